@@ -1,0 +1,263 @@
+// ncservo: the command-line face of the library. It parses arguments and presents; the protocol
+// knowledge lives in the library's tables.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/capture_reader.hpp"
+#include "ncservo/config.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/fields.hpp"
+#include "ncservo/pdo.hpp"
+#include "ncservo/session.hpp"
+
+namespace {
+
+using namespace ncservo;
+
+enum ExitCode { kExitOk = 0, kExitFindings = 1, kExitUsage = 2, kExitCapture = 3 };
+
+std::string shortName(const char* filter) {
+  std::string name(filter);
+  return name.substr(std::string("ncservo.").size());
+}
+
+// One output row of `decode`: an axis in one cycle (outputs from the master's copy, inputs from
+// its returned copy).
+struct Row {
+  std::uint64_t frame = 0;
+  double time = 0;
+  std::uint16_t axis = 0;
+  PdoValues values;
+  std::optional<DriveState> state;
+};
+
+class RowWriter {
+ public:
+  RowWriter(std::FILE* out, bool csv, const Decoder& decoder)
+      : out_(out), csv_(csv), decoder_(decoder) {}
+
+  void header() {
+    if (!csv_) return;
+    std::string line = "frame,time,axis,name";
+    for (const FieldDef& f : kFields) line += "," + shortName(f.filter);
+    line += ",state,message\n";
+    std::fputs(line.c_str(), out_);
+  }
+
+  void write(const Row& row) {
+    const std::string& name = decoder_.axes().at(row.axis).name;
+    char message[128] = "";
+    if (row.values.has_tx) formatMessage(message, sizeof message, row.values.msgCode(), row.values.msgData());
+    const char* state = row.state ? driveStateName(*row.state) : "";
+    if (csv_) {
+      std::string line = fmt::format("{},{:.9f},{},{}", row.frame, row.time, row.axis, name);
+      for (const FieldDef& f : kFields) line += "," + cell(f, row.values);
+      line += fmt::format(",{},\"{}\"\n", state, message);
+      std::fputs(line.c_str(), out_);
+      return;
+    }
+    nlohmann::ordered_json j;
+    j["frame"] = row.frame;
+    j["time"] = row.time;
+    j["axis"] = row.axis;
+    j["name"] = name;
+    for (const FieldDef& f : kFields) {
+      if (!fieldApplies(f, row.values)) continue;
+      const FieldValue v = fieldValue(f, row.values);
+      auto& slot = j[shortName(f.filter)];
+      if (v.kind == FieldValue::Kind::Float) {
+        slot = v.f;
+      } else if (v.kind == FieldValue::Kind::Signed) {
+        slot = v.i;
+      } else {
+        slot = v.u;
+      }
+    }
+    if (row.state) j["state"] = state;
+    if (row.values.has_tx) j["message"] = message;
+    std::fputs((j.dump() + "\n").c_str(), out_);
+  }
+
+ private:
+  static std::string cell(const FieldDef& f, const PdoValues& values) {
+    if (!fieldApplies(f, values)) return "";
+    const FieldValue v = fieldValue(f, values);
+    switch (v.kind) {
+      case FieldValue::Kind::Float:
+        return fmt::format("{:.9g}", v.f);
+      case FieldValue::Kind::Signed:
+        return fmt::format("{}", v.i);
+      case FieldValue::Kind::Unsigned:
+        return f.kind == FieldKind::Word ? fmt::format("0x{:08x}", v.u) : fmt::format("{}", v.u);
+    }
+    return "";
+  }
+
+  std::FILE* out_;
+  bool csv_;
+  const Decoder& decoder_;
+};
+
+DecoderOptions decoderOptions(const std::optional<Config>& config, bool no_default_layout) {
+  DecoderOptions options;
+  if (config) {
+    options.axes = config->axes;
+    options.default_layout = config->default_layout;
+  }
+  if (no_default_layout) options.default_layout = false;
+  return options;
+}
+
+int runDecode(const std::string& path, const std::optional<Config>& config, bool no_default_layout,
+              const std::string& format) {
+  std::string error;
+  auto reader = CaptureReader::open(path, error);
+  if (!reader) {
+    fmt::print(stderr, "ncservo: {}\n", error);
+    return kExitCapture;
+  }
+  Session session(decoderOptions(config, no_default_layout));
+  RowWriter writer(stdout, format == "csv", session.decoder());
+  writer.header();
+  std::map<std::uint16_t, Row> pending;  // outputs seen in a master's copy, awaiting its return
+  auto flush = [&](std::uint16_t axis) {
+    auto it = pending.find(axis);
+    if (it == pending.end()) return;
+    writer.write(it->second);
+    pending.erase(it);
+  };
+
+  EcatFrame frame;
+  CaptureRecord record;
+  std::optional<std::int64_t> first_time;
+  std::size_t malformed = 0;
+  CaptureReader::Next status;
+  while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+    if (!first_time) first_time = record.time_ns;
+    const ByteReader bytes(record.data, record.captured);
+    walkPacket(reader->link(), bytes, frame);
+    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams) continue;
+    const FrameView& view = session.onFrame(frame, bytes);
+    const double time = static_cast<double>(record.time_ns - *first_time) / 1e9;
+    for (std::size_t i = 0; i < view.axis_count; ++i) {
+      const AxisFrameView& axis = view.axes[i];
+      const std::uint16_t index = axis.placement.axis;
+      if (axis.placement.rx_malformed || axis.placement.tx_malformed) {
+        ++malformed;
+        fmt::print(stderr, "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
+                   reader->path(), record.frame, index,
+                   axis.placement.rx_malformed ? "RxPDO" : "TxPDO");
+      }
+      Row row{record.frame, time, index, axis.values, axis.state};
+      if (view.copy == CopyKind::Master) {
+        flush(index);
+        pending[index] = row;
+        continue;
+      }
+      auto it = pending.find(index);
+      if (it != pending.end() && it->second.values.has_rx) {
+        // The master's outputs are what the NC sent; the returned copy adds the inputs.
+        for (const WordDef& word : kWords) {
+          if (word.pdo == Pdo::Rx) row.values.raw[static_cast<std::size_t>(word.word)] = it->second.values.word(word.word);
+        }
+        row.values.has_rx = true;
+        pending.erase(it);
+      }
+      writer.write(row);
+    }
+  }
+  while (!pending.empty()) flush(pending.begin()->first);
+  std::fflush(stdout);
+  if (status == CaptureReader::Next::Error) {
+    fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", reader->error());
+    return kExitCapture;
+  }
+  if (session.decoder().axes().empty()) {
+    fmt::print(stderr, "ncservo: {}: no servo of this protocol found ({})\n", reader->path(),
+               session.decoder().startupShowsNoServo()
+                   ? "the start-up configures slaves, none with 10/40-byte sync managers"
+                   : "no datagram matches the default layout; give the layout in a --config file");
+  }
+  return kExitOk;
+}
+
+void printFields(const std::string& format) {
+  if (format == "markdown") {
+    fmt::print("| filter name | label | word | bits | values | meaning | spec |\n");
+    fmt::print("|---|---|---|---|---|---|---|\n");
+  }
+  for (const FieldDef& f : kFields) {
+    std::string values;
+    for (std::size_t i = 0; i < f.value_count; ++i) {
+      values += fmt::format("{}{}={}{}", i ? "; " : "", f.values[i].value, f.values[i].name,
+                            f.values[i].unit ? fmt::format(" [{}]", f.values[i].unit) : "");
+    }
+    const std::string mask = f.mask ? fmt::format("0x{:X}", f.mask) : "all";
+    if (format == "markdown") {
+      fmt::print("| `{}` | {} | {} | {} | {} | {} | {} |\n", f.filter, f.label,
+                 wordDef(f.word).name, mask, values, f.blurb, f.clause);
+    } else {
+      fmt::print("{}\t{}\t{}\t{}\t{}\n", f.filter, f.label, wordDef(f.word).name, mask, f.blurb);
+    }
+  }
+  for (const DerivedFieldDef& f : kDerivedFields) {
+    if (format == "markdown") {
+      fmt::print("| `{}` | {} | (derived) | | | {} | INTERFACES.md |\n", f.filter, f.label, f.blurb);
+    } else {
+      fmt::print("{}\t{}\t(derived)\t\t{}\n", f.filter, f.label, f.blurb);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"ncservo: decode and check NC <-> servo EtherCAT process data"};
+  app.set_version_flag("--version", std::string("ncservo ") + NCSERVO_VERSION);
+  app.require_subcommand(1);
+
+  std::string capture;
+  std::string config_path;
+  std::string format = "csv";
+  bool no_default_layout = false;
+  auto* decode = app.add_subcommand("decode", "print the decoded process data, one row per axis and cycle");
+  decode->add_option("CAPTURE", capture, "pcap or pcapng capture, - for standard input")->required();
+  decode->add_option("--config", config_path, "TOML configuration file (layout)");
+  decode->add_option("--format", format, "csv or jsonl")->check(CLI::IsMember({"csv", "jsonl"}));
+  decode->add_flag("--no-default-layout", no_default_layout,
+                   "never assume the default layout (PROTOCOL.md §9.4)");
+
+  std::string fields_format = "tsv";
+  auto* fields = app.add_subcommand("fields", "list every decoded field (generated from the field table)");
+  fields->add_option("--format", fields_format, "tsv or markdown")
+      ->check(CLI::IsMember({"tsv", "markdown"}));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? kExitOk : kExitUsage;
+  }
+
+  if (fields->parsed()) {
+    printFields(fields_format);
+    return kExitOk;
+  }
+  std::optional<Config> config;
+  if (!config_path.empty()) {
+    ConfigResult loaded = loadConfig(config_path);
+    if (!loaded.ok()) {
+      fmt::print(stderr, "ncservo: {}\n", loaded.error->text());
+      return kExitUsage;
+    }
+    config = std::move(loaded.config);
+  }
+  return runDecode(capture, config, no_default_layout, format);
+}

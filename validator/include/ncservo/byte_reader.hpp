@@ -1,0 +1,63 @@
+// Bounds-checked little-endian reads over untrusted capture bytes (STYLE.md: "Untrusted bytes").
+// Every read returns std::nullopt instead of reading past the end; nothing here throws.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <optional>
+
+namespace ncservo {
+
+class ByteReader {
+ public:
+  ByteReader(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
+
+  std::size_t size() const { return size_; }
+  const std::uint8_t* data() const { return data_; }
+  bool has(std::size_t offset, std::size_t count) const {
+    return offset <= size_ && count <= size_ - offset;
+  }
+
+  std::optional<std::uint8_t> u8(std::size_t offset) const {
+    if (!has(offset, 1)) return std::nullopt;
+    return data_[offset];
+  }
+  std::optional<std::uint16_t> le16(std::size_t offset) const {
+    if (!has(offset, 2)) return std::nullopt;
+    return static_cast<std::uint16_t>(data_[offset] | (data_[offset + 1] << 8));
+  }
+  std::optional<std::uint16_t> be16(std::size_t offset) const {
+    if (!has(offset, 2)) return std::nullopt;
+    return static_cast<std::uint16_t>((data_[offset] << 8) | data_[offset + 1]);
+  }
+  std::optional<std::uint32_t> le32(std::size_t offset) const {
+    if (!has(offset, 4)) return std::nullopt;
+    return static_cast<std::uint32_t>(loadLe(offset, 4));
+  }
+  std::optional<std::uint64_t> le64(std::size_t offset) const {
+    if (!has(offset, 8)) return std::nullopt;
+    return loadLe(offset, 8);
+  }
+  std::optional<float> leFloat(std::size_t offset) const {
+    auto bits = le32(offset);
+    if (!bits) return std::nullopt;
+    float value;
+    std::memcpy(&value, &*bits, sizeof value);
+    return value;
+  }
+
+ private:
+  std::uint64_t loadLe(std::size_t offset, std::size_t count) const {
+    std::uint64_t value = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      value |= static_cast<std::uint64_t>(data_[offset + i]) << (8 * i);
+    }
+    return value;
+  }
+
+  const std::uint8_t* data_;
+  std::size_t size_;
+};
+
+}  // namespace ncservo

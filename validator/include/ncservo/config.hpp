@@ -1,0 +1,57 @@
+// The TOML configuration file of INTERFACES.md. Errors are values that name file, line and key.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ncservo {
+
+struct AxisConfig {
+  std::string name;
+  // Logical addresses of the 10-byte RxPDO and the 40-byte TxPDO (LRW/LRD/LWR exchange) ...
+  std::optional<std::uint32_t> outputs;
+  std::optional<std::uint32_t> inputs;
+  // ... or a configured station address and SM2/SM3 physical addresses (FPRD/FPWR exchange).
+  std::optional<std::uint16_t> station;
+  std::optional<std::uint16_t> sm_outputs;
+  std::optional<std::uint16_t> sm_inputs;
+  std::optional<int> servo_ready_mode;
+};
+
+struct Config {
+  std::string path;  // where it came from, for messages
+  std::optional<int> servo_ready_mode;
+  std::uint32_t telegram_failure_limit = 3;
+  bool default_layout = true;
+  std::map<std::string, std::uint32_t> timeouts_ms;  // only the ones the file sets
+  std::vector<AxisConfig> axes;
+  std::vector<std::string> disabled_rules;
+  std::map<std::string, std::string> severity_overrides;
+};
+
+struct ConfigError {
+  std::string path;
+  std::uint32_t line = 0;  // 0 when the error is about the file as a whole
+  std::string key;         // dotted key path, e.g. "axis[1].outputs"
+  std::string message;
+  // "FILE:LINE: key 'K': MESSAGE"
+  std::string text() const;
+};
+
+struct ConfigResult {
+  std::optional<Config> config;
+  std::optional<ConfigError> error;
+  bool ok() const { return config.has_value(); }
+};
+
+// Timeout names of RULES.md, the keys [timeouts] accepts.
+extern const std::vector<std::string_view> kTimeoutNames;
+
+ConfigResult parseConfig(std::string_view text, const std::string& path);
+ConfigResult loadConfig(const std::string& path);
+
+}  // namespace ncservo

@@ -1,0 +1,107 @@
+// Where each axis's PDOs sit in a frame (PROTOCOL.md §9), and which copy of the frame it is
+// (PROTOCOL.md §8). One decoder follows one capture in order; its memory is bounded.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ncservo/byte_reader.hpp"
+#include "ncservo/config.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/pdo_layout.hpp"
+
+namespace ncservo {
+
+enum class LayoutSource : std::uint8_t { None, Default, Startup, Config, Eni };
+const char* layoutSourceName(LayoutSource source);
+
+enum class CopyKind : std::uint8_t { Master, Returned };
+const char* copyKindName(CopyKind copy);
+
+struct AxisInfo {
+  std::uint16_t index = 0;
+  std::string name;
+  bool logical = true;  // logical addresses, else station + SM physical addresses
+  std::uint32_t outputs = 0;
+  std::uint32_t inputs = 0;
+  std::uint16_t station = 0;
+};
+
+// Where one axis's PDOs sit in one frame. Offsets are into the bytes given to the walker.
+struct AxisPlacement {
+  std::uint16_t axis = 0;
+  bool has_rx = false;
+  bool has_tx = false;          // inputs present and valid: returned copy, WKC above zero
+  bool rx_malformed = false;    // the RxPDO region is cut short or straddles the datagram's end
+  bool tx_malformed = false;
+  std::uint16_t rx_datagram = 0;  // index in EcatFrame::datagrams
+  std::uint16_t tx_datagram = 0;
+  std::size_t rx_offset = 0;
+  std::size_t tx_offset = 0;
+};
+
+inline constexpr std::size_t kMaxAxesPerFrame = 208;  // 2047 data bytes / 10-byte RxPDO, rounded up
+
+struct FrameDecode {
+  CopyKind copy = CopyKind::Master;
+  std::size_t axis_count = 0;
+  std::array<AxisPlacement, kMaxAxesPerFrame> axes{};  // in axis order
+};
+
+struct DecoderOptions {
+  std::vector<AxisConfig> axes;  // explicit layout (source 1); empty = none
+  bool default_layout = true;    // PROTOCOL.md §9.4 may be used
+};
+
+class Decoder {
+ public:
+  explicit Decoder(DecoderOptions options);
+
+  // Decodes one walked frame (any status; only complete datagram headers are used). `bytes`
+  // are the bytes the frame was walked over.
+  void decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out);
+
+  LayoutSource source() const;
+  const std::vector<AxisInfo>& axes() const { return axes_; }
+  // A start-up configured slaves' sync managers and none is a servo of this protocol.
+  bool startupShowsNoServo() const { return sm_slaves_ > 0 && !servo_seen_; }
+
+ private:
+  struct DefaultKey {
+    std::uint8_t command;
+    std::uint32_t address;
+    std::uint16_t length;
+    std::uint16_t first_axis;
+    std::uint16_t axis_count;
+  };
+
+  void classifyCopy(const EcatFrame& frame, FrameDecode& out);
+  void observeStartup(const EcatFrame& frame, const ByteReader& bytes);
+  void placeConfigured(const EcatFrame& frame, FrameDecode& out);
+  void placeDefault(const EcatFrame& frame, FrameDecode& out);
+  const DefaultKey* defaultKeyFor(const Datagram& dg, std::uint16_t axis_count,
+                                  std::uint16_t expected_wkc, std::uint32_t inputs_address);
+  AxisPlacement* placementFor(FrameDecode& out, std::uint16_t axis);
+  void placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_t start, Pdo pdo,
+                   bool returned, FrameDecode& out, std::uint16_t axis);
+
+  DecoderOptions options_;
+  std::vector<AxisInfo> axes_;
+  std::vector<DefaultKey> default_keys_;
+  std::uint64_t previous_signature_ = 0;
+  bool previous_was_master_ = false;
+  // Sync-manager lengths written by the start-up, per slave (bounded, PROTOCOL.md §9.3).
+  struct SmSlave {
+    std::uint32_t key;
+    std::uint16_t sm2_length = 0;
+    std::uint16_t sm3_length = 0;
+  };
+  std::vector<SmSlave> sm_slaves_list_;
+  std::size_t sm_slaves_ = 0;  // slaves whose SM2 or SM3 got a non-zero length
+  bool servo_seen_ = false;
+};
+
+}  // namespace ncservo

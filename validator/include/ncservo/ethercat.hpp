@@ -1,0 +1,112 @@
+// EtherCAT wire constants and the bounds-checked frame walker (PROTOCOL.md §8).
+// The walker turns captured bytes into datagram views; it never reads past the captured bytes
+// and never allocates.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "ncservo/byte_reader.hpp"
+
+namespace ncservo {
+
+namespace ecat {
+inline constexpr std::uint16_t kEtherType = 0x88A4;
+inline constexpr std::uint16_t kUdpPort = 34980;
+inline constexpr std::uint16_t kFrameTypeDatagrams = 1;
+inline constexpr std::size_t kFrameHeaderSize = 2;
+inline constexpr std::size_t kDatagramHeaderSize = 10;
+inline constexpr std::size_t kWkcSize = 2;
+inline constexpr std::uint16_t kLengthMask = 0x07FF;
+inline constexpr std::uint16_t kCirculatingBit = 0x4000;
+inline constexpr std::uint16_t kMoreBit = 0x8000;
+// The frame header's 11-bit length bounds a chain: at most this many minimal datagrams.
+inline constexpr std::size_t kMaxDatagrams =
+    (kLengthMask + kDatagramHeaderSize + kWkcSize) / (kDatagramHeaderSize + kWkcSize) + 1;
+
+enum Command : std::uint8_t {
+  kNop = 0,
+  kAprd = 1,
+  kApwr = 2,
+  kAprw = 3,
+  kFprd = 4,
+  kFpwr = 5,
+  kFprw = 6,
+  kBrd = 7,
+  kBwr = 8,
+  kBrw = 9,
+  kLrd = 10,
+  kLwr = 11,
+  kLrw = 12,
+  kArmw = 13,
+  kFrmw = 14,
+};
+
+inline constexpr bool isLogical(std::uint8_t cmd) { return cmd == kLrd || cmd == kLwr || cmd == kLrw; }
+inline constexpr bool isConfiguredAddress(std::uint8_t cmd) {
+  return cmd == kFprd || cmd == kFpwr || cmd == kFprw || cmd == kFrmw;
+}
+inline constexpr bool writesSlaves(std::uint8_t cmd) {
+  return cmd == kApwr || cmd == kAprw || cmd == kFpwr || cmd == kFprw || cmd == kBwr ||
+         cmd == kBrw || cmd == kLwr || cmd == kLrw;
+}
+const char* commandName(std::uint8_t cmd);
+
+// ESC registers the decoder looks at (PROTOCOL.md §8).
+inline constexpr std::uint16_t kRegSyncManager0 = 0x0800;
+inline constexpr std::uint16_t kSyncManagerStride = 8;
+inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;
+}  // namespace ecat
+
+struct Datagram {
+  std::uint8_t command = 0;
+  std::uint8_t index = 0;
+  std::uint32_t address = 0;  // logical address, or ADP (low 16 bits) and ADO (high 16 bits)
+  std::uint16_t length = 0;   // data length the header declares
+  bool circulating = false;
+  std::uint16_t irq = 0;
+  std::size_t header_offset = 0;  // in the buffer given to the walker
+  std::size_t data_offset = 0;
+  std::size_t data_captured = 0;  // bytes of data actually captured (<= length)
+  bool has_wkc = false;           // false when the frame is cut before the working counter
+  std::uint16_t wkc = 0;
+
+  std::uint16_t adp() const { return static_cast<std::uint16_t>(address & 0xFFFF); }
+  std::uint16_t ado() const { return static_cast<std::uint16_t>(address >> 16); }
+  bool complete() const { return data_captured == length && has_wkc; }
+};
+
+enum class WalkStatus : std::uint8_t {
+  Ok,
+  NotEtherCat,     // no EtherCAT frame in these bytes (other traffic)
+  NotDatagrams,    // an EtherCAT frame of another type (not process data)
+  Truncated,       // the captured bytes end inside the chain: datagrams before it are valid
+};
+
+struct EcatFrame {
+  WalkStatus status = WalkStatus::NotEtherCat;
+  std::size_t ecat_offset = 0;        // offset of the EtherCAT frame header
+  std::uint16_t header_length = 0;    // chain length the frame header declares
+  std::size_t chain_length = 0;       // bytes the walked chain really spans
+  std::size_t truncated_at = 0;       // offset where the captured bytes ran out (Truncated)
+  std::size_t count = 0;              // datagrams in `datagrams`, a partial last one included
+  std::array<Datagram, ecat::kMaxDatagrams> datagrams{};
+
+  // Same datagram list: what pairs a master's frame with its returned copy (PROTOCOL.md §8).
+  bool sameDatagramList(const EcatFrame& other) const;
+  bool anyWkcAboveZero() const;
+};
+
+// Link-layer framings the walker can start from.
+enum class LinkType : std::uint8_t { Ethernet, LinuxSll, LinuxSll2, Unsupported };
+LinkType linkTypeFromDlt(int dlt);
+
+// Walks the EtherCAT frame that starts at `offset` (its 2-byte frame header).
+void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out);
+
+// Finds the EtherCAT frame in a captured packet (Ethernet II with any number of 802.1Q/802.1ad
+// tags, or IPv4/IPv6 UDP to port 34980) and walks it.
+void walkPacket(LinkType link, const ByteReader& bytes, EcatFrame& out);
+
+}  // namespace ncservo

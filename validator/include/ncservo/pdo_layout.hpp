@@ -1,0 +1,93 @@
+// The two process-data objects of one axis, word by word (PROTOCOL.md §1).
+// Offsets are derived from the sizes in declaration order, and proven to give 10 and 40 bytes.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace ncservo {
+
+enum class Pdo : std::uint8_t { Rx, Tx };  // Rx: NC -> servo (outputs); Tx: servo -> NC (inputs)
+
+enum class WireType : std::uint8_t { I16, I32, U32, I64, F32 };
+
+enum class Word : std::uint8_t {
+  Ssp,
+  Scw,
+  ExtCode,
+  ActPos,
+  Ssw,
+  Sew,
+  MsgCode,
+  MsgData,
+  ExtData1,
+  ExtData2,
+  ExtData3,
+  ExtData4,
+};
+inline constexpr std::size_t kWordCount = 12;
+
+struct WordDef {
+  Word word;
+  Pdo pdo;
+  std::uint8_t size;  // bytes
+  WireType type;
+  const char* name;  // as the interface definition names it
+};
+
+// In wire order within each PDO.
+inline constexpr std::array<WordDef, kWordCount> kWords{{
+    {Word::Ssp, Pdo::Rx, 4, WireType::I32, "SSP"},
+    {Word::Scw, Pdo::Rx, 4, WireType::U32, "SCW"},
+    {Word::ExtCode, Pdo::Rx, 2, WireType::I16, "ExtCode"},
+    {Word::ActPos, Pdo::Tx, 8, WireType::I64, "ActPos"},
+    {Word::Ssw, Pdo::Tx, 4, WireType::U32, "SSW"},
+    {Word::Sew, Pdo::Tx, 4, WireType::U32, "SEW"},
+    {Word::MsgCode, Pdo::Tx, 4, WireType::I32, "MsgCode"},
+    {Word::MsgData, Pdo::Tx, 4, WireType::F32, "MsgData"},
+    {Word::ExtData1, Pdo::Tx, 4, WireType::F32, "ExtData1"},
+    {Word::ExtData2, Pdo::Tx, 4, WireType::F32, "ExtData2"},
+    {Word::ExtData3, Pdo::Tx, 4, WireType::F32, "ExtData3"},
+    {Word::ExtData4, Pdo::Tx, 4, WireType::F32, "ExtData4"},
+}};
+
+constexpr const WordDef& wordDef(Word w) { return kWords[static_cast<std::size_t>(w)]; }
+
+// Byte offset of a word inside its PDO: the sum of the sizes of the words before it.
+constexpr std::size_t wordOffset(Word w) {
+  std::size_t offset = 0;
+  for (const auto& def : kWords) {
+    if (def.word == w) return offset;
+    if (def.pdo == wordDef(w).pdo) offset += def.size;
+  }
+  return offset;
+}
+
+constexpr std::size_t pdoSize(Pdo pdo) {
+  std::size_t size = 0;
+  for (const auto& def : kWords) size += def.pdo == pdo ? def.size : 0;
+  return size;
+}
+
+inline constexpr std::size_t kRxPdoSize = pdoSize(Pdo::Rx);
+inline constexpr std::size_t kTxPdoSize = pdoSize(Pdo::Tx);
+
+namespace detail {
+constexpr bool wordsInEnumOrder() {
+  for (std::size_t i = 0; i < kWords.size(); ++i) {
+    if (static_cast<std::size_t>(kWords[i].word) != i) return false;
+    if (i > 0 && kWords[i].pdo < kWords[i - 1].pdo) return false;
+  }
+  return true;
+}
+}  // namespace detail
+
+static_assert(detail::wordsInEnumOrder(), "kWords must list Word values in order, Rx before Tx");
+static_assert(kRxPdoSize == 10, "RxPDO is 10 bytes (PROTOCOL.md §1)");
+static_assert(kTxPdoSize == 40, "TxPDO is 40 bytes (PROTOCOL.md §1)");
+static_assert(wordOffset(Word::Scw) == 4 && wordOffset(Word::ExtCode) == 8);
+static_assert(wordOffset(Word::Ssw) == 8 && wordOffset(Word::MsgData) == 20 &&
+              wordOffset(Word::ExtData4) == 36);
+
+}  // namespace ncservo

@@ -1,0 +1,43 @@
+// One capture's process data, frame by frame: layout and copy (Decoder), the PDO values in each
+// frame, and each axis's latest values and drive state. Shared by the CLI and the plugin.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "ncservo/decoder.hpp"
+#include "ncservo/drive_state.hpp"
+#include "ncservo/pdo.hpp"
+
+namespace ncservo {
+
+struct AxisFrameView {
+  AxisPlacement placement;
+  PdoValues values;  // only what this frame carries
+  std::optional<DriveState> state;  // from this frame's values and the axis's latest ones
+};
+
+struct FrameView {
+  CopyKind copy = CopyKind::Master;
+  std::size_t axis_count = 0;
+  std::array<AxisFrameView, kMaxAxesPerFrame> axes{};
+};
+
+class Session {
+ public:
+  explicit Session(DecoderOptions options) : decoder_(std::move(options)) {}
+
+  // The frame must have been walked over `bytes`. The returned view lives until the next call.
+  const FrameView& onFrame(const EcatFrame& frame, const ByteReader& bytes);
+
+  const Decoder& decoder() const { return decoder_; }
+
+ private:
+  Decoder decoder_;
+  FrameDecode decode_;
+  FrameView view_;
+  std::vector<PdoValues> latest_;  // per axis index
+};
+
+}  // namespace ncservo

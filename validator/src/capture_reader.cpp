@@ -1,0 +1,53 @@
+#include "ncservo/capture_reader.hpp"
+
+#include <fmt/format.h>
+#include <pcap/pcap.h>
+
+namespace ncservo {
+
+CaptureReader::~CaptureReader() {
+  if (handle_ != nullptr) pcap_close(handle_);
+}
+
+std::unique_ptr<CaptureReader> CaptureReader::open(const std::string& path, std::string& error) {
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  pcap_t* handle =
+      pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, errbuf);
+  const std::string name = path == "-" ? "standard input" : path;
+  if (handle == nullptr) {
+    error = fmt::format("{}: cannot read capture: {}", name, errbuf);
+    return nullptr;
+  }
+  std::unique_ptr<CaptureReader> reader(new CaptureReader());
+  reader->handle_ = handle;
+  reader->path_ = name;
+  reader->dlt_ = pcap_datalink(handle);
+  reader->link_ = linkTypeFromDlt(reader->dlt_);
+  if (reader->link_ == LinkType::Unsupported) {
+    const char* dlt_name = pcap_datalink_val_to_name(reader->dlt_);
+    error = fmt::format("{}: unsupported link type {} ({}); ncservo reads Ethernet and Linux "
+                        "cooked (SLL, SLL2) captures",
+                        name, reader->dlt_, dlt_name != nullptr ? dlt_name : "unknown");
+    return nullptr;
+  }
+  return reader;
+}
+
+CaptureReader::Next CaptureReader::next(CaptureRecord& record) {
+  pcap_pkthdr* header = nullptr;
+  const u_char* data = nullptr;
+  const int rc = pcap_next_ex(handle_, &header, &data);
+  if (rc == PCAP_ERROR_BREAK) return Next::End;
+  if (rc != 1) {
+    error_ = fmt::format("{}: frame {}: {}", path_, frames_ + 1, pcap_geterr(handle_));
+    return Next::Error;
+  }
+  record.frame = ++frames_;
+  record.time_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1000000000 + header->ts.tv_usec;
+  record.data = data;
+  record.captured = header->caplen;
+  record.original = header->len;
+  return Next::Record;
+}
+
+}  // namespace ncservo

@@ -1,0 +1,274 @@
+#include "ncservo/config.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <set>
+#include <toml++/toml.h>
+
+namespace ncservo {
+
+const std::vector<std::string_view> kTimeoutNames = {
+    "drive_response", "nc_release", "enable_response", "clear_response", "fault_reaction",
+    "param_table"};
+
+std::string ConfigError::text() const {
+  std::string where = line > 0 ? fmt::format("{}:{}", path, line) : path;
+  if (key.empty()) return fmt::format("{}: {}", where, message);
+  return fmt::format("{}: key '{}': {}", where, key, message);
+}
+
+namespace {
+
+// Collects the first error; every check below returns false once one is recorded.
+class Checker {
+ public:
+  explicit Checker(std::string path) : path_(std::move(path)) {}
+
+  bool fail(const toml::node& node, std::string key, std::string message) {
+    if (!error_) {
+      error_ = ConfigError{path_, static_cast<std::uint32_t>(node.source().begin.line),
+                           std::move(key), std::move(message)};
+    }
+    return false;
+  }
+  bool failed() const { return error_.has_value(); }
+  ConfigError error() const { return *error_; }
+
+  template <typename T>
+  std::optional<T> integer(const toml::node& node, const std::string& key, std::int64_t lo,
+                           std::int64_t hi) {
+    auto value = node.value<std::int64_t>();
+    if (!node.is_integer() || !value) {
+      fail(node, key, "expected an integer");
+      return std::nullopt;
+    }
+    if (*value < lo || *value > hi) {
+      fail(node, key, fmt::format("{} is out of range [{}, {}]", *value, lo, hi));
+      return std::nullopt;
+    }
+    return static_cast<T>(*value);
+  }
+
+  std::optional<int> readyMode(const toml::node& node, const std::string& key) {
+    return integer<int>(node, key, 0, 1);
+  }
+
+ private:
+  std::string path_;
+  std::optional<ConfigError> error_;
+};
+
+bool isRuleId(std::string_view id) {
+  // PREFIX-NNN, e.g. "SE-001" (RULES.md)
+  auto dash = id.find('-');
+  if (dash == std::string_view::npos || dash == 0 || id.size() != dash + 4) return false;
+  return std::all_of(id.begin(), id.begin() + dash, [](char c) { return c >= 'A' && c <= 'Z'; }) &&
+         std::all_of(id.begin() + dash + 1, id.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+void readAxis(Checker& check, const toml::table& table, std::size_t index, Config& config) {
+  AxisConfig axis;
+  const std::string prefix = fmt::format("axis[{}]", index);
+  for (const auto& [key_node, node] : table) {
+    const std::string key{key_node.str()};
+    const std::string name = prefix + "." + key;
+    if (key == "name") {
+      if (!node.is_string()) {
+        check.fail(node, name, "expected a string");
+        return;
+      }
+      axis.name = *node.value<std::string>();
+    } else if (key == "outputs") {
+      axis.outputs = check.integer<std::uint32_t>(node, name, 0, 0xFFFFFFFF);
+    } else if (key == "inputs") {
+      axis.inputs = check.integer<std::uint32_t>(node, name, 0, 0xFFFFFFFF);
+    } else if (key == "station") {
+      axis.station = check.integer<std::uint16_t>(node, name, 0, 0xFFFF);
+    } else if (key == "sm_outputs") {
+      axis.sm_outputs = check.integer<std::uint16_t>(node, name, 0, 0xFFFF);
+    } else if (key == "sm_inputs") {
+      axis.sm_inputs = check.integer<std::uint16_t>(node, name, 0, 0xFFFF);
+    } else if (key == "servo_ready_mode") {
+      axis.servo_ready_mode = check.readyMode(node, name);
+    } else {
+      check.fail(node, name, "unknown key");
+    }
+    if (check.failed()) return;
+  }
+  const bool logical = axis.outputs || axis.inputs;
+  const bool physical = axis.station || axis.sm_outputs || axis.sm_inputs;
+  if (logical && physical) {
+    check.fail(table, prefix,
+               "give either logical addresses (outputs/inputs) or a station with SM addresses "
+               "(station/sm_outputs/sm_inputs), not both");
+    return;
+  }
+  if (!logical && !physical) {
+    check.fail(table, prefix, "needs outputs/inputs or station/sm_outputs/sm_inputs");
+    return;
+  }
+  if (physical && (!axis.station || !(axis.sm_outputs || axis.sm_inputs))) {
+    check.fail(table, prefix, "a station axis needs station and sm_outputs and/or sm_inputs");
+    return;
+  }
+  if (axis.name.empty()) axis.name = fmt::format("axis{}", index);
+  for (const AxisConfig& other : config.axes) {
+    if (other.name == axis.name) {
+      check.fail(table, prefix + ".name", fmt::format("axis name '{}' is used twice", axis.name));
+      return;
+    }
+  }
+  config.axes.push_back(std::move(axis));
+}
+
+void readRules(Checker& check, const toml::table& rules, Config& config) {
+  for (const auto& [key_node, node] : rules) {
+    const std::string key = "rules." + std::string(key_node.str());
+    if (key_node.str() == "disable") {
+      const toml::array* ids = node.as_array();
+      if (ids == nullptr) {
+        check.fail(node, key, "expected an array of rule IDs");
+        return;
+      }
+      for (const toml::node& id : *ids) {
+        auto text = id.value<std::string>();
+        if (!id.is_string() || !isRuleId(*text)) {
+          check.fail(id, key, "expected rule IDs such as \"MSG-001\"");
+          return;
+        }
+        config.disabled_rules.push_back(*text);
+      }
+    } else if (key_node.str() == "severity") {
+      const toml::table* table = node.as_table();
+      if (table == nullptr) {
+        check.fail(node, key, "expected a table of rule ID = \"error|warning|info\"");
+        return;
+      }
+      for (const auto& [id_node, level] : *table) {
+        const std::string id{id_node.str()};
+        auto text = level.value<std::string>();
+        if (!isRuleId(id)) {
+          check.fail(level, key + "." + id, "not a rule ID");
+          return;
+        }
+        if (!level.is_string() || (*text != "error" && *text != "warning" && *text != "info")) {
+          check.fail(level, key + "." + id, "expected \"error\", \"warning\" or \"info\"");
+          return;
+        }
+        config.severity_overrides[id] = *text;
+      }
+    } else {
+      check.fail(node, key, "unknown key");
+      return;
+    }
+  }
+}
+
+}  // namespace
+
+ConfigResult parseConfig(std::string_view text, const std::string& path) {
+  ConfigResult result;
+  toml::table root;
+  try {
+    root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    result.error = ConfigError{path, static_cast<std::uint32_t>(e.source().begin.line), "",
+                               std::string(e.description())};
+    return result;
+  }
+  Config config;
+  config.path = path;
+  Checker check(path);
+  for (const auto& [key_node, node] : root) {
+    const std::string key{key_node.str()};
+    if (key == "servo_ready_mode") {
+      config.servo_ready_mode = check.readyMode(node, key);
+    } else if (key == "telegram_failure_limit") {
+      if (auto v = check.integer<std::uint32_t>(node, key, 1, 65535)) {
+        config.telegram_failure_limit = *v;
+      }
+    } else if (key == "default_layout") {
+      if (!node.is_boolean()) {
+        check.fail(node, key, "expected true or false");
+      } else {
+        config.default_layout = *node.value<bool>();
+      }
+    } else if (key == "timeouts") {
+      const toml::table* table = node.as_table();
+      if (table == nullptr) {
+        check.fail(node, key, "expected a table");
+      } else {
+        for (const auto& [name_node, value] : *table) {
+          const std::string name{name_node.str()};
+          if (std::find(kTimeoutNames.begin(), kTimeoutNames.end(), name) == kTimeoutNames.end()) {
+            check.fail(value, "timeouts." + name,
+                       "unknown timeout (known: drive_response, nc_release, enable_response, "
+                       "clear_response, fault_reaction, param_table)");
+            break;
+          }
+          if (auto ms = check.integer<std::uint32_t>(value, "timeouts." + name, 0, 3600000)) {
+            config.timeouts_ms[name] = *ms;
+          }
+        }
+      }
+    } else if (key == "axis") {
+      const toml::array* axes = node.as_array();
+      if (axes == nullptr || !axes->is_array_of_tables()) {
+        check.fail(node, key, "expected [[axis]] tables");
+      } else {
+        std::size_t index = 0;
+        for (const toml::node& axis : *axes) {
+          readAxis(check, *axis.as_table(), index++, config);
+          if (check.failed()) break;
+        }
+      }
+    } else if (key == "rules") {
+      if (const toml::table* rules = node.as_table()) {
+        readRules(check, *rules, config);
+      } else {
+        check.fail(node, key, "expected a table");
+      }
+    } else {
+      check.fail(node, key, "unknown key");
+    }
+    if (check.failed()) break;
+  }
+  if (check.failed()) {
+    result.error = check.error();
+  } else {
+    result.config = std::move(config);
+  }
+  return result;
+}
+
+ConfigResult loadConfig(const std::string& path) {
+  ConfigResult result;
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    result.error = ConfigError{path, 0, "", "cannot open the configuration file"};
+    return result;
+  }
+  std::string text;
+  char buffer[4096];
+  std::size_t n;
+  // A configuration file is small; refuse absurd sizes rather than read them whole.
+  constexpr std::size_t kMaxConfigBytes = 4u << 20;
+  while ((n = std::fread(buffer, 1, sizeof buffer, file)) > 0) {
+    text.append(buffer, n);
+    if (text.size() > kMaxConfigBytes) {
+      std::fclose(file);
+      result.error = ConfigError{path, 0, "", "the configuration file is larger than 4 MiB"};
+      return result;
+    }
+  }
+  const bool read_error = std::ferror(file) != 0;
+  std::fclose(file);
+  if (read_error) {
+    result.error = ConfigError{path, 0, "", "cannot read the configuration file"};
+    return result;
+  }
+  return parseConfig(text, path);
+}
+
+}  // namespace ncservo

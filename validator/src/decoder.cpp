@@ -1,0 +1,278 @@
+#include "ncservo/decoder.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "ncservo/pdo_layout.hpp"
+
+namespace ncservo {
+
+namespace {
+// PROTOCOL.md §9.4: one frame holds at most 29 axes in the default layout.
+constexpr std::uint16_t kMaxDefaultAxesPerDatagram = 29;
+// Bounds on what a hostile capture can make the decoder remember.
+constexpr std::size_t kMaxDefaultKeys = 64;
+constexpr std::size_t kMaxSmSlaves = 4096;
+constexpr std::uint16_t kRegSm2 = ecat::kRegSyncManager0 + 2 * ecat::kSyncManagerStride;
+constexpr std::uint16_t kRegSm3 = ecat::kRegSyncManager0 + 3 * ecat::kSyncManagerStride;
+constexpr std::size_t kSmLengthOffset = 2;  // SM register block: start (2), length (2), ...
+
+std::uint64_t datagramListSignature(const EcatFrame& frame) {
+  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a
+  auto mix = [&hash](std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) {
+      hash ^= (v >> (8 * i)) & 0xFF;
+      hash *= 1099511628211ull;
+    }
+  };
+  mix(frame.count);
+  for (std::size_t i = 0; i < frame.count; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    mix(dg.command | (std::uint64_t{dg.index} << 8) | (std::uint64_t{dg.length} << 16));
+    // Slaves increment ADP of auto-increment and broadcast commands on the way (§8).
+    if (ecat::isLogical(dg.command) || ecat::isConfiguredAddress(dg.command)) mix(dg.address);
+  }
+  return hash;
+}
+
+// Position of [start, start+size) relative to [base, base+length): inside, partly, or outside.
+enum class Overlap { None, Partial, Inside };
+Overlap overlap(std::uint64_t base, std::uint64_t length, std::uint64_t start, std::uint64_t size) {
+  if (start + size <= base || start >= base + length) return Overlap::None;
+  if (start >= base && start + size <= base + length) return Overlap::Inside;
+  return Overlap::Partial;
+}
+}  // namespace
+
+const char* layoutSourceName(LayoutSource source) {
+  switch (source) {
+    case LayoutSource::None:
+      return "none";
+    case LayoutSource::Default:
+      return "default";
+    case LayoutSource::Startup:
+      return "startup";
+    case LayoutSource::Config:
+      return "config";
+    case LayoutSource::Eni:
+      return "eni";
+  }
+  return "none";
+}
+
+const char* copyKindName(CopyKind copy) { return copy == CopyKind::Master ? "master" : "returned"; }
+
+Decoder::Decoder(DecoderOptions options) : options_(std::move(options)) {
+  for (std::size_t i = 0; i < options_.axes.size(); ++i) {
+    const AxisConfig& axis = options_.axes[i];
+    AxisInfo info;
+    info.index = static_cast<std::uint16_t>(i);
+    info.name = axis.name.empty() ? fmt::format("axis{}", i) : axis.name;
+    info.logical = !axis.station.has_value();
+    info.outputs = info.logical ? axis.outputs.value_or(0) : axis.sm_outputs.value_or(0);
+    info.inputs = info.logical ? axis.inputs.value_or(0) : axis.sm_inputs.value_or(0);
+    info.station = axis.station.value_or(0);
+    axes_.push_back(std::move(info));
+  }
+}
+
+LayoutSource Decoder::source() const {
+  if (!options_.axes.empty()) return LayoutSource::Config;
+  if (!default_keys_.empty()) return LayoutSource::Default;
+  return LayoutSource::None;
+}
+
+void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out) {
+  out.axis_count = 0;
+  classifyCopy(frame, out);
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  observeStartup(frame, bytes);
+  if (!options_.axes.empty()) {
+    placeConfigured(frame, out);
+  } else if (options_.default_layout && !startupShowsNoServo()) {
+    placeDefault(frame, out);
+  }
+  std::sort(out.axes.begin(), out.axes.begin() + static_cast<std::ptrdiff_t>(out.axis_count),
+            [](const AxisPlacement& a, const AxisPlacement& b) { return a.axis < b.axis; });
+}
+
+// PROTOCOL.md §8: a frame with any WKC above zero is a returned copy; otherwise the frame
+// after a master's frame with the same datagram list is its returned copy.
+void Decoder::classifyCopy(const EcatFrame& frame, FrameDecode& out) {
+  const std::uint64_t signature = datagramListSignature(frame);
+  if (frame.anyWkcAboveZero()) {
+    out.copy = CopyKind::Returned;
+  } else if (previous_was_master_ && signature == previous_signature_) {
+    out.copy = CopyKind::Returned;
+  } else {
+    out.copy = CopyKind::Master;
+  }
+  previous_signature_ = signature;
+  previous_was_master_ = out.copy == CopyKind::Master && frame.count > 0;
+}
+
+// PROTOCOL.md §9.3: SM2/SM3 lengths of 10 and 40 bytes mark a servo of this protocol. Only
+// whether any servo exists is needed here, to keep the default layout off captures without one.
+void Decoder::observeStartup(const EcatFrame& frame, const ByteReader& bytes) {
+  for (std::size_t i = 0; i < frame.count; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    if (!ecat::writesSlaves(dg.command) || ecat::isLogical(dg.command)) continue;
+    for (std::uint16_t sm : {kRegSm2, kRegSm3}) {
+      const std::uint32_t field = sm + kSmLengthOffset;
+      if (field < dg.ado() || field + 2 > std::uint32_t{dg.ado()} + dg.data_captured) continue;
+      auto length = bytes.le16(dg.data_offset + (field - dg.ado()));
+      if (!length || *length == 0) continue;
+      // Broadcast writes reach every slave: one key for all of them.
+      const std::uint32_t key = (std::uint32_t{dg.command} << 16) |
+                                (dg.command == ecat::kBwr || dg.command == ecat::kBrw ? 0 : dg.adp());
+      auto slave = std::find_if(sm_slaves_list_.begin(), sm_slaves_list_.end(),
+                                [key](const SmSlave& s) { return s.key == key; });
+      if (slave == sm_slaves_list_.end()) {
+        if (sm_slaves_list_.size() >= kMaxSmSlaves) continue;
+        slave = sm_slaves_list_.insert(sm_slaves_list_.end(), SmSlave{key});
+        ++sm_slaves_;
+      }
+      (sm == kRegSm2 ? slave->sm2_length : slave->sm3_length) = *length;
+      if (slave->sm2_length == kRxPdoSize && slave->sm3_length == kTxPdoSize) servo_seen_ = true;
+    }
+  }
+}
+
+AxisPlacement* Decoder::placementFor(FrameDecode& out, std::uint16_t axis) {
+  for (std::size_t i = 0; i < out.axis_count; ++i) {
+    if (out.axes[i].axis == axis) return &out.axes[i];
+  }
+  if (out.axis_count >= out.axes.size()) return nullptr;
+  AxisPlacement& placement = out.axes[out.axis_count++];
+  placement = AxisPlacement{};
+  placement.axis = axis;
+  return &placement;
+}
+
+// Records that `axis`'s PDO starts `start` bytes into the datagram's data. A region that is not
+// wholly captured is malformed; inputs count only in a returned copy whose WKC is above zero.
+void Decoder::placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_t start, Pdo pdo,
+                          bool returned, FrameDecode& out, std::uint16_t axis) {
+  AxisPlacement* placement = placementFor(out, axis);
+  if (placement == nullptr) return;
+  const std::size_t size = pdoSize(pdo);
+  const bool captured = start + size <= dg.length && start + size <= dg.data_captured;
+  if (pdo == Pdo::Rx) {
+    placement->rx_datagram = dg_index;
+    placement->rx_offset = dg.data_offset + start;
+    placement->has_rx = captured;
+    placement->rx_malformed = !captured;
+  } else {
+    placement->tx_datagram = dg_index;
+    placement->tx_offset = dg.data_offset + start;
+    placement->has_tx = captured && returned && dg.has_wkc && dg.wkc > 0;
+    placement->tx_malformed = returned && !captured;
+  }
+}
+
+void Decoder::placeConfigured(const EcatFrame& frame, FrameDecode& out) {
+  const bool returned = out.copy == CopyKind::Returned;
+  for (std::size_t d = 0; d < frame.count; ++d) {
+    const Datagram& dg = frame.datagrams[d];
+    const auto dg_index = static_cast<std::uint16_t>(d);
+    const bool logical = ecat::isLogical(dg.command);
+    const bool fp = dg.command == ecat::kFprd || dg.command == ecat::kFpwr ||
+                    dg.command == ecat::kFprw;
+    if (!logical && !fp) continue;
+    const bool writes = dg.command != ecat::kLrd && dg.command != ecat::kFprd;
+    const bool reads = dg.command != ecat::kLwr && dg.command != ecat::kFpwr;
+    const std::uint64_t base = logical ? dg.address : dg.ado();
+    for (std::size_t a = 0; a < options_.axes.size(); ++a) {
+      const AxisConfig& axis = options_.axes[a];
+      const auto axis_index = static_cast<std::uint16_t>(a);
+      if (logical != !axis.station.has_value()) continue;
+      if (fp && *axis.station != dg.adp()) continue;
+      const auto outputs = logical ? std::optional<std::uint64_t>(axis.outputs)
+                                   : std::optional<std::uint64_t>(axis.sm_outputs);
+      const auto inputs = logical ? std::optional<std::uint64_t>(axis.inputs)
+                                  : std::optional<std::uint64_t>(axis.sm_inputs);
+      if (outputs && writes) {
+        Overlap o = overlap(base, dg.length, *outputs, kRxPdoSize);
+        // A region that straddles the datagram's end is inconsistent: placed, and malformed.
+        if (o != Overlap::None) {
+          placeRegion(dg, dg_index, o == Overlap::Inside ? *outputs - base : dg.length, Pdo::Rx,
+                      returned, out, axis_index);
+        }
+      }
+      if (inputs && reads) {
+        Overlap o = overlap(base, dg.length, *inputs, kTxPdoSize);
+        if (o != Overlap::None) {
+          placeRegion(dg, dg_index, o == Overlap::Inside ? *inputs - base : dg.length, Pdo::Tx,
+                      returned, out, axis_index);
+        }
+      }
+    }
+  }
+}
+
+// PROTOCOL.md §9.4: an LRW of n×10 output bytes then n×40 input bytes, or an LWR of n×10 and an
+// LRD of n×40 bytes in one frame. A datagram is taken once it repeats, or at first sight when its
+// WKC is 0 (a master's copy) or exactly what n servos give.
+void Decoder::placeDefault(const EcatFrame& frame, FrameDecode& out) {
+  const bool returned = out.copy == CopyKind::Returned;
+  for (std::size_t d = 0; d < frame.count; ++d) {
+    const Datagram& dg = frame.datagrams[d];
+    std::uint16_t n = 0;
+    std::size_t inputs_index = d;
+    if (dg.command == ecat::kLrw && dg.length % (kRxPdoSize + kTxPdoSize) == 0) {
+      n = static_cast<std::uint16_t>(dg.length / (kRxPdoSize + kTxPdoSize));
+    } else if (dg.command == ecat::kLwr && dg.length % kRxPdoSize == 0) {
+      n = static_cast<std::uint16_t>(dg.length / kRxPdoSize);
+      inputs_index = frame.count;
+      for (std::size_t j = 0; j < frame.count; ++j) {
+        if (frame.datagrams[j].command == ecat::kLrd &&
+            frame.datagrams[j].length == n * kTxPdoSize) {
+          inputs_index = j;
+          break;
+        }
+      }
+      if (inputs_index == frame.count) continue;
+    } else {
+      continue;
+    }
+    if (n == 0 || n > kMaxDefaultAxesPerDatagram) continue;
+    const std::uint16_t expected_wkc = dg.command == ecat::kLrw ? 3 * n : n;
+    const Datagram& inputs = frame.datagrams[inputs_index];
+    const std::size_t inputs_start = dg.command == ecat::kLrw ? n * kRxPdoSize : 0;
+    const DefaultKey* key =
+        defaultKeyFor(dg, n, expected_wkc, static_cast<std::uint32_t>(inputs.address + inputs_start));
+    if (key == nullptr) continue;
+    for (std::uint16_t k = 0; k < n; ++k) {
+      const auto axis = static_cast<std::uint16_t>(key->first_axis + k);
+      placeRegion(dg, static_cast<std::uint16_t>(d), k * kRxPdoSize, Pdo::Rx, returned, out, axis);
+      placeRegion(inputs, static_cast<std::uint16_t>(inputs_index),
+                  inputs_start + k * kTxPdoSize, Pdo::Tx, returned, out, axis);
+    }
+  }
+}
+
+const Decoder::DefaultKey* Decoder::defaultKeyFor(const Datagram& dg, std::uint16_t axis_count,
+                                                  std::uint16_t expected_wkc,
+                                                  std::uint32_t inputs_address) {
+  for (const DefaultKey& key : default_keys_) {
+    if (key.command == dg.command && key.address == dg.address && key.length == dg.length) {
+      return &key;
+    }
+  }
+  const bool plausible = dg.has_wkc && (dg.wkc == 0 || dg.wkc == expected_wkc);
+  if (!plausible || default_keys_.size() >= kMaxDefaultKeys) return nullptr;
+  const auto first_axis = static_cast<std::uint16_t>(axes_.size());
+  for (std::uint16_t k = 0; k < axis_count; ++k) {
+    AxisInfo info;
+    info.index = static_cast<std::uint16_t>(first_axis + k);
+    info.name = fmt::format("axis{}", info.index);
+    info.outputs = dg.address + k * kRxPdoSize;
+    info.inputs = static_cast<std::uint32_t>(inputs_address + k * kTxPdoSize);
+    axes_.push_back(std::move(info));
+  }
+  default_keys_.push_back(DefaultKey{dg.command, dg.address, dg.length, first_axis, axis_count});
+  return &default_keys_.back();
+}
+
+}  // namespace ncservo

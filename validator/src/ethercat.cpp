@@ -1,0 +1,192 @@
+#include "ncservo/ethercat.hpp"
+
+namespace ncservo {
+
+namespace {
+constexpr std::uint16_t kEtherTypeVlan = 0x8100;
+constexpr std::uint16_t kEtherTypeQinQ = 0x88A8;
+constexpr std::uint16_t kEtherTypeQinQOld = 0x9100;
+constexpr std::uint16_t kEtherTypeIpv4 = 0x0800;
+constexpr std::uint16_t kEtherTypeIpv6 = 0x86DD;
+constexpr std::uint8_t kIpProtoUdp = 17;
+constexpr std::size_t kEthernetHeaderSize = 14;
+constexpr std::size_t kVlanTagSize = 4;
+constexpr std::size_t kUdpHeaderSize = 8;
+constexpr std::size_t kIpv6HeaderSize = 40;
+constexpr std::size_t kSllHeaderSize = 16;
+constexpr std::size_t kSll2HeaderSize = 20;
+constexpr int kDltEn10mb = 1;
+constexpr int kDltLinuxSll = 113;
+constexpr int kDltLinuxSll2 = 276;
+
+// Follows a payload of EtherType `type` at `payload` (VLAN tags, IP/UDP) to the EtherCAT header.
+void walkPayload(const ByteReader& bytes, std::uint16_t type, std::size_t payload, EcatFrame& out) {
+  out.status = WalkStatus::NotEtherCat;
+  // A VLAN tag is 2 bytes of TCI and then the next EtherType; tags may stack (802.1ad).
+  while (type == kEtherTypeVlan || type == kEtherTypeQinQ || type == kEtherTypeQinQOld) {
+    auto inner = bytes.be16(payload + 2);
+    if (!inner) return;
+    type = *inner;
+    payload += kVlanTagSize;
+  }
+  if (type == ecat::kEtherType) {
+    walkEcat(bytes, payload, out);
+    return;
+  }
+  std::size_t udp = 0;
+  if (type == kEtherTypeIpv4) {
+    auto version_ihl = bytes.u8(payload);
+    auto fragment = bytes.be16(payload + 6);
+    auto protocol = bytes.u8(payload + 9);
+    if (!version_ihl || !fragment || !protocol) return;
+    std::size_t ihl = (*version_ihl & 0x0F) * 4u;
+    bool first_fragment = (*fragment & 0x1FFF) == 0;
+    if ((*version_ihl >> 4) != 4 || ihl < 20 || *protocol != kIpProtoUdp || !first_fragment) {
+      return;
+    }
+    udp = payload + ihl;
+  } else if (type == kEtherTypeIpv6) {
+    auto next_header = bytes.u8(payload + 6);
+    if (!next_header || *next_header != kIpProtoUdp) return;
+    udp = payload + kIpv6HeaderSize;
+  } else {
+    return;
+  }
+  auto dst_port = bytes.be16(udp + 2);
+  if (!dst_port || *dst_port != ecat::kUdpPort) return;
+  walkEcat(bytes, udp + kUdpHeaderSize, out);
+}
+
+void walkFromTypeField(const ByteReader& bytes, std::size_t type_offset, std::size_t payload,
+                       EcatFrame& out) {
+  auto type = bytes.be16(type_offset);
+  if (!type) {
+    out.status = WalkStatus::NotEtherCat;
+    return;
+  }
+  walkPayload(bytes, *type, payload, out);
+}
+}  // namespace
+
+const char* ecat::commandName(std::uint8_t cmd) {
+  static constexpr const char* kNames[] = {"NOP", "APRD", "APWR", "APRW", "FPRD",
+                                           "FPWR", "FPRW", "BRD", "BWR", "BRW",
+                                           "LRD", "LWR", "LRW", "ARMW", "FRMW"};
+  return cmd < std::size(kNames) ? kNames[cmd] : "unknown";
+}
+
+LinkType linkTypeFromDlt(int dlt) {
+  switch (dlt) {
+    case kDltEn10mb:
+      return LinkType::Ethernet;
+    case kDltLinuxSll:
+      return LinkType::LinuxSll;
+    case kDltLinuxSll2:
+      return LinkType::LinuxSll2;
+    default:
+      return LinkType::Unsupported;
+  }
+}
+
+void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
+  out.ecat_offset = offset;
+  out.count = 0;
+  out.chain_length = 0;
+  out.truncated_at = 0;
+  auto header = bytes.le16(offset);
+  if (!header) {
+    out.status = WalkStatus::Truncated;
+    out.truncated_at = bytes.size();
+    return;
+  }
+  out.header_length = *header & ecat::kLengthMask;
+  if ((*header >> 12) != ecat::kFrameTypeDatagrams) {
+    out.status = WalkStatus::NotDatagrams;
+    return;
+  }
+  out.status = WalkStatus::Ok;
+  const std::size_t chain_start = offset + ecat::kFrameHeaderSize;
+  std::size_t pos = chain_start;
+  bool more = true;
+  // Each datagram advances pos by at least 12 bytes, so the loop ends; the chain is bounded by
+  // the captured bytes, not by the header's length (which may be larger than the chain).
+  while (more && out.count < out.datagrams.size()) {
+    Datagram& dg = out.datagrams[out.count];
+    auto cmd = bytes.u8(pos);
+    auto index = bytes.u8(pos + 1);
+    auto address = bytes.le32(pos + 2);
+    auto length_word = bytes.le16(pos + 6);
+    auto irq = bytes.le16(pos + 8);
+    if (!cmd || !index || !address || !length_word || !irq) {
+      out.status = WalkStatus::Truncated;
+      out.truncated_at = bytes.size();
+      break;
+    }
+    dg = Datagram{};
+    dg.command = *cmd;
+    dg.index = *index;
+    dg.address = *address;
+    dg.length = *length_word & ecat::kLengthMask;
+    dg.circulating = (*length_word & ecat::kCirculatingBit) != 0;
+    more = (*length_word & ecat::kMoreBit) != 0;
+    dg.irq = *irq;
+    dg.header_offset = pos;
+    dg.data_offset = pos + ecat::kDatagramHeaderSize;
+    const std::size_t available =
+        bytes.size() > dg.data_offset ? bytes.size() - dg.data_offset : 0;
+    dg.data_captured = dg.length <= available ? dg.length : available;
+    ++out.count;
+    auto wkc = bytes.le16(dg.data_offset + dg.length);
+    if (dg.data_captured < dg.length || !wkc) {
+      out.status = WalkStatus::Truncated;
+      out.truncated_at = bytes.size();
+      break;
+    }
+    dg.has_wkc = true;
+    dg.wkc = *wkc;
+    pos = dg.data_offset + dg.length + ecat::kWkcSize;
+  }
+  out.chain_length = pos - chain_start;
+}
+
+void walkPacket(LinkType link, const ByteReader& bytes, EcatFrame& out) {
+  out.count = 0;
+  out.status = WalkStatus::NotEtherCat;
+  switch (link) {
+    case LinkType::Ethernet:
+      walkFromTypeField(bytes, kEthernetHeaderSize - 2, kEthernetHeaderSize, out);
+      return;
+    case LinkType::LinuxSll:
+      walkFromTypeField(bytes, kSllHeaderSize - 2, kSllHeaderSize, out);
+      return;
+    case LinkType::LinuxSll2:  // the protocol type comes first in SLL2
+      walkFromTypeField(bytes, 0, kSll2HeaderSize, out);
+      return;
+    case LinkType::Unsupported:
+      return;
+  }
+}
+
+bool EcatFrame::sameDatagramList(const EcatFrame& other) const {
+  if (count != other.count) return false;
+  for (std::size_t i = 0; i < count; ++i) {
+    const Datagram& a = datagrams[i];
+    const Datagram& b = other.datagrams[i];
+    if (a.command != b.command || a.index != b.index || a.length != b.length) return false;
+    // Slaves increment ADP of auto-increment and broadcast commands on the way (§8).
+    if ((ecat::isLogical(a.command) || ecat::isConfiguredAddress(a.command)) &&
+        a.address != b.address) {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool EcatFrame::anyWkcAboveZero() const {
+  for (std::size_t i = 0; i < count; ++i) {
+    if (datagrams[i].has_wkc && datagrams[i].wkc > 0) return true;
+  }
+  return false;
+}
+
+}  // namespace ncservo
