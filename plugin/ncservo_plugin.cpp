@@ -1,0 +1,406 @@
+// Wireshark 4.0 plugin: a thin presenter over the ncservo library. The field registration is
+// generated from the library's field table; layout, copy detection and drive state come from the
+// library's Session, computed on the first pass and kept per frame (PROTOCOL.md §10).
+//
+// Wireshark raises exceptions with longjmp: no object with a destructor may be alive in a frame
+// of this file across a tvb_* or proto_tree_add_* call. The dissector therefore works on plain
+// structs and raw pointers only.
+#define WS_BUILD_DLL
+#include <wireshark.h>
+#include <epan/expert.h>
+#include <epan/packet.h>
+#include <epan/prefs.h>
+#include <epan/proto_data.h>
+#include <wiretap/wtap.h>
+#include <wsutil/report_message.h>
+
+#include <cstdio>
+
+#include "ncservo/config.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/fields.hpp"
+#include "ncservo/pdo.hpp"
+#include "ncservo/session.hpp"
+
+extern "C" {
+WS_DLL_PUBLIC const char plugin_version[];
+WS_DLL_PUBLIC const int plugin_want_major;
+WS_DLL_PUBLIC const int plugin_want_minor;
+WS_DLL_PUBLIC void plugin_register(void);
+}
+const char plugin_version[] = NCSERVO_VERSION;
+const int plugin_want_major = WIRESHARK_VERSION_MAJOR;
+const int plugin_want_minor = WIRESHARK_VERSION_MINOR;
+
+namespace {
+
+using namespace ncservo;
+
+constexpr std::size_t kDerivedCount = std::size(kDerivedFields);
+constexpr std::size_t kMaxChildren = 33;  // at most 32 bit fields per word, NULL-terminated
+
+int proto_ncservo = -1;
+int hf_field[kFieldCount];
+int hf_derived[kDerivedCount];
+int ett_ncservo = -1;
+int ett_axis = -1;
+int ett_word[kWordCount];
+// Per word, the bit fields drawn by one bitmask call (NULL-terminated).
+int* word_children[kWordCount][kMaxChildren];
+expert_field ei_region_malformed = EI_INIT;
+
+const char* pref_config_path = "";
+gboolean pref_default_layout = TRUE;
+
+// Options from the preferences, and the state of the capture being dissected.
+DecoderOptions* g_options = nullptr;
+Session* g_session = nullptr;
+
+// What the first pass found in a frame, kept in file scope for later passes.
+enum AxisFlags : guint8 {
+  kHasRx = 1,
+  kHasTx = 2,
+  kRxMalformed = 4,
+  kTxMalformed = 8,
+  kHasState = 16,
+};
+struct AxisRecord {
+  guint16 axis;
+  guint8 flags;
+  guint8 state;
+  guint32 rx_offset;
+  guint32 tx_offset;
+};
+struct FrameRecord {
+  guint8 copy;
+  guint16 axis_count;
+  AxisRecord axes[1];  // axis_count entries
+};
+
+ftenum wordType(WireType type) {
+  switch (type) {
+    case WireType::I16:
+      return FT_INT16;
+    case WireType::I32:
+      return FT_INT32;
+    case WireType::U32:
+      return FT_UINT32;
+    case WireType::I64:
+      return FT_INT64;
+    case WireType::F32:
+      return FT_FLOAT;
+  }
+  return FT_NONE;
+}
+
+const value_string* makeValueString(const FieldDef& f) {
+  auto* vs = g_new0(value_string, f.value_count + 1u);
+  for (std::size_t i = 0; i < f.value_count; ++i) {
+    vs[i].value = f.values[i].value;
+    vs[i].strptr = f.values[i].unit != nullptr
+                       ? g_strdup_printf("%s [%s]", f.values[i].name, f.values[i].unit)
+                       : f.values[i].name;
+  }
+  return vs;
+}
+
+const true_false_string* makeTfs(const FieldDef& f) {
+  auto* tfs = g_new0(true_false_string, 1);
+  const ValueName* set = valueName(f, 1);
+  const ValueName* clear = valueName(f, 0);
+  tfs->true_string = set != nullptr ? set->name : "Set";
+  tfs->false_string = clear != nullptr ? clear->name : "Not set";
+  return tfs;
+}
+
+void fillHeader(header_field_info& h, const char* name, const char* abbrev, ftenum type, int display,
+                const void* strings, guint64 bitmask, const char* blurb) {
+  h.name = name;
+  h.abbrev = abbrev;
+  h.type = type;
+  h.display = display;
+  h.strings = strings;
+  h.bitmask = bitmask;
+  h.blurb = blurb;
+  h.id = -1;
+  h.parent = 0;
+  h.ref_type = HF_REF_TYPE_NONE;
+  h.same_name_prev_id = -1;
+  h.same_name_next = nullptr;
+}
+
+// The hf_register_info array, generated from the field table.
+hf_register_info* buildFieldRegistrations(std::size_t& count) {
+  count = kFieldCount + kDerivedCount;
+  auto* hf = g_new0(hf_register_info, count);
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    const FieldDef& f = kFields[i];
+    const WordDef& word = wordDef(f.word);
+    hf_field[i] = -1;
+    hf[i].p_id = &hf_field[i];
+    switch (f.kind) {
+      case FieldKind::Word: {
+        const ftenum type = wordType(word.type);
+        const int base = type == FT_FLOAT ? BASE_NONE : type == FT_UINT32 ? BASE_HEX : BASE_DEC;
+        fillHeader(hf[i].hfinfo, f.label, f.filter, type, base,
+                   f.value_count ? VALS(makeValueString(f)) : nullptr, 0, f.blurb);
+        break;
+      }
+      case FieldKind::Flag:
+        fillHeader(hf[i].hfinfo, f.label, f.filter, FT_BOOLEAN, 8 * word.size, TFS(makeTfs(f)),
+                   f.mask, f.blurb);
+        break;
+      case FieldKind::BitRange:
+        fillHeader(hf[i].hfinfo, f.label, f.filter, FT_UINT32, BASE_DEC,
+                   f.value_count ? VALS(makeValueString(f)) : nullptr, f.mask, f.blurb);
+        break;
+      case FieldKind::Part:
+        fillHeader(hf[i].hfinfo, f.label, f.filter, FT_INT32, BASE_DEC, nullptr, 0, f.blurb);
+        break;
+    }
+  }
+  for (std::size_t i = 0; i < kDerivedCount; ++i) {
+    const DerivedFieldDef& d = kDerivedFields[i];
+    hf_derived[i] = -1;
+    hf_register_info& r = hf[kFieldCount + i];
+    r.p_id = &hf_derived[i];
+    if (d.id == Derived::Axis) {
+      fillHeader(r.hfinfo, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
+    } else {
+      fillHeader(r.hfinfo, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
+    }
+  }
+  return hf;
+}
+
+int derivedHf(Derived id) { return hf_derived[static_cast<std::size_t>(id)]; }
+
+void buildWordChildren() {
+  std::size_t used[kWordCount] = {};
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    const FieldDef& f = kFields[i];
+    if (f.kind != FieldKind::Flag && f.kind != FieldKind::BitRange) continue;
+    const auto w = static_cast<std::size_t>(f.word);
+    if (used[w] + 1 < kMaxChildren) word_children[w][used[w]++] = &hf_field[i];
+  }
+}
+
+void applyPreferences() {
+  auto* options = new DecoderOptions();
+  options->default_layout = pref_default_layout != FALSE;
+  if (pref_config_path != nullptr && pref_config_path[0] != '\0') {
+    ConfigResult loaded = loadConfig(pref_config_path);
+    if (loaded.ok()) {
+      options->axes = loaded.config->axes;
+      options->default_layout = options->default_layout && loaded.config->default_layout;
+    } else {
+      report_failure("NCSERVO: %s", loaded.error->text().c_str());
+    }
+  }
+  delete g_options;
+  g_options = options;
+}
+
+void initCapture() {
+  delete g_session;
+  g_session = new Session(g_options != nullptr ? *g_options : DecoderOptions{});
+}
+
+void cleanupCapture() {
+  delete g_session;
+  g_session = nullptr;
+}
+
+LinkType linkTypeOf(const packet_info* pinfo) {
+  if (pinfo->rec == nullptr || pinfo->rec->rec_type != REC_TYPE_PACKET) {
+    return LinkType::Unsupported;
+  }
+  switch (pinfo->rec->rec_header.packet_header.pkt_encap) {
+    case WTAP_ENCAP_ETHERNET:
+      return LinkType::Ethernet;
+    case WTAP_ENCAP_SLL:
+      return LinkType::LinuxSll;
+    case WTAP_ENCAP_SLL2:
+      return LinkType::LinuxSll2;
+    default:
+      return LinkType::Unsupported;
+  }
+}
+
+// First pass: run the library over the frame and keep what it found.
+const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
+  const LinkType link = linkTypeOf(pinfo);
+  if (link == LinkType::Unsupported || g_session == nullptr) return nullptr;
+  const guint length = tvb_captured_length(tvb);
+  const guint8* data = length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr;
+  const ByteReader bytes(data, data != nullptr ? length : 0);
+  static EcatFrame frame;  // 8 KiB; dissection is single-threaded
+  walkPacket(link, bytes, frame);
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return nullptr;
+  const FrameView& view = g_session->onFrame(frame, bytes);
+  if (view.axis_count == 0) return nullptr;
+  const std::size_t size = sizeof(FrameRecord) + (view.axis_count - 1) * sizeof(AxisRecord);
+  auto* record = static_cast<FrameRecord*>(wmem_alloc0(wmem_file_scope(), size));
+  record->copy = static_cast<guint8>(view.copy);
+  record->axis_count = static_cast<guint16>(view.axis_count);
+  for (std::size_t i = 0; i < view.axis_count; ++i) {
+    const AxisFrameView& axis = view.axes[i];
+    AxisRecord& r = record->axes[i];
+    r.axis = axis.placement.axis;
+    r.flags = static_cast<guint8>((axis.placement.has_rx ? kHasRx : 0) |
+                                  (axis.placement.has_tx ? kHasTx : 0) |
+                                  (axis.placement.rx_malformed ? kRxMalformed : 0) |
+                                  (axis.placement.tx_malformed ? kTxMalformed : 0) |
+                                  (axis.state ? kHasState : 0));
+    r.state = axis.state ? static_cast<guint8>(*axis.state) : 0;
+    r.rx_offset = static_cast<guint32>(axis.placement.rx_offset);
+    r.tx_offset = static_cast<guint32>(axis.placement.tx_offset);
+  }
+  p_add_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0, record);
+  return record;
+}
+
+// Adds the words of one PDO, each bit field under its word, generated from the field table.
+void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
+  proto_tree* word_tree = nullptr;
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    const FieldDef& f = kFields[i];
+    if (wordDef(f.word).pdo != pdo) continue;
+    const FieldSpan span = fieldSpan(f);
+    const auto w = static_cast<std::size_t>(f.word);
+    if (f.kind == FieldKind::Word) {
+      if (word_children[w][0] != nullptr) {
+        proto_item* item = proto_tree_add_bitmask(tree, tvb, offset + span.offset, hf_field[i],
+                                                  ett_word[w], word_children[w], ENC_LITTLE_ENDIAN);
+        word_tree = proto_item_get_subtree(item);
+      } else {
+        proto_item* item = proto_tree_add_item(tree, hf_field[i], tvb, offset + span.offset,
+                                               static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
+        word_tree = proto_item_add_subtree(item, ett_word[w]);
+      }
+    } else if (f.kind == FieldKind::Part && fieldApplies(f, values)) {
+      proto_tree_add_item(word_tree, hf_field[i], tvb, offset + span.offset,
+                          static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
+    }
+  }
+}
+
+void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const AxisRecord& r) {
+  const char* name = "?";
+  if (g_session != nullptr && r.axis < g_session->decoder().axes().size()) {
+    name = g_session->decoder().axes()[r.axis].name.c_str();
+  }
+  const char* state = (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
+  const guint start = (r.flags & kHasRx) ? r.rx_offset : r.tx_offset;
+  proto_item* axis_item = nullptr;
+  proto_tree* axis_tree = proto_tree_add_subtree_format(
+      tree, tvb, start, 0, ett_axis, &axis_item, "Axis %u (%s)%s%s", r.axis, name,
+      state ? ": " : "", state ? state : "");
+  proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
+  proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
+
+  // Values for conditions and derived fields; the items themselves read the bytes through tvb.
+  const guint length = tvb_captured_length(tvb);
+  const ByteReader bytes(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length);
+  PdoValues values;
+  if (r.flags & kHasRx) readPdo(Pdo::Rx, bytes, r.rx_offset, values);
+  if (r.flags & kHasTx) readPdo(Pdo::Tx, bytes, r.tx_offset, values);
+  if (values.has_rx) addPdo(axis_tree, tvb, Pdo::Rx, r.rx_offset, values);
+  if (values.has_tx) addPdo(axis_tree, tvb, Pdo::Tx, r.tx_offset, values);
+  if (state != nullptr) {
+    proto_item_set_generated(
+        proto_tree_add_string(axis_tree, derivedHf(Derived::State), tvb, start, 0, state));
+  }
+  if (values.has_tx) {
+    char message[128];
+    formatMessage(message, sizeof message, values.msgCode(), values.msgData());
+    proto_item_set_generated(proto_tree_add_string(axis_tree, derivedHf(Derived::Message), tvb,
+                                                   r.tx_offset, 0, message));
+  }
+  if (r.flags & (kRxMalformed | kTxMalformed)) {
+    const bool rx = (r.flags & kRxMalformed) != 0;
+    expert_add_info_format(pinfo, axis_item, &ei_region_malformed,
+                           "Axis %u: the %s (%u bytes) is cut short or lies partly outside its "
+                           "datagram",
+                           r.axis, rx ? "RxPDO" : "TxPDO",
+                           static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize));
+  }
+  col_append_fstr(pinfo->cinfo, COL_INFO, "%s%s%s", name, state ? " " : "", state ? state : "");
+}
+
+int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
+  const FrameRecord* record = nullptr;
+  if (!PINFO_FD_VISITED(pinfo)) {
+    record = analyseFrame(tvb, pinfo);
+  } else {
+    record = static_cast<const FrameRecord*>(p_get_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0));
+  }
+  if (record == nullptr) return 0;
+  proto_item* root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, -1, ENC_NA);
+  proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
+  const char* copy = copyKindName(static_cast<CopyKind>(record->copy));
+  proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
+  proto_item_set_generated(
+      proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
+  col_append_str(pinfo->cinfo, COL_INFO, " [NCSERVO ");
+  for (guint i = 0; i < record->axis_count; ++i) {
+    if (i > 0) col_append_str(pinfo->cinfo, COL_INFO, "; ");
+    addAxis(ncservo_tree, tvb, pinfo, record->axes[i]);
+  }
+  col_append_str(pinfo->cinfo, COL_INFO, "]");
+  return static_cast<int>(tvb_captured_length(tvb));
+}
+
+void registerProtocol() {
+  proto_ncservo = proto_register_protocol("NC-Servo EtherCAT process data", "NCSERVO", "ncservo");
+  std::size_t count = 0;
+  hf_register_info* hf = buildFieldRegistrations(count);
+  proto_register_field_array(proto_ncservo, hf, static_cast<int>(count));
+  buildWordChildren();
+
+  static gint* ett[2 + kWordCount];
+  ett[0] = &ett_ncservo;
+  ett[1] = &ett_axis;
+  for (std::size_t w = 0; w < kWordCount; ++w) {
+    ett_word[w] = -1;
+    ett[2 + w] = &ett_word[w];
+  }
+  proto_register_subtree_array(ett, static_cast<int>(std::size(ett)));
+
+  static ei_register_info ei[] = {
+      {&ei_region_malformed,
+       {"ncservo.malformed", PI_MALFORMED, PI_ERROR,
+        "A PDO region is cut short or lies partly outside its datagram", EXPFILL}},
+  };
+  expert_module_t* expert = expert_register_protocol(proto_ncservo);
+  expert_register_field_array(expert, ei, static_cast<int>(std::size(ei)));
+
+  module_t* prefs = prefs_register_protocol(proto_ncservo, applyPreferences);
+  prefs_register_filename_preference(
+      prefs, "config", "Configuration file",
+      "TOML configuration file with the axes' layout (see the ncservo README)", &pref_config_path,
+      FALSE);
+  prefs_register_bool_preference(
+      prefs, "default_layout", "Use the default layout",
+      "Assume the layout of a master that maps all outputs, then all inputs (PROTOCOL.md §9.4) "
+      "when nothing else gives the layout",
+      &pref_default_layout);
+
+  register_init_routine(initCapture);
+  register_cleanup_routine(cleanupCapture);
+}
+
+void registerHandoff() {
+  dissector_handle_t handle = create_dissector_handle(dissectNcservo, proto_ncservo);
+  register_postdissector(handle);
+  applyPreferences();
+}
+
+}  // namespace
+
+void plugin_register(void) {
+  static proto_plugin plugin;
+  plugin.register_protoinfo = registerProtocol;
+  plugin.register_handoff = registerHandoff;
+  proto_register_plugin(&plugin);
+}
