@@ -1,0 +1,35 @@
+# Shared helpers for the integration tests (sourced). Expects BUILD and SRC set by the caller.
+set -euo pipefail
+TSHARK="$SRC/tests/tools/tshark-with-plugin.sh"
+GEN="$SRC/tests/tools/gen_capture.py"
+CHECK="$SRC/tests/tools/check_fields.py"
+NCSERVO="$BUILD/validator/ncservo"
+PLUGIN="$BUILD/plugin/ncservo.so"
+WORK=$(mktemp -d)
+chmod 755 "$WORK"  # tshark runs as nobody when the tests run as root
+trap 'rm -rf "$WORK"' EXIT
+
+ALL_FIELDS=(ncservo.ssp ncservo.scw ncservo.ext_code ncservo.actpos ncservo.ssw ncservo.sew
+            ncservo.msg_code ncservo.msg_data ncservo.ext_data1 ncservo.ext_data2
+            ncservo.ext_data3 ncservo.ext_data4)
+
+fail() {
+  echo "FAIL: $*" >&2
+  exit 1
+}
+
+# tshark_fields CAPTURE OUT [tshark options...]: every PDO field, one column each.
+tshark_fields() {
+  local capture=$1 out=$2
+  shift 2
+  local args=()
+  for f in "${ALL_FIELDS[@]}"; do args+=(-e "$f"); done
+  "$TSHARK" "$PLUGIN" -r "$capture" "$@" -T fields -E occurrence=a -E separator=/t -E aggregator=, \
+    -e frame.number "${args[@]}" >"$out" 2>"$WORK/tshark.err" || fail "tshark exited $? on $capture: $(cat "$WORK/tshark.err")"
+  if [ -s "$WORK/tshark.err" ]; then fail "tshark printed on stderr: $(head -5 "$WORK/tshark.err")"; fi
+}
+
+fields_csv() {
+  local IFS=,
+  echo "${ALL_FIELDS[*]}"
+}

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# real_captures.sh SRC BUILD
+# Over real EtherCAT captures from other people's hardware (none holds a servo of this protocol),
+# tshark with the plugin exits 0, prints nothing on stderr and shows no ncservo field, and
+# `ncservo decode` finds no axis and says so.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+real="$SRC/../shared/captures/real"
+[ -d "$real" ] || fail "no real captures at $real"
+count=0
+for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
+  [ -f "$capture" ] || continue
+  count=$((count + 1))
+  cp "$capture" "$WORK/capture"
+  chmod a+r "$WORK/capture"
+  tshark_fields "$WORK/capture" "$WORK/out.tsv"
+  if cut -f2- "$WORK/out.tsv" | grep -q '[^[:space:]]'; then
+    fail "$(basename "$capture"): ncservo fields shown: $(cut -f2- "$WORK/out.tsv" | grep -m1 '[^[:space:]]')"
+  fi
+  "$TSHARK" "$PLUGIN" -r "$WORK/capture" -V >"$WORK/verbose.txt" 2>"$WORK/err.txt" || fail "tshark -V exit $?"
+  [ ! -s "$WORK/err.txt" ] || fail "$(basename "$capture"): stderr: $(head -3 "$WORK/err.txt")"
+  ! grep -q "NC-Servo" "$WORK/verbose.txt" || fail "$(basename "$capture"): an NC-Servo tree"
+  "$NCSERVO" decode "$WORK/capture" >"$WORK/decode.csv" 2>"$WORK/decode.err" || fail "decode exit $?"
+  [ "$(wc -l <"$WORK/decode.csv")" = 1 ] || fail "$(basename "$capture"): decode found rows"
+  grep -q "no servo of this protocol found" "$WORK/decode.err" || fail "no plain message"
+  echo "ok $(basename "$capture")"
+done
+[ $count -ge 1 ] || fail "no capture found"
