@@ -260,6 +260,17 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   return record;
 }
 
+// Whether a word's items are needed: the tree is shown, or a filter or column asks for the word or
+// one of its fields. Skipping the rest keeps `tshark -T fields` and filtering fast.
+bool wordWanted(proto_tree* tree, std::size_t word, std::size_t word_row) {
+  if (proto_field_is_referenced(tree, hf_field[word_row])) return true;
+  for (std::size_t i = word_row + 1; i < kFieldCount && kFields[i].word == kFields[word_row].word; ++i) {
+    if (proto_field_is_referenced(tree, hf_field[i])) return true;
+  }
+  (void)word;
+  return false;
+}
+
 // Adds the words of one PDO, each bit field under its word, generated from the field table.
 void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
   proto_tree* word_tree = nullptr;
@@ -269,16 +280,21 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
     const FieldSpan span = fieldSpan(f);
     const auto w = static_cast<std::size_t>(f.word);
     if (f.kind == FieldKind::Word) {
+      word_tree = nullptr;
+      if (!wordWanted(tree, w, i)) continue;
       if (word_children[w][0] != nullptr) {
-        proto_item* item = proto_tree_add_bitmask(tree, tvb, offset + span.offset, hf_field[i],
-                                                  ett_word[w], word_children[w], ENC_LITTLE_ENDIAN);
+        // BMT_NO_APPEND: the bits are children; appending their names to the word's label
+        // would format every bit of every word on every frame.
+        proto_item* item = proto_tree_add_bitmask_with_flags(
+            tree, tvb, offset + span.offset, hf_field[i], ett_word[w], word_children[w],
+            ENC_LITTLE_ENDIAN, BMT_NO_APPEND);
         word_tree = proto_item_get_subtree(item);
       } else {
         proto_item* item = proto_tree_add_item(tree, hf_field[i], tvb, offset + span.offset,
                                                static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
         word_tree = proto_item_add_subtree(item, ett_word[w]);
       }
-    } else if (f.kind == FieldKind::Part && fieldApplies(f, values)) {
+    } else if (f.kind == FieldKind::Part && word_tree != nullptr && fieldApplies(f, values)) {
       proto_tree_add_item(word_tree, hf_field[i], tvb, offset + span.offset,
                           static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
     }
