@@ -307,7 +307,9 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const AxisReco
     name = g_session->decoder().axes()[r.axis].name.c_str();
   }
   const char* state = (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
-  const guint start = (r.flags & kHasRx) ? r.rx_offset : r.tx_offset;
+  // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
+  // raise an exception.
+  const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
   proto_item* axis_item = nullptr;
   proto_tree* axis_tree = proto_tree_add_subtree_format(
       tree, tvb, start, 0, ett_axis, &axis_item, "Axis %u (%s)%s%s", r.axis, name,
@@ -333,13 +335,14 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const AxisReco
     proto_item_set_generated(proto_tree_add_string(axis_tree, derivedHf(Derived::Message), tvb,
                                                    r.tx_offset, 0, message));
   }
-  if (r.flags & (kRxMalformed | kTxMalformed)) {
-    const bool rx = (r.flags & kRxMalformed) != 0;
+  for (const bool rx : {true, false}) {
+    if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
     expert_add_info_format(pinfo, axis_item, &ei_region_malformed,
-                           "Axis %u: the %s (%u bytes) is cut short or lies partly outside its "
-                           "datagram",
+                           "Axis %u: the %s (%u bytes at frame offset %u) is cut short or lies "
+                           "partly outside its datagram",
                            r.axis, rx ? "RxPDO" : "TxPDO",
-                           static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize));
+                           static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
+                           rx ? r.rx_offset : r.tx_offset);
   }
   col_append_fstr(pinfo->cinfo, COL_INFO, "%s%s%s", name, state ? " " : "", state ? state : "");
 }

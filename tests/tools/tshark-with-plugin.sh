@@ -13,7 +13,11 @@ dir=${NCSERVO_PLUGIN_STAGE:-/tmp}/ncservo-wsplug-$key
 mkdir -p "$dir/4.0/epan"
 for so in "$stock_dir"/*.so; do ln -sf "$so" "$dir/4.0/epan/"; done
 if [ "$plugin" != none ]; then
-  cp -f "$plugin" "$dir/4.0/epan/ncservo.so"
+  # Copy then rename, so a tshark starting in parallel never loads a half-written plugin.
+  tmp=$(mktemp "$dir/4.0/epan/.ncservo.XXXXXX")
+  cp -f "$plugin" "$tmp"
+  chmod a+r "$tmp"
+  mv -f "$tmp" "$dir/4.0/epan/ncservo.so"
 fi
 chmod -R a+rX "$dir"
 if [ "$(id -u)" = 0 ]; then

@@ -260,7 +260,8 @@ const Decoder::DefaultKey* Decoder::defaultKeyFor(const Datagram& dg, std::uint1
       return &key;
     }
   }
-  const bool plausible = dg.has_wkc && (dg.wkc == 0 || dg.wkc == expected_wkc);
+  // A frame cut before the WKC (snap length) cannot contradict the layout: take it.
+  const bool plausible = !dg.has_wkc || dg.wkc == 0 || dg.wkc == expected_wkc;
   if (!plausible || default_keys_.size() >= kMaxDefaultKeys) return nullptr;
   const auto first_axis = static_cast<std::uint16_t>(axes_.size());
   for (std::uint16_t k = 0; k < axis_count; ++k) {
