@@ -6,11 +6,11 @@
 // of this file across a tvb_* or proto_tree_add_* call. The dissector therefore works on plain
 // structs and raw pointers only.
 #define WS_BUILD_DLL
-#include <wireshark.h>
 #include <epan/expert.h>
 #include <epan/packet.h>
 #include <epan/prefs.h>
 #include <epan/proto_data.h>
+#include <wireshark.h>
 #include <wiretap/wtap.h>
 #include <wsutil/report_message.h>
 
@@ -113,8 +113,8 @@ const true_false_string* makeTfs(const FieldDef& f) {
   return tfs;
 }
 
-void fillHeader(header_field_info& h, const char* name, const char* abbrev, ftenum type, int display,
-                const void* strings, guint64 bitmask, const char* blurb) {
+void fillHeader(header_field_info& h, const char* name, const char* abbrev, ftenum type,
+                int display, const void* strings, guint64 bitmask, const char* blurb) {
   h.name = name;
   h.abbrev = abbrev;
   h.type = type;
@@ -173,7 +173,9 @@ hf_register_info* buildFieldRegistrations(std::size_t& count) {
   return hf;
 }
 
-int derivedHf(Derived id) { return hf_derived[static_cast<std::size_t>(id)]; }
+int derivedHf(Derived id) {
+  return hf_derived[static_cast<std::size_t>(id)];
+}
 
 void buildWordChildren() {
   std::size_t used[kWordCount] = {};
@@ -247,11 +249,10 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
     const AxisFrameView& axis = view.axes[i];
     AxisRecord& r = record->axes[i];
     r.axis = axis.placement.axis;
-    r.flags = static_cast<guint8>((axis.placement.has_rx ? kHasRx : 0) |
-                                  (axis.placement.has_tx ? kHasTx : 0) |
-                                  (axis.placement.rx_malformed ? kRxMalformed : 0) |
-                                  (axis.placement.tx_malformed ? kTxMalformed : 0) |
-                                  (axis.state ? kHasState : 0));
+    r.flags = static_cast<guint8>(
+        (axis.placement.has_rx ? kHasRx : 0) | (axis.placement.has_tx ? kHasTx : 0) |
+        (axis.placement.rx_malformed ? kRxMalformed : 0) |
+        (axis.placement.tx_malformed ? kTxMalformed : 0) | (axis.state ? kHasState : 0));
     r.state = axis.state ? static_cast<guint8>(*axis.state) : 0;
     r.rx_offset = static_cast<guint32>(axis.placement.rx_offset);
     r.tx_offset = static_cast<guint32>(axis.placement.tx_offset);
@@ -264,7 +265,8 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
 // one of its fields. Skipping the rest keeps `tshark -T fields` and filtering fast.
 bool wordWanted(proto_tree* tree, std::size_t word, std::size_t word_row) {
   if (proto_field_is_referenced(tree, hf_field[word_row])) return true;
-  for (std::size_t i = word_row + 1; i < kFieldCount && kFields[i].word == kFields[word_row].word; ++i) {
+  for (std::size_t i = word_row + 1; i < kFieldCount && kFields[i].word == kFields[word_row].word;
+       ++i) {
     if (proto_field_is_referenced(tree, hf_field[i])) return true;
   }
   (void)word;
@@ -306,14 +308,15 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const AxisReco
   if (g_session != nullptr && r.axis < g_session->decoder().axes().size()) {
     name = g_session->decoder().axes()[r.axis].name.c_str();
   }
-  const char* state = (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
+  const char* state =
+      (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
   // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
   // raise an exception.
   const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
   proto_item* axis_item = nullptr;
-  proto_tree* axis_tree = proto_tree_add_subtree_format(
-      tree, tvb, start, 0, ett_axis, &axis_item, "Axis %u (%s)%s%s", r.axis, name,
-      state ? ": " : "", state ? state : "");
+  proto_tree* axis_tree =
+      proto_tree_add_subtree_format(tree, tvb, start, 0, ett_axis, &axis_item, "Axis %u (%s)%s%s",
+                                    r.axis, name, state ? ": " : "", state ? state : "");
   proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
   proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
 
@@ -352,7 +355,8 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   if (!PINFO_FD_VISITED(pinfo)) {
     record = analyseFrame(tvb, pinfo);
   } else {
-    record = static_cast<const FrameRecord*>(p_get_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0));
+    record = static_cast<const FrameRecord*>(
+        p_get_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0));
   }
   if (record == nullptr) return 0;
   proto_item* root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, -1, ENC_NA);

@@ -54,7 +54,8 @@ class RowWriter {
   void write(const Row& row) {
     const std::string& name = decoder_.axes().at(row.axis).name;
     char message[128] = "";
-    if (row.values.has_tx) formatMessage(message, sizeof message, row.values.msgCode(), row.values.msgData());
+    if (row.values.has_tx)
+      formatMessage(message, sizeof message, row.values.msgCode(), row.values.msgData());
     const char* state = row.state ? driveStateName(*row.state) : "";
     if (csv_) {
       std::string line = fmt::format("{},{:.9f},{},{}", row.frame, row.time, row.axis, name);
@@ -143,7 +144,8 @@ int runDecode(const std::string& path, const std::optional<Config>& config, bool
     if (!first_time) first_time = record.time_ns;
     const ByteReader bytes(record.data, record.captured);
     walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams) continue;
+    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
+      continue;
     const FrameView& view = session.onFrame(frame, bytes);
     const double time = static_cast<double>(record.time_ns - *first_time) / 1e9;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
@@ -151,9 +153,9 @@ int runDecode(const std::string& path, const std::optional<Config>& config, bool
       const std::uint16_t index = axis.placement.axis;
       if (axis.placement.rx_malformed || axis.placement.tx_malformed) {
         ++malformed;
-        fmt::print(stderr, "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
-                   reader->path(), record.frame, index,
-                   axis.placement.rx_malformed ? "RxPDO" : "TxPDO");
+        fmt::print(
+            stderr, "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
+            reader->path(), record.frame, index, axis.placement.rx_malformed ? "RxPDO" : "TxPDO");
       }
       Row row{record.frame, time, index, axis.values, axis.state};
       if (view.copy == CopyKind::Master) {
@@ -165,7 +167,8 @@ int runDecode(const std::string& path, const std::optional<Config>& config, bool
       if (it != pending.end() && it->second.values.has_rx) {
         // The master's outputs are what the NC sent; the returned copy adds the inputs.
         for (const WordDef& word : kWords) {
-          if (word.pdo == Pdo::Rx) row.values.raw[static_cast<std::size_t>(word.word)] = it->second.values.word(word.word);
+          if (word.pdo == Pdo::Rx)
+            row.values.raw[static_cast<std::size_t>(word.word)] = it->second.values.word(word.word);
         }
         row.values.has_rx = true;
         pending.erase(it);
@@ -209,7 +212,8 @@ void printFields(const std::string& format) {
   }
   for (const DerivedFieldDef& f : kDerivedFields) {
     if (format == "markdown") {
-      fmt::print("| `{}` | {} | (derived) | | | {} | INTERFACES.md |\n", f.filter, f.label, f.blurb);
+      fmt::print("| `{}` | {} | (derived) | | | {} | INTERFACES.md |\n", f.filter, f.label,
+                 f.blurb);
     } else {
       fmt::print("{}\t{}\t(derived)\t\t{}\n", f.filter, f.label, f.blurb);
     }
@@ -227,15 +231,18 @@ int main(int argc, char** argv) {
   std::string config_path;
   std::string format = "csv";
   bool no_default_layout = false;
-  auto* decode = app.add_subcommand("decode", "print the decoded process data, one row per axis and cycle");
-  decode->add_option("CAPTURE", capture, "pcap or pcapng capture, - for standard input")->required();
+  auto* decode =
+      app.add_subcommand("decode", "print the decoded process data, one row per axis and cycle");
+  decode->add_option("CAPTURE", capture, "pcap or pcapng capture, - for standard input")
+      ->required();
   decode->add_option("--config", config_path, "TOML configuration file (layout)");
   decode->add_option("--format", format, "csv or jsonl")->check(CLI::IsMember({"csv", "jsonl"}));
   decode->add_flag("--no-default-layout", no_default_layout,
                    "never assume the default layout (PROTOCOL.md §9.4)");
 
   std::string fields_format = "tsv";
-  auto* fields = app.add_subcommand("fields", "list every decoded field (generated from the field table)");
+  auto* fields =
+      app.add_subcommand("fields", "list every decoded field (generated from the field table)");
   fields->add_option("--format", fields_format, "tsv or markdown")
       ->check(CLI::IsMember({"tsv", "markdown"}));
 

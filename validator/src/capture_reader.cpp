@@ -25,9 +25,10 @@ std::unique_ptr<CaptureReader> CaptureReader::open(const std::string& path, std:
   reader->link_ = linkTypeFromDlt(reader->dlt_);
   if (reader->link_ == LinkType::Unsupported) {
     const char* dlt_name = pcap_datalink_val_to_name(reader->dlt_);
-    error = fmt::format("{}: unsupported link type {} ({}); ncservo reads Ethernet and Linux "
-                        "cooked (SLL, SLL2) captures",
-                        name, reader->dlt_, dlt_name != nullptr ? dlt_name : "unknown");
+    error = fmt::format(
+        "{}: unsupported link type {} ({}); ncservo reads Ethernet and Linux "
+        "cooked (SLL, SLL2) captures",
+        name, reader->dlt_, dlt_name != nullptr ? dlt_name : "unknown");
     return nullptr;
   }
   return reader;

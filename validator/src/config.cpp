@@ -1,16 +1,16 @@
 #include "ncservo/config.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <set>
-#include <toml++/toml.h>
 
 namespace ncservo {
 
-const std::vector<std::string_view> kTimeoutNames = {
-    "drive_response", "nc_release", "enable_response", "clear_response", "fault_reaction",
-    "param_table"};
+const std::vector<std::string_view> kTimeoutNames = {"drive_response",  "nc_release",
+                                                     "enable_response", "clear_response",
+                                                     "fault_reaction",  "param_table"};
 
 std::string ConfigError::text() const {
   std::string where = line > 0 ? fmt::format("{}:{}", path, line) : path;

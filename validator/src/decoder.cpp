@@ -61,7 +61,9 @@ const char* layoutSourceName(LayoutSource source) {
   return "none";
 }
 
-const char* copyKindName(CopyKind copy) { return copy == CopyKind::Master ? "master" : "returned"; }
+const char* copyKindName(CopyKind copy) {
+  return copy == CopyKind::Master ? "master" : "returned";
+}
 
 Decoder::Decoder(DecoderOptions options) : options_(std::move(options)) {
   for (std::size_t i = 0; i < options_.axes.size(); ++i) {
@@ -124,8 +126,9 @@ void Decoder::observeStartup(const EcatFrame& frame, const ByteReader& bytes) {
       auto length = bytes.le16(dg.data_offset + (field - dg.ado()));
       if (!length || *length == 0) continue;
       // Broadcast writes reach every slave: one key for all of them.
-      const std::uint32_t key = (std::uint32_t{dg.command} << 16) |
-                                (dg.command == ecat::kBwr || dg.command == ecat::kBrw ? 0 : dg.adp());
+      const std::uint32_t key =
+          (std::uint32_t{dg.command} << 16) |
+          (dg.command == ecat::kBwr || dg.command == ecat::kBrw ? 0 : dg.adp());
       auto slave = std::find_if(sm_slaves_list_.begin(), sm_slaves_list_.end(),
                                 [key](const SmSlave& s) { return s.key == key; });
       if (slave == sm_slaves_list_.end()) {
@@ -177,8 +180,8 @@ void Decoder::placeConfigured(const EcatFrame& frame, FrameDecode& out) {
     const Datagram& dg = frame.datagrams[d];
     const auto dg_index = static_cast<std::uint16_t>(d);
     const bool logical = ecat::isLogical(dg.command);
-    const bool fp = dg.command == ecat::kFprd || dg.command == ecat::kFpwr ||
-                    dg.command == ecat::kFprw;
+    const bool fp =
+        dg.command == ecat::kFprd || dg.command == ecat::kFpwr || dg.command == ecat::kFprw;
     if (!logical && !fp) continue;
     const bool writes = dg.command != ecat::kLrd && dg.command != ecat::kFprd;
     const bool reads = dg.command != ecat::kLwr && dg.command != ecat::kFpwr;
@@ -240,14 +243,14 @@ void Decoder::placeDefault(const EcatFrame& frame, FrameDecode& out) {
     const std::uint16_t expected_wkc = dg.command == ecat::kLrw ? 3 * n : n;
     const Datagram& inputs = frame.datagrams[inputs_index];
     const std::size_t inputs_start = dg.command == ecat::kLrw ? n * kRxPdoSize : 0;
-    const DefaultKey* key =
-        defaultKeyFor(dg, n, expected_wkc, static_cast<std::uint32_t>(inputs.address + inputs_start));
+    const DefaultKey* key = defaultKeyFor(
+        dg, n, expected_wkc, static_cast<std::uint32_t>(inputs.address + inputs_start));
     if (key == nullptr) continue;
     for (std::uint16_t k = 0; k < n; ++k) {
       const auto axis = static_cast<std::uint16_t>(key->first_axis + k);
       placeRegion(dg, static_cast<std::uint16_t>(d), k * kRxPdoSize, Pdo::Rx, returned, out, axis);
-      placeRegion(inputs, static_cast<std::uint16_t>(inputs_index),
-                  inputs_start + k * kTxPdoSize, Pdo::Tx, returned, out, axis);
+      placeRegion(inputs, static_cast<std::uint16_t>(inputs_index), inputs_start + k * kTxPdoSize,
+                  Pdo::Tx, returned, out, axis);
     }
   }
 }
@@ -262,7 +265,20 @@ const Decoder::DefaultKey* Decoder::defaultKeyFor(const Datagram& dg, std::uint1
   }
   // A frame cut before the WKC (snap length) cannot contradict the layout: take it.
   const bool plausible = !dg.has_wkc || dg.wkc == 0 || dg.wkc == expected_wkc;
-  if (!plausible || default_keys_.size() >= kMaxDefaultKeys) return nullptr;
+  if (default_keys_.size() >= kMaxDefaultKeys) return nullptr;
+  if (!plausible) {
+    auto seen =
+        std::find_if(candidate_keys_.begin(), candidate_keys_.end(), [&dg](const DefaultKey& k) {
+          return k.command == dg.command && k.address == dg.address && k.length == dg.length;
+        });
+    if (seen == candidate_keys_.end()) {
+      if (candidate_keys_.size() < kMaxDefaultKeys) {
+        candidate_keys_.push_back(DefaultKey{dg.command, dg.address, dg.length, 0, axis_count});
+      }
+      return nullptr;
+    }
+    candidate_keys_.erase(seen);  // it repeats: take it
+  }
   const auto first_axis = static_cast<std::uint16_t>(axes_.size());
   for (std::uint16_t k = 0; k < axis_count; ++k) {
     AxisInfo info;

@@ -69,9 +69,9 @@ void walkFromTypeField(const ByteReader& bytes, std::size_t type_offset, std::si
 }  // namespace
 
 const char* ecat::commandName(std::uint8_t cmd) {
-  static constexpr const char* kNames[] = {"NOP", "APRD", "APWR", "APRW", "FPRD",
-                                           "FPWR", "FPRW", "BRD", "BWR", "BRW",
-                                           "LRD", "LWR", "LRW", "ARMW", "FRMW"};
+  static constexpr const char* kNames[] = {"NOP",  "APRD", "APWR", "APRW", "FPRD",
+                                           "FPWR", "FPRW", "BRD",  "BWR",  "BRW",
+                                           "LRD",  "LWR",  "LRW",  "ARMW", "FRMW"};
   return cmd < std::size(kNames) ? kNames[cmd] : "unknown";
 }
 
@@ -132,8 +132,7 @@ void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
     dg.irq = *irq;
     dg.header_offset = pos;
     dg.data_offset = pos + ecat::kDatagramHeaderSize;
-    const std::size_t available =
-        bytes.size() > dg.data_offset ? bytes.size() - dg.data_offset : 0;
+    const std::size_t available = bytes.size() > dg.data_offset ? bytes.size() - dg.data_offset : 0;
     dg.data_captured = dg.length <= available ? dg.length : available;
     ++out.count;
     auto wkc = bytes.le16(dg.data_offset + dg.length);

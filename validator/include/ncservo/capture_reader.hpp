@@ -13,7 +13,7 @@ struct pcap;  // libpcap's handle, kept out of this header
 namespace ncservo {
 
 struct CaptureRecord {
-  std::uint64_t frame = 0;  // 1-based, as Wireshark numbers frames
+  std::uint64_t frame = 0;   // 1-based, as Wireshark numbers frames
   std::int64_t time_ns = 0;  // absolute capture time in nanoseconds
   const std::uint8_t* data = nullptr;
   std::size_t captured = 0;

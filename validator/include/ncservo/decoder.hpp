@@ -34,8 +34,8 @@ struct AxisInfo {
 struct AxisPlacement {
   std::uint16_t axis = 0;
   bool has_rx = false;
-  bool has_tx = false;          // inputs present and valid: returned copy, WKC above zero
-  bool rx_malformed = false;    // the RxPDO region is cut short or straddles the datagram's end
+  bool has_tx = false;        // inputs present and valid: returned copy, WKC above zero
+  bool rx_malformed = false;  // the RxPDO region is cut short or straddles the datagram's end
   bool tx_malformed = false;
   std::uint16_t rx_datagram = 0;  // index in EcatFrame::datagrams
   std::uint16_t tx_datagram = 0;
@@ -91,6 +91,8 @@ class Decoder {
   DecoderOptions options_;
   std::vector<AxisInfo> axes_;
   std::vector<DefaultKey> default_keys_;
+  // Candidates first seen with an unexpected WKC: taken when they repeat (PROTOCOL.md §9.4).
+  std::vector<DefaultKey> candidate_keys_;
   std::uint64_t previous_signature_ = 0;
   bool previous_was_master_ = false;
   // Sync-manager lengths written by the start-up, per slave (bounded, PROTOCOL.md §9.3).

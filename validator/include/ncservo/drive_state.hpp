@@ -10,14 +10,14 @@
 namespace ncservo {
 
 enum class DriveState : std::uint8_t {
-  Error,                   // seed 003 state 8
-  FaultReactionActive,     // 7
-  DriveStop,               // 5b
-  ControlActive,           // 5
-  EnabledPowerStageOff,    // not a seed 003 state
-  SwitchedOn,              // 4
-  ReadyToSwitchOn,         // 3
-  NotReadyToSwitchOn,      // 1
+  Error,                 // seed 003 state 8
+  FaultReactionActive,   // 7
+  DriveStop,             // 5b
+  ControlActive,         // 5
+  EnabledPowerStageOff,  // not a seed 003 state
+  SwitchedOn,            // 4
+  ReadyToSwitchOn,       // 3
+  NotReadyToSwitchOn,    // 1
 };
 
 const char* driveStateName(DriveState state);

@@ -43,7 +43,9 @@ enum Command : std::uint8_t {
   kFrmw = 14,
 };
 
-inline constexpr bool isLogical(std::uint8_t cmd) { return cmd == kLrd || cmd == kLwr || cmd == kLrw; }
+inline constexpr bool isLogical(std::uint8_t cmd) {
+  return cmd == kLrd || cmd == kLwr || cmd == kLrw;
+}
 inline constexpr bool isConfiguredAddress(std::uint8_t cmd) {
   return cmd == kFprd || cmd == kFpwr || cmd == kFprw || cmd == kFrmw;
 }
@@ -79,18 +81,18 @@ struct Datagram {
 
 enum class WalkStatus : std::uint8_t {
   Ok,
-  NotEtherCat,     // no EtherCAT frame in these bytes (other traffic)
-  NotDatagrams,    // an EtherCAT frame of another type (not process data)
-  Truncated,       // the captured bytes end inside the chain: datagrams before it are valid
+  NotEtherCat,   // no EtherCAT frame in these bytes (other traffic)
+  NotDatagrams,  // an EtherCAT frame of another type (not process data)
+  Truncated,     // the captured bytes end inside the chain: datagrams before it are valid
 };
 
 struct EcatFrame {
   WalkStatus status = WalkStatus::NotEtherCat;
-  std::size_t ecat_offset = 0;        // offset of the EtherCAT frame header
-  std::uint16_t header_length = 0;    // chain length the frame header declares
-  std::size_t chain_length = 0;       // bytes the walked chain really spans
-  std::size_t truncated_at = 0;       // offset where the captured bytes ran out (Truncated)
-  std::size_t count = 0;              // datagrams in `datagrams`, a partial last one included
+  std::size_t ecat_offset = 0;      // offset of the EtherCAT frame header
+  std::uint16_t header_length = 0;  // chain length the frame header declares
+  std::size_t chain_length = 0;     // bytes the walked chain really spans
+  std::size_t truncated_at = 0;     // offset where the captured bytes ran out (Truncated)
+  std::size_t count = 0;            // datagrams in `datagrams`, a partial last one included
   std::array<Datagram, ecat::kMaxDatagrams> datagrams{};
 
   // Same datagram list: what pairs a master's frame with its returned copy (PROTOCOL.md §8).

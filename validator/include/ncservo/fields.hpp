@@ -47,11 +47,10 @@ inline constexpr ValueName kSe[] = {{0, "disabled"},
                                     {3, "disabled"}};
 inline constexpr ValueName kEmgon[] = {{0, "emergency (braking ramp)"}, {1, "normal"}};
 inline constexpr ValueName kPoslock[] = {{0, "normal"}, {1, "hold position"}};
-inline constexpr ValueName kTableLow[] = {
-    {0, "table 1 (5 with ExtPRMTBL)"},
-    {1, "table 2 (6 with ExtPRMTBL)"},
-    {2, "table 3 (7 with ExtPRMTBL)"},
-    {3, "table 4 (8 with ExtPRMTBL)"}};
+inline constexpr ValueName kTableLow[] = {{0, "table 1 (5 with ExtPRMTBL)"},
+                                          {1, "table 2 (6 with ExtPRMTBL)"},
+                                          {2, "table 3 (7 with ExtPRMTBL)"},
+                                          {3, "table 4 (8 with ExtPRMTBL)"}};
 inline constexpr ValueName kModeSel[] = {
     {0, "speed"}, {1, "current (torque)"}, {2, "position"}, {3, "high-accuracy speed"}};
 inline constexpr ValueName kSIntLock[] = {{0, "normal"}, {1, "integrator frozen"}};
@@ -64,12 +63,9 @@ inline constexpr ValueName kSetClear[] = {{0, "clear"}, {1, "set"}};
 inline constexpr ValueName kEncoder[] = {{0, "absolute (64-bit position)"},
                                          {1, "incremental (32-bit position)"}};
 // PROTOCOL.md §5: what the message data means for each defined message code.
-inline constexpr ValueName kMsgCode[] = {{0, "motor speed", "rpm"},
-                                         {1, "motor current", "A"},
-                                         {2, "relative current I/In", "%"},
-                                         {3, "bus voltage", "V"},
-                                         {4, "motor temperature", "°C"},
-                                         {5, "motor power", "kW"}};
+inline constexpr ValueName kMsgCode[] = {
+    {0, "motor speed", "rpm"}, {1, "motor current", "A"},      {2, "relative current I/In", "%"},
+    {3, "bus voltage", "V"},   {4, "motor temperature", "°C"}, {5, "motor power", "kW"}};
 }  // namespace names
 
 #define NCSERVO_VALUES(array) names::array, static_cast<std::uint8_t>(std::size(names::array))
@@ -288,8 +284,10 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
     {Derived::AxisName, "Axis name", "ncservo.axis_name", "Name of the axis in the layout"},
     {Derived::Copy, "Copy", "ncservo.copy",
      "master = the master's frame (outputs), returned = the copy back from the ring (inputs)"},
-    {Derived::State, "Drive state", "ncservo.state", "Drive state shown by the process data (PROTOCOL.md §6)"},
-    {Derived::Message, "Message", "ncservo.message", "Message data with its meaning and unit (PROTOCOL.md §5)"},
+    {Derived::State, "Drive state", "ncservo.state",
+     "Drive state shown by the process data (PROTOCOL.md §6)"},
+    {Derived::Message, "Message", "ncservo.message",
+     "Message data with its meaning and unit (PROTOCOL.md §5)"},
 };
 
 }  // namespace ncservo

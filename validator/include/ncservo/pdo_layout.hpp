@@ -52,7 +52,9 @@ inline constexpr std::array<WordDef, kWordCount> kWords{{
     {Word::ExtData4, Pdo::Tx, 4, WireType::F32, "ExtData4"},
 }};
 
-constexpr const WordDef& wordDef(Word w) { return kWords[static_cast<std::size_t>(w)]; }
+constexpr const WordDef& wordDef(Word w) {
+  return kWords[static_cast<std::size_t>(w)];
+}
 
 // Byte offset of a word inside its PDO: the sum of the sizes of the words before it.
 constexpr std::size_t wordOffset(Word w) {

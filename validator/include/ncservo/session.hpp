@@ -14,7 +14,7 @@ namespace ncservo {
 
 struct AxisFrameView {
   AxisPlacement placement;
-  PdoValues values;  // only what this frame carries
+  PdoValues values;                 // only what this frame carries
   std::optional<DriveState> state;  // from this frame's values and the axis's latest ones
 };
 

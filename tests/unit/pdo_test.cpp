@@ -1,0 +1,351 @@
+// Reading PDOs from bytes and the values of the field table's rows (pdo.hpp, PROTOCOL.md §1-5).
+#include "ncservo/pdo.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "frame_builder.hpp"
+
+namespace ncservo {
+namespace {
+
+using test::Bytes;
+using test::rxPdo;
+using test::txPdo;
+using test::TxValues;
+
+using Kind = FieldValue::Kind;
+
+// Reads a 10-byte buffer as the RxPDO or a 40-byte one as the TxPDO.
+PdoValues valuesOf(const Bytes& pdo) {
+  PdoValues values;
+  const Pdo which = pdo.size() == kRxPdoSize ? Pdo::Rx : Pdo::Tx;
+  EXPECT_TRUE(readPdo(which, ByteReader(pdo.data(), pdo.size()), 0, values));
+  return values;
+}
+
+std::uint64_t bitsOf(float f) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  return bits;
+}
+
+TEST(ReadPdo, RxFromLittleEndianBytes) {
+  // Two bytes of something else, then SSP -1000, SCW 0x00000406, ext code -2, then a trailer.
+  const Bytes bytes{0xAA, 0xBB, 0x18, 0xFC, 0xFF, 0xFF, 0x06, 0x04, 0x00, 0x00, 0xFE, 0xFF, 0xCC};
+  PdoValues values;
+  ASSERT_TRUE(readPdo(Pdo::Rx, ByteReader(bytes.data(), bytes.size()), 2, values));
+  EXPECT_TRUE(values.has_rx);
+  EXPECT_FALSE(values.has_tx);
+  EXPECT_EQ(values.word(Word::Ssp), 0xFFFFFC18u);  // raw, zero-extended
+  EXPECT_EQ(values.scw(), 0x406u);
+  EXPECT_EQ(values.word(Word::ExtCode), 0xFFFEu);
+  EXPECT_EQ(fieldValue(field("ncservo.ssp"), values).i, -1000);
+  EXPECT_EQ(fieldValue(field("ncservo.ext_code"), values).i, -2);
+}
+
+TEST(ReadPdo, TxFromLittleEndianBytes) {
+  const Bytes bytes{
+      0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // ActPos 0x0807060504030201
+      0x83, 0x00, 0x00, 0x00,                          // SSW 0x83
+      0x01, 0x00, 0x08, 0x00,                          // SEW 0x00080001
+      0x03, 0x00, 0x00, 0x00,                          // message code 3
+      0x00, 0x00, 0x0C, 0x44,                          // message data 560.0f
+      0x00, 0x00, 0x80, 0x3F,                          // extra data 1: 1.0f
+      0x00, 0x00, 0x00, 0xC0,                          // extra data 2: -2.0f
+      0x00, 0x00, 0x00, 0x00,                          // extra data 3: 0.0f
+      0x00, 0x00, 0x20, 0x41,                          // extra data 4: 10.0f
+  };
+  PdoValues values;
+  ASSERT_TRUE(readPdo(Pdo::Tx, ByteReader(bytes.data(), bytes.size()), 0, values));
+  EXPECT_TRUE(values.has_tx);
+  EXPECT_FALSE(values.has_rx);
+  EXPECT_EQ(values.word(Word::ActPos), 0x0807060504030201u);
+  EXPECT_EQ(values.ssw(), 0x83u);
+  EXPECT_EQ(values.sew(), 0x00080001u);
+  EXPECT_EQ(values.msgCode(), 3);
+  EXPECT_EQ(values.msgData(), 560.0f);
+  EXPECT_EQ(fieldValue(field("ncservo.ext_data1"), values).f, 1.0);
+  EXPECT_EQ(fieldValue(field("ncservo.ext_data2"), values).f, -2.0);
+  EXPECT_EQ(fieldValue(field("ncservo.ext_data3"), values).f, 0.0);
+  EXPECT_EQ(fieldValue(field("ncservo.ext_data4"), values).f, 10.0);
+}
+
+TEST(ReadPdo, BothPdosAccumulateInOneValues) {
+  PdoValues values = valuesOf(rxPdo(7, 0x6));
+  const Bytes tx = txPdo(TxValues{-1, 0x1, 0, 0, 0, {}});
+  ASSERT_TRUE(readPdo(Pdo::Tx, ByteReader(tx.data(), tx.size()), 0, values));
+  EXPECT_TRUE(values.has_rx);
+  EXPECT_TRUE(values.has_tx);
+  EXPECT_EQ(values.scw(), 0x6u);
+  EXPECT_EQ(values.ssw(), 0x1u);
+}
+
+// Every length short of the PDO fails, on a heap buffer of exactly that length.
+TEST(ReadPdo, FailsOnEveryShortLength) {
+  for (Pdo pdo : {Pdo::Rx, Pdo::Tx}) {
+    for (std::size_t length = 0; length < pdoSize(pdo); ++length) {
+      SCOPED_TRACE(std::to_string(length) + " bytes");
+      std::unique_ptr<std::uint8_t[]> buffer(new std::uint8_t[length]);
+      for (std::size_t i = 0; i < length; ++i) buffer[i] = 0x5A;
+      PdoValues values;
+      values.raw[0] = 0x1234;
+      EXPECT_FALSE(readPdo(pdo, ByteReader(buffer.get(), length), 0, values));
+      EXPECT_FALSE(values.has_rx);
+      EXPECT_FALSE(values.has_tx);
+      EXPECT_EQ(values.raw[0], 0x1234u) << "values must stay untouched";
+    }
+  }
+}
+
+// A PDO that starts inside the buffer but runs past its end fails, even at huge offsets.
+TEST(ReadPdo, FailsWhenOffsetRunsPastTheEnd) {
+  const Bytes bytes(45, 0);
+  const ByteReader reader(bytes.data(), bytes.size());
+  struct Row {
+    Pdo pdo;
+    std::size_t offset;
+    bool ok;
+  };
+  const Row rows[] = {
+      {Pdo::Rx, 35, true},  {Pdo::Rx, 36, false},
+      {Pdo::Tx, 5, true},   {Pdo::Tx, 6, false},
+      {Pdo::Rx, 45, false}, {Pdo::Tx, std::numeric_limits<std::size_t>::max(), false},
+  };
+  for (const Row& row : rows) {
+    PdoValues values;
+    EXPECT_EQ(readPdo(row.pdo, reader, row.offset, values), row.ok) << row.offset;
+  }
+}
+
+struct ValueCase {
+  const char* name;
+  const char* filter;
+  Bytes pdo;  // 10 bytes: RxPDO, 40 bytes: TxPDO
+  Kind kind;
+  std::int64_t i = 0;
+  std::uint64_t u = 0;
+  double f = 0;
+};
+
+// Incremental encoder: words 0-1 and 2-3 of ActPos, each a signed 32-bit value.
+std::int64_t actposHalves(std::int32_t low, std::int32_t high) {
+  return static_cast<std::int64_t>(
+      (static_cast<std::uint64_t>(static_cast<std::uint32_t>(high)) << 32) |
+      static_cast<std::uint32_t>(low));
+}
+
+std::vector<ValueCase> valueCases() {
+  constexpr std::uint32_t kIncr = 0x4;
+  return {
+      {"ssp negative", "ncservo.ssp", rxPdo(-1500, 0), Kind::Signed, -1500},
+      {"ssp minimum", "ncservo.ssp", rxPdo(std::numeric_limits<std::int32_t>::min(), 0),
+       Kind::Signed, std::numeric_limits<std::int32_t>::min()},
+      {"ssp 16-bit NC", "ncservo.ssp", rxPdo(0x7FFF, 0), Kind::Signed, 0x7FFF},
+      {"scw all ones is unsigned", "ncservo.scw", rxPdo(0, 0xFFFFFFFF), Kind::Unsigned, 0,
+       0xFFFFFFFF},
+      {"ext_code negative", "ncservo.ext_code", rxPdo(0, 0, -2), Kind::Signed, -2},
+      {"ext_code minimum", "ncservo.ext_code", rxPdo(0, 0, -32768), Kind::Signed, -32768},
+      {"ext_code maximum", "ncservo.ext_code", rxPdo(0, 0, 32767), Kind::Signed, 32767},
+      {"scw.se 2", "ncservo.scw.se", rxPdo(0, 0x6), Kind::Unsigned, 0, 2},
+      {"scw.se 3", "ncservo.scw.se", rxPdo(0, 0xFFFFFFFF), Kind::Unsigned, 0, 3},
+      {"scw.emgon set", "ncservo.scw.emgon", rxPdo(0, 0x4), Kind::Unsigned, 0, 1},
+      {"scw.emgon clear", "ncservo.scw.emgon", rxPdo(0, 0xFFFFFFFB), Kind::Unsigned, 0, 0},
+      {"scw.prmtbl 2", "ncservo.scw.prmtbl", rxPdo(0, 0x20), Kind::Unsigned, 0, 2},
+      {"scw.modesel 3", "ncservo.scw.modesel", rxPdo(0, 0xC0), Kind::Unsigned, 0, 3},
+      {"scw.reserved all", "ncservo.scw.reserved", rxPdo(0, 0x7FFFE000), Kind::Unsigned, 0,
+       0x3FFFF},
+      {"scw.prgdwn", "ncservo.scw.prgdwn", rxPdo(0, 0x80000000), Kind::Unsigned, 0, 1},
+      {"actpos above 2^32", "ncservo.actpos", txPdo({(1ll << 32) + 5}), Kind::Signed,
+       (1ll << 32) + 5},
+      {"actpos negative", "ncservo.actpos", txPdo({-3}), Kind::Signed, -3},
+      {"actpos minimum", "ncservo.actpos", txPdo({std::numeric_limits<std::int64_t>::min()}),
+       Kind::Signed, std::numeric_limits<std::int64_t>::min()},
+      {"actpos.incremental positive", "ncservo.actpos.incremental",
+       txPdo({actposHalves(123456, 7), kIncr}), Kind::Signed, 123456},
+      {"actpos.incremental negative", "ncservo.actpos.incremental",
+       txPdo({actposHalves(-7, 99), kIncr}), Kind::Signed, -7},
+      {"actpos.zero_pulse positive", "ncservo.actpos.zero_pulse",
+       txPdo({actposHalves(-7, 99), kIncr}), Kind::Signed, 99},
+      {"actpos.zero_pulse negative", "ncservo.actpos.zero_pulse",
+       txPdo({actposHalves(5, -100000), kIncr}), Kind::Signed, -100000},
+      {"actpos.zero_pulse minimum", "ncservo.actpos.zero_pulse",
+       txPdo({actposHalves(0, std::numeric_limits<std::int32_t>::min()), kIncr}), Kind::Signed,
+       std::numeric_limits<std::int32_t>::min()},
+      {"ssw top bit is unsigned", "ncservo.ssw", txPdo({0, 0x80000001}), Kind::Unsigned, 0,
+       0x80000001},
+      {"ssw.prmtbl 2", "ncservo.ssw.prmtbl", txPdo({0, 0x200}), Kind::Unsigned, 0, 2},
+      {"ssw.zpulse_ack", "ncservo.ssw.zpulse_ack", txPdo({0, 0x8}), Kind::Unsigned, 0, 1},
+      {"ssw.reserved all", "ncservo.ssw.reserved", txPdo({0, 0xFFFFE000}), Kind::Unsigned, 0,
+       0x7FFFF},
+      {"sew unsigned", "ncservo.sew", txPdo({0, 0, 0xFE000010}), Kind::Unsigned, 0, 0xFE000010},
+      {"sew.following", "ncservo.sew.following", txPdo({0, 0, 0x80001}), Kind::Unsigned, 0, 1},
+      {"sew.reserved bit 4 and 31..25", "ncservo.sew.reserved", txPdo({0, 0, 0xFE000010}),
+       Kind::Unsigned, 0, 0xFE00001},
+      {"sew.reserved bit 4 only", "ncservo.sew.reserved", txPdo({0, 0, 0x10}), Kind::Unsigned, 0,
+       1},
+      {"msg_code negative", "ncservo.msg_code", txPdo({0, 0, 0, -5}), Kind::Signed, -5},
+      {"msg_data", "ncservo.msg_data", txPdo({0, 0, 0, 0, 1500.0f}), Kind::Float, 0, 0, 1500.0},
+      {"msg_data negative", "ncservo.msg_data", txPdo({0, 0, 0, 1, -2.25f}), Kind::Float, 0, 0,
+       -2.25},
+      {"ext_data1", "ncservo.ext_data1", txPdo({0, 0, 0, 0, 0, {0.5f, 1, 2, 3}}), Kind::Float, 0, 0,
+       0.5},
+      {"ext_data2", "ncservo.ext_data2", txPdo({0, 0, 0, 0, 0, {0.5f, -1e6f, 2, 3}}), Kind::Float,
+       0, 0, -1e6},
+      {"ext_data3", "ncservo.ext_data3", txPdo({0, 0, 0, 0, 0, {0, 0, 0.125f, 3}}), Kind::Float, 0,
+       0, 0.125},
+      {"ext_data4", "ncservo.ext_data4", txPdo({0, 0, 0, 0, 0, {0, 0, 0, 3.5f}}), Kind::Float, 0, 0,
+       3.5},
+  };
+}
+
+TEST(FieldValue, EachKindFromBytes) {
+  for (const ValueCase& c : valueCases()) {
+    SCOPED_TRACE(c.name);
+    const PdoValues values = valuesOf(c.pdo);
+    const FieldValue v = fieldValue(field(c.filter), values);
+    ASSERT_EQ(v.kind, c.kind);
+    switch (c.kind) {
+      case Kind::Signed:
+        EXPECT_EQ(v.i, c.i);
+        break;
+      case Kind::Unsigned:
+        EXPECT_EQ(v.u, c.u);
+        break;
+      case Kind::Float:
+        EXPECT_EQ(v.f, c.f);
+        break;
+    }
+  }
+}
+
+TEST(FieldValue, FloatNanKeepsItsBits) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const PdoValues values = valuesOf(txPdo({0, 0, 0, 0, nan}));
+  EXPECT_EQ(values.word(Word::MsgData), bitsOf(nan));
+  EXPECT_TRUE(std::isnan(fieldValue(field("ncservo.msg_data"), values).f));
+}
+
+struct AppliesCase {
+  const char* name;
+  const char* filter;
+  bool has_rx;
+  bool has_tx;
+  std::uint32_t ssw;
+  bool applies;
+};
+const AppliesCase kAppliesCases[] = {
+    {"incremental shown on incremental encoder", "ncservo.actpos.incremental", false, true, 0x4,
+     true},
+    {"zero_pulse shown on incremental encoder", "ncservo.actpos.zero_pulse", false, true, 0x4,
+     true},
+    {"incremental hidden on absolute encoder", "ncservo.actpos.incremental", false, true, 0x0,
+     false},
+    {"zero_pulse hidden on absolute encoder", "ncservo.actpos.zero_pulse", false, true, 0xFFFFFFFB,
+     false},
+    {"incremental hidden without TxPDO", "ncservo.actpos.incremental", true, false, 0x4, false},
+    {"actpos shown on absolute encoder", "ncservo.actpos", false, true, 0x0, true},
+    {"actpos shown on incremental encoder", "ncservo.actpos", false, true, 0x4, true},
+    {"tx field hidden without TxPDO", "ncservo.ssw.servo_en", true, false, 0, false},
+    {"rx field shown with RxPDO", "ncservo.scw.se", true, false, 0, true},
+    {"rx field hidden without RxPDO", "ncservo.ssp", false, true, 0, false},
+    {"nothing shown without PDOs", "ncservo.sew", false, false, 0, false},
+};
+
+TEST(FieldApplies, PdoPresenceAndIncrementalEncoderCondition) {
+  for (const AppliesCase& c : kAppliesCases) {
+    SCOPED_TRACE(c.name);
+    PdoValues values;
+    values.has_rx = c.has_rx;
+    values.has_tx = c.has_tx;
+    values.raw[static_cast<std::size_t>(Word::Ssw)] = c.ssw;
+    EXPECT_EQ(fieldApplies(field(c.filter), values), c.applies);
+  }
+}
+
+struct SpanCase {
+  const char* filter;
+  std::size_t offset;
+  std::size_t length;
+};
+const SpanCase kSpanCases[] = {
+    {"ncservo.ssp", 0, 4},
+    {"ncservo.scw", 4, 4},
+    {"ncservo.scw.se", 4, 4},
+    {"ncservo.ext_code", 8, 2},
+    {"ncservo.actpos", 0, 8},
+    {"ncservo.actpos.incremental", 0, 4},
+    {"ncservo.actpos.zero_pulse", 4, 4},
+    {"ncservo.ssw", 8, 4},
+    {"ncservo.sew.following", 12, 4},
+    {"ncservo.msg_code", 16, 4},
+    {"ncservo.msg_data", 20, 4},
+    {"ncservo.ext_data4", 36, 4},
+};
+
+TEST(FieldSpan, BytesOfTheRowInsideItsPdo) {
+  for (const SpanCase& c : kSpanCases) {
+    SCOPED_TRACE(c.filter);
+    const FieldSpan span = fieldSpan(field(c.filter));
+    EXPECT_EQ(span.offset, c.offset);
+    EXPECT_EQ(span.length, c.length);
+  }
+}
+
+struct MessageCase {
+  std::int32_t code;
+  float data;
+  const char* expected;  // exact text, or a text it must contain when `exact` is false
+  bool exact;
+};
+const MessageCase kMessageCases[] = {
+    {0, 1500.0f, "motor speed 1500.0 rpm", true},
+    {1, 2.5f, "motor current 2.5 A", true},
+    {2, 87.5f, "relative current I/In 87.5 %", true},
+    {3, 560.0f, "bus voltage 560.0 V", true},
+    {4, 41.0f, "motor temperature 41.0 °C", true},
+    {5, 0.5f, "motor power 0.5 kW", true},
+    {0, -300.0f, "motor speed -300.0 rpm", true},
+    {6, 1.0f, "undefined", false},
+    {7, 1.0f, "undefined", false},
+    {9, 1.0f, "undefined", false},
+    {-1, 1.0f, "undefined", false},
+    {std::numeric_limits<std::int32_t>::min(), 0.0f, "undefined", false},
+    {1000, 0.0f, "1000", false},
+};
+
+TEST(FormatMessage, MeaningAndUnitOrUndefined) {
+  for (const MessageCase& c : kMessageCases) {
+    SCOPED_TRACE(std::to_string(c.code));
+    char buf[128];
+    formatMessage(buf, sizeof buf, c.code, c.data);
+    if (c.exact) {
+      EXPECT_STREQ(buf, c.expected);
+    } else {
+      EXPECT_NE(std::string(buf).find(c.expected), std::string::npos) << buf;
+    }
+  }
+}
+
+TEST(FormatMessage, SmallBuffersAreTerminatedAndNotOverrun) {
+  for (std::size_t size = 1; size < 24; ++size) {
+    SCOPED_TRACE(size);
+    std::vector<char> buf(size + 4, '#');
+    formatMessage(buf.data(), size, 0, 1500.0f);
+    EXPECT_EQ(std::string(buf.data()), std::string("motor speed 1500.0 rpm").substr(0, size - 1));
+    for (std::size_t i = size; i < buf.size(); ++i) EXPECT_EQ(buf[i], '#') << i;
+  }
+  char untouched = '#';
+  formatMessage(&untouched, 0, 0, 1.0f);
+  EXPECT_EQ(untouched, '#');
+}
+
+}  // namespace
+}  // namespace ncservo
