@@ -263,13 +263,12 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
 
 // Whether a word's items are needed: the tree is shown, or a filter or column asks for the word or
 // one of its fields. Skipping the rest keeps `tshark -T fields` and filtering fast.
-bool wordWanted(proto_tree* tree, std::size_t word, std::size_t word_row) {
+bool wordWanted(proto_tree* tree, std::size_t word_row) {
   if (proto_field_is_referenced(tree, hf_field[word_row])) return true;
   for (std::size_t i = word_row + 1; i < kFieldCount && kFields[i].word == kFields[word_row].word;
        ++i) {
     if (proto_field_is_referenced(tree, hf_field[i])) return true;
   }
-  (void)word;
   return false;
 }
 
@@ -283,7 +282,7 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
     const auto w = static_cast<std::size_t>(f.word);
     if (f.kind == FieldKind::Word) {
       word_tree = nullptr;
-      if (!wordWanted(tree, w, i)) continue;
+      if (!wordWanted(tree, i)) continue;
       if (word_children[w][0] != nullptr) {
         // BMT_NO_APPEND: the bits are children; appending their names to the word's label
         // would format every bit of every word on every frame.

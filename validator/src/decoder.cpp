@@ -30,8 +30,7 @@ std::uint64_t datagramListSignature(const EcatFrame& frame) {
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];
     mix(dg.command | (std::uint64_t{dg.index} << 8) | (std::uint64_t{dg.length} << 16));
-    // Slaves increment ADP of auto-increment and broadcast commands on the way (§8).
-    if (ecat::isLogical(dg.command) || ecat::isConfiguredAddress(dg.command)) mix(dg.address);
+    if (ecat::addressSurvivesRing(dg.command)) mix(dg.address);
   }
   return hash;
 }

@@ -172,9 +172,7 @@ bool EcatFrame::sameDatagramList(const EcatFrame& other) const {
     const Datagram& a = datagrams[i];
     const Datagram& b = other.datagrams[i];
     if (a.command != b.command || a.index != b.index || a.length != b.length) return false;
-    // Slaves increment ADP of auto-increment and broadcast commands on the way (§8).
-    if ((ecat::isLogical(a.command) || ecat::isConfiguredAddress(a.command)) &&
-        a.address != b.address) {
+    if (ecat::addressSurvivesRing(a.command) && a.address != b.address) {
       return false;
     }
   }

@@ -49,6 +49,11 @@ inline constexpr bool isLogical(std::uint8_t cmd) {
 inline constexpr bool isConfiguredAddress(std::uint8_t cmd) {
   return cmd == kFprd || cmd == kFpwr || cmd == kFprw || cmd == kFrmw;
 }
+// Slaves increment the ADP of auto-increment and broadcast commands on the way round the ring;
+// other commands come back with the address they were sent with (PROTOCOL.md §8).
+inline constexpr bool addressSurvivesRing(std::uint8_t cmd) {
+  return isLogical(cmd) || isConfiguredAddress(cmd);
+}
 inline constexpr bool writesSlaves(std::uint8_t cmd) {
   return cmd == kApwr || cmd == kAprw || cmd == kFpwr || cmd == kFprw || cmd == kBwr ||
          cmd == kBrw || cmd == kLwr || cmd == kLrw;
