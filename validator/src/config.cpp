@@ -1,4 +1,5 @@
 #include "ncservo/config.hpp"
+#include "ncservo/rules.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -59,13 +60,8 @@ class Checker {
   std::optional<ConfigError> error_;
 };
 
-bool isRuleId(std::string_view id) {
-  // PREFIX-NNN, e.g. "SE-001" (RULES.md)
-  auto dash = id.find('-');
-  if (dash == std::string_view::npos || dash == 0 || id.size() != dash + 4) return false;
-  return std::all_of(id.begin(), id.begin() + dash, [](char c) { return c >= 'A' && c <= 'Z'; }) &&
-         std::all_of(id.begin() + dash + 1, id.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
+// An ID of the rule catalogue (RULES.md), e.g. "SE-001".
+bool isRuleId(std::string_view id) { return ruleByCode(id) != nullptr; }
 
 void readAxis(Checker& check, const toml::table& table, std::size_t index, Config& config) {
   AxisConfig axis;
@@ -134,7 +130,7 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
       for (const toml::node& id : *ids) {
         auto text = id.value<std::string>();
         if (!id.is_string() || !isRuleId(*text)) {
-          check.fail(id, key, "expected rule IDs such as \"MSG-001\"");
+          check.fail(id, key, "expected rule IDs of the catalogue (`ncservo rules`), such as \"MSG-001\"");
           return;
         }
         config.disabled_rules.push_back(*text);
@@ -149,7 +145,7 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
         const std::string id{id_node.str()};
         auto text = level.value<std::string>();
         if (!isRuleId(id)) {
-          check.fail(level, key + "." + id, "not a rule ID");
+          check.fail(level, key + "." + id, "not a rule ID of the catalogue (`ncservo rules`)");
           return;
         }
         if (!level.is_string() || (*text != "error" && *text != "warning" && *text != "info")) {

@@ -102,14 +102,16 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
 // after a master's frame with the same datagram list is its returned copy.
 void Decoder::classifyCopy(const EcatFrame& frame, FrameDecode& out) {
   const std::uint64_t signature = datagramListSignature(frame);
+  out.paired = previous_was_master_ && signature == previous_signature_;
   if (frame.anyWkcAboveZero()) {
     out.copy = CopyKind::Returned;
-  } else if (previous_was_master_ && signature == previous_signature_) {
+  } else if (out.paired) {
     out.copy = CopyKind::Returned;
   } else {
     out.copy = CopyKind::Master;
   }
   previous_signature_ = signature;
+  if (out.copy == CopyKind::Master) out.paired = false;
   previous_was_master_ = out.copy == CopyKind::Master && frame.count > 0;
 }
 
@@ -161,11 +163,13 @@ void Decoder::placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_
   const std::size_t size = pdoSize(pdo);
   const bool captured = start + size <= dg.length && start + size <= dg.data_captured;
   if (pdo == Pdo::Rx) {
+    placement->rx_placed = true;
     placement->rx_datagram = dg_index;
     placement->rx_offset = dg.data_offset + start;
     placement->has_rx = captured;
     placement->rx_malformed = !captured;
   } else {
+    placement->tx_placed = true;
     placement->tx_datagram = dg_index;
     placement->tx_offset = dg.data_offset + start;
     placement->has_tx = captured && returned && dg.has_wkc && dg.wkc > 0;

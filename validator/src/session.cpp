@@ -5,6 +5,7 @@ namespace ncservo {
 const FrameView& Session::onFrame(const EcatFrame& frame, const ByteReader& bytes) {
   decoder_.decode(frame, bytes, decode_);
   view_.copy = decode_.copy;
+  view_.paired = decode_.paired;
   view_.axis_count = decode_.axis_count;
   for (std::size_t i = 0; i < decode_.axis_count; ++i) {
     AxisFrameView& axis = view_.axes[i];

@@ -33,6 +33,8 @@ struct AxisInfo {
 // Where one axis's PDOs sit in one frame. Offsets are into the bytes given to the walker.
 struct AxisPlacement {
   std::uint16_t axis = 0;
+  bool rx_placed = false;  // the datagrams of this frame hold the axis's RxPDO region
+  bool tx_placed = false;  // ... and its TxPDO region (valid or not)
   bool has_rx = false;
   bool has_tx = false;        // inputs present and valid: returned copy, WKC above zero
   bool rx_malformed = false;  // the RxPDO region is cut short or straddles the datagram's end
@@ -47,6 +49,7 @@ inline constexpr std::size_t kMaxAxesPerFrame = 208;  // 2047 data bytes / 10-by
 
 struct FrameDecode {
   CopyKind copy = CopyKind::Master;
+  bool paired = false;  // a returned copy whose master's copy was the frame just before
   std::size_t axis_count = 0;
   std::array<AxisPlacement, kMaxAxesPerFrame> axes{};  // in axis order
 };

@@ -20,6 +20,7 @@ struct AxisFrameView {
 
 struct FrameView {
   CopyKind copy = CopyKind::Master;
+  bool paired = false;  // a returned copy whose master's copy was the frame just before
   std::size_t axis_count = 0;
   std::array<AxisFrameView, kMaxAxesPerFrame> axes{};
 };

@@ -1,0 +1,98 @@
+// Each slave's EtherCAT state machine as the capture shows it (PROTOCOL.md §8): station addresses
+// assigned by the start-up, AL control writes (0x0120), AL status reads (0x0130) and AL status
+// codes (0x0134). Judges rules ESM-001, ESM-003 and ESM-004. Bounded memory.
+//
+// A slave is known by its station address (FP commands), its ring position (AP commands, from the
+// master's copy's ADP) or both, once an APWR/APRW of 0x0010 has assigned the one to the other.
+// Station aliases (0x0012) are not used as addresses: an alias addresses a slave only when its DL
+// control enables it, which the capture rarely shows. A broadcast AL control write that a slave's
+// known state does not allow is reported once per such slave, each finding naming its slave. An
+// AL status BRD with the error indicator is not reported: the OR of all slaves names none of them.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/byte_reader.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/finding.hpp"
+
+namespace ncservo {
+
+// AL states in bits 3..0 of AL control and AL status (PROTOCOL.md §8).
+enum class AlState : std::uint8_t { Init = 1, PreOp = 2, Boot = 3, SafeOp = 4, Op = 8 };
+const char* alStateName(std::uint8_t state);  // "INIT", ..., or "0x5" for a non-state
+bool alTransitionAllowed(std::uint8_t from, std::uint8_t to);
+
+// A finding about one slave, before the validator applies the user's settings.
+struct AlFinding {
+  RuleId rule{};
+  std::optional<std::uint16_t> station;   // configured station address, when known
+  std::optional<std::uint16_t> position;  // ring position (0 = first slave), when known
+  std::string message;                    // names the slave, what was seen and expected
+};
+
+class AlTracker {
+ public:
+  static constexpr std::size_t kMaxSlaves = 4096;
+
+  // Every EtherCAT frame, in capture order. `paired`: a returned copy whose master's copy was
+  // the frame just before (its auto-increment addresses can then be taken from the master's copy).
+  // Writes (AL control, station address) are taken from master copies, and from returned copies
+  // whose master copy was not captured; reads from returned copies whose WKC is above zero.
+  void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
+               const Stamp& now, std::vector<AlFinding>& out);
+
+  // The slave's known AL state (its last AL status read), if any. A station the tracker has not
+  // seen addressed has the state of the last BRD of AL status that returned a state, if any.
+  std::optional<std::uint8_t> stateOfStation(std::uint16_t station) const;
+  // Whether the slave with this station address entered OP in the last frame given: its known
+  // state went from another known state to OP.
+  bool enteredOp(std::uint16_t station) const;
+
+ private:
+  // How a datagram addresses slaves, once its auto-increment address is resolved.
+  enum class Target : std::uint8_t { None, Station, Position, All };
+  struct Address {
+    Target target = Target::None;
+    std::uint16_t value = 0;  // station address or ring position
+  };
+  struct Slave {
+    std::optional<std::uint16_t> station;
+    std::optional<std::uint16_t> position;
+    std::optional<std::uint8_t> state;      // last AL status read (bits 3..0)
+    std::optional<std::uint8_t> requested;  // last AL control write to it or to all (bits 3..0)
+    std::optional<std::uint16_t> status_code;
+    std::uint64_t status_code_frame = 0;  // where the status code was read
+    bool error_reported = false;          // once per episode of the error indicator
+    bool entered_op = false;
+  };
+  struct MasterDatagram {
+    std::uint8_t command = 0;
+    std::uint16_t adp = 0;
+  };
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+
+  Address addressOf(const Datagram& dg, std::size_t index, bool returned, bool paired) const;
+  std::size_t findStation(std::uint16_t station) const;
+  std::size_t findPosition(std::uint16_t position) const;
+  std::size_t addSlave();  // kNone when kMaxSlaves are known
+  std::size_t slaveFor(const Address& address);  // finds or adds; kNone for none
+  void assignStation(std::uint16_t position, std::uint16_t station);
+  void onControlWrite(const Address& address, std::uint8_t requested, std::uint16_t raw,
+                      std::vector<AlFinding>& out);
+  void onStatusRead(const Address& address, std::uint16_t raw, const Stamp& now,
+                    std::vector<AlFinding>& out);
+  void setState(Slave& slave, std::uint8_t state);
+
+  std::vector<Slave> slaves_;
+  std::vector<MasterDatagram> master_;         // each datagram of the last master copy
+  std::optional<std::uint8_t> requested_all_;  // last broadcast AL control request
+  std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
+  bool entered_op_all_ = false;                // state_all_ became OP in the last frame
+  bool any_entered_op_ = false;                // some slave's entered_op is set
+};
+
+}  // namespace ncservo

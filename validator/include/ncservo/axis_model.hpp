@@ -1,0 +1,159 @@
+// The model of one axis: the stream of its observations turned into state — signal levels and
+// edges, the valid-enable of PROTOCOL.md §2, the handshakes, the drive state and its named
+// transitions (§6), the error history (§7) and the telegram-failure counters (RULES.md COM-*).
+// Rules read this state; they never see bytes.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ncservo/drive_state.hpp"
+#include "ncservo/finding.hpp"
+#include "ncservo/pdo.hpp"
+
+namespace ncservo {
+
+// One bit (or small value) of a PDO as seen over time.
+struct Signal {
+  std::uint32_t value = 0;
+  bool known = false;
+  bool rose = false;  // became non-zero in this frame's observation (never on the first)
+  bool fell = false;
+  Stamp since;  // where it took its current value (the first observation, if it never changed)
+
+  void observe(std::uint32_t v, const Stamp& now);
+  void clearEdges() { rose = fell = false; }
+  bool on() const { return known && value != 0; }
+  bool off() const { return known && value == 0; }
+};
+
+// PROTOCOL.md §7: SEW cause bit -> display code and CANopen-style code.
+struct SewCause {
+  std::uint32_t mask;
+  const char* display;  // E-number, or the bit's name where the definition gives none
+  std::uint16_t canopen;
+};
+extern const std::array<SewCause, 23> kSewCauses;
+inline constexpr std::uint32_t kSewCauseMask = 0x01FFFFEE;  // bits 1–3 and 5–24
+
+struct ErrorHistoryEntry {
+  const SewCause* cause = nullptr;
+  Stamp at;
+};
+
+struct StateChange {
+  DriveState state{};
+  const char* transition = nullptr;  // seed 003's name, where it has one
+  Stamp at;
+};
+
+class AxisModel {
+ public:
+  static constexpr std::size_t kErrorHistoryDepth = 8;  // as object 1003h
+  static constexpr std::size_t kMaxTimeline = 4096;     // bounded memory per axis
+  static constexpr std::uint32_t kFailureCounterMax = 65535;
+
+  explicit AxisModel(std::uint16_t index, std::optional<int> ready_mode)
+      : index_(index), ready_mode_(ready_mode), ready_mode_configured_(ready_mode.has_value()) {}
+
+  // Telegram accounting, done by the bus model before the frame's values are observed.
+  // `lost`: missing, not returned, or returned with WKC 0 (COM-003); otherwise a wrong WKC.
+  void cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now);
+  void cycleOk(const Stamp& now);
+  // The slave entered OP: the total counter resets (seed 001).
+  void enteredOp() { total_failures_ = 0; }
+  // The AL state of the axis's slave, where the capture shows it (PROTOCOL.md §8; ESM-002).
+  void setAlState(std::optional<std::uint8_t> state) { al_state_ = state; }
+  std::optional<std::uint8_t> alState() const { return al_state_; }
+
+  // This frame's values of the axis (outputs and/or inputs), at `now`.
+  void observe(const PdoValues& values, const Stamp& now);
+
+  // --- state, for rules and reports ---
+  std::uint16_t index() const { return index_; }
+  const Stamp& now() const { return now_; }
+  const PdoValues& latest() const { return latest_; }
+  bool knowsOutputs() const { return latest_.has_rx; }
+  bool knowsInputs() const { return latest_.has_tx; }
+  bool inputsInThisFrame() const { return inputs_now_; }
+
+  // SCW.SE this frame moved to 0x2 from something other than 0x1 (SE-001).
+  bool illegalEnableEdge() const { return illegal_enable_edge_; }
+  std::uint32_t previousSe() const { return previous_se_; }
+  // A valid enable: SE reached 0x2 from 0x1 (or was 0x2 when first seen) and held since.
+  bool validEnable() const { return valid_enable_; }
+  // When the last valid enable ended (SE left 0x2).
+  const std::optional<Stamp>& validEnableEnded() const { return valid_enable_ended_; }
+
+  const Signal& se() const { return se_; }
+  const Signal& emgon() const { return emgon_; }
+  const Signal& brake() const { return brake_; }
+  const Signal& zpulseRequest() const { return zpulse_request_; }
+  const Signal& errorClear() const { return error_clear_; }
+  const Signal& servoEn() const { return servo_en_; }
+  const Signal& servoRdy() const { return servo_rdy_; }
+  const Signal& zpulseAck() const { return zpulse_ack_; }
+  const Signal& errClearAck() const { return err_clear_ack_; }
+  const Signal& servoErrors() const { return servo_errors_; }
+  const Signal& ecatTimeout() const { return ecat_timeout_; }
+  // ErrClearAck rose while ErrorClear was 1, since ErrorClear last rose (EC-002, EC-004).
+  bool clearAcknowledged() const { return clear_acknowledged_; }
+
+  // Servo_Ready_Mode (PROTOCOL.md §5): configured, or inferred (RULES.md RDY-001).
+  std::optional<int> readyMode() const { return ready_mode_; }
+  bool readyModeConfigured() const { return ready_mode_configured_; }
+  // ServoRDY as the §5 table requires it for the latest inputs.
+  std::optional<bool> expectedReady() const;
+
+  std::uint32_t consecutiveLost() const { return consecutive_lost_; }
+  std::uint32_t consecutiveFailed() const { return consecutive_failed_; }
+  std::uint32_t totalFailures() const { return total_failures_; }
+  // Traffic resumed after 3 or more lost cycles and ECatTErr has not been seen since (COM-003).
+  bool awaitingTimeoutReport() const { return awaiting_timeout_report_; }
+  std::uint32_t lastOutageCycles() const { return last_outage_cycles_; }
+
+  std::optional<DriveState> state() const { return state_; }
+  const std::vector<StateChange>& timeline() const { return timeline_; }
+  std::uint64_t timelineOmitted() const { return timeline_omitted_; }
+  // Newest first, at most kErrorHistoryDepth.
+  const std::vector<ErrorHistoryEntry>& errorHistory() const { return error_history_; }
+
+ private:
+  void observeOutputs(const PdoValues& values, const Stamp& now);
+  void observeInputs(const PdoValues& values, const Stamp& now);
+  void updateState(const Stamp& now);
+
+  std::uint16_t index_;
+  Stamp now_;
+  bool inputs_now_ = false;
+  std::optional<std::uint8_t> al_state_;
+  PdoValues latest_;
+
+  bool illegal_enable_edge_ = false;
+  std::uint32_t previous_se_ = 0;
+  bool valid_enable_ = false;
+  std::optional<Stamp> valid_enable_ended_;
+  bool clear_acknowledged_ = false;
+
+  Signal se_, emgon_, brake_, zpulse_request_, error_clear_;
+  Signal servo_en_, servo_rdy_, zpulse_ack_, err_clear_ack_, servo_errors_, ecat_timeout_;
+  std::uint32_t previous_sew_ = 0;
+
+  std::optional<int> ready_mode_;
+  bool ready_mode_configured_;
+
+  std::uint32_t consecutive_lost_ = 0;
+  std::uint32_t consecutive_failed_ = 0;
+  std::uint32_t total_failures_ = 0;
+  bool awaiting_timeout_report_ = false;
+  std::uint32_t last_outage_cycles_ = 0;
+
+  std::optional<DriveState> state_;
+  std::vector<StateChange> timeline_;
+  std::uint64_t timeline_omitted_ = 0;
+  std::vector<ErrorHistoryEntry> error_history_;
+};
+
+}  // namespace ncservo

@@ -1,0 +1,484 @@
+// The rule table of RULES.md and the conditions of the axis rules. Each check reads the axis
+// model's state only; the validator owns timing and the once-per-episode discipline.
+#include "ncservo/rules.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "ncservo/axis_model.hpp"
+#include "ncservo/fields.hpp"
+
+namespace ncservo {
+
+namespace {
+constexpr std::uint32_t kServoErrors = mask32("ncservo.sew.servo_errors");
+constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
+constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
+constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
+constexpr std::uint32_t kIncremental = mask32("ncservo.ssw.incremental");
+constexpr std::uint32_t kNoEncoder = mask32("ncservo.ssw.no_encoder");
+constexpr std::uint32_t kScwTable = mask32("ncservo.scw.prmtbl");
+constexpr std::uint32_t kScwExtTable = mask32("ncservo.scw.ext_prmtbl");
+constexpr std::uint32_t kSswTable = mask32("ncservo.ssw.prmtbl");
+constexpr std::uint32_t kSswExtTable = mask32("ncservo.ssw.ext_prmtbl");
+constexpr std::int32_t kLastDefinedMessageCode = 5;  // PROTOCOL.md §5
+
+std::int64_t ms(const RuleSettings& s, Timeout t) {
+  return s.timeoutNs(t) / 1'000'000;
+}
+double heldMs(std::int64_t held_ns) {
+  return static_cast<double>(held_ns) / 1e6;
+}
+bool longerThan(const AxisModel& a, const Stamp& since, std::int64_t ns) {
+  return a.now().time_ns - since.time_ns > ns;
+}
+
+// Parameter table number as PROTOCOL.md §2 computes it: ExtPRMTBL·4 + PRMTBL + 1.
+std::uint32_t table(std::uint32_t word, std::uint32_t low, std::uint32_t ext) {
+  return ((word & ext) ? 4 : 0) + ((word & low) >> lowestBit(low)) + 1;
+}
+std::uint32_t commandedTable(const AxisModel& a) {
+  return table(a.latest().scw(), kScwTable, kScwExtTable);
+}
+std::uint32_t activeTable(const AxisModel& a) {
+  return table(a.latest().ssw(), kSswTable, kSswExtTable);
+}
+
+bool driveReady(const AxisModel& a) {
+  if (!a.readyMode()) return false;
+  return *a.readyMode() == 0 ? a.servoRdy().on() : a.servoErrors().off();
+}
+
+// --- Servo enable (PROTOCOL.md §2) ---
+bool se001(const AxisModel& a, const RuleSettings&) {
+  return a.illegalEnableEdge();
+}
+std::string se001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SCW.SE went 0x{:X} -> 0x2; an enable is legal only from 0x1", a.previousSe());
+}
+
+bool recentlyEnabled(const AxisModel& a, const RuleSettings& s) {
+  if (a.validEnable()) return true;
+  const auto& ended = a.validEnableEnded();
+  return ended && !longerThan(a, *ended, s.timeoutNs(Timeout::DriveResponse));
+}
+bool se002(const AxisModel& a, const RuleSettings& s) {
+  return a.servoEn().rose && !recentlyEnabled(a, s);
+}
+std::string se002Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+  return fmt::format(
+      "SSW.ServoEn rose with no valid enable within {} ms (SCW.SE is 0x{:X}); the drive may "
+      "enable only after SE goes 0x1 -> 0x2",
+      ms(s, Timeout::DriveResponse), a.se().value);
+}
+
+bool se003(const AxisModel& a, const RuleSettings&) {
+  return a.servoEn().on() && !a.validEnable();
+}
+std::string se003Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format("SSW.ServoEn still 1 {:.3f} ms {} (SCW.SE is 0x{:X}); expected 0 within {} ms",
+                     heldMs(held),
+                     a.validEnableEnded() ? "after the enable ended" : "with no valid enable",
+                     a.se().value, ms(s, Timeout::DriveResponse));
+}
+
+bool se004(const AxisModel& a, const RuleSettings&) {
+  return a.validEnable() && driveReady(a) && a.emgon().on() && a.brake().on() && a.servoEn().off();
+}
+std::string se004Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "valid enable held {:.3f} ms with the drive ready, EMGON 1 and Brake 1, but SSW.ServoEn "
+      "stays 0; expected it within {} ms",
+      heldMs(held), ms(s, Timeout::EnableResponse));
+}
+
+// --- Zero-pulse search ---
+bool zp001(const AxisModel& a, const RuleSettings&) {
+  return a.zpulseRequest().off() && a.zpulseAck().on();
+}
+std::string zp001Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SSW.ZPulseAck still 1 {:.3f} ms after SCW.ZPulseRequest fell; expected 0 within {} ms",
+      heldMs(held), ms(s, Timeout::DriveResponse));
+}
+
+bool zp002(const AxisModel& a, const RuleSettings& s) {
+  return a.zpulseAck().rose && a.zpulseRequest().off() &&
+         longerThan(a, a.zpulseRequest().since, s.timeoutNs(Timeout::DriveResponse));
+}
+std::string zp002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format(
+      "SSW.ZPulseAck rose while SCW.ZPulseRequest had been 0 for {:.3f} ms (since frame {}); "
+      "an acknowledge answers a request",
+      heldMs(a.now().time_ns - a.zpulseRequest().since.time_ns), a.zpulseRequest().since.frame);
+}
+
+bool zp003(const AxisModel& a, const RuleSettings&) {
+  if (!a.zpulseRequest().on() || !a.knowsInputs()) return false;
+  const std::uint32_t ssw = a.latest().ssw();
+  return !(ssw & kIncremental) || (ssw & kNoEncoder);
+}
+std::string zp003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format(
+      "SCW.ZPulseRequest is 1 but SSW says {}; a zero-pulse search needs an "
+      "incremental encoder",
+      (a.latest().ssw() & kNoEncoder) ? "no encoder" : "absolute encoder");
+}
+
+// --- Error clear ---
+bool ec001(const AxisModel& a, const RuleSettings& s) {
+  return a.errClearAck().rose && a.errorClear().off() &&
+         longerThan(a, a.errorClear().since, s.timeoutNs(Timeout::DriveResponse));
+}
+std::string ec001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format(
+      "SSW.ErrClearAck rose while SCW.ErrorClear had been 0 for {:.3f} ms (since frame {}); "
+      "an acknowledge answers a request",
+      heldMs(a.now().time_ns - a.errorClear().since.time_ns), a.errorClear().since.frame);
+}
+
+bool ec002(const AxisModel& a, const RuleSettings&) {
+  return a.errorClear().on() && a.clearAcknowledged();
+}
+std::string ec002Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SCW.ErrorClear still 1 {:.3f} ms after SSW.ErrClearAck rose; the NC must drop it within "
+      "{} ms",
+      heldMs(held), ms(s, Timeout::NcRelease));
+}
+
+bool ec003(const AxisModel& a, const RuleSettings&) {
+  return a.errClearAck().on() && a.errorClear().off();
+}
+std::string ec003Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SSW.ErrClearAck still 1 {:.3f} ms after SCW.ErrorClear fell; expected 0 within {} ms",
+      heldMs(held), ms(s, Timeout::DriveResponse));
+}
+
+bool ec004(const AxisModel& a, const RuleSettings&) {
+  return a.errorClear().on() && a.servoErrors().on() && !a.clearAcknowledged();
+}
+std::string ec004Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SCW.ErrorClear held {:.3f} ms with SEW 0x{:08X} and no SSW.ErrClearAck; expected the "
+      "acknowledge within {} ms",
+      heldMs(held), a.latest().sew(), ms(s, Timeout::ClearResponse));
+}
+
+// --- Status and error words ---
+bool sew001(const AxisModel& a, const RuleSettings&) {
+  const std::uint32_t sew = a.latest().sew();
+  return a.knowsInputs() && (sew & kSewCauseMask) && !(sew & kServoErrors);
+}
+std::string sew001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SEW 0x{:08X} has cause bits set but not the summary bit 0", a.latest().sew());
+}
+
+bool sew002(const AxisModel& a, const RuleSettings&) {
+  const std::uint32_t sew = a.latest().sew();
+  return a.knowsInputs() && (sew & kServoErrors) && !(sew & kSewCauseMask);
+}
+std::string sew002Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format("SEW 0x{:08X}: summary bit set with no cause bit for {:.3f} ms (limit {} ms)",
+                     a.latest().sew(), heldMs(held), ms(s, Timeout::DriveResponse));
+}
+
+bool sew003(const AxisModel& a, const RuleSettings&) {
+  return a.knowsInputs() && (a.latest().sew() & kSewReserved);
+}
+std::string sew003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SEW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().sew(),
+                     a.latest().sew() & kSewReserved);
+}
+
+bool ssw001(const AxisModel& a, const RuleSettings&) {
+  return a.knowsInputs() && (a.latest().ssw() & kSswReserved);
+}
+std::string ssw001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SSW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().ssw(),
+                     a.latest().ssw() & kSswReserved);
+}
+
+bool scw001(const AxisModel& a, const RuleSettings&) {
+  return a.knowsOutputs() && (a.latest().scw() & kScwReserved);
+}
+std::string scw001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SCW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().scw(),
+                     a.latest().scw() & kScwReserved);
+}
+
+bool rdy001(const AxisModel& a, const RuleSettings&) {
+  const std::optional<bool> expected = a.expectedReady();
+  return expected && a.servoRdy().on() != *expected;
+}
+std::string rdy001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SSW.ServoRDY is {} for {:.3f} ms with ServoEn {} and ServoErrors {}; Servo_Ready_Mode {} "
+      "({}) requires {} (limit {} ms)",
+      a.servoRdy().on() ? 1 : 0, heldMs(held), a.servoEn().on() ? 1 : 0,
+      a.servoErrors().on() ? 1 : 0, a.readyMode().value_or(-1),
+      a.readyModeConfigured() ? "configured" : "inferred",
+      a.expectedReady().value_or(false) ? 1 : 0, ms(s, Timeout::DriveResponse));
+}
+
+bool flt001(const AxisModel& a, const RuleSettings&) {
+  return a.servoEn().on() && a.servoErrors().on();
+}
+std::string flt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "drive still enabled {:.3f} ms after reporting an error (SEW 0x{:08X}); expected ServoEn 0 "
+      "within {} ms",
+      heldMs(held), a.latest().sew(), ms(s, Timeout::FaultReaction));
+}
+
+bool pt001(const AxisModel& a, const RuleSettings&) {
+  return a.knowsOutputs() && a.knowsInputs() && commandedTable(a) != activeTable(a);
+}
+std::string pt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "active parameter table {} differs from the commanded table {} for {:.3f} ms (limit {} ms)",
+      activeTable(a), commandedTable(a), heldMs(held), ms(s, Timeout::ParamTable));
+}
+
+bool msg001(const AxisModel& a, const RuleSettings&) {
+  const std::int32_t code = a.latest().msgCode();
+  return a.knowsInputs() && (code < 0 || code > kLastDefinedMessageCode);
+}
+std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("message code {} is undefined; defined codes are 0-5", a.latest().msgCode());
+}
+
+// --- Bus, per axis ---
+bool com003(const AxisModel& a, const RuleSettings&) {
+  return a.awaitingTimeoutReport();
+}
+std::string com003Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+  return fmt::format(
+      "{} consecutive cycles failed, but SEW.ECatTErr did not rise within {} ms after traffic "
+      "resumed",
+      a.lastOutageCycles(), ms(s, Timeout::DriveResponse));
+}
+
+bool com005(const AxisModel& a, const RuleSettings& s) {
+  return a.consecutiveFailed() > s.telegram_failure_limit;
+}
+std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+  return fmt::format("{} consecutive telegram failures exceed the limit of {} (total {})",
+                     a.consecutiveFailed(), s.telegram_failure_limit, a.totalFailures());
+}
+
+// --- EtherCAT state machine, per axis (PROTOCOL.md §8) ---
+constexpr std::uint8_t kAlOp = 8;
+constexpr std::uint8_t kAlSafeOp = 4;
+bool esm002(const AxisModel& a, const RuleSettings&) {
+  if (!a.alState()) return false;
+  const std::uint8_t state = *a.alState();
+  const bool enabling = a.knowsOutputs() && a.se().value != 0 && state != kAlOp;
+  const bool inputs = a.inputsInThisFrame() && state != kAlOp && state != kAlSafeOp;
+  return enabling || inputs;
+}
+std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  const std::uint8_t state = a.alState().value_or(0);
+  if (a.knowsOutputs() && a.se().value != 0 && state != kAlOp) {
+    return fmt::format("SCW.SE is 0x{:X} while the slave's AL state is {:#x}; enable only in OP",
+                       a.se().value, state);
+  }
+  return fmt::format("inputs exchanged while the slave's AL state is {:#x}; expected SAFE-OP or OP",
+                     state);
+}
+
+constexpr auto E = Severity::Error;
+constexpr auto W = Severity::Warning;
+constexpr auto I = Severity::Info;
+constexpr auto NC = Party::Nc;
+constexpr auto DRIVE = Party::Drive;
+constexpr auto BUS = Party::Bus;
+constexpr std::optional<Timeout> kNone{};
+constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
+}  // namespace
+
+// clang-format off
+const std::array<RuleDef, kRuleCount> kRules{{
+  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, "PROTOCOL.md §2 SE", kNone, false, se001, se001Text,
+   "SCW.SE becomes 0x2 from a value other than 0x1"},
+  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, "PROTOCOL.md §2 SE", kDrive, false, se002, se002Text,
+   "SSW.ServoEn rises with no valid enable"},
+  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, "PROTOCOL.md §2 SE", kDrive, true, se003, se003Text,
+   "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
+  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, "PROTOCOL.md §2 SE, §5", Timeout::EnableResponse, true, se004, se004Text,
+   "a valid enable to a ready drive is not answered with ServoEn"},
+  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, "PROTOCOL.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true, zp001, zp001Text,
+   "ZPulseAck stays 1 after ZPulseRequest fell"},
+  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, "PROTOCOL.md §3 ZPulseAck", kDrive, false, zp002, zp002Text,
+   "ZPulseAck rises with no ZPulseRequest"},
+  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, "PROTOCOL.md §1, §2 ZPulseRequest", kNone, false, zp003, zp003Text,
+   "ZPulseRequest on an axis with an absolute encoder or none"},
+  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, "PROTOCOL.md §3 ErrClearAck", kDrive, false, ec001, ec001Text,
+   "ErrClearAck rises with no ErrorClear"},
+  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, "PROTOCOL.md §2 ErrorClear", Timeout::NcRelease, true, ec002, ec002Text,
+   "ErrorClear held after ErrClearAck rose"},
+  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, "PROTOCOL.md §3 ErrClearAck", kDrive, true, ec003, ec003Text,
+   "ErrClearAck stays 1 after ErrorClear fell"},
+  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, "PROTOCOL.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true, ec004, ec004Text,
+   "ErrorClear on a drive in error is not acknowledged"},
+  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, "PROTOCOL.md §4", kNone, false, sew001, sew001Text,
+   "a SEW cause bit without the summary bit 0"},
+  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, "PROTOCOL.md §4", kDrive, true, sew002, sew002Text,
+   "SEW summary bit 0 with no cause bit"},
+  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, "PROTOCOL.md §4", kNone, false, sew003, sew003Text,
+   "reserved SEW bits set"},
+  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, "PROTOCOL.md §3", kNone, false, ssw001, ssw001Text,
+   "reserved SSW bits set"},
+  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, "PROTOCOL.md §2", kNone, false, scw001, scw001Text,
+   "reserved SCW bits set"},
+  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, "PROTOCOL.md §5", kDrive, true, rdy001, rdy001Text,
+   "ServoRDY differs from the Servo_Ready_Mode table"},
+  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, "PROTOCOL.md §4, §6", Timeout::FaultReaction, true, flt001, flt001Text,
+   "the drive stays enabled while reporting an error"},
+  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, "PROTOCOL.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true, pt001, pt001Text,
+   "the active parameter table differs from the commanded one"},
+  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, "PROTOCOL.md §5", kNone, false, msg001, msg001Text,
+   "a message code outside 0-5"},
+  {RuleId::Com001, "COM-001", "working-counter", E, BUS, "PROTOCOL.md §8 WKC", kNone, false, nullptr, nullptr,
+   "a returned cyclic datagram with servo PDOs has an unexpected WKC"},
+  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, "PROTOCOL.md §8; RULES.md Time", kNone, false, nullptr, nullptr,
+   "cycles missing between two master frames"},
+  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, "PROTOCOL.md §4 ECatTErr", kDrive, true, com003, com003Text,
+   "3 or more failed cycles without SEW.ECatTErr"},
+  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, "PROTOCOL.md §8", kNone, false, nullptr, nullptr,
+   "a master frame with servo outputs was not returned"},
+  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, "PROTOCOL.md §8; seed 001", kNone, false, com005, com005Text,
+   "consecutive failed cycles of an axis exceed the limit"},
+  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, "PROTOCOL.md §8 AL control", kNone, false, nullptr, nullptr,
+   "an AL control write requests a transition the state machine does not allow"},
+  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, "PROTOCOL.md §8 AL states", kNone, false, esm002, esm002Text,
+   "process data exchanged with an axis outside OP/SAFE-OP"},
+  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, "PROTOCOL.md §8 AL status", kNone, false, nullptr, nullptr,
+   "AL status shows the error indicator above INIT"},
+  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, "PROTOCOL.md §8 AL status", kNone, false, nullptr, nullptr,
+   "AL status shows the error indicator at INIT"},
+}};
+// clang-format on
+
+const char* severityName(Severity severity) {
+  switch (severity) {
+    case Severity::Info:
+      return "info";
+    case Severity::Warning:
+      return "warning";
+    case Severity::Error:
+      return "error";
+  }
+  return "error";
+}
+
+std::optional<Severity> severityFromName(std::string_view name) {
+  for (Severity s : {Severity::Info, Severity::Warning, Severity::Error}) {
+    if (name == severityName(s)) return s;
+  }
+  return std::nullopt;
+}
+
+const char* partyName(Party party) {
+  switch (party) {
+    case Party::Nc:
+      return "NC";
+    case Party::Drive:
+      return "drive";
+    case Party::Bus:
+      return "bus";
+  }
+  return "bus";
+}
+
+std::optional<Timeout> timeoutFromName(std::string_view name) {
+  for (const TimeoutDef& t : kTimeouts) {
+    if (name == t.name) return t.id;
+  }
+  return std::nullopt;
+}
+
+const RuleDef& ruleDef(RuleId id) {
+  return kRules[static_cast<std::size_t>(id)];
+}
+
+const RuleDef* ruleByCode(std::string_view code) {
+  for (const RuleDef& rule : kRules) {
+    if (code == rule.code) return &rule;
+  }
+  return nullptr;
+}
+
+std::string ruleFilterName(const RuleDef& rule) {
+  std::string slug = rule.slug;
+  std::replace(slug.begin(), slug.end(), '-', '_');
+  return "ncservo.rule." + slug;
+}
+
+RuleSettings::RuleSettings() {
+  for (const RuleDef& rule : kRules) {
+    enabled[static_cast<std::size_t>(rule.id)] = true;
+    severity[static_cast<std::size_t>(rule.id)] = rule.severity;
+  }
+  for (const TimeoutDef& t : kTimeouts) {
+    timeout_ns[static_cast<std::size_t>(t.id)] = std::int64_t{t.default_ms} * 1'000'000;
+  }
+}
+
+std::optional<int> RuleSettings::readyModeFor(std::size_t axis) const {
+  if (axis < axis_ready_mode.size() && axis_ready_mode[axis]) return axis_ready_mode[axis];
+  return servo_ready_mode;
+}
+
+std::optional<std::string> RuleSettings::disable(std::string_view code) {
+  const RuleDef* rule = ruleByCode(code);
+  if (rule == nullptr) return fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code);
+  enabled[static_cast<std::size_t>(rule->id)] = false;
+  return std::nullopt;
+}
+
+std::optional<std::string> RuleSettings::setSeverity(std::string_view code,
+                                                     std::string_view level) {
+  const RuleDef* rule = ruleByCode(code);
+  if (rule == nullptr) return fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code);
+  const std::optional<Severity> s = severityFromName(level);
+  if (!s) return fmt::format("severity '{}' for {}: expected error, warning or info", level, code);
+  severity[static_cast<std::size_t>(rule->id)] = *s;
+  return std::nullopt;
+}
+
+std::optional<std::string> RuleSettings::setTimeout(std::string_view name, std::int64_t ms) {
+  const std::optional<Timeout> t = timeoutFromName(name);
+  if (!t) {
+    std::string known;
+    for (const TimeoutDef& d : kTimeouts)
+      known += fmt::format("{}{}", known.empty() ? "" : ", ", d.name);
+    return fmt::format("unknown timeout '{}' (known: {})", name, known);
+  }
+  if (ms < 0 || ms > 3'600'000) {
+    return fmt::format("timeout {} = {} ms: expected 0 to 3600000", name, ms);
+  }
+  timeout_ns[static_cast<std::size_t>(*t)] = ms * 1'000'000;
+  return std::nullopt;
+}
+
+std::optional<std::string> RuleSettings::apply(const Config& config) {
+  if (config.servo_ready_mode) servo_ready_mode = config.servo_ready_mode;
+  telegram_failure_limit = config.telegram_failure_limit;
+  for (const auto& [name, value] : config.timeouts_ms) {
+    if (auto error = setTimeout(name, value)) return error;
+  }
+  for (const std::string& code : config.disabled_rules) {
+    if (auto error = disable(code)) return error;
+  }
+  for (const auto& [code, level] : config.severity_overrides) {
+    if (auto error = setSeverity(code, level)) return error;
+  }
+  axis_ready_mode.clear();
+  for (const AxisConfig& axis : config.axes) axis_ready_mode.push_back(axis.servo_ready_mode);
+  return std::nullopt;
+}
+
+}  // namespace ncservo
