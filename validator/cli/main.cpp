@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -16,6 +18,8 @@
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
+#include "ncservo/validator.hpp"
+#include "report.hpp"
 
 namespace {
 
@@ -220,6 +224,190 @@ void printFields(const std::string& format) {
   }
 }
 
+
+// Splits "A,B" and "NAME=VALUE" arguments.
+std::vector<std::string> splitList(const std::vector<std::string>& items) {
+  std::vector<std::string> out;
+  for (const std::string& item : items) {
+    std::size_t start = 0;
+    while (start <= item.size()) {
+      const std::size_t comma = item.find(',', start);
+      const std::string part = item.substr(start, comma == std::string::npos ? comma : comma - start);
+      if (!part.empty()) out.push_back(part);
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+  }
+  return out;
+}
+
+struct ValidateOptions {
+  std::vector<std::string> captures;
+  std::string format = "text";
+  std::string output;
+  std::string fail_on = "error";
+  std::vector<std::string> disable;
+  std::vector<std::string> severities;
+  std::vector<std::string> timeouts;
+  std::optional<int> servo_ready_mode;
+  bool no_default_layout = false;
+};
+
+// The settings from RULES.md's defaults, the config file, then the command line.
+std::optional<std::string> buildSettings(const ValidateOptions& o, const std::optional<Config>& config,
+                                         RuleSettings& settings) {
+  if (config) {
+    if (auto error = settings.apply(*config)) return fmt::format("{}: {}", config->path, *error);
+  }
+  for (const std::string& id : splitList(o.disable)) {
+    if (auto error = settings.disable(id)) return "--disable: " + *error;
+  }
+  for (const std::string& pair : splitList(o.severities)) {
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos) return "--severity " + pair + ": expected ID=LEVEL";
+    if (auto error = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)))
+      return "--severity: " + *error;
+  }
+  for (const std::string& pair : splitList(o.timeouts)) {
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos) return "--timeout " + pair + ": expected NAME=MS";
+    std::int64_t ms = -1;
+    try {
+      std::size_t used = 0;
+      ms = std::stoll(pair.substr(eq + 1), &used);
+      if (used != pair.size() - eq - 1) ms = -1;
+    } catch (const std::exception&) {
+      ms = -1;
+    }
+    if (ms < 0) return "--timeout " + pair + ": expected a number of milliseconds";
+    if (auto error = settings.setTimeout(pair.substr(0, eq), ms)) return "--timeout: " + *error;
+  }
+  if (o.servo_ready_mode) settings.servo_ready_mode = o.servo_ready_mode;
+  return std::nullopt;
+}
+
+// Runs one capture through the validator. Returns the capture's exit status (0, 1 or 3).
+int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
+                    const RuleSettings& settings, cli::ReportWriter& writer,
+                    cli::CaptureReport& report, Severity fail_on, bool never) {
+  report.path = path;
+  writer.beginCapture(report);
+  std::string error;
+  auto reader = CaptureReader::open(path, error);
+  if (!reader) {
+    report.error = error;
+    fmt::print(stderr, "ncservo: {}\n", error);
+    writer.endCapture(report);
+    return kExitCapture;
+  }
+  Validator validator(decoder_options, settings);
+  EcatFrame frame;
+  CaptureRecord record;
+  bool first = true;
+  CaptureReader::Next status;
+  while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+    if (first) report.first_time_ns = record.time_ns;
+    first = false;
+    report.frames = record.frame;
+    const ByteReader bytes(record.data, record.captured);
+    walkPacket(reader->link(), bytes, frame);
+    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
+      continue;
+    const FrameView& view = validator.onFrame(record.frame, record.time_ns, frame, bytes);
+    for (std::size_t i = 0; i < view.axis_count; ++i) {
+      const AxisPlacement& p = view.axes[i].placement;
+      if (p.rx_malformed || p.tx_malformed) {
+        fmt::print(stderr,
+                   "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
+                   path, record.frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
+      }
+    }
+    for (const Finding& f : validator.findings()) {
+      report.findings.push_back(f);
+      writer.finding(report, f);
+    }
+  }
+  cli::summarise(validator, report);
+  if (validator.decoder().axes().empty()) {
+    report.note = validator.decoder().startupShowsNoServo()
+                      ? "no servo of this protocol: the start-up configures slaves, none with "
+                        "10/40-byte sync managers"
+                      : "no servo of this protocol found: no datagram matches the default layout; "
+                        "give the layout in a --config file";
+  }
+  int rc = kExitOk;
+  if (status == CaptureReader::Next::Error) {
+    report.error = reader->error() + " (the frames before it were analysed)";
+    fmt::print(stderr, "ncservo: {}\n", *report.error);
+    rc = kExitCapture;
+  }
+  writer.endCapture(report);
+  if (rc == kExitOk && !never) {
+    for (const Finding& f : report.findings) {
+      if (f.severity >= fail_on) rc = kExitFindings;
+    }
+  }
+  return rc;
+}
+
+// INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 0.
+int combine(int a, int b) {
+  auto rank = [](int rc) { return rc == kExitUsage ? 3 : rc == kExitCapture ? 2 : rc; };
+  return rank(a) >= rank(b) ? a : b;
+}
+
+int runValidate(const ValidateOptions& o, const std::optional<Config>& config) {
+  RuleSettings settings;
+  if (auto error = buildSettings(o, config, settings)) {
+    fmt::print(stderr, "ncservo: {}\n", *error);
+    return kExitUsage;
+  }
+  const bool never = o.fail_on == "never";
+  const Severity fail_on = never ? Severity::Error : *severityFromName(o.fail_on);
+  cli::Format format = cli::Format::Text;
+  if (o.format == "json") format = cli::Format::Json;
+  if (o.format == "jsonl") format = cli::Format::Jsonl;
+  if (o.format == "junit") format = cli::Format::Junit;
+  if (o.format == "sarif") format = cli::Format::Sarif;
+  std::FILE* out = stdout;
+  if (!o.output.empty() && o.output != "-") {
+    out = std::fopen(o.output.c_str(), "w");
+    if (out == nullptr) {
+      fmt::print(stderr, "ncservo: {}: cannot write: {}\n", o.output, std::strerror(errno));
+      return kExitUsage;
+    }
+  }
+  cli::ReportWriter writer(out, format, fail_on, never);
+  std::vector<cli::CaptureReport> reports;
+  int rc = kExitOk;
+  for (const std::string& path : o.captures) {
+    reports.emplace_back();
+    rc = combine(rc, validateCapture(path, decoderOptions(config, o.no_default_layout), settings,
+                                     writer, reports.back(), fail_on, never));
+  }
+  writer.finish(reports);
+  if (out != stdout) std::fclose(out);
+  return rc;
+}
+
+void printRules(const std::string& format) {
+  if (format == "markdown") {
+    fmt::print("| ID | slug | severity | party | timeout | clause | summary |\n");
+    fmt::print("|---|---|---|---|---|---|---|\n");
+  }
+  for (const RuleDef& rule : kRules) {
+    const char* timeout = rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
+    if (format == "markdown") {
+      fmt::print("| {} | `{}` | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
+                 severityName(rule.severity), partyName(rule.party), timeout, rule.clause,
+                 rule.summary);
+    } else {
+      fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug,
+                 severityName(rule.severity), partyName(rule.party), rule.summary);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -240,6 +428,30 @@ int main(int argc, char** argv) {
   decode->add_flag("--no-default-layout", no_default_layout,
                    "never assume the default layout (PROTOCOL.md §9.4)");
 
+  ValidateOptions vo;
+  std::string validate_config;
+  auto* validate = app.add_subcommand("validate", "check captures against the rules (RULES.md)");
+  validate->add_option("CAPTURE", vo.captures, "pcap or pcapng captures, - for standard input")
+      ->required();
+  validate->add_option("--config", validate_config, "TOML configuration file");
+  validate->add_option("--format", vo.format, "text, json, jsonl, junit or sarif")
+      ->check(CLI::IsMember({"text", "json", "jsonl", "junit", "sarif"}));
+  validate->add_option("-o,--output", vo.output, "write the report here (default: standard output)");
+  validate->add_option("--fail-on", vo.fail_on, "exit 1 on findings at or above: error, warning, info, never")
+      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+  validate->add_option("--disable", vo.disable, "rule IDs to skip, comma-separated");
+  validate->add_option("--severity", vo.severities, "ID=LEVEL: change a rule's severity");
+  validate->add_option("--timeout", vo.timeouts, "NAME=MS: change a timeout of RULES.md");
+  validate->add_option("--servo-ready-mode", vo.servo_ready_mode, "Servo_Ready_Mode of the drives (0 or 1)")
+      ->check(CLI::Range(0, 1));
+  validate->add_flag("--no-default-layout", vo.no_default_layout,
+                     "never assume the default layout (PROTOCOL.md §9.4)");
+
+  std::string rules_format = "text";
+  auto* rules = app.add_subcommand("rules", "list the rules: ID, slug, severity, party, summary");
+  rules->add_option("--format", rules_format, "text or markdown")
+      ->check(CLI::IsMember({"text", "markdown"}));
+
   std::string fields_format = "tsv";
   auto* fields =
       app.add_subcommand("fields", "list every decoded field (generated from the field table)");
@@ -257,6 +469,11 @@ int main(int argc, char** argv) {
     printFields(fields_format);
     return kExitOk;
   }
+  if (rules->parsed()) {
+    printRules(rules_format);
+    return kExitOk;
+  }
+  if (validate->parsed()) config_path = validate_config;
   std::optional<Config> config;
   if (!config_path.empty()) {
     ConfigResult loaded = loadConfig(config_path);
@@ -266,5 +483,6 @@ int main(int argc, char** argv) {
     }
     config = std::move(loaded.config);
   }
+  if (validate->parsed()) return runValidate(vo, config);
   return runDecode(capture, config, no_default_layout, format);
 }

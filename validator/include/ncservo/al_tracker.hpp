@@ -78,7 +78,7 @@ class AlTracker {
   Address addressOf(const Datagram& dg, std::size_t index, bool returned, bool paired) const;
   std::size_t findStation(std::uint16_t station) const;
   std::size_t findPosition(std::uint16_t position) const;
-  std::size_t addSlave();  // kNone when kMaxSlaves are known
+  std::size_t addSlave();                        // kNone when kMaxSlaves are known
   std::size_t slaveFor(const Address& address);  // finds or adds; kNone for none
   void assignStation(std::uint16_t position, std::uint16_t station);
   void onControlWrite(const Address& address, std::uint8_t requested, std::uint16_t raw,

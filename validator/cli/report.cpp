@@ -1,0 +1,345 @@
+#include "report.hpp"
+
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+#include <pugixml.hpp>
+#include <sstream>
+
+namespace ncservo::cli {
+
+namespace {
+using Json = nlohmann::ordered_json;
+
+double seconds(const CaptureReport& r, const Stamp& at) {
+  return static_cast<double>(at.time_ns - r.first_time_ns) / 1e9;
+}
+
+std::string axisName(const CaptureReport& r, std::uint16_t axis) {
+  for (const AxisInfo& info : r.layout) {
+    if (info.index == axis) return info.name;
+  }
+  return fmt::format("axis{}", axis);
+}
+
+std::string hex32(std::uint32_t v) { return fmt::format("0x{:08X}", v); }
+
+Json findingJson(const CaptureReport& r, const Finding& f) {
+  const RuleDef& rule = ruleDef(f.rule);
+  Json j;
+  j["rule"] = rule.code;
+  j["slug"] = rule.slug;
+  j["severity"] = severityName(f.severity);
+  j["axis"] = f.axis ? Json(*f.axis) : Json(nullptr);
+  j["frame"] = f.at.frame;
+  j["since_frame"] = f.since.frame;
+  j["time"] = seconds(r, f.at);
+  j["message"] = f.message;
+  return j;
+}
+
+Json optionalNumber(const std::optional<double>& v) { return v ? Json(*v) : Json(nullptr); }
+
+Json captureJson(const CaptureReport& r) {
+  Json c;
+  c["path"] = r.path;
+  c["frames"] = r.frames;
+  c["cycles"] = r.cycles;
+  c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},
+                        {"p99", optionalNumber(r.cycle_time.p99_us)},
+                        {"max", optionalNumber(r.cycle_time.max_us)}};
+  Json layout_axes = Json::array();
+  for (const AxisInfo& info : r.layout) {
+    Json a{{"index", info.index}, {"name", info.name}};
+    if (!info.logical) a["station"] = fmt::format("0x{:04X}", info.station);
+    a["outputs"] = hex32(info.outputs);
+    a["inputs"] = hex32(info.inputs);
+    layout_axes.push_back(std::move(a));
+  }
+  c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
+  Json findings = Json::array();
+  for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
+  c["findings"] = std::move(findings);
+  Json axes = Json::array();
+  for (const AxisReport& a : r.axes) {
+    Json timeline = Json::array();
+    for (const StateChange& s : a.timeline) {
+      timeline.push_back({{"state", driveStateName(s.state)},
+                          {"transition", s.transition ? Json(s.transition) : Json(nullptr)},
+                          {"frame", s.at.frame},
+                          {"time", seconds(r, s.at)}});
+    }
+    Json history = Json::array();
+    for (const ErrorHistoryEntry& e : a.error_history) {
+      history.push_back({{"code", e.cause->display},
+                         {"canopen", fmt::format("0x{:04X}", e.cause->canopen)},
+                         {"frame", e.at.frame},
+                         {"time", seconds(r, e.at)}});
+    }
+    Json axis{{"index", a.index},
+              {"name", a.name},
+              {"state", a.state ? Json(driveStateName(*a.state)) : Json(nullptr)},
+              {"state_timeline", std::move(timeline)}};
+    if (a.timeline_omitted > 0) axis["state_timeline_omitted"] = a.timeline_omitted;
+    axis["error_history"] = std::move(history);
+    axis["telegram_failures"] = a.telegram_failures;
+    axis["servo_ready_mode"] = a.ready_mode ? Json(*a.ready_mode) : Json(nullptr);
+    axes.push_back(std::move(axis));
+  }
+  c["axes"] = std::move(axes);
+  c["summary"] = {{"error", r.count(Severity::Error)},
+                  {"warning", r.count(Severity::Warning)},
+                  {"info", r.count(Severity::Info)}};
+  if (r.error) c["error"] = *r.error;
+  if (r.note) c["note"] = *r.note;
+  return c;
+}
+
+const char* sarifLevel(Severity s) {
+  switch (s) {
+    case Severity::Error:
+      return "error";
+    case Severity::Warning:
+      return "warning";
+    case Severity::Info:
+      return "note";
+  }
+  return "note";
+}
+
+void writeSarif(std::FILE* out, const std::vector<CaptureReport>& reports) {
+  Json rules = Json::array();
+  for (const RuleDef& rule : kRules) {
+    rules.push_back({{"id", rule.code},
+                     {"name", rule.slug},
+                     {"shortDescription", {{"text", rule.summary}}},
+                     {"defaultConfiguration", {{"level", sarifLevel(rule.severity)}}},
+                     {"properties", {{"party", partyName(rule.party)}, {"clause", rule.clause}}}});
+  }
+  Json results = Json::array();
+  Json artifacts = Json::array();
+  for (std::size_t c = 0; c < reports.size(); ++c) {
+    const CaptureReport& r = reports[c];
+    artifacts.push_back({{"location", {{"uri", r.path}}}});
+    for (const Finding& f : r.findings) {
+      const RuleDef& rule = ruleDef(f.rule);
+      const std::string axis = f.axis ? axisName(r, *f.axis) : std::string("bus");
+      results.push_back(
+          {{"ruleId", rule.code},
+           {"ruleIndex", static_cast<std::size_t>(rule.id)},
+           {"level", sarifLevel(f.severity)},
+           {"message", {{"text", fmt::format("{} frame {}: {}", axis, f.at.frame, f.message)}}},
+           {"locations",
+            {{{"physicalLocation",
+               {{"artifactLocation", {{"uri", r.path}, {"index", c}}},
+                {"region", {{"startLine", 1}}}}},
+              {"logicalLocations", {{{"name", axis}, {"kind", "object"}}}}}}},
+           {"partialFingerprints",
+            {{"ncservoFinding/v1", fmt::format("{}:{}:{}", rule.code, axis, f.since.frame)}}},
+           {"properties",
+            {{"frame", f.at.frame},
+             {"since_frame", f.since.frame},
+             {"time", seconds(r, f.at)},
+             {"axis", f.axis ? Json(*f.axis) : Json(nullptr)}}}});
+    }
+  }
+  Json sarif{{"$schema", "https://json.schemastore.org/sarif-2.1.0.json"},
+             {"version", "2.1.0"},
+             {"runs",
+              {{{"tool",
+                 {{"driver",
+                   {{"name", "ncservo"},
+                    {"version", NCSERVO_VERSION},
+                    {"informationUri", "https://github.com/ncservo/ncservo"},
+                    {"rules", std::move(rules)}}}}},
+                {"artifacts", std::move(artifacts)},
+                {"results", std::move(results)}}}}};
+  std::fputs((sarif.dump(2) + "\n").c_str(), out);
+}
+
+void writeJunit(std::FILE* out, const std::vector<CaptureReport>& reports, Severity fail_on,
+                bool never) {
+  pugi::xml_document doc;
+  auto decl = doc.append_child(pugi::node_declaration);
+  decl.append_attribute("version") = "1.0";
+  decl.append_attribute("encoding") = "UTF-8";
+  auto suites = doc.append_child("testsuites");
+  suites.append_attribute("name") = "ncservo";
+  std::size_t total_tests = 0, total_failures = 0, total_errors = 0;
+  for (const CaptureReport& r : reports) {
+    auto suite = suites.append_child("testsuite");
+    suite.append_attribute("name") = r.path.c_str();
+    std::size_t failures = 0;
+    for (const RuleDef& rule : kRules) {
+      auto testcase = suite.append_child("testcase");
+      testcase.append_attribute("classname") = (r.path + "." + partyName(rule.party)).c_str();
+      testcase.append_attribute("name") = fmt::format("{} {}", rule.code, rule.slug).c_str();
+      testcase.append_attribute("time") = "0";
+      std::vector<const Finding*> fired;
+      for (const Finding& f : r.findings) {
+        if (f.rule == rule.id) fired.push_back(&f);
+      }
+      if (fired.empty()) continue;
+      // A finding below --fail-on is listed, but does not fail the test case.
+      bool failing = false;
+      std::string body;
+      for (const Finding* f : fired) {
+        failing = failing || (!never && f->severity >= fail_on);
+        body += fmt::format("frame {} (since {}) t={:.6f}s {} [{}]: {}\n", f->at.frame,
+                            f->since.frame, seconds(r, f->at),
+                            f->axis ? axisName(r, *f->axis) : std::string("bus"),
+                            severityName(f->severity), f->message);
+      }
+      auto node = testcase.append_child(failing ? "failure" : "system-out");
+      if (failing) {
+        ++failures;
+        node.append_attribute("message") =
+            fmt::format("{} finding{} of {} {}", fired.size(), fired.size() == 1 ? "" : "s",
+                        rule.code, rule.slug)
+                .c_str();
+        node.append_attribute("type") = rule.code;
+      }
+      node.text() = body.c_str();
+    }
+    if (r.error) {
+      auto testcase = suite.append_child("testcase");
+      testcase.append_attribute("classname") = r.path.c_str();
+      testcase.append_attribute("name") = "capture readable";
+      auto error = testcase.append_child("error");
+      error.append_attribute("message") = r.error->c_str();
+      ++total_errors;
+    }
+    const std::size_t tests = kRules.size() + (r.error ? 1 : 0);
+    suite.append_attribute("tests") = tests;
+    suite.append_attribute("failures") = failures;
+    suite.append_attribute("errors") = r.error ? 1 : 0;
+    suite.append_attribute("skipped") = 0;
+    total_tests += tests;
+    total_failures += failures;
+  }
+  suites.append_attribute("tests") = total_tests;
+  suites.append_attribute("failures") = total_failures;
+  suites.append_attribute("errors") = total_errors;
+  std::ostringstream text;
+  doc.save(text, "  ");
+  std::fputs(text.str().c_str(), out);
+}
+
+void writeTextSummary(std::FILE* out, const CaptureReport& r) {
+  fmt::print(out, "{}: {} frames, {} cycles", r.path, r.frames, r.cycles);
+  if (r.cycle_time.median_us) {
+    fmt::print(out, ", cycle {:.1f} us (p99 {:.1f}, max {:.1f})", *r.cycle_time.median_us,
+               r.cycle_time.p99_us.value_or(0), r.cycle_time.max_us.value_or(0));
+  }
+  fmt::print(out, "\nlayout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
+             r.layout.size() == 1 ? "is" : "es");
+  for (const AxisReport& a : r.axes) {
+    fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
+               a.state ? driveStateName(*a.state) : "no inputs seen", a.telegram_failures);
+    if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);
+    fmt::print(out, "\n");
+    for (const ErrorHistoryEntry& e : a.error_history) {
+      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", e.cause->display,
+                 e.cause->canopen, e.at.frame, seconds(r, e.at));
+    }
+  }
+  if (r.note) fmt::print(out, "note: {}\n", *r.note);
+  if (r.error) fmt::print(out, "error: {}\n", *r.error);
+}
+}  // namespace
+
+std::size_t CaptureReport::count(Severity severity) const {
+  std::size_t n = 0;
+  for (const Finding& f : findings) n += f.severity == severity ? 1 : 0;
+  return n;
+}
+
+void summarise(const Validator& validator, CaptureReport& report) {
+  report.cycles = validator.cycles();
+  report.cycle_time = validator.cycleTime();
+  report.layout_source = validator.decoder().source();
+  report.layout = validator.decoder().axes();
+  report.axes.clear();
+  for (std::size_t i = 0; i < validator.axisCount(); ++i) {
+    const AxisModel* model = validator.axis(i);
+    if (model == nullptr) continue;
+    AxisReport a;
+    a.index = model->index();
+    a.name = axisName(report, model->index());
+    a.state = model->state();
+    a.timeline = model->timeline();
+    a.timeline_omitted = model->timelineOmitted();
+    a.error_history = model->errorHistory();
+    a.telegram_failures = model->totalFailures();
+    a.ready_mode = model->readyMode();
+    report.axes.push_back(std::move(a));
+  }
+}
+
+ReportWriter::ReportWriter(std::FILE* out, Format format, Severity fail_on, bool never)
+    : out_(out), format_(format), fail_on_(fail_on), never_(never) {}
+
+void ReportWriter::beginCapture(const CaptureReport& report) {
+  if (format_ == Format::Text) fmt::print(out_, "== {}\n", report.path);
+}
+
+void ReportWriter::finding(const CaptureReport& report, const Finding& f) {
+  const RuleDef& rule = ruleDef(f.rule);
+  if (format_ == Format::Text) {
+    fmt::print(out_, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}\n", severityName(f.severity),
+               rule.code, f.axis ? axisName(report, *f.axis) : std::string("bus"), f.at.frame,
+               seconds(report, f.at),
+               f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
+               f.message);
+  } else if (format_ == Format::Jsonl) {
+    Json j;
+    j["capture"] = report.path;
+    j.update(findingJson(report, f));
+    std::fputs((j.dump() + "\n").c_str(), out_);
+  }
+}
+
+void ReportWriter::endCapture(const CaptureReport& report) {
+  if (format_ == Format::Text) writeTextSummary(out_, report);
+}
+
+void ReportWriter::finish(const std::vector<CaptureReport>& reports) {
+  switch (format_) {
+    case Format::Text: {
+      std::size_t counts[3] = {0, 0, 0};
+      bool failed = false;
+      for (const CaptureReport& r : reports) {
+        for (const Finding& f : r.findings) {
+          ++counts[static_cast<std::size_t>(f.severity)];
+          failed = failed || (!never_ && f.severity >= fail_on_);
+        }
+        failed = failed || r.error.has_value();
+      }
+      fmt::print(out_, "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}, fail on {})\n",
+                 failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
+                 counts[1] == 1 ? "" : "s", counts[0], reports.size(),
+                 reports.size() == 1 ? "" : "s", never_ ? "never" : severityName(fail_on_));
+      break;
+    }
+    case Format::Json: {
+      Json j;
+      j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
+      Json captures = Json::array();
+      for (const CaptureReport& r : reports) captures.push_back(captureJson(r));
+      j["captures"] = std::move(captures);
+      std::fputs((j.dump(2) + "\n").c_str(), out_);
+      break;
+    }
+    case Format::Jsonl:
+      break;
+    case Format::Junit:
+      writeJunit(out_, reports, fail_on_, never_);
+      break;
+    case Format::Sarif:
+      writeSarif(out_, reports);
+      break;
+  }
+  std::fflush(out_);
+}
+
+}  // namespace ncservo::cli

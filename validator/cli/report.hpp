@@ -1,0 +1,63 @@
+// What `ncservo validate` reports about one capture, and the five ways it writes it
+// (INTERFACES.md: text, json, jsonl, junit, sarif). Presentation only.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/finding.hpp"
+#include "ncservo/validator.hpp"
+
+namespace ncservo::cli {
+
+enum class Format { Text, Json, Jsonl, Junit, Sarif };
+
+struct AxisReport {
+  std::uint16_t index = 0;
+  std::string name;
+  std::optional<DriveState> state;
+  std::vector<StateChange> timeline;
+  std::uint64_t timeline_omitted = 0;
+  std::vector<ErrorHistoryEntry> error_history;
+  std::uint32_t telegram_failures = 0;
+  std::optional<int> ready_mode;
+};
+
+struct CaptureReport {
+  std::string path;
+  std::uint64_t frames = 0;
+  std::uint64_t cycles = 0;
+  std::int64_t first_time_ns = 0;
+  CycleTimeSummary cycle_time;
+  LayoutSource layout_source = LayoutSource::None;
+  std::vector<AxisInfo> layout;
+  std::vector<Finding> findings;
+  std::vector<AxisReport> axes;
+  std::optional<std::string> error;  // the capture could not be read to its end
+  std::optional<std::string> note;   // e.g. no servo found
+  std::size_t count(Severity severity) const;
+};
+
+// Fills the end-of-capture parts of the report from the validator.
+void summarise(const Validator& validator, CaptureReport& report);
+
+// Streaming writers get each finding as it happens; the rest write everything at the end.
+class ReportWriter {
+ public:
+  ReportWriter(std::FILE* out, Format format, Severity fail_on_or_never, bool never);
+  void beginCapture(const CaptureReport& report);
+  void finding(const CaptureReport& report, const Finding& finding);
+  void endCapture(const CaptureReport& report);
+  void finish(const std::vector<CaptureReport>& reports);
+
+ private:
+  std::FILE* out_;
+  Format format_;
+  Severity fail_on_;
+  bool never_;
+};
+
+}  // namespace ncservo::cli
