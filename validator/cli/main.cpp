@@ -224,7 +224,6 @@ void printFields(const std::string& format) {
   }
 }
 
-
 // Splits "A,B" and "NAME=VALUE" arguments.
 std::vector<std::string> splitList(const std::vector<std::string>& items) {
   std::vector<std::string> out;
@@ -232,7 +231,8 @@ std::vector<std::string> splitList(const std::vector<std::string>& items) {
     std::size_t start = 0;
     while (start <= item.size()) {
       const std::size_t comma = item.find(',', start);
-      const std::string part = item.substr(start, comma == std::string::npos ? comma : comma - start);
+      const std::string part =
+          item.substr(start, comma == std::string::npos ? comma : comma - start);
       if (!part.empty()) out.push_back(part);
       if (comma == std::string::npos) break;
       start = comma + 1;
@@ -254,7 +254,8 @@ struct ValidateOptions {
 };
 
 // The settings from RULES.md's defaults, the config file, then the command line.
-std::optional<std::string> buildSettings(const ValidateOptions& o, const std::optional<Config>& config,
+std::optional<std::string> buildSettings(const ValidateOptions& o,
+                                         const std::optional<Config>& config,
                                          RuleSettings& settings) {
   if (config) {
     if (auto error = settings.apply(*config)) return fmt::format("{}: {}", config->path, *error);
@@ -396,14 +397,15 @@ void printRules(const std::string& format) {
     fmt::print("|---|---|---|---|---|---|---|\n");
   }
   for (const RuleDef& rule : kRules) {
-    const char* timeout = rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
+    const char* timeout =
+        rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
     if (format == "markdown") {
       fmt::print("| {} | `{}` | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
                  severityName(rule.severity), partyName(rule.party), timeout, rule.clause,
                  rule.summary);
     } else {
-      fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug,
-                 severityName(rule.severity), partyName(rule.party), rule.summary);
+      fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug, severityName(rule.severity),
+                 partyName(rule.party), rule.summary);
     }
   }
 }
@@ -436,13 +438,18 @@ int main(int argc, char** argv) {
   validate->add_option("--config", validate_config, "TOML configuration file");
   validate->add_option("--format", vo.format, "text, json, jsonl, junit or sarif")
       ->check(CLI::IsMember({"text", "json", "jsonl", "junit", "sarif"}));
-  validate->add_option("-o,--output", vo.output, "write the report here (default: standard output)");
-  validate->add_option("--fail-on", vo.fail_on, "exit 1 on findings at or above: error, warning, info, never")
+  validate->add_option("-o,--output", vo.output,
+                       "write the report here (default: standard output)");
+  validate
+      ->add_option("--fail-on", vo.fail_on,
+                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
   validate->add_option("--disable", vo.disable, "rule IDs to skip, comma-separated");
   validate->add_option("--severity", vo.severities, "ID=LEVEL: change a rule's severity");
   validate->add_option("--timeout", vo.timeouts, "NAME=MS: change a timeout of RULES.md");
-  validate->add_option("--servo-ready-mode", vo.servo_ready_mode, "Servo_Ready_Mode of the drives (0 or 1)")
+  validate
+      ->add_option("--servo-ready-mode", vo.servo_ready_mode,
+                   "Servo_Ready_Mode of the drives (0 or 1)")
       ->check(CLI::Range(0, 1));
   validate->add_flag("--no-default-layout", vo.no_default_layout,
                      "never assume the default layout (PROTOCOL.md §9.4)");

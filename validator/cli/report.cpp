@@ -22,7 +22,9 @@ std::string axisName(const CaptureReport& r, std::uint16_t axis) {
   return fmt::format("axis{}", axis);
 }
 
-std::string hex32(std::uint32_t v) { return fmt::format("0x{:08X}", v); }
+std::string hex32(std::uint32_t v) {
+  return fmt::format("0x{:08X}", v);
+}
 
 Json findingJson(const CaptureReport& r, const Finding& f) {
   const RuleDef& rule = ruleDef(f.rule);
@@ -38,7 +40,9 @@ Json findingJson(const CaptureReport& r, const Finding& f) {
   return j;
 }
 
-Json optionalNumber(const std::optional<double>& v) { return v ? Json(*v) : Json(nullptr); }
+Json optionalNumber(const std::optional<double>& v) {
+  return v ? Json(*v) : Json(nullptr);
+}
 
 Json captureJson(const CaptureReport& r) {
   Json c;
@@ -185,10 +189,10 @@ void writeJunit(std::FILE* out, const std::vector<CaptureReport>& reports, Sever
       std::string body;
       for (const Finding* f : fired) {
         failing = failing || (!never && f->severity >= fail_on);
-        body += fmt::format("frame {} (since {}) t={:.6f}s {} [{}]: {}\n", f->at.frame,
-                            f->since.frame, seconds(r, f->at),
-                            f->axis ? axisName(r, *f->axis) : std::string("bus"),
-                            severityName(f->severity), f->message);
+        body +=
+            fmt::format("frame {} (since {}) t={:.6f}s {} [{}]: {}\n", f->at.frame, f->since.frame,
+                        seconds(r, f->at), f->axis ? axisName(r, *f->axis) : std::string("bus"),
+                        severityName(f->severity), f->message);
       }
       auto node = testcase.append_child(failing ? "failure" : "system-out");
       if (failing) {
@@ -315,7 +319,8 @@ void ReportWriter::finish(const std::vector<CaptureReport>& reports) {
         }
         failed = failed || r.error.has_value();
       }
-      fmt::print(out_, "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}, fail on {})\n",
+      fmt::print(out_,
+                 "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}, fail on {})\n",
                  failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
                  counts[1] == 1 ? "" : "s", counts[0], reports.size(),
                  reports.size() == 1 ? "" : "s", never_ ? "never" : severityName(fail_on_));

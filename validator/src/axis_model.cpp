@@ -80,7 +80,38 @@ void Signal::observe(std::uint32_t v, const Stamp& now) {
   known = true;
 }
 
+// SSW bits no rule and no state reads: they change every cycle while an axis moves.
+constexpr std::uint32_t kSswUnjudged = mask32("ncservo.ssw.n_zero") |
+                                       mask32("ncservo.ssw.n_setpoint") |
+                                       mask32("ncservo.ssw.temp_warning");
+bool definedMessage(std::int32_t code) {
+  return code >= 0 && code <= 5;
+}  // PROTOCOL.md §5
+
+bool AxisModel::wouldNotChange(const PdoValues& values) const {
+  if (values.has_rx && (!latest_.has_rx || values.scw() != latest_.scw())) return false;
+  if (values.has_tx && (!latest_.has_tx || ((values.ssw() ^ latest_.ssw()) & ~kSswUnjudged) != 0 ||
+                        values.sew() != latest_.sew() ||
+                        definedMessage(values.msgCode()) != definedMessage(latest_.msgCode()))) {
+    return false;
+  }
+  return !al_state_.has_value();  // ESM-002 looks at which PDOs a frame carries
+}
+
+void AxisModel::refresh(const PdoValues& values, const Stamp& now) {
+  now_ = now;
+  if (values.has_rx) copyWords(Pdo::Rx, values);
+  if (values.has_tx) copyWords(Pdo::Tx, values);
+}
+
+void AxisModel::copyWords(Pdo pdo, const PdoValues& values) {
+  for (const WordDef& word : kWords) {
+    if (word.pdo == pdo) latest_.raw[static_cast<std::size_t>(word.word)] = values.word(word.word);
+  }
+}
+
 void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
+  ++revision_;
   now_ = now;
   if (lost) {
     consecutive_lost_ += cycles;
@@ -91,6 +122,7 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
 }
 
 void AxisModel::cycleOk(const Stamp& now) {
+  if (consecutive_lost_ != 0 || consecutive_failed_ != 0) ++revision_;
   now_ = now;
   // RULES.md COM-003: after 3 or more lost cycles the drive must raise ECatTErr.
   if (consecutive_lost_ >= 3) {

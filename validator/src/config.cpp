@@ -1,11 +1,12 @@
 #include "ncservo/config.hpp"
-#include "ncservo/rules.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
 #include <set>
+
+#include "ncservo/rules.hpp"
 
 namespace ncservo {
 
@@ -61,7 +62,9 @@ class Checker {
 };
 
 // An ID of the rule catalogue (RULES.md), e.g. "SE-001".
-bool isRuleId(std::string_view id) { return ruleByCode(id) != nullptr; }
+bool isRuleId(std::string_view id) {
+  return ruleByCode(id) != nullptr;
+}
 
 void readAxis(Checker& check, const toml::table& table, std::size_t index, Config& config) {
   AxisConfig axis;
@@ -130,7 +133,8 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
       for (const toml::node& id : *ids) {
         auto text = id.value<std::string>();
         if (!id.is_string() || !isRuleId(*text)) {
-          check.fail(id, key, "expected rule IDs of the catalogue (`ncservo rules`), such as \"MSG-001\"");
+          check.fail(id, key,
+                     "expected rule IDs of the catalogue (`ncservo rules`), such as \"MSG-001\"");
           return;
         }
         config.disabled_rules.push_back(*text);

@@ -144,7 +144,12 @@ void Decoder::observeStartup(const EcatFrame& frame, const ByteReader& bytes) {
 }
 
 AxisPlacement* Decoder::placementFor(FrameDecode& out, std::uint16_t axis) {
-  for (std::size_t i = 0; i < out.axis_count; ++i) {
+  // Placements usually arrive in axis order: the last one, or a new one after it.
+  if (out.axis_count > 0 && out.axes[out.axis_count - 1].axis == axis) {
+    return &out.axes[out.axis_count - 1];
+  }
+  const bool after_last = out.axis_count == 0 || out.axes[out.axis_count - 1].axis < axis;
+  for (std::size_t i = 0; !after_last && i < out.axis_count; ++i) {
     if (out.axes[i].axis == axis) return &out.axes[i];
   }
   if (out.axis_count >= out.axes.size()) return nullptr;

@@ -13,6 +13,8 @@ const FrameView& Session::onFrame(const EcatFrame& frame, const ByteReader& byte
     axis.values = PdoValues{};
     if (axis.placement.has_rx) readPdo(Pdo::Rx, bytes, axis.placement.rx_offset, axis.values);
     if (axis.placement.has_tx) readPdo(Pdo::Tx, bytes, axis.placement.tx_offset, axis.values);
+    axis.state.reset();
+    if (!track_states_) continue;
     const std::size_t index = axis.placement.axis;
     if (index >= latest_.size()) latest_.resize(index + 1);
     PdoValues& latest = latest_[index];

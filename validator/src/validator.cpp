@@ -29,7 +29,9 @@ std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
 }  // namespace
 
 Validator::Validator(DecoderOptions options, RuleSettings settings)
-    : session_(std::move(options)), settings_(std::move(settings)) {}
+    : session_(std::move(options)), settings_(std::move(settings)) {
+  session_.trackStates(false);
+}
 
 const AxisModel* Validator::axis(std::size_t index) const {
   if (index >= axes_.size() || !axes_[index].model) return nullptr;
@@ -83,8 +85,18 @@ const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t tim
       s.model->setAlState(al_.stateOfStation(info->station));
       if (al_.enteredOp(info->station)) s.model->enteredOp();
     }
+    // Fast path: the words the rules read are unchanged and no timer runs, so no condition can
+    // have changed (RULES.md reports at beginnings and at timeouts only).
+    if (s.pending == 0 && s.evaluated_revision == s.model->revision() &&
+        s.model->wouldNotChange(a.values)) {
+      s.model->refresh(a.values, now_);
+      session_.setState(i, s.model->state());
+      continue;
+    }
     s.model->observe(a.values, now_);
     evaluateAxis(s);
+    s.evaluated_revision = s.model->revision();
+    session_.setState(i, s.model->state());
   }
   return view;
 }
@@ -96,14 +108,20 @@ void Validator::evaluateAxis(AxisSlot& s) {
   for (const RuleDef& rule : kRules) {
     if (rule.check == nullptr || !settings_.isEnabled(rule.id)) continue;
     Episode& episode = s.episodes[static_cast<std::size_t>(rule.id)];
+    const bool was_pending = episode.active && !episode.reported;
     if (!rule.check(model, settings_)) {
+      if (was_pending) --s.pending;
       episode.active = false;
       continue;
     }
     if (!episode.active) episode = Episode{true, false, now_};
     if (episode.reported) continue;
     const std::int64_t held = now_.time_ns - episode.began.time_ns;
-    if (rule.delayed && held <= settings_.timeoutNs(*rule.timeout)) continue;
+    if (rule.delayed && held <= settings_.timeoutNs(*rule.timeout)) {
+      if (!was_pending) ++s.pending;
+      continue;
+    }
+    if (was_pending) --s.pending;
     episode.reported = true;
     report(rule.id, model.index(), episode.began, rule.describe(model, settings_, held));
   }

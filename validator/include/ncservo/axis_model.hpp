@@ -63,9 +63,22 @@ class AxisModel {
   void cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now);
   void cycleOk(const Stamp& now);
   // The slave entered OP: the total counter resets (seed 001).
-  void enteredOp() { total_failures_ = 0; }
+  void enteredOp() {
+    total_failures_ = 0;
+    ++revision_;
+  }
   // The AL state of the axis's slave, where the capture shows it (PROTOCOL.md §8; ESM-002).
-  void setAlState(std::optional<std::uint8_t> state) { al_state_ = state; }
+  void setAlState(std::optional<std::uint8_t> state) {
+    if (state != al_state_) ++revision_;
+    al_state_ = state;
+  }
+  // Counts changes made other than by observe(): an unchanged revision and unchanged words
+  // mean the rules' conditions are unchanged too.
+  std::uint64_t revision() const { return revision_; }
+  // Whether observing these values would change nothing the rules look at.
+  bool wouldNotChange(const PdoValues& values) const;
+  // Takes the values without judging them (after wouldNotChange said they change nothing).
+  void refresh(const PdoValues& values, const Stamp& now);
   std::optional<std::uint8_t> alState() const { return al_state_; }
 
   // This frame's values of the axis (outputs and/or inputs), at `now`.
@@ -124,8 +137,10 @@ class AxisModel {
   void observeOutputs(const PdoValues& values, const Stamp& now);
   void observeInputs(const PdoValues& values, const Stamp& now);
   void updateState(const Stamp& now);
+  void copyWords(Pdo pdo, const PdoValues& values);
 
   std::uint16_t index_;
+  std::uint64_t revision_ = 0;
   Stamp now_;
   bool inputs_now_ = false;
   std::optional<std::uint8_t> al_state_;

@@ -33,12 +33,16 @@ class Session {
   const FrameView& onFrame(const EcatFrame& frame, const ByteReader& bytes);
 
   const Decoder& decoder() const { return decoder_; }
+  // A caller with its own model of each axis (the validator) keeps the states itself.
+  void trackStates(bool on) { track_states_ = on; }
+  void setState(std::size_t i, std::optional<DriveState> state) { view_.axes[i].state = state; }
 
  private:
   Decoder decoder_;
   FrameDecode decode_;
   FrameView view_;
   std::vector<PdoValues> latest_;  // per axis index
+  bool track_states_ = true;
 };
 
 }  // namespace ncservo

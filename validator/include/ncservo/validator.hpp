@@ -48,6 +48,8 @@ class Validator {
   struct AxisSlot {
     std::optional<AxisModel> model;
     std::array<Episode, kRuleCount> episodes{};
+    std::uint32_t pending = 0;  // delayed episodes running towards their timeout
+    std::optional<std::uint64_t> evaluated_revision;
   };
   // The cyclic frame that carries a group of axes, named by its lowest axis index.
   struct CyclicFrame {
