@@ -1,6 +1,7 @@
 // Wireshark 4.0 plugin: a thin presenter over the ncservo library. The field registration is
 // generated from the library's field table; layout, copy detection and drive state come from the
-// library's Session, computed on the first pass and kept per frame (PROTOCOL.md §10).
+// library's Validator — as are the rules' findings, shown as expert info — computed on the first
+// pass and kept per frame (PROTOCOL.md §10).
 //
 // Wireshark raises exceptions with longjmp: no object with a destructor may be alive in a frame
 // of this file across a tvb_* or proto_tree_add_* call. The dissector therefore works on plain
@@ -20,7 +21,8 @@
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
-#include "ncservo/session.hpp"
+#include "ncservo/rules.hpp"
+#include "ncservo/validator.hpp"
 
 extern "C" {
 WS_DLL_PUBLIC const char plugin_version[];
@@ -48,13 +50,20 @@ int ett_word[kWordCount];
 // Per word, the bit fields drawn by one bitmask call (NULL-terminated).
 int* word_children[kWordCount][kMaxChildren];
 expert_field ei_region_malformed = EI_INIT;
+expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
 const char* pref_config_path = "";
 gboolean pref_default_layout = TRUE;
+gint pref_servo_ready_mode = -1;  // auto
+const enum_val_t kReadyModes[] = {{"auto", "Inferred from the capture", -1},
+                                  {"0", "Servo_Ready_Mode 0", 0},
+                                  {"1", "Servo_Ready_Mode 1", 1},
+                                  {nullptr, nullptr, 0}};
 
 // Options from the preferences, and the state of the capture being dissected.
 DecoderOptions* g_options = nullptr;
-Session* g_session = nullptr;
+RuleSettings* g_settings = nullptr;
+Validator* g_validator = nullptr;
 
 // What the first pass found in a frame, kept in file scope for later passes.
 enum AxisFlags : guint8 {
@@ -71,10 +80,19 @@ struct AxisRecord {
   guint32 rx_offset;
   guint32 tx_offset;
 };
+constexpr guint16 kBusAxis = 0xFFFF;
+struct FindingRecord {
+  guint8 rule;       // RuleId
+  guint16 axis;      // kBusAxis for a finding about the bus
+  guint32 since;     // frame where the condition began
+  const char* text;  // "SE-001 illegal-enable-edge: axis0: ...", in file scope
+};
 struct FrameRecord {
   guint8 copy;
   guint16 axis_count;
-  AxisRecord axes[1];  // axis_count entries
+  guint16 finding_count;
+  const FindingRecord* findings;
+  AxisRecord axes[1];  // axis_count entries (at least one slot allocated)
 };
 
 ftenum wordType(WireType type) {
@@ -173,6 +191,27 @@ hf_register_info* buildFieldRegistrations(std::size_t& count) {
   return hf;
 }
 
+// One expert item per rule, generated from the rule table, at the rule's default severity.
+ei_register_info* buildRuleRegistrations() {
+  auto* ei = g_new0(ei_register_info, kRuleCount);
+  for (std::size_t i = 0; i < kRuleCount; ++i) {
+    const RuleDef& rule = kRules[i];
+    ei_rule[i] = EI_INIT;
+    ei[i].ids = &ei_rule[i];
+    ei[i].eiinfo.name = g_strdup(ruleFilterName(rule).c_str());
+    ei[i].eiinfo.group = rule.party == Party::Bus ? PI_SEQUENCE : PI_PROTOCOL;
+    ei[i].eiinfo.severity = rule.severity == Severity::Error     ? PI_ERROR
+                            : rule.severity == Severity::Warning ? PI_WARN
+                                                                 : PI_NOTE;
+    ei[i].eiinfo.summary = g_strdup_printf("%s %s: %s", rule.code, rule.slug, rule.summary);
+    // As EXPFILL and HFILL fill them.
+    ei[i].eiinfo.hf_info.p_id = nullptr;
+    ei[i].eiinfo.hf_info.hfinfo.id = -1;
+    ei[i].eiinfo.hf_info.hfinfo.same_name_prev_id = -1;
+  }
+  return ei;
+}
+
 int derivedHf(Derived id) {
   return hf_derived[static_cast<std::size_t>(id)];
 }
@@ -189,28 +228,44 @@ void buildWordChildren() {
 
 void applyPreferences() {
   auto* options = new DecoderOptions();
+  auto* settings = new RuleSettings();
   options->default_layout = pref_default_layout != FALSE;
   if (pref_config_path != nullptr && pref_config_path[0] != '\0') {
     ConfigResult loaded = loadConfig(pref_config_path);
     if (loaded.ok()) {
       options->axes = loaded.config->axes;
       options->default_layout = options->default_layout && loaded.config->default_layout;
+      // Severity overrides are left to Wireshark's own expert-severity table (PROTOCOL.md §10).
+      if (auto error = settings->apply(*loaded.config)) {
+        report_failure("NCSERVO: %s: %s", pref_config_path, error->c_str());
+      }
     } else {
       report_failure("NCSERVO: %s", loaded.error->text().c_str());
     }
   }
+  if (pref_servo_ready_mode >= 0) settings->servo_ready_mode = pref_servo_ready_mode;
   delete g_options;
   g_options = options;
+  delete g_settings;
+  g_settings = settings;
 }
 
 void initCapture() {
-  delete g_session;
-  g_session = new Session(g_options != nullptr ? *g_options : DecoderOptions{});
+  delete g_validator;
+  g_validator = new Validator(g_options != nullptr ? *g_options : DecoderOptions{},
+                              g_settings != nullptr ? *g_settings : RuleSettings{});
 }
 
 void cleanupCapture() {
-  delete g_session;
-  g_session = nullptr;
+  delete g_validator;
+  g_validator = nullptr;
+}
+
+const char* axisName(guint16 axis) {
+  if (g_validator != nullptr && axis < g_validator->decoder().axes().size()) {
+    return g_validator->decoder().axes()[axis].name.c_str();
+  }
+  return "?";
 }
 
 LinkType linkTypeOf(const packet_info* pinfo) {
@@ -232,19 +287,38 @@ LinkType linkTypeOf(const packet_info* pinfo) {
 // First pass: run the library over the frame and keep what it found.
 const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   const LinkType link = linkTypeOf(pinfo);
-  if (link == LinkType::Unsupported || g_session == nullptr) return nullptr;
+  if (link == LinkType::Unsupported || g_validator == nullptr) return nullptr;
   const guint length = tvb_captured_length(tvb);
   const guint8* data = length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr;
   const ByteReader bytes(data, data != nullptr ? length : 0);
   static EcatFrame frame;  // 8 KiB; dissection is single-threaded
   walkPacket(link, bytes, frame);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return nullptr;
-  const FrameView& view = g_session->onFrame(frame, bytes);
-  if (view.axis_count == 0) return nullptr;
-  const std::size_t size = sizeof(FrameRecord) + (view.axis_count - 1) * sizeof(AxisRecord);
+  const std::int64_t time_ns =
+      static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
+  const FrameView& view = g_validator->onFrame(pinfo->num, time_ns, frame, bytes);
+  const std::vector<Finding>& findings = g_validator->findings();
+  if (view.axis_count == 0 && findings.empty()) return nullptr;
+  const std::size_t slots = view.axis_count > 0 ? view.axis_count : 1;
+  const std::size_t size = sizeof(FrameRecord) + (slots - 1) * sizeof(AxisRecord);
   auto* record = static_cast<FrameRecord*>(wmem_alloc0(wmem_file_scope(), size));
   record->copy = static_cast<guint8>(view.copy);
   record->axis_count = static_cast<guint16>(view.axis_count);
+  if (!findings.empty()) {
+    auto* out = static_cast<FindingRecord*>(
+        wmem_alloc0(wmem_file_scope(), findings.size() * sizeof(FindingRecord)));
+    for (std::size_t i = 0; i < findings.size(); ++i) {
+      const Finding& f = findings[i];
+      const RuleDef& rule = ruleDef(f.rule);
+      out[i].rule = static_cast<guint8>(f.rule);
+      out[i].axis = f.axis ? *f.axis : kBusAxis;
+      out[i].since = static_cast<guint32>(f.since.frame);
+      out[i].text = wmem_strdup_printf(wmem_file_scope(), "%s %s: %s: %s", rule.code, rule.slug,
+                                       f.axis ? axisName(*f.axis) : "bus", f.message.c_str());
+    }
+    record->findings = out;
+    record->finding_count = static_cast<guint16>(std::min<std::size_t>(findings.size(), 0xFFFF));
+  }
   for (std::size_t i = 0; i < view.axis_count; ++i) {
     const AxisFrameView& axis = view.axes[i];
     AxisRecord& r = record->axes[i];
@@ -302,11 +376,25 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
   }
 }
 
-void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const AxisRecord& r) {
-  const char* name = "?";
-  if (g_session != nullptr && r.axis < g_session->decoder().axes().size()) {
-    name = g_session->decoder().axes()[r.axis].name.c_str();
+// Each finding as the expert item of its rule, on the axis's subtree (or the protocol's item).
+void addFindings(packet_info* pinfo, const FrameRecord& record, guint16 axis, proto_item* item) {
+  for (guint i = 0; i < record.finding_count; ++i) {
+    const FindingRecord& f = record.findings[i];
+    if (f.axis != axis) continue;
+    expert_add_info_format(pinfo, item, &ei_rule[f.rule], "%s", f.text);
   }
+}
+
+bool findingsFor(const FrameRecord& record, guint16 axis) {
+  for (guint i = 0; i < record.finding_count; ++i) {
+    if (record.findings[i].axis == axis) return true;
+  }
+  return false;
+}
+
+void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRecord& record,
+             const AxisRecord& r) {
+  const char* name = axisName(r.axis);
   const char* state =
       (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
   // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
@@ -347,6 +435,7 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const AxisReco
                            rx ? r.rx_offset : r.tx_offset);
   }
   col_append_fstr(pinfo->cinfo, COL_INFO, "%s%s%s", name, state ? " " : "", state ? state : "");
+  if (findingsFor(record, r.axis)) addFindings(pinfo, record, r.axis, axis_item);
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
@@ -360,14 +449,29 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   if (record == nullptr) return 0;
   proto_item* root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, -1, ENC_NA);
   proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
-  const char* copy = copyKindName(static_cast<CopyKind>(record->copy));
-  proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
-  proto_item_set_generated(
-      proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
   col_append_str(pinfo->cinfo, COL_INFO, " [NCSERVO ");
+  if (record->axis_count > 0) {
+    const char* copy = copyKindName(static_cast<CopyKind>(record->copy));
+    proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
+    proto_item_set_generated(
+        proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
+  }
   for (guint i = 0; i < record->axis_count; ++i) {
     if (i > 0) col_append_str(pinfo->cinfo, COL_INFO, "; ");
-    addAxis(ncservo_tree, tvb, pinfo, record->axes[i]);
+    addAxis(ncservo_tree, tvb, pinfo, *record, record->axes[i]);
+  }
+  // Findings about the bus, or about an axis this frame does not carry, go on the root item.
+  for (guint i = 0; i < record->finding_count; ++i) {
+    const FindingRecord& f = record->findings[i];
+    bool shown = false;
+    for (guint a = 0; a < record->axis_count && f.axis != kBusAxis; ++a) {
+      shown = shown || record->axes[a].axis == f.axis;
+    }
+    if (!shown) expert_add_info_format(pinfo, root, &ei_rule[f.rule], "%s", f.text);
+  }
+  for (guint i = 0; i < record->finding_count; ++i) {
+    col_append_fstr(pinfo->cinfo, COL_INFO, "%s%s", i == 0 ? " | " : " ",
+                    ruleDef(static_cast<RuleId>(record->findings[i].rule)).code);
   }
   col_append_str(pinfo->cinfo, COL_INFO, "]");
   return static_cast<int>(tvb_captured_length(tvb));
@@ -396,12 +500,17 @@ void registerProtocol() {
   };
   expert_module_t* expert = expert_register_protocol(proto_ncservo);
   expert_register_field_array(expert, ei, static_cast<int>(std::size(ei)));
+  expert_register_field_array(expert, buildRuleRegistrations(), static_cast<int>(kRuleCount));
 
   module_t* prefs = prefs_register_protocol(proto_ncservo, applyPreferences);
   prefs_register_filename_preference(
       prefs, "config", "Configuration file",
       "TOML configuration file with the axes' layout (see the ncservo README)", &pref_config_path,
       FALSE);
+  prefs_register_enum_preference(
+      prefs, "servo_ready_mode", "Servo_Ready_Mode",
+      "The drives' Servo_Ready_Mode parameter (PROTOCOL.md §5); auto infers it per axis",
+      &pref_servo_ready_mode, kReadyModes, FALSE);
   prefs_register_bool_preference(
       prefs, "default_layout", "Use the default layout",
       "Assume the layout of a master that maps all outputs, then all inputs (PROTOCOL.md §9.4) "
