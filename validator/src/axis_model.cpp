@@ -105,9 +105,10 @@ void AxisModel::refresh(const PdoValues& values, const Stamp& now) {
 }
 
 void AxisModel::copyWords(Pdo pdo, const PdoValues& values) {
-  for (const WordDef& word : kWords) {
-    if (word.pdo == pdo) latest_.raw[static_cast<std::size_t>(word.word)] = values.word(word.word);
-  }
+  const auto first = static_cast<std::ptrdiff_t>(firstWordOf(pdo));
+  const auto count = static_cast<std::ptrdiff_t>(wordCountOf(pdo));
+  std::copy(values.raw.begin() + first, values.raw.begin() + first + count,
+            latest_.raw.begin() + first);
 }
 
 void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {

@@ -19,12 +19,10 @@ constexpr std::uint16_t kRegSm3 = ecat::kRegSyncManager0 + 3 * ecat::kSyncManage
 constexpr std::size_t kSmLengthOffset = 2;  // SM register block: start (2), length (2), ...
 
 std::uint64_t datagramListSignature(const EcatFrame& frame) {
-  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a
-  auto mix = [&hash](std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) {
-      hash ^= (v >> (8 * i)) & 0xFF;
-      hash *= 1099511628211ull;
-    }
+  std::uint64_t hash = 1469598103934665603ull;
+  auto mix = [&hash](std::uint64_t v) {  // one multiply-xorshift round per value (splitmix64)
+    hash = (hash ^ v) * 0x9E3779B97F4A7C15ull;
+    hash ^= hash >> 31;
   };
   mix(frame.count);
   for (std::size_t i = 0; i < frame.count; ++i) {
@@ -94,8 +92,11 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
   } else if (options_.default_layout && !startupShowsNoServo()) {
     placeDefault(frame, out);
   }
-  std::sort(out.axes.begin(), out.axes.begin() + static_cast<std::ptrdiff_t>(out.axis_count),
-            [](const AxisPlacement& a, const AxisPlacement& b) { return a.axis < b.axis; });
+  const auto end = out.axes.begin() + static_cast<std::ptrdiff_t>(out.axis_count);
+  const auto by_axis = [](const AxisPlacement& a, const AxisPlacement& b) {
+    return a.axis < b.axis;
+  };
+  if (!std::is_sorted(out.axes.begin(), end, by_axis)) std::sort(out.axes.begin(), end, by_axis);
 }
 
 // PROTOCOL.md §8: a frame with any WKC above zero is a returned copy; otherwise the frame
@@ -165,7 +166,7 @@ void Decoder::placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_
                           bool returned, FrameDecode& out, std::uint16_t axis) {
   AxisPlacement* placement = placementFor(out, axis);
   if (placement == nullptr) return;
-  const std::size_t size = pdoSize(pdo);
+  const std::size_t size = sizeOfPdo(pdo);
   const bool captured = start + size <= dg.length && start + size <= dg.data_captured;
   if (pdo == Pdo::Rx) {
     placement->rx_placed = true;

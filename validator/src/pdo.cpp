@@ -51,7 +51,7 @@ void readWords(Pdo pdo, const std::uint8_t* base, PdoValues& out, std::index_seq
 
 bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoValues& out) {
   // One bounds check for the whole PDO; every word lies inside it (kWordOffsets, pdoSize).
-  if (!bytes.has(offset, pdoSize(pdo))) return false;
+  if (!bytes.has(offset, sizeOfPdo(pdo))) return false;
   readWords(pdo, bytes.data() + offset, out, std::make_index_sequence<kWordCount>{});
   (pdo == Pdo::Rx ? out.has_rx : out.has_tx) = true;
   return true;

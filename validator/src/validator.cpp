@@ -58,9 +58,10 @@ void Validator::report(RuleId rule, std::optional<std::uint16_t> axis, const Sta
 }
 
 Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
+  if (axis < axes_.size() && axes_[axis].model) return axes_[axis];
   if (axis >= axes_.size()) axes_.resize(axis + 1u);
   AxisSlot& s = axes_[axis];
-  if (!s.model) s.model.emplace(axis, settings_.readyModeFor(axis));
+  s.model.emplace(axis, settings_.readyModeFor(axis));
   return s;
 }
 

@@ -74,6 +74,11 @@ constexpr std::size_t pdoSize(Pdo pdo) {
 
 inline constexpr std::size_t kRxPdoSize = pdoSize(Pdo::Rx);
 inline constexpr std::size_t kTxPdoSize = pdoSize(Pdo::Tx);
+// The same, as constants for hot paths (pdoSize loops over the table when `pdo` is not constant).
+constexpr std::size_t sizeOfPdo(Pdo pdo) { return pdo == Pdo::Rx ? kRxPdoSize : kTxPdoSize; }
+// Words of one PDO are contiguous in kWords (checked below): [first, first + count).
+constexpr std::size_t firstWordOf(Pdo pdo) { return pdo == Pdo::Rx ? 0 : 3; }
+constexpr std::size_t wordCountOf(Pdo pdo) { return pdo == Pdo::Rx ? 3 : kWordCount - 3; }
 
 namespace detail {
 constexpr bool wordsInEnumOrder() {
@@ -86,6 +91,9 @@ constexpr bool wordsInEnumOrder() {
 }  // namespace detail
 
 static_assert(detail::wordsInEnumOrder(), "kWords must list Word values in order, Rx before Tx");
+static_assert(kWords[firstWordOf(Pdo::Rx) + wordCountOf(Pdo::Rx) - 1].pdo == Pdo::Rx &&
+                  kWords[firstWordOf(Pdo::Tx)].pdo == Pdo::Tx,
+              "firstWordOf/wordCountOf match the word table");
 static_assert(kRxPdoSize == 10, "RxPDO is 10 bytes (PROTOCOL.md §1)");
 static_assert(kTxPdoSize == 40, "TxPDO is 40 bytes (PROTOCOL.md §1)");
 static_assert(wordOffset(Word::Scw) == 4 && wordOffset(Word::ExtCode) == 8);

@@ -1,0 +1,126 @@
+#!/usr/bin/env bash
+# validate_cli.sh SRC BUILD
+# `ncservo validate`: every exit code of INTERFACES.md, the five formats parse and agree, several
+# captures and standard input, overrides from the command line and the config file, and a damaged
+# capture still reports what came before the damage.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+
+run() {  # run EXPECTED_RC ARGS...: runs ncservo validate, checks the exit status
+  local expected=$1
+  shift
+  set +e
+  "$NCSERVO" validate "$@" >"$WORK/out" 2>"$WORK/err"
+  local rc=$?
+  set -e
+  [ "$rc" = "$expected" ] || fail "validate $*: exit $rc, expected $expected; stderr: $(head -3 "$WORK/err")"
+}
+
+python3 "$GEN" --axes 2 --cycles 600 -o "$WORK/clean.pcap"
+python3 "$GEN" --axes 2 --cycles 600 --inject SE-001@0.2:0 --inject MSG-001@0.4:1 -o "$WORK/faults.pcap"
+
+# Exit codes: 0 clean, 1 findings at or above --fail-on, 0 below it or with never.
+run 0 "$WORK/clean.pcap"
+grep -q "^verdict: PASS" "$WORK/out" || fail "clean verdict: $(tail -1 "$WORK/out")"
+run 1 "$WORK/faults.pcap"
+grep -q "^verdict: FAIL - 1 error, 1 warning" "$WORK/out" || fail "faults verdict: $(tail -1 "$WORK/out")"
+grep -q "^error   SE-001  axis0 frame" "$WORK/out" || fail "text finding line: $(grep SE-001 "$WORK/out")"
+run 0 --fail-on never "$WORK/faults.pcap"
+run 0 --disable SE-001 "$WORK/faults.pcap"
+run 1 --disable SE-001 --fail-on warning "$WORK/faults.pcap"
+run 0 --severity SE-001=info "$WORK/faults.pcap"
+run 1 --severity SE-001=info --fail-on info "$WORK/faults.pcap"
+# Usage errors: 2, and nothing runs.
+run 2 --disable XX-999 "$WORK/faults.pcap"
+grep -q "XX-999" "$WORK/err" || fail "unknown rule not named: $(cat "$WORK/err")"
+run 2 --timeout no_such=5 "$WORK/faults.pcap"
+run 2 --timeout drive_response=abc "$WORK/faults.pcap"
+run 2 --format xml "$WORK/faults.pcap"
+run 2 --servo-ready-mode 2 "$WORK/faults.pcap"
+printf 'telegram_failure_limit = 3\n[rules]\ndisable = ["SE-001", "NOPE-1"]\n' >"$WORK/bad.toml"
+run 2 --config "$WORK/bad.toml" "$WORK/faults.pcap"
+grep -q "bad.toml:3: key 'rules.disable'" "$WORK/err" || fail "config error: $(cat "$WORK/err")"
+[ ! -s "$WORK/out" ] || fail "a bad config must stop before any output"
+printf '[rules]\ndisable = ["SE-001"]\n[timeouts]\ndrive_response = 30\n' >"$WORK/good.toml"
+run 0 --config "$WORK/good.toml" "$WORK/faults.pcap"
+
+# Capture errors: 3, naming the file; what was read before the damage is still reported.
+run 3 "$WORK/missing.pcap"
+grep -qF "$WORK/missing.pcap" "$WORK/err" || fail "missing file not named"
+echo "not a capture" >"$WORK/text.pcap"
+run 3 "$WORK/text.pcap"
+grep -qF "$WORK/text.pcap" "$WORK/err" || fail "non-capture not named"
+size=$(stat -c %s "$WORK/faults.pcap")
+head -c $((size * 3 / 4)) "$WORK/faults.pcap" >"$WORK/cut.pcap"
+run 3 --format json "$WORK/cut.pcap"
+grep -qE "cut.pcap: frame [0-9]+" "$WORK/err" || fail "truncation message: $(cat "$WORK/err")"
+python3 - "$WORK/out" <<'PY' || fail "cut capture JSON"
+import json, sys
+c = json.load(open(sys.argv[1]))["captures"][0]
+assert "error" in c and "frame" in c["error"], c.get("error")
+assert any(f["rule"] == "SE-001" for f in c["findings"]), "findings before the damage lost"
+PY
+
+# Several captures: the most serious status in the order 2, 3, 1, 0.
+run 3 "$WORK/faults.pcap" "$WORK/missing.pcap" "$WORK/clean.pcap"
+run 1 "$WORK/clean.pcap" "$WORK/faults.pcap"
+grep -q "(2 captures, fail on error)" "$WORK/out" || fail "two captures: $(tail -1 "$WORK/out")"
+
+# Standard input, and --output.
+"$NCSERVO" validate --format jsonl - <"$WORK/faults.pcap" >"$WORK/stdin.jsonl" && fail "stdin: expected exit 1"
+[ "$(wc -l <"$WORK/stdin.jsonl")" = 2 ] || fail "stdin jsonl: $(cat "$WORK/stdin.jsonl")"
+run 1 --format json --output "$WORK/report.json" "$WORK/faults.pcap"
+[ ! -s "$WORK/out" ] || fail "--output: stdout not empty"
+
+# The formats agree on the findings.
+for format in json jsonl junit sarif text; do
+  run 1 --format "$format" "$WORK/faults.pcap" "$WORK/clean.pcap"
+  cp "$WORK/out" "$WORK/report.$format"
+done
+python3 - "$WORK" <<'PY' || fail "formats disagree"
+import json, sys, xml.etree.ElementTree as ET
+w = sys.argv[1]
+doc = json.load(open(f"{w}/report.json"))
+assert doc["tool"]["name"] == "ncservo"
+caps = doc["captures"]
+assert [len(c["findings"]) for c in caps] == [2, 0], caps
+c = caps[0]
+for key in ("path", "frames", "cycles", "cycle_time_us", "layout", "findings", "axes", "summary"):
+    assert key in c, key
+assert c["frames"] == 1200 and c["cycles"] == 600, (c["frames"], c["cycles"])
+assert c["cycle_time_us"]["median"] == 1000.0
+assert c["layout"]["source"] == "default" and len(c["layout"]["axes"]) == 2
+assert c["layout"]["axes"][1]["outputs"] == "0x0001000A", c["layout"]["axes"][1]
+assert c["summary"] == {"error": 1, "warning": 1, "info": 0}, c["summary"]
+want = sorted((f["rule"], f["axis"], f["frame"]) for f in c["findings"])
+for f in c["findings"]:
+    assert set(f) == {"rule", "slug", "severity", "axis", "frame", "since_frame", "time", "message"}, f
+    assert f["message"]
+for a in c["axes"]:
+    assert {"index", "name", "state", "state_timeline", "error_history", "telegram_failures"} <= set(a)
+    assert any(s["transition"] == "ENABLE OPERATION" for s in a["state_timeline"]), a["state_timeline"][:4]
+lines = [json.loads(l) for l in open(f"{w}/report.jsonl")]
+assert sorted((l["rule"], l["axis"], l["frame"]) for l in lines) == want, lines
+sarif = json.load(open(f"{w}/report.sarif"))
+assert sarif["version"] == "2.1.0"
+run = sarif["runs"][0]
+assert len(run["tool"]["driver"]["rules"]) == 29
+res = run["results"]
+assert sorted((r["ruleId"], r["properties"]["axis"], r["properties"]["frame"]) for r in res) == want
+assert all(r["locations"] and r["locations"][0]["physicalLocation"]["artifactLocation"]["uri"] for r in res)
+suites = ET.parse(f"{w}/report.junit").getroot()
+assert suites.tag == "testsuites" and len(suites) == 2
+s0 = suites[0]
+assert s0.get("tests") == "29" and s0.get("failures") == "1", s0.attrib  # MSG-001 is a warning
+failed = [tc.get("name") for tc in s0 if tc.find("failure") is not None]
+assert failed == ["SE-001 illegal-enable-edge"], failed
+assert suites[1].get("failures") == "0"
+text = open(f"{w}/report.text").read()
+assert "== " in text and "verdict: FAIL" in text
+PY
+
+# `rules` lists the whole catalogue.
+"$NCSERVO" rules >"$WORK/rules.txt"
+[ "$(wc -l <"$WORK/rules.txt")" = 29 ] || fail "rules: $(wc -l <"$WORK/rules.txt") lines"
+"$NCSERVO" validate --help | grep -q -- "--fail-on" || fail "validate --help"
+echo "validate_cli: exit codes, formats, several captures, stdin, overrides"
