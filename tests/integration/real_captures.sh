@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # real_captures.sh SRC BUILD
 # Over real EtherCAT captures from other people's hardware (none holds a servo of this protocol),
-# tshark with the plugin exits 0, prints nothing on stderr and shows no ncservo field, and
+# tshark with the plugin exits 0, prints nothing on stderr and shows no axis field, the only
+# NC-Servo items are the bus findings `ncservo validate` reports on the same frames, and
 # `ncservo decode` finds no axis and says so.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
@@ -19,7 +20,21 @@ for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   fi
   "$TSHARK" "$PLUGIN" -r "$WORK/capture" -V >"$WORK/verbose.txt" 2>"$WORK/err.txt" || fail "tshark -V exit $?"
   [ ! -s "$WORK/err.txt" ] || fail "$(basename "$capture"): stderr: $(head -3 "$WORK/err.txt")"
-  ! grep -q "NC-Servo" "$WORK/verbose.txt" || fail "$(basename "$capture"): an NC-Servo tree"
+  # The only NC-Servo items are bus findings (ESM-*), on the frames where the validator reports them.
+  "$TSHARK" "$PLUGIN" -r "$WORK/capture" -Y ncservo -T fields -e frame.number >"$WORK/plugin.txt"
+  set +e
+  "$NCSERVO" validate --format json --fail-on never "$WORK/capture" >"$WORK/report.json"
+  rc=$?
+  set -e
+  [ $rc = 0 ] || fail "$(basename "$capture"): validate exit $rc"
+  python3 - "$WORK/report.json" "$WORK/plugin.txt" <<'PY' || fail "$(basename "$capture"): plugin and validator disagree"
+import json, sys
+c = json.load(open(sys.argv[1]))["captures"][0]
+assert all(f["rule"].startswith("ESM-") and f["axis"] is None for f in c["findings"]), c["findings"]
+frames = sorted({f["frame"] for f in c["findings"]})
+shown = sorted({int(l) for l in open(sys.argv[2]) if l.strip()})
+assert frames == shown, (frames, shown)
+PY
   "$NCSERVO" decode "$WORK/capture" >"$WORK/decode.csv" 2>"$WORK/decode.err" || fail "decode exit $?"
   [ "$(wc -l <"$WORK/decode.csv")" = 1 ] || fail "$(basename "$capture"): decode found rows"
   grep -q "no servo of this protocol found" "$WORK/decode.err" || fail "no plain message"
