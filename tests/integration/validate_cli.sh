@@ -17,7 +17,8 @@ run() {  # run EXPECTED_RC ARGS...: runs ncservo validate, checks the exit statu
 }
 
 python3 "$GEN" --axes 2 --cycles 600 -o "$WORK/clean.pcap"
-python3 "$GEN" --axes 2 --cycles 600 --inject SE-001@0.2:0 --inject MSG-001@0.4:1 -o "$WORK/faults.pcap"
+python3 "$GEN" --axes 2 --cycles 600 --inject SE-001@0.2:0 --inject MSG-001@0.4:1 -o "$WORK/faults.pcap" \
+  --findings "$WORK/faults.expected.json"
 
 # Exit codes: 0 clean, 1 findings at or above --fail-on, 0 below it or with never.
 run 0 "$WORK/clean.pcap"

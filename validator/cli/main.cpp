@@ -324,7 +324,8 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
       }
     }
     for (const Finding& f : validator.findings()) {
-      report.findings.push_back(f);
+      ++report.counts[static_cast<std::size_t>(f.severity)];
+      if (writer.keepsFindings()) report.findings.push_back(f);
       writer.finding(report, f);
     }
   }
@@ -343,11 +344,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     rc = kExitCapture;
   }
   writer.endCapture(report);
-  if (rc == kExitOk && !never) {
-    for (const Finding& f : report.findings) {
-      if (f.severity >= fail_on) rc = kExitFindings;
-    }
-  }
+  if (rc == kExitOk && !never && report.reaches(fail_on)) rc = kExitFindings;
   return rc;
 }
 

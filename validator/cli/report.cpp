@@ -252,10 +252,11 @@ void writeTextSummary(std::FILE* out, const CaptureReport& r) {
 }
 }  // namespace
 
-std::size_t CaptureReport::count(Severity severity) const {
-  std::size_t n = 0;
-  for (const Finding& f : findings) n += f.severity == severity ? 1 : 0;
-  return n;
+bool CaptureReport::reaches(Severity level) const {
+  for (std::size_t s = static_cast<std::size_t>(level); s < counts.size(); ++s) {
+    if (counts[s] > 0) return true;
+  }
+  return false;
 }
 
 void summarise(const Validator& validator, CaptureReport& report) {
@@ -313,11 +314,8 @@ void ReportWriter::finish(const std::vector<CaptureReport>& reports) {
       std::size_t counts[3] = {0, 0, 0};
       bool failed = false;
       for (const CaptureReport& r : reports) {
-        for (const Finding& f : r.findings) {
-          ++counts[static_cast<std::size_t>(f.severity)];
-          failed = failed || (!never_ && f.severity >= fail_on_);
-        }
-        failed = failed || r.error.has_value();
+        for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
+        failed = failed || (!never_ && r.reaches(fail_on_)) || r.error.has_value();
       }
       fmt::print(out_,
                  "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}, fail on {})\n",

@@ -2,6 +2,7 @@
 // (INTERFACES.md: text, json, jsonl, junit, sarif). Presentation only.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <optional>
@@ -34,11 +35,14 @@ struct CaptureReport {
   CycleTimeSummary cycle_time;
   LayoutSource layout_source = LayoutSource::None;
   std::vector<AxisInfo> layout;
-  std::vector<Finding> findings;
+  std::vector<Finding> findings;        // kept only for the formats written at the end
+  std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
   std::vector<AxisReport> axes;
   std::optional<std::string> error;  // the capture could not be read to its end
   std::optional<std::string> note;   // e.g. no servo found
-  std::size_t count(Severity severity) const;
+  std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
+  // Whether any finding is at or above `level`.
+  bool reaches(Severity level) const;
 };
 
 // Fills the end-of-capture parts of the report from the validator.
@@ -52,6 +56,8 @@ class ReportWriter {
   void finding(const CaptureReport& report, const Finding& finding);
   void endCapture(const CaptureReport& report);
   void finish(const std::vector<CaptureReport>& reports);
+  // Text and JSON Lines write each finding as it comes and keep none (constant memory).
+  bool keepsFindings() const { return format_ != Format::Text && format_ != Format::Jsonl; }
 
  private:
   std::FILE* out_;
