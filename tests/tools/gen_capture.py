@@ -11,6 +11,12 @@ Each axis runs a commissioning session: enable, zero-pulse search (incremental a
 a parameter-table change, a reversal, one drive fault with error clearing (one axis), and an
 emergency stop near the end.  The output is a pure function of the options.
 
+The clean session conforms to every rule of RULES.md with its default timeouts at any cycle
+time from 125 us to 10 ms: the drive answers every handshake within 10 ms of capture time
+(half the shortest timeout), whatever the cycle time, and the one drive fault is reported and
+handled correctly (cause and summary bits together, disabled in time, ErrorClear/ErrClearAck,
+re-enable by SE 0x1 -> 0x2), which RULES.md says is not a finding.
+
     gen_capture.py --axes 4 --cycles 2000 -o out.pcap --truth out.jsonl
 """
 
@@ -46,6 +52,14 @@ SSW_EXT_PRMTBL_SHIFT = 12
 # --- SEW bits (section 4) ---
 SEW_SERVO_ERRORS = 1 << 0
 SEW_FOLLOWING = 1 << 19
+
+# A conforming drive answers a handshake within this much capture time, whatever the cycle time:
+# half the shortest RULES.md timeout (drive_response, 20 ms), so that even the observation a cycle
+# late stays inside it.
+RESPONSE_BUDGET_US = 10_000
+# drive timers that answer the NC under a timeout (not "zpulse": finding the pulse takes a motion)
+ANSWERS = frozenset(("enable", "disable", "zpulse_ack_off", "clear", "err_clear_ack_off",
+                     "table"))
 
 # --- EtherCAT (section 8) ---
 ETHERTYPE_ECAT = 0x88A4
@@ -251,12 +265,14 @@ class Nc:
 class Drive:
     """The servo drive of one axis: reacts to the RxPDO it reads, fills in its TxPDO.
 
-    Handshake answers come after a few cycles, kept as timers (name -> due cycle).
-    Servo_Ready_Mode is 0: ServoRDY = not ServoErrors.
+    Handshake answers come after a few cycles, kept as timers (name -> due cycle), and never
+    later than RESPONSE_BUDGET_US of capture time.  Servo_Ready_Mode is 0: ServoRDY = not
+    ServoErrors.
     """
 
     def __init__(self, axis, plan, cycle_us, rng):
         self.axis = axis
+        self.quick = max(1, RESPONSE_BUDGET_US // cycle_us)  # most cycles an answer may take
         self.rng = rng
         self.incremental = axis % 2 == 1
         cpr = INCR_COUNTS_PER_REV if self.incremental else ABS_COUNTS_PER_REV
@@ -290,7 +306,10 @@ class Drive:
         return rng.randint(-2**40, 2**40)
 
     def _after(self, name, low, high):
-        self.timers[name] = self.k + self.rng.randint(low, high)
+        delay = self.rng.randint(low, high)
+        if name in ANSWERS:
+            delay = min(delay, self.quick)
+        self.timers[name] = self.k + delay
 
     def step(self, k, ssp, scw):
         """Inputs (ActPos, SSW, SEW, code, data, extra 1..4) of cycle k."""
