@@ -11,17 +11,90 @@ Each axis runs a commissioning session: enable, zero-pulse search (incremental a
 a parameter-table change, a reversal, one drive fault with error clearing (one axis), and an
 emergency stop near the end.  The output is a pure function of the options.
 
+    gen_capture.py --axes 4 --cycles 2000 -o out.pcap --truth out.jsonl
+
 The clean session conforms to every rule of RULES.md with its default timeouts at any cycle
 time from 125 us to 10 ms: the drive answers every handshake within 10 ms of capture time
 (half the shortest timeout), whatever the cycle time, and the one drive fault is reported and
 handled correctly (cause and summary bits together, disabled in time, ErrorClear/ErrClearAck,
 re-enable by SE 0x1 -> 0x2), which RULES.md says is not a finding.
 
-    gen_capture.py --axes 4 --cycles 2000 -o out.pcap --truth out.jsonl
+It is also the oracle for the rule engine (`ncservo validate`):
+
+--ready-mode 0|1
+    the drives' Servo_Ready_Mode (PROTOCOL.md section 5; default 0).
+--inject RULE[@SECONDS][:AXIS]   (repeatable)
+    inject one violation of RULE at SECONDS after the capture's first frame on AXIS.  Without
+    @SECONDS the rule's default place in the session (a fraction of its length) is used, without
+    :AXIS the rule's default axis (an incremental one, odd index, for ZP-001; an absolute one,
+    even index, for ZP-003).  An injection starts at the first cycle from then on where its axis is
+    enabled and idle (no handshake, fault or emergency stop under way); injections on one axis run
+    one after another, those on different axes may overlap, and a bus injection (COM-*) waits
+    until every axis is idle and runs alone.  The NC's session pauses while its axis is under an
+    injection and then carries on, so the session needs room: about 0.3 s per injection on one
+    axis (cycles x cycle time of at least 2 s for all of them at once).
+    NC rules (SE-001, ZP-003, EC-002, SCW-001) change the NC's outputs, drive rules the drive's
+    inputs, bus rules the frames.  Every timed violation holds for twice its timeout and then ends
+    cleanly; every momentary one is kept short enough not to become a second, timed finding.
+      SE-001  SE 0x0 -> 0x2 (after a legal disable); the drive stays off; legal re-enable
+      SE-002  ServoEn rises with SE 0 held for 2 x drive_response, for at most drive_response / 4
+      SE-003  SE 2 -> 0, ServoEn stays 1 for 2 x drive_response
+      SE-004  legal SE 0x1 -> 0x2 while ready, ServoEn follows only after 2 x enable_response
+      ZP-001  zero-pulse handshake, ZPulseAck stays 2 x drive_response after the request fell
+      ZP-002  ZPulseAck for at most drive_response / 4 with no request for 2 x drive_response
+      ZP-003  ZPulseRequest on an absolute axis for 2 x drive_response (the drive ignores it)
+      EC-001  ErrClearAck for at most drive_response / 4, ErrorClear 0 for 2 x drive_response
+      EC-002  ErrorClear (no error pending) held 2 x nc_release after ErrClearAck
+      EC-003  ErrClearAck stays 2 x drive_response after ErrorClear fell
+      EC-004  overload fault; the drive acknowledges ErrorClear only after 2 x clear_response
+      SEW-001 I2t_Endat cause bit without the summary bit for 2 x drive_response
+      SEW-002 fault with the summary bit and no cause; cleared no earlier than 2 x drive_response
+      SEW-003 reserved SEW bit 4 for 2 x drive_response
+      SSW-001 reserved SSW bit 13 for 2 x drive_response
+      SCW-001 reserved SCW bit 16 for 2 x drive_response
+      RDY-001 ServoRDY inverted for 2 x drive_response
+      FLT-001 power-stage fault (PDPINT), ServoEn stays 1 for 2 x fault_reaction (the NC keeps
+              SE 2 until the drive is off, so SE-003 is not involved)
+      PT-001  table change followed only after 2 x param_table, then changed back
+      MSG-001 message code 7 for 2 x drive_response
+      COM-001 one returned copy with WKC 3n - 1
+      COM-002 two consecutive cycles missing from the capture (both copies; the ring worked)
+      COM-003 three consecutive frames lost before the drives (master copies only in the
+              capture); AXIS's drive does not raise ECatTErr, every other drive does (a correct
+              E15 fault, then recovered)
+      COM-004 one frame lost before the drives (its master copy only)
+      COM-005 four consecutive frames lost before the drives; every drive raises ECatTErr
+--findings FILE
+    write the findings the injections must produce, as JSON:
+      {"expected": [{"rule": "SE-001", "axis": 0, "first_frame": N, "last_frame": M,
+                     "due_frame": D}, ...],
+       "companions": {"COM-003": ["COM-004"], ...}}
+    axis is null for COM-001, COM-002 and COM-004.  Frames are 1-based, counting every record.
+    The window [first_frame, last_frame] is where the validator may report the finding:
+    an immediate finding exactly on the frame that first shows it (the master copy for NC
+    outputs, the returned copy for drive inputs and WKC, the first master frame after a gap or
+    after a frame that was not returned); a timed one from the frame where the condition began
+    to two cycles after due_frame, the first frame more than the timeout after that begin
+    (RULES.md's reporting discipline).  COM-005: from the master frame of the fourth failed cycle
+    to the returned copy of the next.  COM-003: from the first master frame after the outage
+    to two cycles after the first frame more than drive_response after its returned copy.
+    companions lists, per injected rule, other rules it necessarily causes as well (see
+    COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
+--self-check
+    assert, cycle by cycle, that every axis not under an injection conforms (reserved bits,
+    SE edges, SEW summary, ServoRDY table, message codes, and every handshake answered within
+    its timeout in capture time); on by default with --findings.
+
+    gen_capture.py --cycles 3000 --inject SE-004 --inject COM-003@1.2:1 \
+        -o se004.pcap --findings se004.json
+    ncservo validate --format json se004.pcap >report.json
+    check_findings.py report.json se004.json
 """
 
 import argparse
+import bisect
 import itertools
+import json
 import math
 import operator
 import random
@@ -49,13 +122,26 @@ SSW_PULSE_ENABLED = 1 << 7
 SSW_PRMTBL_SHIFT = 8
 SSW_EXT_PRMTBL_SHIFT = 12
 
+SCW_RESERVED = 0x7FFFE000  # bits 13..30
+
+SSW_RESERVED = 0xFFFFE000  # bits 13..31
+
 # --- SEW bits (section 4) ---
 SEW_SERVO_ERRORS = 1 << 0
+SEW_I2T_ENDAT = 1 << 2
+SEW_RESERVED_BIT4 = 1 << 4
+SEW_ECAT_TIMEOUT = 1 << 15
+SEW_PDPINT = 1 << 16
 SEW_FOLLOWING = 1 << 19
+SEW_OVERLOAD = 1 << 20
+SEW_CAUSES = 0x01FFFFEE  # bits 1..3, 5..24
+SEW_RESERVED = 0xFE000010  # bit 4, bits 25..31
 
+# --- RULES.md timeouts (defaults, milliseconds) ---
+TIMEOUT_MS = {"drive_response": 20, "nc_release": 50, "enable_response": 100,
+              "clear_response": 100, "fault_reaction": 100, "param_table": 50}
 # A conforming drive answers a handshake within this much capture time, whatever the cycle time:
-# half the shortest RULES.md timeout (drive_response, 20 ms), so that even the observation a cycle
-# late stays inside it.
+# half the shortest timeout, so that even the observation a cycle late stays inside it.
 RESPONSE_BUDGET_US = 10_000
 # drive timers that answer the NC under a timeout (not "zpulse": finding the pulse takes a motion)
 ANSWERS = frozenset(("enable", "disable", "zpulse_ack_off", "clear", "err_clear_ack_off",
@@ -154,6 +240,11 @@ class Nc:
         self.recovering = False
         self.done = False
         self.scripts = [self._session()]
+        # set by injections only (--inject): extra SCW bits, the running injection, and a
+        # recovery that leaves SE 2 until the drive has disabled itself
+        self.extra_scw = 0
+        self.injection = None
+        self.recover_waits_for_disable = False
 
     def observe(self, ssw, sew):
         self.ssw, self.sew = ssw, sew
@@ -173,15 +264,31 @@ class Nc:
                | ((self.table & 3) << SCW_PRMTBL_SHIFT)
                | ((self.table >> 2) << SCW_EXT_PRMTBL_SHIFT)
                | (SCW_ERROR_CLEAR if self.error_clear else 0)
-               | (SCW_ZPULSE_REQUEST if self.zpulse_request else 0))
+               | (SCW_ZPULSE_REQUEST if self.zpulse_request else 0)
+               | self.extra_scw)
         return self.ssp, scw, self.ext_code
+
+    def active_table(self):
+        """The drive's active table (ExtPRMTBL*4 + PRMTBL) in the last inputs received."""
+        ssw = self.ssw
+        return ((ssw >> SSW_PRMTBL_SHIFT) & 3) | (((ssw >> SSW_EXT_PRMTBL_SHIFT) & 1) << 2)
+
+    def settled(self):
+        """Enabled and idle as far as the NC can tell: no handshake, fault, emergency or
+        table change under way, so an injection can start (and has ended)."""
+        ssw = self.ssw
+        return bool(self.se == 2 and ssw & SSW_SERVO_EN and not self.sew and self.emgon
+                    and not (self.recovering or self.done or self.zpulse_request
+                             or self.error_clear or self.extra_scw)
+                    and not ssw & (SSW_ZPULSE_ACK | SSW_ERR_CLEAR_ACK)
+                    and self.active_table() == self.table)
 
     def _run_script(self):
         while True:
             try:
                 next(self.scripts[-1])
                 return
-            except StopIteration:  # only the recovery ends; the session idles forever
+            except StopIteration:  # a recovery or an injection ended; the session idles forever
                 self.scripts.pop()
 
     def _ramp_ssp(self):
@@ -239,6 +346,8 @@ class Nc:
         """Fault reset: disable, ErrorClear handshake, enable again, resume the motion."""
         resume_target = self.target
         self.target = self.ssp = 0
+        if self.recover_waits_for_disable:
+            yield from self._until(lambda: not self.ssw & SSW_SERVO_EN)
         yield from self._hold(self.rng.randint(1, 3))
         self.se = 0
         yield from self._until(lambda: not self.ssw & SSW_SERVO_EN)
@@ -266,12 +375,13 @@ class Drive:
     """The servo drive of one axis: reacts to the RxPDO it reads, fills in its TxPDO.
 
     Handshake answers come after a few cycles, kept as timers (name -> due cycle), and never
-    later than RESPONSE_BUDGET_US of capture time.  Servo_Ready_Mode is 0: ServoRDY = not
-    ServoErrors.
+    later than RESPONSE_BUDGET_US of capture time.  ServoRDY follows the Servo_Ready_Mode table:
+    mode 0 not ServoErrors, mode 1 ServoEn and not ServoErrors.
     """
 
-    def __init__(self, axis, plan, cycle_us, rng):
+    def __init__(self, axis, plan, cycle_us, rng, ready_mode=0):
         self.axis = axis
+        self.ready_mode = ready_mode
         self.quick = max(1, RESPONSE_BUDGET_US // cycle_us)  # most cycles an answer may take
         self.rng = rng
         self.incremental = axis % 2 == 1
@@ -293,6 +403,15 @@ class Drive:
         self.timers = {}
         if plan.fault is not None:
             self.timers["fault"] = plan.fault
+        self.last_ssp = 0  # outputs of the last frame that reached the drive
+        self.missed = 0  # consecutive cycles whose frame did not reach the drive
+        # misbehaviour, set by injections only (--inject)
+        self.busy = False  # under an injection: the planned fault waits
+        self.slow = {}  # timer name -> cycles: the next such answer comes that late
+        self.slow_started = {}  # timer name -> cycle in which the slow answer was asked for
+        self.overlay = {}  # "sew" / "ssw" bits ORed in, "rdy" inverts ServoRDY, "msg" code
+        self.mute_ecat_timeout = False  # does not raise ECatTErr when frames stop coming
+        self.clear_ack_cycle = None
 
     @staticmethod
     def _start_position(axis, rng):
@@ -309,11 +428,26 @@ class Drive:
         delay = self.rng.randint(low, high)
         if name in ANSWERS:
             delay = min(delay, self.quick)
+        if self.slow and name in self.slow:
+            delay = self.slow.pop(name)
+            self.slow_started[name] = self.k
         self.timers[name] = self.k + delay
 
-    def step(self, k, ssp, scw):
-        """Inputs (ActPos, SSW, SEW, code, data, extra 1..4) of cycle k."""
+    def step(self, k, ssp, scw, received=True):
+        """Inputs (ActPos, SSW, SEW, code, data, extra 1..4) of cycle k.
+
+        received False: the cycle's frame was lost before the drive, which keeps its last
+        outputs and, at the third such cycle in a row, raises ECatTErr (E15).
+        """
         self.k = k
+        if received:
+            self.last_ssp = ssp
+            self.missed = 0
+        else:
+            ssp, scw = self.last_ssp, self.scw
+            self.missed += 1
+            if self.missed == 3 and not self.mute_ecat_timeout:
+                self.fault(SEW_ECAT_TIMEOUT)
         if self.timers:
             self._fire_timers()
         if scw != self.scw:
@@ -326,7 +460,7 @@ class Drive:
     # --- reactions ---
     def _fire_timers(self):
         for name, due in list(self.timers.items()):
-            if due <= self.k:
+            if due <= self.k and not (self.busy and name == "fault"):
                 del self.timers[name]
                 getattr(self, "_timer_" + name)()
 
@@ -351,6 +485,8 @@ class Drive:
                 self._after("disable", 1, 3)
 
     def _on_zpulse_request(self, on):
+        if not self.incremental:
+            return  # an absolute encoder has no zero pulse to search
         if on:
             self._after("zpulse", 5, 20)
         else:
@@ -359,7 +495,7 @@ class Drive:
                 self._after("zpulse_ack_off", 2, 5)
 
     def _on_error_clear(self, on):
-        if on and self.sew:
+        if on:  # with no error pending the drive clears nothing and acknowledges all the same
             self._after("clear", 2, 5)
         elif not on and self.err_clear_ack:
             self._after("err_clear_ack_off", 2, 5)
@@ -385,6 +521,7 @@ class Drive:
     def _timer_clear(self):
         self.sew = 0
         self.err_clear_ack = True
+        self.clear_ack_cycle = self.k
 
     def _timer_err_clear_ack_off(self):
         self.err_clear_ack = False
@@ -394,8 +531,12 @@ class Drive:
         self.table = ((scw >> SCW_PRMTBL_SHIFT) & 3) | (((scw >> SCW_EXT_PRMTBL_SHIFT) & 1) << 2)
 
     def _timer_fault(self):
-        """Following error: ServoRDY drops at once, the power stage a few cycles later."""
-        self.sew = SEW_FOLLOWING | SEW_SERVO_ERRORS
+        self.fault(SEW_FOLLOWING)
+
+    def fault(self, causes):
+        """A drive fault: summary and cause bits together, ServoRDY drops at once (mode 0),
+        the power stage a few cycles later."""
+        self.sew |= causes | SEW_SERVO_ERRORS
         self.timers.pop("enable", None)
         self._after("disable", 1, 3)
 
@@ -431,8 +572,9 @@ class Drive:
     def _ssw(self, ssp):
         speed = self.speed
         in_tolerance = abs(ssp - speed) <= max(N_SET_ABS, abs(ssp) * N_SET_REL)
+        ready = not self.sew and (self.en or self.ready_mode == 0)
         return ((SSW_SERVO_EN | SSW_PULSE_ENABLED if self.en else 0)
-                | (0 if self.sew else SSW_SERVO_RDY)
+                | (SSW_SERVO_RDY if ready else 0)
                 | (SSW_INCREMENTAL if self.incremental else 0)
                 | (SSW_ZPULSE_ACK if self.zpulse_ack else 0)
                 | (SSW_ERR_CLEAR_ACK if self.err_clear_ack else 0)
@@ -457,8 +599,545 @@ class Drive:
         data = (rpm, abs(current), abs(current) / RATED_CURRENT_A * 100,
                 vbus, self.temp, power_kw)[code]
         following = ssp / SPEED_UNIT_PER_RPM - rpm
-        return (self._actpos(), self._ssw(ssp), self.sew, code, data,
+        ssw, sew = self._ssw(ssp), self.sew
+        if self.overlay:
+            ssw, sew, code = self._overlaid(ssw, sew, code)
+        return (self._actpos(), ssw, sew, code, data,
                 following, torque, current, self.temp + 6.5)
+
+    def _overlaid(self, ssw, sew, code):
+        overlay = self.overlay
+        ssw |= overlay.get("ssw", 0)
+        if overlay.get("rdy"):
+            ssw ^= SSW_SERVO_RDY
+        return ssw, sew | overlay.get("sew", 0), overlay.get("msg", code)
+
+
+# --- injected violations (--inject) and the findings they must produce (--findings) ---
+MASTER, RETURNED = 0, 1  # a frame's place in its cycle: key = 2 * cycle + copy
+DROP, LOST = "drop", "lost"  # a cycle missing from the capture / lost before the drives
+
+# rule -> (timeout a timed finding waits for, or None: reported on the frame showing it;
+#          default start as a fraction of the session; default axis, None for a bus rule).
+# The defaults spread the injections so that all of them fit in one 2-second session.
+INJECTABLE = {
+    "COM-001": (None, 0.10, None),
+    "SE-004": ("enable_response", 0.12, 0),
+    "ZP-001": ("drive_response", 0.12, 1),
+    "FLT-001": ("fault_reaction", 0.12, 2),
+    "EC-004": ("clear_response", 0.12, 3),
+    "COM-002": (None, 0.26, None),
+    "ZP-003": (None, 0.28, 0),
+    "SE-002": (None, 0.28, 1),
+    "SE-003": ("drive_response", 0.28, 2),
+    "SE-001": (None, 0.28, 3),
+    "COM-004": (None, 0.33, None),
+    "PT-001": ("param_table", 0.40, 0),
+    "ZP-002": (None, 0.40, 1),
+    "EC-002": ("nc_release", 0.40, 2),
+    "EC-001": (None, 0.40, 3),
+    "COM-003": ("drive_response", 0.50, 2),  # the axis is the drive that does not report
+    "MSG-001": (None, 0.60, 0),
+    "SEW-001": (None, 0.60, 1),
+    "SCW-001": (None, 0.60, 2),
+    "EC-003": ("drive_response", 0.60, 3),
+    "COM-005": (None, 0.68, None),
+    "SEW-003": (None, 0.72, 0),
+    "SSW-001": (None, 0.72, 1),
+    "RDY-001": ("drive_response", 0.72, 2),
+    "SEW-002": ("drive_response", 0.72, 3),
+}
+BUS_RULES = frozenset(("COM-001", "COM-002", "COM-003", "COM-004", "COM-005"))
+# What a capture with only one copy of each frame can show (inputs and WKC live in the
+# returned copy; "not returned" needs the master copy).
+NEEDS_BOTH_COPIES = frozenset(("COM-003", "COM-004", "COM-005"))
+MASTER_ONLY_OK = frozenset(("SE-001", "SCW-001", "COM-002"))
+# Other rules an injection necessarily fires as well.  COM-003 and COM-005 lose frames on the
+# ring (master copy in the capture, no returned copy): each such master frame has no returned
+# copy before the next cycle's, which is COM-004 (one per lost frame, axis null).  No other
+# injection needs one: COM-002 drops only two cycles (no COM-003, which needs 3, nor COM-005,
+# which needs more than 3), COM-003 loses exactly 3 (not more than the limit: no COM-005), the
+# momentary drive faults (SE-002, ZP-002, EC-001) end within drive_response / 4 so SE-003,
+# ZP-001 and EC-003 do not follow, and FLT-001's NC keeps SE 2 until the drive is off (no SE-003).
+COMPANIONS = {
+    "COM-003": ["COM-004"],
+    "COM-005": ["COM-004"],
+}
+SLACK_CYCLES = 2  # a timed finding's window ends this many cycles after the frame it is due on
+FIRST_INJECTION_CYCLE = 10  # after the 8 intervals COM-002 needs to know the cycle time
+
+
+class Injection:
+    """One --inject request: RULE[@SECONDS][:AXIS]."""
+
+    def __init__(self, rule, axis, start_cycle, order):
+        self.rule, self.axis, self.start_cycle, self.order = rule, axis, start_cycle, order
+        self.bus = rule in BUS_RULES
+
+    def __str__(self):
+        return self.rule if self.axis is None else f"{self.rule}:{self.axis}"
+
+
+def parse_injection(text, order, args, error):
+    """RULE[@SECONDS][:AXIS] -> Injection, with the rule's default time and axis."""
+    rule, _, axis_text = text.partition(":")
+    rule, _, time_text = rule.partition("@")
+    rule = rule.strip().upper()
+    if rule not in INJECTABLE:
+        error(f"--inject {text}: cannot inject {rule!r}; one of {', '.join(sorted(INJECTABLE))}")
+    _, fraction, default_axis = INJECTABLE[rule]
+    cycle_s = args.cycle_us * 1e-6
+    try:
+        seconds = float(time_text) if time_text else fraction * args.cycles * cycle_s
+        axis = int(axis_text) if axis_text else None
+    except ValueError:
+        error(f"--inject {text}: expected RULE[@SECONDS][:AXIS], e.g. SE-001@0.5:2")
+    start_cycle = max(FIRST_INJECTION_CYCLE, math.ceil(seconds / cycle_s - 1e-9))
+    if not 0 <= seconds or start_cycle >= args.cycles:
+        error(f"--inject {text}: {seconds} s is outside the capture "
+              f"({args.cycles * cycle_s:g} s)")
+    if rule == "ZP-001" and args.axes == 1:
+        error(f"--inject {text}: ZP-001 needs an incremental axis (odd index): use --axes 2 or more")
+    if axis is None and (rule not in BUS_RULES or rule == "COM-003"):
+        axis = default_axis % args.axes
+        if rule == "ZP-001" and axis % 2 == 0:
+            axis = axis + 1 if axis + 1 < args.axes else 1
+        if rule == "ZP-003" and axis % 2:
+            axis -= 1
+    if axis is not None:
+        if rule in BUS_RULES and rule != "COM-003":
+            error(f"--inject {text}: {rule} concerns the whole frame, it takes no axis")
+        if not 0 <= axis < args.axes:
+            error(f"--inject {text}: axis {axis} does not exist (--axes {args.axes})")
+        if rule == "ZP-001" and axis % 2 == 0:
+            error(f"--inject {text}: ZP-001 needs an incremental axis (odd index)")
+        if rule == "ZP-003" and axis % 2:
+            error(f"--inject {text}: ZP-003 needs an absolute axis (even index)")
+    if args.copies != "both" and rule in NEEDS_BOTH_COPIES:
+        error(f"--inject {text}: {rule} needs both copies of each frame (--copies both)")
+    if args.copies == "master" and rule not in MASTER_ONLY_OK:
+        error(f"--inject {text}: a capture of master copies cannot show {rule}")
+    return Injection(rule, axis, start_cycle, order)
+
+
+class Expectations:
+    """The findings the injections must produce, resolved to frame windows at the end."""
+
+    def __init__(self, cycle_ns, delay_ns):
+        self.cycle_ns, self.delay_ns = cycle_ns, delay_ns
+        self.items = []
+        self.times, self.keys = [], []  # every written frame, in order
+
+    def add(self, rule, axis, cycle, copy, timeout=None, ref=None, end=None, due=None):
+        """The condition shows first in (cycle, copy); a timed one is due `timeout` after
+        the time of `ref` (a key; default the same place); `end` closes an explicit window
+        in which the finding is due at `due` (keys)."""
+        self.items.append((rule, axis, 2 * cycle + copy, timeout, ref, end, due))
+
+    def frame(self, t_ns, cycle, copy):
+        self.times.append(t_ns)
+        self.keys.append(2 * cycle + copy)
+
+    def _key_time(self, key):
+        """Capture time of a place in a cycle, whether or not a frame was written there."""
+        cycle, copy = divmod(key, 2)
+        return T0_NS + cycle * self.cycle_ns + copy * self.delay_ns
+
+    def _first_at(self, key, rule):
+        """Index of the first frame at or after key that can show it (inputs: returned)."""
+        i = bisect.bisect_left(self.keys, key)
+        while i < len(self.keys) and key % 2 and self.keys[i] % 2 == 0:
+            i += 1
+        if i == len(self.keys):
+            raise ValueError(f"{rule}: the capture ends before the injected condition shows")
+        return i
+
+    def resolve(self):
+        expected = []
+        for rule, axis, key, timeout, ref, end, due_key in self.items:
+            first = self._first_at(key, rule)
+            due = first
+            if end is not None:
+                last = self._first_at(end, rule)
+                due = first if due_key is None else self._first_at(due_key, rule)
+            elif timeout is None:
+                last = first
+            else:
+                limit = self._key_time(key if ref is None else ref) + TIMEOUT_MS[timeout] * 10**6
+                due = bisect.bisect_right(self.times, limit)
+                if due == len(self.times):
+                    raise ValueError(f"{rule}: the capture ends before {timeout} has passed")
+                slack = self.times[due] + SLACK_CYCLES * self.cycle_ns
+                last = bisect.bisect_right(self.times, slack) - 1
+            expected.append({"rule": rule, "axis": axis, "first_frame": first + 1,
+                             "last_frame": last + 1, "due_frame": due + 1})
+        expected.sort(key=lambda e: (e["first_frame"], e["rule"], -1 if e["axis"] is None
+                                     else e["axis"]))
+        return expected
+
+
+class Injector:
+    """The script of one injection, stepped once per cycle (each yield is one cycle).
+
+    An axis injection runs on top of its NC's script stack, so it sees the drive only through
+    the returned copies, like the NC, and also steers the drive's misbehaviour directly.  A bus
+    injection is stepped by the session before the NCs and says what happens to the frame.
+    Every script starts from an enabled, idle axis and ends there again.
+    """
+
+    def __init__(self, inj, session):
+        self.inj = inj
+        self.session = session
+        self.cycle_ns = session.cycle_ns
+        self.rng = random.Random(f"{session.seed}/inject/{inj.order}")
+        if not inj.bus:
+            self.nc, self.drive = session.ncs[inj.axis], session.drives[inj.axis]
+        self.saved_target = 0
+
+    # --- helpers ---
+    def k(self):
+        return self.session.k
+
+    def t(self):
+        """Capture time of this cycle's master copy, ns after the first frame."""
+        return self.session.k * self.cycle_ns
+
+    def timeout_ns(self, name):
+        return TIMEOUT_MS[name] * 10**6
+
+    def cycles_over(self, ns):
+        """Fewest cycles that last at least ns."""
+        return max(1, -(-ns // self.cycle_ns))
+
+    def short_cycles(self):
+        """A momentary condition: at most a quarter of drive_response, at least one cycle."""
+        return max(1, self.timeout_ns("drive_response") // 4 // self.cycle_ns)
+
+    def expect(self, cycle, copy, timeout=None, **kw):
+        inj = self.inj
+        assert timeout == INJECTABLE[inj.rule][0], (inj.rule, timeout)
+        self.session.expect.add(inj.rule, inj.axis, cycle, copy, timeout, **kw)
+
+    def expect_now(self, copy, timeout=None):
+        self.expect(self.k(), copy, timeout)
+
+    def hold(self, cycles):
+        for _ in range(cycles):
+            yield
+
+    def until(self, condition):
+        while not condition():
+            yield
+
+    def wait_ns(self, t_ns):
+        while self.t() < t_ns:
+            yield
+
+    # --- axis scripts ---
+    def run_axis(self):
+        nc, drive = self.nc, self.drive
+        nc.injection, drive.busy = self, True
+        yield from getattr(self, "_" + self.inj.rule.replace("-", "_").lower())()
+        yield from self.until(nc.settled)
+        nc.injection, drive.busy = None, False
+
+    def _disable(self):
+        """A legal disable, set point to zero; returns once the drive is off."""
+        nc = self.nc
+        self.saved_target = nc.target
+        nc.target = nc.ssp = 0
+        nc.se = 0
+        self.off_ns = self.t()
+        yield from self.until(lambda: not nc.ssw & SSW_SERVO_EN)
+        yield from self.hold(self.rng.randint(2, 5))
+
+    def _enable(self, slow_ns=None):
+        """A legal enable (SE 0x1 then 0x2); the motion resumes once the drive is on."""
+        nc = self.nc
+        nc.se = 1
+        yield from self.hold(self.rng.randint(1, 3))
+        if slow_ns:
+            self.drive.slow["enable"] = self.cycles_over(slow_ns)
+        nc.se = 2
+        if slow_ns:
+            self.expect_now(MASTER, "enable_response")
+        yield from self.until(lambda: nc.ssw & SSW_SERVO_EN)
+        nc.target = self.saved_target
+
+    def _se_001(self):
+        yield from self._disable()
+        self.nc.se = 2  # from 0x0: not an enable; the drive rightly stays off
+        self.expect_now(MASTER)
+        yield from self.wait_ns(self.t() + 2 * self.timeout_ns("drive_response"))
+        yield from self._enable()  # 0x2 -> 0x1 -> 0x2
+
+    def _se_002(self):
+        yield from self._disable()
+        yield from self.wait_ns(self.off_ns + 2 * self.timeout_ns("drive_response"))
+        self.drive.en = True
+        self.expect_now(RETURNED)
+        yield from self.hold(self.short_cycles())
+        self.drive.en = False
+        yield from self.until(lambda: not self.nc.ssw & SSW_SERVO_EN)
+        yield from self.hold(self.rng.randint(2, 5))
+        yield from self._enable()
+
+    def _se_003(self):
+        nc = self.nc
+        self.drive.slow["disable"] = self.cycles_over(2 * self.timeout_ns("drive_response"))
+        self.saved_target = nc.target
+        nc.target = nc.ssp = 0
+        nc.se = 0
+        self.expect_now(MASTER, "drive_response")
+        yield from self.until(lambda: not nc.ssw & SSW_SERVO_EN)
+        yield from self.hold(self.rng.randint(2, 5))
+        yield from self._enable()
+
+    def _se_004(self):
+        yield from self._disable()
+        yield from self._enable(slow_ns=2 * self.timeout_ns("enable_response"))
+
+    def _zp_001(self):
+        nc = self.nc
+        self.drive.slow["zpulse_ack_off"] = self.cycles_over(2 * self.timeout_ns("drive_response"))
+        nc.zpulse_request = True
+        yield from self.until(lambda: nc.ssw & SSW_ZPULSE_ACK)
+        nc.zpulse_request = False
+        self.expect_now(MASTER, "drive_response")
+        yield from self.until(lambda: not nc.ssw & SSW_ZPULSE_ACK)
+
+    def _momentary(self, attribute, bit):
+        """The drive raises a handshake bit on its own, after the NC's request bit has been 0
+        for 2 x drive_response, and drops it again before drive_response."""
+        yield from self.wait_ns(self.t() + 2 * self.timeout_ns("drive_response"))
+        setattr(self.drive, attribute, True)
+        self.expect_now(RETURNED)
+        yield from self.hold(self.short_cycles())
+        setattr(self.drive, attribute, False)
+        yield from self.until(lambda: not self.nc.ssw & bit)
+
+    def _zp_002(self):
+        yield from self._momentary("zpulse_ack", SSW_ZPULSE_ACK)
+
+    def _zp_003(self):
+        nc = self.nc
+        nc.zpulse_request = True  # on an absolute axis: the drive ignores it
+        self.expect_now(MASTER)
+        yield from self.wait_ns(self.t() + 2 * self.timeout_ns("drive_response"))
+        nc.zpulse_request = False
+
+    def _ec_001(self):
+        yield from self._momentary("err_clear_ack", SSW_ERR_CLEAR_ACK)
+
+    def _ec_002(self):
+        nc = self.nc
+        nc.error_clear = True
+        yield from self.until(lambda: nc.ssw & SSW_ERR_CLEAR_ACK)
+        ack = self.drive.clear_ack_cycle
+        self.expect(ack, RETURNED, "nc_release")
+        yield from self.wait_ns(ack * self.cycle_ns + 2 * self.timeout_ns("nc_release"))
+        nc.error_clear = False
+        yield from self.until(lambda: not nc.ssw & SSW_ERR_CLEAR_ACK)
+
+    def _ec_003(self):
+        nc = self.nc
+        self.drive.slow["err_clear_ack_off"] = \
+            self.cycles_over(2 * self.timeout_ns("drive_response"))
+        nc.error_clear = True
+        yield from self.until(lambda: nc.ssw & SSW_ERR_CLEAR_ACK)
+        nc.error_clear = False
+        self.expect_now(MASTER, "drive_response")
+        yield from self.until(lambda: not nc.ssw & SSW_ERR_CLEAR_ACK)
+
+    def _fault(self, causes, slow_timer, slow_ns):
+        """A drive fault the NC recovers from with its own script (pushed on top of this one
+        when it sees ServoErrors); this script resumes once the recovery is over."""
+        self.drive.slow[slow_timer] = self.cycles_over(slow_ns)
+        self.drive.fault(causes)
+        yield
+        yield from self.until(lambda: not self.nc.recovering)
+
+    def _ec_004(self):
+        yield from self._fault(SEW_OVERLOAD, "clear", 2 * self.timeout_ns("clear_response"))
+        self.expect(self.drive.slow_started["clear"], MASTER, "clear_response")
+
+    def _flt_001(self):
+        self.nc.recover_waits_for_disable = True
+        self.expect_now(RETURNED, "fault_reaction")
+        yield from self._fault(SEW_PDPINT, "disable", 2 * self.timeout_ns("fault_reaction"))
+        self.nc.recover_waits_for_disable = False
+
+    def _sew_002(self):
+        self.expect_now(RETURNED, "drive_response")
+        # summary bit only; the ErrorClear that ends it is answered 2 x drive_response late
+        yield from self._fault(0, "clear", 2 * self.timeout_ns("drive_response"))
+
+    def _overlay(self, key, value, timeout=None):
+        self.drive.overlay[key] = value
+        self.expect_now(RETURNED, timeout)
+        yield from self.wait_ns(self.t() + 2 * self.timeout_ns("drive_response"))
+        del self.drive.overlay[key]
+
+    def _sew_001(self):
+        yield from self._overlay("sew", SEW_I2T_ENDAT)
+
+    def _sew_003(self):
+        yield from self._overlay("sew", SEW_RESERVED_BIT4)
+
+    def _ssw_001(self):
+        yield from self._overlay("ssw", 1 << 13)
+
+    def _rdy_001(self):
+        yield from self._overlay("rdy", True, "drive_response")
+
+    def _msg_001(self):
+        yield from self._overlay("msg", 7)
+
+    def _scw_001(self):
+        self.nc.extra_scw = 1 << 16
+        self.expect_now(MASTER)
+        yield from self.wait_ns(self.t() + 2 * self.timeout_ns("drive_response"))
+        self.nc.extra_scw = 0
+
+    def _pt_001(self):
+        nc = self.nc
+        table = nc.table
+        self.drive.slow["table"] = self.cycles_over(2 * self.timeout_ns("param_table"))
+        nc.table = table ^ 1
+        self.expect_now(MASTER, "param_table")
+        yield from self.until(lambda: nc.active_table() == nc.table)
+        nc.table = table  # back, followed in time
+        yield from self.until(lambda: nc.active_table() == nc.table)
+
+    # --- bus scripts ---
+    def run_bus(self):
+        session = self.session
+        for drive in session.drives:
+            drive.busy = True
+        yield from getattr(self, "_" + self.inj.rule.replace("-", "_").lower())()
+        yield from self.until(lambda: all(nc.settled() for nc in session.ncs))
+        for drive in session.drives:
+            drive.busy = False
+
+    def _outage(self, what, cycles):
+        for _ in range(cycles):
+            self.session.directive = what
+            yield
+        self.session.directive = None
+
+    def _com_001(self):
+        self.session.wkc = 3 * len(self.session.ncs) - 1
+        self.expect_now(RETURNED)
+        yield
+        self.session.wkc = None
+
+    def _com_002(self):
+        k0 = self.k()
+        yield from self._outage(DROP, 2)
+        self.expect(k0 + 2, MASTER)
+
+    def _com_004(self):
+        k0 = self.k()
+        yield from self._outage(LOST, 1)
+        self.expect(k0 + 1, MASTER)
+
+    def _com_003(self):
+        k0 = self.k()
+        drive = self.session.drives[self.inj.axis]
+        drive.mute_ecat_timeout = True
+        yield from self._outage(LOST, 3)
+        self.expect(k0 + 3, MASTER, "drive_response", ref=2 * (k0 + 3) + RETURNED)
+        yield from self.wait_ns((k0 + 3) * self.cycle_ns + 2 * self.timeout_ns("drive_response"))
+        drive.mute_ecat_timeout = False
+
+    def _com_005(self):
+        k0 = self.k()
+        yield from self._outage(LOST, 4)
+        for axis in range(len(self.session.ncs)):  # every axis lost its frames
+            self.session.expect.add("COM-005", axis, k0 + 3, MASTER,
+                                    end=2 * (k0 + 4) + RETURNED, due=2 * (k0 + 4) + MASTER)
+
+
+class Monitor:
+    """--self-check: every axis not under an injection conforms, cycle by cycle.
+
+    Static checks on each cycle's values, and every "longer than T" condition of RULES.md
+    measured on the cycle's time (the NC's outputs and the inputs it gets back).
+    """
+
+    # name, timeout, condition on (scw, ssw, sew, valid enable)
+    TIMED = (
+        ("ServoEn without a valid enable (SE-003)", "drive_response",
+         lambda scw, ssw, sew, valid: ssw & SSW_SERVO_EN and not valid),
+        ("ZPulseAck without ZPulseRequest (ZP-001)", "drive_response",
+         lambda scw, ssw, sew, valid: ssw & SSW_ZPULSE_ACK and not scw & SCW_ZPULSE_REQUEST),
+        ("ErrClearAck without ErrorClear (EC-003)", "drive_response",
+         lambda scw, ssw, sew, valid: ssw & SSW_ERR_CLEAR_ACK and not scw & SCW_ERROR_CLEAR),
+        ("ErrorClear after ErrClearAck (EC-002)", "nc_release",
+         lambda scw, ssw, sew, valid: ssw & SSW_ERR_CLEAR_ACK and scw & SCW_ERROR_CLEAR),
+        ("ErrorClear not acknowledged (EC-004)", "clear_response",
+         lambda scw, ssw, sew, valid: scw & SCW_ERROR_CLEAR and sew & SEW_SERVO_ERRORS
+         and not ssw & SSW_ERR_CLEAR_ACK),
+        ("summary bit without a cause (SEW-002)", "drive_response",
+         lambda scw, ssw, sew, valid: sew & SEW_SERVO_ERRORS and not sew & SEW_CAUSES),
+        ("enabled with an error (FLT-001)", "fault_reaction",
+         lambda scw, ssw, sew, valid: ssw & SSW_SERVO_EN and sew & SEW_SERVO_ERRORS),
+        ("enable not honoured (SE-004)", "enable_response",
+         lambda scw, ssw, sew, valid: valid and not ssw & SSW_SERVO_EN and ssw & SSW_SERVO_RDY
+         and not sew & SEW_SERVO_ERRORS and scw & SCW_EMGON and scw & SCW_BRAKE),
+        ("parameter table not followed (PT-001)", "param_table",
+         lambda scw, ssw, sew, valid:
+         (((scw >> SCW_PRMTBL_SHIFT) & 3) | (((scw >> SCW_EXT_PRMTBL_SHIFT) & 1) << 2))
+         != (((ssw >> SSW_PRMTBL_SHIFT) & 3) | (((ssw >> SSW_EXT_PRMTBL_SHIFT) & 1) << 2))),
+    )
+
+    def __init__(self, session, ready_mode):
+        self.session = session
+        self.ready_mode = ready_mode
+        n = len(session.ncs)
+        self.prev_se = [None] * n
+        self.valid = [False] * n
+        self.since = [[None] * len(self.TIMED) for _ in range(n)]
+
+    def check(self, k, outputs, inputs):
+        t = k * self.session.cycle_ns
+        for axis, (out, inp) in enumerate(zip(outputs, inputs)):
+            scw = out[1]
+            ssw, sew, code = inp[1], inp[2], inp[3]
+            se, prev = scw & SCW_SE, self.prev_se[axis]
+            self.prev_se[axis] = se
+            self.valid[axis] = se == 2 and (prev == 1 or (prev == 2 and self.valid[axis]))
+            if self.session.ncs[axis].injection is not None:
+                self.since[axis] = [None] * len(self.TIMED)
+                continue
+            problems = []
+            if scw & SCW_RESERVED:
+                problems.append("reserved SCW bits")
+            if se == 2 and prev not in (None, 1, 2):
+                problems.append(f"SE {prev} -> 2")
+            if scw & SCW_ZPULSE_REQUEST and not ssw & SSW_INCREMENTAL:
+                problems.append("ZPulseRequest on an absolute axis")
+            if ssw & SSW_RESERVED or sew & SEW_RESERVED:
+                problems.append("reserved SSW/SEW bits")
+            if sew & SEW_CAUSES and not sew & SEW_SERVO_ERRORS:
+                problems.append("SEW cause without the summary bit")
+            if not 0 <= code <= 5:
+                problems.append(f"message code {code}")
+            error = bool(sew & SEW_SERVO_ERRORS)
+            ready = not error and (self.ready_mode == 0 or ssw & SSW_SERVO_EN)
+            if bool(ssw & SSW_SERVO_RDY) != ready:
+                problems.append("ServoRDY against the Servo_Ready_Mode table")
+            since = self.since[axis]
+            for i, (name, timeout, condition) in enumerate(self.TIMED):
+                if not condition(scw, ssw, sew, self.valid[axis]):
+                    since[i] = None
+                elif since[i] is None:
+                    since[i] = t
+                elif t - since[i] >= TIMEOUT_MS[timeout] * 10**6:
+                    problems.append(f"{name} for {(t - since[i]) / 1e6:g} ms")
+            if problems:
+                raise SystemExit(f"gen_capture: self-check failed at cycle {k}, axis {axis}: "
+                                 + "; ".join(problems))
 
 
 # --- frames ---
@@ -504,11 +1183,13 @@ class FrameBuilder:
         self.prefix_returned = link_header(encap, RETURNED_MAC, self.body.size)
         self.pad = bytes(max(0, 60 - len(self.prefix_master) - self.body.size))
 
-    def frame(self, returned, index, outputs, inputs, dc_time):
+    def frame(self, returned, index, outputs, inputs, dc_time, wkc=None):
         n = self.n_axes
+        if wkc is None:
+            wkc = 3 * n if returned else 0
         body = self.body.pack(self.ecat_header,
                               CMD_LRW, index, LOGICAL_ADDRESS, self.lrw_len_word, 0,
-                              outputs, inputs, 3 * n if returned else 0,
+                              outputs, inputs, wkc,
                               CMD_FRMW, index, DC_ADP, DC_ADO, 8, 0,
                               dc_time, n if returned else 0)
         prefix = self.prefix_returned if returned else self.prefix_master
@@ -595,19 +1276,66 @@ class TruthWriter:
 class Session:
     """All axes of the run, stepped one cycle at a time."""
 
-    def __init__(self, args):
+    def __init__(self, args, injections=(), expect=None, self_check=False):
         self.ncs, self.drives = [], []
         for axis in range(args.axes):
             plan = Plan(axis, args.axes, args.cycles, random.Random(f"{args.seed}/plan/{axis}"))
             self.ncs.append(Nc(axis, plan, random.Random(f"{args.seed}/nc/{axis}")))
             self.drives.append(Drive(axis, plan, args.cycle_us,
-                                     random.Random(f"{args.seed}/drive/{axis}")))
+                                     random.Random(f"{args.seed}/drive/{axis}"), args.ready_mode))
+        self.seed = args.seed
+        self.cycle_ns = args.cycle_us * 1000
+        self.k = 0
+        # injections waiting, in the order of their start (then of the command line)
+        self.pending = sorted(injections, key=lambda inj: (inj.start_cycle, inj.order))
+        self.bus = None  # the running bus injection's script
+        self.directive = None  # this cycle's frame: None, DROP or LOST
+        self.wkc = None  # this cycle's returned WKC, if not the expected one
+        self.expect = expect
+        self.monitor = Monitor(self, args.ready_mode) if self_check else None
 
     def step(self, k):
         """Flat output and input values of every axis for cycle k."""
+        self.k = k
+        if self.pending or self.bus:
+            self._inject(k)
         outputs = [nc.step(k) for nc in self.ncs]
-        inputs = [drive.step(k, o[0], o[1]) for drive, o in zip(self.drives, outputs)]
+        if self.directive == LOST:
+            inputs = [drive.step(k, 0, 0, received=False) for drive in self.drives]
+        else:
+            inputs = [drive.step(k, o[0], o[1]) for drive, o in zip(self.drives, outputs)]
+        if self.monitor:
+            self.monitor.check(k, outputs, inputs)
         return outputs, inputs
+
+    def _inject(self, k):
+        """Start the injections that are due and can start, then step the bus injection."""
+        waiting_axes = set()  # an axis whose earlier injection still waits keeps its order
+        for inj in list(self.pending):
+            if inj.start_cycle > k or self.bus:
+                break
+            if inj.bus:  # alone, with every axis idle
+                if all(nc.injection is None and nc.settled() for nc in self.ncs):
+                    self.pending.remove(inj)
+                    self.bus = Injector(inj, self).run_bus()
+                break
+            nc = self.ncs[inj.axis]
+            if inj.axis not in waiting_axes and nc.injection is None and nc.settled():
+                self.pending.remove(inj)
+                nc.scripts.append(Injector(inj, self).run_axis())
+            else:
+                waiting_axes.add(inj.axis)
+        if self.bus:
+            try:
+                next(self.bus)
+            except StopIteration:
+                self.bus = None
+
+    def unfinished(self):
+        """Injections that did not start, or did not end, before the last cycle."""
+        running = [str(nc.injection.inj) for nc in self.ncs if nc.injection is not None]
+        return [str(inj) for inj in self.pending] + running + (["a bus injection"] if self.bus
+                                                                 else [])
 
     def deliver(self, inputs):
         """The returned copy reached the master: the NCs see the new status."""
@@ -618,11 +1346,11 @@ class Session:
         return all(nc.done for nc in self.ncs)
 
 
-def generate(args, out, truth_out):
+def generate(args, out, truth_out, expect=None):
     builder = FrameBuilder(args.axes, args.encap)
     writer = PcapngWriter(out) if args.format == "pcapng" else PcapWriter(out, args.nanosecond)
     truth = TruthWriter(truth_out, builder) if truth_out else None
-    session = Session(args)
+    session = Session(args, args.inject, expect, args.self_check)
     loss_rng = random.Random(f"{args.seed}/loss")
     cycle_ns, delay_ns = args.cycle_us * 1000, args.return_delay_us * 1000
     dc_start = T0_NS - DC_EPOCH_OFFSET_NS + 1234  # reference clock slightly off the host clock
@@ -634,21 +1362,31 @@ def generate(args, out, truth_out):
         out_bytes = builder.rx.pack(*chain(outputs))
         t_ns = T0_NS + k * cycle_ns
         index = k & 0xFF
-        if want_master:
+        directive = session.directive
+        if want_master and directive != DROP:
             writer.write(t_ns, builder.frame(False, index, out_bytes, builder.zero_inputs, 0))
             if truth:
                 truth.write(t_ns, "master", out_bytes, None)
-        if args.loss and loss_rng.random() < args.loss:
+            if expect:
+                expect.frame(t_ns, k, MASTER)
+        if directive == LOST or (args.loss and loss_rng.random() < args.loss):
             continue
         session.deliver(inputs)
-        if want_returned:
+        if want_returned and directive != DROP:
             in_bytes = builder.tx.pack(*chain(inputs))
             t_ret = t_ns + delay_ns
-            frame = builder.frame(True, index, out_bytes, in_bytes, dc_start + t_ret - T0_NS)
+            frame = builder.frame(True, index, out_bytes, in_bytes, dc_start + t_ret - T0_NS,
+                                  session.wkc)
             writer.write(t_ret, frame)
             if truth:
                 truth.write(t_ret, "returned", out_bytes, in_bytes)
-    return session.complete()
+            if expect:
+                expect.frame(t_ret, k, RETURNED)
+    unfinished = session.unfinished()
+    if unfinished:
+        print("gen_capture: injections not done before the last cycle (more --cycles, or "
+              "earlier @SECONDS): " + ", ".join(unfinished), file=sys.stderr)
+    return session.complete() and not unfinished
 
 
 def parse_args(argv):
@@ -665,6 +1403,15 @@ def parse_args(argv):
     p.add_argument("--copies", choices=("both", "master", "returned"), default="both")
     p.add_argument("--loss", type=float, default=0.0,
                    help="probability of losing a returned copy (default 0)")
+    p.add_argument("--ready-mode", type=int, choices=(0, 1), default=0,
+                   help="the drives' Servo_Ready_Mode (default 0)")
+    p.add_argument("--inject", action="append", default=[], metavar="RULE[@SECONDS][:AXIS]",
+                   help="inject a violation of RULE (repeatable; see the module docstring)")
+    p.add_argument("--findings", metavar="FILE",
+                   help="JSON file of the findings the injections must produce")
+    p.add_argument("--self-check", action="store_true",
+                   help="assert that every axis not under an injection conforms "
+                        "(on with --findings)")
     p.add_argument("-o", "--output", required=True, help="capture file to write")
     p.add_argument("--truth", help="JSON Lines truth file to write")
     args = p.parse_args(argv)
@@ -676,6 +1423,11 @@ def parse_args(argv):
         p.error("--return-delay-us must be positive and below --cycle-us")
     if not 0 <= args.loss < 1:
         p.error("--loss must be in [0, 1)")
+    if args.loss and (args.inject or args.findings):
+        p.error("--inject and --findings need a capture without random --loss")
+    if args.findings:
+        args.self_check = True
+    args.inject = [parse_injection(text, i, args, p.error) for i, text in enumerate(args.inject)]
     if args.encap == "udp" and args.axes > 28:
         print("gen_capture: warning: frames of more than 28 axes in UDP exceed the Ethernet MTU",
               file=sys.stderr)
@@ -685,15 +1437,30 @@ def parse_args(argv):
 def main(argv=None):
     args = parse_args(argv)
     truth_out = open(args.truth, "w", encoding="ascii", buffering=1 << 20) if args.truth else None
+    expect = Expectations(args.cycle_us * 1000, args.return_delay_us * 1000) \
+        if args.findings else None
     try:
         with open(args.output, "wb", buffering=1 << 20) as out:
-            complete = generate(args, out, truth_out)
+            complete = generate(args, out, truth_out, expect)
     finally:
         if truth_out:
             truth_out.close()
     if not complete:
         print("gen_capture: the session did not finish in --cycles cycles", file=sys.stderr)
         return 1
+    if expect:
+        try:
+            expected = expect.resolve()
+        except ValueError as e:
+            print(f"gen_capture: {e}", file=sys.stderr)
+            return 1
+        injected = {inj.rule for inj in args.inject}
+        document = {"expected": expected,
+                    "companions": {rule: COMPANIONS[rule] for rule in sorted(injected)
+                                   if rule in COMPANIONS}}
+        with open(args.findings, "w", encoding="ascii") as f:
+            json.dump(document, f, indent=1)
+            f.write("\n")
     return 0
 
 
