@@ -87,6 +87,23 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
   classifyCopy(frame, out);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
   observeStartup(frame, bytes);
+  // Only wholly captured frames are cached: their placements depend on nothing else than their
+  // shape — framing, commands, addresses, lengths, which WKCs are above zero — not on the
+  // datagram index a master changes every cycle.
+  bool cacheable = frame.status == WalkStatus::Ok;
+  std::uint64_t key = (std::uint64_t{frame.ecat_offset} << 48) ^ frame.count ^
+                      (out.copy == CopyKind::Returned ? 0x5bd1e995ull : 0);
+  for (std::size_t i = 0; i < frame.count && cacheable; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    cacheable = dg.complete();
+    const std::uint64_t address = ecat::addressSurvivesRing(dg.command) ? dg.address : 0;
+    key = (key ^ (address | std::uint64_t{dg.command} << 32 | std::uint64_t{dg.length} << 40 |
+                  std::uint64_t{dg.wkc > 0} << 56)) *
+          0x9E3779B97F4A7C15ull;
+    key ^= key >> 29;
+  }
+  if (cacheable && fromCache(key, out)) return;
+  const std::uint64_t generation = generation_;
   if (!options_.axes.empty()) {
     placeConfigured(frame, out);
   } else if (options_.default_layout && !startupShowsNoServo()) {
@@ -97,6 +114,32 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
     return a.axis < b.axis;
   };
   if (!std::is_sorted(out.axes.begin(), end, by_axis)) std::sort(out.axes.begin(), end, by_axis);
+  // A frame that changed the layout state (a new or candidate key) is placed again next time.
+  if (cacheable && generation == generation_) toCache(key, out);
+}
+
+bool Decoder::fromCache(std::uint64_t key, FrameDecode& out) const {
+  for (const CachedPlacements& c : cache_) {
+    if (!c.valid || c.key != key || c.generation != generation_ || c.copy != out.copy) continue;
+    out.axis_count = c.axis_count;
+    std::copy(c.axes.begin(), c.axes.begin() + static_cast<std::ptrdiff_t>(c.axis_count),
+              out.axes.begin());
+    return true;
+  }
+  return false;
+}
+
+void Decoder::toCache(std::uint64_t key, const FrameDecode& out) {
+  if (out.axis_count > kCachedAxes) return;
+  CachedPlacements& c = cache_[cache_next_];
+  cache_next_ = (cache_next_ + 1) % cache_.size();
+  c.valid = true;
+  c.key = key;
+  c.generation = generation_;
+  c.copy = out.copy;
+  c.axis_count = out.axis_count;
+  std::copy(out.axes.begin(), out.axes.begin() + static_cast<std::ptrdiff_t>(out.axis_count),
+            c.axes.begin());
 }
 
 // PROTOCOL.md §8: a frame with any WKC above zero is a returned copy; otherwise the frame
@@ -137,9 +180,13 @@ void Decoder::observeStartup(const EcatFrame& frame, const ByteReader& bytes) {
         if (sm_slaves_list_.size() >= kMaxSmSlaves) continue;
         slave = sm_slaves_list_.insert(sm_slaves_list_.end(), SmSlave{key});
         ++sm_slaves_;
+        ++generation_;
       }
       (sm == kRegSm2 ? slave->sm2_length : slave->sm3_length) = *length;
-      if (slave->sm2_length == kRxPdoSize && slave->sm3_length == kTxPdoSize) servo_seen_ = true;
+      if (slave->sm2_length == kRxPdoSize && slave->sm3_length == kTxPdoSize && !servo_seen_) {
+        servo_seen_ = true;
+        ++generation_;
+      }
     }
   }
 }
@@ -283,6 +330,7 @@ const Decoder::DefaultKey* Decoder::defaultKeyFor(const Datagram& dg, std::uint1
     if (seen == candidate_keys_.end()) {
       if (candidate_keys_.size() < kMaxDefaultKeys) {
         candidate_keys_.push_back(DefaultKey{dg.command, dg.address, dg.length, 0, axis_count});
+        ++generation_;
       }
       return nullptr;
     }
@@ -298,6 +346,7 @@ const Decoder::DefaultKey* Decoder::defaultKeyFor(const Datagram& dg, std::uint1
     axes_.push_back(std::move(info));
   }
   default_keys_.push_back(DefaultKey{dg.command, dg.address, dg.length, first_axis, axis_count});
+  ++generation_;
   return &default_keys_.back();
 }
 

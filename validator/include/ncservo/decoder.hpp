@@ -82,6 +82,8 @@ class Decoder {
   };
 
   void classifyCopy(const EcatFrame& frame, FrameDecode& out);
+  bool fromCache(std::uint64_t key, FrameDecode& out) const;
+  void toCache(std::uint64_t key, const FrameDecode& out);
   void observeStartup(const EcatFrame& frame, const ByteReader& bytes);
   void placeConfigured(const EcatFrame& frame, FrameDecode& out);
   void placeDefault(const EcatFrame& frame, FrameDecode& out);
@@ -107,6 +109,22 @@ class Decoder {
   std::vector<SmSlave> sm_slaves_list_;
   std::size_t sm_slaves_ = 0;  // slaves whose SM2 or SM3 got a non-zero length
   bool servo_seen_ = false;
+
+  // Placements of recently seen frame shapes (same datagram list, framing, copy and WKCs): a
+  // cyclic frame is placed once, not every cycle. Any change to the layout state invalidates it.
+  static constexpr std::size_t kCachedAxes = 32;
+  struct CachedPlacements {
+    bool valid = false;
+    std::uint64_t key = 0;
+    std::uint64_t generation = 0;
+    CopyKind copy = CopyKind::Master;
+    bool paired = false;
+    std::size_t axis_count = 0;
+    std::array<AxisPlacement, kCachedAxes> axes{};
+  };
+  std::array<CachedPlacements, 4> cache_{};
+  std::size_t cache_next_ = 0;
+  std::uint64_t generation_ = 0;
 };
 
 }  // namespace ncservo
