@@ -36,6 +36,8 @@ def load_json(path):
             text = f.read()
     except OSError as e:
         raise InputError(f"{path}: {e.strerror}") from None
+    if not text.strip():  # a validator that died before writing must not pass as "no findings"
+        raise InputError(f"{path}: empty")
     try:
         return json.loads(text)
     except json.JSONDecodeError as first_error:
