@@ -98,12 +98,6 @@ bool AxisModel::wouldNotChange(const PdoValues& values) const {
   return !al_state_.has_value();  // ESM-002 looks at which PDOs a frame carries
 }
 
-void AxisModel::refresh(const PdoValues& values, const Stamp& now) {
-  now_ = now;
-  if (values.has_rx) copyWords(Pdo::Rx, values);
-  if (values.has_tx) copyWords(Pdo::Tx, values);
-}
-
 void AxisModel::copyWords(Pdo pdo, const PdoValues& values) {
   const auto first = static_cast<std::ptrdiff_t>(firstWordOf(pdo));
   const auto count = static_cast<std::ptrdiff_t>(wordCountOf(pdo));

@@ -90,7 +90,6 @@ const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t tim
     // have changed (RULES.md reports at beginnings and at timeouts only).
     if (s.pending == 0 && s.evaluated_revision == s.model->revision() &&
         s.model->wouldNotChange(a.values)) {
-      s.model->refresh(a.values, now_);
       session_.setState(i, s.model->state());
       continue;
     }
@@ -182,7 +181,6 @@ void Validator::accountCycle(const FrameView& view, const EcatFrame& frame) {
     cyclic.axes.clear();
     for (std::size_t i = 0; i < view.axis_count; ++i) {
       cyclic.axes.push_back(view.axes[i].placement.axis);
-      slot(view.axes[i].placement.axis);
     }
     tick(cyclic, view);
   } else {

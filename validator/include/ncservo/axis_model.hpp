@@ -77,8 +77,6 @@ class AxisModel {
   std::uint64_t revision() const { return revision_; }
   // Whether observing these values would change nothing the rules look at.
   bool wouldNotChange(const PdoValues& values) const;
-  // Takes the values without judging them (after wouldNotChange said they change nothing).
-  void refresh(const PdoValues& values, const Stamp& now);
   std::optional<std::uint8_t> alState() const { return al_state_; }
 
   // This frame's values of the axis (outputs and/or inputs), at `now`.
@@ -87,6 +85,7 @@ class AxisModel {
   // --- state, for rules and reports ---
   std::uint16_t index() const { return index_; }
   const Stamp& now() const { return now_; }
+  // The values last judged (an observation that would change nothing is not taken).
   const PdoValues& latest() const { return latest_; }
   bool knowsOutputs() const { return latest_.has_rx; }
   bool knowsInputs() const { return latest_.has_tx; }

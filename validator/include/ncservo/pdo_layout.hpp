@@ -75,10 +75,16 @@ constexpr std::size_t pdoSize(Pdo pdo) {
 inline constexpr std::size_t kRxPdoSize = pdoSize(Pdo::Rx);
 inline constexpr std::size_t kTxPdoSize = pdoSize(Pdo::Tx);
 // The same, as constants for hot paths (pdoSize loops over the table when `pdo` is not constant).
-constexpr std::size_t sizeOfPdo(Pdo pdo) { return pdo == Pdo::Rx ? kRxPdoSize : kTxPdoSize; }
+constexpr std::size_t sizeOfPdo(Pdo pdo) {
+  return pdo == Pdo::Rx ? kRxPdoSize : kTxPdoSize;
+}
 // Words of one PDO are contiguous in kWords (checked below): [first, first + count).
-constexpr std::size_t firstWordOf(Pdo pdo) { return pdo == Pdo::Rx ? 0 : 3; }
-constexpr std::size_t wordCountOf(Pdo pdo) { return pdo == Pdo::Rx ? 3 : kWordCount - 3; }
+constexpr std::size_t firstWordOf(Pdo pdo) {
+  return pdo == Pdo::Rx ? 0 : 3;
+}
+constexpr std::size_t wordCountOf(Pdo pdo) {
+  return pdo == Pdo::Rx ? 3 : kWordCount - 3;
+}
 
 namespace detail {
 constexpr bool wordsInEnumOrder() {
