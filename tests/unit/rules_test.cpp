@@ -1,0 +1,566 @@
+// The rule catalogue (rules.hpp) against RULES.md, the user's settings (RuleSettings), and the
+// running cycle-time statistics the rules' "nominal cycle" comes from (interval_stats.hpp).
+#include "ncservo/rules.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <iterator>
+#include <optional>
+#include <queue>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "ncservo/config.hpp"
+#include "ncservo/interval_stats.hpp"
+
+namespace ncservo {
+namespace {
+
+// ---- The rule table against RULES.md ----
+
+constexpr auto E = Severity::Error;
+constexpr auto W = Severity::Warning;
+constexpr auto I = Severity::Info;
+constexpr auto NC = Party::Nc;
+constexpr auto DRIVE = Party::Drive;
+constexpr auto BUS = Party::Bus;
+constexpr std::optional<Timeout> kNoTimeout{};
+constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
+
+struct SpecRow {
+  const char* code;
+  const char* slug;
+  Severity severity;
+  Party party;
+  std::optional<Timeout> timeout;  // the timeout its text names
+  bool delayed;                    // "longer than T": reported once the condition outlasts T
+  bool axis;                       // judged on an axis's values (has a check)
+};
+
+// RULES.md, table by table.
+// clang-format off
+const SpecRow kSpec[] = {
+    {"SE-001", "illegal-enable-edge", E, NC, kNoTimeout, false, true},
+    {"SE-002", "enable-without-edge", E, DRIVE, kDrive, false, true},
+    {"SE-003", "not-disabled", E, DRIVE, kDrive, true, true},
+    {"SE-004", "enable-not-honoured", W, DRIVE, Timeout::EnableResponse, true, true},
+    {"ZP-001", "zpulse-ack-not-cleared", E, DRIVE, kDrive, true, true},
+    {"ZP-002", "zpulse-ack-without-request", E, DRIVE, kDrive, false, true},
+    {"ZP-003", "zpulse-absolute-encoder", W, NC, kNoTimeout, false, true},
+    {"EC-001", "clear-ack-without-request", E, DRIVE, kDrive, false, true},
+    {"EC-002", "clear-request-held", W, NC, Timeout::NcRelease, true, true},
+    {"EC-003", "clear-ack-not-cleared", E, DRIVE, kDrive, true, true},
+    {"EC-004", "clear-not-acknowledged", W, DRIVE, Timeout::ClearResponse, true, true},
+    {"SEW-001", "cause-without-summary", E, DRIVE, kNoTimeout, false, true},
+    {"SEW-002", "summary-without-cause", W, DRIVE, kDrive, true, true},
+    {"SEW-003", "reserved-error-bits", W, DRIVE, kNoTimeout, false, true},
+    {"SSW-001", "reserved-status-bits", W, DRIVE, kNoTimeout, false, true},
+    {"SCW-001", "reserved-control-bits", W, NC, kNoTimeout, false, true},
+    {"RDY-001", "ready-mismatch", E, DRIVE, kDrive, true, true},
+    {"FLT-001", "enabled-with-error", E, DRIVE, Timeout::FaultReaction, true, true},
+    {"PT-001", "param-table-not-followed", W, DRIVE, Timeout::ParamTable, true, true},
+    {"MSG-001", "undefined-message-code", W, DRIVE, kNoTimeout, false, true},
+    {"COM-001", "working-counter", E, BUS, kNoTimeout, false, false},
+    {"COM-002", "cycle-gap", W, BUS, kNoTimeout, false, false},
+    {"COM-003", "timeout-not-reported", I, DRIVE, kDrive, true, true},
+    {"COM-004", "frame-not-returned", W, BUS, kNoTimeout, false, false},
+    {"COM-005", "telegram-failure-limit", E, BUS, kNoTimeout, false, true},
+    {"ESM-001", "invalid-al-transition", E, NC, kNoTimeout, false, false},
+    {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, false, true},
+    {"ESM-003", "al-error", E, DRIVE, kNoTimeout, false, false},
+    {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, false, false},
+};
+// clang-format on
+
+TEST(RuleTable, MatchesRulesMdRowByRow) {
+  ASSERT_EQ(std::size(kSpec), kRuleCount);
+  ASSERT_EQ(kRules.size(), kRuleCount);
+  for (std::size_t i = 0; i < kRuleCount; ++i) {
+    const SpecRow& spec = kSpec[i];
+    const RuleDef& rule = kRules[i];
+    SCOPED_TRACE(spec.code);
+    EXPECT_EQ(static_cast<std::size_t>(rule.id), i) << "IDs in enum order";
+    EXPECT_EQ(&ruleDef(rule.id), &rule);
+    EXPECT_STREQ(rule.code, spec.code);
+    EXPECT_STREQ(rule.slug, spec.slug);
+    EXPECT_EQ(rule.severity, spec.severity);
+    EXPECT_EQ(rule.party, spec.party);
+    EXPECT_EQ(rule.timeout, spec.timeout);
+    EXPECT_EQ(rule.delayed, spec.delayed);
+    EXPECT_EQ(rule.check != nullptr, spec.axis);
+    EXPECT_NE(rule.clause, nullptr);
+    EXPECT_NE(rule.summary, nullptr);
+    if (rule.summary != nullptr) {
+      EXPECT_GT(std::string(rule.summary).size(), 10u);
+    }
+  }
+}
+
+TEST(RuleTable, CodesAndSlugsAreUniqueAndWellFormed) {
+  std::set<std::string> codes, slugs, filters;
+  for (const RuleDef& rule : kRules) {
+    SCOPED_TRACE(rule.code);
+    EXPECT_TRUE(codes.insert(rule.code).second) << "duplicate code";
+    EXPECT_TRUE(slugs.insert(rule.slug).second) << "duplicate slug";
+    EXPECT_TRUE(filters.insert(ruleFilterName(rule)).second) << "duplicate filter name";
+    const std::string code = rule.code;
+    const std::size_t dash = code.find('-');
+    ASSERT_NE(dash, std::string::npos);
+    EXPECT_EQ(code.size() - dash - 1, 3u) << "three digits after the dash";
+    for (char c : std::string(rule.slug)) {
+      EXPECT_TRUE((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-') << rule.slug;
+    }
+  }
+}
+
+TEST(RuleTable, RuleByCodeRoundTrips) {
+  for (const RuleDef& rule : kRules) {
+    EXPECT_EQ(ruleByCode(rule.code), &rule) << rule.code;
+  }
+  for (const char* unknown : {"", "SE-000", "SE-005", "se-001", "SE001", "SE-001 ", "ESM-005"}) {
+    EXPECT_EQ(ruleByCode(unknown), nullptr) << "'" << unknown << "'";
+  }
+}
+
+TEST(RuleTable, FilterNames) {
+  EXPECT_EQ(ruleFilterName(ruleDef(RuleId::Se001)), "ncservo.rule.illegal_enable_edge");
+  EXPECT_EQ(ruleFilterName(ruleDef(RuleId::Zp002)), "ncservo.rule.zpulse_ack_without_request");
+  EXPECT_EQ(ruleFilterName(ruleDef(RuleId::Esm004)), "ncservo.rule.al_error_at_init");
+  for (const RuleDef& rule : kRules) {
+    std::string expected = std::string("ncservo.rule.") + rule.slug;
+    std::replace(expected.begin(), expected.end(), '-', '_');
+    EXPECT_EQ(ruleFilterName(rule), expected);
+  }
+}
+
+TEST(RuleTable, DelayedRulesHaveATimeoutAxisRulesCheckAndDescribe) {
+  for (const RuleDef& rule : kRules) {
+    SCOPED_TRACE(rule.code);
+    if (rule.delayed) {
+      EXPECT_TRUE(rule.timeout.has_value());
+      EXPECT_NE(rule.check, nullptr) << "a delayed rule is timed per axis";
+    }
+    EXPECT_EQ(rule.check != nullptr, rule.describe != nullptr);
+  }
+}
+
+// RULES.md "Time": the "used by" column of the timeout table (COM-003's text names
+// drive_response too).
+TEST(RuleTable, TimeoutsAndTheRulesThatUseThem) {
+  struct Row {
+    const char* name;
+    std::uint32_t default_ms;
+    std::vector<RuleId> used_by;
+  };
+  const Row rows[] = {
+      {"drive_response",
+       20,
+       {RuleId::Se002, RuleId::Se003, RuleId::Zp001, RuleId::Zp002, RuleId::Ec001, RuleId::Ec003,
+        RuleId::Sew002, RuleId::Rdy001, RuleId::Com003}},
+      {"nc_release", 50, {RuleId::Ec002}},
+      {"enable_response", 100, {RuleId::Se004}},
+      {"clear_response", 100, {RuleId::Ec004}},
+      {"fault_reaction", 100, {RuleId::Flt001}},
+      {"param_table", 50, {RuleId::Pt001}},
+  };
+  ASSERT_EQ(std::size(rows), kTimeouts.size());
+  for (std::size_t i = 0; i < kTimeouts.size(); ++i) {
+    const Row& row = rows[i];
+    SCOPED_TRACE(row.name);
+    EXPECT_EQ(static_cast<std::size_t>(kTimeouts[i].id), i);
+    EXPECT_STREQ(kTimeouts[i].name, row.name);
+    EXPECT_EQ(kTimeouts[i].default_ms, row.default_ms);
+    EXPECT_EQ(timeoutFromName(row.name), kTimeouts[i].id);
+    EXPECT_NE(std::find(kTimeoutNames.begin(), kTimeoutNames.end(), row.name), kTimeoutNames.end())
+        << "the config file accepts it";
+    std::vector<RuleId> users;
+    for (const RuleDef& rule : kRules) {
+      if (rule.timeout == kTimeouts[i].id) users.push_back(rule.id);
+    }
+    EXPECT_EQ(users, row.used_by);
+  }
+  EXPECT_FALSE(timeoutFromName("drive-response").has_value());
+  EXPECT_FALSE(timeoutFromName("").has_value());
+}
+
+TEST(RuleTable, SeverityAndPartyNames) {
+  struct Row {
+    Severity severity;
+    const char* name;
+  };
+  for (const Row& row : {Row{E, "error"}, Row{W, "warning"}, Row{I, "info"}}) {
+    EXPECT_STREQ(severityName(row.severity), row.name);
+    EXPECT_EQ(severityFromName(row.name), row.severity);
+  }
+  for (const char* bad : {"", "Error", "fatal", "never", "warn"}) {
+    EXPECT_FALSE(severityFromName(bad).has_value()) << bad;
+  }
+  EXPECT_STREQ(partyName(NC), "NC");
+  EXPECT_STREQ(partyName(DRIVE), "drive");
+  EXPECT_STREQ(partyName(BUS), "bus");
+}
+
+// ---- RuleSettings ----
+
+TEST(RuleSettings, DefaultsAreRulesMd) {
+  const RuleSettings s;
+  for (const RuleDef& rule : kRules) {
+    EXPECT_TRUE(s.isEnabled(rule.id)) << rule.code;
+    EXPECT_EQ(s.severityOf(rule.id), rule.severity) << rule.code;
+  }
+  for (const TimeoutDef& t : kTimeouts) {
+    EXPECT_EQ(s.timeoutNs(t.id), std::int64_t{t.default_ms} * 1'000'000) << t.name;
+  }
+  EXPECT_EQ(s.telegram_failure_limit, 3u);
+  EXPECT_FALSE(s.servo_ready_mode.has_value());
+  EXPECT_FALSE(s.readyModeFor(0).has_value());
+}
+
+struct DisableCase {
+  const char* code;
+  std::optional<RuleId> disabled;  // none: rejected
+  const char* error;               // a text the error contains
+};
+const DisableCase kDisableCases[] = {
+    {"MSG-001", RuleId::Msg001, nullptr},
+    {"ESM-004", RuleId::Esm004, nullptr},
+    {"MSG-009", std::nullopt, "unknown rule ID 'MSG-009'"},
+    {"msg-001", std::nullopt, "unknown rule ID 'msg-001'"},
+    {"", std::nullopt, "unknown rule ID ''"},
+};
+
+TEST(RuleSettings, Disable) {
+  for (const DisableCase& c : kDisableCases) {
+    SCOPED_TRACE(c.code);
+    RuleSettings s;
+    const std::optional<std::string> error = s.disable(c.code);
+    for (const RuleDef& rule : kRules) {
+      EXPECT_EQ(s.isEnabled(rule.id), !(c.disabled && rule.id == *c.disabled)) << rule.code;
+    }
+    if (c.disabled) {
+      EXPECT_FALSE(error.has_value()) << *error;
+    } else {
+      ASSERT_TRUE(error.has_value());
+      EXPECT_NE(error->find(c.error), std::string::npos) << *error;
+    }
+  }
+}
+
+struct SeverityCase {
+  const char* code;
+  const char* level;
+  std::optional<Severity> set;  // none: rejected
+  std::vector<const char*> error;
+};
+const SeverityCase kSeverityCases[] = {
+    {"EC-002", "error", E, {}},
+    {"SE-001", "info", I, {}},
+    {"COM-003", "warning", W, {}},
+    {"SE-001", "error", E, {}},
+    {"XX-001", "error", std::nullopt, {"unknown rule ID 'XX-001'"}},
+    {"SE-001", "fatal", std::nullopt, {"'fatal'", "SE-001", "error, warning or info"}},
+    {"SE-001", "", std::nullopt, {"''", "SE-001"}},
+    {"SE-001", "Error", std::nullopt, {"'Error'"}},
+};
+
+TEST(RuleSettings, SetSeverity) {
+  for (const SeverityCase& c : kSeverityCases) {
+    SCOPED_TRACE(std::string(c.code) + " = " + c.level);
+    RuleSettings s;
+    const std::optional<std::string> error = s.setSeverity(c.code, c.level);
+    const RuleDef* target = ruleByCode(c.code);
+    for (const RuleDef& rule : kRules) {
+      const bool changed = c.set && &rule == target;
+      EXPECT_EQ(s.severityOf(rule.id), changed ? *c.set : rule.severity) << rule.code;
+      EXPECT_TRUE(s.isEnabled(rule.id));
+    }
+    if (c.set) {
+      EXPECT_FALSE(error.has_value()) << *error;
+    } else {
+      ASSERT_TRUE(error.has_value());
+      for (const char* text : c.error) EXPECT_NE(error->find(text), std::string::npos) << *error;
+    }
+  }
+}
+
+struct TimeoutCase {
+  const char* name;
+  std::int64_t ms;
+  bool ok;
+  std::vector<const char*> error;
+};
+const TimeoutCase kTimeoutCases[] = {
+    {"drive_response", 5, true, {}},
+    {"param_table", 0, true, {}},
+    {"fault_reaction", 3'600'000, true, {}},
+    {"fault_reaction", 3'600'001, false, {"fault_reaction", "3600001"}},
+    {"nc_release", -1, false, {"nc_release", "-1"}},
+    {"drive-response",
+     5,
+     false,
+     {"unknown timeout 'drive-response'", "drive_response, nc_release"}},
+    {"", 5, false, {"unknown timeout ''"}},
+};
+
+TEST(RuleSettings, SetTimeout) {
+  for (const TimeoutCase& c : kTimeoutCases) {
+    SCOPED_TRACE(std::string(c.name) + " = " + std::to_string(c.ms));
+    RuleSettings s;
+    const std::optional<std::string> error = s.setTimeout(c.name, c.ms);
+    for (const TimeoutDef& t : kTimeouts) {
+      const bool changed = c.ok && c.name == std::string(t.name);
+      EXPECT_EQ(s.timeoutNs(t.id), (changed ? c.ms : std::int64_t{t.default_ms}) * 1'000'000)
+          << t.name;
+    }
+    if (c.ok) {
+      EXPECT_FALSE(error.has_value()) << *error;
+    } else {
+      ASSERT_TRUE(error.has_value());
+      for (const char* text : c.error) EXPECT_NE(error->find(text), std::string::npos) << *error;
+    }
+  }
+}
+
+TEST(RuleSettings, ApplyAConfiguration) {
+  Config config;
+  config.servo_ready_mode = 1;
+  config.telegram_failure_limit = 7;
+  config.timeouts_ms = {{"drive_response", 30}, {"clear_response", 250}};
+  config.disabled_rules = {"MSG-001", "COM-002"};
+  config.severity_overrides = {{"EC-002", "error"}, {"COM-003", "warning"}};
+  AxisConfig x, y;
+  x.servo_ready_mode = 0;
+  config.axes = {x, y};
+
+  RuleSettings s;
+  const std::optional<std::string> error = s.apply(config);
+  ASSERT_FALSE(error.has_value()) << *error;
+  EXPECT_EQ(s.servo_ready_mode, 1);
+  EXPECT_EQ(s.telegram_failure_limit, 7u);
+  EXPECT_EQ(s.timeoutNs(Timeout::DriveResponse), 30'000'000);
+  EXPECT_EQ(s.timeoutNs(Timeout::ClearResponse), 250'000'000);
+  EXPECT_EQ(s.timeoutNs(Timeout::NcRelease), 50'000'000) << "untouched";
+  EXPECT_FALSE(s.isEnabled(RuleId::Msg001));
+  EXPECT_FALSE(s.isEnabled(RuleId::Com002));
+  EXPECT_TRUE(s.isEnabled(RuleId::Com001));
+  EXPECT_EQ(s.severityOf(RuleId::Ec002), E);
+  EXPECT_EQ(s.severityOf(RuleId::Com003), W);
+  EXPECT_EQ(s.severityOf(RuleId::Ec001), E);
+  // Per axis: the axis's own mode, else the global one.
+  EXPECT_EQ(s.readyModeFor(0), 0);
+  EXPECT_EQ(s.readyModeFor(1), 1);
+  EXPECT_EQ(s.readyModeFor(5), 1);
+}
+
+TEST(RuleSettings, ApplyKeepsWhatTheConfigurationDoesNotSet) {
+  RuleSettings s;
+  ASSERT_FALSE(s.setTimeout("nc_release", 80).has_value());
+  s.servo_ready_mode = 0;
+  ASSERT_FALSE(s.apply(Config{}).has_value());
+  EXPECT_EQ(s.timeoutNs(Timeout::NcRelease), 80'000'000);
+  EXPECT_EQ(s.servo_ready_mode, 0);
+  EXPECT_EQ(s.telegram_failure_limit, 3u);
+  for (const RuleDef& rule : kRules) EXPECT_TRUE(s.isEnabled(rule.id));
+}
+
+TEST(RuleSettings, ApplyRejectsUnknownNamesNamingThem) {
+  struct Case {
+    const char* name;
+    std::function<void(Config&)> edit;
+    const char* error;
+  };
+  const Case cases[] = {
+      {"disabled rule",
+       [](Config& c) {
+         c.disabled_rules = {"MSG-001", "FOO-001"};
+       },
+       "unknown rule ID 'FOO-001'"},
+      {"severity rule",
+       [](Config& c) {
+         c.severity_overrides = {{"BAR-002", "info"}};
+       },
+       "unknown rule ID 'BAR-002'"},
+      {"severity level",
+       [](Config& c) {
+         c.severity_overrides = {{"SE-001", "loud"}};
+       },
+       "severity 'loud' for SE-001"},
+      {"timeout value",
+       [](Config& c) {
+         c.timeouts_ms = {{"param_table", 4'000'000}};
+       },
+       "timeout param_table = 4000000 ms"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Config config;
+    c.edit(config);
+    RuleSettings s;
+    const std::optional<std::string> error = s.apply(config);
+    ASSERT_TRUE(error.has_value());
+    EXPECT_NE(error->find(c.error), std::string::npos) << *error;
+  }
+}
+
+TEST(RuleSettings, ApplyTheInterfacesExample) {
+  const ConfigResult parsed = parseConfig(R"(servo_ready_mode = 0
+telegram_failure_limit = 3
+[timeouts]
+drive_response = 20
+[[axis]]
+name = "X"
+outputs = 0x00010000
+inputs  = 0x00010028
+servo_ready_mode = 1
+[[axis]]
+name = "Y"
+station = 0x03EA
+sm_outputs = 0x1100
+sm_inputs  = 0x1180
+[rules]
+disable = ["MSG-001"]
+severity = { "EC-002" = "error" }
+)",
+                                          "example.toml");
+  ASSERT_TRUE(parsed.ok()) << parsed.error->text();
+  RuleSettings s;
+  ASSERT_FALSE(s.apply(*parsed.config).has_value());
+  EXPECT_FALSE(s.isEnabled(RuleId::Msg001));
+  EXPECT_EQ(s.severityOf(RuleId::Ec002), E);
+  EXPECT_EQ(s.readyModeFor(0), 1);
+  EXPECT_EQ(s.readyModeFor(1), 0);
+  EXPECT_EQ(s.timeoutNs(Timeout::DriveResponse), 20'000'000);
+}
+
+// ---- IntervalStats ----
+
+constexpr std::int64_t kUs = 1'000;
+
+// The lower median of everything added so far, kept by two heaps.
+class BruteMedian {
+ public:
+  void add(std::int64_t v) {
+    if (low_.empty() || v <= low_.top()) {
+      low_.push(v);
+    } else {
+      high_.push(v);
+    }
+    if (low_.size() > high_.size() + 1) {
+      high_.push(low_.top());
+      low_.pop();
+    } else if (high_.size() > low_.size()) {
+      low_.push(high_.top());
+      high_.pop();
+    }
+  }
+  std::int64_t median() const { return low_.top(); }
+
+ private:
+  std::priority_queue<std::int64_t> low_;
+  std::priority_queue<std::int64_t, std::vector<std::int64_t>, std::greater<>> high_;
+};
+
+std::int64_t quantileOf(const std::vector<std::int64_t>& sorted, double q) {
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size())));
+  return sorted[std::max<std::size_t>(rank, 1) - 1];
+}
+
+TEST(IntervalStats, EmptyHasNothing) {
+  const IntervalStats stats;
+  EXPECT_EQ(stats.count(), 0u);
+  EXPECT_FALSE(stats.medianNs().has_value());
+  EXPECT_FALSE(stats.quantileNs(0.99).has_value());
+  EXPECT_FALSE(stats.maxNs().has_value());
+  EXPECT_EQ(stats.resolutionNs(), 1'000);
+}
+
+// A 1 ms cycle with jitter and some outliers, at 1 µs-rounded values: the running median after
+// every interval is exactly the brute-force lower median; p99 and max too.
+TEST(IntervalStats, RunningMedianP99AndMaxMatchASortedVector) {
+  std::mt19937_64 random(20240611);
+  std::uniform_int_distribution<std::int64_t> jitter(-150, 150);
+  std::uniform_int_distribution<std::int64_t> outlier(2'000, 12'000);
+  std::uniform_int_distribution<int> percent(0, 99);
+  IntervalStats stats;
+  std::vector<std::int64_t> sorted;
+  for (int i = 0; i < 4000; ++i) {
+    const std::int64_t us = percent(random) < 3 ? outlier(random) : 1'000 + jitter(random);
+    const std::int64_t ns = us * kUs;
+    stats.add(ns);
+    sorted.insert(std::upper_bound(sorted.begin(), sorted.end(), ns), ns);
+    ASSERT_EQ(stats.count(), sorted.size());
+    ASSERT_EQ(stats.medianNs(), sorted[(sorted.size() - 1) / 2]) << "after " << sorted.size();
+    if (i % 97 == 0 || i == 3999) {
+      ASSERT_EQ(stats.quantileNs(0.99), quantileOf(sorted, 0.99)) << "after " << sorted.size();
+      ASSERT_EQ(stats.quantileNs(0.5), quantileOf(sorted, 0.5));
+      ASSERT_EQ(stats.quantileNs(1.0), sorted.back());
+      ASSERT_EQ(stats.quantileNs(0.0), sorted.front());
+      ASSERT_EQ(stats.maxNs(), sorted.back());
+    }
+  }
+  EXPECT_EQ(stats.resolutionNs(), 1'000) << "few distinct values: no coarsening";
+}
+
+TEST(IntervalStats, ValuesRoundToTheNearestMicrosecondMaxStaysExact) {
+  struct Row {
+    std::int64_t ns;
+    std::int64_t bucket_ns;
+  };
+  const Row rows[] = {
+      {1'000'499, 1'000'000}, {1'000'500, 1'001'000}, {999'501, 1'000'000}, {0, 0}, {-5'000, 0},
+  };
+  for (const Row& row : rows) {
+    SCOPED_TRACE(row.ns);
+    IntervalStats stats;
+    stats.add(row.ns);
+    EXPECT_EQ(stats.medianNs(), row.bucket_ns);
+    EXPECT_EQ(stats.maxNs(), row.ns);
+  }
+}
+
+// More distinct values than kMaxBuckets: the resolution halves (several times here), and the
+// running median stays within one resolution step of the exact one.
+TEST(IntervalStats, CoarseningKeepsTheMedianWithinTheResolution) {
+  std::mt19937_64 random(7);
+  std::uniform_int_distribution<std::int64_t> us(1, 200'000);
+  IntervalStats stats;
+  BruteMedian brute;
+  std::vector<std::int64_t> all;
+  std::int64_t max = 0;
+  for (std::size_t i = 0; i < 60'000; ++i) {
+    const std::int64_t ns = us(random) * kUs;
+    stats.add(ns);
+    brute.add(ns);
+    all.push_back(ns);
+    max = std::max(max, ns);
+    const std::int64_t error = *stats.medianNs() - brute.median();
+    ASSERT_LE(std::abs(error), stats.resolutionNs())
+        << "after " << i + 1 << " at resolution " << stats.resolutionNs();
+  }
+  EXPECT_GE(stats.resolutionNs(), 8'000) << "far more distinct values than buckets";
+  EXPECT_EQ(stats.maxNs(), max);
+  std::sort(all.begin(), all.end());
+  EXPECT_LE(std::abs(*stats.quantileNs(0.99) - quantileOf(all, 0.99)), stats.resolutionNs());
+}
+
+TEST(IntervalStats, CoarseningAtTheBucketLimit) {
+  IntervalStats stats;
+  for (std::size_t i = 1; i <= IntervalStats::kMaxBuckets; ++i) {
+    stats.add(static_cast<std::int64_t>(i) * kUs);
+  }
+  EXPECT_EQ(stats.resolutionNs(), 1'000) << "exactly kMaxBuckets distinct values fit";
+  EXPECT_EQ(stats.medianNs(), static_cast<std::int64_t>(IntervalStats::kMaxBuckets / 2) * kUs);
+  stats.add(static_cast<std::int64_t>(IntervalStats::kMaxBuckets + 1) * kUs);
+  EXPECT_EQ(stats.resolutionNs(), 2'000) << "one more halves the resolution";
+  const std::int64_t exact = static_cast<std::int64_t>(IntervalStats::kMaxBuckets / 2 + 1) * kUs;
+  EXPECT_LE(std::abs(*stats.medianNs() - exact), stats.resolutionNs());
+}
+
+}  // namespace
+}  // namespace ncservo
