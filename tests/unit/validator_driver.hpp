@@ -1,0 +1,273 @@
+// Test helper: drives a Validator with default-layout cycles (PROTOCOL.md §9.4) built byte by
+// byte — per cycle a master copy (outputs, WKC 0) and a returned copy (outputs and inputs, WKC
+// 3n) at exact integer-nanosecond timestamps — and names every frame by its cycle and copy, so
+// that tests state where a finding must be reported as "the master copy of cycle 31".
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "frame_builder.hpp"
+#include "ncservo/finding.hpp"
+#include "ncservo/rules.hpp"
+#include "ncservo/validator.hpp"
+
+namespace ncservo::test {
+
+inline constexpr std::int64_t kMs = 1'000'000;
+inline constexpr std::int64_t kUs = 1'000;
+inline constexpr std::int64_t kCycleNs = kMs;  // a 1 ms cycle
+// Capture time of cycle 0's master copy: a realistic epoch time, so that no arithmetic on
+// timestamps gets away with small numbers.
+inline constexpr std::int64_t kEpochNs = 1'700'000'000'000'000'000;
+inline constexpr std::int64_t kEnd = 1'000'000;  // "to the end of the script"
+inline constexpr std::uint32_t kLrwAddress = 0x00010000;
+
+// SCW 0x406: SE 0x2, EMGON 1, Brake 1. SSW 0x83: ServoEn, ServoRDY, PulseEnabled (absolute).
+inline constexpr std::uint32_t kScwRunning = 0x406;
+inline constexpr std::uint32_t kSswRunning = 0x83;
+
+struct AxisCycle {
+  std::uint32_t scw = kScwRunning;
+  std::uint32_t ssw = kSswRunning;
+  std::uint32_t sew = 0;
+  std::int32_t msg = 0;
+};
+
+enum class Copy : std::uint8_t { Master, Returned };
+
+// A frame of a script, named by cycle and copy.
+struct At {
+  Copy copy;
+  std::int64_t cycle;
+};
+inline At M(std::int64_t cycle) {
+  return At{Copy::Master, cycle};
+}
+inline At R(std::int64_t cycle) {
+  return At{Copy::Returned, cycle};
+}
+
+// What a script sends: per cycle and axis the PDO words, per cycle which copies are captured,
+// the returned copy's WKC and the timestamps. Later settings override earlier ones.
+class Script {
+ public:
+  explicit Script(std::int64_t cycles = 60) : cycles_(cycles) {}
+
+  Script& axes(std::size_t n) {
+    axes_ = n;
+    return *this;
+  }
+  // The returned copy's delay after the master's copy.
+  Script& delay(std::int64_t ns) {
+    delay_ns_ = ns;
+    return *this;
+  }
+  Script& base(std::uint32_t scw, std::uint32_t ssw, std::uint32_t sew = 0) {
+    base_ = AxisCycle{scw, ssw, sew, 0};
+    return *this;
+  }
+  // Cycles [from, to) of one axis.
+  Script& scw(std::int64_t from, std::int64_t to, std::uint32_t v, std::size_t axis = 0) {
+    return span(from, to, Field::Scw, v, axis);
+  }
+  Script& ssw(std::int64_t from, std::int64_t to, std::uint32_t v, std::size_t axis = 0) {
+    return span(from, to, Field::Ssw, v, axis);
+  }
+  Script& sew(std::int64_t from, std::int64_t to, std::uint32_t v, std::size_t axis = 0) {
+    return span(from, to, Field::Sew, v, axis);
+  }
+  Script& msg(std::int64_t from, std::int64_t to, std::int32_t v, std::size_t axis = 0) {
+    return span(from, to, Field::Msg, static_cast<std::uint32_t>(v), axis);
+  }
+  // Cycles [from, to): the returned copy's WKC.
+  Script& wkc(std::int64_t from, std::int64_t to, std::uint16_t v) {
+    return span(from, to, Field::Wkc, v, 0);
+  }
+  Script& noMaster(std::int64_t from, std::int64_t to) {
+    return span(from, to, Field::NoMaster, 1, 0);
+  }
+  Script& noReturned(std::int64_t from, std::int64_t to) {
+    return span(from, to, Field::NoReturned, 1, 0);
+  }
+  // Neither copy of cycles [from, to) is in the capture.
+  Script& missing(std::int64_t from, std::int64_t to) {
+    return noMaster(from, to).noReturned(from, to);
+  }
+  // An explicit timestamp for one frame.
+  Script& time(At at, std::int64_t ns) {
+    times_.push_back({at, ns});
+    return *this;
+  }
+  // Every cycle's datagram has the same index (by default it counts the cycles).
+  Script& constantIndex() {
+    constant_index_ = true;
+    return *this;
+  }
+  Script& settings(RuleSettings s) {
+    settings_ = std::move(s);
+    return *this;
+  }
+
+  std::int64_t cycles() const { return cycles_; }
+  std::uint8_t indexOf(std::int64_t cycle) const {
+    return constant_index_ ? 0x80 : static_cast<std::uint8_t>(cycle & 0xFF);
+  }
+  std::size_t axisCount() const { return axes_; }
+  const RuleSettings& ruleSettings() const { return settings_; }
+
+  AxisCycle valuesOf(std::int64_t cycle, std::size_t axis) const {
+    AxisCycle v = base_;
+    for (const Span& s : spans_) {
+      if (s.axis != axis || cycle < s.from || cycle >= s.to) continue;
+      switch (s.field) {
+        case Field::Scw:
+          v.scw = s.value;
+          break;
+        case Field::Ssw:
+          v.ssw = s.value;
+          break;
+        case Field::Sew:
+          v.sew = s.value;
+          break;
+        case Field::Msg:
+          v.msg = static_cast<std::int32_t>(s.value);
+          break;
+        default:
+          break;
+      }
+    }
+    return v;
+  }
+  std::uint16_t wkcOf(std::int64_t cycle) const {
+    auto wkc = static_cast<std::uint16_t>(3 * axes_);
+    for (const Span& s : spans_) {
+      if (s.field == Field::Wkc && cycle >= s.from && cycle < s.to) {
+        wkc = static_cast<std::uint16_t>(s.value);
+      }
+    }
+    return wkc;
+  }
+  bool captured(At at) const {
+    const Field field = at.copy == Copy::Master ? Field::NoMaster : Field::NoReturned;
+    for (const Span& s : spans_) {
+      if (s.field == field && at.cycle >= s.from && at.cycle < s.to) return false;
+    }
+    return true;
+  }
+  std::int64_t timeOf(At at) const {
+    for (const auto& [where, ns] : times_) {
+      if (where.copy == at.copy && where.cycle == at.cycle) return ns;
+    }
+    return kEpochNs + at.cycle * kCycleNs + (at.copy == Copy::Returned ? delay_ns_ : 0);
+  }
+
+ private:
+  enum class Field : std::uint8_t { Scw, Ssw, Sew, Msg, Wkc, NoMaster, NoReturned };
+  struct Span {
+    std::int64_t from, to;
+    Field field;
+    std::uint32_t value;
+    std::size_t axis;
+  };
+  Script& span(std::int64_t from, std::int64_t to, Field field, std::uint32_t value,
+               std::size_t axis) {
+    spans_.push_back(Span{from, to, field, value, axis});
+    return *this;
+  }
+
+  std::int64_t cycles_;
+  std::size_t axes_ = 1;
+  std::int64_t delay_ns_ = 0;
+  bool constant_index_ = false;
+  AxisCycle base_;
+  std::vector<Span> spans_;
+  std::vector<std::pair<At, std::int64_t>> times_;
+  RuleSettings settings_;
+};
+
+// The default layout's cyclic LRW of all axes: n RxPDOs then n TxPDOs. `index` is the datagram
+// index; a master that numbers its frames (as SOEM does) makes consecutive cycles' datagram lists
+// differ, so that a master copy never looks like the returned copy of the one before (§8).
+inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std::uint16_t wkc,
+                         std::uint8_t index = 0x80) {
+  Bytes data;
+  for (std::size_t k = 0; k < axes.size(); ++k) {
+    const Bytes rx = rxPdo(static_cast<std::int32_t>(100 + k), axes[k].scw);
+    data.insert(data.end(), rx.begin(), rx.end());
+  }
+  for (const AxisCycle& a : axes) {
+    const Bytes tx = returned ? txPdo(TxValues(0, a.ssw, a.sew, a.msg)) : Bytes(40, 0);
+    data.insert(data.end(), tx.begin(), tx.end());
+  }
+  FrameBuilder builder;
+  builder.add(
+      Dg{ecat::kLrw, index, kLrwAddress, std::move(data), returned ? wkc : std::uint16_t{0}});
+  return builder.bytes();
+}
+
+// Feeds frames to one Validator, numbering them from 1, and keeps every finding.
+class ValidatorDriver {
+ public:
+  explicit ValidatorDriver(RuleSettings settings = RuleSettings{},
+                           DecoderOptions options = DecoderOptions{})
+      : validator_(std::move(options), std::move(settings)) {}
+
+  // One captured frame at `time_ns`; returns the findings reported on it.
+  const std::vector<Finding>& feed(const Bytes& bytes, std::int64_t time_ns) {
+    const Walked w = walk(bytes);
+    validator_.onFrame(++frame_, time_ns, *w.frame, w.reader());
+    all_.insert(all_.end(), validator_.findings().begin(), validator_.findings().end());
+    return validator_.findings();
+  }
+
+  // Every frame of a script, in capture order; records where each cycle's copies went.
+  void run(const Script& script) {
+    for (std::int64_t k = 0; k < script.cycles(); ++k) {
+      std::vector<AxisCycle> values;
+      for (std::size_t a = 0; a < script.axisCount(); ++a) values.push_back(script.valuesOf(k, a));
+      for (Copy copy : {Copy::Master, Copy::Returned}) {
+        const At at{copy, k};
+        if (!script.captured(at)) continue;
+        feed(cyclicFrame(values, copy == Copy::Returned, script.wkcOf(k), script.indexOf(k)),
+             script.timeOf(at));
+        frames_.push_back({at, frame_});
+      }
+    }
+  }
+
+  // The frame number a script gave a cycle's copy (0 if it was not captured).
+  std::uint64_t frameOf(At at) const {
+    for (const auto& [where, number] : frames_) {
+      if (where.copy == at.copy && where.cycle == at.cycle) return number;
+    }
+    return 0;
+  }
+
+  const std::vector<Finding>& findings() const { return all_; }
+  const Validator& validator() const { return validator_; }
+  std::uint64_t frames() const { return frame_; }
+
+ private:
+  Validator validator_;
+  std::uint64_t frame_ = 0;
+  std::vector<Finding> all_;
+  std::vector<std::pair<At, std::uint64_t>> frames_;
+};
+
+// "SE-001 axis 0 at 11 since 11", "COM-002 bus at 40 since 37": comparable and readable.
+inline std::string describe(RuleId rule, std::optional<std::uint16_t> axis, std::uint64_t at,
+                            std::uint64_t since) {
+  return std::string(ruleDef(rule).code) +
+         (axis ? " axis " + std::to_string(*axis) : std::string(" bus")) + " at " +
+         std::to_string(at) + " since " + std::to_string(since);
+}
+inline std::string describe(const Finding& f) {
+  return describe(f.rule, f.axis, f.at.frame, f.since.frame);
+}
+
+}  // namespace ncservo::test
