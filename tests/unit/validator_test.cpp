@@ -641,7 +641,7 @@ TEST(ValidatorNominal, AReportedFaultGoesIntoTheHistoryAndTheTimeline) {
 // 14 ms) for its cycle clock, so the next master copy (16 ms) is 2 ms after it: COM-002 reports
 // "1 cycle missing" on M(16) and counts a lost cycle for the axis, though no cycle is missing.
 // BUG (validator.cpp, Validator::tick): a backwards timestamp turns into a gap finding.
-TEST(ValidatorTime, DISABLED_AMasterCopyGoingBackwardsIsNotAGap) {
+TEST(ValidatorTime, AMasterCopyGoingBackwardsIsNotAGap) {
   const Script script = Script().time(M(15), kEpochNs + 7 * kMs).time(R(15), kEpochNs + 7 * kMs);
   const auto driver = runScript(script);
   for (const Finding& f : driver->findings())
@@ -679,7 +679,7 @@ TEST(ValidatorCycleTime, MedianP99AndMaxOfTheMasterIntervals) {
 // BUG (axis_model.cpp, AxisModel::cycleFailed): a failed-but-not-lost cycle does not end the run
 // of lost cycles (consecutive_lost_ is only reset by cycleOk), so 2 + 1 lost cycles separated by
 // a WKC-2 cycle count as 3 consecutive and COM-003 is reported at M(35).
-TEST(ValidatorCom003, DISABLED_LostCyclesSeparatedByAWrongWkcAreNotConsecutive) {
+TEST(ValidatorCom003, LostCyclesSeparatedByAWrongWkcAreNotConsecutive) {
   const auto driver = runScript(Script().wkc(10, 12, 0).wkc(12, 13, 2).wkc(13, 14, 0));
   for (const Finding& f : driver->findings()) {
     EXPECT_NE(f.rule, RuleId::Com003) << test::describe(f) << ": " << f.message;
@@ -813,7 +813,7 @@ TEST(ValidatorEsm, InputsExchangedInPreOpAreReported) {
   EXPECT_NE(f.message.find("expected SAFE-OP or OP"), std::string::npos) << f.message;
 }
 
-TEST(ValidatorEsm, DISABLED_InputsExchangedInPreOpAreReportedOnce) {
+TEST(ValidatorEsm, InputsExchangedInPreOpAreReportedOnce) {
   const EsmCase c{"PRE-OP, inputs exchanged", {{0, kScwOff, kSswReady, 2}}, {}};
   std::vector<std::uint64_t> masters, returns;
   const auto driver = runEsm(c, masters, returns);

@@ -111,6 +111,10 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
   if (lost) {
     consecutive_lost_ += cycles;
     awaiting_timeout_report_ = false;  // a new outage: COM-003 is judged after it
+  } else {
+    // A wrong but non-zero WKC: the slaves processed the frame, so traffic went through and a
+    // run of lost cycles (COM-003) ends here.
+    endOutage();
   }
   consecutive_failed_ += cycles;
   total_failures_ = std::min(kFailureCounterMax, total_failures_ + cycles);
@@ -119,19 +123,24 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
 void AxisModel::cycleOk(const Stamp& now) {
   if (consecutive_lost_ != 0 || consecutive_failed_ != 0) ++revision_;
   now_ = now;
-  // RULES.md COM-003: after 3 or more lost cycles the drive must raise ECatTErr.
+  endOutage();
+  consecutive_failed_ = 0;
+}
+
+// RULES.md COM-003: after 3 or more lost cycles the drive must raise ECatTErr.
+void AxisModel::endOutage() {
   if (consecutive_lost_ >= 3) {
     awaiting_timeout_report_ = true;
     last_outage_cycles_ = consecutive_lost_;
   }
   consecutive_lost_ = 0;
-  consecutive_failed_ = 0;
 }
 
 void AxisModel::observe(const PdoValues& values, const Stamp& now) {
   now_ = now;
   illegal_enable_edge_ = false;
   inputs_now_ = values.has_tx;
+  inputs_in_al_state_ = inputs_in_al_state_ || values.has_tx;
   for (Signal* s : {&se_, &emgon_, &brake_, &zpulse_request_, &error_clear_, &servo_en_,
                     &servo_rdy_, &zpulse_ack_, &err_clear_ack_, &servo_errors_, &ecat_timeout_}) {
     s->clearEdges();

@@ -276,7 +276,7 @@ bool esm002(const AxisModel& a, const RuleSettings&) {
   if (!a.alState()) return false;
   const std::uint8_t state = *a.alState();
   const bool enabling = a.knowsOutputs() && a.se().value != 0 && state != kAlOp;
-  const bool inputs = a.inputsInThisFrame() && state != kAlOp && state != kAlSafeOp;
+  const bool inputs = a.inputsInAlState() && state != kAlOp && state != kAlSafeOp;
   return enabling || inputs;
 }
 std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {

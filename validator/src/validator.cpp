@@ -194,6 +194,12 @@ void Validator::accountCycle(const FrameView& view, const EcatFrame& frame) {
 // One tick of a cyclic frame's clock: the interval statistics and COM-002.
 void Validator::tick(CyclicFrame& cyclic, const FrameView& view) {
   if (cyclic.first_axis == cyclic_.front().first_axis) ++cycles_;
+  // RULES.md "Time": a timestamp that went backwards is not an error; the interval it would
+  // give is unknown, so the clock of this cyclic frame starts again at the next tick.
+  if (frame_time_ns_ < now_.time_ns) {
+    cyclic.last_tick.reset();
+    return;
+  }
   if (!cyclic.last_tick) {
     cyclic.last_tick = now_;
     return;

@@ -69,9 +69,14 @@ class AxisModel {
   }
   // The AL state of the axis's slave, where the capture shows it (PROTOCOL.md §8; ESM-002).
   void setAlState(std::optional<std::uint8_t> state) {
-    if (state != al_state_) ++revision_;
+    if (state != al_state_) {
+      ++revision_;
+      inputs_in_al_state_ = false;
+    }
     al_state_ = state;
   }
+  // Inputs were exchanged since the AL state last changed (ESM-002).
+  bool inputsInAlState() const { return inputs_in_al_state_; }
   // Counts changes made other than by observe(): an unchanged revision and unchanged words
   // mean the rules' conditions are unchanged too.
   std::uint64_t revision() const { return revision_; }
@@ -137,12 +142,14 @@ class AxisModel {
   void observeInputs(const PdoValues& values, const Stamp& now);
   void updateState(const Stamp& now);
   void copyWords(Pdo pdo, const PdoValues& values);
+  void endOutage();
 
   std::uint16_t index_;
   std::uint64_t revision_ = 0;
   Stamp now_;
   bool inputs_now_ = false;
   std::optional<std::uint8_t> al_state_;
+  bool inputs_in_al_state_ = false;
   PdoValues latest_;
 
   bool illegal_enable_edge_ = false;
