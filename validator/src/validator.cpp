@@ -76,10 +76,15 @@ const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t tim
 
   const FrameView& view = session_.onFrame(frame, bytes);
   observeAl(frame, bytes, view);
+  // Every slot first (slot() may grow axes_), then pointers to them for this frame.
+  for (std::size_t i = 0; i < view.axis_count; ++i) slot(view.axes[i].placement.axis);
+  for (std::size_t i = 0; i < view.axis_count; ++i) {
+    frame_slots_[i] = &axes_[view.axes[i].placement.axis];
+  }
   if (view.axis_count > 0) accountCycle(view, frame);
   for (std::size_t i = 0; i < view.axis_count; ++i) {
     const AxisFrameView& a = view.axes[i];
-    AxisSlot& s = slot(a.placement.axis);
+    AxisSlot& s = *frame_slots_[i];
     const AxisInfo* info =
         a.placement.axis < decoder().axes().size() ? &decoder().axes()[a.placement.axis] : nullptr;
     if (info != nullptr && !info->logical) {
@@ -216,7 +221,7 @@ void Validator::tick(CyclicFrame& cyclic, const FrameView& view) {
                        static_cast<double>(interval) / 1e6, cyclic.last_tick->frame,
                        static_cast<double>(*median) / 1e6, missing, missing == 1 ? "" : "s"));
     for (std::size_t i = 0; i < view.axis_count; ++i) {
-      if (missing > 0) slot(view.axes[i].placement.axis).model->cycleFailed(true, missing, now_);
+      if (missing > 0) frame_slots_[i]->model->cycleFailed(true, missing, now_);
     }
   }
   intervals_.add(interval);
@@ -294,7 +299,7 @@ void Validator::checkWorkingCounters(const FrameView& view, const EcatFrame& fra
     }
   }
   for (std::size_t i = 0; i < view.axis_count; ++i) {
-    AxisModel& model = *slot(view.axes[i].placement.axis).model;
+    AxisModel& model = *frame_slots_[i]->model;
     if (outcome[i] == kGood) {
       model.cycleOk(now_);
     } else {

@@ -86,6 +86,7 @@ class Validator {
   AlTracker al_;
   std::vector<AlFinding> al_findings_;
   std::vector<AxisSlot> axes_;
+  std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
   std::vector<CyclicFrame> cyclic_;
   std::vector<WkcRecord> wkc_;
   IntervalStats intervals_;
