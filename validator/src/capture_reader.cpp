@@ -3,6 +3,10 @@
 #include <fmt/format.h>
 #include <pcap/pcap.h>
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
 namespace ncservo {
 
 CaptureReader::~CaptureReader() {
@@ -10,15 +14,24 @@ CaptureReader::~CaptureReader() {
 }
 
 std::unique_ptr<CaptureReader> CaptureReader::open(const std::string& path, std::string& error) {
-  char errbuf[PCAP_ERRBUF_SIZE] = {};
-  pcap_t* handle =
-      pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, errbuf);
   const std::string name = path == "-" ? "standard input" : path;
-  if (handle == nullptr) {
-    error = fmt::format("{}: cannot read capture: {}", name, errbuf);
+  std::FILE* file = path == "-" ? stdin : std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    error = fmt::format("{}: cannot read capture: {}", name, std::strerror(errno));
     return nullptr;
   }
   std::unique_ptr<CaptureReader> reader(new CaptureReader());
+  // A large stdio buffer: hours-long captures are read in few system calls.
+  reader->buffer_ = std::make_unique<char[]>(kReadBufferSize);
+  std::setvbuf(file, reader->buffer_.get(), _IOFBF, kReadBufferSize);
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  pcap_t* handle =
+      pcap_fopen_offline_with_tstamp_precision(file, PCAP_TSTAMP_PRECISION_NANO, errbuf);
+  if (handle == nullptr) {
+    if (file != stdin) std::fclose(file);
+    error = fmt::format("{}: cannot read capture: {}", name, errbuf);
+    return nullptr;
+  }
   reader->handle_ = handle;
   reader->path_ = name;
   reader->dlt_ = pcap_datalink(handle);

@@ -41,6 +41,8 @@ class CaptureReader {
 
  private:
   CaptureReader() = default;
+  static constexpr std::size_t kReadBufferSize = 1 << 20;
+  std::unique_ptr<char[]> buffer_;  // the FILE's buffer: outlives the handle that closes it
   ::pcap* handle_ = nullptr;
   std::string path_;
   std::string error_;
