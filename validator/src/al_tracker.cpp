@@ -54,13 +54,12 @@ constexpr bool aboveInit(std::uint8_t state) {
 
 // Commands whose data the slaves write into (AL status is read by these) and commands whose data
 // the slaves take (AL control and the station address are written by these).
+// Register access reaches slaves through the physical commands, not the logical ones.
 constexpr bool readsSlave(std::uint8_t cmd) {
-  return cmd == ecat::kAprd || cmd == ecat::kAprw || cmd == ecat::kFprd || cmd == ecat::kFprw ||
-         cmd == ecat::kBrd || cmd == ecat::kBrw || cmd == ecat::kArmw || cmd == ecat::kFrmw;
+  return ecat::readsSlaves(cmd) && !ecat::isLogical(cmd);
 }
 constexpr bool writesSlave(std::uint8_t cmd) {
-  return cmd == ecat::kApwr || cmd == ecat::kAprw || cmd == ecat::kFpwr || cmd == ecat::kFprw ||
-         cmd == ecat::kBwr || cmd == ecat::kBrw;
+  return ecat::writesSlaves(cmd) && !ecat::isLogical(cmd);
 }
 constexpr bool isAutoIncrement(std::uint8_t cmd) {
   return cmd == ecat::kAprd || cmd == ecat::kApwr || cmd == ecat::kAprw || cmd == ecat::kArmw;

@@ -13,18 +13,11 @@ constexpr std::uint64_t kIntervalsBeforeGaps = 8;
 constexpr std::int64_t kGapNumerator = 3, kGapDenominator = 2;
 constexpr std::size_t kMaxWkcRecords = 64;
 
-bool reads(std::uint8_t cmd) {
-  return cmd != ecat::kLwr && cmd != ecat::kFpwr;
-}
-bool writes(std::uint8_t cmd) {
-  return cmd != ecat::kLrd && cmd != ecat::kFprd;
-}
-
 // PROTOCOL.md §8: an LRW/FPRW adds 2 for a slave whose outputs it writes and 1 for one whose
 // inputs it reads; LRD/LWR/FPRD/FPWR add 1 per slave.
 std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
   if (cmd == ecat::kLrw || cmd == ecat::kFprw) return (outputs ? 2 : 0) + (inputs ? 1 : 0);
-  return (outputs && writes(cmd)) || (inputs && reads(cmd)) ? 1 : 0;
+  return (outputs && ecat::writesSlaves(cmd)) || (inputs && ecat::readsSlaves(cmd)) ? 1 : 0;
 }
 }  // namespace
 

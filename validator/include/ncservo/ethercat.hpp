@@ -54,9 +54,15 @@ inline constexpr bool isConfiguredAddress(std::uint8_t cmd) {
 inline constexpr bool addressSurvivesRing(std::uint8_t cmd) {
   return isLogical(cmd) || isConfiguredAddress(cmd);
 }
+// Whether the addressed slaves' memory is written, and read, by a command (PROTOCOL.md §8).
+// ARMW/FRMW read one slave and write the others: counted as reads of the addressed one.
 inline constexpr bool writesSlaves(std::uint8_t cmd) {
   return cmd == kApwr || cmd == kAprw || cmd == kFpwr || cmd == kFprw || cmd == kBwr ||
          cmd == kBrw || cmd == kLwr || cmd == kLrw;
+}
+inline constexpr bool readsSlaves(std::uint8_t cmd) {
+  return cmd == kAprd || cmd == kAprw || cmd == kFprd || cmd == kFprw || cmd == kBrd ||
+         cmd == kBrw || cmd == kLrd || cmd == kLrw || cmd == kArmw || cmd == kFrmw;
 }
 const char* commandName(std::uint8_t cmd);
 
