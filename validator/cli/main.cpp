@@ -187,10 +187,7 @@ int runDecode(const std::string& path, const std::optional<Config>& config, bool
     return kExitCapture;
   }
   if (session.decoder().axes().empty()) {
-    fmt::print(stderr, "ncservo: {}: no servo of this protocol found ({})\n", reader->path(),
-               session.decoder().startupShowsNoServo()
-                   ? "the start-up configures slaves, none with 10/40-byte sync managers"
-                   : "no datagram matches the default layout; give the layout in a --config file");
+    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session.decoder().noServoReason());
   }
   return kExitOk;
 }
@@ -330,13 +327,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     }
   }
   cli::summarise(validator, report);
-  if (validator.decoder().axes().empty()) {
-    report.note = validator.decoder().startupShowsNoServo()
-                      ? "no servo of this protocol: the start-up configures slaves, none with "
-                        "10/40-byte sync managers"
-                      : "no servo of this protocol found: no datagram matches the default layout; "
-                        "give the layout in a --config file";
-  }
+  if (validator.decoder().axes().empty()) report.note = validator.decoder().noServoReason();
   int rc = kExitOk;
   if (status == CaptureReader::Next::Error) {
     report.error = reader->error() + " (the frames before it were analysed)";

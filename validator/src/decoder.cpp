@@ -76,6 +76,20 @@ Decoder::Decoder(DecoderOptions options) : options_(std::move(options)) {
   }
 }
 
+std::string Decoder::noServoReason() const {
+  if (!axes_.empty()) return {};
+  if (startupShowsNoServo()) {
+    return "no servo of this protocol found: the start-up configures slaves, none with 10/40-byte "
+           "sync managers (PROTOCOL.md §9.3)";
+  }
+  if (!options_.default_layout) {
+    return "no servo of this protocol found: the default layout is off; give the layout in a "
+           "--config file";
+  }
+  return "no servo of this protocol found: no datagram matches the default layout (PROTOCOL.md "
+         "§9.4); give the layout in a --config file";
+}
+
 LayoutSource Decoder::source() const {
   if (!options_.axes.empty()) return LayoutSource::Config;
   if (!default_keys_.empty()) return LayoutSource::Default;
@@ -239,8 +253,8 @@ void Decoder::placeConfigured(const EcatFrame& frame, FrameDecode& out) {
     const bool fp =
         dg.command == ecat::kFprd || dg.command == ecat::kFpwr || dg.command == ecat::kFprw;
     if (!logical && !fp) continue;
-    const bool writes = dg.command != ecat::kLrd && dg.command != ecat::kFprd;
-    const bool reads = dg.command != ecat::kLwr && dg.command != ecat::kFpwr;
+    const bool writes = ecat::writesSlaves(dg.command);
+    const bool reads = ecat::readsSlaves(dg.command);
     const std::uint64_t base = logical ? dg.address : dg.ado();
     for (std::size_t a = 0; a < options_.axes.size(); ++a) {
       const AxisConfig& axis = options_.axes[a];

@@ -71,6 +71,8 @@ class Decoder {
   const std::vector<AxisInfo>& axes() const { return axes_; }
   // A start-up configured slaves' sync managers and none is a servo of this protocol.
   bool startupShowsNoServo() const { return sm_slaves_ > 0 && !servo_seen_; }
+  // Why no axis was found, for a person (empty while axes are known).
+  std::string noServoReason() const;
 
  private:
   struct DefaultKey {
