@@ -139,7 +139,6 @@ void AxisModel::endOutage() {
 void AxisModel::observe(const PdoValues& values, const Stamp& now) {
   now_ = now;
   illegal_enable_edge_ = false;
-  inputs_now_ = values.has_tx;
   inputs_in_al_state_ = inputs_in_al_state_ || values.has_tx;
   for (Signal* s : {&se_, &emgon_, &brake_, &zpulse_request_, &error_clear_, &servo_en_,
                     &servo_rdy_, &zpulse_ack_, &err_clear_ack_, &servo_errors_, &ecat_timeout_}) {

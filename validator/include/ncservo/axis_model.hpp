@@ -94,7 +94,6 @@ class AxisModel {
   const PdoValues& latest() const { return latest_; }
   bool knowsOutputs() const { return latest_.has_rx; }
   bool knowsInputs() const { return latest_.has_tx; }
-  bool inputsInThisFrame() const { return inputs_now_; }
 
   // SCW.SE this frame moved to 0x2 from something other than 0x1 (SE-001).
   bool illegalEnableEdge() const { return illegal_enable_edge_; }
@@ -147,7 +146,6 @@ class AxisModel {
   std::uint16_t index_;
   std::uint64_t revision_ = 0;
   Stamp now_;
-  bool inputs_now_ = false;
   std::optional<std::uint8_t> al_state_;
   bool inputs_in_al_state_ = false;
   PdoValues latest_;
