@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -13,11 +14,13 @@
 #include <vector>
 
 #include "ncservo/capture_reader.hpp"
+#include "ncservo/capture_writer.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
+#include "ncservo/simulator.hpp"
 #include "ncservo/validator.hpp"
 #include "report.hpp"
 
@@ -398,6 +401,92 @@ void printRules(const std::string& format) {
   }
 }
 
+struct SimulateArgs {
+  sim::SimOptions options;
+  std::string scenario = "commissioning";
+  std::string layout = "default";
+  std::string output;
+  std::string format;  // pcap, pcapng; default from the file name
+  std::vector<std::string> faults;
+  std::string layout_config;
+  bool no_startup = false;
+  bool list_faults = false;
+};
+
+void printFaults() {
+  fmt::print("{:<8} {:<11} {}\n", "rule", "companions", "what the simulator does");
+  for (const RuleDef& rule : kRules) {
+    std::string companions;
+    for (RuleId c : sim::companionsOf(rule.id)) {
+      companions += (companions.empty() ? "" : ",") + std::string(ruleDef(c).code);
+    }
+    fmt::print("{:<8} {:<11} {}\n", rule.code, companions.empty() ? "-" : companions,
+               sim::faultDescription(rule.id));
+  }
+}
+
+int runSimulate(SimulateArgs& args) {
+  if (args.list_faults) {
+    printFaults();
+    return kExitOk;
+  }
+  if (args.output.empty()) {
+    fmt::print(
+        stderr,
+        "ncservo simulate: give the capture to write with -o FILE (- for standard output)\n");
+    return kExitUsage;
+  }
+  sim::SimOptions& o = args.options;
+  o.scenario = *sim::scenarioFromName(args.scenario);
+  o.layout = args.layout == "interleaved" ? sim::LayoutKind::Interleaved : sim::LayoutKind::Default;
+  o.startup = !args.no_startup;
+  for (const std::string& text : args.faults) {
+    std::string error;
+    auto fault = sim::parseFault(text, error);
+    if (!fault) {
+      fmt::print(stderr, "ncservo simulate: {}\n", error);
+      return kExitUsage;
+    }
+    o.faults.push_back(std::move(*fault));
+  }
+  if (std::string error = sim::resolveOptions(o); !error.empty()) {
+    fmt::print(stderr, "ncservo simulate: {}\n", error);
+    return kExitUsage;
+  }
+  const bool pcapng = args.format.empty()
+                          ? args.output.size() >= 7 &&
+                                args.output.compare(args.output.size() - 7, 7, ".pcapng") == 0
+                          : args.format == "pcapng";
+  sim::Simulator simulator(o);
+  if (!args.layout_config.empty()) {
+    std::ofstream out(args.layout_config);
+    out << simulator.layoutConfig();
+    if (!out.flush()) {
+      fmt::print(stderr, "ncservo simulate: {}: cannot write the layout\n", args.layout_config);
+      return kExitUsage;
+    }
+  }
+  std::string error;
+  auto writer =
+      CaptureWriter::open(args.output, pcapng ? CaptureFormat::Pcapng : CaptureFormat::Pcap, error);
+  if (!writer) {
+    fmt::print(stderr, "ncservo simulate: {}\n", error);
+    return kExitCapture;
+  }
+  const auto frames = simulator.run([&](const sim::SimFrame& frame) {
+    return writer->write(frame.time_ns, frame.data, frame.size);
+  });
+  if (!writer->close(error) || !frames) {
+    fmt::print(stderr, "ncservo simulate: {}\n",
+               error.empty() ? args.output + ": write failed" : error);
+    return kExitCapture;
+  }
+  if (args.output != "-") {
+    fmt::print(stderr, "ncservo simulate: wrote {} frames to {}\n", *frames, args.output);
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -453,6 +542,38 @@ int main(int argc, char** argv) {
   fields->add_option("--format", fields_format, "tsv or markdown")
       ->check(CLI::IsMember({"tsv", "markdown"}));
 
+  SimulateArgs sa;
+  auto* simulate = app.add_subcommand(
+      "simulate", "write a capture of simulated NC and drives (scenarios, faults)");
+  simulate->add_option("-o,--output", sa.output, "capture to write, - for standard output");
+  simulate->add_option("--scenario", sa.scenario, "commissioning, faults or soak")
+      ->check(CLI::IsMember({"commissioning", "faults", "soak"}));
+  simulate->add_option("--axes", sa.options.axes, "servo axes, 1 to 32 (default 4)");
+  simulate->add_option("--io-slaves", sa.options.io_slaves,
+                       "8-bit digital output/input terminals sharing the LRW (default 0)");
+  simulate->add_option("--cycle-us", sa.options.cycle_us,
+                       "cycle time, 125 to 10000 (default 1000)");
+  simulate->add_option("--duration", sa.options.duration_s,
+                       "seconds (default: commissioning 3, faults 4.3, soak 60)");
+  simulate->add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
+  simulate->add_option("--layout", sa.layout, "default (PROTOCOL.md §9.4) or interleaved")
+      ->check(CLI::IsMember({"default", "interleaved"}));
+  simulate->add_flag("--no-startup", sa.no_startup,
+                     "begin with the slaves already in OP (no start-up traffic)");
+  simulate->add_option("--format", sa.format, "pcap or pcapng (default: from the file name)")
+      ->check(CLI::IsMember({"pcap", "pcapng"}));
+  simulate->add_option(
+      "--fault", sa.faults,
+      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
+  simulate->add_option("--ready-mode", sa.options.ready_mode,
+                       "the drives' Servo_Ready_Mode, 0 or 1");
+  simulate->add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
+  simulate->add_option("--loss", sa.options.loss,
+                       "probability that a returned frame is lost (COM-004 findings)");
+  simulate->add_option("--layout-config", sa.layout_config,
+                       "also write the layout as a configuration file for validate --config");
+  simulate->add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -460,6 +581,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? kExitOk : kExitUsage;
   }
 
+  if (simulate->parsed()) return runSimulate(sa);
   if (fields->parsed()) {
     printFields(fields_format);
     return kExitOk;

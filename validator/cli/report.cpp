@@ -55,7 +55,7 @@ Json captureJson(const CaptureReport& r) {
   Json layout_axes = Json::array();
   for (const AxisInfo& info : r.layout) {
     Json a{{"index", info.index}, {"name", info.name}};
-    if (!info.logical) a["station"] = fmt::format("0x{:04X}", info.station);
+    if (info.has_station) a["station"] = fmt::format("0x{:04X}", info.station);
     a["outputs"] = hex32(info.outputs);
     a["inputs"] = hex32(info.inputs);
     layout_axes.push_back(std::move(a));

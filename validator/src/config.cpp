@@ -96,18 +96,18 @@ void readAxis(Checker& check, const toml::table& table, std::size_t index, Confi
     if (check.failed()) return;
   }
   const bool logical = axis.outputs || axis.inputs;
-  const bool physical = axis.station || axis.sm_outputs || axis.sm_inputs;
+  const bool physical = axis.physical();
   if (logical && physical) {
     check.fail(table, prefix,
-               "give either logical addresses (outputs/inputs) or a station with SM addresses "
-               "(station/sm_outputs/sm_inputs), not both");
+               "give either logical addresses (outputs/inputs, optionally with station) or a "
+               "station with SM addresses (station/sm_outputs/sm_inputs), not both");
     return;
   }
   if (!logical && !physical) {
     check.fail(table, prefix, "needs outputs/inputs or station/sm_outputs/sm_inputs");
     return;
   }
-  if (physical && (!axis.station || !(axis.sm_outputs || axis.sm_inputs))) {
+  if (physical && !axis.station) {
     check.fail(table, prefix, "a station axis needs station and sm_outputs and/or sm_inputs");
     return;
   }

@@ -68,7 +68,8 @@ Decoder::Decoder(DecoderOptions options) : options_(std::move(options)) {
     AxisInfo info;
     info.index = static_cast<std::uint16_t>(i);
     info.name = axis.name.empty() ? fmt::format("axis{}", i) : axis.name;
-    info.logical = !axis.station.has_value();
+    info.logical = !axis.physical();
+    info.has_station = axis.station.has_value();
     info.outputs = info.logical ? axis.outputs.value_or(0) : axis.sm_outputs.value_or(0);
     info.inputs = info.logical ? axis.inputs.value_or(0) : axis.sm_inputs.value_or(0);
     info.station = axis.station.value_or(0);
@@ -259,7 +260,7 @@ void Decoder::placeConfigured(const EcatFrame& frame, FrameDecode& out) {
     for (std::size_t a = 0; a < options_.axes.size(); ++a) {
       const AxisConfig& axis = options_.axes[a];
       const auto axis_index = static_cast<std::uint16_t>(a);
-      if (logical != !axis.station.has_value()) continue;
+      if (logical == axis.physical()) continue;
       if (fp && *axis.station != dg.adp()) continue;
       const auto outputs = logical ? std::optional<std::uint64_t>(axis.outputs)
                                    : std::optional<std::uint64_t>(axis.sm_outputs);

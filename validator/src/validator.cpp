@@ -80,7 +80,7 @@ const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t tim
     AxisSlot& s = *frame_slots_[i];
     const AxisInfo* info =
         a.placement.axis < decoder().axes().size() ? &decoder().axes()[a.placement.axis] : nullptr;
-    if (info != nullptr && !info->logical) {
+    if (info != nullptr && info->has_station) {
       s.model->setAlState(al_.stateOfStation(info->station));
       if (al_.enteredOp(info->station)) s.model->enteredOp();
     }
@@ -132,7 +132,7 @@ void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes, const
   for (AlFinding& f : al_findings_) {
     std::optional<std::uint16_t> axis;
     for (const AxisInfo& info : decoder().axes()) {
-      if (!info.logical && f.station && info.station == *f.station) axis = info.index;
+      if (info.has_station && f.station && info.station == *f.station) axis = info.index;
     }
     report(f.rule, axis, now_, std::move(f.message));
   }

@@ -20,6 +20,10 @@ struct AxisConfig {
   std::optional<std::uint16_t> sm_outputs;
   std::optional<std::uint16_t> sm_inputs;
   std::optional<int> servo_ready_mode;
+
+  // Exchanged with FPRD/FPWR at SM addresses; else logical. A logical axis may still name its
+  // station, which ties it to that slave's AL state (ESM-002).
+  bool physical() const { return sm_outputs.has_value() || sm_inputs.has_value(); }
 };
 
 struct Config {

@@ -28,6 +28,7 @@ struct AxisInfo {
   std::uint32_t outputs = 0;
   std::uint32_t inputs = 0;
   std::uint16_t station = 0;
+  bool has_station = false;  // station known: the axis's AL state can be followed
 };
 
 // Where one axis's PDOs sit in one frame. Offsets are into the bytes given to the walker.

@@ -1,0 +1,288 @@
+// The two ends of the simulated link, stepped once per cycle: a drive that answers as
+// PROTOCOL.md §1–7 say, and an NC axis that commands a commissioning session. Both are pure
+// functions of their inputs, their seed and the misbehaviours armed in them (the simulator's
+// faults), so tests can drive them step by step. No EtherCAT here: the bus is simulator.hpp.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ncservo/fields.hpp"
+
+namespace ncservo::sim {
+
+// SplitMix64: a seeded generator whose output is the same on every platform (the standard
+// library's distributions are not), so a capture is a pure function of the options.
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : state_(seed) {}
+  std::uint64_t next() {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+  // [lo, hi], both inclusive
+  std::int64_t between(std::int64_t lo, std::int64_t hi) {
+    return lo + static_cast<std::int64_t>(next() % static_cast<std::uint64_t>(hi - lo + 1));
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+// The PDO values of PROTOCOL.md §1 (the bus model writes them little-endian).
+struct RxPdo {
+  std::int32_t ssp = 0;
+  std::uint32_t scw = 0;
+  std::int16_t ext_code = 0;
+};
+struct TxPdo {
+  std::int64_t actpos = 0;
+  std::uint32_t ssw = 0;
+  std::uint32_t sew = 0;
+  std::int32_t msg_code = 0;
+  float msg_data = 0;
+  std::array<float, 4> ext_data{};
+};
+void encodeRx(const RxPdo& pdo, std::uint8_t* out);  // 10 bytes
+void encodeTx(const TxPdo& pdo, std::uint8_t* out);  // 40 bytes
+RxPdo decodeRx(const std::uint8_t* in);              // 10 bytes
+
+// Bits of the words, from the field table (one table, no drift).
+namespace bits {
+inline constexpr std::uint32_t kSe = mask32("ncservo.scw.se");
+inline constexpr std::uint32_t kEmgon = mask32("ncservo.scw.emgon");
+inline constexpr std::uint32_t kScwPrmtbl = mask32("ncservo.scw.prmtbl");
+inline constexpr std::uint32_t kErrorClear = mask32("ncservo.scw.error_clear");
+inline constexpr std::uint32_t kBrake = mask32("ncservo.scw.brake");
+inline constexpr std::uint32_t kZPulseRequest = mask32("ncservo.scw.zpulse_request");
+inline constexpr std::uint32_t kScwExtPrmtbl = mask32("ncservo.scw.ext_prmtbl");
+inline constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
+inline constexpr std::uint32_t kServoEn = mask32("ncservo.ssw.servo_en");
+inline constexpr std::uint32_t kServoRdy = mask32("ncservo.ssw.servo_rdy");
+inline constexpr std::uint32_t kIncremental = mask32("ncservo.ssw.incremental");
+inline constexpr std::uint32_t kZPulseAck = mask32("ncservo.ssw.zpulse_ack");
+inline constexpr std::uint32_t kErrClearAck = mask32("ncservo.ssw.err_clear_ack");
+inline constexpr std::uint32_t kNZero = mask32("ncservo.ssw.n_zero");
+inline constexpr std::uint32_t kNSetpoint = mask32("ncservo.ssw.n_setpoint");
+inline constexpr std::uint32_t kPulseEnabled = mask32("ncservo.ssw.pulse_enabled");
+inline constexpr std::uint32_t kSswPrmtbl = mask32("ncservo.ssw.prmtbl");
+inline constexpr std::uint32_t kSswExtPrmtbl = mask32("ncservo.ssw.ext_prmtbl");
+inline constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
+inline constexpr std::uint32_t kServoErrors = mask32("ncservo.sew.servo_errors");
+inline constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
+inline constexpr std::uint32_t kEcatTimeout = mask32("ncservo.sew.ecat_timeout");
+inline constexpr std::uint32_t kFollowing = mask32("ncservo.sew.following");
+inline constexpr std::uint32_t kOverload = mask32("ncservo.sew.overload");
+// Every cause bit: all of the SEW but the summary and the reserved bits.
+inline constexpr std::uint32_t kSewCauses = ~(kServoErrors | kSewReserved);
+
+inline constexpr std::uint32_t kSeEnable = 0x2;  // reached from 0x1 only (PROTOCOL.md §2)
+inline constexpr std::uint32_t kSePrepare = 0x1;
+
+// Parameter table number 1..8 <-> the SCW/SSW bits (table = ExtPRMTBL·4 + PRMTBL + 1).
+std::uint32_t scwTable(int table);
+std::uint32_t sswTable(int table);
+int tableOfScw(std::uint32_t scw);
+}  // namespace bits
+
+inline constexpr double kSspPerRpm = 100.0;  // SSP unit: 0.01 rpm (this simulator's choice)
+
+// How a simulated drive breaks the protocol (each one makes one rule of RULES.md fire).
+// A misbehaviour is armed from a time on and applies to the first occasion after it.
+enum class DriveQuirk : std::uint8_t {
+  SpuriousEnable,       // SE-002: ServoEn rises for a moment without a valid enable
+  LateDisable,          // SE-003: stays enabled long after the enable ended
+  IgnoreEnable,         // SE-004: does not enable although ready
+  HoldZPulseAck,        // ZP-001: keeps ZPulseAck after the request fell
+  SpuriousZPulseAck,    // ZP-002: ZPulseAck pulse with no request
+  SpuriousClearAck,     // EC-001: ErrClearAck pulse with no ErrorClear
+  HoldClearAck,         // EC-003: keeps ErrClearAck after ErrorClear fell
+  IgnoreClear,          // EC-004: does not acknowledge an error clear
+  CauseWithoutSummary,  // SEW-001: a cause bit with SEW bit 0 clear
+  SummaryWithoutCause,  // SEW-002: SEW bit 0 with no cause
+  ReservedErrorBit,     // SEW-003: a reserved SEW bit
+  ReservedStatusBit,    // SSW-001: a reserved SSW bit
+  ReadyInverted,        // RDY-001: ServoRDY against the Servo_Ready_Mode table
+  SlowFaultReaction,    // FLT-001: stays enabled with an error
+  IgnoreTable,          // PT-001: does not follow a parameter table change
+  UndefinedMessage,     // MSG-001: message code 7
+  SilentTimeout,        // COM-003: no ECatTErr after lost cycles
+};
+
+struct DriveSetup {
+  int axis = 0;
+  bool incremental = false;  // incremental encoder (zero-pulse search), else absolute
+  int ready_mode = 0;        // Servo_Ready_Mode (PROTOCOL.md §5)
+  std::uint64_t seed = 1;
+};
+
+class DriveModel {
+ public:
+  static constexpr std::int64_t kIncrementalCountsPerRev = 10000;  // 2500 lines, x4
+  static constexpr std::int64_t kAbsoluteCountsPerRev = 1 << 20;   // 20-bit single turn
+
+  explicit DriveModel(const DriveSetup& setup);
+
+  // One cycle: the outputs the drive took (nullptr when the cycle's frame did not reach it)
+  // and the time. The result is what it writes into the next frame.
+  void step(const RxPdo* outputs, std::int64_t now_ns);
+  const TxPdo& inputs() const { return inputs_; }
+  // Outputs are ignored outside OP (the slave is in SAFE-OP: inputs only).
+  void setOperational(bool op) { operational_ = op; }
+  // A drive fault: the cause bit rises now (orderly reaction follows).
+  void raiseFault(std::uint32_t cause_bit) { pending_faults_ |= cause_bit; }
+  void arm(DriveQuirk quirk, std::int64_t from_ns);
+
+  bool enabled() const { return enabled_; }
+  double speedRpm() const { return speed_rpm_; }
+
+ private:
+  struct Armed {
+    DriveQuirk quirk;
+    std::int64_t from_ns;
+    std::int64_t until_ns = -1;  // set when it takes effect; -1 while waiting
+    bool done = false;
+  };
+  Armed* active(DriveQuirk quirk, std::int64_t now_ns);                   // armed and due
+  bool fire(DriveQuirk quirk, std::int64_t now_ns, std::int64_t for_ns);  // starts a window
+  bool within(DriveQuirk quirk, std::int64_t now_ns);                     // inside a started window
+  void updateEnable(const RxPdo& rx, std::int64_t now_ns);
+  void updateHandshakes(const RxPdo& rx, std::int64_t now_ns);
+  void updateMotion(const RxPdo& rx, double dt);
+  void buildInputs(const RxPdo& rx, std::int64_t now_ns);
+
+  DriveSetup setup_;
+  Rng rng_;
+  std::vector<Armed> quirks_;
+  bool operational_ = true;
+  std::int64_t last_ns_ = -1;
+  RxPdo last_rx_{0, bits::kEmgon | bits::kBrake, 0};  // outputs last taken
+  std::uint64_t cycle_ = 0;
+  // enable (PROTOCOL.md §2)
+  std::uint32_t last_se_ = 0;
+  bool valid_enable_ = false;
+  bool enabled_ = false;
+  std::int64_t last_enable_end_ns_ = 0;  // last time a valid enable was seen
+  std::int64_t want_since_ns_ = -1;      // enable wanted (valid, ready) since
+  std::int64_t enable_after_ns_ = 0;
+  std::int64_t unwant_since_ns_ = -1;  // valid enable gone since
+  std::int64_t disable_after_ns_ = 0;
+  std::int64_t reaction_ns_ = -1;  // this fault's reaction time
+  std::int64_t spurious_until_ns_ = -1;
+  std::int64_t enable_delay_ns_;
+  std::int64_t disable_delay_ns_;
+  std::int64_t fault_reaction_ns_;
+  // errors (PROTOCOL.md §4, §7)
+  std::uint32_t causes_ = 0;          // latched cause bits
+  std::uint32_t pending_faults_ = 0;  // raised, latched at the next step
+  std::int64_t fault_since_ns_ = -1;
+  int missed_cycles_ = 0;
+  // zero-pulse handshake
+  bool zp_ack_ = false;
+  bool zp_searching_ = false;
+  std::int64_t zp_release_ns_ = -1;       // request fell: the ack drops at this time
+  std::int64_t zp_request_since_ns_ = 0;  // last time the request was seen
+  std::int64_t zp_spurious_until_ns_ = -1;
+  std::optional<std::int32_t> zero_pulse_;  // position latched at the last zero pulse
+  // error-clear handshake
+  bool clear_ack_ = false;
+  std::int64_t clear_since_ns_ = -1;  // ErrorClear seen since
+  std::int64_t clear_after_ns_ = 0;
+  std::int64_t clear_release_ns_ = -1;
+  std::int64_t clear_request_since_ns_ = 0;  // last time ErrorClear was seen
+  std::int64_t clear_spurious_until_ns_ = -1;
+  // parameter table
+  int table_ = 1;
+  int table_target_ = 1;
+  std::int64_t table_since_ns_ = -1;
+  std::int64_t table_after_ns_ = 0;
+  std::int64_t table_delay_ns_;
+  // motion
+  double speed_rpm_ = 0;
+  double position_ = 0;  // encoder counts
+  double accel_ = 0;     // rpm/s, for the current
+  double current_a_ = 0;
+  double temperature_c_ = 35.0;
+  TxPdo inputs_;
+};
+
+// What the NC's plan asks of one axis at a time (the scenario).
+enum class NcAction : std::uint8_t {
+  Enable,     // SE 0x0 -> 0x1 -> 0x2, wait for ServoEn
+  Disable,    // SE 0x2 -> 0x1 -> 0x0
+  Speed,      // new speed target (value: rpm)
+  ZeroPulse,  // zero-pulse search (incremental encoder)
+  Table,      // parameter table (value: 1..8)
+  Emergency,  // EMGON 0 for value milliseconds, speed to zero
+  // misbehaviours of the NC (each makes one rule of RULES.md fire)
+  IllegalEnable,      // SE-001: SE 0x0 -> 0x2
+  ZeroPulseAbsolute,  // ZP-003: ZPulseRequest on an absolute axis (value: ms)
+  HoldErrorClear,     // EC-002: the next ErrorClear is held value ms after ErrClearAck
+  ReservedBit,        // SCW-001: SCW bit 20 for value cycles
+};
+
+struct NcEvent {
+  std::int64_t at_ns;
+  NcAction action;
+  double value = 0;
+};
+
+class NcAxis {
+ public:
+  NcAxis(int axis, bool incremental);
+  // Events in any order; they run at the first cycle at or after their time.
+  void schedule(const NcEvent& event);
+  // One cycle: the latest inputs the NC received (nullptr: none yet or not valid), the time.
+  RxPdo step(const TxPdo* inputs, std::int64_t now_ns);
+  // Outside OP the NC sends neutral outputs (SE 0), unless told to misbehave (ESM-002).
+  void setOperational(bool op) { operational_ = op; }
+  void setEnableBeforeOp(bool on) { enable_before_op_ = on; }
+  std::size_t pendingEvents() const { return events_.size(); }
+
+ private:
+  enum class Phase : std::uint8_t {
+    Off,
+    Prepare,   // SE 0x1 before 0x2
+    Enabling,  // SE 0x2, waiting for ServoEn
+    On,
+    FaultWait,  // drive reports an error: SE held until the drive is off
+    Clearing,   // ErrorClear 1 until ErrClearAck
+    Releasing,  // ErrorClear 0 until ErrClearAck falls
+    Disabling,  // SE 0x1, then 0x0
+  };
+  void runEvents(std::int64_t now_ns);
+  void enter(Phase phase, std::int64_t now_ns);
+
+  int axis_;
+  bool incremental_;
+  std::vector<NcEvent> events_;  // sorted by time, newest last
+  Phase phase_ = Phase::Off;
+  std::int64_t phase_since_ns_ = 0;
+  int phase_cycles_ = 0;
+  std::int64_t last_ns_ = -1;
+  bool operational_ = true;
+  bool enable_before_op_ = false;
+  bool want_on_ = false;  // the plan wants the axis enabled
+  bool illegal_next_ = false;
+  std::uint32_t se_ = 0;
+  bool emgon_ = true;
+  std::int64_t emergency_until_ns_ = -1;
+  double target_rpm_ = 0;
+  double ssp_rpm_ = 0;  // ramped set point
+  int table_ = 1;
+  bool zp_request_ = false;
+  std::int64_t zp_since_ns_ = -1;
+  std::int64_t zp_abs_until_ns_ = -1;
+  bool error_clear_ = false;
+  std::int64_t hold_clear_ns_ = 0;  // EC-002 misbehaviour: hold ErrorClear this long
+  std::int64_t ack_seen_ns_ = -1;
+  int reserved_cycles_ = 0;
+};
+
+}  // namespace ncservo::sim

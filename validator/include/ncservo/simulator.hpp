@@ -1,0 +1,104 @@
+// `ncservo simulate`: an EtherCAT master, its slaves and the NC/drive models (sim_models.hpp)
+// producing a capture whose truth is known. The output is a pure function of the options.
+//
+// The master does what real masters do (PROTOCOL.md §8): counts the slaves, assigns station
+// addresses, walks every slave INIT -> PRE-OP -> SAFE-OP -> OP with AL status polls, configures
+// SM2/SM3 and FMMUs, then exchanges process data once per cycle in an LRW with a DC FRMW to
+// 0x0910. Each frame is captured twice: the master's copy and the copy the ring returns. The
+// slaves are small ESC models with register memory: FMMUs, sync managers and AL control work
+// from what the master wrote, so the capture is consistent by construction.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ncservo/rules.hpp"
+
+namespace ncservo::sim {
+
+enum class Scenario : std::uint8_t { Commissioning, Faults, Soak };
+enum class LayoutKind : std::uint8_t {
+  Default,      // PROTOCOL.md §9.4: all outputs, then all inputs
+  Interleaved,  // per slave in ring order: its outputs, then its inputs
+};
+std::optional<Scenario> scenarioFromName(std::string_view name);
+const char* scenarioName(Scenario scenario);
+
+// --fault RULE[@SECONDS][:AXIS]
+struct FaultRequest {
+  RuleId rule{};
+  std::optional<double> at_s;  // capture time; default: the scenario's quiet time
+  std::optional<int> axis;     // default: an axis that suits the rule
+  std::string text;            // as given, for messages
+};
+// The fault, or a message saying what is wrong with the text.
+std::optional<FaultRequest> parseFault(std::string_view text, std::string& error);
+
+// Other rules a fault necessarily fires as well (captures/README.md documents them).
+std::vector<RuleId> companionsOf(RuleId rule);
+// One line: what the simulator does to make the rule fire.
+const char* faultDescription(RuleId rule);
+
+struct SimOptions {
+  Scenario scenario = Scenario::Commissioning;
+  int axes = 4;                      // servos, 1..32
+  int io_slaves = 0;                 // 8-bit digital output/input terminals sharing the LRW, 0..32
+  int cycle_us = 1000;               // 125..10000
+  std::optional<double> duration_s;  // default per scenario
+  std::uint64_t seed = 1;
+  LayoutKind layout = LayoutKind::Default;
+  bool startup = true;
+  int ready_mode = 0;  // the drives' Servo_Ready_Mode
+  int jitter_us = 0;   // master send jitter, at most a quarter cycle
+  double loss = 0;     // probability that a returned frame is lost after the slaves
+  std::vector<FaultRequest> faults;
+};
+
+// The default duration of a scenario, in seconds.
+double defaultDuration(Scenario scenario);
+// Checks the options and resolves defaults (fault times and axes). Empty on success, else the
+// message for the user.
+std::string resolveOptions(SimOptions& options);
+
+// Where one axis's PDOs are, as a configuration file (INTERFACES.md) would give them.
+struct SimAxisLayout {
+  int index = 0;
+  std::string name;
+  std::uint16_t station = 0;
+  std::uint32_t outputs = 0;
+  std::uint32_t inputs = 0;
+};
+
+struct SimFrame {
+  std::int64_t time_ns;  // since the Unix epoch
+  const std::uint8_t* data;
+  std::size_t size;
+};
+// Receives each frame in capture order; returns false to stop (e.g. a write error).
+using FrameSink = std::function<bool(const SimFrame&)>;
+
+class Simulator {
+ public:
+  // The options must have passed resolveOptions.
+  explicit Simulator(const SimOptions& options);
+  ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  const std::vector<SimAxisLayout>& layout() const;
+  // The layout as a TOML configuration file that `ncservo validate --config` reads.
+  std::string layoutConfig() const;
+  // Runs the whole simulation; the number of frames written, or nothing if the sink stopped.
+  std::optional<std::uint64_t> run(const FrameSink& sink);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ncservo::sim

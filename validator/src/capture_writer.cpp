@@ -1,0 +1,165 @@
+#include "ncservo/capture_writer.hpp"
+
+#include <fmt/format.h>
+#include <pcap/pcap.h>
+
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+namespace ncservo {
+namespace {
+
+constexpr int kSnapLength = 65535;
+constexpr std::size_t kWriteBuffer = 1 << 20;
+
+std::FILE* openFile(const std::string& path, std::string& error) {
+  if (path == "-") return stdout;
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) error = fmt::format("{}: cannot write: {}", path, std::strerror(errno));
+  return file;
+}
+
+class PcapWriter final : public CaptureWriter {
+ public:
+  PcapWriter(std::string path, std::FILE* file, pcap_t* dead, pcap_dumper_t* dumper)
+      : path_(std::move(path)), file_(file), dead_(dead), dumper_(dumper) {}
+  ~PcapWriter() override {
+    std::string ignored;
+    close(ignored);
+  }
+  bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
+    if (dumper_ == nullptr) return false;
+    pcap_pkthdr header{};
+    header.ts.tv_sec = static_cast<time_t>(time_ns / 1'000'000'000);
+    header.ts.tv_usec = static_cast<suseconds_t>(time_ns % 1'000'000'000 / 1000);
+    header.caplen = header.len = static_cast<bpf_u_int32>(size);
+    pcap_dump(reinterpret_cast<u_char*>(dumper_), &header, data);
+    return std::ferror(file_) == 0;
+  }
+  bool close(std::string& error) override {
+    if (dumper_ == nullptr) return !failed_;
+    const bool flushed = pcap_dump_flush(dumper_) == 0 && std::ferror(file_) == 0;
+    if (file_ == stdout) {
+      dumper_ = nullptr;  // standard output stays open for the process
+    } else {
+      pcap_dump_close(dumper_);  // closes the file
+      dumper_ = nullptr;
+    }
+    pcap_close(dead_);
+    if (!flushed) {
+      failed_ = true;
+      error = fmt::format("{}: write failed: {}", path_, std::strerror(errno));
+    }
+    return !failed_;
+  }
+
+ private:
+  std::string path_;
+  std::FILE* file_;
+  pcap_t* dead_;
+  pcap_dumper_t* dumper_;
+  bool failed_ = false;
+};
+
+// pcapng: a Section Header Block, one Interface Description Block with if_tsresol = 9
+// (nanoseconds), then one Enhanced Packet Block per frame (pcapng specification, §4).
+class PcapngWriter final : public CaptureWriter {
+ public:
+  PcapngWriter(std::string path, std::FILE* file) : path_(std::move(path)), file_(file) {
+    block_.reserve(2048);
+    begin(0x0A0D0D0A);  // SHB
+    put32(0x1A2B3C4D);  // byte-order magic
+    put16(1);           // version 1.0
+    put16(0);
+    put32(0xFFFFFFFF);  // section length unknown
+    put32(0xFFFFFFFF);
+    finish();
+    begin(0x00000001);  // IDB
+    put16(1);           // LINKTYPE_ETHERNET
+    put16(0);
+    put32(kSnapLength);
+    put16(9);  // if_tsresol
+    put16(1);
+    block_.push_back(9);  // 10^-9 s
+    block_.resize(block_.size() + 3, 0);
+    put16(0);  // opt_endofopt
+    put16(0);
+    finish();
+  }
+  ~PcapngWriter() override {
+    std::string ignored;
+    close(ignored);
+  }
+  bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
+    if (file_ == nullptr) return false;
+    const auto ts = static_cast<std::uint64_t>(time_ns);
+    begin(0x00000006);  // EPB
+    put32(0);           // interface 0
+    put32(static_cast<std::uint32_t>(ts >> 32));
+    put32(static_cast<std::uint32_t>(ts));
+    put32(static_cast<std::uint32_t>(size));
+    put32(static_cast<std::uint32_t>(size));
+    block_.insert(block_.end(), data, data + size);
+    block_.resize((block_.size() + 3) & ~std::size_t{3}, 0);
+    finish();
+    return !failed_;
+  }
+  bool close(std::string& error) override {
+    if (file_ == nullptr) return !failed_;
+    if (std::fflush(file_) != 0 || std::ferror(file_) != 0) failed_ = true;
+    if (file_ != stdout && std::fclose(file_) != 0) failed_ = true;
+    file_ = nullptr;
+    if (failed_) error = fmt::format("{}: write failed: {}", path_, std::strerror(errno));
+    return !failed_;
+  }
+
+ private:
+  void put16(std::uint16_t v) {
+    block_.push_back(static_cast<std::uint8_t>(v));
+    block_.push_back(static_cast<std::uint8_t>(v >> 8));
+  }
+  void put32(std::uint32_t v) {
+    put16(static_cast<std::uint16_t>(v));
+    put16(static_cast<std::uint16_t>(v >> 16));
+  }
+  void begin(std::uint32_t type) {
+    block_.clear();
+    put32(type);
+    put32(0);  // total length, set by finish()
+  }
+  void finish() {
+    const auto total = static_cast<std::uint32_t>(block_.size() + 4);
+    for (int i = 0; i < 4; ++i) block_[4 + i] = static_cast<std::uint8_t>(total >> (8 * i));
+    put32(total);
+    if (std::fwrite(block_.data(), 1, block_.size(), file_) != block_.size()) failed_ = true;
+  }
+
+  std::string path_;
+  std::FILE* file_;
+  std::vector<std::uint8_t> block_;
+  bool failed_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<CaptureWriter> CaptureWriter::open(const std::string& path, CaptureFormat format,
+                                                   std::string& error) {
+  std::FILE* file = openFile(path, error);
+  if (file == nullptr) return nullptr;
+  std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
+  if (format == CaptureFormat::Pcapng) return std::make_unique<PcapngWriter>(path, file);
+  pcap_t* dead =
+      pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kSnapLength, PCAP_TSTAMP_PRECISION_MICRO);
+  pcap_dumper_t* dumper = dead != nullptr ? pcap_dump_fopen(dead, file) : nullptr;
+  if (dumper == nullptr) {
+    error = fmt::format("{}: cannot write a pcap: {}", path,
+                        dead != nullptr ? pcap_geterr(dead) : "libpcap failed");
+    if (dead != nullptr) pcap_close(dead);
+    if (file != stdout) std::fclose(file);
+    return nullptr;
+  }
+  return std::make_unique<PcapWriter>(path, file, dead, dumper);
+}
+
+}  // namespace ncservo
