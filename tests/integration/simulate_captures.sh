@@ -29,6 +29,11 @@ for name in sim-commissioning-4axis.pcap sim-faults-4axis.pcap sim-io-interleave
   diff -u "$SRC/captures/$stem.expected.json" "$WORK/$stem.golden.json" >"$WORK/diff.txt" ||
     fail "$name: report differs from captures/$stem.expected.json: $(head -40 "$WORK/diff.txt")"
 
+  # tshark's stock dissector takes every frame, faults included, without complaint
+  "$TSHARK" none -r - -Y "_ws.malformed || _ws.expert" -T fields -e frame.number \
+    <"$SRC/captures/$name" >"$WORK/stock.txt" 2>"$WORK/tshark.err" || fail "$name: tshark exit $?"
+  [ ! -s "$WORK/stock.txt" ] || fail "$name: the stock dissector flags frames $(head -c 200 "$WORK/stock.txt")"
+
   # the rules column: "none", "all 29", or a list of rule IDs
   must=$(awk -F'|' '{ print $4 }' <<<"$row" | xargs)
   python3 - "$WORK/$stem.json" "$must" <<'PY' || fail "$name: fired rules differ from captures/README.md"
