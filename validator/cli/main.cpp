@@ -409,6 +409,7 @@ struct SimulateArgs {
   std::string format;  // pcap, pcapng; default from the file name
   std::vector<std::string> faults;
   std::string layout_config;
+  std::string eni;
   bool no_startup = false;
   bool list_faults = false;
 };
@@ -463,6 +464,14 @@ int runSimulate(SimulateArgs& args) {
     out << simulator.layoutConfig();
     if (!out.flush()) {
       fmt::print(stderr, "ncservo simulate: {}: cannot write the layout\n", args.layout_config);
+      return kExitUsage;
+    }
+  }
+  if (!args.eni.empty()) {
+    std::ofstream out(args.eni);
+    out << simulator.eni();
+    if (!out.flush()) {
+      fmt::print(stderr, "ncservo simulate: {}: cannot write the ENI file\n", args.eni);
       return kExitUsage;
     }
   }
@@ -572,6 +581,9 @@ int main(int argc, char** argv) {
                        "probability that a returned frame is lost (COM-004 findings)");
   simulate->add_option("--layout-config", sa.layout_config,
                        "also write the layout as a configuration file for validate --config");
+  simulate->add_option(
+      "--eni", sa.eni,
+      "also write the set-up as an ENI file (EtherCATConfig.xml) for validate --eni");
   simulate->add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
 
   try {

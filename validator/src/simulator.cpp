@@ -13,6 +13,7 @@
 #include <sstream>
 #include <utility>
 
+#include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/pdo_layout.hpp"
 #include "ncservo/sim_models.hpp"
@@ -1397,6 +1398,36 @@ std::string Simulator::layoutConfig() const {
               impl_->o.io_slaves)
        << root << "\n";
   return text.str();
+}
+
+std::string Simulator::eni() const {
+  const Impl& s = *impl_;
+  std::vector<EniSlave> slaves;
+  for (std::size_t pos = 0; pos < s.escs.size(); ++pos) {
+    const Esc& esc = s.escs[pos];
+    EniSlave e;
+    e.name = esc.kind == SlaveKind::Servo            ? fmt::format("axis{}", esc.axis)
+             : esc.kind == SlaveKind::OutputTerminal ? fmt::format("Term {} (EL2008)", pos)
+                                                     : fmt::format("Term {} (EL1008)", pos);
+    e.station = static_cast<std::uint16_t>(kFirstStation + pos);
+    e.position = static_cast<std::uint16_t>(pos);
+    e.outputs = s.out_addr[pos];
+    e.output_bytes = static_cast<std::uint16_t>(Impl::outLen(esc));
+    e.inputs = s.in_addr[pos];
+    e.input_bytes = static_cast<std::uint16_t>(Impl::inLen(esc));
+    slaves.push_back(std::move(e));
+  }
+  std::vector<EniCyclicCommand> commands;
+  for (const FrameGroup& g : s.groups) {
+    std::uint16_t wkc = 0;
+    for (int pos : g.slaves) {
+      const Esc& esc = s.escs[static_cast<std::size_t>(pos)];
+      wkc = static_cast<std::uint16_t>(wkc + (Impl::inLen(esc) > 0 ? 1 : 0) +
+                                       (Impl::outLen(esc) > 0 ? 2 : 0));
+    }
+    commands.push_back({g.base, static_cast<std::uint16_t>(g.size), wkc});
+  }
+  return writeEni(slaves, commands, static_cast<std::uint32_t>(s.o.cycle_us));
 }
 
 std::optional<std::uint64_t> Simulator::run(const FrameSink& sink) {

@@ -93,6 +93,8 @@ class Simulator {
   const std::vector<SimAxisLayout>& layout() const;
   // The layout as a TOML configuration file that `ncservo validate --config` reads.
   std::string layoutConfig() const;
+  // The set-up as an ENI file (ETG.2100 EtherCATConfig.xml), for `ncservo validate --eni`.
+  std::string eni() const;
   // Runs the whole simulation; the number of frames written, or nothing if the sink stopped.
   std::optional<std::uint64_t> run(const FrameSink& sink);
 

@@ -1,0 +1,278 @@
+// ENI import (ETG.2100 EtherCATConfig.xml) through pugixml. Paths used (root
+// EtherCATConfig/Config):
+//   Slave/Info/{Name, PhysAddr, AutoIncAddr}
+//   Slave/ProcessData/Send|Recv/{BitStart, BitLength}     outputs | inputs, in image bits
+//   Slave/ProcessData/Sm2|Sm3/DefaultSize                   the sync managers' sizes, bytes
+//   Cyclic/Frame/Cmd/{Cmd, Addr, DataLength, OutputOffs, InputOffs, Cnt}
+// A slave's logical address: for the LRD/LWR/LRW whose image range holds its first byte,
+// Addr + floor(BitStart / 8) - OutputOffs (outputs) or - InputOffs (inputs).
+#include "ncservo/eni.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <fstream>
+#include <pugixml.hpp>
+#include <sstream>
+
+#include "ncservo/ethercat.hpp"
+#include "ncservo/pdo_layout.hpp"
+
+namespace ncservo {
+namespace {
+
+// ETG.2000 HexDecValue: "#x1A00" or "0x1A00" is hexadecimal, anything else decimal (may be
+// negative, e.g. AutoIncAddr -1).
+std::optional<std::int64_t> hexDec(std::string_view text) {
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front())))
+    text.remove_prefix(1);
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())))
+    text.remove_suffix(1);
+  int base = 10;
+  if (text.size() > 2 && (text.substr(0, 2) == "#x" || text.substr(0, 2) == "0x" ||
+                          text.substr(0, 2) == "#X" || text.substr(0, 2) == "0X")) {
+    base = 16;
+    text.remove_prefix(2);
+  }
+  if (text.empty()) return std::nullopt;
+  const std::string s(text);
+  char* end = nullptr;
+  const long long value = std::strtoll(s.c_str(), &end, base);
+  if (end != s.c_str() + s.size()) return std::nullopt;
+  return value;
+}
+
+struct Command {
+  std::uint8_t cmd = 0;
+  std::uint32_t address = 0;
+  std::int64_t length = 0;
+  std::optional<std::int64_t> output_offset;
+  std::optional<std::int64_t> input_offset;
+};
+
+class Reader {
+ public:
+  Reader(std::string path, std::string_view xml) : path_(std::move(path)), xml_(xml) {}
+
+  std::uint32_t lineOf(const pugi::xml_node& node) const { return lineAt(node.offset_debug()); }
+  std::uint32_t lineAt(std::ptrdiff_t offset) const {
+    if (offset < 0) return 0;
+    const auto end = std::min<std::size_t>(static_cast<std::size_t>(offset), xml_.size());
+    return static_cast<std::uint32_t>(
+        std::count(xml_.begin(), xml_.begin() + static_cast<std::ptrdiff_t>(end), '\n') + 1);
+  }
+  EniError error(const pugi::xml_node& node, std::string message) const {
+    return {path_, node ? lineOf(node) : 0, std::move(message)};
+  }
+  // The number in child `name` of `node`; an error if it is missing (when required) or no number.
+  std::optional<std::int64_t> number(const pugi::xml_node& node, const char* name, bool required,
+                                     std::optional<EniError>& error) const {
+    const pugi::xml_node child = node.child(name);
+    if (!child) {
+      if (required && !error)
+        error = this->error(node, fmt::format("<{}> has no <{}>", node.name(), name));
+      return std::nullopt;
+    }
+    auto value = hexDec(child.child_value());
+    if (!value && !error) {
+      error =
+          this->error(child, fmt::format("<{}> is not a number: '{}'", name, child.child_value()));
+    }
+    return value;
+  }
+
+ private:
+  std::string path_;
+  std::string_view xml_;
+};
+
+}  // namespace
+
+std::string EniError::text() const {
+  return line > 0 ? fmt::format("{}:{}: {}", path, line, message)
+                  : fmt::format("{}: {}", path, message);
+}
+
+EniResult parseEni(std::string_view xml, const std::string& path) {
+  EniResult result;
+  Reader reader(path, xml);
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size());
+  if (!parsed) {
+    result.error = EniError{path, reader.lineAt(parsed.offset),
+                            fmt::format("not well-formed XML: {}", parsed.description())};
+    return result;
+  }
+  const pugi::xml_node config = doc.child("EtherCATConfig").child("Config");
+  if (!config) {
+    result.error = EniError{path, 0, "no <EtherCATConfig><Config>: not an ENI file (ETG.2100)"};
+    return result;
+  }
+  std::optional<EniError>& error = result.error;
+
+  std::vector<Command> commands;
+  for (pugi::xml_node frame : config.child("Cyclic").children("Frame")) {
+    for (pugi::xml_node cmd : frame.children("Cmd")) {
+      auto code = reader.number(cmd, "Cmd", true, error);
+      if (error) return result;
+      if (!ecat::isLogical(static_cast<std::uint8_t>(*code))) continue;
+      Command c;
+      c.cmd = static_cast<std::uint8_t>(*code);
+      auto addr = reader.number(cmd, "Addr", true, error);
+      auto length = reader.number(cmd, "DataLength", true, error);
+      c.output_offset = reader.number(cmd, "OutputOffs", false, error);
+      c.input_offset = reader.number(cmd, "InputOffs", false, error);
+      if (error) return result;
+      c.address = static_cast<std::uint32_t>(*addr);
+      c.length = *length;
+      commands.push_back(c);
+    }
+  }
+  // The logical address of image byte `byte`, through the command whose range holds it.
+  auto logical = [&](std::int64_t byte, bool outputs) -> std::optional<std::uint32_t> {
+    for (const Command& c : commands) {
+      const bool carries = outputs ? ecat::writesSlaves(c.cmd) : ecat::readsSlaves(c.cmd);
+      const auto& offset = outputs ? c.output_offset : c.input_offset;
+      if (!carries || !offset || byte < *offset || byte >= *offset + c.length) continue;
+      return static_cast<std::uint32_t>(c.address + (byte - *offset));
+    }
+    return std::nullopt;
+  };
+
+  for (pugi::xml_node slave : config.children("Slave")) {
+    ++result.slaves;
+    const pugi::xml_node info = slave.child("Info");
+    const std::string name = info.child("Name").child_value();
+    auto station = reader.number(info, "PhysAddr", false, error);
+    if (error) return result;
+    // Sizes of the process data: the Send/Recv bit lengths, or the sync managers' sizes.
+    const pugi::xml_node pd = slave.child("ProcessData");
+    std::int64_t send_bits = 0, recv_bits = 0;
+    std::optional<std::int64_t> send_start, recv_start;
+    for (pugi::xml_node send : pd.children("Send")) {
+      auto start = reader.number(send, "BitStart", true, error);
+      auto bits = reader.number(send, "BitLength", true, error);
+      if (error) return result;
+      if (!send_start) send_start = start;
+      send_bits += *bits;
+    }
+    for (pugi::xml_node recv : pd.children("Recv")) {
+      auto start = reader.number(recv, "BitStart", true, error);
+      auto bits = reader.number(recv, "BitLength", true, error);
+      if (error) return result;
+      if (!recv_start) recv_start = start;
+      recv_bits += *bits;
+    }
+    const bool servo = send_bits == 8 * static_cast<std::int64_t>(kRxPdoSize) &&
+                       recv_bits == 8 * static_cast<std::int64_t>(kTxPdoSize);
+    if (!servo) continue;
+    if (*send_start % 8 != 0 || *recv_start % 8 != 0) {
+      error = reader.error(
+          pd, fmt::format("slave '{}': its process data does not start on a byte", name));
+      return result;
+    }
+    AxisConfig axis;
+    axis.name = name.empty() ? fmt::format("axis{}", result.axes.size()) : name;
+    auto outputs = logical(*send_start / 8, true);
+    auto inputs = logical(*recv_start / 8, false);
+    if (!outputs || !inputs) {
+      error = reader.error(pd, fmt::format("slave '{}': its {} (image bit {}) are in no cyclic "
+                                           "LRD/LWR/LRW command of <Cyclic>",
+                                           name, outputs ? "inputs" : "outputs",
+                                           outputs ? *recv_start : *send_start));
+      return result;
+    }
+    axis.outputs = *outputs;
+    axis.inputs = *inputs;
+    if (station) axis.station = static_cast<std::uint16_t>(*station);
+    result.axes.push_back(std::move(axis));
+  }
+  return result;
+}
+
+EniResult loadEni(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    EniResult r;
+    r.error = EniError{path, 0, "cannot open the ENI file"};
+    return r;
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseEni(text.str(), path);
+}
+
+std::string writeEni(const std::vector<EniSlave>& slaves,
+                     const std::vector<EniCyclicCommand>& commands, std::uint32_t cycle_us) {
+  // Image offsets: each command's data at its own place in the process image, as a frame's
+  // first datagram would sit (Ethernet 14 + EtherCAT 2 + datagram header 10 = 26), one region per
+  // command.
+  constexpr std::uint32_t kFirstOffset = 26;
+  constexpr std::uint32_t kRegion = 2048;
+  auto offsetOf = [&](std::uint32_t address, std::size_t& which) -> std::optional<std::uint32_t> {
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+      const EniCyclicCommand& c = commands[i];
+      if (address >= c.address && address < c.address + c.length) {
+        which = i;
+        return kFirstOffset + static_cast<std::uint32_t>(i) * kRegion + (address - c.address);
+      }
+    }
+    return std::nullopt;
+  };
+  auto hex = [](std::uint64_t value, int digits) {
+    return fmt::format("#x{:0{}x}", value, digits);
+  };
+
+  pugi::xml_document doc;
+  pugi::xml_node decl = doc.append_child(pugi::node_declaration);
+  decl.append_attribute("version") = "1.0";
+  decl.append_attribute("encoding") = "UTF-8";
+  pugi::xml_node config = doc.append_child("EtherCATConfig").append_child("Config");
+  pugi::xml_node master = config.append_child("Master").append_child("Info");
+  master.append_child("Name").text().set("ncservo simulate");
+  for (const EniSlave& s : slaves) {
+    pugi::xml_node slave = config.append_child("Slave");
+    pugi::xml_node info = slave.append_child("Info");
+    info.append_child("Name").text().set(s.name.c_str());
+    info.append_child("PhysAddr").text().set(s.station);
+    info.append_child("AutoIncAddr").text().set(static_cast<int>(-static_cast<int>(s.position)));
+    pugi::xml_node pd = slave.append_child("ProcessData");
+    std::size_t which = 0;
+    if (s.output_bytes > 0) {
+      if (auto offset = offsetOf(s.outputs, which)) {
+        pugi::xml_node send = pd.append_child("Send");
+        send.append_child("BitStart").text().set(*offset * 8);
+        send.append_child("BitLength").text().set(s.output_bytes * 8);
+      }
+    }
+    if (s.input_bytes > 0) {
+      if (auto offset = offsetOf(s.inputs, which)) {
+        pugi::xml_node recv = pd.append_child("Recv");
+        recv.append_child("BitStart").text().set(*offset * 8);
+        recv.append_child("BitLength").text().set(s.input_bytes * 8);
+      }
+    }
+  }
+  pugi::xml_node cyclic = config.append_child("Cyclic");
+  cyclic.append_child("CycleTime").text().set(cycle_us);
+  for (std::size_t i = 0; i < commands.size(); ++i) {
+    const EniCyclicCommand& c = commands[i];
+    pugi::xml_node cmd = cyclic.append_child("Frame").append_child("Cmd");
+    cmd.append_child("State").text().set("SAFEOP");
+    cmd.append_child("State").text().set("OP");
+    cmd.append_child("Cmd").text().set(static_cast<int>(ecat::kLrw));
+    cmd.append_child("Addr").text().set(hex(c.address, 8).c_str());
+    cmd.append_child("DataLength").text().set(c.length);
+    cmd.append_child("Cnt").text().set(c.expected_wkc);
+    const std::uint32_t offset = kFirstOffset + static_cast<std::uint32_t>(i) * kRegion;
+    cmd.append_child("InputOffs").text().set(offset);
+    cmd.append_child("OutputOffs").text().set(offset);
+  }
+  std::ostringstream out;
+  doc.save(out, "  ");
+  return out.str();
+}
+
+}  // namespace ncservo
