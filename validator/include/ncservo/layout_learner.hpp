@@ -1,0 +1,93 @@
+// Learning where each servo's PDOs are from the capture's own start-up (PROTOCOL.md §9.3): the
+// sync manager (0x0800 + 8n) and FMMU (0x0600 + 16n) registers the master writes, or reads back,
+// per slave. A slave whose SM2 is 10 bytes and SM3 40 bytes is a servo of this protocol; its FMMUs
+// give the logical addresses of its RxPDO and TxPDO, or, with no FMMU over them, it is exchanged
+// with FPRD/FPWR at the SM physical addresses. Bounded memory; one pass.
+#pragma once
+
+#include <array>
+#include <bitset>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ncservo/byte_reader.hpp"
+#include "ncservo/config.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/slave_directory.hpp"
+
+namespace ncservo {
+
+inline constexpr std::uint16_t kRegFmmu = 0x0600;
+inline constexpr std::uint16_t kRegSyncManager = 0x0800;
+inline constexpr std::size_t kFmmuCount = 16;
+inline constexpr std::size_t kFmmuSize = 16;
+inline constexpr std::size_t kSyncManagerCount = 16;
+inline constexpr std::size_t kSyncManagerSize = 8;
+
+// A slave's SM and FMMU registers as far as the capture showed them (byte by byte).
+struct SlaveRegisters {
+  std::array<std::uint8_t, kFmmuCount * kFmmuSize> fmmu{};
+  std::bitset<kFmmuCount * kFmmuSize> fmmu_known;
+  std::array<std::uint8_t, kSyncManagerCount * kSyncManagerSize> sm{};
+  std::bitset<kSyncManagerCount * kSyncManagerSize> sm_known;
+  bool physical_exchange = false;  // FPRD/FPWR seen at a configured servo's SM addresses
+  void absorb(const SlaveRegisters& other);
+};
+
+struct SyncManagerView {
+  std::size_t index = 0;
+  std::uint16_t start = 0;
+  std::uint16_t length = 0;
+  std::uint8_t control = 0;
+  bool enabled = false;
+};
+struct FmmuView {
+  std::size_t index = 0;
+  std::uint32_t logical = 0;
+  std::uint16_t length = 0;
+  std::uint16_t physical = 0;
+  std::uint8_t type = 0;  // 1 read (inputs), 2 write (outputs), 3 both
+  bool active = false;
+};
+struct SlaveLayout {
+  std::optional<std::uint16_t> station;
+  std::optional<std::uint16_t> position;
+  std::vector<SyncManagerView> sync_managers;  // those whose start and length are known
+  std::vector<FmmuView> fmmus;                 // those whose logical start, length, type are known
+  bool servo = false;                          // SM2 10 bytes, SM3 40 bytes
+};
+
+class LayoutLearner {
+ public:
+  // Every frame in capture order (see AlTracker::onFrame for `returned` and `paired`). Writes are
+  // taken from master copies (and from returned copies whose master copy was not captured),
+  // reads from returned copies whose WKC is above zero.
+  void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired);
+
+  // The servos found so far, in ring order, with station and logical (or SM) addresses.
+  const std::vector<AxisConfig>& axes() const { return axes_; }
+  // Changes whenever axes() does.
+  std::uint32_t generation() const { return generation_; }
+  // Whether the capture configured any slave's sync managers (a start-up was captured).
+  bool sawConfiguration() const { return saw_configuration_; }
+  // Every slave seen, with its registers, in ring order (for `decode --layout` and tests).
+  std::vector<SlaveLayout> slaves() const;
+
+ private:
+  // Copies the SM/FMMU bytes the datagram carries; whether anything changed.
+  bool touch(SlaveRegisters& regs, const Datagram& dg, const ByteReader& bytes);
+  void rebuild();
+
+  SlaveDirectory<SlaveRegisters> directory_;
+  std::vector<AxisConfig> axes_;
+  std::uint32_t generation_ = 0;
+  bool saw_configuration_ = false;
+  bool dirty_ = false;
+};
+
+// What a slave's registers say (helpers of slaves(), public for tests).
+SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_t> station,
+                          std::optional<std::uint16_t> position);
+
+}  // namespace ncservo

@@ -1,0 +1,238 @@
+#include "ncservo/layout_learner.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <tuple>
+
+#include "ncservo/pdo_layout.hpp"
+
+namespace ncservo {
+namespace {
+
+// Byte offsets inside one SM (PROTOCOL.md §8: start 2, length 2, control 1, status 1, activate 1,
+// PDI 1) and one FMMU (logical start 4, length 2, start bit, stop bit, physical start 2,
+// physical start bit, type, activate).
+constexpr std::size_t kSmStart = 0, kSmLength = 2, kSmControl = 4, kSmActivate = 6;
+constexpr std::size_t kFmmuLogical = 0, kFmmuLength = 4, kFmmuPhysical = 8, kFmmuType = 11,
+                      kFmmuActivate = 12;
+constexpr std::size_t kOutputsSm = 2, kInputsSm = 3;  // by convention (PROTOCOL.md §8)
+constexpr std::uint8_t kFmmuRead = 1, kFmmuWrite = 2;
+// Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
+constexpr std::uint16_t kProcessRam = 0x1000;
+
+template <std::size_t N>
+bool known(const std::bitset<N>& mask, std::size_t from, std::size_t count) {
+  for (std::size_t i = from; i < from + count; ++i) {
+    if (!mask[i]) return false;
+  }
+  return true;
+}
+template <std::size_t N>
+std::uint32_t le(const std::array<std::uint8_t, N>& bytes, std::size_t at, std::size_t count) {
+  std::uint32_t value = 0;
+  for (std::size_t i = 0; i < count; ++i) value |= std::uint32_t{bytes[at + i]} << (8 * i);
+  return value;
+}
+
+// Copies the part of [ado, ado + count) that falls in a register block into its shadow.
+template <std::size_t N>
+bool copyBlock(std::array<std::uint8_t, N>& shadow, std::bitset<N>& mask, std::uint16_t block,
+               const Datagram& dg, const ByteReader& bytes) {
+  const std::size_t ado = dg.ado();
+  const std::size_t from = std::max<std::size_t>(ado, block);
+  const std::size_t to = std::min<std::size_t>(ado + dg.data_captured, std::size_t{block} + N);
+  bool changed = false;
+  for (std::size_t reg = from; reg < to; ++reg) {
+    auto value = bytes.u8(dg.data_offset + (reg - ado));
+    if (!value) break;
+    const std::size_t i = reg - block;
+    if (!mask[i] || shadow[i] != *value) changed = true;
+    shadow[i] = *value;
+    mask[i] = true;
+  }
+  return changed;
+}
+
+}  // namespace
+
+void SlaveRegisters::absorb(const SlaveRegisters& other) {
+  for (std::size_t i = 0; i < fmmu.size(); ++i) {
+    if (!fmmu_known[i] && other.fmmu_known[i]) {
+      fmmu[i] = other.fmmu[i];
+      fmmu_known[i] = true;
+    }
+  }
+  for (std::size_t i = 0; i < sm.size(); ++i) {
+    if (!sm_known[i] && other.sm_known[i]) {
+      sm[i] = other.sm[i];
+      sm_known[i] = true;
+    }
+  }
+  physical_exchange = physical_exchange || other.physical_exchange;
+}
+
+SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_t> station,
+                          std::optional<std::uint16_t> position) {
+  SlaveLayout out;
+  out.station = station;
+  out.position = position;
+  for (std::size_t n = 0; n < kSyncManagerCount; ++n) {
+    const std::size_t at = n * kSyncManagerSize;
+    if (!known(regs.sm_known, at + kSmStart, 4)) continue;
+    SyncManagerView sm;
+    sm.index = n;
+    sm.start = static_cast<std::uint16_t>(le(regs.sm, at + kSmStart, 2));
+    sm.length = static_cast<std::uint16_t>(le(regs.sm, at + kSmLength, 2));
+    sm.control = regs.sm[at + kSmControl];
+    sm.enabled = regs.sm_known[at + kSmActivate] ? (regs.sm[at + kSmActivate] & 1) != 0 : true;
+    if (sm.length == 0) continue;
+    out.sync_managers.push_back(sm);
+  }
+  for (std::size_t n = 0; n < kFmmuCount; ++n) {
+    const std::size_t at = n * kFmmuSize;
+    if (!known(regs.fmmu_known, at, kFmmuActivate + 1)) continue;
+    FmmuView f;
+    f.index = n;
+    f.logical = le(regs.fmmu, at + kFmmuLogical, 4);
+    f.length = static_cast<std::uint16_t>(le(regs.fmmu, at + kFmmuLength, 2));
+    f.physical = static_cast<std::uint16_t>(le(regs.fmmu, at + kFmmuPhysical, 2));
+    f.type = regs.fmmu[at + kFmmuType];
+    f.active = (regs.fmmu[at + kFmmuActivate] & 1) != 0;
+    if (f.length == 0 && !f.active) continue;
+    out.fmmus.push_back(f);
+  }
+  auto smOf = [&](std::size_t index) -> const SyncManagerView* {
+    for (const SyncManagerView& sm : out.sync_managers) {
+      if (sm.index == index) return &sm;
+    }
+    return nullptr;
+  };
+  const SyncManagerView* rx = smOf(kOutputsSm);
+  const SyncManagerView* tx = smOf(kInputsSm);
+  out.servo =
+      rx != nullptr && tx != nullptr && rx->length == kRxPdoSize && tx->length == kTxPdoSize;
+  return out;
+}
+
+bool LayoutLearner::touch(SlaveRegisters& regs, const Datagram& dg, const ByteReader& bytes) {
+  const bool fmmu = copyBlock(regs.fmmu, regs.fmmu_known, kRegFmmu, dg, bytes);
+  const bool sm = copyBlock(regs.sm, regs.sm_known, kRegSyncManager, dg, bytes);
+  if (sm) saw_configuration_ = true;
+  return fmmu || sm;
+}
+
+void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned,
+                            bool paired) {
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  directory_.beginFrame(frame, returned);
+  for (std::size_t i = 0; i < frame.count; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    if (ecat::isLogical(dg.command)) continue;
+    const bool take_write = ecat::writesSlaves(dg.command) && (!returned || !paired);
+    const bool take_read = ecat::readsSlaves(dg.command) && returned && dg.has_wkc && dg.wkc > 0;
+    if (!take_write && !take_read) continue;
+    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    if (take_write) directory_.noteStationWrite(dg, bytes, address);
+    const std::size_t ado = dg.ado();
+    const std::size_t end = ado + dg.data_captured;
+    if (ado >= kProcessRam && address.target == SlaveTarget::Station) {
+      // Process data exchanged with FPRD/FPWR: a configured servo's SM addresses.
+      const std::size_t s = directory_.findStation(address.value);
+      if (s == directory_.kNone) continue;
+      SlaveRegisters& regs = directory_.slaves()[s].data;
+      const SlaveLayout layout = describeSlave(regs, std::nullopt, std::nullopt);
+      if (!layout.servo || regs.physical_exchange) continue;
+      for (const SyncManagerView& sm : layout.sync_managers) {
+        if ((sm.index == kOutputsSm || sm.index == kInputsSm) &&
+            ado < std::size_t{sm.start} + sm.length && end > sm.start) {
+          regs.physical_exchange = true;
+          dirty_ = true;
+        }
+      }
+      continue;
+    }
+    const bool registers =
+        (ado < kRegFmmu + kFmmuCount * kFmmuSize && end > kRegFmmu) ||
+        (ado < kRegSyncManager + kSyncManagerCount * kSyncManagerSize && end > kRegSyncManager);
+    if (!registers) continue;
+    if (address.target == SlaveTarget::All) {
+      for (auto& slave : directory_.slaves()) dirty_ = touch(slave.data, dg, bytes) || dirty_;
+      continue;
+    }
+    const std::size_t s = directory_.slaveFor(address);
+    if (s == directory_.kNone) continue;
+    dirty_ = touch(directory_.slaves()[s].data, dg, bytes) || dirty_;
+  }
+  if (dirty_) rebuild();
+}
+
+std::vector<SlaveLayout> LayoutLearner::slaves() const {
+  std::vector<SlaveLayout> out;
+  for (const auto& slave : directory_.slaves()) {
+    out.push_back(describeSlave(slave.data, slave.station, slave.position));
+  }
+  // Ring order where known; slaves known only by station after them, by station.
+  std::stable_sort(out.begin(), out.end(), [](const SlaveLayout& a, const SlaveLayout& b) {
+    return std::make_tuple(!a.position.has_value(), a.position.value_or(0), a.station.value_or(0)) <
+           std::make_tuple(!b.position.has_value(), b.position.value_or(0), b.station.value_or(0));
+  });
+  return out;
+}
+
+void LayoutLearner::rebuild() {
+  dirty_ = false;
+  std::vector<AxisConfig> axes;
+  for (const SlaveLayout& slave : slaves()) {
+    if (!slave.servo) continue;
+    const SyncManagerView* rx = nullptr;
+    const SyncManagerView* tx = nullptr;
+    for (const SyncManagerView& sm : slave.sync_managers) {
+      if (sm.index == kOutputsSm) rx = &sm;
+      if (sm.index == kInputsSm) tx = &sm;
+    }
+    // The logical address an active FMMU of this direction gives the SM's first byte.
+    auto mapped = [&](const SyncManagerView& sm,
+                      std::uint8_t direction) -> std::optional<std::uint32_t> {
+      for (const FmmuView& f : slave.fmmus) {
+        if (!f.active || (f.type & direction) == 0) continue;
+        if (sm.start < f.physical ||
+            std::size_t{sm.start} + sm.length > std::size_t{f.physical} + f.length)
+          continue;
+        return f.logical + (sm.start - f.physical);
+      }
+      return std::nullopt;
+    };
+    AxisConfig axis;
+    axis.name = fmt::format("axis{}", axes.size());
+    axis.station = slave.station;
+    const auto outputs = mapped(*rx, kFmmuWrite);
+    const auto inputs = mapped(*tx, kFmmuRead);
+    if (outputs && inputs) {
+      axis.outputs = outputs;
+      axis.inputs = inputs;
+    } else if (slave.station && (outputs || inputs)) {
+      // Only one direction mapped: the other is unknown; keep the mapped one.
+      axis.outputs = outputs;
+      axis.inputs = inputs;
+    } else if (slave.station && slave.fmmus.empty()) {
+      const std::size_t s = directory_.findStation(*slave.station);
+      if (s == directory_.kNone || !directory_.slaves()[s].data.physical_exchange) continue;
+      axis.sm_outputs = rx->start;
+      axis.sm_inputs = tx->start;
+    } else {
+      continue;  // not placed yet
+    }
+    axes.push_back(std::move(axis));
+  }
+  auto same = [](const AxisConfig& a, const AxisConfig& b) {
+    return a.station == b.station && a.outputs == b.outputs && a.inputs == b.inputs &&
+           a.sm_outputs == b.sm_outputs && a.sm_inputs == b.sm_inputs;
+  };
+  if (axes.size() == axes_.size() && std::equal(axes.begin(), axes.end(), axes_.begin(), same))
+    return;
+  axes_ = std::move(axes);
+  ++generation_;
+}
+
+}  // namespace ncservo
