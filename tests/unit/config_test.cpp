@@ -120,6 +120,14 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.axes[1].inputs, 40u);
        EXPECT_FALSE(c.axes[1].outputs.has_value());
      }},
+    {"logical axis naming its station (ESM-002)",
+     "[[axis]]\nname = \"L\"\noutputs = 0x10000\ninputs = 0x10028\nstation = 0x3E9\n",
+     [](const Config& c) {
+       ASSERT_EQ(c.axes.size(), 1u);
+       EXPECT_EQ(c.axes[0].station, 0x3E9);
+       EXPECT_EQ(c.axes[0].outputs, 0x10000u);
+       EXPECT_FALSE(c.axes[0].physical());
+     }},
     {"station axis with SM3 only", "[[axis]]\nname = \"S\"\nstation = 1001\nsm_inputs = 0x1180\n",
      [](const Config& c) {
        ASSERT_EQ(c.axes.size(), 1u);
@@ -181,8 +189,8 @@ const BadCase kBadCases[] = {
     {"outputs and station in one axis",
      "[[axis]]\nname = \"X\"\noutputs = 0x10000\nstation = 0x3EA\nsm_outputs = 0x1100\n", 1,
      "axis[0]", "not both"},
-    {"station without sm_*", "[[axis]]\nname = \"Y\"\nstation = 0x3EA\n", 1, "axis[0]",
-     "station axis needs"},
+    {"station alone", "[[axis]]\nname = \"Y\"\nstation = 0x3EA\n", 1, "axis[0]",
+     "a station alone places no PDO"},
     {"sm_* without station", "[[axis]]\nname = \"Y\"\nsm_outputs = 0x1100\n", 1, "axis[0]",
      "station axis needs"},
     {"axis without addresses", "[[axis]]\nname = \"Z\"\n", 1, "axis[0]", "needs"},

@@ -103,6 +103,11 @@ void readAxis(Checker& check, const toml::table& table, std::size_t index, Confi
                "station with SM addresses (station/sm_outputs/sm_inputs), not both");
     return;
   }
+  if (!logical && !physical && axis.station) {
+    check.fail(table, prefix,
+               "a station alone places no PDO: give outputs/inputs or sm_outputs/sm_inputs too");
+    return;
+  }
   if (!logical && !physical) {
     check.fail(table, prefix, "needs outputs/inputs or station/sm_outputs/sm_inputs");
     return;
