@@ -47,8 +47,18 @@ int hf_derived[kDerivedCount];
 int ett_ncservo = -1;
 int ett_axis = -1;
 int ett_word[kWordCount];
-// Per word, the bit fields drawn by one bitmask call (NULL-terminated).
-int* word_children[kWordCount][kMaxChildren];
+// What each PDO word adds, prepared once from the field table so that no frame scans the table.
+constexpr std::size_t kMaxParts = 2;
+struct WordItems {
+  std::size_t row;      // the word's row in kFields; its bit fields and parts follow it
+  std::size_t row_end;  // one past the word's last row
+  guint offset;         // in its PDO
+  gint length;
+  int* children[kMaxChildren];   // bit fields drawn by one bitmask call, NULL-terminated
+  std::size_t parts[kMaxParts];  // rows of byte-aligned parts, each shown when it applies
+  std::size_t part_count;
+};
+WordItems word_items[kWordCount];
 expert_field ei_region_malformed = EI_INIT;
 expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
@@ -216,13 +226,29 @@ int derivedHf(Derived id) {
   return hf_derived[static_cast<std::size_t>(id)];
 }
 
-void buildWordChildren() {
-  std::size_t used[kWordCount] = {};
+void buildWordItems() {
   for (std::size_t i = 0; i < kFieldCount; ++i) {
     const FieldDef& f = kFields[i];
-    if (f.kind != FieldKind::Flag && f.kind != FieldKind::BitRange) continue;
-    const auto w = static_cast<std::size_t>(f.word);
-    if (used[w] + 1 < kMaxChildren) word_children[w][used[w]++] = &hf_field[i];
+    WordItems& word = word_items[static_cast<std::size_t>(f.word)];
+    const FieldSpan span = fieldSpan(f);
+    switch (f.kind) {
+      case FieldKind::Word:
+        word.row = i;
+        word.offset = static_cast<guint>(span.offset);
+        word.length = static_cast<gint>(span.length);
+        break;
+      case FieldKind::Flag:
+      case FieldKind::BitRange: {
+        std::size_t used = 0;
+        while (word.children[used] != nullptr) ++used;
+        if (used + 1 < kMaxChildren) word.children[used] = &hf_field[i];
+        break;
+      }
+      case FieldKind::Part:
+        if (word.part_count < kMaxParts) word.parts[word.part_count++] = i;
+        break;
+    }
+    word.row_end = i + 1;
   }
 }
 
@@ -336,42 +362,40 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
 }
 
 // Whether a word's items are needed: the tree is shown, or a filter or column asks for the word or
-// one of its fields. Skipping the rest keeps `tshark -T fields` and filtering fast.
-bool wordWanted(proto_tree* tree, std::size_t word_row) {
-  if (proto_field_is_referenced(tree, hf_field[word_row])) return true;
-  for (std::size_t i = word_row + 1; i < kFieldCount && kFields[i].word == kFields[word_row].word;
-       ++i) {
+// one of its fields. Skipping the rest keeps filtering with an invisible tree fast.
+bool wordWanted(proto_tree* tree, const WordItems& word) {
+  for (std::size_t i = word.row; i < word.row_end; ++i) {
     if (proto_field_is_referenced(tree, hf_field[i])) return true;
   }
   return false;
 }
 
-// Adds the words of one PDO, each bit field under its word, generated from the field table.
+// Adds the words of one PDO, each bit field under its word, as the field table defines them.
 void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
-  proto_tree* word_tree = nullptr;
-  for (std::size_t i = 0; i < kFieldCount; ++i) {
-    const FieldDef& f = kFields[i];
-    if (wordDef(f.word).pdo != pdo) continue;
-    const FieldSpan span = fieldSpan(f);
-    const auto w = static_cast<std::size_t>(f.word);
-    if (f.kind == FieldKind::Word) {
-      word_tree = nullptr;
-      if (!wordWanted(tree, i)) continue;
-      if (word_children[w][0] != nullptr) {
-        // BMT_NO_APPEND: the bits are children; appending their names to the word's label
-        // would format every bit of every word on every frame.
-        proto_item* item = proto_tree_add_bitmask_with_flags(
-            tree, tvb, offset + span.offset, hf_field[i], ett_word[w], word_children[w],
-            ENC_LITTLE_ENDIAN, BMT_NO_APPEND);
-        word_tree = proto_item_get_subtree(item);
-      } else {
-        proto_item* item = proto_tree_add_item(tree, hf_field[i], tvb, offset + span.offset,
-                                               static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
-        word_tree = proto_item_add_subtree(item, ett_word[w]);
-      }
-    } else if (f.kind == FieldKind::Part && word_tree != nullptr && fieldApplies(f, values)) {
-      proto_tree_add_item(word_tree, hf_field[i], tvb, offset + span.offset,
-                          static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
+  const std::size_t first = firstWordOf(pdo);
+  for (std::size_t w = first; w < first + wordCountOf(pdo); ++w) {
+    const WordItems& word = word_items[w];
+    if (!wordWanted(tree, word)) continue;
+    proto_item* item = nullptr;
+    if (word.children[0] != nullptr) {
+      // BMT_NO_APPEND: the bits are children; appending their names to the word's label
+      // would format every bit of every word on every frame.
+      item = proto_tree_add_bitmask_with_flags(tree, tvb, offset + word.offset, hf_field[word.row],
+                                               ett_word[w], word.children, ENC_LITTLE_ENDIAN,
+                                               BMT_NO_APPEND);
+    } else {
+      item = proto_tree_add_item(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
+                                 ENC_LITTLE_ENDIAN);
+    }
+    if (word.part_count == 0) continue;
+    proto_tree* word_tree = proto_item_add_subtree(item, ett_word[w]);
+    for (std::size_t p = 0; p < word.part_count; ++p) {
+      const FieldDef& f = kFields[word.parts[p]];
+      if (!fieldApplies(f, values)) continue;
+      const FieldSpan span = fieldSpan(f);
+      proto_tree_add_item(word_tree, hf_field[word.parts[p]], tvb,
+                          offset + static_cast<guint>(span.offset), static_cast<gint>(span.length),
+                          ENC_LITTLE_ENDIAN);
     }
   }
 }
@@ -482,7 +506,7 @@ void registerProtocol() {
   std::size_t count = 0;
   hf_register_info* hf = buildFieldRegistrations(count);
   proto_register_field_array(proto_ncservo, hf, static_cast<int>(count));
-  buildWordChildren();
+  buildWordItems();
 
   static gint* ett[2 + kWordCount];
   ett[0] = &ett_ncservo;
