@@ -11,11 +11,14 @@
 #include <epan/packet.h>
 #include <epan/prefs.h>
 #include <epan/proto_data.h>
+#include <fmt/format.h>
 #include <wireshark.h>
 #include <wiretap/wtap.h>
 #include <wsutil/report_message.h>
 
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
@@ -276,7 +279,32 @@ void applyPreferences() {
   g_settings = settings;
 }
 
+// Each axis's subtree label ("Axis 3 (x): control active") per drive state, formatted once per
+// capture: formatting it on every frame cost more than creating the item it names.
+constexpr std::size_t kStateSlots = 9;  // the eight drive states, then "no state"
+struct AxisLabel {
+  std::string name;             // the axis name and
+  const char* state = nullptr;  // the state name it was made with
+  std::string text;
+};
+std::vector<AxisLabel> g_axis_labels;  // [axis * kStateSlots + slot]
+
+const char* axisLabel(const AxisRecord& r, const char* name, const char* state) {
+  const std::size_t slot = (r.flags & kHasState) ? r.state % (kStateSlots - 1) : kStateSlots - 1;
+  const std::size_t index = std::size_t{r.axis} * kStateSlots + slot;
+  if (index >= g_axis_labels.size()) g_axis_labels.resize(index + kStateSlots);
+  AxisLabel& label = g_axis_labels[index];
+  if (label.text.empty() || label.state != state || label.name != name) {
+    label.name = name;
+    label.state = state;
+    label.text =
+        fmt::format("Axis {} ({}){}{}", r.axis, name, state ? ": " : "", state ? state : "");
+  }
+  return label.text.c_str();
+}
+
 void initCapture() {
+  g_axis_labels.clear();
   delete g_validator;
   g_validator = new Validator(g_options != nullptr ? *g_options : DecoderOptions{},
                               g_settings != nullptr ? *g_settings : RuleSettings{});
@@ -426,8 +454,7 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRec
   const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
   proto_item* axis_item = nullptr;
   proto_tree* axis_tree =
-      proto_tree_add_subtree_format(tree, tvb, start, 0, ett_axis, &axis_item, "Axis %u (%s)%s%s",
-                                    r.axis, name, state ? ": " : "", state ? state : "");
+      proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item, axisLabel(r, name, state));
   proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
   proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
 
