@@ -41,6 +41,16 @@ namespace {
 
 using namespace ncservo;
 
+// Built as ncservo_item_floor.so only for the benchmark (tests/bench/plugin_ratio.sh,
+// NCSERVO_BENCH_FLOOR=1): the same first pass and the same items as the plugin, but constant
+// texts instead of labels, names, states and messages, so that what remains is what Wireshark
+// itself spends on the items.
+#ifdef NCSERVO_ITEM_FLOOR
+constexpr bool kItemFloor = true;
+#else
+constexpr bool kItemFloor = false;
+#endif
+
 constexpr std::size_t kDerivedCount = std::size(kDerivedFields);
 constexpr std::size_t kMaxChildren = 33;  // at most 32 bit fields per word, NULL-terminated
 
@@ -446,15 +456,16 @@ bool findingsFor(const FrameRecord& record, guint16 axis) {
 
 void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRecord& record,
              const AxisRecord& r) {
-  const char* name = axisName(r.axis);
-  const char* state =
-      (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
+  const char* name = kItemFloor ? "axis" : axisName(r.axis);
+  const char* state = !(r.flags & kHasState) ? nullptr
+                      : kItemFloor           ? "state"
+                                             : driveStateName(static_cast<DriveState>(r.state));
   // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
   // raise an exception.
   const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
   proto_item* axis_item = nullptr;
-  proto_tree* axis_tree =
-      proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item, axisLabel(r, name, state));
+  proto_tree* axis_tree = proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item,
+                                                 kItemFloor ? "Axis" : axisLabel(r, name, state));
   proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
   proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
 
@@ -471,8 +482,8 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRec
         proto_tree_add_string(axis_tree, derivedHf(Derived::State), tvb, start, 0, state));
   }
   if (values.has_tx) {
-    char message[128];
-    formatMessage(message, sizeof message, values.msgCode(), values.msgData());
+    char message[128] = "message";
+    if (!kItemFloor) formatMessage(message, sizeof message, values.msgCode(), values.msgData());
     proto_item_set_generated(proto_tree_add_string(axis_tree, derivedHf(Derived::Message), tvb,
                                                    r.tx_offset, 0, message));
   }
@@ -502,8 +513,8 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
   col_append_str(pinfo->cinfo, COL_INFO, " [NCSERVO ");
   if (record->axis_count > 0) {
-    const char* copy = copyKindName(static_cast<CopyKind>(record->copy));
-    proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
+    const char* copy = kItemFloor ? "copy" : copyKindName(static_cast<CopyKind>(record->copy));
+    if (!kItemFloor) proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
     proto_item_set_generated(
         proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
   }
