@@ -408,6 +408,24 @@ bool wordWanted(proto_tree* tree, const WordItems& word) {
   return false;
 }
 
+// One word or part from the value the library already read: Wireshark adds an item from a value
+// for less than it takes to read the bytes again. The region was read whole, so the item covers
+// captured bytes.
+proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint length,
+                     const FieldValue& v) {
+  switch (v.kind) {
+    case FieldValue::Kind::Signed:
+      return length == 8
+                 ? proto_tree_add_int64(tree, hf, tvb, offset, length, v.i)
+                 : proto_tree_add_int(tree, hf, tvb, offset, length, static_cast<gint32>(v.i));
+    case FieldValue::Kind::Unsigned:
+      return proto_tree_add_uint(tree, hf, tvb, offset, length, static_cast<guint32>(v.u));
+    case FieldValue::Kind::Float:
+      return proto_tree_add_float(tree, hf, tvb, offset, length, static_cast<float>(v.f));
+  }
+  return nullptr;
+}
+
 // Adds the words of one PDO, each bit field under its word, as the field table defines them.
 void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
   const std::size_t first = firstWordOf(pdo);
@@ -418,12 +436,12 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
     if (word.children[0] != nullptr) {
       // BMT_NO_APPEND: the bits are children; appending their names to the word's label
       // would format every bit of every word on every frame.
-      item = proto_tree_add_bitmask_with_flags(tree, tvb, offset + word.offset, hf_field[word.row],
-                                               ett_word[w], word.children, ENC_LITTLE_ENDIAN,
-                                               BMT_NO_APPEND);
+      item = proto_tree_add_bitmask_value_with_flags(tree, tvb, offset + word.offset,
+                                                     hf_field[word.row], ett_word[w], word.children,
+                                                     values.raw[w], BMT_NO_APPEND);
     } else {
-      item = proto_tree_add_item(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
-                                 ENC_LITTLE_ENDIAN);
+      item = addValue(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
+                      fieldValue(kFields[word.row], values));
     }
     if (word.part_count == 0) continue;
     proto_tree* word_tree = proto_item_add_subtree(item, ett_word[w]);
@@ -431,9 +449,8 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
       const FieldDef& f = kFields[word.parts[p]];
       if (!fieldApplies(f, values)) continue;
       const FieldSpan span = fieldSpan(f);
-      proto_tree_add_item(word_tree, hf_field[word.parts[p]], tvb,
-                          offset + static_cast<guint>(span.offset), static_cast<gint>(span.length),
-                          ENC_LITTLE_ENDIAN);
+      addValue(word_tree, hf_field[word.parts[p]], tvb, offset + static_cast<guint>(span.offset),
+               static_cast<gint>(span.length), fieldValue(f, values));
     }
   }
 }
