@@ -11,11 +11,14 @@
 #include <epan/packet.h>
 #include <epan/prefs.h>
 #include <epan/proto_data.h>
+#include <fmt/format.h>
 #include <wireshark.h>
 #include <wiretap/wtap.h>
 #include <wsutil/report_message.h>
 
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
@@ -38,6 +41,16 @@ namespace {
 
 using namespace ncservo;
 
+// Built as ncservo_item_floor.so only for the benchmark (tests/bench/plugin_ratio.sh,
+// NCSERVO_BENCH_FLOOR=1): the same first pass and the same items as the plugin, but constant
+// texts instead of labels, names, states and messages, so that what remains is what Wireshark
+// itself spends on the items.
+#ifdef NCSERVO_ITEM_FLOOR
+constexpr bool kItemFloor = true;
+#else
+constexpr bool kItemFloor = false;
+#endif
+
 constexpr std::size_t kDerivedCount = std::size(kDerivedFields);
 constexpr std::size_t kMaxChildren = 33;  // at most 32 bit fields per word, NULL-terminated
 
@@ -47,8 +60,18 @@ int hf_derived[kDerivedCount];
 int ett_ncservo = -1;
 int ett_axis = -1;
 int ett_word[kWordCount];
-// Per word, the bit fields drawn by one bitmask call (NULL-terminated).
-int* word_children[kWordCount][kMaxChildren];
+// What each PDO word adds, prepared once from the field table so that no frame scans the table.
+constexpr std::size_t kMaxParts = 2;
+struct WordItems {
+  std::size_t row;      // the word's row in kFields; its bit fields and parts follow it
+  std::size_t row_end;  // one past the word's last row
+  guint offset;         // in its PDO
+  gint length;
+  int* children[kMaxChildren];   // bit fields drawn by one bitmask call, NULL-terminated
+  std::size_t parts[kMaxParts];  // rows of byte-aligned parts, each shown when it applies
+  std::size_t part_count;
+};
+WordItems word_items[kWordCount];
 expert_field ei_region_malformed = EI_INIT;
 expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
@@ -216,13 +239,29 @@ int derivedHf(Derived id) {
   return hf_derived[static_cast<std::size_t>(id)];
 }
 
-void buildWordChildren() {
-  std::size_t used[kWordCount] = {};
+void buildWordItems() {
   for (std::size_t i = 0; i < kFieldCount; ++i) {
     const FieldDef& f = kFields[i];
-    if (f.kind != FieldKind::Flag && f.kind != FieldKind::BitRange) continue;
-    const auto w = static_cast<std::size_t>(f.word);
-    if (used[w] + 1 < kMaxChildren) word_children[w][used[w]++] = &hf_field[i];
+    WordItems& word = word_items[static_cast<std::size_t>(f.word)];
+    const FieldSpan span = fieldSpan(f);
+    switch (f.kind) {
+      case FieldKind::Word:
+        word.row = i;
+        word.offset = static_cast<guint>(span.offset);
+        word.length = static_cast<gint>(span.length);
+        break;
+      case FieldKind::Flag:
+      case FieldKind::BitRange: {
+        std::size_t used = 0;
+        while (word.children[used] != nullptr) ++used;
+        if (used + 1 < kMaxChildren) word.children[used] = &hf_field[i];
+        break;
+      }
+      case FieldKind::Part:
+        if (word.part_count < kMaxParts) word.parts[word.part_count++] = i;
+        break;
+    }
+    word.row_end = i + 1;
   }
 }
 
@@ -250,7 +289,32 @@ void applyPreferences() {
   g_settings = settings;
 }
 
+// Each axis's subtree label ("Axis 3 (x): control active") per drive state, formatted once per
+// capture: formatting it on every frame cost more than creating the item it names.
+constexpr std::size_t kStateSlots = 9;  // the eight drive states, then "no state"
+struct AxisLabel {
+  std::string name;             // the axis name and
+  const char* state = nullptr;  // the state name it was made with
+  std::string text;
+};
+std::vector<AxisLabel> g_axis_labels;  // [axis * kStateSlots + slot]
+
+const char* axisLabel(const AxisRecord& r, const char* name, const char* state) {
+  const std::size_t slot = (r.flags & kHasState) ? r.state % (kStateSlots - 1) : kStateSlots - 1;
+  const std::size_t index = std::size_t{r.axis} * kStateSlots + slot;
+  if (index >= g_axis_labels.size()) g_axis_labels.resize(index + kStateSlots);
+  AxisLabel& label = g_axis_labels[index];
+  if (label.text.empty() || label.state != state || label.name != name) {
+    label.name = name;
+    label.state = state;
+    label.text =
+        fmt::format("Axis {} ({}){}{}", r.axis, name, state ? ": " : "", state ? state : "");
+  }
+  return label.text.c_str();
+}
+
 void initCapture() {
+  g_axis_labels.clear();
   delete g_validator;
   g_validator = new Validator(g_options != nullptr ? *g_options : DecoderOptions{},
                               g_settings != nullptr ? *g_settings : RuleSettings{});
@@ -336,42 +400,57 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
 }
 
 // Whether a word's items are needed: the tree is shown, or a filter or column asks for the word or
-// one of its fields. Skipping the rest keeps `tshark -T fields` and filtering fast.
-bool wordWanted(proto_tree* tree, std::size_t word_row) {
-  if (proto_field_is_referenced(tree, hf_field[word_row])) return true;
-  for (std::size_t i = word_row + 1; i < kFieldCount && kFields[i].word == kFields[word_row].word;
-       ++i) {
+// one of its fields. Skipping the rest keeps filtering with an invisible tree fast.
+bool wordWanted(proto_tree* tree, const WordItems& word) {
+  for (std::size_t i = word.row; i < word.row_end; ++i) {
     if (proto_field_is_referenced(tree, hf_field[i])) return true;
   }
   return false;
 }
 
-// Adds the words of one PDO, each bit field under its word, generated from the field table.
+// One word or part from the value the library already read: Wireshark adds an item from a value
+// for less than it takes to read the bytes again. The region was read whole, so the item covers
+// captured bytes.
+proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint length,
+                     const FieldValue& v) {
+  switch (v.kind) {
+    case FieldValue::Kind::Signed:
+      return length == 8
+                 ? proto_tree_add_int64(tree, hf, tvb, offset, length, v.i)
+                 : proto_tree_add_int(tree, hf, tvb, offset, length, static_cast<gint32>(v.i));
+    case FieldValue::Kind::Unsigned:
+      return proto_tree_add_uint(tree, hf, tvb, offset, length, static_cast<guint32>(v.u));
+    case FieldValue::Kind::Float:
+      return proto_tree_add_float(tree, hf, tvb, offset, length, static_cast<float>(v.f));
+  }
+  return nullptr;
+}
+
+// Adds the words of one PDO, each bit field under its word, as the field table defines them.
 void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
-  proto_tree* word_tree = nullptr;
-  for (std::size_t i = 0; i < kFieldCount; ++i) {
-    const FieldDef& f = kFields[i];
-    if (wordDef(f.word).pdo != pdo) continue;
-    const FieldSpan span = fieldSpan(f);
-    const auto w = static_cast<std::size_t>(f.word);
-    if (f.kind == FieldKind::Word) {
-      word_tree = nullptr;
-      if (!wordWanted(tree, i)) continue;
-      if (word_children[w][0] != nullptr) {
-        // BMT_NO_APPEND: the bits are children; appending their names to the word's label
-        // would format every bit of every word on every frame.
-        proto_item* item = proto_tree_add_bitmask_with_flags(
-            tree, tvb, offset + span.offset, hf_field[i], ett_word[w], word_children[w],
-            ENC_LITTLE_ENDIAN, BMT_NO_APPEND);
-        word_tree = proto_item_get_subtree(item);
-      } else {
-        proto_item* item = proto_tree_add_item(tree, hf_field[i], tvb, offset + span.offset,
-                                               static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
-        word_tree = proto_item_add_subtree(item, ett_word[w]);
-      }
-    } else if (f.kind == FieldKind::Part && word_tree != nullptr && fieldApplies(f, values)) {
-      proto_tree_add_item(word_tree, hf_field[i], tvb, offset + span.offset,
-                          static_cast<gint>(span.length), ENC_LITTLE_ENDIAN);
+  const std::size_t first = firstWordOf(pdo);
+  for (std::size_t w = first; w < first + wordCountOf(pdo); ++w) {
+    const WordItems& word = word_items[w];
+    if (!wordWanted(tree, word)) continue;
+    proto_item* item = nullptr;
+    if (word.children[0] != nullptr) {
+      // BMT_NO_APPEND: the bits are children; appending their names to the word's label
+      // would format every bit of every word on every frame.
+      item = proto_tree_add_bitmask_value_with_flags(tree, tvb, offset + word.offset,
+                                                     hf_field[word.row], ett_word[w], word.children,
+                                                     values.raw[w], BMT_NO_APPEND);
+    } else {
+      item = addValue(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
+                      fieldValue(kFields[word.row], values));
+    }
+    if (word.part_count == 0) continue;
+    proto_tree* word_tree = proto_item_add_subtree(item, ett_word[w]);
+    for (std::size_t p = 0; p < word.part_count; ++p) {
+      const FieldDef& f = kFields[word.parts[p]];
+      if (!fieldApplies(f, values)) continue;
+      const FieldSpan span = fieldSpan(f);
+      addValue(word_tree, hf_field[word.parts[p]], tvb, offset + static_cast<guint>(span.offset),
+               static_cast<gint>(span.length), fieldValue(f, values));
     }
   }
 }
@@ -394,16 +473,16 @@ bool findingsFor(const FrameRecord& record, guint16 axis) {
 
 void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRecord& record,
              const AxisRecord& r) {
-  const char* name = axisName(r.axis);
-  const char* state =
-      (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
+  const char* name = kItemFloor ? "axis" : axisName(r.axis);
+  const char* state = !(r.flags & kHasState) ? nullptr
+                      : kItemFloor           ? "state"
+                                             : driveStateName(static_cast<DriveState>(r.state));
   // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
   // raise an exception.
   const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
   proto_item* axis_item = nullptr;
-  proto_tree* axis_tree =
-      proto_tree_add_subtree_format(tree, tvb, start, 0, ett_axis, &axis_item, "Axis %u (%s)%s%s",
-                                    r.axis, name, state ? ": " : "", state ? state : "");
+  proto_tree* axis_tree = proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item,
+                                                 kItemFloor ? "Axis" : axisLabel(r, name, state));
   proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
   proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
 
@@ -420,8 +499,8 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRec
         proto_tree_add_string(axis_tree, derivedHf(Derived::State), tvb, start, 0, state));
   }
   if (values.has_tx) {
-    char message[128];
-    formatMessage(message, sizeof message, values.msgCode(), values.msgData());
+    char message[128] = "message";
+    if (!kItemFloor) formatMessage(message, sizeof message, values.msgCode(), values.msgData());
     proto_item_set_generated(proto_tree_add_string(axis_tree, derivedHf(Derived::Message), tvb,
                                                    r.tx_offset, 0, message));
   }
@@ -451,8 +530,8 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
   col_append_str(pinfo->cinfo, COL_INFO, " [NCSERVO ");
   if (record->axis_count > 0) {
-    const char* copy = copyKindName(static_cast<CopyKind>(record->copy));
-    proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
+    const char* copy = kItemFloor ? "copy" : copyKindName(static_cast<CopyKind>(record->copy));
+    if (!kItemFloor) proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
     proto_item_set_generated(
         proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
   }
@@ -482,7 +561,7 @@ void registerProtocol() {
   std::size_t count = 0;
   hf_register_info* hf = buildFieldRegistrations(count);
   proto_register_field_array(proto_ncservo, hf, static_cast<int>(count));
-  buildWordChildren();
+  buildWordItems();
 
   static gint* ett[2 + kWordCount];
   ett[0] = &ett_ncservo;

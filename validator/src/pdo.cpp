@@ -1,5 +1,7 @@
 #include "ncservo/pdo.hpp"
 
+#include <fmt/format.h>
+
 #include <array>
 #include <cinttypes>
 #include <cstdio>
@@ -10,6 +12,7 @@ namespace ncservo {
 
 namespace {
 constexpr std::uint32_t kIncrementalEncoder = mask32("ncservo.ssw.incremental");
+constexpr const FieldDef& kMsgCodeField = field("ncservo.msg_code");
 
 std::int64_t signExtend(std::uint64_t raw, unsigned bits) {
   if (bits >= 64) return static_cast<std::int64_t>(raw);
@@ -119,9 +122,11 @@ const ValueName* valueName(const FieldDef& field, std::uint64_t value) {
 void formatMessage(char* buf, std::size_t size, std::int32_t code, float data) {
   if (size == 0) return;
   const ValueName* name =
-      code >= 0 ? valueName(field("ncservo.msg_code"), static_cast<std::uint32_t>(code)) : nullptr;
+      code >= 0 ? valueName(kMsgCodeField, static_cast<std::uint32_t>(code)) : nullptr;
   if (name != nullptr) {
-    std::snprintf(buf, size, "%s %.1f %s", name->name, static_cast<double>(data), name->unit);
+    // fmt, not snprintf: the Wireshark plugin formats this for every axis of every frame, and
+    // fmt's {:.1f} gives the same digits as %.1f at a fraction of the cost.
+    *fmt::format_to_n(buf, size - 1, "{} {:.1f} {}", name->name, data, name->unit).out = '\0';
   } else {
     std::snprintf(buf, size, "undefined message code %" PRId32 ": %g", code,
                   static_cast<double>(data));
