@@ -320,6 +320,19 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   entered_op_all_ = false;
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   const std::size_t count = walked ? frame.count : 0;
+  if (!returned) {
+    master_.clear();
+    for (std::size_t i = 0; i < count; ++i) {
+      master_.push_back({frame.datagrams[i].command, frame.datagrams[i].adp()});
+    }
+  }
+  // Logical commands (the cyclic process data) address no register: a frame of nothing else
+  // has nothing for the state machines.
+  bool registers = false;
+  for (std::size_t i = 0; i < count && !registers; ++i) {
+    registers = !ecat::isLogical(frame.datagrams[i].command);
+  }
+  if (!registers) return;
 
   // Writes from the master's copy, or from a returned copy whose master copy was not captured;
   // reads from a returned copy, of datagrams that some slave answered.
@@ -362,13 +375,6 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
       if (auto raw = readStateRegister(dg, bytes, kRegAlStatus)) {
         onStatusRead(address, *raw, now, out);
       }
-    }
-  }
-
-  if (!returned) {
-    master_.clear();
-    for (std::size_t i = 0; i < count; ++i) {
-      master_.push_back({frame.datagrams[i].command, frame.datagrams[i].adp()});
     }
   }
 }

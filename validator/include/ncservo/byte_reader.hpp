@@ -25,7 +25,7 @@ class ByteReader {
   }
   std::optional<std::uint16_t> le16(std::size_t offset) const {
     if (!has(offset, 2)) return std::nullopt;
-    return static_cast<std::uint16_t>(data_[offset] | (data_[offset + 1] << 8));
+    return static_cast<std::uint16_t>(loadLe(offset, 2));
   }
   std::optional<std::uint16_t> be16(std::size_t offset) const {
     if (!has(offset, 2)) return std::nullopt;
@@ -48,11 +48,16 @@ class ByteReader {
   }
 
  private:
+  // Only after a bounds check. On a little-endian host one load (memcpy of a constant count).
   std::uint64_t loadLe(std::size_t offset, std::size_t count) const {
     std::uint64_t value = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    std::memcpy(&value, data_ + offset, count);
+#else
     for (std::size_t i = 0; i < count; ++i) {
       value |= static_cast<std::uint64_t>(data_[offset + i]) << (8 * i);
     }
+#endif
     return value;
   }
 

@@ -75,7 +75,8 @@ class Validator {
   AxisSlot& slot(std::uint16_t axis);
   CyclicFrame* cyclicFrame(std::uint16_t first_axis);
   WkcRecord* wkcRecord(const Datagram& dg);
-  void accountCycle(const FrameView& view, const EcatFrame& frame);
+  // `first_axis`: the lowest axis index of the frame, which names its cyclic frame.
+  void accountCycle(const FrameView& view, const EcatFrame& frame, std::uint16_t first_axis);
   void tick(CyclicFrame& cyclic, const FrameView& view);
   void checkWorkingCounters(const FrameView& view, const EcatFrame& frame);
   void evaluateAxis(AxisSlot& axis);
