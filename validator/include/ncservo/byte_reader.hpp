@@ -9,6 +9,49 @@
 
 namespace ncservo {
 
+// A fixed-size record copied out of the captured bytes after one bounds check (a datagram
+// header, a PDO): its fields are read at offsets checked against its size at compile time.
+template <std::size_t N>
+class ByteRecord {
+ public:
+  explicit ByteRecord(const std::uint8_t* data) { std::memcpy(bytes_, data, N); }
+
+  template <std::size_t Offset>
+  std::uint8_t u8() const {
+    static_assert(Offset + 1 <= N, "field outside the record");
+    return bytes_[Offset];
+  }
+  template <std::size_t Offset>
+  std::uint16_t le16() const {
+    return static_cast<std::uint16_t>(le<Offset, 2>());
+  }
+  template <std::size_t Offset>
+  std::uint32_t le32() const {
+    return static_cast<std::uint32_t>(le<Offset, 4>());
+  }
+  template <std::size_t Offset>
+  std::uint64_t le64() const {
+    return le<Offset, 8>();
+  }
+
+ private:
+  template <std::size_t Offset, std::size_t Count>
+  std::uint64_t le() const {
+    static_assert(Offset + Count <= N, "field outside the record");
+    std::uint64_t value = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    std::memcpy(&value, bytes_ + Offset, Count);
+#else
+    for (std::size_t i = 0; i < Count; ++i) {
+      value |= static_cast<std::uint64_t>(bytes_[Offset + i]) << (8 * i);
+    }
+#endif
+    return value;
+  }
+
+  std::uint8_t bytes_[N];
+};
+
 class ByteReader {
  public:
   ByteReader(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
@@ -17,6 +60,13 @@ class ByteReader {
   const std::uint8_t* data() const { return data_; }
   bool has(std::size_t offset, std::size_t count) const {
     return offset <= size_ && count <= size_ - offset;
+  }
+
+  // The N bytes at `offset` as a record, when all of them were captured.
+  template <std::size_t N>
+  std::optional<ByteRecord<N>> record(std::size_t offset) const {
+    if (!has(offset, N)) return std::nullopt;
+    return ByteRecord<N>(data_ + offset);
   }
 
   std::optional<std::uint8_t> u8(std::size_t offset) const {
