@@ -9,12 +9,13 @@
 
 namespace ncservo {
 
-// A fixed-size record copied out of the captured bytes after one bounds check (a datagram
-// header, a PDO): its fields are read at offsets checked against its size at compile time.
+// A fixed-size record of the captured bytes whose bounds were checked once (a datagram header):
+// its fields are read at offsets checked against its size at compile time. It points into the
+// ByteReader's bytes (no copy: a copy to the stack and loads across it stall the CPU).
 template <std::size_t N>
 class ByteRecord {
  public:
-  explicit ByteRecord(const std::uint8_t* data) { std::memcpy(bytes_, data, N); }
+  explicit ByteRecord(const std::uint8_t* data) : bytes_(data) {}
 
   template <std::size_t Offset>
   std::uint8_t u8() const {
@@ -49,7 +50,7 @@ class ByteRecord {
     return value;
   }
 
-  std::uint8_t bytes_[N];
+  const std::uint8_t* bytes_;
 };
 
 class ByteReader {

@@ -1,7 +1,6 @@
 // Reading one axis's PDOs out of captured bytes, and the values of the field table's rows.
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -82,11 +81,18 @@ inline bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoVal
                         : readPdoOf<Pdo::Tx>(bytes, offset, out);
 }
 
-// The words of one PDO set to zero and marked absent.
-inline void clearPdo(Pdo pdo, PdoValues& out) {
-  const auto first = out.raw.begin() + static_cast<std::ptrdiff_t>(firstWordOf(pdo));
-  std::fill(first, first + static_cast<std::ptrdiff_t>(wordCountOf(pdo)), 0);
-  (pdo == Pdo::Rx ? out.has_rx : out.has_tx) = false;
+namespace detail {
+template <Pdo P, std::size_t... I>
+void clearWords(PdoValues& out, std::index_sequence<I...>) {
+  ((kWords[I].pdo == P ? (void)(out.raw[I] = 0) : (void)0), ...);
+}
+}  // namespace detail
+
+// The words of one PDO set to zero and marked absent (unrolled: on the hot path).
+template <Pdo P>
+void clearPdoOf(PdoValues& out) {
+  detail::clearWords<P>(out, std::make_index_sequence<kWordCount>{});
+  (P == Pdo::Rx ? out.has_rx : out.has_tx) = false;
 }
 
 struct FieldValue {

@@ -23,10 +23,10 @@ struct AxisFrameView {
 inline void readFrameValues(const AxisPlacement& placement, const ByteReader& bytes,
                             PdoValues& out) {
   if (!placement.has_rx || !readPdoOf<Pdo::Rx>(bytes, placement.rx_offset, out)) {
-    clearPdo(Pdo::Rx, out);
+    clearPdoOf<Pdo::Rx>(out);
   }
   if (!placement.has_tx || !readPdoOf<Pdo::Tx>(bytes, placement.tx_offset, out)) {
-    clearPdo(Pdo::Tx, out);
+    clearPdoOf<Pdo::Tx>(out);
   }
 }
 
