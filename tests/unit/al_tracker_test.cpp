@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -494,6 +495,53 @@ TEST(AlTracker, LongerReadCoversStatus) {
              {Dg{ecat::kFprd, 0, physical(kStation1, 0x012E), le16(kOp), 1}});
   EXPECT_EQ(h.tracker.stateOfStation(kStation1), std::nullopt);
 }
+
+// A frame of cyclic process data and the DC time reaches no AL register; one register datagram
+// among them is still seen, wherever it sits and however far before the registers it starts.
+struct AmongCase {
+  const char* name;
+  bool with_status_read;
+  std::uint16_t read_from;  // ADO of the FPRD; its data covers AL status at 0x0130
+  bool status_first;        // the FPRD before the LRW and the FRMW
+};
+class AlTrackerAmongCyclic : public ::testing::TestWithParam<AmongCase> {};
+
+TEST_P(AlTrackerAmongCyclic, StatusReadSeen) {
+  const AmongCase c = GetParam();
+  Harness h;
+  const Dg lrw{ecat::kLrw, 0, 0x00010000, Bytes(50, 0), 0};
+  const Dg lrw_back{ecat::kLrw, 0, 0x00010000, Bytes(50, 0), 3};
+  const Dg dc{ecat::kFrmw, 1, physical(kStation0, 0x0910), Bytes(8, 0), 0};
+  const Dg dc_back{ecat::kFrmw, 1, physical(kStation0, 0x0910), Bytes(8, 0), 1};
+  std::vector<Dg> master{lrw, dc};
+  std::vector<Dg> back{lrw_back, dc_back};
+  if (c.with_status_read) {
+    const std::size_t size = kRegStatus + 2u - c.read_from;
+    Bytes data(size, 0);
+    data[kRegStatus - c.read_from] = kOp;
+    const Dg read{ecat::kFprd, 2, physical(kStation0, c.read_from), Bytes(size, 0), 0};
+    const Dg read_back{ecat::kFprd, 2, physical(kStation0, c.read_from), data, 1};
+    master.insert(c.status_first ? master.begin() : master.end(), read);
+    back.insert(c.status_first ? back.begin() : back.end(), read_back);
+  }
+  EXPECT_TRUE(h.exchange(master, back).empty());
+  EXPECT_EQ(h.tracker.stateOfStation(kStation0),
+            c.with_status_read ? std::optional<std::uint8_t>(kOp) : std::nullopt)
+      << c.name;
+}
+
+INSTANTIATE_TEST_SUITE_P(AlTracker, AlTrackerAmongCyclic,
+                         ::testing::Values(AmongCase{"cyclic only", false, 0, false},
+                                           AmongCase{"status read last", true, kRegStatus, false},
+                                           AmongCase{"status read first", true, kRegStatus, true},
+                                           AmongCase{"read from 0x0000", true, 0x0000, false},
+                                           AmongCase{"read from control", true, kRegControl, true}),
+                         [](const ::testing::TestParamInfo<AmongCase>& param_info) {
+                           std::string name = param_info.param.name;
+                           for (char& ch : name)
+                             ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+                           return name;
+                         });
 
 // Every cut of a frame: no read past the captured bytes (ASan), and nothing wrong comes out.
 TEST(AlTracker, TruncatedFramesNeverReadPastTheEnd) {

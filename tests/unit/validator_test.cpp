@@ -18,6 +18,7 @@
 #include "frame_builder.hpp"
 #include "ncservo/axis_model.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/session.hpp"
 #include "validator_driver.hpp"
 
 namespace ncservo {
@@ -1174,6 +1175,99 @@ TEST(AxisModelSignals, FirstObservationHasNoEdges) {
   EXPECT_FALSE(axis.servoEn().fell);
   EXPECT_EQ(axis.servoEn().since.frame, 1u);
   EXPECT_EQ(axis.errClearAck().since.frame, 2u);
+}
+
+// The validator reads each frame's placements and values itself, in one pass with its judging:
+// its view must be what a Session gives for the same frames (placements, values, copy), and each
+// axis's state its model's. One row per frame, fed in order to both.
+struct ViewRow {
+  const char* name;
+  std::vector<Dg> datagrams;
+  std::size_t cut = 0;  // bytes cut off the end of the captured frame
+};
+
+std::vector<ViewRow> viewRows() {
+  using test::concat;
+  using test::rxPdo;
+  using test::txPdo;
+  const auto lrw = [](std::uint32_t scw, std::optional<std::uint32_t> ssw, std::uint16_t wkc) {
+    Bytes data = concat({rxPdo(100, scw), rxPdo(101, scw)});
+    for (std::int64_t k = 0; k < 2; ++k) {
+      data = concat({data, ssw ? txPdo({1000 + k, *ssw}) : Bytes(40, 0)});
+    }
+    return Dg{ecat::kLrw, 0x80, 0x00010000, data, wkc};
+  };
+  const Dg dc{ecat::kFrmw, 1, physical(0x1001, 0x0910), Bytes(8, 0), 0};
+  const Dg dc_back{ecat::kFrmw, 1, physical(0x1001, 0x0910), Bytes(8, 0), 1};
+  const Dg lwr{ecat::kLwr, 2, 0x00020000, concat({rxPdo(7, 0x1), rxPdo(8, 0x1), rxPdo(9, 0x1)}), 0};
+  const Dg lrd{ecat::kLrd, 3, 0x00030000, Bytes(120, 0), 0};
+  Dg lwr_back = lwr;
+  lwr_back.wkc = 3;
+  Bytes inputs;
+  for (std::int64_t k = 0; k < 3; ++k) inputs = concat({inputs, txPdo({k, 0x2})});
+  const Dg lrd_back{ecat::kLrd, 3, 0x00030000, inputs, 3};
+  return {
+      {"master, 2 axes", {lrw(kScwRunning, std::nullopt, 0), dc}},
+      {"returned, 2 axes", {lrw(kScwRunning, kSswRunning, 6), dc_back}},
+      {"master again: cached placements", {lrw(kScwRunning, std::nullopt, 0), dc}},
+      {"returned, words unchanged", {lrw(kScwRunning, kSswRunning, 6), dc_back}},
+      {"master, SCW changed", {lrw(0x402, std::nullopt, 0), dc}},
+      {"returned, SSW changed", {lrw(0x402, 0x2, 6), dc_back}},
+      {"returned with WKC 0: outputs only", {lrw(0x402, std::nullopt, 0), dc_back}},
+      {"returned, cut inside the second TxPDO", {lrw(0x402, 0x2, 6)}, 18},
+      {"returned, cut inside the first RxPDO", {lrw(0x402, 0x2, 6)}, 98},
+      {"master, LWR and LRD of 3 more axes", {lwr, lrd}},
+      {"returned, LWR and LRD", {lwr_back, lrd_back}},
+      {"no servo: the DC time alone", {dc_back}},
+      {"returned, 2 axes again", {lrw(kScwRunning, kSswRunning, 6), dc_back}},
+  };
+}
+
+TEST(ValidatorView, SameAsSessionFrameByFrame) {
+  Validator validator(DecoderOptions{}, RuleSettings{});
+  Session session(DecoderOptions{});
+  session.trackStates(false);
+  std::uint64_t frame = 0;
+  std::size_t axes_seen = 0;
+  for (const ViewRow& row : viewRows()) {
+    SCOPED_TRACE(row.name);
+    FrameBuilder builder;
+    for (const Dg& dg : row.datagrams) builder.add(dg);
+    const Bytes bytes = builder.bytes();
+    ASSERT_LT(row.cut, bytes.size());
+    const test::Walked w = test::walk(bytes, bytes.size() - row.cut);
+    ++frame;
+    const FrameView& got = validator.onFrame(
+        frame, kEpochNs + static_cast<std::int64_t>(frame) * kMs, *w.frame, w.reader());
+    const FrameView& want = session.onFrame(*w.frame, w.reader());
+    EXPECT_EQ(got.copy, want.copy);
+    EXPECT_EQ(got.paired, want.paired);
+    ASSERT_EQ(got.axis_count, want.axis_count);
+    axes_seen += got.axis_count;
+    for (std::size_t i = 0; i < got.axis_count; ++i) {
+      SCOPED_TRACE("axis slot " + std::to_string(i));
+      const AxisPlacement& g = got.axes[i].placement;
+      const AxisPlacement& e = want.axes[i].placement;
+      EXPECT_EQ(g.axis, e.axis);
+      EXPECT_EQ(g.rx_placed, e.rx_placed);
+      EXPECT_EQ(g.tx_placed, e.tx_placed);
+      EXPECT_EQ(g.has_rx, e.has_rx);
+      EXPECT_EQ(g.has_tx, e.has_tx);
+      EXPECT_EQ(g.rx_malformed, e.rx_malformed);
+      EXPECT_EQ(g.tx_malformed, e.tx_malformed);
+      EXPECT_EQ(g.rx_datagram, e.rx_datagram);
+      EXPECT_EQ(g.tx_datagram, e.tx_datagram);
+      EXPECT_EQ(g.rx_offset, e.rx_offset);
+      EXPECT_EQ(g.tx_offset, e.tx_offset);
+      EXPECT_EQ(got.axes[i].values.has_rx, want.axes[i].values.has_rx);
+      EXPECT_EQ(got.axes[i].values.has_tx, want.axes[i].values.has_tx);
+      EXPECT_EQ(got.axes[i].values.raw, want.axes[i].values.raw);
+      const AxisModel* model = validator.axis(g.axis);
+      ASSERT_NE(model, nullptr);
+      EXPECT_EQ(got.axes[i].state, model->state());
+    }
+  }
+  EXPECT_GT(axes_seen, 20u) << "the rows must place axes";
 }
 
 }  // namespace

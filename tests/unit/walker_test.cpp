@@ -1,7 +1,9 @@
 // The EtherCAT frame walker (ethercat.hpp, PROTOCOL.md §8) on frames built byte by byte.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -463,6 +465,43 @@ TEST(Walker, ChainLongerThanMaxDatagramsStopsAtTheBound) {
   EXPECT_NE(w.frame->status, WalkStatus::NotEtherCat);
   EXPECT_EQ(w.frame->count, ecat::kMaxDatagrams);
 }
+
+// ByteReader::record: one bounds check for a fixed-size record, then its fields little-endian.
+struct RecordCase {
+  std::size_t size;    // captured bytes
+  std::size_t offset;  // where the 10-byte record starts
+  bool present;
+};
+class ByteRecordRead : public ::testing::TestWithParam<RecordCase> {};
+
+TEST_P(ByteRecordRead, WholeOrNothing) {
+  const RecordCase c = GetParam();
+  // Exactly `size` bytes on the heap, so that a read past them is caught by ASan.
+  const Bytes bytes = counting(c.size, 1);
+  std::unique_ptr<std::uint8_t[]> buffer(new std::uint8_t[c.size > 0 ? c.size : 1]);
+  std::copy(bytes.begin(), bytes.end(), buffer.get());
+  const ByteReader reader(buffer.get(), c.size);
+  const auto record = reader.record<10>(c.offset);
+  ASSERT_EQ(record.has_value(), c.present);
+  if (!record) return;
+  const auto at = [&](std::size_t i) { return std::uint64_t{bytes[c.offset + i]}; };
+  EXPECT_EQ(record->u8<0>(), at(0));
+  EXPECT_EQ(record->u8<9>(), at(9));
+  EXPECT_EQ(record->le16<1>(), at(1) | at(2) << 8);
+  EXPECT_EQ(record->le32<2>(), at(2) | at(3) << 8 | at(4) << 16 | at(5) << 24);
+  EXPECT_EQ(record->le64<2>(), at(2) | at(3) << 8 | at(4) << 16 | at(5) << 24 | at(6) << 32 |
+                                   at(7) << 40 | at(8) << 48 | at(9) << 56);
+  // The same values as the single reads.
+  EXPECT_EQ(record->le16<8>(), reader.le16(c.offset + 8));
+  EXPECT_EQ(record->le32<6>(), reader.le32(c.offset + 6));
+}
+
+INSTANTIATE_TEST_SUITE_P(Walker, ByteRecordRead,
+                         ::testing::Values(RecordCase{10, 0, true}, RecordCase{20, 10, true},
+                                           RecordCase{20, 5, true}, RecordCase{20, 11, false},
+                                           RecordCase{9, 0, false}, RecordCase{0, 0, false},
+                                           RecordCase{10, SIZE_MAX - 4, false},
+                                           RecordCase{10, 10, false}));
 
 TEST(Walker, CommandNames) {
   EXPECT_STREQ(ecat::commandName(ecat::kLrw), "LRW");

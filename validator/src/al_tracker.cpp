@@ -78,6 +78,18 @@ std::optional<std::size_t> registerAt(const Datagram& dg, std::uint16_t reg, std
   return dg.data_offset + relative;
 }
 
+// Whether any register read or written here lies in the datagram's captured data. Logical
+// commands do not address registers.
+constexpr std::uint16_t kFirstRegister = kRegStationAddress;
+constexpr std::uint16_t kEndOfRegisters = kRegAlStatusCode + 2;
+static_assert(kFirstRegister <= kRegAlControl && kRegAlControl < kEndOfRegisters &&
+              kRegAlStatus < kEndOfRegisters);
+bool reachesAlRegisters(const Datagram& dg) {
+  if (ecat::isLogical(dg.command)) return false;
+  const std::size_t ado = dg.ado();
+  return ado < kEndOfRegisters && ado + dg.data_captured > kFirstRegister;
+}
+
 // The low byte of a register holds the state bits; the high byte is shown when captured.
 std::optional<std::uint16_t> readStateRegister(const Datagram& dg, const ByteReader& bytes,
                                                std::uint16_t reg) {
@@ -320,6 +332,18 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   entered_op_all_ = false;
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   const std::size_t count = walked ? frame.count : 0;
+  if (!returned) {
+    master_.clear();
+    for (std::size_t i = 0; i < count; ++i) {
+      master_.push_back({frame.datagrams[i].command, frame.datagrams[i].adp()});
+    }
+  }
+  // A frame whose datagrams reach none of these registers (the cyclic process data, the DC
+  // time) has nothing for the state machines.
+  bool registers = false;
+  for (std::size_t i = 0; i < count && !registers; ++i)
+    registers = reachesAlRegisters(frame.datagrams[i]);
+  if (!registers) return;
 
   // Writes from the master's copy, or from a returned copy whose master copy was not captured;
   // reads from a returned copy, of datagrams that some slave answered.
@@ -362,13 +386,6 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
       if (auto raw = readStateRegister(dg, bytes, kRegAlStatus)) {
         onStatusRead(address, *raw, now, out);
       }
-    }
-  }
-
-  if (!returned) {
-    master_.clear();
-    for (std::size_t i = 0; i < count; ++i) {
-      master_.push_back({frame.datagrams[i].command, frame.datagrams[i].adp()});
     }
   }
 }

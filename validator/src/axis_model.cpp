@@ -80,24 +80,6 @@ void Signal::observe(std::uint32_t v, const Stamp& now) {
   known = true;
 }
 
-// SSW bits no rule and no state reads: they change every cycle while an axis moves.
-constexpr std::uint32_t kSswUnjudged = mask32("ncservo.ssw.n_zero") |
-                                       mask32("ncservo.ssw.n_setpoint") |
-                                       mask32("ncservo.ssw.temp_warning");
-bool definedMessage(std::int32_t code) {
-  return code >= 0 && code <= 5;
-}  // PROTOCOL.md §5
-
-bool AxisModel::wouldNotChange(const PdoValues& values) const {
-  if (values.has_rx && (!latest_.has_rx || values.scw() != latest_.scw())) return false;
-  if (values.has_tx && (!latest_.has_tx || ((values.ssw() ^ latest_.ssw()) & ~kSswUnjudged) != 0 ||
-                        values.sew() != latest_.sew() ||
-                        definedMessage(values.msgCode()) != definedMessage(latest_.msgCode()))) {
-    return false;
-  }
-  return !al_state_.has_value();  // ESM-002 looks at which PDOs a frame carries
-}
-
 void AxisModel::copyWords(Pdo pdo, const PdoValues& values) {
   const auto first = static_cast<std::ptrdiff_t>(firstWordOf(pdo));
   const auto count = static_cast<std::ptrdiff_t>(wordCountOf(pdo));
@@ -118,13 +100,6 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
   }
   consecutive_failed_ += cycles;
   total_failures_ = std::min(kFailureCounterMax, total_failures_ + cycles);
-}
-
-void AxisModel::cycleOk(const Stamp& now) {
-  if (consecutive_lost_ != 0 || consecutive_failed_ != 0) ++revision_;
-  now_ = now;
-  endOutage();
-  consecutive_failed_ = 0;
 }
 
 // RULES.md COM-003: after 3 or more lost cycles the drive must raise ECatTErr.

@@ -18,19 +18,46 @@ constexpr std::uint16_t kRegSm2 = ecat::kRegSyncManager0 + 2 * ecat::kSyncManage
 constexpr std::uint16_t kRegSm3 = ecat::kRegSyncManager0 + 3 * ecat::kSyncManagerStride;
 constexpr std::size_t kSmLengthOffset = 2;  // SM register block: start (2), length (2), ...
 
-std::uint64_t datagramListSignature(const EcatFrame& frame) {
+// What the decoder needs to know of a frame's datagram list, gathered in one pass.
+struct FrameShape {
+  // Commands, indexes, lengths and the addresses that survive the ring: what pairs a master's
+  // copy with its returned copy (PROTOCOL.md §8).
+  std::uint64_t signature = 0;
+  // Framing, commands, surviving addresses, lengths and which WKCs are above zero: what the
+  // placements depend on (not the index a master changes every cycle).
+  std::uint64_t layout_key = 0;
+  bool any_wkc = false;           // some WKC is above zero
+  bool complete = true;           // every datagram wholly captured, WKC included
+  bool writes_registers = false;  // some datagram writes slave registers (a start-up may)
+};
+
+FrameShape shapeOf(const EcatFrame& frame) {
+  FrameShape shape;
   std::uint64_t hash = 1469598103934665603ull;
   auto mix = [&hash](std::uint64_t v) {  // one multiply-xorshift round per value (splitmix64)
     hash = (hash ^ v) * 0x9E3779B97F4A7C15ull;
     hash ^= hash >> 31;
   };
+  std::uint64_t key = (std::uint64_t{frame.ecat_offset} << 48) ^ frame.count;
   mix(frame.count);
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];
+    const bool survives = ecat::addressSurvivesRing(dg.command);
     mix(dg.command | (std::uint64_t{dg.index} << 8) | (std::uint64_t{dg.length} << 16));
-    if (ecat::addressSurvivesRing(dg.command)) mix(dg.address);
+    if (survives) mix(dg.address);
+    shape.any_wkc = shape.any_wkc || (dg.has_wkc && dg.wkc > 0);
+    shape.complete = shape.complete && dg.complete();
+    shape.writes_registers =
+        shape.writes_registers || (ecat::writesSlaves(dg.command) && !ecat::isLogical(dg.command));
+    const std::uint64_t address = survives ? dg.address : 0;
+    key = (key ^ (address | std::uint64_t{dg.command} << 32 | std::uint64_t{dg.length} << 40 |
+                  std::uint64_t{dg.wkc > 0} << 56)) *
+          0x9E3779B97F4A7C15ull;
+    key ^= key >> 29;
   }
-  return hash;
+  shape.signature = hash;
+  shape.layout_key = key;
+  return shape;
 }
 
 // Position of [start, start+size) relative to [base, base+length): inside, partly, or outside.
@@ -99,24 +126,15 @@ LayoutSource Decoder::source() const {
 
 void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out) {
   out.axis_count = 0;
-  classifyCopy(frame, out);
+  const FrameShape shape = shapeOf(frame);
+  classifyCopy(frame, shape.signature, shape.any_wkc, out);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
-  observeStartup(frame, bytes);
+  // Only physical writes reach the sync-manager registers.
+  if (shape.writes_registers) observeStartup(frame, bytes);
   // Only wholly captured frames are cached: their placements depend on nothing else than their
-  // shape — framing, commands, addresses, lengths, which WKCs are above zero — not on the
-  // datagram index a master changes every cycle.
-  bool cacheable = frame.status == WalkStatus::Ok;
-  std::uint64_t key = (std::uint64_t{frame.ecat_offset} << 48) ^ frame.count ^
-                      (out.copy == CopyKind::Returned ? 0x5bd1e995ull : 0);
-  for (std::size_t i = 0; i < frame.count && cacheable; ++i) {
-    const Datagram& dg = frame.datagrams[i];
-    cacheable = dg.complete();
-    const std::uint64_t address = ecat::addressSurvivesRing(dg.command) ? dg.address : 0;
-    key = (key ^ (address | std::uint64_t{dg.command} << 32 | std::uint64_t{dg.length} << 40 |
-                  std::uint64_t{dg.wkc > 0} << 56)) *
-          0x9E3779B97F4A7C15ull;
-    key ^= key >> 29;
-  }
+  // shape — framing, commands, addresses, lengths, which WKCs are above zero — and the copy.
+  const bool cacheable = frame.status == WalkStatus::Ok && shape.complete;
+  const std::uint64_t key = shape.layout_key ^ (out.copy == CopyKind::Returned ? 0x5bd1e995ull : 0);
   if (cacheable && fromCache(key, out)) return;
   const std::uint64_t generation = generation_;
   if (!options_.axes.empty()) {
@@ -159,10 +177,10 @@ void Decoder::toCache(std::uint64_t key, const FrameDecode& out) {
 
 // PROTOCOL.md §8: a frame with any WKC above zero is a returned copy; otherwise the frame
 // after a master's frame with the same datagram list is its returned copy.
-void Decoder::classifyCopy(const EcatFrame& frame, FrameDecode& out) {
-  const std::uint64_t signature = datagramListSignature(frame);
+void Decoder::classifyCopy(const EcatFrame& frame, std::uint64_t signature, bool any_wkc,
+                           FrameDecode& out) {
   out.paired = previous_was_master_ && signature == previous_signature_;
-  if (frame.anyWkcAboveZero()) {
+  if (any_wkc) {
     out.copy = CopyKind::Returned;
   } else if (out.paired) {
     out.copy = CopyKind::Returned;

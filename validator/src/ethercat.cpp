@@ -93,14 +93,14 @@ void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
   out.count = 0;
   out.chain_length = 0;
   out.truncated_at = 0;
-  auto header = bytes.le16(offset);
-  if (!header) {
+  auto frame_header = bytes.le16(offset);
+  if (!frame_header) {
     out.status = WalkStatus::Truncated;
     out.truncated_at = bytes.size();
     return;
   }
-  out.header_length = *header & ecat::kLengthMask;
-  if ((*header >> 12) != ecat::kFrameTypeDatagrams) {
+  out.header_length = *frame_header & ecat::kLengthMask;
+  if ((*frame_header >> 12) != ecat::kFrameTypeDatagrams) {
     out.status = WalkStatus::NotDatagrams;
     return;
   }
@@ -111,38 +111,35 @@ void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
   // Each datagram advances pos by at least 12 bytes, so the loop ends; the chain is bounded by
   // the captured bytes, not by the header's length (which may be larger than the chain).
   while (more && out.count < out.datagrams.size()) {
-    Datagram& dg = out.datagrams[out.count];
-    auto cmd = bytes.u8(pos);
-    auto index = bytes.u8(pos + 1);
-    auto address = bytes.le32(pos + 2);
-    auto length_word = bytes.le16(pos + 6);
-    auto irq = bytes.le16(pos + 8);
-    if (!cmd || !index || !address || !length_word || !irq) {
+    const std::optional<ByteRecord<ecat::kDatagramHeaderSize>> header =
+        bytes.record<ecat::kDatagramHeaderSize>(pos);
+    if (!header) {
       out.status = WalkStatus::Truncated;
       out.truncated_at = bytes.size();
       break;
     }
-    dg = Datagram{};
-    dg.command = *cmd;
-    dg.index = *index;
-    dg.address = *address;
-    dg.length = *length_word & ecat::kLengthMask;
-    dg.circulating = (*length_word & ecat::kCirculatingBit) != 0;
-    more = (*length_word & ecat::kMoreBit) != 0;
-    dg.irq = *irq;
+    const std::uint16_t length_word = header->le16<6>();
+    Datagram& dg = out.datagrams[out.count];
+    dg.command = header->u8<0>();
+    dg.index = header->u8<1>();
+    dg.address = header->le32<2>();
+    dg.length = length_word & ecat::kLengthMask;
+    dg.circulating = (length_word & ecat::kCirculatingBit) != 0;
+    more = (length_word & ecat::kMoreBit) != 0;
+    dg.irq = header->le16<8>();
     dg.header_offset = pos;
     dg.data_offset = pos + ecat::kDatagramHeaderSize;
-    const std::size_t available = bytes.size() > dg.data_offset ? bytes.size() - dg.data_offset : 0;
+    const std::size_t available = bytes.size() - dg.data_offset;  // has() above: no underflow
     dg.data_captured = dg.length <= available ? dg.length : available;
     ++out.count;
-    auto wkc = bytes.le16(dg.data_offset + dg.length);
-    if (dg.data_captured < dg.length || !wkc) {
+    const std::optional<std::uint16_t> wkc = bytes.le16(dg.data_offset + dg.length);
+    dg.has_wkc = wkc.has_value();
+    dg.wkc = wkc.value_or(0);
+    if (!wkc) {  // the data or the working counter is cut short
       out.status = WalkStatus::Truncated;
       out.truncated_at = bytes.size();
       break;
     }
-    dg.has_wkc = true;
-    dg.wkc = *wkc;
     pos = dg.data_offset + dg.length + ecat::kWkcSize;
   }
   out.chain_length = pos - chain_start;

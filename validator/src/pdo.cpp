@@ -21,45 +21,6 @@ std::int64_t signExtend(std::uint64_t raw, unsigned bits) {
 }
 }  // namespace
 
-// Each word's offset inside its PDO, computed once at compile time.
-constexpr std::array<std::uint8_t, kWordCount> kWordOffsets = [] {
-  std::array<std::uint8_t, kWordCount> offsets{};
-  for (const WordDef& def : kWords) {
-    offsets[static_cast<std::size_t>(def.word)] = static_cast<std::uint8_t>(wordOffset(def.word));
-  }
-  return offsets;
-}();
-
-// Little-endian load of N bytes from a place already bounds-checked.
-template <std::size_t N>
-std::uint64_t loadLe(const std::uint8_t* p) {
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  std::uint64_t value = 0;
-  std::memcpy(&value, p, N);
-  return value;
-#else
-  std::uint64_t value = 0;
-  for (std::size_t i = 0; i < N; ++i) value |= static_cast<std::uint64_t>(p[i]) << (8 * i);
-  return value;
-#endif
-}
-
-// Reads every word of one PDO, unrolled at compile time from kWords.
-template <std::size_t... I>
-void readWords(Pdo pdo, const std::uint8_t* base, PdoValues& out, std::index_sequence<I...>) {
-  ((kWords[I].pdo == pdo ? (void)(out.raw[I] = loadLe<kWords[I].size>(base + kWordOffsets[I]))
-                         : (void)0),
-   ...);
-}
-
-bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoValues& out) {
-  // One bounds check for the whole PDO; every word lies inside it (kWordOffsets, pdoSize).
-  if (!bytes.has(offset, sizeOfPdo(pdo))) return false;
-  readWords(pdo, bytes.data() + offset, out, std::make_index_sequence<kWordCount>{});
-  (pdo == Pdo::Rx ? out.has_rx : out.has_tx) = true;
-  return true;
-}
-
 FieldValue fieldValue(const FieldDef& field, const PdoValues& values) {
   const WordDef& word = wordDef(field.word);
   const std::uint64_t raw = values.word(field.word);

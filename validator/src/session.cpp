@@ -10,9 +10,7 @@ const FrameView& Session::onFrame(const EcatFrame& frame, const ByteReader& byte
   for (std::size_t i = 0; i < decode_.axis_count; ++i) {
     AxisFrameView& axis = view_.axes[i];
     axis.placement = decode_.axes[i];
-    axis.values = PdoValues{};
-    if (axis.placement.has_rx) readPdo(Pdo::Rx, bytes, axis.placement.rx_offset, axis.values);
-    if (axis.placement.has_tx) readPdo(Pdo::Tx, bytes, axis.placement.tx_offset, axis.values);
+    readFrameValues(axis.placement, bytes, axis.values);
     axis.state.reset();
     if (!track_states_) continue;
     const std::size_t index = axis.placement.axis;

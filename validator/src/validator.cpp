@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ncservo {
 
@@ -22,9 +23,7 @@ std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
 }  // namespace
 
 Validator::Validator(DecoderOptions options, RuleSettings settings)
-    : session_(std::move(options)), settings_(std::move(settings)) {
-  session_.trackStates(false);
-}
+    : decoder_(std::move(options)), settings_(std::move(settings)) {}
 
 const AxisModel* Validator::axis(std::size_t index) const {
   if (index >= axes_.size() || !axes_[index].model) return nullptr;
@@ -67,36 +66,51 @@ const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t tim
   now_ = Stamp{frame_number, monotonic};
   frame_time_ns_ = time_ns;
 
-  const FrameView& view = session_.onFrame(frame, bytes);
-  observeAl(frame, bytes, view);
-  // Every slot first (slot() may grow axes_), then pointers to them for this frame.
-  for (std::size_t i = 0; i < view.axis_count; ++i) slot(view.axes[i].placement.axis);
-  for (std::size_t i = 0; i < view.axis_count; ++i) {
-    frame_slots_[i] = &axes_[view.axes[i].placement.axis];
+  // The placements, then each axis's values read and judged in one pass (what a Session would
+  // give, without building its view and then walking it again).
+  decoder_.decode(frame, bytes, decode_);
+  view_.copy = decode_.copy;
+  view_.paired = decode_.paired;
+  view_.axis_count = decode_.axis_count;
+  observeAl(frame, bytes);
+  const std::size_t axis_count = decode_.axis_count;
+  // The slots grow once (which moves them), then this frame's are looked up once.
+  std::uint16_t first_axis = std::numeric_limits<std::uint16_t>::max(), last_axis = 0;
+  for (std::size_t i = 0; i < axis_count; ++i) {
+    first_axis = std::min(first_axis, decode_.axes[i].axis);
+    last_axis = std::max(last_axis, decode_.axes[i].axis);
   }
-  if (view.axis_count > 0) accountCycle(view, frame);
-  for (std::size_t i = 0; i < view.axis_count; ++i) {
-    const AxisFrameView& a = view.axes[i];
+  if (axis_count > 0 && last_axis >= axes_.size()) axes_.resize(last_axis + 1u);
+  for (std::size_t i = 0; i < axis_count; ++i) {
+    const std::uint16_t axis = decode_.axes[i].axis;
+    AxisSlot& s = axes_[axis];
+    if (!s.model) s.model.emplace(axis, settings_.readyModeFor(axis));
+    frame_slots_[i] = &s;
+  }
+  if (axis_count > 0) accountCycle(frame, first_axis);
+  const std::vector<AxisInfo>& infos = decoder_.axes();
+  for (std::size_t i = 0; i < axis_count; ++i) {
+    AxisFrameView& a = view_.axes[i];
+    a.placement = decode_.axes[i];
+    readFrameValues(a.placement, bytes, a.values);
     AxisSlot& s = *frame_slots_[i];
-    const AxisInfo* info =
-        a.placement.axis < decoder().axes().size() ? &decoder().axes()[a.placement.axis] : nullptr;
+    AxisModel& model = *s.model;
+    const AxisInfo* info = a.placement.axis < infos.size() ? &infos[a.placement.axis] : nullptr;
     if (info != nullptr && info->has_station) {
-      s.model->setAlState(al_.stateOfStation(info->station));
-      if (al_.enteredOp(info->station)) s.model->enteredOp();
+      model.setAlState(al_.stateOfStation(info->station));
+      if (al_.enteredOp(info->station)) model.enteredOp();
     }
     // Fast path: the words the rules read are unchanged and no timer runs, so no condition can
     // have changed (RULES.md reports at beginnings and at timeouts only).
-    if (s.pending == 0 && s.evaluated_revision == s.model->revision() &&
-        s.model->wouldNotChange(a.values)) {
-      session_.setState(i, s.model->state());
-      continue;
+    if (s.pending != 0 || s.evaluated_revision != model.revision() ||
+        !model.wouldNotChange(a.values)) {
+      model.observe(a.values, now_);
+      evaluateAxis(s);
+      s.evaluated_revision = model.revision();
     }
-    s.model->observe(a.values, now_);
-    evaluateAxis(s);
-    s.evaluated_revision = s.model->revision();
-    session_.setState(i, s.model->state());
+    a.state = model.state();
   }
-  return view;
+  return view_;
 }
 
 // RULES.md "Time": a condition is reported once per episode — when it begins, or for a delayed
@@ -125,10 +139,10 @@ void Validator::evaluateAxis(AxisSlot& s) {
   }
 }
 
-void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes, const FrameView& view) {
+void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes) {
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
   al_findings_.clear();
-  al_.onFrame(frame, bytes, view.copy == CopyKind::Returned, view.paired, now_, al_findings_);
+  al_.onFrame(frame, bytes, decode_.copy == CopyKind::Returned, decode_.paired, now_, al_findings_);
   for (AlFinding& f : al_findings_) {
     std::optional<std::uint16_t> axis;
     for (const AxisInfo& info : decoder().axes()) {
@@ -149,13 +163,9 @@ Validator::CyclicFrame* Validator::cyclicFrame(std::uint16_t first_axis) {
 
 // Telegram accounting (RULES.md COM-002, COM-004; failures for COM-003 and COM-005). The clock is
 // the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
-void Validator::accountCycle(const FrameView& view, const EcatFrame& frame) {
-  std::uint16_t first_axis = view.axes[0].placement.axis;
-  for (std::size_t i = 1; i < view.axis_count; ++i) {
-    first_axis = std::min(first_axis, view.axes[i].placement.axis);
-  }
+void Validator::accountCycle(const EcatFrame& frame, std::uint16_t first_axis) {
   CyclicFrame& cyclic = *cyclicFrame(first_axis);
-  const bool master = view.copy == CopyKind::Master;
+  const bool master = decode_.copy == CopyKind::Master;
   if (master && !master_copies_seen_) {
     master_copies_seen_ = true;
     for (CyclicFrame& c : cyclic_) c.last_tick.reset();  // returned copies were the clock so far
@@ -177,20 +187,20 @@ void Validator::accountCycle(const FrameView& view, const EcatFrame& frame) {
     cyclic.awaiting_return = true;
     cyclic.last_master = now_;
     cyclic.axes.clear();
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      cyclic.axes.push_back(view.axes[i].placement.axis);
+    for (std::size_t i = 0; i < decode_.axis_count; ++i) {
+      cyclic.axes.push_back(decode_.axes[i].axis);
     }
-    tick(cyclic, view);
+    tick(cyclic);
   } else {
-    if (!master_copies_seen_) tick(cyclic, view);
+    if (!master_copies_seen_) tick(cyclic);
     cyclic.awaiting_return = false;
     cyclic.not_returned_episode = false;
-    checkWorkingCounters(view, frame);
+    checkWorkingCounters(frame);
   }
 }
 
 // One tick of a cyclic frame's clock: the interval statistics and COM-002.
-void Validator::tick(CyclicFrame& cyclic, const FrameView& view) {
+void Validator::tick(CyclicFrame& cyclic) {
   if (cyclic.first_axis == cyclic_.front().first_axis) ++cycles_;
   // RULES.md "Time": a timestamp that went backwards is not an error; the interval it would
   // give is unknown, so the clock of this cyclic frame starts again at the next tick.
@@ -213,7 +223,7 @@ void Validator::tick(CyclicFrame& cyclic, const FrameView& view) {
                        "cycle{} missing",
                        static_cast<double>(interval) / 1e6, cyclic.last_tick->frame,
                        static_cast<double>(*median) / 1e6, missing, missing == 1 ? "" : "s"));
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
+    for (std::size_t i = 0; i < decode_.axis_count; ++i) {
       if (missing > 0) frame_slots_[i]->model->cycleFailed(true, missing, now_);
     }
   }
@@ -232,27 +242,44 @@ Validator::WkcRecord* Validator::wkcRecord(const Datagram& dg) {
 
 // RULES.md COM-001 on each returned datagram that carries servo PDOs, and each axis's cycle:
 // lost (WKC 0), failed (another wrong WKC) or good.
-void Validator::checkWorkingCounters(const FrameView& view, const EcatFrame& frame) {
+void Validator::checkWorkingCounters(const EcatFrame& frame) {
   enum Outcome : std::uint8_t { kGood, kFailed, kLost };
-  std::array<std::uint8_t, kMaxAxesPerFrame> outcome{};
-  for (std::size_t d = 0; d < frame.count; ++d) {
-    const Datagram& dg = frame.datagrams[d];
-    std::uint16_t expected = 0;
-    std::size_t covered = 0;
-    bool carries = false;
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      const AxisPlacement& p = view.axes[i].placement;
-      const bool out = p.rx_placed && p.rx_datagram == d;
-      const bool in = p.tx_placed && p.tx_datagram == d;
-      if (!out && !in) continue;
-      carries = true;
-      expected = static_cast<std::uint16_t>(expected + wkcShare(dg.command, out, in));
-      covered += (out ? kRxPdoSize : 0) + (in ? kTxPdoSize : 0);
+  // Per datagram: what the axes it carries add to its WKC, the bytes of theirs it holds, and the
+  // outcome. One pass over the axes; only the frame's first `count` entries are used.
+  struct Carried {
+    bool carries;
+    std::uint16_t expected;
+    std::size_t covered;
+    std::uint8_t outcome;
+  };
+  std::array<Carried, ecat::kMaxDatagrams> carried;
+  const std::size_t count = std::min(frame.count, carried.size());
+  for (std::size_t d = 0; d < count; ++d) carried[d] = Carried{false, 0, 0, kGood};
+  auto add = [&](std::size_t d, bool out, bool in) {
+    if (d >= count) return;
+    Carried& c = carried[d];
+    c.carries = true;
+    c.expected =
+        static_cast<std::uint16_t>(c.expected + wkcShare(frame.datagrams[d].command, out, in));
+    c.covered += (out ? kRxPdoSize : 0) + (in ? kTxPdoSize : 0);
+  };
+  for (std::size_t i = 0; i < decode_.axis_count; ++i) {
+    const AxisPlacement& p = decode_.axes[i];
+    if (p.rx_placed && p.tx_placed && p.rx_datagram == p.tx_datagram) {
+      add(p.rx_datagram, true, true);
+      continue;
     }
-    if (!carries || !dg.has_wkc) continue;
+    if (p.rx_placed) add(p.rx_datagram, true, false);
+    if (p.tx_placed) add(p.tx_datagram, false, true);
+  }
+  for (std::size_t d = 0; d < count; ++d) {
+    const Datagram& dg = frame.datagrams[d];
+    Carried& c = carried[d];
+    if (!c.carries || !dg.has_wkc) continue;
+    std::uint16_t expected = c.expected;
     WkcRecord* record = wkcRecord(dg);
     // Other slaves share the datagram: the expected value is the one seen most often so far.
-    if (covered != dg.length && record != nullptr) {
+    if (c.covered != dg.length && record != nullptr) {
       std::size_t slot_index = record->values.size();
       for (std::size_t k = 0; k < record->values.size(); ++k) {
         if (record->counts[k] > 0 && record->values[k] == dg.wkc) slot_index = k;
@@ -271,9 +298,8 @@ void Validator::checkWorkingCounters(const FrameView& view, const EcatFrame& fra
           std::max_element(record->counts.begin(), record->counts.end()) - record->counts.begin());
       expected = record->values[mode];
     }
-    std::uint8_t result = kGood;
     if (dg.wkc != expected) {
-      result = dg.wkc == 0 ? kLost : kFailed;
+      c.outcome = dg.wkc == 0 ? kLost : kFailed;
       if (record == nullptr || !record->wrong_episode) {
         if (record != nullptr) record->wrong_episode = true;
         report(RuleId::Com001, std::nullopt, now_,
@@ -284,19 +310,19 @@ void Validator::checkWorkingCounters(const FrameView& view, const EcatFrame& fra
     } else if (record != nullptr) {
       record->wrong_episode = false;
     }
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      const AxisPlacement& p = view.axes[i].placement;
-      if ((p.rx_placed && p.rx_datagram == d) || (p.tx_placed && p.tx_datagram == d)) {
-        outcome[i] = std::max(outcome[i], result);
-      }
-    }
   }
-  for (std::size_t i = 0; i < view.axis_count; ++i) {
+  for (std::size_t i = 0; i < decode_.axis_count; ++i) {
+    const AxisPlacement& p = decode_.axes[i];
+    std::uint8_t outcome = kGood;
+    if (p.rx_placed && p.rx_datagram < count) outcome = carried[p.rx_datagram].outcome;
+    if (p.tx_placed && p.tx_datagram < count) {
+      outcome = std::max(outcome, carried[p.tx_datagram].outcome);
+    }
     AxisModel& model = *frame_slots_[i]->model;
-    if (outcome[i] == kGood) {
+    if (outcome == kGood) {
       model.cycleOk(now_);
     } else {
-      model.cycleFailed(outcome[i] == kLost, 1, now_);
+      model.cycleFailed(outcome == kLost, 1, now_);
     }
   }
 }

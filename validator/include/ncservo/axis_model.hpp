@@ -61,7 +61,14 @@ class AxisModel {
   // Telegram accounting, done by the bus model before the frame's values are observed.
   // `lost`: missing, not returned, or returned with WKC 0 (COM-003); otherwise a wrong WKC.
   void cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now);
-  void cycleOk(const Stamp& now);
+  void cycleOk(const Stamp& now) {
+    now_ = now;
+    if (consecutive_lost_ == 0 && consecutive_failed_ == 0)
+      return;  // every cycle while all is well
+    ++revision_;
+    endOutage();
+    consecutive_failed_ = 0;
+  }
   // The slave entered OP: the total counter resets (seed 001).
   void enteredOp() {
     total_failures_ = 0;
@@ -81,7 +88,18 @@ class AxisModel {
   // mean the rules' conditions are unchanged too.
   std::uint64_t revision() const { return revision_; }
   // Whether observing these values would change nothing the rules look at.
-  bool wouldNotChange(const PdoValues& values) const;
+  bool wouldNotChange(const PdoValues& values) const {
+    if (values.has_rx && (!latest_.has_rx || values.scw() != latest_.scw())) return false;
+    if (values.has_tx &&
+        (!latest_.has_tx || ((values.ssw() ^ latest_.ssw()) & ~kSswUnjudged) != 0 ||
+         values.sew() != latest_.sew() ||
+         definedMessage(values.msgCode()) != definedMessage(latest_.msgCode()))) {
+      return false;
+    }
+    return !al_state_.has_value();  // ESM-002 looks at which PDOs a frame carries
+  }
+  // PROTOCOL.md §5: message codes 0-5 are defined.
+  static constexpr bool definedMessage(std::int32_t code) { return code >= 0 && code <= 5; }
   std::optional<std::uint8_t> alState() const { return al_state_; }
 
   // This frame's values of the axis (outputs and/or inputs), at `now`.
@@ -137,6 +155,11 @@ class AxisModel {
   const std::vector<ErrorHistoryEntry>& errorHistory() const { return error_history_; }
 
  private:
+  // SSW bits no rule and no state reads: they change every cycle while an axis moves.
+  static constexpr std::uint32_t kSswUnjudged = mask32("ncservo.ssw.n_zero") |
+                                                mask32("ncservo.ssw.n_setpoint") |
+                                                mask32("ncservo.ssw.temp_warning");
+
   void observeOutputs(const PdoValues& values, const Stamp& now);
   void observeInputs(const PdoValues& values, const Stamp& now);
   void updateState(const Stamp& now);

@@ -9,6 +9,50 @@
 
 namespace ncservo {
 
+// A fixed-size record of the captured bytes whose bounds were checked once (a datagram header):
+// its fields are read at offsets checked against its size at compile time. It points into the
+// ByteReader's bytes (no copy: a copy to the stack and loads across it stall the CPU).
+template <std::size_t N>
+class ByteRecord {
+ public:
+  explicit ByteRecord(const std::uint8_t* data) : bytes_(data) {}
+
+  template <std::size_t Offset>
+  std::uint8_t u8() const {
+    static_assert(Offset + 1 <= N, "field outside the record");
+    return bytes_[Offset];
+  }
+  template <std::size_t Offset>
+  std::uint16_t le16() const {
+    return static_cast<std::uint16_t>(le<Offset, 2>());
+  }
+  template <std::size_t Offset>
+  std::uint32_t le32() const {
+    return static_cast<std::uint32_t>(le<Offset, 4>());
+  }
+  template <std::size_t Offset>
+  std::uint64_t le64() const {
+    return le<Offset, 8>();
+  }
+
+ private:
+  template <std::size_t Offset, std::size_t Count>
+  std::uint64_t le() const {
+    static_assert(Offset + Count <= N, "field outside the record");
+    std::uint64_t value = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    std::memcpy(&value, bytes_ + Offset, Count);
+#else
+    for (std::size_t i = 0; i < Count; ++i) {
+      value |= static_cast<std::uint64_t>(bytes_[Offset + i]) << (8 * i);
+    }
+#endif
+    return value;
+  }
+
+  const std::uint8_t* bytes_;
+};
+
 class ByteReader {
  public:
   ByteReader(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
@@ -19,13 +63,20 @@ class ByteReader {
     return offset <= size_ && count <= size_ - offset;
   }
 
+  // The N bytes at `offset` as a record, when all of them were captured.
+  template <std::size_t N>
+  std::optional<ByteRecord<N>> record(std::size_t offset) const {
+    if (!has(offset, N)) return std::nullopt;
+    return ByteRecord<N>(data_ + offset);
+  }
+
   std::optional<std::uint8_t> u8(std::size_t offset) const {
     if (!has(offset, 1)) return std::nullopt;
     return data_[offset];
   }
   std::optional<std::uint16_t> le16(std::size_t offset) const {
     if (!has(offset, 2)) return std::nullopt;
-    return static_cast<std::uint16_t>(data_[offset] | (data_[offset + 1] << 8));
+    return static_cast<std::uint16_t>(loadLe(offset, 2));
   }
   std::optional<std::uint16_t> be16(std::size_t offset) const {
     if (!has(offset, 2)) return std::nullopt;
@@ -48,11 +99,16 @@ class ByteReader {
   }
 
  private:
+  // Only after a bounds check. On a little-endian host one load (memcpy of a constant count).
   std::uint64_t loadLe(std::size_t offset, std::size_t count) const {
     std::uint64_t value = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    std::memcpy(&value, data_ + offset, count);
+#else
     for (std::size_t i = 0; i < count; ++i) {
       value |= static_cast<std::uint64_t>(data_[offset + i]) << (8 * i);
     }
+#endif
     return value;
   }
 

@@ -84,7 +84,9 @@ class Decoder {
     std::uint16_t axis_count;
   };
 
-  void classifyCopy(const EcatFrame& frame, FrameDecode& out);
+  // `signature`: of the datagram list; `any_wkc`: some WKC is above zero.
+  void classifyCopy(const EcatFrame& frame, std::uint64_t signature, bool any_wkc,
+                    FrameDecode& out);
   bool fromCache(std::uint64_t key, FrameDecode& out) const;
   void toCache(std::uint64_t key, const FrameDecode& out);
   void observeStartup(const EcatFrame& frame, const ByteReader& bytes);

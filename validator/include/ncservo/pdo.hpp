@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 
 #include "ncservo/byte_reader.hpp"
 #include "ncservo/fields.hpp"
@@ -32,8 +33,67 @@ struct PdoValues {
   }
 };
 
+namespace detail {
+// Each word's offset inside its PDO, computed once at compile time.
+inline constexpr std::array<std::uint8_t, kWordCount> kWordOffsets = [] {
+  std::array<std::uint8_t, kWordCount> offsets{};
+  for (const WordDef& def : kWords) {
+    offsets[static_cast<std::size_t>(def.word)] = static_cast<std::uint8_t>(wordOffset(def.word));
+  }
+  return offsets;
+}();
+
+// Little-endian load of N bytes from a place already bounds-checked.
+template <std::size_t N>
+std::uint64_t loadLe(const std::uint8_t* p) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::uint64_t value = 0;
+  std::memcpy(&value, p, N);
+  return value;
+#else
+  std::uint64_t value = 0;
+  for (std::size_t i = 0; i < N; ++i) value |= static_cast<std::uint64_t>(p[i]) << (8 * i);
+  return value;
+#endif
+}
+
+// Reads every word of one PDO, unrolled at compile time from kWords.
+template <Pdo P, std::size_t... I>
+void readWords(const std::uint8_t* base, PdoValues& out, std::index_sequence<I...>) {
+  ((kWords[I].pdo == P ? (void)(out.raw[I] = loadLe<kWords[I].size>(base + kWordOffsets[I]))
+                       : (void)0),
+   ...);
+}
+}  // namespace detail
+
 // Reads the 10- or 40-byte PDO at `offset`; false (values untouched) when the bytes are short.
-bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoValues& out);
+// Inline, one PDO at a time: the hot path of every frame.
+template <Pdo P>
+bool readPdoOf(const ByteReader& bytes, std::size_t offset, PdoValues& out) {
+  // One bounds check for the whole PDO; every word lies inside it (kWordOffsets, pdoSize).
+  if (!bytes.has(offset, sizeOfPdo(P))) return false;
+  detail::readWords<P>(bytes.data() + offset, out, std::make_index_sequence<kWordCount>{});
+  (P == Pdo::Rx ? out.has_rx : out.has_tx) = true;
+  return true;
+}
+inline bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoValues& out) {
+  return pdo == Pdo::Rx ? readPdoOf<Pdo::Rx>(bytes, offset, out)
+                        : readPdoOf<Pdo::Tx>(bytes, offset, out);
+}
+
+namespace detail {
+template <Pdo P, std::size_t... I>
+void clearWords(PdoValues& out, std::index_sequence<I...>) {
+  ((kWords[I].pdo == P ? (void)(out.raw[I] = 0) : (void)0), ...);
+}
+}  // namespace detail
+
+// The words of one PDO set to zero and marked absent (unrolled: on the hot path).
+template <Pdo P>
+void clearPdoOf(PdoValues& out) {
+  detail::clearWords<P>(out, std::make_index_sequence<kWordCount>{});
+  (P == Pdo::Rx ? out.has_rx : out.has_tx) = false;
+}
 
 struct FieldValue {
   enum class Kind : std::uint8_t { Signed, Unsigned, Float } kind;

@@ -18,6 +18,18 @@ struct AxisFrameView {
   std::optional<DriveState> state;  // from this frame's values and the axis's latest ones
 };
 
+// The values one frame carries for one axis at its placement; the words of a PDO the frame does
+// not carry (or that is cut short) are zero and marked absent.
+inline void readFrameValues(const AxisPlacement& placement, const ByteReader& bytes,
+                            PdoValues& out) {
+  if (!placement.has_rx || !readPdoOf<Pdo::Rx>(bytes, placement.rx_offset, out)) {
+    clearPdoOf<Pdo::Rx>(out);
+  }
+  if (!placement.has_tx || !readPdoOf<Pdo::Tx>(bytes, placement.tx_offset, out)) {
+    clearPdoOf<Pdo::Tx>(out);
+  }
+}
+
 struct FrameView {
   CopyKind copy = CopyKind::Master;
   bool paired = false;  // a returned copy whose master's copy was the frame just before

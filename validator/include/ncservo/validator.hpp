@@ -31,7 +31,7 @@ class Validator {
                            const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
 
-  const Decoder& decoder() const { return session_.decoder(); }
+  const Decoder& decoder() const { return decoder_; }
   const RuleSettings& settings() const { return settings_; }
   // Models of the axes seen so far, by axis index (null where an axis was never seen).
   std::size_t axisCount() const { return axes_.size(); }
@@ -75,13 +75,17 @@ class Validator {
   AxisSlot& slot(std::uint16_t axis);
   CyclicFrame* cyclicFrame(std::uint16_t first_axis);
   WkcRecord* wkcRecord(const Datagram& dg);
-  void accountCycle(const FrameView& view, const EcatFrame& frame);
-  void tick(CyclicFrame& cyclic, const FrameView& view);
-  void checkWorkingCounters(const FrameView& view, const EcatFrame& frame);
+  // On this frame's placements (decode_). `first_axis`: the lowest axis index of the frame,
+  // which names its cyclic frame.
+  void accountCycle(const EcatFrame& frame, std::uint16_t first_axis);
+  void tick(CyclicFrame& cyclic);
+  void checkWorkingCounters(const EcatFrame& frame);
   void evaluateAxis(AxisSlot& axis);
-  void observeAl(const EcatFrame& frame, const ByteReader& bytes, const FrameView& view);
+  void observeAl(const EcatFrame& frame, const ByteReader& bytes);
 
-  Session session_;
+  Decoder decoder_;
+  FrameDecode decode_;  // this frame's placements
+  FrameView view_;      // this frame's placements, values and states, as a Session gives them
   RuleSettings settings_;
   AlTracker al_;
   std::vector<AlFinding> al_findings_;
