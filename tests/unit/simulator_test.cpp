@@ -13,6 +13,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "frame_builder.hpp"
@@ -575,6 +576,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, Layout,
 
 struct Validated {
   std::vector<Finding> findings;
+  std::int64_t first_ns = 0;  // the first frame's time
   std::size_t axes = 0;
   std::vector<std::size_t> history;  // error-history entries per axis
 };
@@ -598,6 +600,7 @@ Validated validate(const SimOptions& resolved, bool with_config) {
   std::uint64_t number = 0;
   EcatFrame frame;
   for (const Frame& f : simulate(resolved)) {
+    if (number == 0) out.first_ns = f.time_ns;
     const ByteReader bytes(f.bytes.data(), f.bytes.size());
     walkPacket(LinkType::Ethernet, bytes, frame);
     validator.onFrame(++number, f.time_ns, frame, bytes);
@@ -688,12 +691,36 @@ INSTANTIATE_TEST_SUITE_P(
                  62.0}),
     [](const ::testing::TestParamInfo<CleanRow>& row) { return std::string(row.param.name); });
 
-// Each fault makes its rule fire, with its documented companions, and nothing else.
-class FaultRun : public ::testing::TestWithParam<std::size_t> {};
+// Each fault makes its rule fire, with its documented companions, and nothing else; in a few
+// set-ups (the fault's default axis and time).
+struct FaultSetup {
+  const char* name;
+  int axes;
+  int io_slaves;
+  LayoutKind layout;
+  int cycle_us;
+  int ready_mode;
+  std::uint64_t seed;
+};
+const std::vector<FaultSetup>& faultSetups() {
+  static const std::vector<FaultSetup> setups = {
+      {"4_axes", 4, 0, LayoutKind::Default, 1000, 0, 1},
+      {"2_axes_500us_ready_mode_1", 2, 0, LayoutKind::Default, 500, 1, 7},
+      {"6_axes_io_interleaved", 6, 3, LayoutKind::Interleaved, 1000, 0, 3},
+  };
+  return setups;
+}
+class FaultRun : public ::testing::TestWithParam<std::tuple<std::size_t, std::size_t>> {};
 
 TEST_P(FaultRun, FiresItsRuleAndCompanionsOnly) {
-  const RuleDef& rule = kRules[GetParam()];
-  SimOptions o = options(Scenario::Commissioning, 4, 3.0);
+  const RuleDef& rule = kRules[std::get<0>(GetParam())];
+  const FaultSetup& setup = faultSetups()[std::get<1>(GetParam())];
+  SimOptions o = options(Scenario::Commissioning, setup.axes, 3.0);
+  o.io_slaves = setup.io_slaves;
+  o.layout = setup.layout;
+  o.cycle_us = setup.cycle_us;
+  o.ready_mode = setup.ready_mode;
+  o.seed = setup.seed;
   o.faults = {fault(rule.code)};
   ASSERT_EQ(resolveOptions(o), "") << rule.code;
   std::set<std::string> expected = documentedCompanions(rule.code);
@@ -702,14 +729,38 @@ TEST_P(FaultRun, FiresItsRuleAndCompanionsOnly) {
   std::set<std::string> fired;
   for (const Finding& f : v.findings) fired.insert(ruleDef(f.rule).code);
   EXPECT_EQ(fired, expected) << rule.code << ":\n" << findingsText(v.findings);
+  // The rule fires once (a whole-bus fault: at most once per axis), on the fault's axis, around
+  // the fault's time (the start-up's faults within the start-up).
+  const FaultRequest& f = o.faults[0];
+  int count = 0;
+  for (const Finding& finding : v.findings) {
+    if (finding.rule != rule.id) continue;
+    ++count;
+    if (finding.axis && f.axis) {
+      EXPECT_EQ(*finding.axis, *f.axis) << rule.code;
+    }
+    const double since_s = static_cast<double>(finding.since.time_ns - v.first_ns) * 1e-9;
+    if (f.at_s) {
+      EXPECT_GE(since_s, *f.at_s - 0.2) << rule.code;
+      EXPECT_LE(since_s, *f.at_s + 0.5) << rule.code;
+    } else {
+      EXPECT_LE(since_s, 0.25) << rule.code;
+    }
+  }
+  EXPECT_GE(count, 1) << rule.code;
+  EXPECT_LE(count, f.axis ? 1 : o.axes) << rule.code << ":\n" << findingsText(v.findings);
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, FaultRun, ::testing::Range<std::size_t>(0, kRuleCount),
-                         [](const ::testing::TestParamInfo<std::size_t>& row) {
-                           std::string name = kRules[row.param].code;
-                           std::replace(name.begin(), name.end(), '-', '_');
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Rows, FaultRun,
+    ::testing::Combine(::testing::Range<std::size_t>(0, kRuleCount),
+                       ::testing::Range<std::size_t>(0, 3)),
+    [](const ::testing::TestParamInfo<std::tuple<std::size_t, std::size_t>>& row) {
+      std::string name = std::string(kRules[std::get<0>(row.param)].code) + "_" +
+                         faultSetups()[std::get<1>(row.param)].name;
+      std::replace(name.begin(), name.end(), '-', '_');
+      return name;
+    });
 
 TEST(FaultsScenario, FiresEveryRule) {
   SimOptions o = options(Scenario::Faults, 4, 4.3);
