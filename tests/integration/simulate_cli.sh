@@ -18,9 +18,10 @@ cases=(
   "2|COM-002 concerns the whole bus; no :axis|simulate --fault COM-002:1 -o $WORK/x.pcap"
   "2|ESM-001 happens in the start-up; give no @time|simulate --fault ESM-001@1 -o $WORK/x.pcap"
   "2|ESM-004 happens in the start-up|simulate --no-startup --fault ESM-004 -o $WORK/x.pcap"
-  "2|outside the quiet part of the run|simulate --fault SE-001@0.1 -o $WORK/x.pcap"
+  "2|outside the quiet part of the run (0.65 s to 1.34 s)|simulate --fault SE-001@0.1 -o $WORK/x.pcap"
+  "2|the run is too short for a fault; use --duration 2.5|simulate --duration 1.2 --fault SE-001 -o $WORK/x.pcap"
   "2|--scenario faults needs at least 4 axes|simulate --scenario faults --axes 3 -o $WORK/x.pcap"
-  "2|--jitter-us 300: from 0 to a quarter cycle (250)|simulate --jitter-us 300 -o $WORK/x.pcap"
+  "2|--jitter-us 300: from 0 to a fifth of the cycle (200)|simulate --jitter-us 300 -o $WORK/x.pcap"
   "3|$WORK/no/such/dir/x.pcap: cannot write|simulate -o $WORK/no/such/dir/x.pcap"
   "0|wrote 3004 frames to $WORK/ok.pcap|simulate --duration 1.5 -o $WORK/ok.pcap"
 )
@@ -36,7 +37,7 @@ for row in "${cases[@]}"; do
 done
 
 # A pure function of the options: the same bytes twice, other bytes for another seed.
-opts=(simulate --axes 3 --duration 1.2 --fault SE-001 --jitter-us 50 --loss 0.01)
+opts=(simulate --axes 3 --duration 2.5 --fault SE-001 --jitter-us 50 --loss 0.01)
 "$NCSERVO" "${opts[@]}" --seed 4 -o "$WORK/a.pcap" 2>/dev/null
 "$NCSERVO" "${opts[@]}" --seed 4 -o "$WORK/b.pcap" 2>/dev/null
 "$NCSERVO" "${opts[@]}" --seed 5 -o "$WORK/c.pcap" 2>/dev/null
@@ -44,9 +45,9 @@ cmp -s "$WORK/a.pcap" "$WORK/b.pcap" || fail "the same options gave different ca
 ! cmp -s "$WORK/a.pcap" "$WORK/c.pcap" || fail "another seed gave the same capture"
 
 # Standard output into standard input: the same report as through a file.
-"$NCSERVO" simulate --axes 2 --duration 1.2 --fault FLT-001 -o - |
+"$NCSERVO" simulate --axes 2 --duration 2.5 --fault FLT-001 -o - |
   "$NCSERVO" validate --format jsonl --fail-on never - >"$WORK/piped.jsonl"
-"$NCSERVO" simulate --axes 2 --duration 1.2 --fault FLT-001 -o "$WORK/f.pcap" 2>/dev/null
+"$NCSERVO" simulate --axes 2 --duration 2.5 --fault FLT-001 -o "$WORK/f.pcap" 2>/dev/null
 "$NCSERVO" validate --format jsonl --fail-on never "$WORK/f.pcap" >"$WORK/file.jsonl"
 diff <(grep -o '"rule":"[^"]*".*"frame":[0-9]*' "$WORK/piped.jsonl") \
   <(grep -o '"rule":"[^"]*".*"frame":[0-9]*' "$WORK/file.jsonl") >/dev/null ||

@@ -114,27 +114,25 @@ TEST_P(ParseFault, Rows) {
 
 INSTANTIATE_TEST_SUITE_P(
     Rows, ParseFault,
-    ::testing::Values(ParseRow{"SE-001", RuleId::Se001, std::nullopt, std::nullopt, nullptr},
-                      ParseRow{"se-001@1.5", RuleId::Se001, 1.5, std::nullopt, nullptr},
-                      ParseRow{"ZP-001@2:3", RuleId::Zp001, 2.0, 3, nullptr},
-                      ParseRow{"COM-002@1", RuleId::Com002, 1.0, std::nullopt, nullptr},
-                      ParseRow{"ESM-004:0", RuleId::Esm004, std::nullopt, 0, nullptr},
-                      ParseRow{"XX-1", std::nullopt, std::nullopt, std::nullopt,
-                               "--fault XX-1: no rule 'XX-1' (see `ncservo rules`)"},
-                      ParseRow{
-                          "SE-001@x", std::nullopt, std::nullopt, std::nullopt,
-                          "--fault SE-001@x: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0"},
-                      ParseRow{"SE-001:-1", std::nullopt, std::nullopt, std::nullopt, nullptr},
-                      ParseRow{"SE-001@-2", std::nullopt, std::nullopt, std::nullopt, nullptr},
-                      ParseRow{"SE-001@1.5s", std::nullopt, std::nullopt, std::nullopt, nullptr},
-                      ParseRow{"SE-001:1x", std::nullopt, std::nullopt, std::nullopt, nullptr},
-                      ParseRow{"SE-001@nan", std::nullopt, std::nullopt, std::nullopt, nullptr},
-                      ParseRow{"", std::nullopt, std::nullopt, std::nullopt, nullptr},
-                      // bug: an empty @time or :axis is taken as if it were not given
-                      ParseRow{"SE-001@", std::nullopt, std::nullopt, std::nullopt, nullptr,
-                               "bug: parseFault accepts an empty @time"},
-                      ParseRow{"SE-001@1:", std::nullopt, std::nullopt, std::nullopt, nullptr,
-                               "bug: parseFault accepts an empty :axis"}));
+    ::testing::Values(
+        ParseRow{"SE-001", RuleId::Se001, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"se-001@1.5", RuleId::Se001, 1.5, std::nullopt, nullptr},
+        ParseRow{"ZP-001@2:3", RuleId::Zp001, 2.0, 3, nullptr},
+        ParseRow{"COM-002@1", RuleId::Com002, 1.0, std::nullopt, nullptr},
+        ParseRow{"ESM-004:0", RuleId::Esm004, std::nullopt, 0, nullptr},
+        ParseRow{"XX-1", std::nullopt, std::nullopt, std::nullopt,
+                 "--fault XX-1: no rule 'XX-1' (see `ncservo rules`)"},
+        ParseRow{"SE-001@x", std::nullopt, std::nullopt, std::nullopt,
+                 "--fault SE-001@x: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0"},
+        ParseRow{"SE-001:-1", std::nullopt, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"SE-001@-2", std::nullopt, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"SE-001@1.5s", std::nullopt, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"SE-001:1x", std::nullopt, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"SE-001@nan", std::nullopt, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"", std::nullopt, std::nullopt, std::nullopt, nullptr},
+        ParseRow{"SE-001@", std::nullopt, std::nullopt, std::nullopt,
+                 "--fault SE-001@: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0"},
+        ParseRow{"SE-001@1:", std::nullopt, std::nullopt, std::nullopt, nullptr}));
 
 // --- resolveOptions ---
 
@@ -189,9 +187,9 @@ INSTANTIATE_TEST_SUITE_P(
                      o.duration_s = 4.0;
                    },
                    "--scenario faults needs --duration 4.3 or more"},
-        ResolveRow{"jitter_quarter", [](SimOptions& o) { o.jitter_us = 250; }, ""},
-        ResolveRow{"jitter_too_big", [](SimOptions& o) { o.jitter_us = 251; },
-                   "--jitter-us 251: from 0 to a quarter cycle (250)"},
+        ResolveRow{"jitter_fifth", [](SimOptions& o) { o.jitter_us = 200; }, ""},
+        ResolveRow{"jitter_too_big", [](SimOptions& o) { o.jitter_us = 201; },
+                   "--jitter-us 201: from 0 to a fifth of the cycle (200)"},
         ResolveRow{"faults_3_axes",
                    [](SimOptions& o) {
                      o.scenario = Scenario::Faults;
@@ -228,12 +226,14 @@ INSTANTIATE_TEST_SUITE_P(
         ResolveRow{"com002_with_axis", [](SimOptions& o) { o.faults = {fault("COM-002:1")}; },
                    "--fault COM-002:1: COM-002 concerns the whole bus; no :axis"},
         ResolveRow{"time_before_quiet", [](SimOptions& o) { o.faults = {fault("SE-001@0.6")}; },
-                   "is outside the quiet part of the run (0.65 s to 2.6 s)"},
+                   "is outside the quiet part of the run (0.65 s to 1.34 s)"},
         ResolveRow{"time_after_quiet", [](SimOptions& o) { o.faults = {fault("SE-001@2.7")}; },
                    "outside the quiet part"},
         ResolveRow{"time_quiet_start", [](SimOptions& o) { o.faults = {fault("SE-001@0.65")}; },
                    ""},
-        ResolveRow{"time_quiet_end", [](SimOptions& o) { o.faults = {fault("SE-001@2.6")}; }, ""},
+        ResolveRow{"time_quiet_end", [](SimOptions& o) { o.faults = {fault("SE-001@1.34")}; }, ""},
+        ResolveRow{"time_after_quiet_end", [](SimOptions& o) { o.faults = {fault("SE-001@1.35")}; },
+                   "outside the quiet part"},
         ResolveRow{"time_without_startup",
                    [](SimOptions& o) {
                      o.startup = false;
@@ -681,11 +681,6 @@ INSTANTIATE_TEST_SUITE_P(
         CleanRow{"cycle_125us", 2, 0, LayoutKind::Default, false, 0, 125, true},
         CleanRow{"cycle_10ms", 4, 0, LayoutKind::Default, false, 0, 10000, true},
         CleanRow{"jitter_200us", 4, 0, LayoutKind::Default, false, 0, 1000, true, 200},
-        // bug: the largest jitter resolveOptions allows makes two consecutive master copies
-        // 1.497 ms apart against a nominal (median) 0.996 ms: COM-002 "1 cycle missing".
-        CleanRow{"jitter_quarter_cycle", 4, 0, LayoutKind::Default, false, 0, 1000, true, 250,
-                 Scenario::Commissioning, 3.0,
-                 "bug: --jitter-us 250 (a quarter cycle) makes COM-002 fire in a clean run"},
         CleanRow{"soak_12s", 4, 0, LayoutKind::Default, false, 0, 1000, true, 0, Scenario::Soak,
                  12.0},
         CleanRow{"soak_62s", 2, 0, LayoutKind::Default, false, 0, 1000, true, 0, Scenario::Soak,
@@ -709,35 +704,17 @@ const std::vector<FaultSetup>& faultSetups() {
       {"4_axes", 4, 0, LayoutKind::Default, 1000, 0, 1},
       {"2_axes_500us_ready_mode_1", 2, 0, LayoutKind::Default, 500, 1, 7},
       {"5_axes_io_interleaved", 5, 2, LayoutKind::Interleaved, 1000, 0, 3},
-      {"earliest", 4, 0, LayoutKind::Default, 1000, 0, 4, 0.65},   // start-up 0.2 + 0.45
-      {"plan_stops", 4, 0, LayoutKind::Default, 1000, 0, 6, 2.5},  // speed 0 at 2.34, off 2.55
-      {"latest", 4, 0, LayoutKind::Default, 1000, 0, 5, 2.6},      // duration 3 - 0.4
+      {"earliest", 4, 0, LayoutKind::Default, 1000, 0, 4, 0.65},  // start-up 0.2 + 0.45
+      {"late", 4, 0, LayoutKind::Default, 1000, 0, 6, 1.3},
+      {"latest", 4, 0, LayoutKind::Default, 1000, 0, 5, 1.34},  // 0.53 x 3 s - 0.25
   };
   return setups;
 }
 class FaultRun : public ::testing::TestWithParam<std::tuple<std::size_t, std::size_t>> {};
 
-// Rows that fail because of simulator bugs, skipped until they are fixed.
-const char* knownBug(const std::string& code, const std::string& setup) {
-  // bug: resolveOptions allows a fault up to duration - 0.4 s, but the commissioning plan
-  // disables every axis at 0.85 x duration (2.55 s of 3 s): at 2.6 s these faults find no
-  // enabled axis (no disable to delay, no zero pulse while moving, no fault while enabled).
-  if (setup == "latest" && (code == "SE-003" || code == "ZP-001" || code == "FLT-001")) {
-    return "bug: at the latest allowed time the plan has already disabled the axis; the rule "
-           "never fires";
-  }
-  // bug: at 2.5 s the plan's Disable (2.55 s) comes first: SE-004's enable ends before
-  // enable_response (100 ms) has passed, ZP-001's search ends before a zero pulse is found.
-  if (setup == "plan_stops" && (code == "SE-004" || code == "ZP-001")) {
-    return "bug: the plan's Disable 50 ms after the fault's time hides the rule";
-  }
-  return nullptr;
-}
-
 TEST_P(FaultRun, FiresItsRuleAndCompanionsOnly) {
   const RuleDef& rule = kRules[std::get<0>(GetParam())];
   const FaultSetup& setup = faultSetups()[std::get<1>(GetParam())];
-  if (const char* bug = knownBug(rule.code, setup.name)) GTEST_SKIP() << bug;
   SimOptions o = options(Scenario::Commissioning, setup.axes, 3.0);
   o.io_slaves = setup.io_slaves;
   o.layout = setup.layout;

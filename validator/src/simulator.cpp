@@ -322,8 +322,13 @@ std::optional<FaultRequest> parseFault(std::string_view text, std::string& error
     return std::nullopt;
   }
   fault.rule = rule->id;
+  const bool has_time = text.find('@') != std::string_view::npos;
+  const bool has_axis = text.find(':') != std::string_view::npos;
   try {
     std::size_t used = 0;
+    if ((has_time && time_text.empty()) || (has_axis && axis_text.empty())) {
+      throw std::invalid_argument("empty");
+    }
     if (!time_text.empty()) {
       fault.at_s = std::stod(std::string(time_text), &used);
       if (used != time_text.size() || !(*fault.at_s >= 0)) throw std::invalid_argument("time");
@@ -350,9 +355,10 @@ std::string resolveOptions(SimOptions& o) {
   if (o.ready_mode != 0 && o.ready_mode != 1) {
     return fmt::format("--ready-mode {}: 0 or 1", o.ready_mode);
   }
-  if (o.jitter_us < 0 || o.jitter_us > o.cycle_us / 4) {
-    return fmt::format("--jitter-us {}: from 0 to a quarter cycle ({})", o.jitter_us,
-                       o.cycle_us / 4);
+  // A fifth of a cycle either way keeps every interval under 1.5 cycles (COM-002).
+  if (o.jitter_us < 0 || o.jitter_us > o.cycle_us / 5) {
+    return fmt::format("--jitter-us {}: from 0 to a fifth of the cycle ({})", o.jitter_us,
+                       o.cycle_us / 5);
   }
   if (!(o.loss >= 0 && o.loss <= 0.5)) return fmt::format("--loss {}: from 0 to 0.5", o.loss);
   if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);
@@ -378,11 +384,20 @@ std::string resolveOptions(SimOptions& o) {
         return fmt::format("--fault {}: {} happens in the start-up; give no @time", f.text, code);
       }
     } else {
-      if (!f.at_s) f.at_s = std::max(start + 0.5, 0.43 * duration);
-      if (*f.at_s < start + 0.45 || *f.at_s > duration - 0.4) {
+      // After the start-up and the enables; in a commissioning run before the emergency stop
+      // and the disables that end it (at 53 % and 85 % of the run), else before the end.
+      const double earliest = start + 0.45;
+      const double latest =
+          o.scenario == Scenario::Commissioning ? 0.53 * duration - 0.25 : duration - 0.4;
+      if (latest < earliest) {
+        return fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
+                           f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5);
+      }
+      if (!f.at_s) f.at_s = std::clamp(0.43 * duration, earliest, latest);
+      if (*f.at_s < earliest || *f.at_s > latest) {
         return fmt::format(
             "--fault {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)", f.text,
-            *f.at_s, start + 0.45, duration - 0.4);
+            *f.at_s, earliest, latest);
       }
     }
     if (r.need == AxisNeed::None) {
