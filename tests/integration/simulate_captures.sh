@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # simulate_captures.sh SRC BUILD
 # Each simulated capture in captures/ is exactly what its documented command regenerates (and so
-# is its layout file); `ncservo validate` on it gives its golden report; it triggers exactly the
-# rules captures/README.md says; and the fault table there is `ncservo simulate --list-faults`.
+# is its layout file); `ncservo validate` on it, with no configuration (the layout learned from
+# its start-up), gives its golden report, and the same findings as with its layout file; it
+# triggers exactly the rules captures/README.md says; the fault table there is
+# `ncservo simulate --list-faults`.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 readme="$SRC/captures/README.md"
@@ -15,15 +17,23 @@ for name in sim-commissioning-4axis.pcap sim-faults-4axis.pcap sim-io-interleave
   cmd=${cmd/build\/validator\/ncservo/$NCSERVO}
   eval "$cmd" 2>"$WORK/sim.err" || fail "$name: simulate exit $?: $(cat "$WORK/sim.err")"
   cmp "$SRC/captures/$name" "$WORK/$name" || fail "$name differs from its regeneration"
-  config=()
   if [ -f "$SRC/captures/$stem.toml" ]; then
     cmp "$SRC/captures/$stem.toml" "$WORK/$stem.toml" || fail "$stem.toml differs from its regeneration"
-    config=(--config "$SRC/captures/$stem.toml")
+    # The layout file gives the findings the start-up's learned layout gives: the same rules on
+    # the same frames (a finding before the FMMUs are configured names its axis only with the
+    # file, which knows the axes from the first frame).
+    "$NCSERVO" validate --config "$SRC/captures/$stem.toml" --format jsonl --fail-on never \
+      "$SRC/captures/$name" | { grep -o '"rule":"[^"]*"\|"frame":[0-9]*' || true; } | paste -d' ' - - >"$WORK/with-config.txt"
+    "$NCSERVO" validate --format jsonl --fail-on never "$SRC/captures/$name" |
+      { grep -o '"rule":"[^"]*"\|"frame":[0-9]*' || true; } | paste -d' ' - - >"$WORK/learned.txt"
+    [ -s "$WORK/learned.txt" ] || [ ! -s "$WORK/with-config.txt" ] || fail "$name: no findings learned"
+    diff -q "$WORK/with-config.txt" "$WORK/learned.txt" >/dev/null ||
+      fail "$name: findings with $stem.toml differ from the learned layout's"
   fi
   size=$(stat -c %s "$SRC/captures/$name")
   [ "$size" -lt 2000000 ] || fail "$name is $size bytes; bundled captures stay under 2 MB"
 
-  "$NCSERVO" validate "${config[@]}" --format json --fail-on never "$SRC/captures/$name" \
+  "$NCSERVO" validate --format json --fail-on never "$SRC/captures/$name" \
     >"$WORK/$stem.json" || fail "$name: validate exit $?"
   python3 "$SRC/tests/tools/golden.py" <"$WORK/$stem.json" >"$WORK/$stem.golden.json"
   diff -u "$SRC/captures/$stem.expected.json" "$WORK/$stem.golden.json" >"$WORK/diff.txt" ||

@@ -26,14 +26,22 @@ for row in "${cases[@]}"; do
     fail "$name: validate exit $?: $(grep -v '^  ' "$WORK/report.txt" | head -20)"
   grep -q "^verdict: PASS - 0 errors, 0 warnings, 0 info" "$WORK/report.txt" ||
     fail "$name: $(tail -1 "$WORK/report.txt")"
+  # with no configuration: the layout learned from the start-up (or the default one)
+  "$NCSERVO" validate --fail-on warning "$cap" >"$WORK/learned.txt" ||
+    fail "$name, learned layout: validate exit $?: $(grep -v '^  ' "$WORK/learned.txt" | head -20)"
+  grep -q "^verdict: PASS - 0 errors, 0 warnings, 0 info" "$WORK/learned.txt" ||
+    fail "$name, learned layout: $(tail -1 "$WORK/learned.txt")"
+  axes=$(grep -c '^  axis' "$WORK/report.txt")
+  grep -q "^layout: \(startup\|default\), $axes ax" "$WORK/learned.txt" ||
+    fail "$name: learned $(grep '^layout' "$WORK/learned.txt"), configured $axes axes"
   "$TSHARK" none -r "$cap" -Y "_ws.malformed || _ws.expert" -T fields -e frame.number \
     >"$WORK/stock.txt" 2>"$WORK/tshark.err" || fail "$name: tshark exit $?: $(cat "$WORK/tshark.err")"
   [ ! -s "$WORK/stock.txt" ] ||
     fail "$name: the stock dissector flags frames $(head -c 200 "$WORK/stock.txt" | tr '\n' ' ')"
 done
 
-# The default layout decodes the plain set-ups without any configuration.
-"$NCSERVO" simulate --axes 5 --duration 1.5 -o "$WORK/plain.pcap" 2>/dev/null
+# Without a start-up in the capture, the default layout decodes the plain set-ups.
+"$NCSERVO" simulate --axes 5 --duration 1.5 --no-startup -o "$WORK/plain.pcap" 2>/dev/null
 "$NCSERVO" validate --fail-on warning "$WORK/plain.pcap" >"$WORK/plain.txt" ||
   fail "default layout: validate exit $?"
 grep -q "^layout: default, 5 axes" "$WORK/plain.txt" || fail "default layout: $(grep '^layout' "$WORK/plain.txt")"
@@ -43,6 +51,10 @@ grep -q "^layout: default, 5 axes" "$WORK/plain.txt" || fail "default layout: $(
   --layout-config "$WORK/fields.toml" 2>/dev/null
 chmod a+r "$WORK/fields.pcap" "$WORK/fields.toml"
 mapfile -t fields < <("$NCSERVO" fields | cut -f1)
+# the same with the layout learned from the start-up (no preference set)
+"$TSHARK" "$PLUGIN" -r "$WORK/fields.pcap" -T fields -e ncservo.axis -e ncservo.sew -Y ncservo.sew \
+  >"$WORK/learned.tsv" 2>"$WORK/tshark.err" || fail "tshark exit $?"
+grep -q "^0,1,2,3	" "$WORK/learned.tsv" || fail "the plugin did not learn the 4 axes: $(head -3 "$WORK/learned.tsv")"
 args=()
 for f in "${fields[@]}"; do args+=(-e "$f"); done
 "$TSHARK" "$PLUGIN" -r "$WORK/fields.pcap" -o "ncservo.config:$WORK/fields.toml" -T fields \

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # simulate_fault.sh SRC BUILD RULE [simulate options...]
-# `ncservo simulate --fault RULE` followed by `ncservo validate` reports RULE, on the axis the
-# fault was put on, plus only the companions captures/README.md documents for it (nothing else at
-# all); and tshark with the plugin shows the finding on exactly the frames the validator reports.
+# `ncservo simulate --fault RULE` followed by `ncservo validate`, with no configuration (the
+# layout learned from the start-up), reports RULE plus only the companions captures/README.md
+# documents for it (nothing else at all), and the same with the layout file the simulator wrote;
+# tshark with the plugin, with no preference set, shows the finding on exactly the frames the
+# validator reports.
 SRC=$1 BUILD=$2 RULE=$3
 shift 3
 source "$SRC/tests/integration/lib.sh"
@@ -10,11 +12,24 @@ source "$SRC/tests/integration/lib.sh"
   2>"$WORK/sim.err" || fail "simulate exit $?: $(cat "$WORK/sim.err")"
 chmod a+r "$WORK/capture.pcap" "$WORK/layout.toml"
 set +e
-"$NCSERVO" validate --config "$WORK/layout.toml" --format json "$WORK/capture.pcap" \
-  >"$WORK/report.json" 2>"$WORK/err.txt"
+"$NCSERVO" validate --format json "$WORK/capture.pcap" >"$WORK/report.json" 2>"$WORK/err.txt"
 rc=$?
+"$NCSERVO" validate --config "$WORK/layout.toml" --format json "$WORK/capture.pcap" \
+  >"$WORK/configured.json" 2>>"$WORK/err.txt"
+rc2=$?
 set -e
 [ $rc = 0 ] || [ $rc = 1 ] || fail "validate exit $rc: $(cat "$WORK/err.txt")"
+[ $rc2 = $rc ] || fail "validate --config exit $rc2, without $rc: $(cat "$WORK/err.txt")"
+python3 - "$WORK/report.json" "$WORK/configured.json" <<'PY' || fail "$RULE: learned and configured layouts disagree"
+import json, sys
+# The same rules on the same frames; a finding before the FMMUs are configured names its axis
+# only with the layout file (learning knows the axes once the start-up has mapped them).
+load = lambda p: sorted((f["rule"], f["frame"], f["axis"]) for f in json.load(open(p))["captures"][0]["findings"])
+learned, configured = load(sys.argv[1]), load(sys.argv[2])
+assert [f[:2] for f in learned] == [f[:2] for f in configured], f"learned {learned}, configured {configured}"
+for l, c in zip(learned, configured):
+    assert l[2] is None or l[2] == c[2], f"axis {l} vs {c}"
+PY
 companions=$(grep "^| $RULE |" "$SRC/captures/README.md" | awk -F'|' '{ print $3 }' | xargs)
 [ -n "$companions" ] || fail "captures/README.md documents no row for $RULE"
 python3 - "$WORK/report.json" "$RULE" "$companions" <<'PY' || fail "$RULE: findings differ"
@@ -29,7 +44,7 @@ PY
 
 slug=$("$NCSERVO" rules | awk -v id="$RULE" '$1 == id { print $2 }')
 field="ncservo.rule.${slug//-/_}"
-"$TSHARK" "$PLUGIN" -r "$WORK/capture.pcap" -o "ncservo.config:$WORK/layout.toml" -Y "$field" \
+"$TSHARK" "$PLUGIN" -r "$WORK/capture.pcap" -Y "$field" \
   -T fields -e frame.number >"$WORK/plugin.txt" 2>"$WORK/tshark.err" ||
   fail "tshark exit $?: $(cat "$WORK/tshark.err")"
 [ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"

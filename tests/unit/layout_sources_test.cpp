@@ -52,7 +52,7 @@ void learn(sim::Simulator& simulator, LayoutLearner& learner, std::size_t max_fr
     ByteReader bytes(f.data, f.size);
     walkPacket(LinkType::Ethernet, bytes, *frame);
     if (before_fmmus && frame->count > 0 && frame->datagrams[0].command == ecat::kFpwr &&
-        frame->datagrams[0].ado() == kRegFmmu) {
+        frame->datagrams[0].ado() == ecat::kRegFmmu0) {
       return false;
     }
     const bool returned = (f.data[6] & 0x02) != 0;  // the slaves' locally-administered bit

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <set>
+#include <sstream>
 
 #include "ncservo/rules.hpp"
 
@@ -274,6 +275,32 @@ ConfigResult loadConfig(const std::string& path) {
     return result;
   }
   return parseConfig(text, path);
+}
+
+std::string writeConfig(const std::vector<AxisConfig>& axes, std::optional<int> servo_ready_mode) {
+  toml::table root;
+  if (servo_ready_mode) root.insert("servo_ready_mode", *servo_ready_mode);
+  auto hex = [](std::int64_t value) {
+    toml::value<std::int64_t> v(value);
+    v.flags(toml::value_flags::format_as_hexadecimal);
+    return v;
+  };
+  toml::array list;
+  for (const AxisConfig& a : axes) {
+    toml::table axis;
+    axis.insert("name", a.name);
+    if (a.outputs) axis.insert("outputs", hex(*a.outputs));
+    if (a.inputs) axis.insert("inputs", hex(*a.inputs));
+    if (a.station) axis.insert("station", hex(*a.station));
+    if (a.sm_outputs) axis.insert("sm_outputs", hex(*a.sm_outputs));
+    if (a.sm_inputs) axis.insert("sm_inputs", hex(*a.sm_inputs));
+    if (a.servo_ready_mode) axis.insert("servo_ready_mode", *a.servo_ready_mode);
+    list.push_back(std::move(axis));
+  }
+  root.insert("axis", std::move(list));
+  std::ostringstream text;
+  text << root << "\n";
+  return text.str();
 }
 
 }  // namespace ncservo

@@ -13,10 +13,6 @@ namespace {
 constexpr std::uint16_t kMaxDefaultAxesPerDatagram = 29;
 // Bounds on what a hostile capture can make the decoder remember.
 constexpr std::size_t kMaxDefaultKeys = 64;
-constexpr std::size_t kMaxSmSlaves = 4096;
-constexpr std::uint16_t kRegSm2 = ecat::kRegSyncManager0 + 2 * ecat::kSyncManagerStride;
-constexpr std::uint16_t kRegSm3 = ecat::kRegSyncManager0 + 3 * ecat::kSyncManagerStride;
-constexpr std::size_t kSmLengthOffset = 2;  // SM register block: start (2), length (2), ...
 
 // What the decoder needs to know of a frame's datagram list, gathered in one pass.
 struct FrameShape {
@@ -26,9 +22,9 @@ struct FrameShape {
   // Framing, commands, surviving addresses, lengths and which WKCs are above zero: what the
   // placements depend on (not the index a master changes every cycle).
   std::uint64_t layout_key = 0;
-  bool any_wkc = false;           // some WKC is above zero
-  bool complete = true;           // every datagram wholly captured, WKC included
-  bool writes_registers = false;  // some datagram writes slave registers (a start-up may)
+  bool any_wkc = false;    // some WKC is above zero
+  bool complete = true;    // every datagram wholly captured, WKC included
+  bool registers = false;  // some datagram reads or writes slave registers (a start-up may)
 };
 
 FrameShape shapeOf(const EcatFrame& frame) {
@@ -47,8 +43,7 @@ FrameShape shapeOf(const EcatFrame& frame) {
     if (survives) mix(dg.address);
     shape.any_wkc = shape.any_wkc || (dg.has_wkc && dg.wkc > 0);
     shape.complete = shape.complete && dg.complete();
-    shape.writes_registers =
-        shape.writes_registers || (ecat::writesSlaves(dg.command) && !ecat::isLogical(dg.command));
+    shape.registers = shape.registers || (dg.command != ecat::kNop && !ecat::isLogical(dg.command));
     const std::uint64_t address = survives ? dg.address : 0;
     key = (key ^ (address | std::uint64_t{dg.command} << 32 | std::uint64_t{dg.length} << 40 |
                   std::uint64_t{dg.wkc > 0} << 56)) *
@@ -89,9 +84,28 @@ const char* copyKindName(CopyKind copy) {
   return copy == CopyKind::Master ? "master" : "returned";
 }
 
+DecoderOptions layoutOptions(const std::vector<AxisConfig>* config_axes,
+                             const std::vector<AxisConfig>* eni_axes, bool default_layout) {
+  DecoderOptions options;
+  options.default_layout = default_layout;
+  if (config_axes != nullptr && !config_axes->empty()) {
+    options.axes = *config_axes;
+    options.explicit_source = LayoutSource::Config;
+  } else if (eni_axes != nullptr && !eni_axes->empty()) {
+    options.axes = *eni_axes;
+    options.explicit_source = LayoutSource::Eni;
+  }
+  return options;
+}
+
 Decoder::Decoder(DecoderOptions options) : options_(std::move(options)) {
-  for (std::size_t i = 0; i < options_.axes.size(); ++i) {
-    const AxisConfig& axis = options_.axes[i];
+  setAxes(options_.axes);
+}
+
+void Decoder::setAxes(const std::vector<AxisConfig>& axes) {
+  axes_.clear();
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const AxisConfig& axis = axes[i];
     AxisInfo info;
     info.index = static_cast<std::uint16_t>(i);
     info.name = axis.name.empty() ? fmt::format("axis{}", i) : axis.name;
@@ -119,7 +133,8 @@ std::string Decoder::noServoReason() const {
 }
 
 LayoutSource Decoder::source() const {
-  if (!options_.axes.empty()) return LayoutSource::Config;
+  if (!options_.axes.empty()) return options_.explicit_source;
+  if (!learned_axes_.empty()) return LayoutSource::Startup;
   if (!default_keys_.empty()) return LayoutSource::Default;
   return LayoutSource::None;
 }
@@ -129,15 +144,26 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
   const FrameShape shape = shapeOf(frame);
   classifyCopy(frame, shape.signature, shape.any_wkc, out);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
-  // Only physical writes reach the sync-manager registers.
-  if (shape.writes_registers) observeStartup(frame, bytes);
+  // Only register commands configure slaves; the learner follows them whatever the layout
+  // source, and its axes are used when no configuration or ENI gives any.
+  if (shape.registers) {
+    learner_.onFrame(frame, bytes, out.copy == CopyKind::Returned, out.paired);
+    if (learner_.generation() != learned_generation_) {
+      learned_generation_ = learner_.generation();
+      ++generation_;  // placements cached before are stale
+      if (options_.axes.empty()) {
+        learned_axes_ = learner_.axes();
+        setAxes(learned_axes_);
+      }
+    }
+  }
   // Only wholly captured frames are cached: their placements depend on nothing else than their
   // shape — framing, commands, addresses, lengths, which WKCs are above zero — and the copy.
   const bool cacheable = frame.status == WalkStatus::Ok && shape.complete;
   const std::uint64_t key = shape.layout_key ^ (out.copy == CopyKind::Returned ? 0x5bd1e995ull : 0);
   if (cacheable && fromCache(key, out)) return;
   const std::uint64_t generation = generation_;
-  if (!options_.axes.empty()) {
+  if (!placedAxes().empty()) {
     placeConfigured(frame, out);
   } else if (options_.default_layout && !startupShowsNoServo()) {
     placeDefault(frame, out);
@@ -192,38 +218,6 @@ void Decoder::classifyCopy(const EcatFrame& frame, std::uint64_t signature, bool
   previous_was_master_ = out.copy == CopyKind::Master && frame.count > 0;
 }
 
-// PROTOCOL.md §9.3: SM2/SM3 lengths of 10 and 40 bytes mark a servo of this protocol. Only
-// whether any servo exists is needed here, to keep the default layout off captures without one.
-void Decoder::observeStartup(const EcatFrame& frame, const ByteReader& bytes) {
-  for (std::size_t i = 0; i < frame.count; ++i) {
-    const Datagram& dg = frame.datagrams[i];
-    if (!ecat::writesSlaves(dg.command) || ecat::isLogical(dg.command)) continue;
-    for (std::uint16_t sm : {kRegSm2, kRegSm3}) {
-      const std::uint32_t field = sm + kSmLengthOffset;
-      if (field < dg.ado() || field + 2 > std::uint32_t{dg.ado()} + dg.data_captured) continue;
-      auto length = bytes.le16(dg.data_offset + (field - dg.ado()));
-      if (!length || *length == 0) continue;
-      // Broadcast writes reach every slave: one key for all of them.
-      const std::uint32_t key =
-          (std::uint32_t{dg.command} << 16) |
-          (dg.command == ecat::kBwr || dg.command == ecat::kBrw ? 0 : dg.adp());
-      auto slave = std::find_if(sm_slaves_list_.begin(), sm_slaves_list_.end(),
-                                [key](const SmSlave& s) { return s.key == key; });
-      if (slave == sm_slaves_list_.end()) {
-        if (sm_slaves_list_.size() >= kMaxSmSlaves) continue;
-        slave = sm_slaves_list_.insert(sm_slaves_list_.end(), SmSlave{key});
-        ++sm_slaves_;
-        ++generation_;
-      }
-      (sm == kRegSm2 ? slave->sm2_length : slave->sm3_length) = *length;
-      if (slave->sm2_length == kRxPdoSize && slave->sm3_length == kTxPdoSize && !servo_seen_) {
-        servo_seen_ = true;
-        ++generation_;
-      }
-    }
-  }
-}
-
 AxisPlacement* Decoder::placementFor(FrameDecode& out, std::uint16_t axis) {
   // Placements usually arrive in axis order: the last one, or a new one after it.
   if (out.axis_count > 0 && out.axes[out.axis_count - 1].axis == axis) {
@@ -275,8 +269,9 @@ void Decoder::placeConfigured(const EcatFrame& frame, FrameDecode& out) {
     const bool writes = ecat::writesSlaves(dg.command);
     const bool reads = ecat::readsSlaves(dg.command);
     const std::uint64_t base = logical ? dg.address : dg.ado();
-    for (std::size_t a = 0; a < options_.axes.size(); ++a) {
-      const AxisConfig& axis = options_.axes[a];
+    const std::vector<AxisConfig>& axes = placedAxes();
+    for (std::size_t a = 0; a < axes.size(); ++a) {
+      const AxisConfig& axis = axes[a];
       const auto axis_index = static_cast<std::uint16_t>(a);
       if (logical == axis.physical()) continue;
       if (fp && *axis.station != dg.adp()) continue;

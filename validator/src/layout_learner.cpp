@@ -77,8 +77,8 @@ SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_
   SlaveLayout out;
   out.station = station;
   out.position = position;
-  for (std::size_t n = 0; n < kSyncManagerCount; ++n) {
-    const std::size_t at = n * kSyncManagerSize;
+  for (std::size_t n = 0; n < ecat::kSyncManagerCount; ++n) {
+    const std::size_t at = n * ecat::kSyncManagerStride;
     if (!known(regs.sm_known, at + kSmStart, 4)) continue;
     SyncManagerView sm;
     sm.index = n;
@@ -89,8 +89,8 @@ SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_
     if (sm.length == 0) continue;
     out.sync_managers.push_back(sm);
   }
-  for (std::size_t n = 0; n < kFmmuCount; ++n) {
-    const std::size_t at = n * kFmmuSize;
+  for (std::size_t n = 0; n < ecat::kFmmuCount; ++n) {
+    const std::size_t at = n * ecat::kFmmuStride;
     if (!known(regs.fmmu_known, at, kFmmuActivate + 1)) continue;
     FmmuView f;
     f.index = n;
@@ -116,9 +116,8 @@ SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_
 }
 
 bool LayoutLearner::touch(SlaveRegisters& regs, const Datagram& dg, const ByteReader& bytes) {
-  const bool fmmu = copyBlock(regs.fmmu, regs.fmmu_known, kRegFmmu, dg, bytes);
-  const bool sm = copyBlock(regs.sm, regs.sm_known, kRegSyncManager, dg, bytes);
-  if (sm) saw_configuration_ = true;
+  const bool fmmu = copyBlock(regs.fmmu, regs.fmmu_known, ecat::kRegFmmu0, dg, bytes);
+  const bool sm = copyBlock(regs.sm, regs.sm_known, ecat::kRegSyncManager0, dg, bytes);
   return fmmu || sm;
 }
 
@@ -129,11 +128,10 @@ void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, boo
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];
     if (ecat::isLogical(dg.command)) continue;
-    const bool take_write = ecat::writesSlaves(dg.command) && (!returned || !paired);
-    const bool take_read = ecat::readsSlaves(dg.command) && returned && dg.has_wkc && dg.wkc > 0;
-    if (!take_write && !take_read) continue;
+    // What the master wrote configures the slave (a read-back would only repeat it).
+    if (!ecat::writesSlaves(dg.command) || (returned && paired)) continue;
     const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
-    if (take_write) directory_.noteStationWrite(dg, bytes, address);
+    directory_.noteStationWrite(dg, bytes, address);
     const std::size_t ado = dg.ado();
     const std::size_t end = ado + dg.data_captured;
     if (ado >= kProcessRam && address.target == SlaveTarget::Station) {
@@ -153,8 +151,9 @@ void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, boo
       continue;
     }
     const bool registers =
-        (ado < kRegFmmu + kFmmuCount * kFmmuSize && end > kRegFmmu) ||
-        (ado < kRegSyncManager + kSyncManagerCount * kSyncManagerSize && end > kRegSyncManager);
+        (ado < ecat::kRegFmmu0 + ecat::kFmmuCount * ecat::kFmmuStride && end > ecat::kRegFmmu0) ||
+        (ado < ecat::kRegSyncManager0 + ecat::kSyncManagerCount * ecat::kSyncManagerStride &&
+         end > ecat::kRegSyncManager0);
     if (!registers) continue;
     if (address.target == SlaveTarget::All) {
       for (auto& slave : directory_.slaves()) dirty_ = touch(slave.data, dg, bytes) || dirty_;
@@ -184,7 +183,9 @@ void LayoutLearner::rebuild() {
   dirty_ = false;
   std::vector<AxisConfig> axes;
   for (const SlaveLayout& slave : slaves()) {
+    if (!slave.sync_managers.empty()) saw_configuration_ = true;  // non-zero lengths only
     if (!slave.servo) continue;
+    saw_servo_ = true;
     const SyncManagerView* rx = nullptr;
     const SyncManagerView* tx = nullptr;
     for (const SyncManagerView& sm : slave.sync_managers) {

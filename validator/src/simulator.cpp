@@ -3,7 +3,6 @@
 #include "ncservo/simulator.hpp"
 
 #include <fmt/format.h>
-#include <toml++/toml.h>
 
 #include <algorithm>
 #include <array>
@@ -13,6 +12,7 @@
 #include <sstream>
 #include <utility>
 
+#include "ncservo/config.hpp"
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/pdo_layout.hpp"
@@ -1388,31 +1388,21 @@ const std::vector<SimAxisLayout>& Simulator::layout() const {
 }
 
 std::string Simulator::layoutConfig() const {
-  toml::table root;
-  root.insert("servo_ready_mode", impl_->o.ready_mode);
-  toml::array axes;
-  auto hex = [](std::int64_t value) {
-    toml::value<std::int64_t> v(value);
-    v.flags(toml::value_flags::format_as_hexadecimal);
-    return v;
-  };
+  std::vector<AxisConfig> axes;
   for (const SimAxisLayout& a : impl_->axis_layout) {
-    toml::table axis;
-    axis.insert("name", a.name);
-    axis.insert("outputs", hex(a.outputs));
-    axis.insert("inputs", hex(a.inputs));
-    axis.insert("station", hex(a.station));
+    AxisConfig axis;
+    axis.name = a.name;
+    axis.outputs = a.outputs;
+    axis.inputs = a.inputs;
+    axis.station = a.station;
     axes.push_back(std::move(axis));
   }
-  root.insert("axis", std::move(axes));
-  std::ostringstream text;
-  text << fmt::format(
-              "# The layout of `ncservo simulate` ({} axes, {} layout, {} terminals), for\n"
-              "# `ncservo validate --config` or the Wireshark preference ncservo.config.\n",
-              impl_->o.axes, impl_->o.layout == LayoutKind::Default ? "default" : "interleaved",
-              impl_->o.io_slaves)
-       << root << "\n";
-  return text.str();
+  return fmt::format(
+             "# The layout of `ncservo simulate` ({} axes, {} layout, {} terminals), for\n"
+             "# `ncservo validate --config` or the Wireshark preference ncservo.config.\n",
+             impl_->o.axes, impl_->o.layout == LayoutKind::Default ? "default" : "interleaved",
+             impl_->o.io_slaves) +
+         writeConfig(axes, impl_->o.ready_mode);
 }
 
 std::string Simulator::eni() const {

@@ -56,6 +56,9 @@ struct ConfigResult {
 extern const std::vector<std::string_view> kTimeoutNames;
 
 ConfigResult parseConfig(std::string_view text, const std::string& path);
+// The axes (and a Servo_Ready_Mode) as a configuration file that parseConfig reads back,
+// addresses in hexadecimal.
+std::string writeConfig(const std::vector<AxisConfig>& axes, std::optional<int> servo_ready_mode);
 ConfigResult loadConfig(const std::string& path);
 
 }  // namespace ncservo

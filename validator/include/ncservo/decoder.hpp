@@ -11,6 +11,7 @@
 #include "ncservo/byte_reader.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
+#include "ncservo/layout_learner.hpp"
 #include "ncservo/pdo_layout.hpp"
 
 namespace ncservo {
@@ -56,9 +57,15 @@ struct FrameDecode {
 };
 
 struct DecoderOptions {
-  std::vector<AxisConfig> axes;  // explicit layout (source 1); empty = none
-  bool default_layout = true;    // PROTOCOL.md §9.4 may be used
+  std::vector<AxisConfig> axes;  // explicit layout (a configuration or an ENI); empty = none
+  LayoutSource explicit_source = LayoutSource::Config;  // where `axes` came from
+  bool default_layout = true;                           // PROTOCOL.md §9.4 may be used
 };
+
+// The layout sources in the order PROTOCOL.md §9 tries them: a configuration's axes, else an
+// ENI's, else (in the decoder) the start-up's, else the default layout.
+DecoderOptions layoutOptions(const std::vector<AxisConfig>* config_axes,
+                             const std::vector<AxisConfig>* eni_axes, bool default_layout);
 
 class Decoder {
  public:
@@ -71,7 +78,9 @@ class Decoder {
   LayoutSource source() const;
   const std::vector<AxisInfo>& axes() const { return axes_; }
   // A start-up configured slaves' sync managers and none is a servo of this protocol.
-  bool startupShowsNoServo() const { return sm_slaves_ > 0 && !servo_seen_; }
+  bool startupShowsNoServo() const { return learner_.sawConfiguration() && !learner_.sawServo(); }
+  // What the start-up showed of every slave (learned whatever the layout source).
+  const LayoutLearner& learner() const { return learner_; }
   // Why no axis was found, for a person (empty while axes are known).
   std::string noServoReason() const;
 
@@ -89,7 +98,10 @@ class Decoder {
                     FrameDecode& out);
   bool fromCache(std::uint64_t key, FrameDecode& out) const;
   void toCache(std::uint64_t key, const FrameDecode& out);
-  void observeStartup(const EcatFrame& frame, const ByteReader& bytes);
+  void setAxes(const std::vector<AxisConfig>& axes);
+  const std::vector<AxisConfig>& placedAxes() const {
+    return options_.axes.empty() ? learned_axes_ : options_.axes;
+  }
   void placeConfigured(const EcatFrame& frame, FrameDecode& out);
   void placeDefault(const EcatFrame& frame, FrameDecode& out);
   const DefaultKey* defaultKeyFor(const Datagram& dg, std::uint16_t axis_count,
@@ -105,15 +117,10 @@ class Decoder {
   std::vector<DefaultKey> candidate_keys_;
   std::uint64_t previous_signature_ = 0;
   bool previous_was_master_ = false;
-  // Sync-manager lengths written by the start-up, per slave (bounded, PROTOCOL.md §9.3).
-  struct SmSlave {
-    std::uint32_t key;
-    std::uint16_t sm2_length = 0;
-    std::uint16_t sm3_length = 0;
-  };
-  std::vector<SmSlave> sm_slaves_list_;
-  std::size_t sm_slaves_ = 0;  // slaves whose SM2 or SM3 got a non-zero length
-  bool servo_seen_ = false;
+  // The start-up's SM/FMMU configuration (PROTOCOL.md §9.3), and the axes it gave so far.
+  LayoutLearner learner_;
+  std::uint32_t learned_generation_ = 0;
+  std::vector<AxisConfig> learned_axes_;
 
   // Placements of recently seen frame shapes (same datagram list, framing, copy and WKCs): a
   // cyclic frame is placed once, not every cycle. Any change to the layout state invalidates it.

@@ -67,8 +67,17 @@ inline constexpr bool readsSlaves(std::uint8_t cmd) {
 const char* commandName(std::uint8_t cmd);
 
 // ESC registers the decoder looks at (PROTOCOL.md §8).
+// ESC registers (PROTOCOL.md §8).
+inline constexpr std::uint16_t kRegStationAddress = 0x0010;
+inline constexpr std::uint16_t kRegAlControl = 0x0120;
+inline constexpr std::uint16_t kRegAlStatus = 0x0130;
+inline constexpr std::uint16_t kRegAlStatusCode = 0x0134;
+inline constexpr std::uint16_t kRegFmmu0 = 0x0600;
+inline constexpr std::uint16_t kFmmuStride = 16;
+inline constexpr std::size_t kFmmuCount = 16;
 inline constexpr std::uint16_t kRegSyncManager0 = 0x0800;
 inline constexpr std::uint16_t kSyncManagerStride = 8;
+inline constexpr std::size_t kSyncManagerCount = 16;
 inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;
 }  // namespace ecat
 

@@ -1,8 +1,8 @@
 // Learning where each servo's PDOs are from the capture's own start-up (PROTOCOL.md §9.3): the
-// sync manager (0x0800 + 8n) and FMMU (0x0600 + 16n) registers the master writes, or reads back,
-// per slave. A slave whose SM2 is 10 bytes and SM3 40 bytes is a servo of this protocol; its FMMUs
-// give the logical addresses of its RxPDO and TxPDO, or, with no FMMU over them, it is exchanged
-// with FPRD/FPWR at the SM physical addresses. Bounded memory; one pass.
+// sync manager (0x0800 + 8n) and FMMU (0x0600 + 16n) registers the master writes, per slave. A
+// slave whose SM2 is 10 bytes and SM3 40 bytes is a servo of this protocol; its FMMUs give the
+// logical addresses of its RxPDO and TxPDO, or, with no FMMU over them, it is exchanged with
+// FPRD/FPWR at the SM physical addresses. Bounded memory; one pass.
 #pragma once
 
 #include <array>
@@ -18,19 +18,12 @@
 
 namespace ncservo {
 
-inline constexpr std::uint16_t kRegFmmu = 0x0600;
-inline constexpr std::uint16_t kRegSyncManager = 0x0800;
-inline constexpr std::size_t kFmmuCount = 16;
-inline constexpr std::size_t kFmmuSize = 16;
-inline constexpr std::size_t kSyncManagerCount = 16;
-inline constexpr std::size_t kSyncManagerSize = 8;
-
 // A slave's SM and FMMU registers as far as the capture showed them (byte by byte).
 struct SlaveRegisters {
-  std::array<std::uint8_t, kFmmuCount * kFmmuSize> fmmu{};
-  std::bitset<kFmmuCount * kFmmuSize> fmmu_known;
-  std::array<std::uint8_t, kSyncManagerCount * kSyncManagerSize> sm{};
-  std::bitset<kSyncManagerCount * kSyncManagerSize> sm_known;
+  std::array<std::uint8_t, ecat::kFmmuCount * ecat::kFmmuStride> fmmu{};
+  std::bitset<ecat::kFmmuCount * ecat::kFmmuStride> fmmu_known;
+  std::array<std::uint8_t, ecat::kSyncManagerCount * ecat::kSyncManagerStride> sm{};
+  std::bitset<ecat::kSyncManagerCount * ecat::kSyncManagerStride> sm_known;
   bool physical_exchange = false;  // FPRD/FPWR seen at a configured servo's SM addresses
   void absorb(const SlaveRegisters& other);
 };
@@ -61,15 +54,16 @@ struct SlaveLayout {
 class LayoutLearner {
  public:
   // Every frame in capture order (see AlTracker::onFrame for `returned` and `paired`). Writes are
-  // taken from master copies (and from returned copies whose master copy was not captured),
-  // reads from returned copies whose WKC is above zero.
+  // taken from master copies, and from returned copies whose master copy was not captured.
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired);
 
+  // Whether any slave's sync managers have the sizes of a servo of this protocol.
+  bool sawServo() const { return saw_servo_; }
   // The servos found so far, in ring order, with station and logical (or SM) addresses.
   const std::vector<AxisConfig>& axes() const { return axes_; }
   // Changes whenever axes() does.
   std::uint32_t generation() const { return generation_; }
-  // Whether the capture configured any slave's sync managers (a start-up was captured).
+  // Whether the capture gave any slave's sync manager a non-zero length (a start-up was captured).
   bool sawConfiguration() const { return saw_configuration_; }
   // Every slave seen, with its registers, in ring order (for `decode --layout` and tests).
   std::vector<SlaveLayout> slaves() const;
@@ -83,6 +77,7 @@ class LayoutLearner {
   std::vector<AxisConfig> axes_;
   std::uint32_t generation_ = 0;
   bool saw_configuration_ = false;
+  bool saw_servo_ = false;
   bool dirty_ = false;
 };
 

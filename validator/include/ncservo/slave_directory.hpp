@@ -15,8 +15,6 @@
 
 namespace ncservo {
 
-inline constexpr std::uint16_t kRegStationAddress = 0x0010;
-
 // How a datagram addresses slaves.
 enum class SlaveTarget : std::uint8_t { None, Station, Position, All };
 struct SlaveAddress {
@@ -79,7 +77,7 @@ class SlaveDirectory {
   // The station address an APWR/APRW of 0x0010 assigns (taken from the write's data).
   void noteStationWrite(const Datagram& dg, const ByteReader& bytes, const SlaveAddress& address) {
     if (address.target != SlaveTarget::Position || !ecat::writesSlaves(dg.command)) return;
-    if (auto at = registerAt(dg, kRegStationAddress, 2)) {
+    if (auto at = registerAt(dg, ecat::kRegStationAddress, 2)) {
       if (auto station = bytes.le16(*at)) assignStation(address.value, *station);
     }
   }
