@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "ncservo/config.hpp"
+#include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
@@ -76,6 +77,7 @@ expert_field ei_region_malformed = EI_INIT;
 expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
 const char* pref_config_path = "";
+const char* pref_eni_path = "";
 gboolean pref_default_layout = TRUE;
 gint pref_servo_ready_mode = -1;  // auto
 const enum_val_t kReadyModes[] = {{"auto", "Inferred from the capture", -1},
@@ -266,14 +268,23 @@ void buildWordItems() {
 }
 
 void applyPreferences() {
-  auto* options = new DecoderOptions();
   auto* settings = new RuleSettings();
-  options->default_layout = pref_default_layout != FALSE;
+  bool default_layout = pref_default_layout != FALSE;
+  std::vector<AxisConfig> config_axes;
+  std::vector<AxisConfig> eni_axes;
+  if (pref_eni_path != nullptr && pref_eni_path[0] != '\0') {
+    EniResult eni = loadEni(pref_eni_path);
+    if (eni.ok()) {
+      eni_axes = std::move(eni.axes);
+    } else {
+      report_failure("NCSERVO: %s", eni.error->text().c_str());
+    }
+  }
   if (pref_config_path != nullptr && pref_config_path[0] != '\0') {
     ConfigResult loaded = loadConfig(pref_config_path);
     if (loaded.ok()) {
-      options->axes = loaded.config->axes;
-      options->default_layout = options->default_layout && loaded.config->default_layout;
+      config_axes = loaded.config->axes;
+      default_layout = default_layout && loaded.config->default_layout;
       // Severity overrides are left to Wireshark's own expert-severity table (PROTOCOL.md §10).
       if (auto error = settings->apply(*loaded.config)) {
         report_failure("NCSERVO: %s: %s", pref_config_path, error->c_str());
@@ -283,6 +294,8 @@ void applyPreferences() {
     }
   }
   if (pref_servo_ready_mode >= 0) settings->servo_ready_mode = pref_servo_ready_mode;
+  // PROTOCOL.md §9: the configuration, else the ENI, else the start-up, else the default layout.
+  auto* options = new DecoderOptions(layoutOptions(&config_axes, &eni_axes, default_layout));
   delete g_options;
   g_options = options;
   delete g_settings;
@@ -586,6 +599,11 @@ void registerProtocol() {
       prefs, "config", "Configuration file",
       "TOML configuration file with the axes' layout (see the ncservo README)", &pref_config_path,
       FALSE);
+  prefs_register_filename_preference(
+      prefs, "eni", "ENI file",
+      "EtherCATConfig.xml (ETG.2100) exported by the configuration tool: the servos' layout when "
+      "no configuration file gives one",
+      &pref_eni_path, FALSE);
   prefs_register_enum_preference(
       prefs, "servo_ready_mode", "Servo_Ready_Mode",
       "The drives' Servo_Ready_Mode parameter (PROTOCOL.md §5); auto infers it per axis",

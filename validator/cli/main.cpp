@@ -16,6 +16,7 @@
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/capture_writer.hpp"
 #include "ncservo/config.hpp"
+#include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
@@ -113,27 +114,68 @@ class RowWriter {
   const Decoder& decoder_;
 };
 
-DecoderOptions decoderOptions(const std::optional<Config>& config, bool no_default_layout) {
-  DecoderOptions options;
-  if (config) {
-    options.axes = config->axes;
-    options.default_layout = config->default_layout;
-  }
-  if (no_default_layout) options.default_layout = false;
-  return options;
+// PROTOCOL.md §9: the configuration's axes, else the ENI's, else (in the decoder) the start-up's,
+// else the default layout.
+DecoderOptions decoderOptions(const std::optional<Config>& config,
+                              const std::optional<EniResult>& eni, bool no_default_layout) {
+  const bool default_layout = !no_default_layout && (!config || config->default_layout);
+  return layoutOptions(config ? &config->axes : nullptr, eni ? &eni->axes : nullptr,
+                       default_layout);
 }
 
-int runDecode(const std::string& path, const std::optional<Config>& config, bool no_default_layout,
-              const std::string& format) {
+// `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
+void printLayout(const Decoder& decoder) {
+  std::vector<AxisConfig> axes;
+  for (const AxisInfo& info : decoder.axes()) {
+    AxisConfig axis;
+    axis.name = info.name;
+    if (info.has_station) axis.station = info.station;
+    if (info.logical) {
+      axis.outputs = info.outputs;
+      axis.inputs = info.inputs;
+    } else {
+      axis.sm_outputs = static_cast<std::uint16_t>(info.outputs);
+      axis.sm_inputs = static_cast<std::uint16_t>(info.inputs);
+    }
+    axes.push_back(std::move(axis));
+  }
+  fmt::print("# layout source: {}, {} ax{}{}\n", layoutSourceName(decoder.source()), axes.size(),
+             axes.size() == 1 ? "is" : "es",
+             axes.empty() ? " (" + decoder.noServoReason() + ")" : std::string());
+  for (const SlaveLayout& slave : decoder.learner().slaves()) {
+    std::string text = "# slave";
+    if (slave.position) text += fmt::format(" {}", *slave.position);
+    if (slave.station) text += fmt::format(" station 0x{:04X}", *slave.station);
+    for (const SyncManagerView& sm : slave.sync_managers) {
+      text += fmt::format("; SM{} 0x{:04X}+{} control 0x{:02X}{}", sm.index, sm.start, sm.length,
+                          sm.control, sm.enabled ? "" : " (off)");
+    }
+    for (const FmmuView& f : slave.fmmus) {
+      text += fmt::format("; FMMU{} 0x{:08X}+{} -> 0x{:04X} {}{}", f.index, f.logical, f.length,
+                          f.physical,
+                          f.type == 1   ? "read"
+                          : f.type == 2 ? "write"
+                                        : "read/write",
+                          f.active ? "" : " (off)");
+    }
+    if (slave.servo) text += "; servo";
+    fmt::print("{}\n", text);
+  }
+  if (!axes.empty()) fmt::print("{}", writeConfig(axes, std::nullopt));
+}
+
+int runDecode(const std::string& path, const std::optional<Config>& config,
+              const std::optional<EniResult>& eni, bool no_default_layout,
+              const std::string& format, bool layout_only) {
   std::string error;
   auto reader = CaptureReader::open(path, error);
   if (!reader) {
     fmt::print(stderr, "ncservo: {}\n", error);
     return kExitCapture;
   }
-  Session session(decoderOptions(config, no_default_layout));
+  Session session(decoderOptions(config, eni, no_default_layout));
   RowWriter writer(stdout, format == "csv", session.decoder());
-  writer.header();
+  if (!layout_only) writer.header();
   std::map<std::uint16_t, Row> pending;  // outputs seen in a master's copy, awaiting its return
   auto flush = [&](std::uint16_t axis) {
     auto it = pending.find(axis);
@@ -154,6 +196,7 @@ int runDecode(const std::string& path, const std::optional<Config>& config, bool
     if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
       continue;
     const FrameView& view = session.onFrame(frame, bytes);
+    if (layout_only) continue;
     const double time = static_cast<double>(record.time_ns - *first_time) / 1e9;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
       const AxisFrameView& axis = view.axes[i];
@@ -189,6 +232,7 @@ int runDecode(const std::string& path, const std::optional<Config>& config, bool
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", reader->error());
     return kExitCapture;
   }
+  if (layout_only) printLayout(session.decoder());
   if (session.decoder().axes().empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session.decoder().noServoReason());
   }
@@ -348,7 +392,8 @@ int combine(int a, int b) {
   return rank(a) >= rank(b) ? a : b;
 }
 
-int runValidate(const ValidateOptions& o, const std::optional<Config>& config) {
+int runValidate(const ValidateOptions& o, const std::optional<Config>& config,
+                const std::optional<EniResult>& eni) {
   RuleSettings settings;
   if (auto error = buildSettings(o, config, settings)) {
     fmt::print(stderr, "ncservo: {}\n", *error);
@@ -374,8 +419,8 @@ int runValidate(const ValidateOptions& o, const std::optional<Config>& config) {
   int rc = kExitOk;
   for (const std::string& path : o.captures) {
     reports.emplace_back();
-    rc = combine(rc, validateCapture(path, decoderOptions(config, o.no_default_layout), settings,
-                                     writer, reports.back(), fail_on, never));
+    rc = combine(rc, validateCapture(path, decoderOptions(config, eni, o.no_default_layout),
+                                     settings, writer, reports.back(), fail_on, never));
   }
   writer.finish(reports);
   if (out != stdout) std::fclose(out);
@@ -515,6 +560,12 @@ int main(int argc, char** argv) {
   decode->add_option("--format", format, "csv or jsonl")->check(CLI::IsMember({"csv", "jsonl"}));
   decode->add_flag("--no-default-layout", no_default_layout,
                    "never assume the default layout (PROTOCOL.md §9.4)");
+  std::string eni_path;
+  bool layout_only = false;
+  decode->add_option("--eni", eni_path, "ENI file (EtherCATConfig.xml) giving the layout");
+  decode->add_flag("--layout", layout_only,
+                   "print the layout found (as a configuration file) and the slaves the start-up "
+                   "configured, instead of the process data");
 
   ValidateOptions vo;
   std::string validate_config;
@@ -539,6 +590,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1));
   validate->add_flag("--no-default-layout", vo.no_default_layout,
                      "never assume the default layout (PROTOCOL.md §9.4)");
+  std::string validate_eni;
+  validate->add_option("--eni", validate_eni,
+                       "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
 
   std::string rules_format = "text";
   auto* rules = app.add_subcommand("rules", "list the rules: ID, slug, severity, party, summary");
@@ -612,6 +666,22 @@ int main(int argc, char** argv) {
     }
     config = std::move(loaded.config);
   }
-  if (validate->parsed()) return runValidate(vo, config);
-  return runDecode(capture, config, no_default_layout, format);
+  if (validate->parsed()) eni_path = validate_eni;
+  std::optional<EniResult> eni;
+  if (!eni_path.empty()) {
+    eni = loadEni(eni_path);
+    if (!eni->ok()) {
+      fmt::print(stderr, "ncservo: {}\n", eni->error->text());
+      return kExitUsage;
+    }
+    if (eni->axes.empty()) {
+      fmt::print(stderr,
+                 "ncservo: {}: no servo of this protocol (10-byte outputs, 40-byte inputs) among "
+                 "its {} slaves\n",
+                 eni_path, eni->slaves);
+      return kExitUsage;
+    }
+  }
+  if (validate->parsed()) return runValidate(vo, config, eni);
+  return runDecode(capture, config, eni, no_default_layout, format, layout_only);
 }
