@@ -31,7 +31,7 @@ for row in "${cases[@]}"; do
     fail "$name, learned layout: validate exit $?: $(grep -v '^  ' "$WORK/learned.txt" | head -20)"
   grep -q "^verdict: PASS - 0 errors, 0 warnings, 0 info" "$WORK/learned.txt" ||
     fail "$name, learned layout: $(tail -1 "$WORK/learned.txt")"
-  axes=$(grep -c '^  axis' "$WORK/report.txt")
+  axes=$(grep -c '^  axis[0-9]* (axis' "$WORK/report.txt")
   grep -q "^layout: \(startup\|default\), $axes ax" "$WORK/learned.txt" ||
     fail "$name: learned $(grep '^layout' "$WORK/learned.txt"), configured $axes axes"
   "$TSHARK" none -r "$cap" -Y "_ws.malformed || _ws.expert" -T fields -e frame.number \

@@ -237,6 +237,13 @@ void writeTextSummary(std::FILE* out, const CaptureReport& r) {
   }
   fmt::print(out, "\nlayout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
              r.layout.size() == 1 ? "is" : "es");
+  // Where each axis was found: its station and its PDOs' logical (or SM) addresses.
+  for (const AxisInfo& info : r.layout) {
+    fmt::print(out, "  {}:", info.name);
+    if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
+    fmt::print(out, " {} 0x{:08X}, {} 0x{:08X}\n", info.logical ? "outputs" : "SM2",
+               info.outputs, info.logical ? "inputs" : "SM3", info.inputs);
+  }
   for (const AxisReport& a : r.axes) {
     fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
                a.state ? driveStateName(*a.state) : "no inputs seen", a.telegram_failures);
