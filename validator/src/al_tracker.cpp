@@ -8,11 +8,10 @@
 namespace ncservo {
 
 namespace {
-// ESC registers (PROTOCOL.md §8).
-constexpr std::uint16_t kRegStationAddress = 0x0010;
-constexpr std::uint16_t kRegAlControl = 0x0120;
-constexpr std::uint16_t kRegAlStatus = 0x0130;
-constexpr std::uint16_t kRegAlStatusCode = 0x0134;
+using ecat::kRegAlControl;
+using ecat::kRegAlStatus;
+using ecat::kRegAlStatusCode;
+using ecat::kRegStationAddress;
 constexpr std::uint8_t kStateMask = 0x0F;
 constexpr std::uint8_t kErrorBit = 0x10;  // error indicator in AL status, acknowledge in AL control
 
@@ -60,22 +59,6 @@ constexpr bool readsSlave(std::uint8_t cmd) {
 }
 constexpr bool writesSlave(std::uint8_t cmd) {
   return ecat::writesSlaves(cmd) && !ecat::isLogical(cmd);
-}
-constexpr bool isAutoIncrement(std::uint8_t cmd) {
-  return cmd == ecat::kAprd || cmd == ecat::kApwr || cmd == ecat::kAprw || cmd == ecat::kArmw;
-}
-constexpr bool isBroadcast(std::uint8_t cmd) {
-  return cmd == ecat::kBrd || cmd == ecat::kBwr || cmd == ecat::kBrw;
-}
-
-// Offset in the captured bytes of register `reg` when the datagram's captured data holds all
-// `size` bytes of it (ADO <= reg and reg + size <= ADO + data_captured).
-std::optional<std::size_t> registerAt(const Datagram& dg, std::uint16_t reg, std::size_t size) {
-  const std::uint16_t ado = dg.ado();
-  if (ado > reg) return std::nullopt;
-  const std::size_t relative = std::size_t{reg} - ado;
-  if (relative + size > dg.data_captured) return std::nullopt;
-  return dg.data_offset + relative;
 }
 
 // Whether any register read or written here lies in the datagram's captured data. Logical
@@ -138,98 +121,29 @@ std::string slaveName(const std::optional<std::uint16_t>& station,
 }
 }  // namespace
 
-AlTracker::Address AlTracker::addressOf(const Datagram& dg, std::size_t index, bool returned,
-                                        bool paired) const {
-  if (ecat::isConfiguredAddress(dg.command)) return {Target::Station, dg.adp()};
-  if (isBroadcast(dg.command)) return {Target::All, 0};
-  if (!isAutoIncrement(dg.command)) return {};
-  std::uint16_t adp = dg.adp();
-  if (returned) {
-    // Every slave has incremented the returned ADP: only the master's copy says whom it meant.
-    if (!paired || index >= master_.size() || master_[index].command != dg.command) return {};
-    adp = master_[index].adp;
+void AlTracker::AlData::absorb(const AlData& gone) {
+  if (!state) state = gone.state;
+  if (!requested) requested = gone.requested;
+  if (!status_code) {
+    status_code = gone.status_code;
+    status_code_frame = gone.status_code_frame;
   }
-  return {Target::Position, static_cast<std::uint16_t>((0x10000u - adp) & 0xFFFFu)};
+  error_reported = error_reported || gone.error_reported;
+  entered_op = entered_op || gone.entered_op;
 }
 
-std::size_t AlTracker::findStation(std::uint16_t station) const {
-  for (std::size_t i = 0; i < slaves_.size(); ++i) {
-    if (slaves_[i].station == station) return i;
-  }
-  return kNone;
-}
-
-std::size_t AlTracker::findPosition(std::uint16_t position) const {
-  for (std::size_t i = 0; i < slaves_.size(); ++i) {
-    if (slaves_[i].position == position) return i;
-  }
-  return kNone;
-}
-
-std::size_t AlTracker::addSlave() {
-  if (slaves_.size() >= kMaxSlaves) return kNone;
-  Slave slave;
+void AlTracker::fresh(AlData& data) const {
   // What the last broadcasts told every slave on the ring applies to one first seen now.
-  slave.state = state_all_;
-  slave.requested = requested_all_;
-  slaves_.push_back(slave);
-  return slaves_.size() - 1;
+  data.state = state_all_;
+  data.requested = requested_all_;
 }
 
-std::size_t AlTracker::slaveFor(const Address& address) {
-  std::size_t i = kNone;
-  switch (address.target) {
-    case Target::Station:
-      i = findStation(address.value);
-      if (i == kNone && (i = addSlave()) != kNone) slaves_[i].station = address.value;
-      break;
-    case Target::Position:
-      i = findPosition(address.value);
-      if (i == kNone && (i = addSlave()) != kNone) slaves_[i].position = address.value;
-      break;
-    case Target::None:
-    case Target::All:
-      break;
-  }
-  return i;
+std::size_t AlTracker::slaveFor(const SlaveAddress& address) {
+  return directory_.slaveFor(address, [this](AlData& data) { fresh(data); });
 }
 
-void AlTracker::assignStation(std::uint16_t position, std::uint16_t station) {
-  std::size_t at = findPosition(position);
-  std::size_t named = findStation(station);
-  if (at != kNone && at == named) return;
-  if (named != kNone && slaves_[named].position) {
-    // The address moves to another slave: the old holder keeps only its position.
-    slaves_[named].station.reset();
-    named = kNone;
-  }
-  if (at == kNone && named == kNone) {
-    at = addSlave();
-    if (at == kNone) return;
-    slaves_[at].position = position;
-  } else if (at == kNone) {
-    slaves_[named].position = position;
-    return;
-  } else if (named != kNone) {
-    // The same slave was seen by station before the assignment: one record keeps what both knew.
-    Slave& keep = slaves_[at];
-    const Slave& gone = slaves_[named];
-    if (!keep.state) keep.state = gone.state;
-    if (!keep.requested) keep.requested = gone.requested;
-    if (!keep.status_code) {
-      keep.status_code = gone.status_code;
-      keep.status_code_frame = gone.status_code_frame;
-    }
-    keep.error_reported = keep.error_reported || gone.error_reported;
-    keep.entered_op = keep.entered_op || gone.entered_op;
-    slaves_.erase(slaves_.begin() + static_cast<std::ptrdiff_t>(named));
-    if (named < at) --at;
-  }
-  slaves_[at].station = station;
-}
-
-void AlTracker::onControlWrite(const Address& address, std::uint8_t requested, std::uint16_t raw,
-                               std::vector<AlFinding>& out) {
+void AlTracker::onControlWrite(const SlaveAddress& address, std::uint8_t requested,
+                               std::uint16_t raw, std::vector<AlFinding>& out) {
   auto check = [&](const std::optional<std::uint8_t>& known,
                    const std::optional<std::uint16_t>& station,
                    const std::optional<std::uint16_t>& position) {
@@ -240,23 +154,23 @@ void AlTracker::onControlWrite(const Address& address, std::uint8_t requested, s
                                slaveName(station, position), raw, alStateName(requested),
                                alStateName(*known), allowedFrom(*known))});
   };
-  if (address.target == Target::All) {
+  if (address.target == SlaveTarget::All) {
     requested_all_ = requested;
-    if (slaves_.empty()) check(state_all_, std::nullopt, std::nullopt);
-    for (Slave& slave : slaves_) {
-      check(slave.state, slave.station, slave.position);
-      slave.requested = requested;
+    if (directory_.slaves().empty()) check(state_all_, std::nullopt, std::nullopt);
+    for (Slave& slave : directory_.slaves()) {
+      check(slave.data.state, slave.station, slave.position);
+      slave.data.requested = requested;
     }
     return;
   }
   const std::size_t i = slaveFor(address);
-  if (i == kNone) return;
-  Slave& slave = slaves_[i];
-  check(slave.state, slave.station, slave.position);
-  slave.requested = requested;
+  if (i == directory_.kNone) return;
+  Slave& slave = directory_.slaves()[i];
+  check(slave.data.state, slave.station, slave.position);
+  slave.data.requested = requested;
 }
 
-void AlTracker::setState(Slave& slave, std::uint8_t state) {
+void AlTracker::setState(AlData& slave, std::uint8_t state) {
   const std::optional<std::uint8_t> previous = slave.state;
   if (isState(state)) {
     slave.state = state;
@@ -269,25 +183,26 @@ void AlTracker::setState(Slave& slave, std::uint8_t state) {
   }
 }
 
-void AlTracker::onStatusRead(const Address& address, std::uint16_t raw, const Stamp& now,
+void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, const Stamp& now,
                              std::vector<AlFinding>& out) {
   const std::uint8_t state = raw & kStateMask;
   const bool error = (raw & kErrorBit) != 0;
-  if (address.target == Target::All) {
+  if (address.target == SlaveTarget::All) {
     // The OR of all slaves: a state only when they all agree; no error bit means none has one.
     if (isState(state)) {
       if (state == kOp && state_all_ && *state_all_ != kOp) entered_op_all_ = true;
       state_all_ = state;
-      for (Slave& slave : slaves_) setState(slave, state);
+      for (Slave& slave : directory_.slaves()) setState(slave.data, state);
     }
     if (!error) {
-      for (Slave& slave : slaves_) slave.error_reported = false;
+      for (Slave& slave : directory_.slaves()) slave.data.error_reported = false;
     }
     return;
   }
   const std::size_t i = slaveFor(address);
-  if (i == kNone) return;
-  Slave& slave = slaves_[i];
+  if (i == directory_.kNone) return;
+  Slave& entry = directory_.slaves()[i];
+  AlData& slave = entry.data;
   const std::optional<std::uint8_t> previous = slave.state;
   setState(slave, state);
   if (!error) {
@@ -317,27 +232,22 @@ void AlTracker::onStatusRead(const Address& address, std::uint16_t raw, const St
   } else {
     code = "; AL status code not read";
   }
-  out.push_back({rule, slave.station, slave.position,
+  out.push_back({rule, entry.station, entry.position,
                  fmt::format("{}: AL status 0x{:04X} ({} + error) {}{}",
-                             slaveName(slave.station, slave.position), raw, alStateName(state),
+                             slaveName(entry.station, entry.position), raw, alStateName(state),
                              context, code)});
 }
 
 void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                         const Stamp& now, std::vector<AlFinding>& out) {
   if (any_entered_op_) {
-    for (Slave& slave : slaves_) slave.entered_op = false;
+    for (Slave& slave : directory_.slaves()) slave.data.entered_op = false;
     any_entered_op_ = false;
   }
   entered_op_all_ = false;
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   const std::size_t count = walked ? frame.count : 0;
-  if (!returned) {
-    master_.clear();
-    for (std::size_t i = 0; i < count; ++i) {
-      master_.push_back({frame.datagrams[i].command, frame.datagrams[i].adp()});
-    }
-  }
+  if (walked) directory_.beginFrame(frame, returned);
   // A frame whose datagrams reach none of these registers (the cyclic process data, the DC
   // time) has nothing for the state machines.
   bool registers = false;
@@ -355,19 +265,18 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   // First station addresses and AL status codes, so that the rest of the frame can use them.
   for (std::size_t i = 0; i < count; ++i) {
     const Datagram& dg = frame.datagrams[i];
-    const Address address = addressOf(dg, i, returned, paired);
-    if (take_writes && writesSlave(dg.command) && address.target == Target::Position) {
-      if (auto at = registerAt(dg, kRegStationAddress, 2)) {
-        if (auto station = bytes.le16(*at)) assignStation(address.value, *station);
-      }
+    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    if (take_writes && writesSlave(dg.command)) {
+      directory_.noteStationWrite(dg, bytes, address, [this](AlData& data) { fresh(data); });
     }
-    if (takeRead(dg) && (address.target == Target::Station || address.target == Target::Position)) {
+    if (takeRead(dg) &&
+        (address.target == SlaveTarget::Station || address.target == SlaveTarget::Position)) {
       if (auto at = registerAt(dg, kRegAlStatusCode, 2)) {
         auto code = bytes.le16(*at);
-        const std::size_t s = code ? slaveFor(address) : kNone;
-        if (s != kNone) {
-          slaves_[s].status_code = *code;
-          slaves_[s].status_code_frame = now.frame;
+        const std::size_t s = code ? slaveFor(address) : directory_.kNone;
+        if (s != directory_.kNone) {
+          directory_.slaves()[s].data.status_code = *code;
+          directory_.slaves()[s].data.status_code_frame = now.frame;
         }
       }
     }
@@ -375,8 +284,8 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   // Then AL control writes and AL status reads, in the order of the datagrams.
   for (std::size_t i = 0; i < count; ++i) {
     const Datagram& dg = frame.datagrams[i];
-    const Address address = addressOf(dg, i, returned, paired);
-    if (address.target == Target::None) continue;
+    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    if (address.target == SlaveTarget::None) continue;
     if (take_writes && writesSlave(dg.command)) {
       if (auto raw = readStateRegister(dg, bytes, kRegAlControl)) {
         onControlWrite(address, *raw & kStateMask, *raw, out);
@@ -391,13 +300,13 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
 }
 
 std::optional<std::uint8_t> AlTracker::stateOfStation(std::uint16_t station) const {
-  const std::size_t i = findStation(station);
-  return i == kNone ? state_all_ : slaves_[i].state;
+  const std::size_t i = directory_.findStation(station);
+  return i == directory_.kNone ? state_all_ : directory_.slaves()[i].data.state;
 }
 
 bool AlTracker::enteredOp(std::uint16_t station) const {
-  const std::size_t i = findStation(station);
-  return i == kNone ? entered_op_all_ : slaves_[i].entered_op;
+  const std::size_t i = directory_.findStation(station);
+  return i == directory_.kNone ? entered_op_all_ : directory_.slaves()[i].data.entered_op;
 }
 
 }  // namespace ncservo

@@ -12,14 +12,6 @@ namespace {
 
 constexpr std::int64_t kMs = 1'000'000;
 
-void putLe(std::uint8_t* out, std::uint64_t value, std::size_t size) {
-  for (std::size_t i = 0; i < size; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-std::uint64_t getLe(const std::uint8_t* in, std::size_t size) {
-  std::uint64_t value = 0;
-  for (std::size_t i = 0; i < size; ++i) value |= static_cast<std::uint64_t>(in[i]) << (8 * i);
-  return value;
-}
 std::uint32_t floatBits(float value) {
   std::uint32_t bits;
   std::memcpy(&bits, &value, sizeof bits);

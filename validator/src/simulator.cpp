@@ -63,14 +63,6 @@ constexpr std::size_t kMinFrame = 60;
 
 constexpr double kStartupSeconds = 0.2;  // the NC's plan starts once the start-up is over
 
-void putLe(std::uint8_t* out, std::uint64_t value, std::size_t size) {
-  for (std::size_t i = 0; i < size; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-std::uint64_t getLe(const std::uint8_t* in, std::size_t size) {
-  std::uint64_t value = 0;
-  for (std::size_t i = 0; i < size; ++i) value |= static_cast<std::uint64_t>(in[i]) << (8 * i);
-  return value;
-}
 
 // --- the fault catalogue: one row per rule ---
 

@@ -18,6 +18,7 @@
 #include "ncservo/byte_reader.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/finding.hpp"
+#include "ncservo/slave_directory.hpp"
 
 namespace ncservo {
 
@@ -36,7 +37,7 @@ struct AlFinding {
 
 class AlTracker {
  public:
-  static constexpr std::size_t kMaxSlaves = 4096;
+  static constexpr std::size_t kMaxSlaves = SlaveDirectory<int>::kMaxSlaves;
 
   // Every EtherCAT frame, in capture order. `paired`: a returned copy whose master's copy was
   // the frame just before (its auto-increment addresses can then be taken from the master's copy).
@@ -53,42 +54,27 @@ class AlTracker {
   bool enteredOp(std::uint16_t station) const;
 
  private:
-  // How a datagram addresses slaves, once its auto-increment address is resolved.
-  enum class Target : std::uint8_t { None, Station, Position, All };
-  struct Address {
-    Target target = Target::None;
-    std::uint16_t value = 0;  // station address or ring position
-  };
-  struct Slave {
-    std::optional<std::uint16_t> station;
-    std::optional<std::uint16_t> position;
+  // What the capture showed of one slave's state machine.
+  struct AlData {
     std::optional<std::uint8_t> state;      // last AL status read (bits 3..0)
     std::optional<std::uint8_t> requested;  // last AL control write to it or to all (bits 3..0)
     std::optional<std::uint16_t> status_code;
     std::uint64_t status_code_frame = 0;  // where the status code was read
     bool error_reported = false;          // once per episode of the error indicator
     bool entered_op = false;
+    void absorb(const AlData& other);  // one slave seen by station before its assignment
   };
-  struct MasterDatagram {
-    std::uint8_t command = 0;
-    std::uint16_t adp = 0;
-  };
-  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  using Slave = SlaveDirectory<AlData>::Slave;
 
-  Address addressOf(const Datagram& dg, std::size_t index, bool returned, bool paired) const;
-  std::size_t findStation(std::uint16_t station) const;
-  std::size_t findPosition(std::uint16_t position) const;
-  std::size_t addSlave();                        // kNone when kMaxSlaves are known
-  std::size_t slaveFor(const Address& address);  // finds or adds; kNone for none
-  void assignStation(std::uint16_t position, std::uint16_t station);
-  void onControlWrite(const Address& address, std::uint8_t requested, std::uint16_t raw,
+  std::size_t slaveFor(const SlaveAddress& address);  // finds or adds; kNone for none
+  void fresh(AlData& data) const;                     // what the last broadcasts told every slave
+  void onControlWrite(const SlaveAddress& address, std::uint8_t requested, std::uint16_t raw,
                       std::vector<AlFinding>& out);
-  void onStatusRead(const Address& address, std::uint16_t raw, const Stamp& now,
+  void onStatusRead(const SlaveAddress& address, std::uint16_t raw, const Stamp& now,
                     std::vector<AlFinding>& out);
-  void setState(Slave& slave, std::uint8_t state);
+  void setState(AlData& slave, std::uint8_t state);
 
-  std::vector<Slave> slaves_;
-  std::vector<MasterDatagram> master_;         // each datagram of the last master copy
+  SlaveDirectory<AlData> directory_;
   std::optional<std::uint8_t> requested_all_;  // last broadcast AL control request
   std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
   bool entered_op_all_ = false;                // state_all_ became OP in the last frame

@@ -75,11 +75,16 @@ class SlaveDirectory {
   }
 
   // The station address an APWR/APRW of 0x0010 assigns (taken from the write's data).
-  void noteStationWrite(const Datagram& dg, const ByteReader& bytes, const SlaveAddress& address) {
+  template <typename Fresh>
+  void noteStationWrite(const Datagram& dg, const ByteReader& bytes, const SlaveAddress& address,
+                        Fresh fresh) {
     if (address.target != SlaveTarget::Position || !ecat::writesSlaves(dg.command)) return;
     if (auto at = registerAt(dg, ecat::kRegStationAddress, 2)) {
-      if (auto station = bytes.le16(*at)) assignStation(address.value, *station);
+      if (auto station = bytes.le16(*at)) assignStation(address.value, *station, fresh);
     }
+  }
+  void noteStationWrite(const Datagram& dg, const ByteReader& bytes, const SlaveAddress& address) {
+    noteStationWrite(dg, bytes, address, [](T&) {});
   }
 
   std::size_t findStation(std::uint16_t station) const {
@@ -127,7 +132,8 @@ class SlaveDirectory {
     fresh(slaves_.back().data);
     return slaves_.size() - 1;
   }
-  void assignStation(std::uint16_t position, std::uint16_t station) {
+  template <typename Fresh>
+  void assignStation(std::uint16_t position, std::uint16_t station, Fresh fresh) {
     std::size_t at = findPosition(position);
     std::size_t named = findStation(station);
     if (at != kNone && at == named) return;
@@ -137,7 +143,7 @@ class SlaveDirectory {
       named = kNone;
     }
     if (at == kNone && named == kNone) {
-      at = add([](T&) {});
+      at = add(fresh);
       if (at == kNone) return;
       slaves_[at].position = position;
     } else if (at == kNone) {
