@@ -676,5 +676,128 @@ TEST(Session, StateOfAMasterCopyComesFromTheLatestReturnedInputs) {
   }
 }
 
+// ---- Layout learned from the start-up, and the precedence of the sources (PROTOCOL.md §9) ----
+
+// An FMMU's 16-byte register block.
+Bytes fmmuBlock(std::uint32_t logical, std::uint16_t length, std::uint16_t phys,
+                std::uint8_t type) {
+  Bytes out;
+  test::putLe(out, logical, 4);
+  test::putLe(out, length, 2);
+  out.push_back(0);
+  out.push_back(7);
+  test::putLe(out, phys, 2);
+  out.push_back(0);
+  out.push_back(type);
+  out.push_back(1);
+  out.resize(16, 0);
+  return out;
+}
+// A servo's start-up at `adp` (a station or an alias): SM2/SM3 of 10/40 bytes and, when
+// `logical` is given, FMMUs mapping them there (outputs, then inputs).
+std::vector<Bytes> servoStartup(std::uint16_t adp, std::optional<std::uint32_t> logical) {
+  std::vector<Bytes> frames;
+  frames.push_back(
+      frameOf({Dg{ecat::kFpwr, 1, physical(adp, 0x0810),
+                  concat({smBlock(0x1100, 10, 0x64), smBlock(0x1180, 40, 0x20)}), 0}}));
+  if (logical) {
+    frames.push_back(frameOf(
+        {Dg{ecat::kFpwr, 2, physical(adp, 0x0600),
+            concat({fmmuBlock(*logical, 10, 0x1100, 2), fmmuBlock(*logical + 10, 40, 0x1180, 1)}),
+            0}}));
+  }
+  return frames;
+}
+
+TEST(LearnedLayout, FmmusGiveTheLogicalAddresses) {
+  Decoder decoder(defaults());
+  for (const Bytes& f : servoStartup(0x03E9, 0x00020000)) run(decoder, f);
+  ASSERT_EQ(decoder.axes().size(), 1u);
+  EXPECT_EQ(decoder.source(), LayoutSource::Startup);
+  EXPECT_TRUE(decoder.axes()[0].logical);
+  EXPECT_EQ(decoder.axes()[0].outputs, 0x00020000u);
+  EXPECT_EQ(decoder.axes()[0].inputs, 0x0002000Au);
+  EXPECT_EQ(decoder.axes()[0].station, 0x03E9);
+  // its LRW is placed by the learned addresses, not by the default layout
+  const Decoded got =
+      run(decoder,
+          frameOf({Dg{ecat::kLrw, 9, 0x00020000, concat({outputsOf(1), inputsOf(1, true)}), 3}}));
+  ASSERT_EQ(got.count(), 1u);
+  EXPECT_TRUE(got.axis(0).has_tx);
+}
+
+TEST(LearnedLayout, NoFmmuButFprdFpwrAtTheSmAddressesIsPhysicalExchange) {
+  Decoder decoder(defaults());
+  for (const Bytes& f : servoStartup(0x03E9, std::nullopt)) run(decoder, f);
+  EXPECT_TRUE(decoder.axes().empty());  // not placed before its process data is exchanged
+  const Bytes exchange =
+      frameOf({Dg{ecat::kFpwr, 3, physical(0x03E9, 0x1100), outputsOf(1), 0},
+               Dg{ecat::kFprd, 4, physical(0x03E9, 0x1180), inputsOf(1, false), 0}});
+  run(decoder, exchange);
+  ASSERT_EQ(decoder.axes().size(), 1u);
+  EXPECT_FALSE(decoder.axes()[0].logical);
+  EXPECT_EQ(decoder.axes()[0].outputs, 0x1100u);
+  EXPECT_EQ(decoder.axes()[0].inputs, 0x1180u);
+  EXPECT_EQ(decoder.axes()[0].station, 0x03E9);
+  EXPECT_EQ(run(decoder, exchange).count(), 1u);
+}
+
+TEST(LearnedLayout, AStationAliasReachesItsSlave) {
+  Decoder decoder(defaults());
+  // ring position 0 gets station 0x03E9; it reads back alias 0x0100; the start-up then
+  // configures it by its alias
+  Bytes station;
+  test::putLe(station, 0x03E9, 2);
+  run(decoder, frameOf({Dg{ecat::kApwr, 1, physical(0, 0x0010), station, 0}}));
+  run(decoder, frameOf({Dg{ecat::kFprd, 2, physical(0x03E9, 0x0012), Bytes(2, 0), 0}}));
+  run(decoder, frameOf({Dg{ecat::kFprd, 2, physical(0x03E9, 0x0012), Bytes{0x00, 0x01}, 1}}));
+  for (const Bytes& f : servoStartup(0x0100, 0x00030000)) run(decoder, f);
+  ASSERT_EQ(decoder.axes().size(), 1u);
+  EXPECT_EQ(decoder.axes()[0].station, 0x03E9);
+  EXPECT_EQ(decoder.axes()[0].outputs, 0x00030000u);
+  ASSERT_EQ(decoder.learner().slaves().size(), 1u);
+  EXPECT_EQ(decoder.learner().slaves()[0].position, 0);
+}
+
+struct PrecedenceCase {
+  const char* name;
+  bool config;
+  bool eni;
+  bool startup;
+  LayoutSource source;
+  std::uint32_t outputs;  // of axis 0
+};
+TEST(LayoutPrecedence, ConfigurationThenEniThenStartupThenDefault) {
+  AxisConfig from_config;
+  from_config.name = "C";
+  from_config.outputs = 0x00050000;
+  from_config.inputs = 0x0005000A;
+  AxisConfig from_eni;
+  from_eni.name = "E";
+  from_eni.outputs = 0x00060000;
+  from_eni.inputs = 0x0006000A;
+  const std::vector<AxisConfig> config{from_config}, eni{from_eni};
+  const PrecedenceCase cases[] = {
+      {"configuration over everything", true, true, true, LayoutSource::Config, 0x00050000},
+      {"configuration over the start-up", true, false, true, LayoutSource::Config, 0x00050000},
+      {"ENI over the start-up", false, true, true, LayoutSource::Eni, 0x00060000},
+      {"start-up over the default", false, false, true, LayoutSource::Startup, 0x00020000},
+      {"default when nothing else", false, false, false, LayoutSource::Default, kBase},
+  };
+  for (const PrecedenceCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    Decoder decoder(layoutOptions(c.config ? &config : nullptr, c.eni ? &eni : nullptr, true));
+    if (c.startup) {
+      for (const Bytes& f : servoStartup(0x03E9, 0x00020000)) run(decoder, f);
+    } else {
+      run(decoder, frameOf({defaultLrw(1, 0)}));
+      run(decoder, frameOf({defaultLrw(1, 3)}));
+    }
+    EXPECT_EQ(decoder.source(), c.source);
+    ASSERT_FALSE(decoder.axes().empty());
+    EXPECT_EQ(decoder.axes()[0].outputs, c.outputs);
+  }
+}
+
 }  // namespace
 }  // namespace ncservo

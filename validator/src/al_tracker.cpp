@@ -268,7 +268,9 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
     const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
     if (take_writes && writesSlave(dg.command)) {
       directory_.noteStationWrite(dg, bytes, address, [this](AlData& data) { fresh(data); });
+      directory_.noteAlias(dg, bytes, address);
     }
+    if (takeRead(dg)) directory_.noteAlias(dg, bytes, address);
     if (takeRead(dg) &&
         (address.target == SlaveTarget::Station || address.target == SlaveTarget::Position)) {
       if (auto at = registerAt(dg, kRegAlStatusCode, 2)) {

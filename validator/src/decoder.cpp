@@ -24,7 +24,7 @@ struct FrameShape {
   std::uint64_t layout_key = 0;
   bool any_wkc = false;    // some WKC is above zero
   bool complete = true;    // every datagram wholly captured, WKC included
-  bool writes_registers = false;  // some datagram writes slave registers (a start-up may)
+  bool registers = false;  // some datagram reaches slave registers (a start-up's do)
 };
 
 FrameShape shapeOf(const EcatFrame& frame) {
@@ -43,8 +43,8 @@ FrameShape shapeOf(const EcatFrame& frame) {
     if (survives) mix(dg.address);
     shape.any_wkc = shape.any_wkc || (dg.has_wkc && dg.wkc > 0);
     shape.complete = shape.complete && dg.complete();
-    shape.writes_registers =
-        shape.writes_registers || (ecat::writesSlaves(dg.command) && !ecat::isLogical(dg.command));
+    shape.registers = shape.registers || (dg.command != ecat::kNop && dg.command != ecat::kFrmw &&
+                                          !ecat::isLogical(dg.command));
     const std::uint64_t address = survives ? dg.address : 0;
     key = (key ^ (address | std::uint64_t{dg.command} << 32 | std::uint64_t{dg.length} << 40 |
                   std::uint64_t{dg.wkc > 0} << 56)) *
@@ -145,10 +145,10 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
   const FrameShape shape = shapeOf(frame);
   classifyCopy(frame, shape.signature, shape.any_wkc, out);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
-  // Only register writes configure slaves (the cyclic LRW and DC FRMW are not looked at); the
-  // learner follows them whatever the layout source, and its axes are used when no
+  // Only register commands configure slaves (the cyclic LRW and the DC FRMW are not looked
+  // at); the learner follows them whatever the layout source, and its axes are used when no
   // configuration or ENI gives any.
-  if (shape.writes_registers) {
+  if (shape.registers) {
     learner_.onFrame(frame, bytes, out.copy == CopyKind::Returned, out.paired);
     if (learner_.generation() != learned_generation_) {
       learned_generation_ = learner_.generation();

@@ -128,10 +128,15 @@ void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, boo
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];
     if (ecat::isLogical(dg.command)) continue;
+    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    // A station alias read back from a slave names it as well.
+    if (returned && ecat::readsSlaves(dg.command) && dg.has_wkc && dg.wkc > 0) {
+      directory_.noteAlias(dg, bytes, address);
+    }
     // What the master wrote configures the slave (a read-back would only repeat it).
     if (!ecat::writesSlaves(dg.command) || (returned && paired)) continue;
-    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
     directory_.noteStationWrite(dg, bytes, address);
+    directory_.noteAlias(dg, bytes, address);
     const std::size_t ado = dg.ado();
     const std::size_t end = ado + dg.data_captured;
     if (ado >= kProcessRam && address.target == SlaveTarget::Station) {

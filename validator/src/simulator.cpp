@@ -63,7 +63,6 @@ constexpr std::size_t kMinFrame = 60;
 
 constexpr double kStartupSeconds = 0.2;  // the NC's plan starts once the start-up is over
 
-
 // --- the fault catalogue: one row per rule ---
 
 enum class FaultKind : std::uint8_t { Nc, Drive, Bus, Startup };

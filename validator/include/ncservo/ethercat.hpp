@@ -69,6 +69,7 @@ const char* commandName(std::uint8_t cmd);
 // ESC registers the decoder looks at (PROTOCOL.md §8).
 // ESC registers (PROTOCOL.md §8).
 inline constexpr std::uint16_t kRegStationAddress = 0x0010;
+inline constexpr std::uint16_t kRegStationAlias = 0x0012;
 inline constexpr std::uint16_t kRegAlControl = 0x0120;
 inline constexpr std::uint16_t kRegAlStatus = 0x0130;
 inline constexpr std::uint16_t kRegAlStatusCode = 0x0134;

@@ -49,6 +49,7 @@ class SlaveDirectory {
   struct Slave {
     std::optional<std::uint16_t> station;
     std::optional<std::uint16_t> position;
+    std::optional<std::uint16_t> alias;  // configured station alias (0x0012), when seen
     T data{};
   };
 
@@ -87,11 +88,26 @@ class SlaveDirectory {
     noteStationWrite(dg, bytes, address, [](T&) {});
   }
 
+  // By configured station address, else by station alias: a master may address a slave by its
+  // alias once it enabled it (DL control), which the capture seldom shows; an address that is
+  // no slave's station but is one's alias is taken for that slave.
   std::size_t findStation(std::uint16_t station) const {
     for (std::size_t i = 0; i < slaves_.size(); ++i) {
       if (slaves_[i].station == station) return i;
     }
+    for (std::size_t i = 0; i < slaves_.size(); ++i) {
+      if (slaves_[i].alias == station) return i;
+    }
     return kNone;
+  }
+  // A slave's station alias, written to 0x0012 or read back from it (not zero: no alias).
+  void noteAlias(const Datagram& dg, const ByteReader& bytes, const SlaveAddress& address) {
+    if (address.target != SlaveTarget::Station && address.target != SlaveTarget::Position) return;
+    auto at = registerAt(dg, ecat::kRegStationAlias, 2);
+    auto alias = at ? bytes.le16(*at) : std::nullopt;
+    if (!alias || *alias == 0) return;
+    const std::size_t i = slaveFor(address);
+    if (i != kNone) slaves_[i].alias = *alias;
   }
   std::size_t findPosition(std::uint16_t position) const {
     for (std::size_t i = 0; i < slaves_.size(); ++i) {
