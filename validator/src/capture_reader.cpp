@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <pcap/pcap.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -57,7 +58,12 @@ CaptureReader::Next CaptureReader::next(CaptureRecord& record) {
     return Next::Error;
   }
   record.frame = ++frames_;
-  record.time_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1000000000 + header->ts.tv_usec;
+  // pcapng stores 64-bit timestamps: seconds are clamped to pcap's unsigned 32-bit range (up to
+  // the year 2106), so nanoseconds and their differences fit in 64 bits.
+  constexpr std::int64_t kMaxSeconds = 0xFFFFFFFF;
+  const std::int64_t seconds =
+      std::clamp<std::int64_t>(static_cast<std::int64_t>(header->ts.tv_sec), 0, kMaxSeconds);
+  record.time_ns = seconds * 1000000000 + static_cast<std::int64_t>(header->ts.tv_usec);
   record.data = data;
   record.captured = header->caplen;
   record.original = header->len;
