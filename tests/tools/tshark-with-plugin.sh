@@ -20,8 +20,17 @@ if [ "$plugin" != none ]; then
   mv -f "$tmp" "$dir/4.0/epan/ncservo.so"
 fi
 chmod -R a+rX "$dir"
+# A plugin built with ASan + UBSan (NCSERVO_SANITIZE) needs the sanitizer runtime preloaded into
+# the stock tshark; its build leaves the runtime's path beside it. Any report aborts tshark.
+# Leaks are not checked: tshark's own allocations at exit would drown ours.
+sanitizer_env=()
+if [ "$plugin" != none ] && [ -f "$plugin.preload" ]; then
+  sanitizer_env=(LD_PRELOAD="$(cat "$plugin.preload")"
+    ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1:halt_on_error=1}"
+    UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}")
+fi
 if [ "$(id -u)" = 0 ]; then
   exec setpriv --reuid=65534 --regid=65534 --clear-groups \
-    env HOME=/nonexistent WIRESHARK_PLUGIN_DIR="$dir" tshark "$@"
+    env HOME=/nonexistent WIRESHARK_PLUGIN_DIR="$dir" "${sanitizer_env[@]}" tshark "$@"
 fi
-exec env WIRESHARK_PLUGIN_DIR="$dir" tshark "$@"
+exec env WIRESHARK_PLUGIN_DIR="$dir" "${sanitizer_env[@]}" tshark "$@"
