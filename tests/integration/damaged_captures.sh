@@ -43,8 +43,8 @@ after="(the frames before it were analysed)"
 cases=(
   # file|exit|message on standard error|frames reported
   "missing|3|missing: cannot read capture: No such file or directory|0"
-  "directory|3|directory: cannot read capture: error reading dump file: Is a directory|0"
-  "empty|3|empty: cannot read capture: truncated dump file; tried to read 4 file header bytes, only got 0|0"
+  "directory|3|directory: cannot read capture: is a directory|0"
+  "empty|3|empty: cannot read capture: empty file|0"
   "not-a-capture|3|not-a-capture: cannot read capture: unknown file format|0"
   "truncated-global-header|3|cannot read capture: truncated dump file; tried to read 24 file header bytes, only got 9|0"
   "truncated-record-header|3|frame 101: truncated dump file; tried to read 16 header bytes, only got 9 $after|100"

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <pcap/pcap.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -19,6 +20,16 @@ std::unique_ptr<CaptureReader> CaptureReader::open(const std::string& path, std:
   std::FILE* file = path == "-" ? stdin : std::fopen(path.c_str(), "rb");
   if (file == nullptr) {
     error = fmt::format("{}: cannot read capture: {}", name, std::strerror(errno));
+    return nullptr;
+  }
+  // libpcap's words for these ("truncated dump file; tried to read 4 file header bytes") do not
+  // say what is wrong with the file.
+  struct stat info {};
+  if (fstat(fileno(file), &info) == 0 &&
+      (S_ISDIR(info.st_mode) || (S_ISREG(info.st_mode) && info.st_size == 0))) {
+    if (file != stdin) std::fclose(file);
+    error = fmt::format("{}: cannot read capture: {}", name,
+                        S_ISDIR(info.st_mode) ? "is a directory" : "empty file");
     return nullptr;
   }
   std::unique_ptr<CaptureReader> reader(new CaptureReader());
