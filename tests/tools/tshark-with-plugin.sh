@@ -19,7 +19,8 @@ if [ "$plugin" != none ]; then
   chmod a+r "$tmp"
   mv -f "$tmp" "$dir/4.0/epan/ncservo.so"
 fi
-chmod -R a+rX "$dir"
+# Not recursive: another run may be renaming its copy of the plugin in there right now.
+chmod a+rx "$dir" "$dir/4.0" "$dir/4.0/epan"
 # A plugin built with ASan + UBSan (NCSERVO_SANITIZE) needs the sanitizer runtime preloaded into
 # the stock tshark; its build leaves the runtime's path beside it. Any report aborts tshark.
 # Leaks are not checked: tshark's own allocations at exit would drown ours.
