@@ -2,6 +2,7 @@
 // accepted (rule settings, a decoder with its layout). Input: the file's text.
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <string_view>
 
 #include "ncservo/config.hpp"
