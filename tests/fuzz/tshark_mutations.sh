@@ -5,7 +5,8 @@
 # 14-byte Ethernet header, so the EtherCAT dissection is reached), snap-length truncations and
 # files cut inside a record. Each goes through tshark with BUILD_DIR's plugin (-nVx, and -2 for
 # every fourth) and through `ncservo validate`.
-# Fails on a crash, an abort, a sanitizer report, a dissector bug, a plugin warning or any other
+# Fails on a crash, an abort, a sanitizer report, a dissector bug, an exception thrown in the
+# plugin (a "Malformed Packet: NCSERVO" item), a plugin warning or any other
 # output on tshark's standard error (a cut file may only say that it was cut short), a run over
 # the time limit, and a validate exit status other than 0 or 3 (INTERFACES.md, with
 # --fail-on never). Failing mutants are kept in KEEP_DIR (default BUILD_DIR/tshark-mutations).
@@ -52,9 +53,12 @@ check() {
   [ $((count % 4)) = 0 ] && two_pass=(-2)
   local why="" rc=0
   chmod a+r "$mutant"
-  timeout $limit "$run_tshark" "$plugin" -nVx "${two_pass[@]}" -r "$mutant" >/dev/null 2>"$work/tshark.err" || rc=$?
+  timeout $limit "$run_tshark" "$plugin" -nVx "${two_pass[@]}" -r "$mutant" >"$work/tshark.out" 2>"$work/tshark.err" || rc=$?
   if [ $rc = 124 ]; then
     why="tshark ran over ${limit} s"
+  elif grep -qE "Malformed Packet: NCSERVO|Dissector bug, protocol NCSERVO" "$work/tshark.out"; then
+    # The plugin reads within the captured bytes and marks short regions; it never throws.
+    why="the plugin threw: $(grep -m1 -E "Malformed Packet: NCSERVO|Dissector bug, protocol NCSERVO" "$work/tshark.out")"
   elif [ $cut = 1 ] && [ $rc = 2 ] && grep -q "cut short in the middle of a packet" "$work/tshark.err" &&
     [ "$(grep -c . "$work/tshark.err")" -le 2 ]; then
     :
