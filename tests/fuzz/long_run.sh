@@ -50,7 +50,8 @@ for target in "${targets[@]}"; do
     "$fuzzer" -minimize_crash=1 -runs=20000 -exact_artifact_path="$saved" "$crash" >"$log.min" 2>&1 || true
     [ -f "$saved" ] || cp "$crash" "$saved"
     echo "  crasher $(basename "$crash") minimised to $saved ($(stat -c %s "$saved") bytes)"
-    mv "$crash" "$crash.saved"
+    mkdir -p "$artifacts/saved"
+    mv "$crash" "$artifacts/saved/"
   done
 done
 exit $status
