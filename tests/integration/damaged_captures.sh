@@ -2,7 +2,7 @@
 # damaged_captures.sh SRC BUILD
 # Short PDO regions are marked malformed in Wireshark without a crash; a capture cut inside a
 # record ends `ncservo decode` with exit 3 naming the file and the frame, after decoding what came
-# before; a missing file or a non-capture is exit 3 with its name.
+# before; hostile files (table below) give the documented exit code and a message naming the file.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 python3 "$GEN" --axes 8 --cycles 200 -o "$WORK/capture"
@@ -31,13 +31,80 @@ set -e
 grep -qE "$WORK/cut: frame [0-9]+: .*truncated" "$WORK/cut.err" || fail "cut message: $(cat "$WORK/cut.err")"
 [ "$(wc -l <"$WORK/cut.csv")" -gt 100 ] || fail "frames before the damage were not decoded"
 
-for bad in "$WORK/missing.pcap" "$WORK/not-a-capture.txt" "$WORK"; do
-  echo "hello" >"$WORK/not-a-capture.txt"
+# Hostile files, one row each: what `ncservo validate` must exit with, a line its standard error
+# must hold ("-": nothing on standard error), and how many frames its JSON report still counts.
+# `ncservo decode` must give the same verdict (0 or 3) and message. Every run has a time limit and
+# a memory bound (peak RSS), so a hang or a runaway allocation fails the row.
+python3 "$GEN" --axes 2 --cycles 200 -o "$WORK/two-axes"
+python3 "$SRC/tests/tools/hostile_captures.py" "$WORK/two-axes" "$WORK/hostile"
+mkdir "$WORK/hostile/directory"
+echo "hello" >"$WORK/hostile/not-a-capture"
+after="(the frames before it were analysed)"
+cases=(
+  # file|exit|message on standard error|frames reported
+  "missing|3|missing: cannot read capture: No such file or directory|0"
+  "directory|3|directory: cannot read capture: is a directory|0"
+  "empty|3|empty: cannot read capture: empty file|0"
+  "not-a-capture|3|not-a-capture: cannot read capture: unknown file format|0"
+  "truncated-global-header|3|cannot read capture: truncated dump file; tried to read 24 file header bytes, only got 9|0"
+  "truncated-record-header|3|frame 101: truncated dump file; tried to read 16 header bytes, only got 9 $after|100"
+  "truncated-record-data|3|frame 101: truncated dump file; tried to read 148 captured bytes, only got 24 $after|100"
+  "caplen-above-snaplen|0|frame 2: axis 0: TxPDO region cut short or outside its datagram|100"
+  "caplen-above-record|3|frame 101: truncated dump file; tried to read 5148 captured bytes, only got 148 $after|100"
+  "caplen-above-original|0|-|100"
+  "absurd-caplen|3|frame 101: invalid packet capture length 4294967280, bigger than snaplen of 65535 $after|100"
+  "absurd-snaplen|0|-|100"
+  "zero-length-frames|0|-|200"
+  "timestamps-backwards|0|-|400"
+  "timestamp-after-2262|0|-|100"
+  "pcapng-unknown-blocks|0|-|100"
+  "pcapng-oversized-block|3|frame 101: pcapng block size 2147483632 > maximum 16777216 $after|100"
+  "pcapng-short-block|3|frame 101: block in pcapng dump file has a length of 8 < 12 $after|100"
+  "pcapng-mixed-link-types|3|frame 101: an interface has a type 113 different from the type of the first interface $after|100"
+  "pcapng-interface-out-of-range|3|frame 51: a packet arrived on interface 7, but there's no Interface Description Block for that interface $after|50"
+  "huge-sparse|0|-|$((100 + (1 << 30) / 16))"
+)
+# run_bounded SECONDS MAX_RSS_MB OUT ERR COMMAND...: exit status of COMMAND; fails the test when it
+# runs out of time or memory.
+run_bounded() {
+  python3 - "$@" <<'PY'
+import resource, subprocess, sys
+seconds, max_mb, out, err, command = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5:]
+try:
+    rc = subprocess.run(command, stdout=open(out, "wb"), stderr=open(err, "wb"), timeout=seconds).returncode
+except subprocess.TimeoutExpired:
+    sys.exit(f"FAIL: {' '.join(command)}: still running after {seconds} s")
+peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+if peak_mb > max_mb:
+    sys.exit(f"FAIL: {' '.join(command)}: peak RSS {peak_mb:.0f} MB > {max_mb} MB")
+sys.exit(rc if rc >= 0 else 128 - rc)
+PY
+}
+for row in "${cases[@]}"; do
+  IFS='|' read -r name want message frames <<<"$row"
+  file="$WORK/hostile/$name"
   set +e
-  "$NCSERVO" decode "$bad" >/dev/null 2>"$WORK/bad.err"
+  run_bounded 300 256 "$WORK/report.json" "$WORK/validate.err" \
+    "$NCSERVO" validate --format json --fail-on never "$file"
   rc=$?
   set -e
-  [ $rc = 3 ] || fail "$bad: exit $rc, expected 3"
-  grep -qF "$bad" "$WORK/bad.err" || fail "$bad: message does not name the file: $(cat "$WORK/bad.err")"
+  [ $rc = "$want" ] || fail "$name: validate exit $rc, expected $want: $(head -3 "$WORK/validate.err")"
+  if [ "$message" = - ]; then
+    [ ! -s "$WORK/validate.err" ] || fail "$name: unexpected message: $(head -3 "$WORK/validate.err")"
+  else
+    grep -qF "ncservo: $WORK/hostile/" "$WORK/validate.err" || fail "$name: message does not name the file: $(head -3 "$WORK/validate.err")"
+    grep -qF -- "$message" "$WORK/validate.err" || fail "$name: expected '$message', got: $(head -3 "$WORK/validate.err")"
+  fi
+  got=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["captures"][0]["frames"])' "$WORK/report.json") ||
+    fail "$name: no readable JSON report"
+  [ "$got" = "$frames" ] || fail "$name: report counts $got frames, expected $frames"
+  set +e
+  run_bounded 300 256 /dev/null "$WORK/decode.err" "$NCSERVO" decode "$file"
+  rc=$?
+  set -e
+  [ $rc = "$want" ] || fail "$name: decode exit $rc, expected $want: $(head -3 "$WORK/decode.err")"
+  if [ "$message" != - ]; then
+    grep -qF -- "${message% "$after"}" "$WORK/decode.err" || fail "$name: decode: expected '$message', got: $(head -3 "$WORK/decode.err")"
+  fi
 done
-echo "damaged_captures: malformed marked, truncation reported, bad files named"
+echo "damaged_captures: malformed marked, truncation reported, ${#cases[@]} hostile files handled"

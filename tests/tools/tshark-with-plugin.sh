@@ -19,9 +19,19 @@ if [ "$plugin" != none ]; then
   chmod a+r "$tmp"
   mv -f "$tmp" "$dir/4.0/epan/ncservo.so"
 fi
-chmod -R a+rX "$dir"
+# Not recursive: another run may be renaming its copy of the plugin in there right now.
+chmod a+rx "$dir" "$dir/4.0" "$dir/4.0/epan"
+# A plugin built with ASan + UBSan (NCSERVO_SANITIZE) needs the sanitizer runtime preloaded into
+# the stock tshark; its build leaves the runtime's path beside it. Any report aborts tshark.
+# Leaks are not checked: tshark's own allocations at exit would drown ours.
+sanitizer_env=()
+if [ "$plugin" != none ] && [ -f "$plugin.preload" ]; then
+  sanitizer_env=(LD_PRELOAD="$(cat "$plugin.preload")"
+    ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1:halt_on_error=1}"
+    UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}")
+fi
 if [ "$(id -u)" = 0 ]; then
   exec setpriv --reuid=65534 --regid=65534 --clear-groups \
-    env HOME=/nonexistent WIRESHARK_PLUGIN_DIR="$dir" tshark "$@"
+    env HOME=/nonexistent WIRESHARK_PLUGIN_DIR="$dir" "${sanitizer_env[@]}" tshark "$@"
 fi
-exec env WIRESHARK_PLUGIN_DIR="$dir" tshark "$@"
+exec env WIRESHARK_PLUGIN_DIR="$dir" "${sanitizer_env[@]}" tshark "$@"

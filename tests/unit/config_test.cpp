@@ -180,6 +180,8 @@ const BadCase kBadCases[] = {
      "expected an integer"},
     {"outputs as a float", "[[axis]]\noutputs = 1.5\n", 2, "axis[0].outputs",
      "expected an integer"},
+    {"station as a float beyond 64 bits (fuzz_config)", "[[axis]]\nstation=3E80\n", 2,
+     "axis[0].station", "expected an integer"},
     {"outputs above 32 bits", "[[axis]]\noutputs = 0x100000000\n", 2, "axis[0].outputs",
      "out of range"},
     {"station above 16 bits", "[[axis]]\nstation = 0x10000\nsm_outputs = 0x1100\n", 2,

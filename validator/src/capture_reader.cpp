@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 #include <pcap/pcap.h>
+#include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +20,16 @@ std::unique_ptr<CaptureReader> CaptureReader::open(const std::string& path, std:
   std::FILE* file = path == "-" ? stdin : std::fopen(path.c_str(), "rb");
   if (file == nullptr) {
     error = fmt::format("{}: cannot read capture: {}", name, std::strerror(errno));
+    return nullptr;
+  }
+  // libpcap's words for these ("truncated dump file; tried to read 4 file header bytes") do not
+  // say what is wrong with the file.
+  struct stat info {};
+  if (fstat(fileno(file), &info) == 0 &&
+      (S_ISDIR(info.st_mode) || (S_ISREG(info.st_mode) && info.st_size == 0))) {
+    if (file != stdin) std::fclose(file);
+    error = fmt::format("{}: cannot read capture: {}", name,
+                        S_ISDIR(info.st_mode) ? "is a directory" : "empty file");
     return nullptr;
   }
   std::unique_ptr<CaptureReader> reader(new CaptureReader());
@@ -57,7 +69,12 @@ CaptureReader::Next CaptureReader::next(CaptureRecord& record) {
     return Next::Error;
   }
   record.frame = ++frames_;
-  record.time_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1000000000 + header->ts.tv_usec;
+  // pcapng stores 64-bit timestamps: seconds are clamped to pcap's unsigned 32-bit range (up to
+  // the year 2106), so nanoseconds and their differences fit in 64 bits.
+  constexpr std::int64_t kMaxSeconds = 0xFFFFFFFF;
+  const std::int64_t seconds =
+      std::clamp<std::int64_t>(static_cast<std::int64_t>(header->ts.tv_sec), 0, kMaxSeconds);
+  record.time_ns = seconds * 1000000000 + static_cast<std::int64_t>(header->ts.tv_usec);
   record.data = data;
   record.captured = header->caplen;
   record.original = header->len;

@@ -41,8 +41,9 @@ class Checker {
   template <typename T>
   std::optional<T> integer(const toml::node& node, const std::string& key, std::int64_t lo,
                            std::int64_t hi) {
-    auto value = node.value<std::int64_t>();
-    if (!node.is_integer() || !value) {
+    // Only an integer node is converted: toml++ casts a float to int64 unchecked (UB for 3E80).
+    auto value = node.is_integer() ? node.value<std::int64_t>() : std::nullopt;
+    if (!value) {
       fail(node, key, "expected an integer");
       return std::nullopt;
     }

@@ -1,0 +1,76 @@
+// libFuzzer target: a whole capture file through the CLI's reading path — libpcap through
+// CaptureReader, the walker, the validator and a report in one of the five formats — as
+// `ncservo validate` runs it. Input: the file's bytes.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "fuzz_common.hpp"
+#include "ncservo/capture_reader.hpp"
+#include "report.hpp"
+
+namespace {
+
+// The input goes to a file because CaptureReader opens paths, as the CLI does.
+const std::string& inputPath() {
+  static const std::string path = [] {
+    const char* dir = std::getenv("TMPDIR");
+    return std::string(dir != nullptr ? dir : "/tmp") + "/ncservo-fuzz-capture-" +
+           std::to_string(getpid()) + ".pcap";
+  }();
+  return path;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace ncservo;
+  const std::string& path = inputPath();
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) std::abort();
+  if (size > 0 && std::fwrite(data, 1, size, file) != size) std::abort();
+  std::fclose(file);
+
+  static std::FILE* sink = std::fopen("/dev/null", "w");
+  const auto format = static_cast<cli::Format>(size % 5);
+  cli::ReportWriter writer(sink, format, Severity::Error, false);
+  std::vector<cli::CaptureReport> reports(1);
+  cli::CaptureReport& report = reports.back();
+  report.path = path;
+  writer.beginCapture(report);
+  std::string error;
+  auto reader = CaptureReader::open(path, error);
+  if (!reader) {
+    if (error.find(path) == std::string::npos) std::abort();  // messages name the file
+    report.error = error;
+  } else {
+    Validator validator(DecoderOptions{}, RuleSettings{});
+    static EcatFrame frame;
+    CaptureRecord record;
+    CaptureReader::Next status;
+    while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+      if (record.frame == 1) report.first_time_ns = record.time_ns;
+      report.frames = record.frame;
+      fuzz::feedFrame(validator, reader->link(), record.frame, record.time_ns, record.data,
+                      record.captured, frame);
+      for (const Finding& f : validator.findings()) {
+        ++report.counts[static_cast<std::size_t>(f.severity)];
+        if (writer.keepsFindings()) report.findings.push_back(f);
+        writer.finding(report, f);
+      }
+    }
+    cli::summarise(validator, report);
+    if (status == CaptureReader::Next::Error) {
+      if (reader->error().find(path) == std::string::npos) std::abort();
+      report.error = reader->error();
+    }
+  }
+  writer.endCapture(report);
+  writer.finish(reports);
+  return 0;
+}
