@@ -25,6 +25,13 @@ run() { # run SECONDS: the report in $WORK/report-SECONDS.txt, peak RSS (KiB) of
 }
 run 60
 run "$SECONDS_LONG"
+# A sanitizer build keeps freed memory in quarantine (ASan: up to 256 MiB), so its RSS says
+# nothing about the program's own: there only the verdicts are checked.
+if grep -q '^NCSERVO_SANITIZE:BOOL=ON' "$BUILD/CMakeCache.txt" 2>/dev/null; then
+  echo "simulate_soak: sanitizer build: peak RSS not judged ($(tail -1 "$WORK/rss-sim-$SECONDS_LONG") KiB simulate, $(tail -1 "$WORK/rss-val-$SECONDS_LONG") KiB validate)"
+  echo "simulate_soak: $SECONDS_LONG s at 1 kHz, 8 axes: PASS with no error or warning"
+  exit 0
+fi
 for who in sim val; do
   short=$(tail -1 "$WORK/rss-$who-60") long=$(tail -1 "$WORK/rss-$who-$SECONDS_LONG")
   [ "$long" -lt 32768 ] || fail "$who: peak RSS $long KiB for $SECONDS_LONG s (limit 32 MiB)"

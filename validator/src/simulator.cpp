@@ -1023,20 +1023,16 @@ struct Simulator::Impl {
   }
   // Sends a frame round the ring and captures both copies. `lost_before`: nothing returns and
   // no slave saw it; `lost_after`: the slaves processed it but the returned copy is lost.
+  // `came_back` (when given) says whether the returned copy reached the master.
   bool exchange(const FrameSink& sink, std::vector<Datagram>& frame, std::int64_t t_ns,
-                bool lost_before = false, bool lost_after = false) {
+                bool lost_before = false, bool lost_after = false, bool* came_back = nullptr) {
+    if (came_back != nullptr) *came_back = false;
     serialize(frame, false);
     if (!emit(sink, t_ns)) return false;
-    if (lost_before) {
-      for (Datagram& dg : frame) dg.wkc = 0;
-      frame.clear();
-      return true;
-    }
+    if (lost_before) return true;
     passRing(frame, kEpochNs + t_ns);
-    if (lost_after) {
-      frame.clear();
-      return true;
-    }
+    if (lost_after) return true;
+    if (came_back != nullptr) *came_back = true;
     serialize(frame, true);
     return emit(sink, t_ns + return_delay_ns);
   }
@@ -1159,19 +1155,30 @@ struct Simulator::Impl {
           image[at_out] = static_cast<std::uint8_t>(1U << (cycle / 100 % 8));
         }
       }
-      std::vector<Datagram> frame;
-      Datagram lrw;
+      // The same datagrams every cycle, refilled in place: a long run allocates nothing.
+      std::vector<Datagram>& frame = cyclic_frames[g];
+      frame.resize(g == 0 ? 2 : 1);
+      Datagram& lrw = frame[0];
       lrw.command = ecat::kLrw;
       lrw.index = datagram_index++;
       lrw.adp = static_cast<std::uint16_t>(fg.base & 0xFFFF);
       lrw.ado = static_cast<std::uint16_t>(fg.base >> 16);
-      lrw.data = image;
-      frame.push_back(std::move(lrw));
-      if (g == 0) frame.push_back(registerDatagram(ecat::kFrmw, kFirstStation, kRegSystemTime, 8));
+      lrw.data.assign(image.begin(), image.end());
+      lrw.wkc = 0;
+      if (g == 0) {
+        Datagram& dc = frame[1];
+        dc.command = ecat::kFrmw;
+        dc.index = datagram_index++;
+        dc.adp = kFirstStation;
+        dc.ado = kRegSystemTime;
+        dc.data.assign(8, 0);
+        dc.wkc = 0;
+      }
       const std::int64_t at_ns = t_ns + static_cast<std::int64_t>(g) * 2 * return_delay_ns;
-      if (!exchange(sink, frame, at_ns, lost_before, lost_after)) return false;
-      if (frame.empty() || frame[0].wkc == 0) continue;
-      image = frame[0].data;  // the inputs the slaves wrote (outputs pass unchanged)
+      bool came_back = false;
+      if (!exchange(sink, frame, at_ns, lost_before, lost_after, &came_back)) return false;
+      if (!came_back || frame[0].wkc == 0) continue;
+      image.assign(frame[0].data.begin(), frame[0].data.end());  // the inputs the slaves wrote
       for (int pos : fg.slaves) {
         const Esc& esc = escs[static_cast<std::size_t>(pos)];
         if (esc.kind != SlaveKind::Servo) continue;
@@ -1187,6 +1194,7 @@ struct Simulator::Impl {
     return true;
   }
   std::vector<RxPdo> outputs_;
+  std::vector<std::vector<Datagram>> cyclic_frames;  // per group, reused every cycle
 
   void stepDrives(std::int64_t now_ns) {
     for (DriveFaultEvent& e : drive_faults) {
@@ -1244,6 +1252,7 @@ struct Simulator::Impl {
 
   std::optional<std::uint64_t> run(const FrameSink& sink) {
     outputs_.assign(static_cast<std::size_t>(o.axes), RxPdo{});
+    cyclic_frames.assign(groups.size(), {});
     std::int64_t t = 0;
     const std::int64_t step_ns = std::min<std::int64_t>(cycle_ns, kMs);
     if (o.startup) {
