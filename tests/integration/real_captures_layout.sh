@@ -28,9 +28,20 @@ for row in "${cases[@]}"; do
   # our slave lines, without ring position, SM control bytes and "(off)" of disabled SMs, and
   # without the slaves the start-up configured nothing on
   grep '^# slave' "$WORK/layout.txt" | sed -e 's/^# slave [0-9]* //' -e 's/ control 0x[0-9A-F]*//g' \
+    -e 's/; CoE PDOs .* bits in//' \
     -e 's/\(SM[0-9]* 0x[0-9A-F]*+[0-9]*\) (off)/\1/g' | grep ';' >"$WORK/learned.txt" || true
   diff -u "$WORK/stock.txt" "$WORK/learned.txt" >"$WORK/diff.txt" ||
     fail "$name: learned layout differs from the stock dissector's: $(cat "$WORK/diff.txt")"
+  # The CoE PDO assignment the start-up wrote or read back sizes the process data as its SMs do.
+  { grep '^# slave.*CoE PDOs' "$WORK/layout.txt" || true; } | python3 -c '
+import re, sys
+for line in sys.stdin:
+    sm = {int(n): int(l) for n, l in re.findall(r"SM(\d) 0x[0-9A-F]+\+(\d+)", line)}
+    out, inp = re.search(r"CoE PDOs (\S+) bits out, (\S+) bits in", line).groups()
+    for bits, n in ((out, 2), (inp, 3)):
+        if bits != "?":
+            assert int(bits) == 8 * sm.get(n, 0), f"CoE {bits} bits, SM{n} {sm.get(n)} bytes: {line}"
+' || fail "$name: the CoE PDO sizes disagree with the sync managers"
   "$NCSERVO" validate --format json --fail-on never "$capture" >"$WORK/report.json"
   python3 - "$WORK/report.json" "$want" <<'PY' || fail "$name: ESM findings differ"
 import json, sys
@@ -39,5 +50,9 @@ serious = sorted({f["rule"] for f in findings if f["severity"] != "info"})
 want = sorted(sys.argv[2].split()) if sys.argv[2] else []
 assert serious == want, f"findings at warning or above: {serious}, expected {want}"
 PY
-  echo "ok $name: $(wc -l <"$WORK/learned.txt") slaves' SMs and FMMUs as the stock dissector shows them"
+  echo "ok $name: $(wc -l <"$WORK/learned.txt") slaves' SMs and FMMUs as the stock dissector shows them; $(grep -c 'CoE PDOs' "$WORK/layout.txt") with CoE PDO sizes"
 done
+# The AKD's assignment and mapping, read back over CoE, give the 17 + 17 bytes of its SMs.
+"$NCSERVO" decode --layout "$real/soem-akd-servo-pdo-mapping.pcapng" 2>/dev/null |
+  grep -q "SM2 0x1100+17 .*CoE PDOs 136 bits out, 136 bits in" || fail "the AKD's CoE PDO mapping was not learned"
+echo "ok: the AKD's CoE PDO assignment and mapping give its 17 + 17 bytes"

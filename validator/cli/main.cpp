@@ -158,6 +158,13 @@ void printLayout(const Decoder& decoder) {
                                         : "read/write",
                           f.active ? "" : " (off)");
     }
+    if (slave.coe_output_bits || slave.coe_input_bits) {
+      auto bits = [](const std::optional<std::uint32_t>& b) {
+        return b ? fmt::format("{}", *b) : std::string("?");
+      };
+      text += fmt::format("; CoE PDOs {} bits out, {} bits in", bits(slave.coe_output_bits),
+                          bits(slave.coe_input_bits));
+    }
     if (slave.servo) text += "; servo";
     fmt::print("{}\n", text);
   }

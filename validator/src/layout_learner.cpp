@@ -18,6 +18,9 @@ constexpr std::size_t kFmmuLogical = 0, kFmmuLength = 4, kFmmuPhysical = 8, kFmm
                       kFmmuActivate = 12;
 constexpr std::size_t kOutputsSm = 2, kInputsSm = 3;  // by convention (PROTOCOL.md §8)
 constexpr std::uint8_t kFmmuRead = 1, kFmmuWrite = 2;
+constexpr std::size_t kMailboxOutSm = 0, kMailboxInSm = 1;  // by convention (ETG.1000.4)
+constexpr std::uint8_t kSmModeMask = 0x03, kSmModeMailbox = 0x02;
+constexpr std::uint16_t kRxAssignment = 0x1C12, kTxAssignment = 0x1C13;
 // Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
 constexpr std::uint16_t kProcessRam = 0x1000;
 
@@ -54,6 +57,14 @@ bool copyBlock(std::array<std::uint8_t, N>& shadow, std::bitset<N>& mask, std::u
   return changed;
 }
 
+// The start of the slave's mailbox sync manager `index`, when the start-up configured one.
+std::optional<std::uint16_t> mailboxAt(const SlaveRegisters& regs, std::size_t index) {
+  const std::size_t at = index * ecat::kSyncManagerStride;
+  if (!known(regs.sm_known, at, 5)) return std::nullopt;
+  if ((regs.sm[at + 4] & kSmModeMask) != kSmModeMailbox) return std::nullopt;
+  return static_cast<std::uint16_t>(le(regs.sm, at, 2));
+}
+
 }  // namespace
 
 void SlaveRegisters::absorb(const SlaveRegisters& other) {
@@ -70,6 +81,7 @@ void SlaveRegisters::absorb(const SlaveRegisters& other) {
     }
   }
   physical_exchange = physical_exchange || other.physical_exchange;
+  coe.absorb(other.coe);
 }
 
 SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_t> station,
@@ -110,8 +122,16 @@ SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_
   };
   const SyncManagerView* rx = smOf(kOutputsSm);
   const SyncManagerView* tx = smOf(kInputsSm);
-  out.servo =
+  out.coe_output_bits = regs.coe.assignedBits(kRxAssignment);
+  out.coe_input_bits = regs.coe.assignedBits(kTxAssignment);
+  const bool sm_servo =
       rx != nullptr && tx != nullptr && rx->length == kRxPdoSize && tx->length == kTxPdoSize;
+  // The CoE assignment marks a servo where the SM lengths were not written (they are, in every
+  // start-up seen so far; then they decide).
+  const bool coe_servo =
+      out.coe_output_bits == 8 * kRxPdoSize && out.coe_input_bits == 8 * kTxPdoSize;
+  const bool sm_lengths = rx != nullptr || tx != nullptr;
+  out.servo = sm_servo || (coe_servo && !sm_lengths);
   return out;
 }
 
@@ -119,6 +139,23 @@ bool LayoutLearner::touch(SlaveRegisters& regs, const Datagram& dg, const ByteRe
   const bool fmmu = copyBlock(regs.fmmu, regs.fmmu_known, ecat::kRegFmmu0, dg, bytes);
   const bool sm = copyBlock(regs.sm, regs.sm_known, ecat::kRegSyncManager0, dg, bytes);
   return fmmu || sm;
+}
+
+bool LayoutLearner::observeMailbox(const Datagram& dg, const ByteReader& bytes,
+                                   const SlaveAddress& address, std::size_t sm) {
+  if (address.target != SlaveTarget::Station && address.target != SlaveTarget::Position) {
+    return false;
+  }
+  const std::size_t s = address.target == SlaveTarget::Station
+                            ? directory_.findStation(address.value)
+                            : directory_.findPosition(address.value);
+  if (s == directory_.kNone) return false;
+  SlaveRegisters& regs = directory_.slaves()[s].data;
+  const auto start = mailboxAt(regs, sm);
+  if (!start || dg.ado() != *start) return false;
+  regs.coe.onMailbox(bytes, dg.data_offset, dg.data_captured, sm == kMailboxOutSm);
+  dirty_ = true;
+  return true;
 }
 
 void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned,
@@ -129,14 +166,17 @@ void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, boo
     const Datagram& dg = frame.datagrams[i];
     if (ecat::isLogical(dg.command)) continue;
     const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
-    // A station alias read back from a slave names it as well.
+    // A station alias read back from a slave names it as well; a CoE answer in its mailbox (SM1)
+    // says what its PDOs hold.
     if (returned && ecat::readsSlaves(dg.command) && dg.has_wkc && dg.wkc > 0) {
       directory_.noteAlias(dg, bytes, address);
+      observeMailbox(dg, bytes, address, kMailboxInSm);
     }
     // What the master wrote configures the slave (a read-back would only repeat it).
     if (!ecat::writesSlaves(dg.command) || (returned && paired)) continue;
     directory_.noteStationWrite(dg, bytes, address);
     directory_.noteAlias(dg, bytes, address);
+    if (observeMailbox(dg, bytes, address, kMailboxOutSm)) continue;
     const std::size_t ado = dg.ado();
     const std::size_t end = ado + dg.data_captured;
     if (ado >= kProcessRam && address.target == SlaveTarget::Station) {
@@ -212,6 +252,7 @@ void LayoutLearner::rebuild() {
     AxisConfig axis;
     axis.name = fmt::format("axis{}", axes.size());
     axis.station = slave.station;
+    if (rx == nullptr || tx == nullptr) continue;  // a servo by CoE, its SMs not configured yet
     const auto outputs = mapped(*rx, kFmmuWrite);
     const auto inputs = mapped(*tx, kFmmuRead);
     if (outputs && inputs) {

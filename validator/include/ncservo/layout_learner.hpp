@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ncservo/byte_reader.hpp"
+#include "ncservo/coe_pdo.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/slave_directory.hpp"
@@ -25,6 +26,7 @@ struct SlaveRegisters {
   std::array<std::uint8_t, ecat::kSyncManagerCount * ecat::kSyncManagerStride> sm{};
   std::bitset<ecat::kSyncManagerCount * ecat::kSyncManagerStride> sm_known;
   bool physical_exchange = false;  // FPRD/FPWR seen at a configured servo's SM addresses
+  CoePdoObjects coe;               // the PDO assignment and mapping read or written over CoE
   void absorb(const SlaveRegisters& other);
 };
 
@@ -48,7 +50,11 @@ struct SlaveLayout {
   std::optional<std::uint16_t> position;
   std::vector<SyncManagerView> sync_managers;  // those whose start and length are known
   std::vector<FmmuView> fmmus;                 // those whose logical start, length, type are known
-  bool servo = false;                          // SM2 10 bytes, SM3 40 bytes
+  // Process data sizes the CoE PDO assignment gives (0x1C12 outputs, 0x1C13 inputs), in bits.
+  std::optional<std::uint32_t> coe_output_bits;
+  std::optional<std::uint32_t> coe_input_bits;
+  // SM2 10 bytes and SM3 40 bytes, or (SM lengths not written) a CoE assignment of 80/320 bits.
+  bool servo = false;
 };
 
 class LayoutLearner {
@@ -69,6 +75,9 @@ class LayoutLearner {
   std::vector<SlaveLayout> slaves() const;
 
  private:
+  // A mailbox write to SM `sm` (0) or read of it (1) of the addressed slave; whether it was one.
+  bool observeMailbox(const Datagram& dg, const ByteReader& bytes, const SlaveAddress& address,
+                      std::size_t sm);
   // Copies the SM/FMMU bytes the datagram carries; whether anything changed.
   bool touch(SlaveRegisters& regs, const Datagram& dg, const ByteReader& bytes);
   void rebuild();
