@@ -12,6 +12,7 @@
 #include <sstream>
 #include <utility>
 
+#include "ncservo/al_tracker.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
@@ -28,15 +29,15 @@ constexpr std::int64_t kEpochNs = 1'767'225'600 * kSecond;  // 2026-01-01 00:00:
 
 // ESC registers (PROTOCOL.md §8)
 constexpr std::uint16_t kRegType = 0x0000;
-constexpr std::uint16_t kRegStation = 0x0010;
-constexpr std::uint16_t kRegAlControl = 0x0120;
-constexpr std::uint16_t kRegAlStatus = 0x0130;
-constexpr std::uint16_t kRegAlStatusCode = 0x0134;
-constexpr std::uint16_t kRegFmmu = 0x0600;
-constexpr std::uint16_t kRegSyncManager = 0x0800;
-constexpr std::uint16_t kRegSystemTime = 0x0910;
-constexpr std::size_t kFmmuSize = 16;
-constexpr std::size_t kSyncManagerSize = 8;
+using ecat::kRegAlControl;
+using ecat::kRegAlStatus;
+using ecat::kRegAlStatusCode;
+constexpr std::uint16_t kRegStation = ecat::kRegStationAddress;
+constexpr std::uint16_t kRegFmmu = ecat::kRegFmmu0;
+constexpr std::uint16_t kRegSyncManager = ecat::kRegSyncManager0;
+constexpr std::uint16_t kRegSystemTime = ecat::kRegDcSystemTime;
+constexpr std::size_t kFmmuSize = ecat::kFmmuStride;
+constexpr std::size_t kSyncManagerSize = ecat::kSyncManagerStride;
 constexpr std::size_t kEscMemory = 0x2000;  // registers and process RAM
 constexpr std::uint16_t kFirstStation = 0x03E9;
 
@@ -459,7 +460,7 @@ struct Esc {
       publishAlStatus();
       return;
     }
-    const bool allowed = alAllowed(state, requested);
+    const bool allowed = alTransitionAllowed(state, requested);  // PROTOCOL.md §8
     if (!allowed || (requested == kOp && refuse_next_op)) {
       if (requested == kOp && refuse_next_op && allowed) {
         refuse_next_op = false;
@@ -473,22 +474,6 @@ struct Esc {
       pending_frames = transition_frames;
     }
     publishAlStatus();
-  }
-  static bool alAllowed(std::uint8_t from, std::uint8_t to) {
-    switch (from) {
-      case kInit:
-        return to == kPreOp || to == 3;
-      case 3:
-        return to == kInit;
-      case kPreOp:
-        return to == kSafeOp || to == kInit;
-      case kSafeOp:
-        return to == kOp || to == kPreOp || to == kInit;
-      case kOp:
-        return to == kSafeOp || to == kPreOp || to == kInit;
-      default:
-        return false;
-    }
   }
   // Once per frame passing through.
   void tick() {
