@@ -126,47 +126,12 @@ DecoderOptions decoderOptions(const std::optional<Config>& config,
 // `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
 void printLayout(const Decoder& decoder) {
   std::vector<AxisConfig> axes;
-  for (const AxisInfo& info : decoder.axes()) {
-    AxisConfig axis;
-    axis.name = info.name;
-    if (info.has_station) axis.station = info.station;
-    if (info.logical) {
-      axis.outputs = info.outputs;
-      axis.inputs = info.inputs;
-    } else {
-      axis.sm_outputs = static_cast<std::uint16_t>(info.outputs);
-      axis.sm_inputs = static_cast<std::uint16_t>(info.inputs);
-    }
-    axes.push_back(std::move(axis));
-  }
+  for (const AxisInfo& info : decoder.axes()) axes.push_back(axisConfigOf(info));
   fmt::print("# layout source: {}, {} ax{}{}\n", layoutSourceName(decoder.source()), axes.size(),
              axes.size() == 1 ? "is" : "es",
              axes.empty() ? " (" + decoder.noServoReason() + ")" : std::string());
   for (const SlaveLayout& slave : decoder.learner().slaves()) {
-    std::string text = "# slave";
-    if (slave.position) text += fmt::format(" {}", *slave.position);
-    if (slave.station) text += fmt::format(" station 0x{:04X}", *slave.station);
-    for (const SyncManagerView& sm : slave.sync_managers) {
-      text += fmt::format("; SM{} 0x{:04X}+{} control 0x{:02X}{}", sm.index, sm.start, sm.length,
-                          sm.control, sm.enabled ? "" : " (off)");
-    }
-    for (const FmmuView& f : slave.fmmus) {
-      text += fmt::format("; FMMU{} 0x{:08X}+{} -> 0x{:04X} {}{}", f.index, f.logical, f.length,
-                          f.physical,
-                          f.type == 1   ? "read"
-                          : f.type == 2 ? "write"
-                                        : "read/write",
-                          f.active ? "" : " (off)");
-    }
-    if (slave.coe_output_bits || slave.coe_input_bits) {
-      auto bits = [](const std::optional<std::uint32_t>& b) {
-        return b ? fmt::format("{}", *b) : std::string("?");
-      };
-      text += fmt::format("; CoE PDOs {} bits out, {} bits in", bits(slave.coe_output_bits),
-                          bits(slave.coe_input_bits));
-    }
-    if (slave.servo) text += "; servo";
-    fmt::print("{}\n", text);
+    fmt::print("# slave {}\n", describeSlaveLayout(slave));
   }
   if (!axes.empty()) fmt::print("{}", writeConfig(axes, std::nullopt));
 }

@@ -99,6 +99,20 @@ DecoderOptions layoutOptions(const std::vector<AxisConfig>* config_axes,
   return options;
 }
 
+AxisConfig axisConfigOf(const AxisInfo& info) {
+  AxisConfig axis;
+  axis.name = info.name;
+  if (info.has_station) axis.station = info.station;
+  if (info.logical) {
+    axis.outputs = info.outputs;
+    axis.inputs = info.inputs;
+  } else {
+    axis.sm_outputs = static_cast<std::uint16_t>(info.outputs);
+    axis.sm_inputs = static_cast<std::uint16_t>(info.inputs);
+  }
+  return axis;
+}
+
 Decoder::Decoder(DecoderOptions options) : options_(std::move(options)) {
   setAxes(options_.axes);
 }

@@ -282,4 +282,29 @@ void LayoutLearner::rebuild() {
   ++generation_;
 }
 
+std::string describeSlaveLayout(const SlaveLayout& slave) {
+  std::string text;
+  if (slave.position) text += fmt::format("{}", *slave.position);
+  if (slave.station)
+    text += fmt::format("{}station 0x{:04X}", text.empty() ? "" : " ", *slave.station);
+  for (const SyncManagerView& sm : slave.sync_managers) {
+    text += fmt::format("; SM{} 0x{:04X}+{} control 0x{:02X}{}", sm.index, sm.start, sm.length,
+                        sm.control, sm.enabled ? "" : " (off)");
+  }
+  for (const FmmuView& f : slave.fmmus) {
+    const char* type = f.type == kFmmuRead ? "read" : f.type == kFmmuWrite ? "write" : "read/write";
+    text += fmt::format("; FMMU{} 0x{:08X}+{} -> 0x{:04X} {}{}", f.index, f.logical, f.length,
+                        f.physical, type, f.active ? "" : " (off)");
+  }
+  if (slave.coe_output_bits || slave.coe_input_bits) {
+    auto bits = [](const std::optional<std::uint32_t>& b) {
+      return b ? fmt::format("{}", *b) : std::string("?");
+    };
+    text += fmt::format("; CoE PDOs {} bits out, {} bits in", bits(slave.coe_output_bits),
+                        bits(slave.coe_input_bits));
+  }
+  if (slave.servo) text += "; servo";
+  return text;
+}
+
 }  // namespace ncservo

@@ -56,6 +56,9 @@ struct FrameDecode {
   std::array<AxisPlacement, kMaxAxesPerFrame> axes{};  // in axis order
 };
 
+// An axis as a configuration file would give it (for `decode --layout`).
+AxisConfig axisConfigOf(const AxisInfo& info);
+
 struct DecoderOptions {
   std::vector<AxisConfig> axes;  // explicit layout (a configuration or an ENI); empty = none
   LayoutSource explicit_source = LayoutSource::Config;  // where `axes` came from

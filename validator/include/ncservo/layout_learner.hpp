@@ -9,6 +9,7 @@
 #include <bitset>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "ncservo/byte_reader.hpp"
@@ -89,6 +90,9 @@ class LayoutLearner {
   bool saw_servo_ = false;
   bool dirty_ = false;
 };
+
+// One line for a person: "3 station 0x03EC; SM2 0x1100+10 control 0x64; FMMU0 ... write; servo".
+std::string describeSlaveLayout(const SlaveLayout& slave);
 
 // What a slave's registers say (helpers of slaves(), public for tests).
 SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_t> station,
