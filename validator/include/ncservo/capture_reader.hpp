@@ -41,7 +41,7 @@ class CaptureReader {
 
  private:
   CaptureReader() = default;
-  static constexpr std::size_t kReadBufferSize = 1 << 20;
+  static constexpr std::size_t kReadBufferSize = 1 << 16;
   std::unique_ptr<char[]> buffer_;  // the FILE's buffer: outlives the handle that closes it
   ::pcap* handle_ = nullptr;
   std::string path_;
