@@ -373,14 +373,15 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return nullptr;
   const std::int64_t time_ns =
       static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
-  const FrameView& view = g_validator->onFrame(pinfo->num, time_ns, frame, bytes);
+  const ValidatedFrame& view = g_validator->onFrame(pinfo->num, time_ns, frame, bytes);
+  const FrameDecode& decode = view.decode;
   const std::vector<Finding>& findings = g_validator->findings();
-  if (view.axis_count == 0 && findings.empty()) return nullptr;
-  const std::size_t slots = view.axis_count > 0 ? view.axis_count : 1;
+  if (decode.axis_count == 0 && findings.empty()) return nullptr;
+  const std::size_t slots = decode.axis_count > 0 ? decode.axis_count : 1;
   const std::size_t size = sizeof(FrameRecord) + (slots - 1) * sizeof(AxisRecord);
   auto* record = static_cast<FrameRecord*>(wmem_alloc0(wmem_file_scope(), size));
-  record->copy = static_cast<guint8>(view.copy);
-  record->axis_count = static_cast<guint16>(view.axis_count);
+  record->copy = static_cast<guint8>(decode.copy);
+  record->axis_count = static_cast<guint16>(decode.axis_count);
   if (!findings.empty()) {
     auto* out = static_cast<FindingRecord*>(
         wmem_alloc0(wmem_file_scope(), findings.size() * sizeof(FindingRecord)));
@@ -396,17 +397,18 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
     record->findings = out;
     record->finding_count = static_cast<guint16>(std::min<std::size_t>(findings.size(), 0xFFFF));
   }
-  for (std::size_t i = 0; i < view.axis_count; ++i) {
-    const AxisFrameView& axis = view.axes[i];
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& placement = decode.axes[i];
+    const std::optional<DriveState>& state = view.states[i];
     AxisRecord& r = record->axes[i];
-    r.axis = axis.placement.axis;
-    r.flags = static_cast<guint8>(
-        (axis.placement.has_rx ? kHasRx : 0) | (axis.placement.has_tx ? kHasTx : 0) |
-        (axis.placement.rx_malformed ? kRxMalformed : 0) |
-        (axis.placement.tx_malformed ? kTxMalformed : 0) | (axis.state ? kHasState : 0));
-    r.state = axis.state ? static_cast<guint8>(*axis.state) : 0;
-    r.rx_offset = static_cast<guint32>(axis.placement.rx_offset);
-    r.tx_offset = static_cast<guint32>(axis.placement.tx_offset);
+    r.axis = placement.axis;
+    r.flags =
+        static_cast<guint8>((placement.has_rx ? kHasRx : 0) | (placement.has_tx ? kHasTx : 0) |
+                            (placement.rx_malformed ? kRxMalformed : 0) |
+                            (placement.tx_malformed ? kTxMalformed : 0) | (state ? kHasState : 0));
+    r.state = state ? static_cast<guint8>(*state) : 0;
+    r.rx_offset = static_cast<guint32>(placement.rx_offset);
+    r.tx_offset = static_cast<guint32>(placement.tx_offset);
   }
   p_add_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0, record);
   return record;

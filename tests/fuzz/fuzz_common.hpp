@@ -62,10 +62,12 @@ inline std::size_t feedFrame(Validator& validator, LinkType link, std::uint64_t 
   const ByteReader bytes(data, size);
   walkPacket(link, bytes, frame);
   if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams) return 0;
-  const FrameView& view = validator.onFrame(number, time_ns, frame, bytes);
-  std::size_t seen = view.axis_count + validator.findings().size();
-  for (std::size_t i = 0; i < view.axis_count; ++i) {
-    seen += view.axes[i].values.has_rx + view.axes[i].values.has_tx;
+  const ValidatedFrame& view = validator.onFrame(number, time_ns, frame, bytes);
+  std::size_t seen = view.decode.axis_count + validator.findings().size();
+  for (std::size_t i = 0; i < view.decode.axis_count; ++i) {
+    PdoValues values;  // as the plugin reads them at the placements
+    readFrameValues(view.decode.axes[i], bytes, values);
+    seen += values.has_rx + values.has_tx + view.states[i].has_value();
   }
   for (const Finding& f : validator.findings()) seen += f.message.size();
   return seen;

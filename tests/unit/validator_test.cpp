@@ -1237,16 +1237,17 @@ TEST(ValidatorView, SameAsSessionFrameByFrame) {
     ASSERT_LT(row.cut, bytes.size());
     const test::Walked w = test::walk(bytes, bytes.size() - row.cut);
     ++frame;
-    const FrameView& got = validator.onFrame(
+    const ValidatedFrame& got = validator.onFrame(
         frame, kEpochNs + static_cast<std::int64_t>(frame) * kMs, *w.frame, w.reader());
     const FrameView& want = session.onFrame(*w.frame, w.reader());
-    EXPECT_EQ(got.copy, want.copy);
-    EXPECT_EQ(got.paired, want.paired);
-    ASSERT_EQ(got.axis_count, want.axis_count);
-    axes_seen += got.axis_count;
-    for (std::size_t i = 0; i < got.axis_count; ++i) {
+    EXPECT_EQ(got.decode.copy, want.copy);
+    EXPECT_EQ(got.decode.paired, want.paired);
+    ASSERT_EQ(got.decode.axis_count, want.axis_count);
+    axes_seen += got.decode.axis_count;
+    bool any_malformed = false;
+    for (std::size_t i = 0; i < got.decode.axis_count; ++i) {
       SCOPED_TRACE("axis slot " + std::to_string(i));
-      const AxisPlacement& g = got.axes[i].placement;
+      const AxisPlacement& g = got.decode.axes[i];
       const AxisPlacement& e = want.axes[i].placement;
       EXPECT_EQ(g.axis, e.axis);
       EXPECT_EQ(g.rx_placed, e.rx_placed);
@@ -1259,13 +1260,18 @@ TEST(ValidatorView, SameAsSessionFrameByFrame) {
       EXPECT_EQ(g.tx_datagram, e.tx_datagram);
       EXPECT_EQ(g.rx_offset, e.rx_offset);
       EXPECT_EQ(g.tx_offset, e.tx_offset);
-      EXPECT_EQ(got.axes[i].values.has_rx, want.axes[i].values.has_rx);
-      EXPECT_EQ(got.axes[i].values.has_tx, want.axes[i].values.has_tx);
-      EXPECT_EQ(got.axes[i].values.raw, want.axes[i].values.raw);
+      any_malformed = any_malformed || g.rx_malformed || g.tx_malformed;
+      // The values at the validator's placements are the session's.
+      PdoValues values;
+      readFrameValues(g, w.reader(), values);
+      EXPECT_EQ(values.has_rx, want.axes[i].values.has_rx);
+      EXPECT_EQ(values.has_tx, want.axes[i].values.has_tx);
+      EXPECT_EQ(values.raw, want.axes[i].values.raw);
       const AxisModel* model = validator.axis(g.axis);
       ASSERT_NE(model, nullptr);
-      EXPECT_EQ(got.axes[i].state, model->state());
+      EXPECT_EQ(got.states[i], model->state());
     }
+    EXPECT_EQ(got.decode.any_malformed, any_malformed);
   }
   EXPECT_GT(axes_seen, 20u) << "the rows must place axes";
 }

@@ -330,9 +330,10 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     walkPacket(reader->link(), bytes, frame);
     if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
       continue;
-    const FrameView& view = validator.onFrame(record.frame, record.time_ns, frame, bytes);
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      const AxisPlacement& p = view.axes[i].placement;
+    const FrameDecode& decode =
+        validator.onFrame(record.frame, record.time_ns, frame, bytes).decode;
+    for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
+      const AxisPlacement& p = decode.axes[i];
       if (p.rx_malformed || p.tx_malformed) {
         fmt::print(stderr,
                    "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",

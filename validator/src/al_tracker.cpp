@@ -253,6 +253,7 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   bool registers = false;
   for (std::size_t i = 0; i < count && !registers; ++i)
     registers = reachesAlRegisters(frame.datagrams[i]);
+  last_frame_registers_ = registers;
   if (!registers) return;
 
   // Writes from the master's copy, or from a returned copy whose master copy was not captured;

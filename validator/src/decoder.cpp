@@ -156,7 +156,10 @@ LayoutSource Decoder::source() const {
 
 void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out) {
   out.axis_count = 0;
+  out.any_malformed = false;
+  out.shape_id = 0;
   const FrameShape shape = shapeOf(frame);
+  out.registers = shape.registers;
   classifyCopy(frame, shape.signature, shape.any_wkc, out);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
   // Only register commands configure slaves (the cyclic LRW and the DC FRMW are not looked
@@ -189,6 +192,9 @@ void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecod
     return a.axis < b.axis;
   };
   if (!std::is_sorted(out.axes.begin(), end, by_axis)) std::sort(out.axes.begin(), end, by_axis);
+  out.any_malformed = std::any_of(out.axes.begin(), end, [](const AxisPlacement& p) {
+    return p.rx_malformed || p.tx_malformed;
+  });
   // A frame that changed the layout state (a new or candidate key) is placed again next time.
   if (cacheable && generation == generation_) toCache(key, out);
 }
@@ -197,6 +203,8 @@ bool Decoder::fromCache(std::uint64_t key, FrameDecode& out) const {
   for (const CachedPlacements& c : cache_) {
     if (!c.valid || c.key != key || c.generation != generation_ || c.copy != out.copy) continue;
     out.axis_count = c.axis_count;
+    out.any_malformed = c.any_malformed;
+    out.shape_id = c.shape_id;
     std::copy(c.axes.begin(), c.axes.begin() + static_cast<std::ptrdiff_t>(c.axis_count),
               out.axes.begin());
     return true;
@@ -204,14 +212,17 @@ bool Decoder::fromCache(std::uint64_t key, FrameDecode& out) const {
   return false;
 }
 
-void Decoder::toCache(std::uint64_t key, const FrameDecode& out) {
+void Decoder::toCache(std::uint64_t key, FrameDecode& out) {
   if (out.axis_count > kCachedAxes) return;
+  out.shape_id = ++last_shape_id_;
   CachedPlacements& c = cache_[cache_next_];
   cache_next_ = (cache_next_ + 1) % cache_.size();
   c.valid = true;
   c.key = key;
   c.generation = generation_;
   c.copy = out.copy;
+  c.any_malformed = out.any_malformed;
+  c.shape_id = out.shape_id;
   c.axis_count = out.axis_count;
   std::copy(out.axes.begin(), out.axes.begin() + static_cast<std::ptrdiff_t>(out.axis_count),
             c.axes.begin());

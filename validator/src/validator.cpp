@@ -57,8 +57,8 @@ Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
   return s;
 }
 
-const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
-                                    const EcatFrame& frame, const ByteReader& bytes) {
+const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
+                                         const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
   // RULES.md: timestamps that go backwards do not move timers back.
   const std::int64_t monotonic = any_frame_ ? std::max(now_.time_ns, time_ns) : time_ns;
@@ -66,51 +66,59 @@ const FrameView& Validator::onFrame(std::uint64_t frame_number, std::int64_t tim
   now_ = Stamp{frame_number, monotonic};
   frame_time_ns_ = time_ns;
 
-  // The placements, then each axis's values read and judged in one pass (what a Session would
-  // give, without building its view and then walking it again).
-  decoder_.decode(frame, bytes, decode_);
-  view_.copy = decode_.copy;
-  view_.paired = decode_.paired;
-  view_.axis_count = decode_.axis_count;
+  FrameDecode& decode = view_.decode;
+  decoder_.decode(frame, bytes, decode);
   observeAl(frame, bytes);
-  const std::size_t axis_count = decode_.axis_count;
-  // The slots grow once (which moves them), then this frame's are looked up once.
-  std::uint16_t first_axis = std::numeric_limits<std::uint16_t>::max(), last_axis = 0;
+  // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
+  if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
+  const std::size_t axis_count = decode.axis_count;
+  if (axis_count == 0) return view_;
+  // The placements are in axis order: the slots grow once (which moves them), then this frame's
+  // are looked up once.
+  const std::uint16_t first_axis = decode.axes[0].axis;
+  const std::uint16_t last_axis = decode.axes[axis_count - 1].axis;
+  if (last_axis >= axes_.size()) axes_.resize(last_axis + 1u);
   for (std::size_t i = 0; i < axis_count; ++i) {
-    first_axis = std::min(first_axis, decode_.axes[i].axis);
-    last_axis = std::max(last_axis, decode_.axes[i].axis);
-  }
-  if (axis_count > 0 && last_axis >= axes_.size()) axes_.resize(last_axis + 1u);
-  for (std::size_t i = 0; i < axis_count; ++i) {
-    const std::uint16_t axis = decode_.axes[i].axis;
-    AxisSlot& s = axes_[axis];
-    if (!s.model) s.model.emplace(axis, settings_.readyModeFor(axis));
+    const AxisPlacement& placement = decode.axes[i];
+    AxisSlot& s = axes_[placement.axis];
+    if (!s.model) s.model.emplace(placement.axis, settings_.readyModeFor(placement.axis));
+    if (s.al_epoch != al_epoch_) {
+      syncAlState(placement, *s.model);
+      s.al_epoch = al_epoch_;
+    }
     frame_slots_[i] = &s;
   }
-  if (axis_count > 0) accountCycle(frame, first_axis);
-  const std::vector<AxisInfo>& infos = decoder_.axes();
+  accountCycle(frame, first_axis);
   for (std::size_t i = 0; i < axis_count; ++i) {
-    AxisFrameView& a = view_.axes[i];
-    a.placement = decode_.axes[i];
-    readFrameValues(a.placement, bytes, a.values);
+    const AxisPlacement& placement = decode.axes[i];
     AxisSlot& s = *frame_slots_[i];
     AxisModel& model = *s.model;
-    const AxisInfo* info = a.placement.axis < infos.size() ? &infos[a.placement.axis] : nullptr;
-    if (info != nullptr && info->has_station) {
-      model.setAlState(al_.stateOfStation(info->station));
-      if (al_.enteredOp(info->station)) model.enteredOp();
-    }
     // Fast path: the words the rules read are unchanged and no timer runs, so no condition can
-    // have changed (RULES.md reports at beginnings and at timeouts only).
+    // have changed (RULES.md reports at beginnings and at timeouts only). Only those words are
+    // read; the whole PDOs are read when the model takes them.
+    const JudgedWords judged = readJudgedWords(
+        bytes, placement.has_rx ? std::optional<std::size_t>(placement.rx_offset) : std::nullopt,
+        placement.has_tx ? std::optional<std::size_t>(placement.tx_offset) : std::nullopt);
     if (s.pending != 0 || s.evaluated_revision != model.revision() ||
-        !model.wouldNotChange(a.values)) {
-      model.observe(a.values, now_);
+        !model.wouldNotChange(judged)) {
+      PdoValues values;
+      readFrameValues(placement, bytes, values);
+      model.observe(values, now_);
       evaluateAxis(s);
       s.evaluated_revision = model.revision();
     }
-    a.state = model.state();
+    view_.states[i] = model.state();
   }
   return view_;
+}
+
+// The AL state of the axis's slave, where its station is known (ESM-002), and OP entries.
+void Validator::syncAlState(const AxisPlacement& placement, AxisModel& model) {
+  const std::vector<AxisInfo>& infos = decoder_.axes();
+  if (placement.axis >= infos.size() || !infos[placement.axis].has_station) return;
+  const std::uint16_t station = infos[placement.axis].station;
+  model.setAlState(al_.stateOfStation(station));
+  if (al_.enteredOp(station)) model.enteredOp();
 }
 
 // RULES.md "Time": a condition is reported once per episode — when it begins, or for a delayed
@@ -142,7 +150,8 @@ void Validator::evaluateAxis(AxisSlot& s) {
 void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes) {
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
   al_findings_.clear();
-  al_.onFrame(frame, bytes, decode_.copy == CopyKind::Returned, decode_.paired, now_, al_findings_);
+  al_.onFrame(frame, bytes, view_.decode.copy == CopyKind::Returned, view_.decode.paired, now_,
+              al_findings_);
   for (AlFinding& f : al_findings_) {
     std::optional<std::uint16_t> axis;
     for (const AxisInfo& info : decoder().axes()) {
@@ -165,7 +174,7 @@ Validator::CyclicFrame* Validator::cyclicFrame(std::uint16_t first_axis) {
 // the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
 void Validator::accountCycle(const EcatFrame& frame, std::uint16_t first_axis) {
   CyclicFrame& cyclic = *cyclicFrame(first_axis);
-  const bool master = decode_.copy == CopyKind::Master;
+  const bool master = view_.decode.copy == CopyKind::Master;
   if (master && !master_copies_seen_) {
     master_copies_seen_ = true;
     for (CyclicFrame& c : cyclic_) c.last_tick.reset();  // returned copies were the clock so far
@@ -186,9 +195,13 @@ void Validator::accountCycle(const EcatFrame& frame, std::uint16_t first_axis) {
     }
     cyclic.awaiting_return = true;
     cyclic.last_master = now_;
-    cyclic.axes.clear();
-    for (std::size_t i = 0; i < decode_.axis_count; ++i) {
-      cyclic.axes.push_back(decode_.axes[i].axis);
+    // A cached shape carries the same axes as last time.
+    if (view_.decode.shape_id == 0 || view_.decode.shape_id != cyclic.axes_shape_id) {
+      cyclic.axes.clear();
+      for (std::size_t i = 0; i < view_.decode.axis_count; ++i) {
+        cyclic.axes.push_back(view_.decode.axes[i].axis);
+      }
+      cyclic.axes_shape_id = view_.decode.shape_id;
     }
     tick(cyclic);
   } else {
@@ -223,7 +236,7 @@ void Validator::tick(CyclicFrame& cyclic) {
                        "cycle{} missing",
                        static_cast<double>(interval) / 1e6, cyclic.last_tick->frame,
                        static_cast<double>(*median) / 1e6, missing, missing == 1 ? "" : "s"));
-    for (std::size_t i = 0; i < decode_.axis_count; ++i) {
+    for (std::size_t i = 0; i < view_.decode.axis_count; ++i) {
       if (missing > 0) frame_slots_[i]->model->cycleFailed(true, missing, now_);
     }
   }
@@ -231,30 +244,38 @@ void Validator::tick(CyclicFrame& cyclic) {
   cyclic.last_tick = now_;
 }
 
-Validator::WkcRecord* Validator::wkcRecord(const Datagram& dg) {
-  for (WkcRecord& r : wkc_) {
-    if (r.command == dg.command && r.address == dg.address && r.length == dg.length) return &r;
+std::int16_t Validator::wkcRecord(const Datagram& dg) {
+  for (std::size_t i = 0; i < wkc_.size(); ++i) {
+    const WkcRecord& r = wkc_[i];
+    if (r.command == dg.command && r.address == dg.address && r.length == dg.length) {
+      return static_cast<std::int16_t>(i);
+    }
   }
-  if (wkc_.size() >= kMaxWkcRecords) return nullptr;
+  if (wkc_.size() >= kMaxWkcRecords) return kNoWkcRecord;
   wkc_.push_back(WkcRecord{dg.command, dg.address, dg.length});
-  return &wkc_.back();
+  return static_cast<std::int16_t>(wkc_.size() - 1);
 }
 
-// RULES.md COM-001 on each returned datagram that carries servo PDOs, and each axis's cycle:
-// lost (WKC 0), failed (another wrong WKC) or good.
-void Validator::checkWorkingCounters(const EcatFrame& frame) {
-  enum Outcome : std::uint8_t { kGood, kFailed, kLost };
-  // Per datagram: what the axes it carries add to its WKC, the bytes of theirs it holds, and the
-  // outcome. One pass over the axes; only the frame's first `count` entries are used.
+// Which datagrams of this frame carry servo PDOs, and what the axes in each add to its WKC.
+Validator::WkcPlan& Validator::wkcPlan(const EcatFrame& frame) {
+  const FrameDecode& decode = view_.decode;
+  if (decode.shape_id != 0) {
+    for (WkcPlan& plan : wkc_plans_) {
+      if (plan.shape_id == decode.shape_id) return plan;
+    }
+  }
+  WkcPlan& plan = decode.shape_id != 0 ? wkc_plans_[wkc_plan_next_] : uncached_plan_;
+  if (decode.shape_id != 0) wkc_plan_next_ = (wkc_plan_next_ + 1) % wkc_plans_.size();
+  plan.shape_id = decode.shape_id;
+  plan.checks.clear();
+  // Per datagram: what the axes it carries add to its WKC and the bytes of theirs it holds.
   struct Carried {
-    bool carries;
-    std::uint16_t expected;
-    std::size_t covered;
-    std::uint8_t outcome;
+    bool carries = false;
+    std::uint16_t expected = 0;
+    std::size_t covered = 0;
   };
-  std::array<Carried, ecat::kMaxDatagrams> carried;
+  std::array<Carried, ecat::kMaxDatagrams> carried{};
   const std::size_t count = std::min(frame.count, carried.size());
-  for (std::size_t d = 0; d < count; ++d) carried[d] = Carried{false, 0, 0, kGood};
   auto add = [&](std::size_t d, bool out, bool in) {
     if (d >= count) return;
     Carried& c = carried[d];
@@ -263,8 +284,8 @@ void Validator::checkWorkingCounters(const EcatFrame& frame) {
         static_cast<std::uint16_t>(c.expected + wkcShare(frame.datagrams[d].command, out, in));
     c.covered += (out ? kRxPdoSize : 0) + (in ? kTxPdoSize : 0);
   };
-  for (std::size_t i = 0; i < decode_.axis_count; ++i) {
-    const AxisPlacement& p = decode_.axes[i];
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& p = decode.axes[i];
     if (p.rx_placed && p.tx_placed && p.rx_datagram == p.tx_datagram) {
       add(p.rx_datagram, true, true);
       continue;
@@ -273,13 +294,30 @@ void Validator::checkWorkingCounters(const EcatFrame& frame) {
     if (p.tx_placed) add(p.tx_datagram, false, true);
   }
   for (std::size_t d = 0; d < count; ++d) {
-    const Datagram& dg = frame.datagrams[d];
-    Carried& c = carried[d];
-    if (!c.carries || !dg.has_wkc) continue;
-    std::uint16_t expected = c.expected;
-    WkcRecord* record = wkcRecord(dg);
+    if (!carried[d].carries) continue;
+    plan.checks.push_back(WkcCheck{static_cast<std::uint16_t>(d), carried[d].expected,
+                                   carried[d].covered != frame.datagrams[d].length,
+                                   kUnresolvedWkcRecord});
+  }
+  return plan;
+}
+
+// RULES.md COM-001 on each returned datagram that carries servo PDOs, and each axis's cycle:
+// lost (WKC 0), failed (another wrong WKC) or good.
+void Validator::checkWorkingCounters(const EcatFrame& frame) {
+  enum Outcome : std::uint8_t { kGood, kFailed, kLost };
+  WkcPlan& plan = wkcPlan(frame);
+  const FrameDecode& decode = view_.decode;
+  bool all_good = true;
+  for (WkcCheck& check : plan.checks) {
+    const Datagram& dg = frame.datagrams[check.datagram];
+    check.outcome = kGood;
+    if (!dg.has_wkc) continue;
+    if (check.record == kUnresolvedWkcRecord) check.record = wkcRecord(dg);
+    WkcRecord* record = check.record >= 0 ? &wkc_[static_cast<std::size_t>(check.record)] : nullptr;
+    std::uint16_t expected = check.expected;
     // Other slaves share the datagram: the expected value is the one seen most often so far.
-    if (c.covered != dg.length && record != nullptr) {
+    if (check.shared && record != nullptr) {
       std::size_t slot_index = record->values.size();
       for (std::size_t k = 0; k < record->values.size(); ++k) {
         if (record->counts[k] > 0 && record->values[k] == dg.wkc) slot_index = k;
@@ -299,7 +337,8 @@ void Validator::checkWorkingCounters(const EcatFrame& frame) {
       expected = record->values[mode];
     }
     if (dg.wkc != expected) {
-      c.outcome = dg.wkc == 0 ? kLost : kFailed;
+      check.outcome = dg.wkc == 0 ? kLost : kFailed;
+      all_good = false;
       if (record == nullptr || !record->wrong_episode) {
         if (record != nullptr) record->wrong_episode = true;
         report(RuleId::Com001, std::nullopt, now_,
@@ -311,12 +350,19 @@ void Validator::checkWorkingCounters(const EcatFrame& frame) {
       record->wrong_episode = false;
     }
   }
-  for (std::size_t i = 0; i < decode_.axis_count; ++i) {
-    const AxisPlacement& p = decode_.axes[i];
+  if (all_good) {
+    for (std::size_t i = 0; i < decode.axis_count; ++i) frame_slots_[i]->model->cycleOk(now_);
+    return;
+  }
+  std::array<std::uint8_t, ecat::kMaxDatagrams> outcomes{};
+  for (const WkcCheck& check : plan.checks) outcomes[check.datagram] = check.outcome;
+  const std::size_t count = std::min(frame.count, outcomes.size());
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& p = decode.axes[i];
     std::uint8_t outcome = kGood;
-    if (p.rx_placed && p.rx_datagram < count) outcome = carried[p.rx_datagram].outcome;
+    if (p.rx_placed && p.rx_datagram < count) outcome = outcomes[p.rx_datagram];
     if (p.tx_placed && p.tx_datagram < count) {
-      outcome = std::max(outcome, carried[p.tx_datagram].outcome);
+      outcome = std::max(outcome, outcomes[p.tx_datagram]);
     }
     AxisModel& model = *frame_slots_[i]->model;
     if (outcome == kGood) {

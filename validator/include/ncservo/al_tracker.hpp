@@ -52,6 +52,8 @@ class AlTracker {
   // Whether the slave with this station address entered OP in the last frame given: its known
   // state went from another known state to OP.
   bool enteredOp(std::uint16_t station) const;
+  // Whether the last frame given reached AL registers: only such a frame changes a state.
+  bool lastFrameReachedRegisters() const { return last_frame_registers_; }
 
  private:
   // What the capture showed of one slave's state machine.
@@ -79,6 +81,7 @@ class AlTracker {
   std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
   bool entered_op_all_ = false;                // state_all_ became OP in the last frame
   bool any_entered_op_ = false;                // some slave's entered_op is set
+  bool last_frame_registers_ = false;
 };
 
 }  // namespace ncservo

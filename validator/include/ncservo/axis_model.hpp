@@ -87,13 +87,12 @@ class AxisModel {
   // Counts changes made other than by observe(): an unchanged revision and unchanged words
   // mean the rules' conditions are unchanged too.
   std::uint64_t revision() const { return revision_; }
-  // Whether observing these values would change nothing the rules look at.
-  bool wouldNotChange(const PdoValues& values) const {
-    if (values.has_rx && (!latest_.has_rx || values.scw() != latest_.scw())) return false;
-    if (values.has_tx &&
-        (!latest_.has_tx || ((values.ssw() ^ latest_.ssw()) & ~kSswUnjudged) != 0 ||
-         values.sew() != latest_.sew() ||
-         definedMessage(values.msgCode()) != definedMessage(latest_.msgCode()))) {
+  // Whether observing these words would change nothing the rules look at.
+  bool wouldNotChange(const JudgedWords& words) const {
+    if (words.has_rx && (!latest_.has_rx || words.scw != latest_.scw())) return false;
+    if (words.has_tx && (!latest_.has_tx || ((words.ssw ^ latest_.ssw()) & ~kSswUnjudged) != 0 ||
+                         words.sew != latest_.sew() ||
+                         definedMessage(words.msg_code) != definedMessage(latest_.msgCode()))) {
       return false;
     }
     return !al_state_.has_value();  // ESM-002 looks at which PDOs a frame carries

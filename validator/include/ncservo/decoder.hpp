@@ -51,7 +51,12 @@ inline constexpr std::size_t kMaxAxesPerFrame = 208;  // 2047 data bytes / 10-by
 
 struct FrameDecode {
   CopyKind copy = CopyKind::Master;
-  bool paired = false;  // a returned copy whose master's copy was the frame just before
+  bool paired = false;         // a returned copy whose master's copy was the frame just before
+  bool registers = false;      // some datagram reaches slave registers (a start-up's do)
+  bool any_malformed = false;  // some placed region is cut short or straddles its datagram
+  // Non-zero when the placements came from (or went into) the shape cache: frames with the same
+  // id have the same datagram list (commands, lengths, surviving addresses), copy and placements.
+  std::uint64_t shape_id = 0;
   std::size_t axis_count = 0;
   std::array<AxisPlacement, kMaxAxesPerFrame> axes{};  // in axis order
 };
@@ -100,7 +105,7 @@ class Decoder {
   void classifyCopy(const EcatFrame& frame, std::uint64_t signature, bool any_wkc,
                     FrameDecode& out);
   bool fromCache(std::uint64_t key, FrameDecode& out) const;
-  void toCache(std::uint64_t key, const FrameDecode& out);
+  void toCache(std::uint64_t key, FrameDecode& out);
   void setAxes(const std::vector<AxisConfig>& axes);
   const std::vector<AxisConfig>& placedAxes() const {
     return options_.axes.empty() ? learned_axes_ : options_.axes;
@@ -133,13 +138,15 @@ class Decoder {
     std::uint64_t key = 0;
     std::uint64_t generation = 0;
     CopyKind copy = CopyKind::Master;
-    bool paired = false;
+    bool any_malformed = false;
+    std::uint64_t shape_id = 0;
     std::size_t axis_count = 0;
     std::array<AxisPlacement, kCachedAxes> axes{};
   };
   std::array<CachedPlacements, 4> cache_{};
   std::size_t cache_next_ = 0;
   std::uint64_t generation_ = 0;
+  std::uint64_t last_shape_id_ = 0;
 };
 
 }  // namespace ncservo

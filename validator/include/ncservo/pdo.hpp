@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <utility>
 
 #include "ncservo/byte_reader.hpp"
@@ -79,6 +80,46 @@ bool readPdoOf(const ByteReader& bytes, std::size_t offset, PdoValues& out) {
 inline bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoValues& out) {
   return pdo == Pdo::Rx ? readPdoOf<Pdo::Rx>(bytes, offset, out)
                         : readPdoOf<Pdo::Tx>(bytes, offset, out);
+}
+
+// The words the rules judge (RULES.md): SCW of the outputs; SSW, SEW and the message code of the
+// inputs. Every other word (positions, message data) changes nothing a rule looks at.
+struct JudgedWords {
+  bool has_rx = false;
+  bool has_tx = false;
+  std::uint32_t scw = 0;
+  std::uint32_t ssw = 0;
+  std::uint32_t sew = 0;
+  std::int32_t msg_code = 0;
+};
+
+// One word of a PDO whose bytes start at `pdo` (already bounds-checked for the whole PDO).
+template <Word W>
+std::uint64_t loadWord(const std::uint8_t* pdo) {
+  constexpr auto i = static_cast<std::size_t>(W);
+  return detail::loadLe<kWords[i].size>(pdo + detail::kWordOffsets[i]);
+}
+
+static_assert(wordDef(Word::Scw).pdo == Pdo::Rx && wordDef(Word::Ssw).pdo == Pdo::Tx &&
+              wordDef(Word::Sew).pdo == Pdo::Tx && wordDef(Word::MsgCode).pdo == Pdo::Tx);
+
+// The judged words of the PDOs at these offsets (nullopt: not carried). A PDO whose bytes are
+// short counts as not carried, as in readPdoOf.
+inline JudgedWords readJudgedWords(const ByteReader& bytes, std::optional<std::size_t> rx_offset,
+                                   std::optional<std::size_t> tx_offset) {
+  JudgedWords out;
+  if (rx_offset && bytes.has(*rx_offset, kRxPdoSize)) {
+    out.has_rx = true;
+    out.scw = static_cast<std::uint32_t>(loadWord<Word::Scw>(bytes.data() + *rx_offset));
+  }
+  if (tx_offset && bytes.has(*tx_offset, kTxPdoSize)) {
+    const std::uint8_t* pdo = bytes.data() + *tx_offset;
+    out.has_tx = true;
+    out.ssw = static_cast<std::uint32_t>(loadWord<Word::Ssw>(pdo));
+    out.sew = static_cast<std::uint32_t>(loadWord<Word::Sew>(pdo));
+    out.msg_code = static_cast<std::int32_t>(loadWord<Word::MsgCode>(pdo));
+  }
+  return out;
 }
 
 namespace detail {

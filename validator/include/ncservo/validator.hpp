@@ -17,6 +17,14 @@
 
 namespace ncservo {
 
+// What the validator gives back for one frame: where each axis's PDOs sit, and each placed
+// axis's drive state after the frame. The values are read from the bytes at the placements
+// (readFrameValues) by whoever shows them.
+struct ValidatedFrame {
+  FrameDecode decode;  // copy, pairing and placements, in axis order
+  std::array<std::optional<DriveState>, kMaxAxesPerFrame> states{};  // by placement
+};
+
 struct CycleTimeSummary {
   std::optional<double> median_us, p99_us, max_us;
 };
@@ -26,9 +34,9 @@ class Validator {
   Validator(DecoderOptions options, RuleSettings settings);
 
   // One walked EtherCAT frame (any status) with its 1-based frame number and capture time.
-  // Returns the frame's decoded view; findings() then holds what was reported on this frame.
-  const FrameView& onFrame(std::uint64_t frame_number, std::int64_t time_ns, const EcatFrame& frame,
-                           const ByteReader& bytes);
+  // Returns the frame's placements and states; findings() then holds what was reported on it.
+  const ValidatedFrame& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
+                                const EcatFrame& frame, const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
 
   const Decoder& decoder() const { return decoder_; }
@@ -50,6 +58,22 @@ class Validator {
     std::array<Episode, kRuleCount> episodes{};
     std::uint32_t pending = 0;  // delayed episodes running towards their timeout
     std::optional<std::uint64_t> evaluated_revision;
+    std::uint64_t al_epoch = 0;  // al_epoch_ when the AL state was last taken (0: never)
+  };
+  // What a frame shape's datagrams that carry servo PDOs should return (COM-001), worked out
+  // once per shape (FrameDecode::shape_id) instead of every cycle.
+  struct WkcCheck {
+    std::uint16_t datagram;
+    std::uint16_t expected;    // what the axes it carries add to its WKC (PROTOCOL.md §8)
+    bool shared;               // other slaves' bytes share it: judged against its usual WKC
+    std::int16_t record;       // index in wkc_; kNoWkcRecord, kUnresolvedWkcRecord
+    std::uint8_t outcome = 0;  // this frame's
+  };
+  static constexpr std::int16_t kNoWkcRecord = -1;  // too many datagrams are followed
+  static constexpr std::int16_t kUnresolvedWkcRecord = -2;
+  struct WkcPlan {
+    std::uint64_t shape_id = 0;
+    std::vector<WkcCheck> checks;
   };
   // The cyclic frame that carries a group of axes, named by its lowest axis index.
   struct CyclicFrame {
@@ -59,6 +83,7 @@ class Validator {
     bool not_returned_episode = false;
     Stamp last_master;
     std::vector<std::uint16_t> axes;  // axes of the last master copy
+    std::uint64_t axes_shape_id = 0;  // the shape they were taken from (0: none cached)
   };
   // A cyclic datagram carrying servo PDOs: its WKC history (COM-001).
   struct WkcRecord {
@@ -74,7 +99,8 @@ class Validator {
               std::string message);
   AxisSlot& slot(std::uint16_t axis);
   CyclicFrame* cyclicFrame(std::uint16_t first_axis);
-  WkcRecord* wkcRecord(const Datagram& dg);
+  std::int16_t wkcRecord(const Datagram& dg);
+  WkcPlan& wkcPlan(const EcatFrame& frame);
   // On this frame's placements (decode_). `first_axis`: the lowest axis index of the frame,
   // which names its cyclic frame.
   void accountCycle(const EcatFrame& frame, std::uint16_t first_axis);
@@ -82,10 +108,10 @@ class Validator {
   void checkWorkingCounters(const EcatFrame& frame);
   void evaluateAxis(AxisSlot& axis);
   void observeAl(const EcatFrame& frame, const ByteReader& bytes);
+  void syncAlState(const AxisPlacement& placement, AxisModel& model);
 
   Decoder decoder_;
-  FrameDecode decode_;  // this frame's placements
-  FrameView view_;      // this frame's placements, values and states, as a Session gives them
+  ValidatedFrame view_;  // this frame's placements and states
   RuleSettings settings_;
   AlTracker al_;
   std::vector<AlFinding> al_findings_;
@@ -93,7 +119,11 @@ class Validator {
   std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
   std::vector<CyclicFrame> cyclic_;
   std::vector<WkcRecord> wkc_;
+  std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
+  std::size_t wkc_plan_next_ = 0;
+  WkcPlan uncached_plan_;  // for a frame whose shape is not cached
   IntervalStats intervals_;
+  std::uint64_t al_epoch_ = 1;  // frames so far that could move an AL state or a station
   std::uint64_t cycles_ = 0;
   bool master_copies_seen_ = false;
   bool returned_copies_seen_ = false;
