@@ -835,6 +835,61 @@ TEST(ValidatorEsm, AlErrorIsAttributedToTheAxisOfItsStation) {
   EXPECT_EQ(actual, std::vector<std::string>{test::describe(RuleId::Esm003, 0, 6, 6)});
 }
 
+// RULES.md COM-005 / seed 001: an axis's total failure counter resets when its slave enters OP,
+// whether the AL status read that shows OP shares the cyclic frame or has a frame of its own
+// (a master polls AL status in frames of their own, as the simulator's does).
+struct OpEntryRow {
+  const char* name;
+  bool own_frame;  // the OP read in a frame of its own, not in the cyclic frame
+  bool enter_op;   // the slave goes SAFE-OP -> OP at all
+};
+
+Bytes alStatusFrame(std::uint16_t al, bool returned) {
+  Bytes status;
+  test::putLe(status, returned ? al : 0, 2);
+  FrameBuilder builder;
+  builder.add(Dg{ecat::kFprd, 7, physical(kStation, kRegAlStatus), status,
+                 static_cast<std::uint16_t>(returned ? 1 : 0)});
+  return builder.bytes();
+}
+
+TEST(ValidatorEsm, TotalFailuresResetWhenTheSlaveEntersOp) {
+  const OpEntryRow rows[] = {
+      {"OP read in the cyclic frame", false, true},
+      {"OP read in a frame of its own", true, true},
+      {"stays in SAFE-OP: the failures stay counted", true, false},
+  };
+  for (const OpEntryRow& row : rows) {
+    SCOPED_TRACE(row.name);
+    ValidatorDriver driver(RuleSettings{}, stationAxis());
+    std::int64_t t = kEpochNs;
+    // SAFE-OP, outputs off; three cycles not returned (a master copy with no returned copy;
+    // PROTOCOL.md §8 takes a master copy after one with the same datagrams as its returned copy
+    // with WKC 0, so this counts fewer than three failures, but some).
+    for (std::int64_t k = 0; k < 10; ++k, t += kMs) {
+      driver.feed(stationFrame(kScwOff, kSswReady, 4, false), t);
+      if (k < 3 || k > 5) driver.feed(stationFrame(kScwOff, kSswReady, 4, true), t + 20 * kUs);
+    }
+    const AxisModel* axis = driver.validator().axis(0);
+    ASSERT_NE(axis, nullptr);
+    const std::uint32_t failures = axis->totalFailures();
+    ASSERT_GT(failures, 0u);
+    const std::uint16_t next = row.enter_op ? 8 : 4;
+    if (row.own_frame) {
+      driver.feed(alStatusFrame(next, false), t);
+      driver.feed(alStatusFrame(next, true), t + 10 * kUs);
+      t += kMs;
+    }
+    for (std::int64_t k = 0; k < 5; ++k, t += kMs) {
+      const std::optional<std::uint16_t> al =
+          row.own_frame ? std::nullopt : std::optional<std::uint16_t>(next);
+      driver.feed(stationFrame(kScwOff, kSswReady, al, false), t);
+      driver.feed(stationFrame(kScwOff, kSswReady, al, true), t + 20 * kUs);
+    }
+    EXPECT_EQ(driver.validator().axis(0)->totalFailures(), row.enter_op ? 0u : failures);
+  }
+}
+
 // ---- AxisModel (axis_model.hpp) ----
 
 PdoValues pdo(std::optional<std::uint32_t> scw, std::optional<std::uint32_t> ssw,

@@ -130,6 +130,7 @@ void AlTracker::AlData::absorb(const AlData& gone) {
   }
   error_reported = error_reported || gone.error_reported;
   entered_op = entered_op || gone.entered_op;
+  op_entries += gone.op_entries;
 }
 
 void AlTracker::fresh(AlData& data) const {
@@ -180,6 +181,7 @@ void AlTracker::setState(AlData& slave, std::uint8_t state) {
   if (state == kOp && previous && *previous != kOp) {
     slave.entered_op = true;
     any_entered_op_ = true;
+    ++slave.op_entries;
   }
 }
 
@@ -190,7 +192,10 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
   if (address.target == SlaveTarget::All) {
     // The OR of all slaves: a state only when they all agree; no error bit means none has one.
     if (isState(state)) {
-      if (state == kOp && state_all_ && *state_all_ != kOp) entered_op_all_ = true;
+      if (state == kOp && state_all_ && *state_all_ != kOp) {
+        entered_op_all_ = true;
+        ++op_entries_all_;
+      }
       state_all_ = state;
       for (Slave& slave : directory_.slaves()) setState(slave.data, state);
     }
@@ -305,6 +310,11 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
 std::optional<std::uint8_t> AlTracker::stateOfStation(std::uint16_t station) const {
   const std::size_t i = directory_.findStation(station);
   return i == directory_.kNone ? state_all_ : directory_.slaves()[i].data.state;
+}
+
+std::uint32_t AlTracker::opEntries(std::uint16_t station) const {
+  const std::size_t i = directory_.findStation(station);
+  return i == directory_.kNone ? op_entries_all_ : directory_.slaves()[i].data.op_entries;
 }
 
 bool AlTracker::enteredOp(std::uint16_t station) const {

@@ -83,7 +83,7 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
     AxisSlot& s = axes_[placement.axis];
     if (!s.model) s.model.emplace(placement.axis, settings_.readyModeFor(placement.axis));
     if (s.al_epoch != al_epoch_) {
-      syncAlState(placement, *s.model);
+      syncAlState(placement, s);
       s.al_epoch = al_epoch_;
     }
     frame_slots_[i] = &s;
@@ -112,13 +112,19 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   return view_;
 }
 
-// The AL state of the axis's slave, where its station is known (ESM-002), and OP entries.
-void Validator::syncAlState(const AxisPlacement& placement, AxisModel& model) {
+// The AL state of the axis's slave, where its station is known (ESM-002), and its entries into
+// OP since the last look (seed 001: the total failure counter resets), whichever frames showed
+// them: an AL status poll need not share a frame with the axis's PDOs.
+void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
   const std::vector<AxisInfo>& infos = decoder_.axes();
   if (placement.axis >= infos.size() || !infos[placement.axis].has_station) return;
   const std::uint16_t station = infos[placement.axis].station;
+  AxisModel& model = *slot.model;
   model.setAlState(al_.stateOfStation(station));
-  if (al_.enteredOp(station)) model.enteredOp();
+  const std::uint32_t entries = al_.opEntries(station);
+  if (slot.al_station == station && entries != slot.op_entries) model.enteredOp();
+  slot.al_station = station;
+  slot.op_entries = entries;
 }
 
 // RULES.md "Time": a condition is reported once per episode — when it begins, or for a delayed

@@ -52,6 +52,9 @@ class AlTracker {
   // Whether the slave with this station address entered OP in the last frame given: its known
   // state went from another known state to OP.
   bool enteredOp(std::uint16_t station) const;
+  // How often the slave entered OP so far (as enteredOp counts it): a change since an earlier
+  // call means it entered OP in between, whichever frame showed it.
+  std::uint32_t opEntries(std::uint16_t station) const;
   // Whether the last frame given reached AL registers: only such a frame changes a state.
   bool lastFrameReachedRegisters() const { return last_frame_registers_; }
 
@@ -64,6 +67,7 @@ class AlTracker {
     std::uint64_t status_code_frame = 0;  // where the status code was read
     bool error_reported = false;          // once per episode of the error indicator
     bool entered_op = false;
+    std::uint32_t op_entries = 0;
     void absorb(const AlData& other);  // one slave seen by station before its assignment
   };
   using Slave = SlaveDirectory<AlData>::Slave;
@@ -81,6 +85,7 @@ class AlTracker {
   std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
   bool entered_op_all_ = false;                // state_all_ became OP in the last frame
   bool any_entered_op_ = false;                // some slave's entered_op is set
+  std::uint32_t op_entries_all_ = 0;           // times state_all_ became OP
   bool last_frame_registers_ = false;
 };
 

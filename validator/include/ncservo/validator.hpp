@@ -59,6 +59,8 @@ class Validator {
     std::uint32_t pending = 0;  // delayed episodes running towards their timeout
     std::optional<std::uint64_t> evaluated_revision;
     std::uint64_t al_epoch = 0;  // al_epoch_ when the AL state was last taken (0: never)
+    std::optional<std::uint16_t> al_station;  // the station it was taken from
+    std::uint32_t op_entries = 0;             // the station's OP entries then
   };
   // What a frame shape's datagrams that carry servo PDOs should return (COM-001), worked out
   // once per shape (FrameDecode::shape_id) instead of every cycle.
@@ -108,7 +110,7 @@ class Validator {
   void checkWorkingCounters(const EcatFrame& frame);
   void evaluateAxis(AxisSlot& axis);
   void observeAl(const EcatFrame& frame, const ByteReader& bytes);
-  void syncAlState(const AxisPlacement& placement, AxisModel& model);
+  void syncAlState(const AxisPlacement& placement, AxisSlot& slot);
 
   Decoder decoder_;
   ValidatedFrame view_;  // this frame's placements and states
