@@ -676,6 +676,75 @@ TEST(Session, StateOfAMasterCopyComesFromTheLatestReturnedInputs) {
   }
 }
 
+// ---- CycleRows: one row per axis and cycle (PROTOCOL.md §8) ----
+
+// A frame for CycleRows: its copy, and per axis whether outputs and inputs are present.
+struct RowFrame {
+  CopyKind copy;
+  std::vector<std::uint16_t> axes;
+  bool has_rx = true;
+  bool has_tx = false;
+};
+// A row as "frame:axis:rx-scw/tx" ("-" for no outputs, "tx" when inputs are present).
+struct CycleRowsCase {
+  const char* name;
+  std::vector<RowFrame> frames;
+  std::vector<std::string> rows;  // in the order emitted; the end of the capture flushes
+};
+
+std::string describeRow(const CycleRow& row) {
+  return std::to_string(row.frame) + ":" + std::to_string(row.axis) + ":" +
+         (row.values.has_rx ? std::to_string(row.values.scw()) : std::string("-")) +
+         (row.values.has_tx ? "/tx" : "");
+}
+
+TEST(CycleRows, PairsMasterOutputsWithReturnedInputs) {
+  const CopyKind M = CopyKind::Master, R = CopyKind::Returned;
+  const CycleRowsCase cases[] = {
+      {"master then returned: one row at the returned copy, the master's outputs",
+       {{M, {0, 1}}, {R, {0, 1}, true, true}},
+       {"2:0:1/tx", "2:1:1/tx"}},
+      {"a master copy not returned is a row of its own",
+       {{M, {0}}, {M, {0}}, {R, {0}, true, true}},
+       {"1:0:1", "3:0:2/tx"}},
+      {"a returned copy without a master copy", {{R, {3}, true, true}}, {"1:3:1/tx"}},
+      {"the last master copy is flushed at the end",
+       {{M, {0}}, {R, {0}, true, true}, {M, {0}}},
+       {"2:0:1/tx", "3:0:3"}},
+      {"a master copy without outputs waits for the end; the returned copy keeps its own",
+       {{M, {0}, false}, {R, {0}, true, true}},
+       {"2:0:2/tx", "1:0:-"}},
+      {"axes pair separately",
+       {{M, {0}}, {M, {1}}, {R, {1}, true, true}, {R, {0}, true, true}},
+       {"3:1:2/tx", "4:0:1/tx"}},
+  };
+  for (const CycleRowsCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    CycleRows pairer;
+    std::vector<CycleRow> rows;
+    std::uint64_t number = 0;
+    for (const RowFrame& f : c.frames) {
+      ++number;
+      FrameView view;
+      view.copy = f.copy;
+      view.axis_count = f.axes.size();
+      for (std::size_t i = 0; i < f.axes.size(); ++i) {
+        AxisFrameView& axis = view.axes[i];
+        axis.placement.axis = f.axes[i];
+        axis.values.has_rx = f.has_rx;
+        axis.values.has_tx = f.has_tx;
+        // The SCW names the frame the outputs came from.
+        if (f.has_rx) axis.values.raw[static_cast<std::size_t>(Word::Scw)] = number;
+      }
+      pairer.onFrame(number, static_cast<std::int64_t>(number) * 1000, view, rows);
+    }
+    pairer.finish(rows);
+    std::vector<std::string> got;
+    for (const CycleRow& row : rows) got.push_back(describeRow(row));
+    EXPECT_EQ(got, c.rows);
+  }
+}
+
 // ---- Layout learned from the start-up, and the precedence of the sources (PROTOCOL.md §9) ----
 
 // An FMMU's 16-byte register block.

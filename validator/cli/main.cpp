@@ -36,16 +36,6 @@ std::string shortName(const char* filter) {
   return name.substr(std::string("ncservo.").size());
 }
 
-// One output row of `decode`: an axis in one cycle (outputs from the master's copy, inputs from
-// its returned copy).
-struct Row {
-  std::uint64_t frame = 0;
-  double time = 0;
-  std::uint16_t axis = 0;
-  PdoValues values;
-  std::optional<DriveState> state;
-};
-
 class RowWriter {
  public:
   RowWriter(std::FILE* out, bool csv, const Decoder& decoder)
@@ -59,14 +49,14 @@ class RowWriter {
     std::fputs(line.c_str(), out_);
   }
 
-  void write(const Row& row) {
+  void write(const CycleRow& row, double time) {
     const std::string& name = decoder_.axes().at(row.axis).name;
     char message[128] = "";
     if (row.values.has_tx)
       formatMessage(message, sizeof message, row.values.msgCode(), row.values.msgData());
     const char* state = row.state ? driveStateName(*row.state) : "";
     if (csv_) {
-      std::string line = fmt::format("{},{:.9f},{},{}", row.frame, row.time, row.axis, name);
+      std::string line = fmt::format("{},{:.9f},{},{}", row.frame, time, row.axis, name);
       for (const FieldDef& f : kFields) line += "," + cell(f, row.values);
       line += fmt::format(",{},\"{}\"\n", state, message);
       std::fputs(line.c_str(), out_);
@@ -74,7 +64,7 @@ class RowWriter {
     }
     nlohmann::ordered_json j;
     j["frame"] = row.frame;
-    j["time"] = row.time;
+    j["time"] = time;
     j["axis"] = row.axis;
     j["name"] = name;
     for (const FieldDef& f : kFields) {
@@ -148,18 +138,17 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
   Session session(decoderOptions(config, eni, no_default_layout));
   RowWriter writer(stdout, format == "csv", session.decoder());
   if (!layout_only) writer.header();
-  std::map<std::uint16_t, Row> pending;  // outputs seen in a master's copy, awaiting its return
-  auto flush = [&](std::uint16_t axis) {
-    auto it = pending.find(axis);
-    if (it == pending.end()) return;
-    writer.write(it->second);
-    pending.erase(it);
-  };
-
+  CycleRows cycles;
+  std::vector<CycleRow> rows;
   EcatFrame frame;
   CaptureRecord record;
   std::optional<std::int64_t> first_time;
-  std::size_t malformed = 0;
+  auto write = [&] {
+    for (const CycleRow& row : rows) {
+      writer.write(row, static_cast<double>(row.time_ns - *first_time) / 1e9);
+    }
+    rows.clear();
+  };
   CaptureReader::Next status;
   while ((status = reader->next(record)) == CaptureReader::Next::Record) {
     if (!first_time) first_time = record.time_ns;
@@ -169,36 +158,19 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
       continue;
     const FrameView& view = session.onFrame(frame, bytes);
     if (layout_only) continue;
-    const double time = static_cast<double>(record.time_ns - *first_time) / 1e9;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
-      const AxisFrameView& axis = view.axes[i];
-      const std::uint16_t index = axis.placement.axis;
-      if (axis.placement.rx_malformed || axis.placement.tx_malformed) {
-        ++malformed;
-        fmt::print(
-            stderr, "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
-            reader->path(), record.frame, index, axis.placement.rx_malformed ? "RxPDO" : "TxPDO");
+      const AxisPlacement& p = view.axes[i].placement;
+      if (p.rx_malformed || p.tx_malformed) {
+        fmt::print(stderr,
+                   "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
+                   reader->path(), record.frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
       }
-      Row row{record.frame, time, index, axis.values, axis.state};
-      if (view.copy == CopyKind::Master) {
-        flush(index);
-        pending[index] = row;
-        continue;
-      }
-      auto it = pending.find(index);
-      if (it != pending.end() && it->second.values.has_rx) {
-        // The master's outputs are what the NC sent; the returned copy adds the inputs.
-        for (const WordDef& word : kWords) {
-          if (word.pdo == Pdo::Rx)
-            row.values.raw[static_cast<std::size_t>(word.word)] = it->second.values.word(word.word);
-        }
-        row.values.has_rx = true;
-        pending.erase(it);
-      }
-      writer.write(row);
     }
+    cycles.onFrame(record.frame, record.time_ns, view, rows);
+    write();
   }
-  while (!pending.empty()) flush(pending.begin()->first);
+  cycles.finish(rows);
+  write();
   std::fflush(stdout);
   if (status == CaptureReader::Next::Error) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", reader->error());

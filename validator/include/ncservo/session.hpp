@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -35,6 +36,31 @@ struct FrameView {
   bool paired = false;  // a returned copy whose master's copy was the frame just before
   std::size_t axis_count = 0;
   std::array<AxisFrameView, kMaxAxesPerFrame> axes{};
+};
+
+// One axis in one cycle, as `decode` lists it: the outputs of the master's copy and the inputs of
+// its returned copy (PROTOCOL.md §8), at the frame that completed it.
+struct CycleRow {
+  std::uint64_t frame = 0;
+  std::int64_t time_ns = 0;
+  std::uint16_t axis = 0;
+  PdoValues values;
+  std::optional<DriveState> state;
+};
+
+// Pairs each axis's outputs in a master's copy with its inputs in the returned copy. A master's
+// copy whose return was not captured, or a returned copy without a master's copy, is a row of
+// its own. Holds at most one row per axis.
+class CycleRows {
+ public:
+  // One frame's view; appends the rows it completes to `out`.
+  void onFrame(std::uint64_t frame, std::int64_t time_ns, const FrameView& view,
+               std::vector<CycleRow>& out);
+  // The rows still waiting for a returned copy, at the end of a capture.
+  void finish(std::vector<CycleRow>& out);
+
+ private:
+  std::map<std::uint16_t, CycleRow> pending_;  // outputs of a master's copy, by axis
 };
 
 class Session {
