@@ -212,23 +212,6 @@ void printFields(const std::string& format) {
   }
 }
 
-// Splits "A,B" and "NAME=VALUE" arguments.
-std::vector<std::string> splitList(const std::vector<std::string>& items) {
-  std::vector<std::string> out;
-  for (const std::string& item : items) {
-    std::size_t start = 0;
-    while (start <= item.size()) {
-      const std::size_t comma = item.find(',', start);
-      const std::string part =
-          item.substr(start, comma == std::string::npos ? comma : comma - start);
-      if (!part.empty()) out.push_back(part);
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
-  }
-  return out;
-}
-
 struct ValidateOptions {
   std::vector<std::string> captures;
   std::string format = "text";
@@ -248,16 +231,16 @@ std::optional<std::string> buildSettings(const ValidateOptions& o,
   if (config) {
     if (auto error = settings.apply(*config)) return fmt::format("{}: {}", config->path, *error);
   }
-  for (const std::string& id : splitList(o.disable)) {
+  for (const std::string& id : o.disable) {
     if (auto error = settings.disable(id)) return "--disable: " + *error;
   }
-  for (const std::string& pair : splitList(o.severities)) {
+  for (const std::string& pair : o.severities) {
     const auto eq = pair.find('=');
     if (eq == std::string::npos) return "--severity " + pair + ": expected ID=LEVEL";
     if (auto error = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)))
       return "--severity: " + *error;
   }
-  for (const std::string& pair : splitList(o.timeouts)) {
+  for (const std::string& pair : o.timeouts) {
     const auto eq = pair.find('=');
     if (eq == std::string::npos) return "--timeout " + pair + ": expected NAME=MS";
     std::int64_t ms = -1;
@@ -526,9 +509,12 @@ int main(int argc, char** argv) {
       ->add_option("--fail-on", vo.fail_on,
                    "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
-  validate->add_option("--disable", vo.disable, "rule IDs to skip, comma-separated");
-  validate->add_option("--severity", vo.severities, "ID=LEVEL: change a rule's severity");
-  validate->add_option("--timeout", vo.timeouts, "NAME=MS: change a timeout of RULES.md");
+  validate->add_option("--disable", vo.disable, "rule IDs to skip, comma-separated")
+      ->delimiter(',');
+  validate->add_option("--severity", vo.severities, "ID=LEVEL: change a rule's severity")
+      ->delimiter(',');
+  validate->add_option("--timeout", vo.timeouts, "NAME=MS: change a timeout of RULES.md")
+      ->delimiter(',');
   validate
       ->add_option("--servo-ready-mode", vo.servo_ready_mode,
                    "Servo_Ready_Mode of the drives (0 or 1)")
