@@ -19,7 +19,8 @@
 #                                    (a small fork/wait4 timer built here); default gnu if installed
 # Each cycle is two frames (master and returned copy). Captures come from
 # tests/tools/gen_capture.py --axes 8 --seed 3 and sit in the page cache (just written), so every
-# tool reads from memory. Runs go one after the other; the load average is printed since the
+# tool reads from memory. The bare loop and ncservo take turns, run by run, so that a change in
+# the load of a busy machine falls on both alike; the load average is printed since the
 # machine may be busy. The goals are reported PASS or MISS; the exit status is 0 whatever they
 # are, and 1 when a tool fails to build or run.
 set -euo pipefail
@@ -178,26 +179,46 @@ measure() {
   return "$status"
 }
 
+# once NAME OK_STATUSES ARGS...: one run; keeps the best wall time, highest RSS and every time
+declare -A best_s peak_kib times
+once() {
+  local name=$1 ok=$2 status=0 secs kib
+  shift 2
+  measure "$tmp/m" "$@" || status=$?
+  if ! [[ " $ok " == *" $status "* ]]; then
+    echo "validate_ratio: $name failed (exit $status): $*" >&2
+    tail -n 20 "$tmp/stderr" >&2
+    exit 1
+  fi
+  read -r secs kib <"$tmp/m"
+  times[$name]+="${times[$name]:+ }$(printf '%.3f' "$secs")"
+  if [ -z "${best_s[$name]:-}" ] || awk -v a="$secs" -v b="${best_s[$name]}" 'BEGIN { exit !(a < b) }'; then
+    best_s[$name]=$secs
+  fi
+  if [ "$kib" -gt "${peak_kib[$name]:-0}" ]; then peak_kib[$name]=$kib; fi
+}
+# row NAME FRAMES: appends the runs of NAME as a row to $tmp/table, and forgets them
+row() {
+  printf '%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "${best_s[$1]}" "${peak_kib[$1]}" "${times[$1]}" \
+    >>"$tmp/table"
+  unset "best_s[$1]" "peak_kib[$1]" "times[$1]"
+}
 # bench NAME FRAMES OK_STATUSES ARGS...: $runs runs; appends a row to $tmp/table
 bench() {
-  local name=$1 frames=$2 ok=$3 best="" rss=0 all="" status secs kib
+  local name=$1 frames=$2 ok=$3
   shift 3
+  for _ in $(seq "$runs"); do once "$name" "$ok" "$@"; done
+  row "$name" "$frames"
+}
+# against_bare CAPTURE FRAMES: the bare loop and ncservo take turns, so that a change in the
+# machine's load falls on both alike
+against_bare() {
   for _ in $(seq "$runs"); do
-    status=0
-    measure "$tmp/m" "$@" || status=$?
-    if ! [[ " $ok " == *" $status "* ]]; then
-      echo "validate_ratio: $name failed (exit $status): $*" >&2
-      tail -n 20 "$tmp/stderr" >&2
-      exit 1
-    fi
-    read -r secs kib <"$tmp/m"
-    all+="${all:+ }$(printf '%.3f' "$secs")"
-    if [ -z "$best" ] || awk -v a="$secs" -v b="$best" 'BEGIN { exit !(a < b) }'; then
-      best=$secs
-    fi
-    if [ "$kib" -gt "$rss" ]; then rss=$kib; fi
+    once "$bare_name" 0 "$tmp/bare_loop" "$1"
+    once "$ncservo_name" "$ncservo_ok" "$ncservo" "${ncservo_args[@]}" "$1"
   done
-  printf '%s\t%s\t%s\t%s\t%s\n' "$name" "$frames" "$best" "$rss" "$all" >>"$tmp/table"
+  row "$bare_name" "$2"
+  row "$ncservo_name" "$2"
 }
 
 # rate NAME FRAMES: frames per second of that row
@@ -239,8 +260,7 @@ script_start=$(date +%s)
 cap=$tmp/main.pcap
 capture "$cycles" "$cap"
 check_count "$cap" "$frames"
-bench "$bare_name" "$frames" 0 "$tmp/bare_loop" "$cap"
-bench "$ncservo_name" "$frames" "$ncservo_ok" "$ncservo" "${ncservo_args[@]}" "$cap"
+against_bare "$cap" "$frames"
 if [ "$tshark_frames" -gt 0 ] && [ "$tshark_frames" -lt "$frames" ]; then
   echo "tshark reads only the first $tshark_frames frames (-c); frame rates are compared"
   bench "$tshark_name" "$tshark_frames" 0 "$runner" none -r "$cap" -c "$tshark_frames" \
@@ -257,8 +277,7 @@ if [ "$large" != 0 ]; then
   cap=$tmp/large.pcap
   capture "$large_cycles" "$cap"
   check_count "$cap" "$large_frames"
-  bench "$bare_name" "$large_frames" 0 "$tmp/bare_loop" "$cap"
-  bench "$ncservo_name" "$large_frames" "$ncservo_ok" "$ncservo" "${ncservo_args[@]}" "$cap"
+  against_bare "$cap" "$large_frames"
   rm -f "$cap"
 fi
 
