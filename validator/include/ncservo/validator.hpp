@@ -103,7 +103,7 @@ class Validator {
   CyclicFrame* cyclicFrame(std::uint16_t first_axis);
   std::int16_t wkcRecord(const Datagram& dg);
   WkcPlan& wkcPlan(const EcatFrame& frame);
-  // On this frame's placements (decode_). `first_axis`: the lowest axis index of the frame,
+  // On this frame's placements (view_.decode). `first_axis`: the lowest axis index of the frame,
   // which names its cyclic frame.
   void accountCycle(const EcatFrame& frame, std::uint16_t first_axis);
   void tick(CyclicFrame& cyclic);
