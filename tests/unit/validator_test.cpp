@@ -881,8 +881,8 @@ TEST(ValidatorEsm, TotalFailuresResetWhenTheSlaveEntersOp) {
       t += kMs;
     }
     for (std::int64_t k = 0; k < 5; ++k, t += kMs) {
-      const std::optional<std::uint16_t> al =
-          row.own_frame ? std::nullopt : std::optional<std::uint16_t>(next);
+      std::optional<std::uint16_t> al;  // the AL status read in the cyclic frame
+      if (!row.own_frame) al = next;
       driver.feed(stationFrame(kScwOff, kSswReady, al, false), t);
       driver.feed(stationFrame(kScwOff, kSswReady, al, true), t + 20 * kUs);
     }

@@ -973,8 +973,7 @@ struct Simulator::Impl {
     return dg;
   }
   void serialize(const std::vector<Datagram>& frame, bool returned) {
-    bytes.clear();
-    bytes.insert(bytes.end(), kBroadcastMac.begin(), kBroadcastMac.end());
+    bytes.assign(kBroadcastMac.begin(), kBroadcastMac.end());
     std::array<std::uint8_t, 6> source = kMasterMac;
     if (returned) source[0] |= kLocallyAdministered;
     bytes.insert(bytes.end(), source.begin(), source.end());
