@@ -203,12 +203,12 @@ TEST(AlTracker, LegalStartUpRaisesNothingAndEntersOp) {
       h.request(station, next);
       h.status(station, next);
       EXPECT_EQ(h.tracker.stateOfStation(station), next);
-      EXPECT_EQ(h.tracker.enteredOp(station), next == kOp) << alStateName(next);
+      EXPECT_EQ(h.tracker.opEntries(station), next == kOp ? 1u : 0u) << alStateName(next);
     }
   }
   // Still OP on the next read: not entered again.
   h.status(kStation0, kOp);
-  EXPECT_FALSE(h.tracker.enteredOp(kStation0));
+  EXPECT_EQ(h.tracker.opEntries(kStation0), 1u);
   EXPECT_TRUE(h.findings.empty()) << describe(h.findings);
 }
 
@@ -412,8 +412,8 @@ TEST(AlTracker, BroadcastStatusAppliesToAll) {
   brd(kSafeOp | kOp);  // the OR of different states: no state, nothing changes
   EXPECT_EQ(h.tracker.stateOfStation(kStation0), kSafeOp);
   brd(kOp);
-  EXPECT_TRUE(h.tracker.enteredOp(kStation0));
-  EXPECT_TRUE(h.tracker.enteredOp(kStation1));
+  EXPECT_EQ(h.tracker.opEntries(kStation0), 1u);
+  EXPECT_EQ(h.tracker.opEntries(kStation1), 1u);
   brd(kOp | 0x10);  // the error of some slave: it names none, nothing is reported
   EXPECT_EQ(h.tracker.stateOfStation(kStation1), kOp);
   brd(kInit, 0);  // nobody answered
@@ -453,7 +453,8 @@ TEST(AlTracker, AutoIncrementReadMapsThroughTheMastersAdp) {
   h.feed({master}, false, false);
   h.feed({back}, true, true);
   EXPECT_EQ(h.tracker.stateOfStation(kStation1), kOp);
-  EXPECT_TRUE(h.tracker.enteredOp(kStation1));
+  EXPECT_EQ(h.tracker.opEntries(kStation1), 1u);
+  EXPECT_EQ(h.tracker.opEntries(kStation0), 0u);
   EXPECT_EQ(h.tracker.stateOfStation(kStation0), kSafeOp);
   // Unpaired, the returned ADP names nobody: the read is skipped.
   const Dg back0{ecat::kAprd, 0, physical(static_cast<std::uint16_t>(apAdp(0) + 2), kRegStatus),

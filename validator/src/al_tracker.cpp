@@ -129,7 +129,6 @@ void AlTracker::AlData::absorb(const AlData& gone) {
     status_code_frame = gone.status_code_frame;
   }
   error_reported = error_reported || gone.error_reported;
-  entered_op = entered_op || gone.entered_op;
   op_entries += gone.op_entries;
 }
 
@@ -178,11 +177,7 @@ void AlTracker::setState(AlData& slave, std::uint8_t state) {
   } else {
     slave.state.reset();  // a slave that answers with a non-state: its state is not known
   }
-  if (state == kOp && previous && *previous != kOp) {
-    slave.entered_op = true;
-    any_entered_op_ = true;
-    ++slave.op_entries;
-  }
+  if (state == kOp && previous && *previous != kOp) ++slave.op_entries;
 }
 
 void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, const Stamp& now,
@@ -192,10 +187,7 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
   if (address.target == SlaveTarget::All) {
     // The OR of all slaves: a state only when they all agree; no error bit means none has one.
     if (isState(state)) {
-      if (state == kOp && state_all_ && *state_all_ != kOp) {
-        entered_op_all_ = true;
-        ++op_entries_all_;
-      }
+      if (state == kOp && state_all_ && *state_all_ != kOp) ++op_entries_all_;
       state_all_ = state;
       for (Slave& slave : directory_.slaves()) setState(slave.data, state);
     }
@@ -245,11 +237,6 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
 
 void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                         const Stamp& now, std::vector<AlFinding>& out) {
-  if (any_entered_op_) {
-    for (Slave& slave : directory_.slaves()) slave.data.entered_op = false;
-    any_entered_op_ = false;
-  }
-  entered_op_all_ = false;
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   const std::size_t count = walked ? frame.count : 0;
   if (walked) directory_.beginFrame(frame, returned);
@@ -315,11 +302,6 @@ std::optional<std::uint8_t> AlTracker::stateOfStation(std::uint16_t station) con
 std::uint32_t AlTracker::opEntries(std::uint16_t station) const {
   const std::size_t i = directory_.findStation(station);
   return i == directory_.kNone ? op_entries_all_ : directory_.slaves()[i].data.op_entries;
-}
-
-bool AlTracker::enteredOp(std::uint16_t station) const {
-  const std::size_t i = directory_.findStation(station);
-  return i == directory_.kNone ? entered_op_all_ : directory_.slaves()[i].data.entered_op;
 }
 
 }  // namespace ncservo

@@ -49,11 +49,9 @@ class AlTracker {
   // The slave's known AL state (its last AL status read), if any. A station the tracker has not
   // seen addressed has the state of the last BRD of AL status that returned a state, if any.
   std::optional<std::uint8_t> stateOfStation(std::uint16_t station) const;
-  // Whether the slave with this station address entered OP in the last frame given: its known
-  // state went from another known state to OP.
-  bool enteredOp(std::uint16_t station) const;
-  // How often the slave entered OP so far (as enteredOp counts it): a change since an earlier
-  // call means it entered OP in between, whichever frame showed it.
+  // How often the slave with this station address entered OP so far — its known state went from
+  // another known state to OP. A change since an earlier call means it entered OP in between,
+  // whichever frame showed it.
   std::uint32_t opEntries(std::uint16_t station) const;
   // Whether the last frame given reached AL registers: only such a frame changes a state.
   bool lastFrameReachedRegisters() const { return last_frame_registers_; }
@@ -66,7 +64,6 @@ class AlTracker {
     std::optional<std::uint16_t> status_code;
     std::uint64_t status_code_frame = 0;  // where the status code was read
     bool error_reported = false;          // once per episode of the error indicator
-    bool entered_op = false;
     std::uint32_t op_entries = 0;
     void absorb(const AlData& other);  // one slave seen by station before its assignment
   };
@@ -83,8 +80,6 @@ class AlTracker {
   SlaveDirectory<AlData> directory_;
   std::optional<std::uint8_t> requested_all_;  // last broadcast AL control request
   std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
-  bool entered_op_all_ = false;                // state_all_ became OP in the last frame
-  bool any_entered_op_ = false;                // some slave's entered_op is set
   std::uint32_t op_entries_all_ = 0;           // times state_all_ became OP
   bool last_frame_registers_ = false;
 };
