@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
+#include "row_name.hpp"
 
 namespace ncservo {
 namespace {
@@ -537,12 +538,7 @@ INSTANTIATE_TEST_SUITE_P(AlTracker, AlTrackerAmongCyclic,
                                            AmongCase{"status read first", true, kRegStatus, true},
                                            AmongCase{"read from 0x0000", true, 0x0000, false},
                                            AmongCase{"read from control", true, kRegControl, true}),
-                         [](const ::testing::TestParamInfo<AmongCase>& param_info) {
-                           std::string name = param_info.param.name;
-                           for (char& ch : name)
-                             ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
-                           return name;
-                         });
+                         test::rowName<AmongCase>);
 
 // Every cut of a frame: no read past the captured bytes (ASan), and nothing wrong comes out.
 TEST(AlTracker, TruncatedFramesNeverReadPastTheEnd) {

@@ -9,6 +9,7 @@
 
 #include "frame_builder.hpp"
 #include "ncservo/decoder.hpp"
+#include "row_name.hpp"
 
 namespace ncservo {
 namespace {
@@ -115,13 +116,7 @@ TEST_P(CoePdo, SizesTheProcessData) {
   EXPECT_EQ(objects.assignedBits(0x1C12), c.out_bits);
   EXPECT_EQ(objects.assignedBits(0x1C13), c.in_bits);
 }
-INSTANTIATE_TEST_SUITE_P(Mailboxes, CoePdo, ::testing::ValuesIn(cases()), [](const auto& info) {
-  std::string name = info.param.name;
-  for (char& ch : name) {
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  }
-  return name;
-});
+INSTANTIATE_TEST_SUITE_P(Mailboxes, CoePdo, ::testing::ValuesIn(cases()), test::rowName<CoeCase>);
 
 // Through the decoder: the mailboxes a master writes to a slave's SM0, once the start-up made SM0
 // a mailbox, mark a servo when its SM lengths are not written (and so keep the default layout).

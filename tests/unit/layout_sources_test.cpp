@@ -11,6 +11,7 @@
 #include "ncservo/ethercat.hpp"
 #include "ncservo/layout_learner.hpp"
 #include "ncservo/simulator.hpp"
+#include "row_name.hpp"
 
 namespace ncservo {
 namespace {
@@ -64,7 +65,8 @@ void learn(sim::Simulator& simulator, LayoutLearner& learner, std::size_t max_fr
   });
 }
 
-void expectSameAxes(const std::vector<AxisConfig>& got, const std::vector<sim::SimAxisLayout>& want) {
+void expectSameAxes(const std::vector<AxisConfig>& got,
+                    const std::vector<sim::SimAxisLayout>& want) {
   ASSERT_EQ(got.size(), want.size());
   for (std::size_t i = 0; i < want.size(); ++i) {
     SCOPED_TRACE(want[i].name);
@@ -99,13 +101,7 @@ TEST_P(LearnedLayout, EniGivesTheSameLayout) {
 }
 
 INSTANTIATE_TEST_SUITE_P(SimulatedSetUps, LearnedLayout, ::testing::ValuesIn(kSetUps),
-                         [](const auto& info) {
-                           std::string name = info.param.name;
-                           for (char& c : name) {
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           }
-                           return name;
-                         });
+                         test::rowName<SetUp>);
 
 TEST(LearnedLayout, NothingBeforeTheFmmusAreWritten) {
   sim::SimOptions o;
@@ -185,13 +181,7 @@ TEST_P(EniFile, ParsesOrNamesTheLine) {
   EXPECT_NE(r.error->text().find(c.message), std::string::npos) << r.error->text();
   EXPECT_EQ(r.error->text().rfind("eni.xml", 0), 0u);
 }
-INSTANTIATE_TEST_SUITE_P(Cases, EniFile, ::testing::ValuesIn(kEniCases), [](const auto& info) {
-  std::string name = info.param.name;
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  return name;
-});
+INSTANTIATE_TEST_SUITE_P(Cases, EniFile, ::testing::ValuesIn(kEniCases), test::rowName<EniCase>);
 
 }  // namespace
 }  // namespace ncservo

@@ -12,9 +12,12 @@
 #include <vector>
 
 #include "frame_builder.hpp"
+#include "row_name.hpp"
 
 namespace ncservo::sim {
 namespace {
+
+using test::rowName;
 
 constexpr std::int64_t kMs = 1'000'000;
 // RULES.md default timeouts, in milliseconds.
@@ -71,16 +74,6 @@ RxPdo rx(const Scw& s) {
 }
 std::int32_t sspOf(double rpm) {
   return static_cast<std::int32_t>(rpm * kSspPerRpm);
-}
-
-// A test name from a row's `name`: letters and digits, the rest '_'.
-template <typename Row>
-std::string rowName(const ::testing::TestParamInfo<Row>& row) {
-  std::string name = row.param.name;
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  return name;
 }
 
 // A drive stepped once per millisecond from time 0.
@@ -661,8 +654,7 @@ struct NcRecord {
 class Loop {
  public:
   Loop(bool incremental, bool operational = true)
-      : nc(incremental ? 1 : 0, incremental),
-        drive(incremental ? incrementalAxis() : absoluteAxis()) {
+      : nc(incremental), drive(incremental ? incrementalAxis() : absoluteAxis()) {
     nc.setOperational(operational);
     drive.setOperational(operational);
   }

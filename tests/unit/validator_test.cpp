@@ -19,6 +19,7 @@
 #include "ncservo/axis_model.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/session.hpp"
+#include "row_name.hpp"
 #include "validator_driver.hpp"
 
 namespace ncservo {
@@ -459,12 +460,6 @@ std::vector<RuleCase> ruleCases() {
 }
 // clang-format on
 
-std::string paramName(const testing::TestParamInfo<RuleCase>& info) {
-  std::string out;
-  for (char c : info.param.name) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return out;
-}
-
 class ValidatorRules : public testing::TestWithParam<RuleCase> {};
 
 TEST_P(ValidatorRules, ReportsExactlyTheExpectedFindings) {
@@ -492,7 +487,8 @@ TEST_P(ValidatorRules, ReportsExactlyTheExpectedFindings) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Validator, ValidatorRules, testing::ValuesIn(ruleCases()), paramName);
+INSTANTIATE_TEST_SUITE_P(Validator, ValidatorRules, testing::ValuesIn(ruleCases()),
+                         test::rowName<RuleCase>);
 
 // The rows where something is reported, again: disabled, and with another severity.
 std::vector<RuleCase> reportingCases() {
@@ -533,7 +529,7 @@ TEST_P(ValidatorRuleSettings, ASeverityOverrideChangesTheFindings) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Validator, ValidatorRuleSettings, testing::ValuesIn(reportingCases()),
-                         paramName);
+                         test::rowName<RuleCase>);
 
 // Every rule the default layout can show has a positive and a negative row above.
 TEST(ValidatorRuleCoverage, EveryAxisAndBusRuleHasAPositiveAndANegativeRow) {

@@ -429,7 +429,7 @@ constexpr double kNcRampRpmPerS = 10000;
 constexpr double kNcStopRpmPerS = 30000;
 }  // namespace
 
-NcAxis::NcAxis(int axis, bool incremental) : axis_(axis), incremental_(incremental) {}
+NcAxis::NcAxis(bool incremental) : incremental_(incremental) {}
 
 void NcAxis::schedule(const NcEvent& event) {
   // Sorted newest first by time, then by the order given, so the next one is at the back.

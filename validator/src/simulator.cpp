@@ -583,7 +583,7 @@ struct Simulator::Impl {
       setup.ready_mode = o.ready_mode;
       setup.seed = o.seed;
       drives.emplace_back(setup);
-      ncs.emplace_back(a, setup.incremental);
+      ncs.emplace_back(setup.incremental);
     }
     latest_inputs.assign(static_cast<std::size_t>(o.axes), std::nullopt);
     planScenario();

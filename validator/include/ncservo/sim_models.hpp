@@ -246,7 +246,7 @@ struct NcEvent {
 
 class NcAxis {
  public:
-  NcAxis(int axis, bool incremental);
+  explicit NcAxis(bool incremental);
   // Events in any order; they run at the first cycle at or after their time.
   void schedule(const NcEvent& event);
   // One cycle: the latest inputs the NC received (nullptr: none yet or not valid), the time.
@@ -270,7 +270,6 @@ class NcAxis {
   void runEvents(std::int64_t now_ns);
   void enter(Phase phase, std::int64_t now_ns);
 
-  int axis_;
   bool incremental_;
   std::vector<NcEvent> events_;  // sorted by time, newest last
   Phase phase_ = Phase::Off;
