@@ -279,7 +279,6 @@ class NcAxis {
   bool operational_ = true;
   bool enable_before_op_ = false;
   bool want_on_ = false;  // the plan wants the axis enabled
-  bool illegal_next_ = false;
   std::uint32_t se_ = 0;
   bool emgon_ = true;
   std::int64_t emergency_until_ns_ = -1;
