@@ -61,6 +61,10 @@ c = json.load(open(sys.argv[1]))["captures"][0]
 assert "error" in c and "frame" in c["error"], c.get("error")
 assert any(f["rule"] == "SE-001" for f in c["findings"]), "findings before the damage lost"
 PY
+# The text verdict says a capture was not read to its end, beside what was found before it.
+run 3 "$WORK/cut.pcap" "$WORK/clean.pcap"
+grep -qE "^verdict: FAIL - [1-9][0-9]* errors?, .* \(2 captures, 1 not read to the end, fail on error\)$" \
+  "$WORK/out" || fail "cut capture verdict: $(tail -1 "$WORK/out")"
 
 # Several captures: the most serious status in the order 2, 3, 1, 0.
 run 3 "$WORK/faults.pcap" "$WORK/missing.pcap" "$WORK/clean.pcap"

@@ -241,8 +241,8 @@ void writeTextSummary(std::FILE* out, const CaptureReport& r) {
   for (const AxisInfo& info : r.layout) {
     fmt::print(out, "  {}:", info.name);
     if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
-    fmt::print(out, " {} 0x{:08X}, {} 0x{:08X}\n", info.logical ? "outputs" : "SM2",
-               info.outputs, info.logical ? "inputs" : "SM3", info.inputs);
+    fmt::print(out, " {} 0x{:08X}, {} 0x{:08X}\n", info.logical ? "outputs" : "SM2", info.outputs,
+               info.logical ? "inputs" : "SM3", info.inputs);
   }
   for (const AxisReport& a : r.axes) {
     fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
@@ -319,16 +319,20 @@ void ReportWriter::finish(const std::vector<CaptureReport>& reports) {
   switch (format_) {
     case Format::Text: {
       std::size_t counts[3] = {0, 0, 0};
+      std::size_t unread = 0;  // captures that could not be read to their end
       bool failed = false;
       for (const CaptureReport& r : reports) {
         for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
+        unread += r.error.has_value() ? 1 : 0;
         failed = failed || (!never_ && r.reaches(fail_on_)) || r.error.has_value();
       }
-      fmt::print(out_,
-                 "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}, fail on {})\n",
-                 failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
-                 counts[1] == 1 ? "" : "s", counts[0], reports.size(),
-                 reports.size() == 1 ? "" : "s", never_ ? "never" : severityName(fail_on_));
+      const std::string unread_note =
+          unread == 0 ? std::string() : fmt::format(", {} not read to the end", unread);
+      fmt::print(
+          out_, "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
+          failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
+          counts[1] == 1 ? "" : "s", counts[0], reports.size(), reports.size() == 1 ? "" : "s",
+          unread_note, never_ ? "never" : severityName(fail_on_));
       break;
     }
     case Format::Json: {
