@@ -96,11 +96,8 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
     // Fast path: the words the rules read are unchanged and no timer runs, so no condition can
     // have changed (RULES.md reports at beginnings and at timeouts only). Only those words are
     // read; the whole PDOs are read when the model takes them.
-    const JudgedWords judged = readJudgedWords(
-        bytes, placement.has_rx ? std::optional<std::size_t>(placement.rx_offset) : std::nullopt,
-        placement.has_tx ? std::optional<std::size_t>(placement.tx_offset) : std::nullopt);
     if (s.pending != 0 || s.evaluated_revision != model.revision() ||
-        !model.wouldNotChange(judged)) {
+        !model.wouldNotChange(readJudgedWords(placement, bytes))) {
       PdoValues values;
       readFrameValues(placement, bytes, values);
       model.observe(values, now_);

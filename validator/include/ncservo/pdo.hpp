@@ -5,7 +5,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#include <optional>
 #include <utility>
 
 #include "ncservo/byte_reader.hpp"
@@ -102,25 +101,6 @@ std::uint64_t loadWord(const std::uint8_t* pdo) {
 
 static_assert(wordDef(Word::Scw).pdo == Pdo::Rx && wordDef(Word::Ssw).pdo == Pdo::Tx &&
               wordDef(Word::Sew).pdo == Pdo::Tx && wordDef(Word::MsgCode).pdo == Pdo::Tx);
-
-// The judged words of the PDOs at these offsets (nullopt: not carried). A PDO whose bytes are
-// short counts as not carried, as in readPdoOf.
-inline JudgedWords readJudgedWords(const ByteReader& bytes, std::optional<std::size_t> rx_offset,
-                                   std::optional<std::size_t> tx_offset) {
-  JudgedWords out;
-  if (rx_offset && bytes.has(*rx_offset, kRxPdoSize)) {
-    out.has_rx = true;
-    out.scw = static_cast<std::uint32_t>(loadWord<Word::Scw>(bytes.data() + *rx_offset));
-  }
-  if (tx_offset && bytes.has(*tx_offset, kTxPdoSize)) {
-    const std::uint8_t* pdo = bytes.data() + *tx_offset;
-    out.has_tx = true;
-    out.ssw = static_cast<std::uint32_t>(loadWord<Word::Ssw>(pdo));
-    out.sew = static_cast<std::uint32_t>(loadWord<Word::Sew>(pdo));
-    out.msg_code = static_cast<std::int32_t>(loadWord<Word::MsgCode>(pdo));
-  }
-  return out;
-}
 
 namespace detail {
 template <Pdo P, std::size_t... I>
