@@ -36,6 +36,15 @@ std::string shortName(const char* filter) {
   return name.substr(std::string("ncservo.").size());
 }
 
+// A PDO region the capture cut short or that straddles its datagram's end (the frame is still
+// analysed; the region is not read).
+void warnIfMalformed(const std::string& capture, std::uint64_t frame, const AxisPlacement& p) {
+  if (!p.rx_malformed && !p.tx_malformed) return;
+  fmt::print(stderr,
+             "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
+             capture, frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
+}
+
 class RowWriter {
  public:
   RowWriter(std::FILE* out, bool csv, const Decoder& decoder)
@@ -159,12 +168,7 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
     const FrameView& view = session.onFrame(frame, bytes);
     if (layout_only) continue;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
-      const AxisPlacement& p = view.axes[i].placement;
-      if (p.rx_malformed || p.tx_malformed) {
-        fmt::print(stderr,
-                   "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
-                   reader->path(), record.frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
-      }
+      warnIfMalformed(reader->path(), record.frame, view.axes[i].placement);
     }
     cycles.onFrame(record.frame, record.time_ns, view, rows);
     write();
@@ -288,12 +292,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     const FrameDecode& decode =
         validator.onFrame(record.frame, record.time_ns, frame, bytes).decode;
     for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
-      const AxisPlacement& p = decode.axes[i];
-      if (p.rx_malformed || p.tx_malformed) {
-        fmt::print(stderr,
-                   "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
-                   path, record.frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
-      }
+      warnIfMalformed(reader->path(), record.frame, decode.axes[i]);
     }
     for (const Finding& f : validator.findings()) {
       ++report.counts[static_cast<std::size_t>(f.severity)];
