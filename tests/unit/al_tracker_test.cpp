@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
+#include "ncservo/rules.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {
@@ -49,6 +50,14 @@ Bytes frameOf(const std::vector<Dg>& dgs) {
   return builder.bytes();
 }
 
+// The tracker's events as the slave rules judge them (rules.hpp judgeEvent).
+struct AlFinding {
+  RuleId rule{};
+  std::optional<std::uint16_t> station;
+  std::optional<std::uint16_t> position;
+  std::string message;
+};
+
 // Feeds frames to one tracker, numbering them from 1, and keeps every finding.
 struct Harness {
   AlTracker tracker;
@@ -58,9 +67,15 @@ struct Harness {
   std::vector<AlFinding> feedBytes(const Bytes& bytes, std::size_t size, bool returned,
                                    bool paired) {
     const test::Walked w = test::walk(bytes, size);
-    std::vector<AlFinding> out;
+    std::vector<BusEvent> events;
     ++frame;
-    tracker.onFrame(*w.frame, w.reader(), returned, paired, Stamp{frame, 0}, out);
+    tracker.onFrame(*w.frame, w.reader(), returned, paired, Stamp{frame, 0}, events);
+    std::vector<EventFinding> judged;
+    for (const BusEvent& event : events) judgeEvent(event, RuleSettings{}, judged);
+    std::vector<AlFinding> out;
+    for (EventFinding& f : judged) {
+      out.push_back({f.rule, f.slave.station, f.slave.position, std::move(f.message)});
+    }
     findings.insert(findings.end(), out.begin(), out.end());
     return out;
   }

@@ -30,6 +30,9 @@ constexpr auto I = Severity::Info;
 constexpr auto NC = Party::Nc;
 constexpr auto DRIVE = Party::Drive;
 constexpr auto BUS = Party::Bus;
+constexpr auto AXIS = RuleKind::Axis;
+constexpr auto BUSK = RuleKind::Bus;
+constexpr auto SLAVE = RuleKind::Slave;
 constexpr std::optional<Timeout> kNoTimeout{};
 constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
 
@@ -40,41 +43,41 @@ struct SpecRow {
   Party party;
   std::optional<Timeout> timeout;  // the timeout its text names
   bool delayed;                    // "longer than T": reported once the condition outlasts T
-  bool axis;                       // judged on an axis's values (has a check)
+  RuleKind kind;                   // judged on an axis's model, the bus's events or a slave's
 };
 
 // RULES.md, table by table.
 // clang-format off
 const SpecRow kSpec[] = {
-    {"SE-001", "illegal-enable-edge", E, NC, kNoTimeout, false, true},
-    {"SE-002", "enable-without-edge", E, DRIVE, kDrive, false, true},
-    {"SE-003", "not-disabled", E, DRIVE, kDrive, true, true},
-    {"SE-004", "enable-not-honoured", W, DRIVE, Timeout::EnableResponse, true, true},
-    {"ZP-001", "zpulse-ack-not-cleared", E, DRIVE, kDrive, true, true},
-    {"ZP-002", "zpulse-ack-without-request", E, DRIVE, kDrive, false, true},
-    {"ZP-003", "zpulse-absolute-encoder", W, NC, kNoTimeout, false, true},
-    {"EC-001", "clear-ack-without-request", E, DRIVE, kDrive, false, true},
-    {"EC-002", "clear-request-held", W, NC, Timeout::NcRelease, true, true},
-    {"EC-003", "clear-ack-not-cleared", E, DRIVE, kDrive, true, true},
-    {"EC-004", "clear-not-acknowledged", W, DRIVE, Timeout::ClearResponse, true, true},
-    {"SEW-001", "cause-without-summary", E, DRIVE, kNoTimeout, false, true},
-    {"SEW-002", "summary-without-cause", W, DRIVE, kDrive, true, true},
-    {"SEW-003", "reserved-error-bits", W, DRIVE, kNoTimeout, false, true},
-    {"SSW-001", "reserved-status-bits", W, DRIVE, kNoTimeout, false, true},
-    {"SCW-001", "reserved-control-bits", W, NC, kNoTimeout, false, true},
-    {"RDY-001", "ready-mismatch", E, DRIVE, kDrive, true, true},
-    {"FLT-001", "enabled-with-error", E, DRIVE, Timeout::FaultReaction, true, true},
-    {"PT-001", "param-table-not-followed", W, DRIVE, Timeout::ParamTable, true, true},
-    {"MSG-001", "undefined-message-code", W, DRIVE, kNoTimeout, false, true},
-    {"COM-001", "working-counter", E, BUS, kNoTimeout, false, false},
-    {"COM-002", "cycle-gap", W, BUS, kNoTimeout, false, false},
-    {"COM-003", "timeout-not-reported", I, DRIVE, kDrive, true, true},
-    {"COM-004", "frame-not-returned", W, BUS, kNoTimeout, false, false},
-    {"COM-005", "telegram-failure-limit", E, BUS, kNoTimeout, false, true},
-    {"ESM-001", "invalid-al-transition", E, NC, kNoTimeout, false, false},
-    {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, false, true},
-    {"ESM-003", "al-error", E, DRIVE, kNoTimeout, false, false},
-    {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, false, false},
+    {"SE-001", "illegal-enable-edge", E, NC, kNoTimeout, false, AXIS},
+    {"SE-002", "enable-without-edge", E, DRIVE, kDrive, false, AXIS},
+    {"SE-003", "not-disabled", E, DRIVE, kDrive, true, AXIS},
+    {"SE-004", "enable-not-honoured", W, DRIVE, Timeout::EnableResponse, true, AXIS},
+    {"ZP-001", "zpulse-ack-not-cleared", E, DRIVE, kDrive, true, AXIS},
+    {"ZP-002", "zpulse-ack-without-request", E, DRIVE, kDrive, false, AXIS},
+    {"ZP-003", "zpulse-absolute-encoder", W, NC, kNoTimeout, false, AXIS},
+    {"EC-001", "clear-ack-without-request", E, DRIVE, kDrive, false, AXIS},
+    {"EC-002", "clear-request-held", W, NC, Timeout::NcRelease, true, AXIS},
+    {"EC-003", "clear-ack-not-cleared", E, DRIVE, kDrive, true, AXIS},
+    {"EC-004", "clear-not-acknowledged", W, DRIVE, Timeout::ClearResponse, true, AXIS},
+    {"SEW-001", "cause-without-summary", E, DRIVE, kNoTimeout, false, AXIS},
+    {"SEW-002", "summary-without-cause", W, DRIVE, kDrive, true, AXIS},
+    {"SEW-003", "reserved-error-bits", W, DRIVE, kNoTimeout, false, AXIS},
+    {"SSW-001", "reserved-status-bits", W, DRIVE, kNoTimeout, false, AXIS},
+    {"SCW-001", "reserved-control-bits", W, NC, kNoTimeout, false, AXIS},
+    {"RDY-001", "ready-mismatch", E, DRIVE, kDrive, true, AXIS},
+    {"FLT-001", "enabled-with-error", E, DRIVE, Timeout::FaultReaction, true, AXIS},
+    {"PT-001", "param-table-not-followed", W, DRIVE, Timeout::ParamTable, true, AXIS},
+    {"MSG-001", "undefined-message-code", W, DRIVE, kNoTimeout, false, AXIS},
+    {"COM-001", "working-counter", E, BUS, kNoTimeout, false, BUSK},
+    {"COM-002", "cycle-gap", W, BUS, kNoTimeout, false, BUSK},
+    {"COM-003", "timeout-not-reported", I, DRIVE, kDrive, true, AXIS},
+    {"COM-004", "frame-not-returned", W, BUS, kNoTimeout, false, BUSK},
+    {"COM-005", "telegram-failure-limit", E, BUS, kNoTimeout, false, AXIS},
+    {"ESM-001", "invalid-al-transition", E, NC, kNoTimeout, false, SLAVE},
+    {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, false, AXIS},
+    {"ESM-003", "al-error", E, DRIVE, kNoTimeout, false, SLAVE},
+    {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, false, SLAVE},
 };
 // clang-format on
 
@@ -93,7 +96,9 @@ TEST(RuleTable, MatchesRulesMdRowByRow) {
     EXPECT_EQ(rule.party, spec.party);
     EXPECT_EQ(rule.timeout, spec.timeout);
     EXPECT_EQ(rule.delayed, spec.delayed);
-    EXPECT_EQ(rule.check != nullptr, spec.axis);
+    EXPECT_EQ(rule.kind, spec.kind);
+    EXPECT_NE(rule.check, nullptr) << "every rule is a row with its check";
+    EXPECT_NE(rule.describe, nullptr);
     EXPECT_NE(rule.clause, nullptr);
     EXPECT_NE(rule.summary, nullptr);
     if (rule.summary != nullptr) {
@@ -144,9 +149,12 @@ TEST(RuleTable, DelayedRulesHaveATimeoutAxisRulesCheckAndDescribe) {
     SCOPED_TRACE(rule.code);
     if (rule.delayed) {
       EXPECT_TRUE(rule.timeout.has_value());
-      EXPECT_NE(rule.check, nullptr) << "a delayed rule is timed per axis";
+      EXPECT_EQ(rule.kind, RuleKind::Axis) << "a delayed rule is timed per axis";
     }
-    EXPECT_EQ(rule.check != nullptr, rule.describe != nullptr);
+    EXPECT_NE(rule.check, nullptr);
+    EXPECT_NE(rule.describe, nullptr);
+    EXPECT_EQ(rule.kind == RuleKind::Axis, rule.reads.any() || rule.id == RuleId::Com005)
+        << "an axis rule declares what it reads (COM-005 reads only the failure counter)";
   }
 }
 

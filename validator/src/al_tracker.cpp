@@ -20,7 +20,6 @@ constexpr std::uint8_t kPreOp = static_cast<std::uint8_t>(AlState::PreOp);
 constexpr std::uint8_t kBoot = static_cast<std::uint8_t>(AlState::Boot);
 constexpr std::uint8_t kSafeOp = static_cast<std::uint8_t>(AlState::SafeOp);
 constexpr std::uint8_t kOp = static_cast<std::uint8_t>(AlState::Op);
-constexpr std::array<std::uint8_t, 5> kStates{kInit, kPreOp, kBoot, kSafeOp, kOp};
 
 // PROTOCOL.md §8: the requested transitions a slave accepts, besides staying where it is.
 struct Transition {
@@ -42,13 +41,10 @@ constexpr std::array<Transition, 11> kTransitions{{
 }};
 
 constexpr bool isState(std::uint8_t state) {
-  for (std::uint8_t s : kStates) {
+  for (std::uint8_t s : kAlStates) {
     if (s == state) return true;
   }
   return false;
-}
-constexpr bool aboveInit(std::uint8_t state) {
-  return isState(state) && state != kInit;
 }
 
 // Commands whose data the slaves write into (AL status is read by these) and commands whose data
@@ -83,15 +79,6 @@ std::optional<std::uint16_t> readStateRegister(const Datagram& dg, const ByteRea
   return std::nullopt;
 }
 
-std::string allowedFrom(std::uint8_t from) {
-  std::string out;
-  for (std::uint8_t to : kStates) {
-    if (!alTransitionAllowed(from, to)) continue;
-    if (!out.empty()) out += ", ";
-    out += alStateName(to);
-  }
-  return out;
-}
 }  // namespace
 
 const char* alStateName(std::uint8_t state) {
@@ -99,6 +86,10 @@ const char* alStateName(std::uint8_t state) {
       "0x0", "INIT", "PRE-OP", "BOOT", "SAFE-OP", "0x5", "0x6", "0x7",
       "OP",  "0x9",  "0xA",    "0xB",  "0xC",     "0xD", "0xE", "0xF"};
   return state < kNames.size() ? kNames[state] : "?";
+}
+
+bool alStateAboveInit(std::uint8_t state) {
+  return isState(state) && state != kInit;
 }
 
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to) {
@@ -110,16 +101,13 @@ bool alTransitionAllowed(std::uint8_t from, std::uint8_t to) {
   return false;
 }
 
-namespace {
-std::string slaveName(const std::optional<std::uint16_t>& station,
-                      const std::optional<std::uint16_t>& position) {
-  if (station && position)
-    return fmt::format("station 0x{:04X} (ring position {})", *station, *position);
-  if (station) return fmt::format("station 0x{:04X}", *station);
-  if (position) return fmt::format("ring position {}", *position);
+std::string slaveName(const SlaveRef& slave) {
+  if (slave.station && slave.position)
+    return fmt::format("station 0x{:04X} (ring position {})", *slave.station, *slave.position);
+  if (slave.station) return fmt::format("station 0x{:04X}", *slave.station);
+  if (slave.position) return fmt::format("ring position {}", *slave.position);
   return "all slaves (broadcast)";
 }
-}  // namespace
 
 void AlTracker::AlData::absorb(const AlData& gone) {
   if (!state) state = gone.state;
@@ -143,22 +131,18 @@ std::size_t AlTracker::slaveFor(const SlaveAddress& address) {
 }
 
 void AlTracker::onControlWrite(const SlaveAddress& address, std::uint8_t requested,
-                               std::uint16_t raw, std::vector<AlFinding>& out) {
-  auto check = [&](const std::optional<std::uint8_t>& known,
+                               std::uint16_t raw, const Stamp& now, std::vector<BusEvent>& out) {
+  auto write = [&](const std::optional<std::uint8_t>& known,
                    const std::optional<std::uint16_t>& station,
                    const std::optional<std::uint16_t>& position) {
-    if (!known || alTransitionAllowed(*known, requested)) return;
-    out.push_back({RuleId::Esm001, station, position,
-                   fmt::format("{}: AL control 0x{:04X} requests {} from known state {}; "
-                               "allowed: {}",
-                               slaveName(station, position), raw, alStateName(requested),
-                               alStateName(*known), allowedFrom(*known))});
+    if (!known) return;  // PROTOCOL.md §8: nothing that depends on an unknown state is checked
+    out.push_back({now, AlControlEvent{SlaveRef{station, position}, raw, requested, *known}});
   };
   if (address.target == SlaveTarget::All) {
     requested_all_ = requested;
-    if (directory_.slaves().empty()) check(state_all_, std::nullopt, std::nullopt);
+    if (directory_.slaves().empty()) write(state_all_, std::nullopt, std::nullopt);
     for (Slave& slave : directory_.slaves()) {
-      check(slave.data.state, slave.station, slave.position);
+      write(slave.data.state, slave.station, slave.position);
       slave.data.requested = requested;
     }
     return;
@@ -166,7 +150,7 @@ void AlTracker::onControlWrite(const SlaveAddress& address, std::uint8_t request
   const std::size_t i = slaveFor(address);
   if (i == directory_.kNone) return;
   Slave& slave = directory_.slaves()[i];
-  check(slave.data.state, slave.station, slave.position);
+  write(slave.data.state, slave.station, slave.position);
   slave.data.requested = requested;
 }
 
@@ -181,7 +165,7 @@ void AlTracker::setState(AlData& slave, std::uint8_t state) {
 }
 
 void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, const Stamp& now,
-                             std::vector<AlFinding>& out) {
+                             std::vector<BusEvent>& out) {
   const std::uint8_t state = raw & kStateMask;
   const bool error = (raw & kErrorBit) != 0;
   if (address.target == SlaveTarget::All) {
@@ -208,35 +192,12 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
   }
   if (slave.error_reported) return;
   slave.error_reported = true;
-
-  RuleId rule = RuleId::Esm004;
-  std::string context;
-  if (slave.requested) {
-    if (aboveInit(*slave.requested)) rule = RuleId::Esm003;
-    context = fmt::format("while {} requested", alStateName(*slave.requested));
-  } else if (previous) {
-    if (aboveInit(*previous)) rule = RuleId::Esm003;
-    context = fmt::format("with no request seen, previous state {}", alStateName(*previous));
-  } else {
-    context = "with no request seen and no previous state";
-  }
-  std::string code;
-  if (slave.status_code) {
-    code = fmt::format("; AL status code 0x{:04X}", *slave.status_code);
-    if (slave.status_code_frame != now.frame) {
-      code += fmt::format(" (read in frame {})", slave.status_code_frame);
-    }
-  } else {
-    code = "; AL status code not read";
-  }
-  out.push_back({rule, entry.station, entry.position,
-                 fmt::format("{}: AL status 0x{:04X} ({} + error) {}{}",
-                             slaveName(entry.station, entry.position), raw, alStateName(state),
-                             context, code)});
+  out.push_back({now, AlErrorEvent{SlaveRef{entry.station, entry.position}, raw, slave.requested,
+                                   previous, slave.status_code, slave.status_code_frame}});
 }
 
 void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
-                        const Stamp& now, std::vector<AlFinding>& out) {
+                        const Stamp& now, std::vector<BusEvent>& out) {
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   const std::size_t count = walked ? frame.count : 0;
   if (walked) directory_.beginFrame(frame, returned);
@@ -283,7 +244,7 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
     if (address.target == SlaveTarget::None) continue;
     if (take_writes && writesSlave(dg.command)) {
       if (auto raw = readStateRegister(dg, bytes, kRegAlControl)) {
-        onControlWrite(address, *raw & kStateMask, *raw, out);
+        onControlWrite(address, *raw & kStateMask, *raw, now, out);
       }
     }
     if (takeRead(dg)) {

@@ -32,6 +32,14 @@ constexpr bool causesMatchFieldTable() {
 }
 static_assert(causesMatchFieldTable(), "SEW cause bits are the table's SEW flags but bit 0");
 
+constexpr bool declared(Word w, std::uint64_t bits) {
+  return (AxisModel::kReads.bits[static_cast<std::size_t>(w)] & bits) == bits;
+}
+static_assert(declared(Word::Scw, kSe | kEmgon | kBrake | kZPulseRequest | kErrorClear) &&
+                  declared(Word::Ssw, kServoEn | kServoRdy | kZPulseAck | kErrClearAck) &&
+                  declared(Word::Sew, kServoErrors | kEcatTimeout | kSewCauseMask),
+              "AxisModel::kReads declares every bit observe() reads");
+
 const char* transitionName(std::optional<DriveState> from, DriveState to, const AxisModel& axis) {
   if (!from) return nullptr;
   const bool was_error = *from == DriveState::Error || *from == DriveState::FaultReactionActive;

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 
+#include "ncservo/al_tracker.hpp"
 #include "ncservo/axis_model.hpp"
+#include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 
 namespace ncservo {
@@ -270,8 +272,8 @@ std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) 
 }
 
 // --- EtherCAT state machine, per axis (PROTOCOL.md §8) ---
-constexpr std::uint8_t kAlOp = 8;
-constexpr std::uint8_t kAlSafeOp = 4;
+constexpr auto kAlOp = static_cast<std::uint8_t>(AlState::Op);
+constexpr auto kAlSafeOp = static_cast<std::uint8_t>(AlState::SafeOp);
 bool esm002(const AxisModel& a, const RuleSettings&) {
   if (!a.alState()) return false;
   const std::uint8_t state = *a.alState();
@@ -289,78 +291,215 @@ std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
                      state);
 }
 
+// --- Bus (PROTOCOL.md §8; RULES.md COM-001, COM-002, COM-004) ---
+bool com001(const WorkingCounterEvent& e, const RuleSettings&) {
+  return e.wkc != e.expected;
+}
+std::string com001Text(const WorkingCounterEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format("{} at 0x{:08X} ({} bytes) returned with WKC {}, expected {}{}",
+                     ecat::commandName(e.command), e.address, e.length, e.wkc, e.expected,
+                     e.wkc == 0 ? " (no slave processed it)" : "; inputs may be stale");
+}
+
+bool com002(const CycleGapEvent&, const RuleSettings&) {
+  return true;  // the bus model reports an interval only when it is a gap
+}
+std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format(
+      "{:.3f} ms since the previous cycle (frame {}), {:.3f} ms nominal: {} cycle{} missing",
+      static_cast<double>(e.interval_ns) / 1e6, e.previous_frame,
+      static_cast<double>(e.nominal_ns) / 1e6, e.missing, e.missing == 1 ? "" : "s");
+}
+
+bool com004(const NotReturnedEvent&, const RuleSettings&) {
+  return true;
+}
+std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format(
+      "the master frame {} (axes {}-{}) was not returned before the next cycle's master frame",
+      e.master_frame, e.first_axis, e.last_axis);
+}
+
+// --- EtherCAT state machine, per slave (PROTOCOL.md §8) ---
+std::string allowedFrom(std::uint8_t from) {
+  std::string out;
+  for (std::uint8_t to : kAlStates) {
+    if (!alTransitionAllowed(from, to)) continue;
+    if (!out.empty()) out += ", ";
+    out += alStateName(to);
+  }
+  return out;
+}
+
+bool esm001(const AlControlEvent& e, const RuleSettings&) {
+  return !alTransitionAllowed(e.known_state, e.requested);
+}
+std::string esm001Text(const AlControlEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format("{}: AL control 0x{:04X} requests {} from known state {}; allowed: {}",
+                     slaveName(e.slave), e.raw, alStateName(e.requested),
+                     alStateName(e.known_state), allowedFrom(e.known_state));
+}
+
+// RULES.md ESM-003/004: judged against the requested state, or with none seen the previous one.
+bool errorAboveInit(const AlErrorEvent& e) {
+  const std::optional<std::uint8_t> reference = e.requested ? e.requested : e.previous;
+  return reference && alStateAboveInit(*reference);
+}
+bool esm003(const AlErrorEvent& e, const RuleSettings&) {
+  return errorAboveInit(e);
+}
+bool esm004(const AlErrorEvent& e, const RuleSettings&) {
+  return !errorAboveInit(e);
+}
+std::string alErrorText(const AlErrorEvent& e, const Stamp& at, const RuleSettings&) {
+  std::string context;
+  if (e.requested) {
+    context = fmt::format("while {} requested", alStateName(*e.requested));
+  } else if (e.previous) {
+    context = fmt::format("with no request seen, previous state {}", alStateName(*e.previous));
+  } else {
+    context = "with no request seen and no previous state";
+  }
+  std::string code = "; AL status code not read";
+  if (e.status_code) {
+    code = fmt::format("; AL status code 0x{:04X}", *e.status_code);
+    if (e.status_code_frame != at.frame) {
+      code += fmt::format(" (read in frame {})", e.status_code_frame);
+    }
+  }
+  return fmt::format("{}: AL status 0x{:04X} ({} + error) {}{}", slaveName(e.slave), e.raw,
+                     alStateName(e.raw & 0x0F), context, code);
+}
+
+// The table's uniform check signature over the axis model or one kind of event.
+template <bool (*F)(const AxisModel&, const RuleSettings&)>
+bool onAxis(const RuleSubject& s, const RuleSettings& settings) {
+  return F(*s.axis, settings);
+}
+template <std::string (*F)(const AxisModel&, const RuleSettings&, std::int64_t)>
+std::string describeAxis(const RuleSubject& s, const RuleSettings& settings, std::int64_t held) {
+  return F(*s.axis, settings, held);
+}
+template <class Event, bool (*F)(const Event&, const RuleSettings&)>
+bool onEvent(const RuleSubject& s, const RuleSettings& settings) {
+  const Event* e = std::get_if<Event>(&s.event->data);
+  return e != nullptr && F(*e, settings);
+}
+template <class Event, std::string (*F)(const Event&, const Stamp&, const RuleSettings&)>
+std::string describeEvent(const RuleSubject& s, const RuleSettings& settings, std::int64_t) {
+  return F(std::get<Event>(s.event->data), s.event->since, settings);
+}
+
 constexpr auto E = Severity::Error;
 constexpr auto W = Severity::Warning;
 constexpr auto I = Severity::Info;
 constexpr auto NC = Party::Nc;
 constexpr auto DRIVE = Party::Drive;
 constexpr auto BUS = Party::Bus;
+constexpr auto AXIS = RuleKind::Axis;
+constexpr auto BUSK = RuleKind::Bus;
+constexpr auto SLAVE = RuleKind::Slave;
 constexpr std::optional<Timeout> kNone{};
 constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
+constexpr Reads kNothing{};
 }  // namespace
 
+#define NCSERVO_AXIS(name) onAxis<name>, describeAxis<name##Text>
+#define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
 // clang-format off
 const std::array<RuleDef, kRuleCount> kRules{{
-  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, "PROTOCOL.md §2 SE", kNone, false, se001, se001Text,
+  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "PROTOCOL.md §2 SE", kNone, false,
+   readsOf({"ncservo.scw.se"}), NCSERVO_AXIS(se001),
    "SCW.SE becomes 0x2 from a value other than 0x1"},
-  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, "PROTOCOL.md §2 SE", kDrive, false, se002, se002Text,
+  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "PROTOCOL.md §2 SE", kDrive, false,
+   readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se002),
    "SSW.ServoEn rises with no valid enable"},
-  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, "PROTOCOL.md §2 SE", kDrive, true, se003, se003Text,
+  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "PROTOCOL.md §2 SE", kDrive, true,
+   readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se003),
    "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
-  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, "PROTOCOL.md §2 SE, §5", Timeout::EnableResponse, true, se004, se004Text,
+  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "PROTOCOL.md §2 SE, §5", Timeout::EnableResponse, true,
+   readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake", "ncservo.ssw.servo_en",
+            "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(se004),
    "a valid enable to a ready drive is not answered with ServoEn"},
-  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, "PROTOCOL.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true, zp001, zp001Text,
+  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "PROTOCOL.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true,
+   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp001),
    "ZPulseAck stays 1 after ZPulseRequest fell"},
-  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, "PROTOCOL.md §3 ZPulseAck", kDrive, false, zp002, zp002Text,
+  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "PROTOCOL.md §3 ZPulseAck", kDrive, false,
+   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp002),
    "ZPulseAck rises with no ZPulseRequest"},
-  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, "PROTOCOL.md §1, §2 ZPulseRequest", kNone, false, zp003, zp003Text,
+  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "PROTOCOL.md §1, §2 ZPulseRequest", kNone, false,
+   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.incremental", "ncservo.ssw.no_encoder"}), NCSERVO_AXIS(zp003),
    "ZPulseRequest on an axis with an absolute encoder or none"},
-  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, "PROTOCOL.md §3 ErrClearAck", kDrive, false, ec001, ec001Text,
+  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "PROTOCOL.md §3 ErrClearAck", kDrive, false,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec001),
    "ErrClearAck rises with no ErrorClear"},
-  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, "PROTOCOL.md §2 ErrorClear", Timeout::NcRelease, true, ec002, ec002Text,
+  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "PROTOCOL.md §2 ErrorClear", Timeout::NcRelease, true,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec002),
    "ErrorClear held after ErrClearAck rose"},
-  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, "PROTOCOL.md §3 ErrClearAck", kDrive, true, ec003, ec003Text,
+  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "PROTOCOL.md §3 ErrClearAck", kDrive, true,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec003),
    "ErrClearAck stays 1 after ErrorClear fell"},
-  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, "PROTOCOL.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true, ec004, ec004Text,
+  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "PROTOCOL.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}), NCSERVO_AXIS(ec004),
    "ErrorClear on a drive in error is not acknowledged"},
-  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, "PROTOCOL.md §4", kNone, false, sew001, sew001Text,
+  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "PROTOCOL.md §4", kNone, false,
+   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew001),
    "a SEW cause bit without the summary bit 0"},
-  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, "PROTOCOL.md §4", kDrive, true, sew002, sew002Text,
+  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "PROTOCOL.md §4", kDrive, true,
+   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew002),
    "SEW summary bit 0 with no cause bit"},
-  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, "PROTOCOL.md §4", kNone, false, sew003, sew003Text,
+  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "PROTOCOL.md §4", kNone, false,
+   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew003),
    "reserved SEW bits set"},
-  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, "PROTOCOL.md §3", kNone, false, ssw001, ssw001Text,
+  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "PROTOCOL.md §3", kNone, false,
+   readsOf({"ncservo.ssw.reserved"}), NCSERVO_AXIS(ssw001),
    "reserved SSW bits set"},
-  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, "PROTOCOL.md §2", kNone, false, scw001, scw001Text,
+  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "PROTOCOL.md §2", kNone, false,
+   readsOf({"ncservo.scw.reserved"}), NCSERVO_AXIS(scw001),
    "reserved SCW bits set"},
-  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, "PROTOCOL.md §5", kDrive, true, rdy001, rdy001Text,
+  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "PROTOCOL.md §5", kDrive, true,
+   readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(rdy001),
    "ServoRDY differs from the Servo_Ready_Mode table"},
-  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, "PROTOCOL.md §4, §6", Timeout::FaultReaction, true, flt001, flt001Text,
+  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "PROTOCOL.md §4, §6", Timeout::FaultReaction, true,
+   readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}), NCSERVO_AXIS(flt001),
    "the drive stays enabled while reporting an error"},
-  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, "PROTOCOL.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true, pt001, pt001Text,
+  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "PROTOCOL.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true,
+   readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl", "ncservo.ssw.ext_prmtbl"}), NCSERVO_AXIS(pt001),
    "the active parameter table differs from the commanded one"},
-  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, "PROTOCOL.md §5", kNone, false, msg001, msg001Text,
+  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "PROTOCOL.md §5", kNone, false,
+   readsOf({"ncservo.msg_code"}), NCSERVO_AXIS(msg001),
    "a message code outside 0-5"},
-  {RuleId::Com001, "COM-001", "working-counter", E, BUS, "PROTOCOL.md §8 WKC", kNone, false, nullptr, nullptr,
+  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "PROTOCOL.md §8 WKC", kNone, false,
+   kNothing, NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),
    "a returned cyclic datagram with servo PDOs has an unexpected WKC"},
-  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, "PROTOCOL.md §8; RULES.md Time", kNone, false, nullptr, nullptr,
+  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "PROTOCOL.md §8; RULES.md Time", kNone, false,
+   kNothing, NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
    "cycles missing between two master frames"},
-  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, "PROTOCOL.md §4 ECatTErr", kDrive, true, com003, com003Text,
+  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "PROTOCOL.md §4 ECatTErr", kDrive, true,
+   readsOf({"ncservo.sew.ecat_timeout"}), NCSERVO_AXIS(com003),
    "3 or more failed cycles without SEW.ECatTErr"},
-  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, "PROTOCOL.md §8", kNone, false, nullptr, nullptr,
+  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "PROTOCOL.md §8", kNone, false,
+   kNothing, NCSERVO_EVENT(NotReturnedEvent, com004, com004Text),
    "a master frame with servo outputs was not returned"},
-  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, "PROTOCOL.md §8; seed 001", kNone, false, com005, com005Text,
+  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "PROTOCOL.md §8; seed 001", kNone, false,
+   kNothing, NCSERVO_AXIS(com005),
    "consecutive failed cycles of an axis exceed the limit"},
-  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, "PROTOCOL.md §8 AL control", kNone, false, nullptr, nullptr,
+  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "PROTOCOL.md §8 AL control", kNone, false,
+   kNothing, NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
    "an AL control write requests a transition the state machine does not allow"},
-  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, "PROTOCOL.md §8 AL states", kNone, false, esm002, esm002Text,
+  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "PROTOCOL.md §8 AL states", kNone, false,
+   readsOf({"ncservo.scw.se"}, true), NCSERVO_AXIS(esm002),
    "process data exchanged with an axis outside OP/SAFE-OP"},
-  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, "PROTOCOL.md §8 AL status", kNone, false, nullptr, nullptr,
+  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "PROTOCOL.md §8 AL status", kNone, false,
+   kNothing, NCSERVO_EVENT(AlErrorEvent, esm003, alErrorText),
    "AL status shows the error indicator above INIT"},
-  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, "PROTOCOL.md §8 AL status", kNone, false, nullptr, nullptr,
+  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "PROTOCOL.md §8 AL status", kNone, false,
+   kNothing, NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
    "AL status shows the error indicator at INIT"},
 }};
 // clang-format on
+#undef NCSERVO_AXIS
+#undef NCSERVO_EVENT
 
 const char* severityName(Severity severity) {
   switch (severity) {
@@ -409,6 +548,31 @@ const RuleDef* ruleByCode(std::string_view code) {
     if (code == rule.code) return &rule;
   }
   return nullptr;
+}
+
+const char* ruleKindName(RuleKind kind) {
+  switch (kind) {
+    case RuleKind::Axis:
+      return "axis";
+    case RuleKind::Bus:
+      return "bus";
+    case RuleKind::Slave:
+      return "slave";
+  }
+  return "axis";
+}
+
+void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+                std::vector<EventFinding>& out) {
+  const RuleSubject subject{nullptr, &event};
+  for (const RuleDef& rule : kRules) {
+    if (rule.kind == RuleKind::Axis || !settings.isEnabled(rule.id)) continue;
+    if (!rule.check(subject, settings)) continue;
+    SlaveRef slave;
+    if (const auto* control = std::get_if<AlControlEvent>(&event.data)) slave = control->slave;
+    if (const auto* error = std::get_if<AlErrorEvent>(&event.data)) slave = error->slave;
+    out.push_back(EventFinding{rule.id, slave, rule.describe(subject, settings, 0)});
+  }
 }
 
 std::string ruleFilterName(const RuleDef& rule) {

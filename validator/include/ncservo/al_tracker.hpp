@@ -1,6 +1,6 @@
 // Each slave's EtherCAT state machine as the capture shows it (PROTOCOL.md §8): station addresses
 // assigned by the start-up, AL control writes (0x0120), AL status reads (0x0130) and AL status
-// codes (0x0134). Judges rules ESM-001, ESM-003 and ESM-004. Bounded memory.
+// codes (0x0134). Gives the events rules ESM-001, ESM-003 and ESM-004 judge. Bounded memory.
 //
 // A slave is known by its station address (FP commands), its ring position (AP commands, from the
 // master's copy's ADP) or both, once an APWR/APRW of 0x0010 has assigned the one to the other.
@@ -10,30 +10,30 @@
 // AL status BRD with the error indicator is not reported: the OR of all slaves names none of them.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "ncservo/bus_events.hpp"
 #include "ncservo/byte_reader.hpp"
 #include "ncservo/ethercat.hpp"
-#include "ncservo/finding.hpp"
 #include "ncservo/slave_directory.hpp"
 
 namespace ncservo {
 
 // AL states in bits 3..0 of AL control and AL status (PROTOCOL.md §8).
 enum class AlState : std::uint8_t { Init = 1, PreOp = 2, Boot = 3, SafeOp = 4, Op = 8 };
+inline constexpr std::array<std::uint8_t, 5> kAlStates{
+    static_cast<std::uint8_t>(AlState::Init), static_cast<std::uint8_t>(AlState::PreOp),
+    static_cast<std::uint8_t>(AlState::Boot), static_cast<std::uint8_t>(AlState::SafeOp),
+    static_cast<std::uint8_t>(AlState::Op)};
 const char* alStateName(std::uint8_t state);  // "INIT", ..., or "0x5" for a non-state
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to);
-
-// A finding about one slave, before the validator applies the user's settings.
-struct AlFinding {
-  RuleId rule{};
-  std::optional<std::uint16_t> station;   // configured station address, when known
-  std::optional<std::uint16_t> position;  // ring position (0 = first slave), when known
-  std::string message;                    // names the slave, what was seen and expected
-};
+bool alStateAboveInit(std::uint8_t state);  // a state, and not INIT
+// "station 0x1001 (ring position 0)", "ring position 2", "all slaves (broadcast)".
+std::string slaveName(const SlaveRef& slave);
 
 class AlTracker {
  public:
@@ -44,7 +44,7 @@ class AlTracker {
   // Writes (AL control, station address) are taken from master copies, and from returned copies
   // whose master copy was not captured; reads from returned copies whose WKC is above zero.
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
-               const Stamp& now, std::vector<AlFinding>& out);
+               const Stamp& now, std::vector<BusEvent>& out);
 
   // The slave's known AL state (its last AL status read), if any. A station the tracker has not
   // seen addressed has the state of the last BRD of AL status that returned a state, if any.
@@ -72,9 +72,9 @@ class AlTracker {
   std::size_t slaveFor(const SlaveAddress& address);  // finds or adds; kNone for none
   void fresh(AlData& data) const;                     // what the last broadcasts told every slave
   void onControlWrite(const SlaveAddress& address, std::uint8_t requested, std::uint16_t raw,
-                      std::vector<AlFinding>& out);
+                      const Stamp& now, std::vector<BusEvent>& out);
   void onStatusRead(const SlaveAddress& address, std::uint16_t raw, const Stamp& now,
-                    std::vector<AlFinding>& out);
+                    std::vector<BusEvent>& out);
   void setState(AlData& slave, std::uint8_t state);
 
   SlaveDirectory<AlData> directory_;

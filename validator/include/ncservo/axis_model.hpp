@@ -51,6 +51,14 @@ struct StateChange {
 
 class AxisModel {
  public:
+  // What observe() reads of the PDOs: the signals below, the drive state's inputs
+  // (drive_state.hpp) and the error history's SEW causes. The validator's fast path compares
+  // these bits with the rules' (rules.hpp Reads).
+  static constexpr Reads kReads =
+      readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake",
+               "ncservo.scw.zpulse_request", "ncservo.scw.error_clear", "ncservo.ssw.servo_en",
+               "ncservo.ssw.servo_rdy", "ncservo.ssw.zpulse_ack", "ncservo.ssw.err_clear_ack",
+               "ncservo.ssw.pulse_enabled", "ncservo.sew"});
   static constexpr std::size_t kErrorHistoryDepth = 8;  // as object 1003h
   static constexpr std::size_t kMaxTimeline = 4096;     // bounded memory per axis
   static constexpr std::uint32_t kFailureCounterMax = 65535;
@@ -84,21 +92,9 @@ class AxisModel {
   }
   // Inputs were exchanged since the AL state last changed (ESM-002).
   bool inputsInAlState() const { return inputs_in_al_state_; }
-  // Counts changes made other than by observe(): an unchanged revision and unchanged words
-  // mean the rules' conditions are unchanged too.
+  // Counts changes made other than by observe(): an unchanged revision and unchanged read bits
+  // (kReads and the rules' Reads) mean the rules' conditions are unchanged too.
   std::uint64_t revision() const { return revision_; }
-  // Whether observing these words would change nothing the rules look at.
-  bool wouldNotChange(const JudgedWords& words) const {
-    if (words.has_rx && (!latest_.has_rx || words.scw != latest_.scw())) return false;
-    if (words.has_tx && (!latest_.has_tx || ((words.ssw ^ latest_.ssw()) & ~kSswUnjudged) != 0 ||
-                         words.sew != latest_.sew() ||
-                         definedMessage(words.msg_code) != definedMessage(latest_.msgCode()))) {
-      return false;
-    }
-    return !al_state_.has_value();  // ESM-002 looks at which PDOs a frame carries
-  }
-  // PROTOCOL.md §5: message codes 0-5 are defined.
-  static constexpr bool definedMessage(std::int32_t code) { return code >= 0 && code <= 5; }
   std::optional<std::uint8_t> alState() const { return al_state_; }
 
   // This frame's values of the axis (outputs and/or inputs), at `now`.
@@ -154,11 +150,6 @@ class AxisModel {
   const std::vector<ErrorHistoryEntry>& errorHistory() const { return error_history_; }
 
  private:
-  // SSW bits no rule and no state reads: they change every cycle while an axis moves.
-  static constexpr std::uint32_t kSswUnjudged = mask32("ncservo.ssw.n_zero") |
-                                                mask32("ncservo.ssw.n_setpoint") |
-                                                mask32("ncservo.ssw.temp_warning");
-
   void observeOutputs(const PdoValues& values, const Stamp& now);
   void observeInputs(const PdoValues& values, const Stamp& now);
   void updateState(const Stamp& now);

@@ -6,14 +6,9 @@
 #include <string>
 
 #include "ncservo/rules.hpp"
+#include "ncservo/stamp.hpp"
 
 namespace ncservo {
-
-// Where something was seen: Wireshark's 1-based frame number and the capture time.
-struct Stamp {
-  std::uint64_t frame = 0;
-  std::int64_t time_ns = 0;  // absolute capture time
-};
 
 struct Finding {
   RuleId rule{};

@@ -81,26 +81,19 @@ inline bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoVal
                         : readPdoOf<Pdo::Tx>(bytes, offset, out);
 }
 
-// The words the rules judge (RULES.md): SCW of the outputs; SSW, SEW and the message code of the
-// inputs. Every other word (positions, message data) changes nothing a rule looks at.
-struct JudgedWords {
-  bool has_rx = false;
-  bool has_tx = false;
-  std::uint32_t scw = 0;
-  std::uint32_t ssw = 0;
-  std::uint32_t sew = 0;
-  std::int32_t msg_code = 0;
-};
-
 // One word of a PDO whose bytes start at `pdo` (already bounds-checked for the whole PDO).
-template <Word W>
-std::uint64_t loadWord(const std::uint8_t* pdo) {
-  constexpr auto i = static_cast<std::size_t>(W);
-  return detail::loadLe<kWords[i].size>(pdo + detail::kWordOffsets[i]);
+inline std::uint64_t loadWordAt(const std::uint8_t* pdo, Word w) {
+  const auto i = static_cast<std::size_t>(w);
+  const std::uint8_t* p = pdo + detail::kWordOffsets[i];
+  switch (kWords[i].size) {
+    case 2:
+      return detail::loadLe<2>(p);
+    case 4:
+      return detail::loadLe<4>(p);
+    default:
+      return detail::loadLe<8>(p);
+  }
 }
-
-static_assert(wordDef(Word::Scw).pdo == Pdo::Rx && wordDef(Word::Ssw).pdo == Pdo::Tx &&
-              wordDef(Word::Sew).pdo == Pdo::Tx && wordDef(Word::MsgCode).pdo == Pdo::Tx);
 
 namespace detail {
 template <Pdo P, std::size_t... I>

@@ -6,12 +6,15 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "ncservo/bus_events.hpp"
 #include "ncservo/config.hpp"
+#include "ncservo/fields.hpp"
 
 namespace ncservo {
 
@@ -82,12 +85,55 @@ inline constexpr std::size_t kRuleCount = 29;
 class AxisModel;
 struct RuleSettings;
 
-// How a rule is checked. An axis condition is evaluated on every frame that carries the axis; it
-// is reported when it begins, or — for a delayed rule — once it has held longer than its timeout.
-// Bus rules are reported by the bus model when the event happens.
-using AxisCheck = bool (*)(const AxisModel& axis, const RuleSettings& settings);
+// Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
+// cycles) or on what a slave's state machine did (AL control and status).
+enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
+const char* ruleKindName(RuleKind kind);
+
+// What an axis rule's check reads (STYLE.md "A rule declares what it reads"): bits of the PDO
+// words, and the slave's AL state. The validator's fast path compares exactly what the rules and
+// the axis model read, so a check that reads something undeclared is caught by the fast-path
+// test (tests/unit/fast_path_test.cpp), never silently skipped.
+struct Reads {
+  std::array<std::uint64_t, kWordCount> bits{};  // per word (kWords order), the bits read
+  bool al_state = false;  // the slave's AL state, and which PDOs each frame carries
+
+  constexpr Reads operator|(const Reads& other) const {
+    Reads out = *this;
+    for (std::size_t w = 0; w < kWordCount; ++w) out.bits[w] |= other.bits[w];
+    out.al_state = al_state || other.al_state;
+    return out;
+  }
+  constexpr bool any() const {
+    for (std::uint64_t b : bits) {
+      if (b != 0) return true;
+    }
+    return al_state;
+  }
+};
+// The fields of the field table named by their filter names (a whole word for a word's row);
+// an unknown name does not compile.
+constexpr Reads readsOf(std::initializer_list<std::string_view> filters, bool al_state = false) {
+  Reads out;
+  for (std::string_view filter : filters) {
+    const FieldDef& f = field(filter);
+    out.bits[static_cast<std::size_t>(f.word)] |= f.mask != 0 ? f.mask : wordMask(f.word);
+  }
+  out.al_state = al_state;
+  return out;
+}
+
+// What a check looks at: the axis's model (axis rules) or one event of the bus and slave models.
+struct RuleSubject {
+  const AxisModel* axis = nullptr;
+  const BusEvent* event = nullptr;
+};
+// Whether the rule's condition holds. An axis condition is evaluated on every frame that changes
+// what it reads; it is reported when it begins or, for a delayed rule, once it has held longer
+// than its timeout. An event condition is reported on the frame of the event.
+using RuleCheck = bool (*)(const RuleSubject& subject, const RuleSettings& settings);
 // What was seen and what was expected; `held_ns` is how long the condition has held.
-using AxisDescribe = std::string (*)(const AxisModel& axis, const RuleSettings& settings,
+using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleSettings& settings,
                                      std::int64_t held_ns);
 
 struct RuleDef {
@@ -96,12 +142,14 @@ struct RuleDef {
   const char* slug;  // e.g. "illegal-enable-edge"
   Severity severity;
   Party party;
+  RuleKind kind;
   const char* clause;              // where the protocol says so
   std::optional<Timeout> timeout;  // the timeout the rule uses (RULES.md "Time")
   bool delayed;                    // reported when the condition outlasts the timeout
-  AxisCheck check;                 // nullptr for bus rules
-  AxisDescribe describe;           // nullptr for bus rules
-  const char* summary;             // one line, for `ncservo rules` and the expert item
+  Reads reads;                     // axis rules: what check and describe read of the axis
+  RuleCheck check;
+  RuleDescribe describe;
+  const char* summary;  // one line, for `ncservo rules` and the expert item
 };
 
 // Defined in rules.cpp, next to the checks the table names.
@@ -111,6 +159,16 @@ const RuleDef& ruleDef(RuleId id);
 const RuleDef* ruleByCode(std::string_view code);
 // "ncservo.rule.illegal_enable_edge"
 std::string ruleFilterName(const RuleDef& rule);
+
+// A bus or slave rule's finding on an event, before the user's severities are applied.
+struct EventFinding {
+  RuleId rule{};
+  SlaveRef slave;  // the slave it is about, for slave rules
+  std::string message;
+};
+// The enabled bus and slave rules that fire on the event, in table order.
+void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+                std::vector<EventFinding>& out);
 
 // What the user may change: RULES.md defaults, then the config file, then the command line.
 struct RuleSettings {

@@ -31,24 +31,6 @@ inline void readFrameValues(const AxisPlacement& placement, const ByteReader& by
   }
 }
 
-// The words the rules judge at the placement: what a frame that may change nothing needs read.
-// A PDO the frame does not carry (or that is cut short) counts as absent, as in readFrameValues.
-inline JudgedWords readJudgedWords(const AxisPlacement& placement, const ByteReader& bytes) {
-  JudgedWords out;
-  if (placement.has_rx && bytes.has(placement.rx_offset, kRxPdoSize)) {
-    out.has_rx = true;
-    out.scw = static_cast<std::uint32_t>(loadWord<Word::Scw>(bytes.data() + placement.rx_offset));
-  }
-  if (placement.has_tx && bytes.has(placement.tx_offset, kTxPdoSize)) {
-    const std::uint8_t* pdo = bytes.data() + placement.tx_offset;
-    out.has_tx = true;
-    out.ssw = static_cast<std::uint32_t>(loadWord<Word::Ssw>(pdo));
-    out.sew = static_cast<std::uint32_t>(loadWord<Word::Sew>(pdo));
-    out.msg_code = static_cast<std::int32_t>(loadWord<Word::MsgCode>(pdo));
-  }
-  return out;
-}
-
 struct FrameView {
   CopyKind copy = CopyKind::Master;
   bool paired = false;  // a returned copy whose master's copy was the frame just before

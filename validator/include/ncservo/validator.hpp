@@ -10,8 +10,8 @@
 
 #include "ncservo/al_tracker.hpp"
 #include "ncservo/axis_model.hpp"
+#include "ncservo/bus_model.hpp"
 #include "ncservo/finding.hpp"
-#include "ncservo/interval_stats.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/session.hpp"
 
@@ -29,9 +29,13 @@ struct CycleTimeSummary {
   std::optional<double> median_us, p99_us, max_us;
 };
 
+// The validator's fast path: an axis whose read bits did not change (rules.hpp Reads) is not
+// observed again. Off only to prove it changes nothing (tests/unit/fast_path_test.cpp).
+enum class FastPath : std::uint8_t { On, Off };
+
 class Validator {
  public:
-  Validator(DecoderOptions options, RuleSettings settings);
+  Validator(DecoderOptions options, RuleSettings settings, FastPath fast_path = FastPath::On);
 
   // One walked EtherCAT frame (any status) with its 1-based frame number and capture time.
   // Returns the frame's placements and states; findings() then holds what was reported on it.
@@ -44,7 +48,7 @@ class Validator {
   // Models of the axes seen so far, by axis index (null where an axis was never seen).
   std::size_t axisCount() const { return axes_.size(); }
   const AxisModel* axis(std::size_t index) const;
-  std::uint64_t cycles() const { return cycles_; }
+  std::uint64_t cycles() const { return bus_.cycles(); }
   CycleTimeSummary cycleTime() const;
 
  private:
@@ -62,73 +66,41 @@ class Validator {
     std::optional<std::uint16_t> al_station;  // the station it was taken from
     std::uint32_t op_entries = 0;             // the station's OP entries then
   };
-  // What a frame shape's datagrams that carry servo PDOs should return (COM-001), worked out
-  // once per shape (FrameDecode::shape_id) instead of every cycle.
-  struct WkcCheck {
-    std::uint16_t datagram;
-    std::uint16_t expected;    // what the axes it carries add to its WKC (PROTOCOL.md §8)
-    bool shared;               // other slaves' bytes share it: judged against its usual WKC
-    std::int16_t record;       // index in wkc_; kNoWkcRecord, kUnresolvedWkcRecord
-    std::uint8_t outcome = 0;  // this frame's
+  // The bits of each PDO word that the axis model or an enabled rule reads, as the fast path
+  // compares them.
+  struct JudgedWord {
+    Word word;
+    std::uint64_t bits;
   };
-  static constexpr std::int16_t kNoWkcRecord = -1;  // too many datagrams are followed
-  static constexpr std::int16_t kUnresolvedWkcRecord = -2;
-  struct WkcPlan {
-    std::uint64_t shape_id = 0;
-    std::vector<WkcCheck> checks;
+  struct Judged {
+    std::vector<JudgedWord> rx, tx;
+    bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
   };
-  // The cyclic frame that carries a group of axes, named by its lowest axis index.
-  struct CyclicFrame {
-    std::uint16_t first_axis = 0;
-    std::optional<Stamp> last_tick;
-    bool awaiting_return = false;
-    bool not_returned_episode = false;
-    Stamp last_master;
-    std::vector<std::uint16_t> axes;  // axes of the last master copy
-    std::uint64_t axes_shape_id = 0;  // the shape they were taken from (0: none cached)
-  };
-  // A cyclic datagram carrying servo PDOs: its WKC history (COM-001).
-  struct WkcRecord {
-    std::uint8_t command;
-    std::uint32_t address;
-    std::uint16_t length;
-    bool wrong_episode = false;
-    std::array<std::uint16_t, 8> values{};
-    std::array<std::uint32_t, 8> counts{};
-  };
+  static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
+  bool unchanged(const AxisPlacement& placement, const ByteReader& bytes,
+                 const AxisModel& model) const;
 
   void report(RuleId rule, std::optional<std::uint16_t> axis, const Stamp& since,
               std::string message);
   AxisSlot& slot(std::uint16_t axis);
-  CyclicFrame* cyclicFrame(std::uint16_t first_axis);
-  std::int16_t wkcRecord(const Datagram& dg);
-  WkcPlan& wkcPlan(const EcatFrame& frame);
-  // On this frame's placements (view_.decode). `first_axis`: the lowest axis index of the frame,
-  // which names its cyclic frame.
-  void accountCycle(const EcatFrame& frame, std::uint16_t first_axis);
-  void tick(CyclicFrame& cyclic);
-  void checkWorkingCounters(const EcatFrame& frame);
   void evaluateAxis(AxisSlot& axis);
   void observeAl(const EcatFrame& frame, const ByteReader& bytes);
+  void reportEvents();
   void syncAlState(const AxisPlacement& placement, AxisSlot& slot);
 
   Decoder decoder_;
   ValidatedFrame view_;  // this frame's placements and states
   RuleSettings settings_;
+  Judged judged_;
+  bool fast_path_;
   AlTracker al_;
-  std::vector<AlFinding> al_findings_;
+  BusModel bus_;
+  std::vector<BusEvent> events_;  // this frame's, from the slave and bus models
+  std::vector<EventFinding> event_findings_;
+  std::vector<AxisAccount> accounts_;  // this frame's telegram accounting
   std::vector<AxisSlot> axes_;
   std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
-  std::vector<CyclicFrame> cyclic_;
-  std::vector<WkcRecord> wkc_;
-  std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
-  std::size_t wkc_plan_next_ = 0;
-  WkcPlan uncached_plan_;  // for a frame whose shape is not cached
-  IntervalStats intervals_;
-  std::uint64_t al_epoch_ = 1;  // frames so far that could move an AL state or a station
-  std::uint64_t cycles_ = 0;
-  bool master_copies_seen_ = false;
-  bool returned_copies_seen_ = false;
+  std::uint64_t al_epoch_ = 1;      // frames so far that could move an AL state or a station
   Stamp now_;                       // this frame, on the monotonic clock of the timers
   std::int64_t frame_time_ns_ = 0;  // this frame's own timestamp
   bool any_frame_ = false;

@@ -1,0 +1,98 @@
+// The bus as the cyclic frames show it (PROTOCOL.md §8, RULES.md COM-*): each cyclic frame's
+// clock and interval statistics, whether master frames come back, and the working counter of
+// every returned datagram that carries servo PDOs. Gives the events the bus rules judge and each
+// axis's telegram accounting; never reports a finding itself.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ncservo/bus_events.hpp"
+#include "ncservo/decoder.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/interval_stats.hpp"
+
+namespace ncservo {
+
+// What one frame means for one axis's telegram-failure counters (RULES.md COM-003, COM-005).
+struct AxisAccount {
+  enum class Outcome : std::uint8_t { Good, Failed, Lost };
+  std::uint16_t axis = 0;
+  Outcome outcome = Outcome::Good;
+  std::uint32_t cycles = 1;
+};
+
+class BusModel {
+ public:
+  // One frame that carries servo PDOs, at `now` on the timers' monotonic clock; `frame_time_ns`
+  // is its own timestamp. Appends the events the bus rules judge and the axes' accounting, in the
+  // order they happened.
+  void onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
+                     std::int64_t frame_time_ns, std::vector<BusEvent>& events,
+                     std::vector<AxisAccount>& accounts);
+
+  std::uint64_t cycles() const { return cycles_; }
+  const IntervalStats& intervals() const { return intervals_; }
+
+ private:
+  // What a frame shape's datagrams that carry servo PDOs should return (COM-001), worked out
+  // once per shape (FrameDecode::shape_id) instead of every cycle.
+  struct WkcCheck {
+    std::uint16_t datagram;
+    std::uint16_t expected;  // what the axes it carries add to its WKC (PROTOCOL.md §8)
+    bool shared;             // other slaves' bytes share it: judged against its usual WKC
+    std::int16_t record;     // index in wkc_; kNoWkcRecord, kUnresolvedWkcRecord
+    AxisAccount::Outcome outcome = AxisAccount::Outcome::Good;  // this frame's
+  };
+  static constexpr std::int16_t kNoWkcRecord = -1;  // too many datagrams are followed
+  static constexpr std::int16_t kUnresolvedWkcRecord = -2;
+  struct WkcPlan {
+    std::uint64_t shape_id = 0;
+    std::vector<WkcCheck> checks;
+  };
+  // The cyclic frame that carries a group of axes, named by its lowest axis index.
+  struct CyclicFrame {
+    std::uint16_t first_axis = 0;
+    std::optional<Stamp> last_tick;
+    bool awaiting_return = false;
+    bool not_returned_episode = false;
+    Stamp last_master;
+    std::vector<std::uint16_t> axes;  // axes of the last master copy
+    std::uint64_t axes_shape_id = 0;  // the shape they were taken from (0: none cached)
+  };
+  // A cyclic datagram carrying servo PDOs: its WKC history (COM-001).
+  struct WkcRecord {
+    std::uint8_t command;
+    std::uint32_t address;
+    std::uint16_t length;
+    bool wrong_episode = false;
+    std::array<std::uint16_t, 8> values{};
+    std::array<std::uint32_t, 8> counts{};
+  };
+
+  CyclicFrame& cyclicFrame(std::uint16_t first_axis);
+  std::int16_t wkcRecord(const Datagram& dg);
+  WkcPlan& wkcPlan(const EcatFrame& frame, const FrameDecode& decode);
+  void tick(CyclicFrame& cyclic, const FrameDecode& decode);
+  void checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode);
+
+  // This frame's.
+  Stamp now_;
+  std::int64_t frame_time_ns_ = 0;
+  std::vector<BusEvent>* events_ = nullptr;
+  std::vector<AxisAccount>* accounts_ = nullptr;
+
+  std::vector<CyclicFrame> cyclic_;
+  std::vector<WkcRecord> wkc_;
+  std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
+  std::size_t wkc_plan_next_ = 0;
+  WkcPlan uncached_plan_;  // for a frame whose shape is not cached
+  IntervalStats intervals_;
+  std::uint64_t cycles_ = 0;
+  bool master_copies_seen_ = false;
+  bool returned_copies_seen_ = false;
+};
+
+}  // namespace ncservo

@@ -1,0 +1,230 @@
+#include "ncservo/bus_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ncservo/pdo_layout.hpp"
+
+namespace ncservo {
+
+namespace {
+// RULES.md COM-002: no gap is judged before 8 intervals; a gap is more than 1.5 × the median.
+constexpr std::uint64_t kIntervalsBeforeGaps = 8;
+constexpr std::int64_t kGapNumerator = 3, kGapDenominator = 2;
+constexpr std::size_t kMaxWkcRecords = 64;
+using Outcome = AxisAccount::Outcome;
+
+// PROTOCOL.md §8: an LRW/FPRW adds 2 for a slave whose outputs it writes and 1 for one whose
+// inputs it reads; LRD/LWR/FPRD/FPWR add 1 per slave.
+std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
+  if (cmd == ecat::kLrw || cmd == ecat::kFprw) return (outputs ? 2 : 0) + (inputs ? 1 : 0);
+  return (outputs && ecat::writesSlaves(cmd)) || (inputs && ecat::readsSlaves(cmd)) ? 1 : 0;
+}
+}  // namespace
+
+BusModel::CyclicFrame& BusModel::cyclicFrame(std::uint16_t first_axis) {
+  for (CyclicFrame& c : cyclic_) {
+    if (c.first_axis == first_axis) return c;
+  }
+  cyclic_.push_back(CyclicFrame{});
+  cyclic_.back().first_axis = first_axis;
+  return cyclic_.back();
+}
+
+// Telegram accounting (RULES.md COM-002, COM-004; failures for COM-003 and COM-005). The clock is
+// the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
+void BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
+                             std::int64_t frame_time_ns, std::vector<BusEvent>& events,
+                             std::vector<AxisAccount>& accounts) {
+  now_ = now;
+  frame_time_ns_ = frame_time_ns;
+  events_ = &events;
+  accounts_ = &accounts;
+  CyclicFrame& cyclic = cyclicFrame(decode.axes[0].axis);
+  const bool master = decode.copy == CopyKind::Master;
+  if (master && !master_copies_seen_) {
+    master_copies_seen_ = true;
+    for (CyclicFrame& c : cyclic_) c.last_tick.reset();  // returned copies were the clock so far
+  }
+  returned_copies_seen_ = returned_copies_seen_ || !master;
+
+  if (master) {
+    // RULES.md COM-004: judged on the next master frame, once returned copies exist at all.
+    if (cyclic.awaiting_return && returned_copies_seen_) {
+      if (!cyclic.not_returned_episode) {
+        cyclic.not_returned_episode = true;
+        events.push_back(
+            {cyclic.last_master,
+             NotReturnedEvent{cyclic.last_master.frame, cyclic.axes.front(), cyclic.axes.back()}});
+      }
+      for (std::uint16_t a : cyclic.axes) accounts.push_back({a, Outcome::Lost, 1});
+    }
+    cyclic.awaiting_return = true;
+    cyclic.last_master = now_;
+    // A cached shape carries the same axes as last time.
+    if (decode.shape_id == 0 || decode.shape_id != cyclic.axes_shape_id) {
+      cyclic.axes.clear();
+      for (std::size_t i = 0; i < decode.axis_count; ++i)
+        cyclic.axes.push_back(decode.axes[i].axis);
+      cyclic.axes_shape_id = decode.shape_id;
+    }
+    tick(cyclic, decode);
+  } else {
+    if (!master_copies_seen_) tick(cyclic, decode);
+    cyclic.awaiting_return = false;
+    cyclic.not_returned_episode = false;
+    checkWorkingCounters(frame, decode);
+  }
+}
+
+// One tick of a cyclic frame's clock: the interval statistics and COM-002.
+void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
+  if (cyclic.first_axis == cyclic_.front().first_axis) ++cycles_;
+  // RULES.md "Time": a timestamp that went backwards is not an error; the interval it would
+  // give is unknown, so the clock of this cyclic frame starts again at the next tick.
+  if (frame_time_ns_ < now_.time_ns) {
+    cyclic.last_tick.reset();
+    return;
+  }
+  if (!cyclic.last_tick) {
+    cyclic.last_tick = now_;
+    return;
+  }
+  const std::int64_t interval = now_.time_ns - cyclic.last_tick->time_ns;
+  const std::optional<std::int64_t> median = intervals_.medianNs();
+  if (intervals_.count() >= kIntervalsBeforeGaps && median && *median > 0 &&
+      interval * kGapDenominator > *median * kGapNumerator) {
+    const auto missing = static_cast<std::uint32_t>(
+        std::llround(static_cast<double>(interval) / static_cast<double>(*median)) - 1);
+    events_->push_back(
+        {*cyclic.last_tick, CycleGapEvent{interval, *median, missing, cyclic.last_tick->frame}});
+    if (missing > 0) {
+      for (std::size_t i = 0; i < decode.axis_count; ++i) {
+        accounts_->push_back({decode.axes[i].axis, Outcome::Lost, missing});
+      }
+    }
+  }
+  intervals_.add(interval);
+  cyclic.last_tick = now_;
+}
+
+std::int16_t BusModel::wkcRecord(const Datagram& dg) {
+  for (std::size_t i = 0; i < wkc_.size(); ++i) {
+    const WkcRecord& r = wkc_[i];
+    if (r.command == dg.command && r.address == dg.address && r.length == dg.length) {
+      return static_cast<std::int16_t>(i);
+    }
+  }
+  if (wkc_.size() >= kMaxWkcRecords) return kNoWkcRecord;
+  wkc_.push_back(WkcRecord{dg.command, dg.address, dg.length});
+  return static_cast<std::int16_t>(wkc_.size() - 1);
+}
+
+// Which datagrams of this frame carry servo PDOs, and what the axes in each add to its WKC.
+BusModel::WkcPlan& BusModel::wkcPlan(const EcatFrame& frame, const FrameDecode& decode) {
+  if (decode.shape_id != 0) {
+    for (WkcPlan& plan : wkc_plans_) {
+      if (plan.shape_id == decode.shape_id) return plan;
+    }
+  }
+  WkcPlan& plan = decode.shape_id != 0 ? wkc_plans_[wkc_plan_next_] : uncached_plan_;
+  if (decode.shape_id != 0) wkc_plan_next_ = (wkc_plan_next_ + 1) % wkc_plans_.size();
+  plan.shape_id = decode.shape_id;
+  plan.checks.clear();
+  // Per datagram: what the axes it carries add to its WKC and the bytes of theirs it holds.
+  struct Carried {
+    bool carries = false;
+    std::uint16_t expected = 0;
+    std::size_t covered = 0;
+  };
+  std::array<Carried, ecat::kMaxDatagrams> carried{};
+  const std::size_t count = std::min(frame.count, carried.size());
+  auto add = [&](std::size_t d, bool out, bool in) {
+    if (d >= count) return;
+    Carried& c = carried[d];
+    c.carries = true;
+    c.expected =
+        static_cast<std::uint16_t>(c.expected + wkcShare(frame.datagrams[d].command, out, in));
+    c.covered += (out ? kRxPdoSize : 0) + (in ? kTxPdoSize : 0);
+  };
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& p = decode.axes[i];
+    if (p.rx_placed && p.tx_placed && p.rx_datagram == p.tx_datagram) {
+      add(p.rx_datagram, true, true);
+      continue;
+    }
+    if (p.rx_placed) add(p.rx_datagram, true, false);
+    if (p.tx_placed) add(p.tx_datagram, false, true);
+  }
+  for (std::size_t d = 0; d < count; ++d) {
+    if (!carried[d].carries) continue;
+    plan.checks.push_back(WkcCheck{static_cast<std::uint16_t>(d), carried[d].expected,
+                                   carried[d].covered != frame.datagrams[d].length,
+                                   kUnresolvedWkcRecord});
+  }
+  return plan;
+}
+
+// RULES.md COM-001 on each returned datagram that carries servo PDOs, and each axis's cycle:
+// lost (WKC 0), failed (another wrong WKC) or good.
+void BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode) {
+  WkcPlan& plan = wkcPlan(frame, decode);
+  bool all_good = true;
+  for (WkcCheck& check : plan.checks) {
+    const Datagram& dg = frame.datagrams[check.datagram];
+    check.outcome = Outcome::Good;
+    if (!dg.has_wkc) continue;
+    if (check.record == kUnresolvedWkcRecord) check.record = wkcRecord(dg);
+    WkcRecord* record = check.record >= 0 ? &wkc_[static_cast<std::size_t>(check.record)] : nullptr;
+    std::uint16_t expected = check.expected;
+    // Other slaves share the datagram: the expected value is the one seen most often so far.
+    if (check.shared && record != nullptr) {
+      std::size_t slot_index = record->values.size();
+      for (std::size_t k = 0; k < record->values.size(); ++k) {
+        if (record->counts[k] > 0 && record->values[k] == dg.wkc) slot_index = k;
+      }
+      if (slot_index == record->values.size()) {
+        slot_index = static_cast<std::size_t>(
+            std::min_element(record->counts.begin(), record->counts.end()) -
+            record->counts.begin());
+        if (record->counts[slot_index] == 0)
+          record->values[slot_index] = dg.wkc;
+        else
+          slot_index = record->values.size();  // too many distinct values: not counted
+      }
+      if (slot_index < record->values.size()) ++record->counts[slot_index];
+      const std::size_t mode = static_cast<std::size_t>(
+          std::max_element(record->counts.begin(), record->counts.end()) - record->counts.begin());
+      expected = record->values[mode];
+    }
+    if (dg.wkc != expected) {
+      check.outcome = dg.wkc == 0 ? Outcome::Lost : Outcome::Failed;
+      all_good = false;
+      if (record == nullptr || !record->wrong_episode) {
+        if (record != nullptr) record->wrong_episode = true;
+        events_->push_back(
+            {now_, WorkingCounterEvent{dg.command, dg.address, dg.length, dg.wkc, expected}});
+      }
+    } else if (record != nullptr) {
+      record->wrong_episode = false;
+    }
+  }
+  if (all_good) {
+    for (std::size_t i = 0; i < decode.axis_count; ++i) {
+      accounts_->push_back({decode.axes[i].axis, Outcome::Good, 1});
+    }
+    return;
+  }
+  std::array<Outcome, ecat::kMaxDatagrams> outcomes{};
+  for (const WkcCheck& check : plan.checks) outcomes[check.datagram] = check.outcome;
+  const std::size_t count = std::min(frame.count, outcomes.size());
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& p = decode.axes[i];
+    Outcome outcome = Outcome::Good;
+    if (p.rx_placed && p.rx_datagram < count) outcome = outcomes[p.rx_datagram];
+    if (p.tx_placed && p.tx_datagram < count) outcome = std::max(outcome, outcomes[p.tx_datagram]);
+    accounts_->push_back({p.axis, outcome, 1});
+  }
+}
+
+}  // namespace ncservo
