@@ -17,9 +17,11 @@
 #include <wsutil/report_message.h>
 
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "item_texts.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
@@ -41,16 +43,6 @@ const int plugin_want_minor = WIRESHARK_VERSION_MINOR;
 namespace {
 
 using namespace ncservo;
-
-// Built as ncservo_item_floor.so only for the benchmark (tests/bench/plugin_ratio.sh,
-// NCSERVO_BENCH_FLOOR=1): the same first pass and the same items as the plugin, but constant
-// texts instead of labels, names, states and messages, so that what remains is what Wireshark
-// itself spends on the items.
-#ifdef NCSERVO_ITEM_FLOOR
-constexpr bool kItemFloor = true;
-#else
-constexpr bool kItemFloor = false;
-#endif
 
 constexpr std::size_t kDerivedCount = std::size(kDerivedFields);
 constexpr std::size_t kMaxChildren = 33;  // at most 32 bit fields per word, NULL-terminated
@@ -269,8 +261,7 @@ void buildWordItems() {
 
 void applyPreferences() {
   auto* settings = new RuleSettings();
-  bool default_layout = pref_default_layout != FALSE;
-  std::vector<AxisConfig> config_axes;
+  std::optional<Config> config;
   std::vector<AxisConfig> eni_axes;
   if (pref_eni_path != nullptr && pref_eni_path[0] != '\0') {
     EniResult eni = loadEni(pref_eni_path);
@@ -283,10 +274,9 @@ void applyPreferences() {
   if (pref_config_path != nullptr && pref_config_path[0] != '\0') {
     ConfigResult loaded = loadConfig(pref_config_path);
     if (loaded.ok()) {
-      config_axes = loaded.config->axes;
-      default_layout = default_layout && loaded.config->default_layout;
+      config = std::move(loaded.config);
       // Severity overrides are left to Wireshark's own expert-severity table (PROTOCOL.md §10).
-      if (auto error = settings->apply(*loaded.config)) {
+      if (auto error = settings->apply(*config)) {
         report_failure("NCSERVO: %s: %s", pref_config_path, error->c_str());
       }
     } else {
@@ -294,40 +284,16 @@ void applyPreferences() {
     }
   }
   if (pref_servo_ready_mode >= 0) settings->servo_ready_mode = pref_servo_ready_mode;
-  // PROTOCOL.md §9: the configuration, else the ENI, else the start-up, else the default layout.
-  auto* options = new DecoderOptions(layoutOptions(&config_axes, &eni_axes, default_layout));
+  auto* options = new DecoderOptions(
+      layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != FALSE));
   delete g_options;
   g_options = options;
   delete g_settings;
   g_settings = settings;
 }
 
-// Each axis's subtree label ("Axis 3 (x): control active") per drive state, formatted once per
-// capture: formatting it on every frame cost more than creating the item it names.
-constexpr std::size_t kStateSlots = 9;  // the eight drive states, then "no state"
-struct AxisLabel {
-  std::string name;             // the axis name and
-  const char* state = nullptr;  // the state name it was made with
-  std::string text;
-};
-std::vector<AxisLabel> g_axis_labels;  // [axis * kStateSlots + slot]
-
-const char* axisLabel(const AxisRecord& r, const char* name, const char* state) {
-  const std::size_t slot = (r.flags & kHasState) ? r.state % (kStateSlots - 1) : kStateSlots - 1;
-  const std::size_t index = std::size_t{r.axis} * kStateSlots + slot;
-  if (index >= g_axis_labels.size()) g_axis_labels.resize(index + kStateSlots);
-  AxisLabel& label = g_axis_labels[index];
-  if (label.text.empty() || label.state != state || label.name != name) {
-    label.name = name;
-    label.state = state;
-    label.text =
-        fmt::format("Axis {} ({}){}{}", r.axis, name, state ? ": " : "", state ? state : "");
-  }
-  return label.text.c_str();
-}
-
 void initCapture() {
-  g_axis_labels.clear();
+  plugin::resetItemTexts();
   delete g_validator;
   g_validator = new Validator(g_options != nullptr ? *g_options : DecoderOptions{},
                               g_settings != nullptr ? *g_settings : RuleSettings{});
@@ -488,16 +454,17 @@ bool findingsFor(const FrameRecord& record, guint16 axis) {
 
 void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRecord& record,
              const AxisRecord& r) {
-  const char* name = kItemFloor ? "axis" : axisName(r.axis);
-  const char* state = !(r.flags & kHasState) ? nullptr
-                      : kItemFloor           ? "state"
-                                             : driveStateName(static_cast<DriveState>(r.state));
+  const std::optional<DriveState> known_state =
+      (r.flags & kHasState) ? std::optional(static_cast<DriveState>(r.state)) : std::nullopt;
+  const plugin::AxisTexts texts = plugin::axisTexts(r.axis, axisName(r.axis), known_state);
+  const char* name = texts.name;
+  const char* state = texts.state;
   // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
   // raise an exception.
   const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
   proto_item* axis_item = nullptr;
-  proto_tree* axis_tree = proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item,
-                                                 kItemFloor ? "Axis" : axisLabel(r, name, state));
+  proto_tree* axis_tree =
+      proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item, texts.label);
   proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
   proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
 
@@ -514,8 +481,8 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRec
         proto_tree_add_string(axis_tree, derivedHf(Derived::State), tvb, start, 0, state));
   }
   if (values.has_tx) {
-    char message[128] = "message";
-    if (!kItemFloor) formatMessage(message, sizeof message, values.msgCode(), values.msgData());
+    char message[128];
+    plugin::messageText(values, message, sizeof message);
     proto_item_set_generated(proto_tree_add_string(axis_tree, derivedHf(Derived::Message), tvb,
                                                    r.tx_offset, 0, message));
   }
@@ -545,8 +512,8 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
   col_append_str(pinfo->cinfo, COL_INFO, " [NCSERVO ");
   if (record->axis_count > 0) {
-    const char* copy = kItemFloor ? "copy" : copyKindName(static_cast<CopyKind>(record->copy));
-    if (!kItemFloor) proto_item_append_text(root, ", %s copy, %u axes", copy, record->axis_count);
+    const char* copy =
+        plugin::describeCopy(root, static_cast<CopyKind>(record->copy), record->axis_count);
     proto_item_set_generated(
         proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
   }

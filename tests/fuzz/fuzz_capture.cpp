@@ -37,7 +37,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::fclose(file);
 
   static std::FILE* sink = std::fopen("/dev/null", "w");
-  const auto format = static_cast<cli::Format>(size % 5);
+  static const std::vector<std::string> formats = cli::reportFormatNames();
+  const cli::ReportFormat& format = *cli::findReportFormat(formats[size % formats.size()]);
   cli::ReportWriter writer(sink, format, Severity::Error, false);
   std::vector<cli::CaptureReport> reports(1);
   cli::CaptureReport& report = reports.back();

@@ -845,7 +845,9 @@ TEST(LayoutPrecedence, ConfigurationThenEniThenStartupThenDefault) {
   from_eni.name = "E";
   from_eni.outputs = 0x00060000;
   from_eni.inputs = 0x0006000A;
-  const std::vector<AxisConfig> config{from_config}, eni{from_eni};
+  Config config;
+  config.axes = {from_config};
+  const std::vector<AxisConfig> eni{from_eni};
   const PrecedenceCase cases[] = {
       {"configuration over everything", true, true, true, LayoutSource::Config, 0x00050000},
       {"configuration over the start-up", true, false, true, LayoutSource::Config, 0x00050000},
@@ -865,6 +867,55 @@ TEST(LayoutPrecedence, ConfigurationThenEniThenStartupThenDefault) {
     EXPECT_EQ(decoder.source(), c.source);
     ASSERT_FALSE(decoder.axes().empty());
     EXPECT_EQ(decoder.axes()[0].outputs, c.outputs);
+  }
+}
+
+// PROTOCOL.md §9.4: the default layout applies unless the user (--no-default-layout, the plugin's
+// preference) or the configuration (default_layout = false) rules it out; §9.1-9.2: a
+// configuration's axes come before an ENI's, and a configuration without axes gives none.
+struct LayoutOptionsCase {
+  const char* name;
+  bool config;                                  // a configuration file was given
+  bool config_axes;                             // ... with axes
+  bool config_default_layout;                   // ... and its default_layout
+  bool eni;                                     // an ENI with axes was given
+  bool allow_default_layout;                    // the user's choice
+  bool default_layout;                          // expected
+  std::optional<LayoutSource> explicit_source;  // expected; nullopt: no explicit axes
+};
+const LayoutOptionsCase kLayoutOptionsCases[] = {
+    {"nothing given", false, false, true, false, true, true, std::nullopt},
+    {"user rules the default out", false, false, true, false, false, false, std::nullopt},
+    {"configuration without axes keeps the default", true, false, true, false, true, true,
+     std::nullopt},
+    {"configuration rules the default out", true, false, false, false, true, false, std::nullopt},
+    {"configuration allows, user rules out", true, false, true, false, false, false, std::nullopt},
+    {"configuration's axes", true, true, true, false, true, true, LayoutSource::Config},
+    {"configuration's axes over the ENI's", true, true, true, true, true, true,
+     LayoutSource::Config},
+    {"ENI when the configuration has no axes", true, false, false, true, true, false,
+     LayoutSource::Eni},
+    {"ENI alone", false, false, true, true, false, false, LayoutSource::Eni},
+};
+
+TEST(LayoutOptions, SourcesAndTheDefaultLayoutDecision) {
+  AxisConfig axis;
+  axis.name = "a";
+  axis.outputs = 0x00050000;
+  axis.inputs = 0x0005000A;
+  const std::vector<AxisConfig> eni{axis};
+  for (const LayoutOptionsCase& c : kLayoutOptionsCases) {
+    SCOPED_TRACE(c.name);
+    Config config;
+    config.default_layout = c.config_default_layout;
+    if (c.config_axes) config.axes = {axis};
+    const DecoderOptions options =
+        layoutOptions(c.config ? &config : nullptr, c.eni ? &eni : nullptr, c.allow_default_layout);
+    EXPECT_EQ(options.default_layout, c.default_layout);
+    EXPECT_EQ(options.axes.empty(), !c.explicit_source.has_value());
+    if (c.explicit_source) {
+      EXPECT_EQ(options.explicit_source, *c.explicit_source);
+    }
   }
 }
 

@@ -1,98 +1,25 @@
-// Layout sources of PROTOCOL.md §9 other than the configuration file: learning from the start-up
-// (LayoutLearner) and the ENI file. The simulator's set-ups are the truth: what it configured is
-// what learning and the ENI it writes must give.
+// The ENI file as a layout source (eni.hpp, PROTOCOL.md §9.2): the simulator's set-ups are the
+// truth, and a broken file is named with its line.
 #include <gtest/gtest.h>
 
-#include <memory>
 #include <string>
 #include <vector>
 
 #include "ncservo/eni.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/layout_learner.hpp"
 #include "ncservo/simulator.hpp"
 #include "row_name.hpp"
+#include "simulated_setups.hpp"
 
 namespace ncservo {
 namespace {
 
-struct SetUp {
-  const char* name;
-  int axes;
-  int io_slaves;
-  sim::LayoutKind layout;
-};
-const SetUp kSetUps[] = {
-    {"1 axis", 1, 0, sim::LayoutKind::Default},
-    {"4 axes, default layout", 4, 0, sim::LayoutKind::Default},
-    {"3 axes and 2 terminals, interleaved", 3, 2, sim::LayoutKind::Interleaved},
-    {"4 axes and 4 terminals, default layout", 4, 4, sim::LayoutKind::Default},
-    {"32 axes and 3 terminals, two frames", 32, 3, sim::LayoutKind::Interleaved},
-};
+using test::expectSameAxes;
+using test::kSetUps;
+using test::optionsFor;
 
-sim::SimOptions optionsFor(const SetUp& s) {
-  sim::SimOptions o;
-  o.axes = s.axes;
-  o.io_slaves = s.io_slaves;
-  o.layout = s.layout;
-  o.duration_s = 1.0;
-  EXPECT_EQ(sim::resolveOptions(o), "");
-  return o;
-}
+class EniOfSetUp : public ::testing::TestWithParam<test::SetUp> {};
 
-// Feeds the simulator's frames to the learner, telling master and returned copies apart as the
-// decoder does (a returned copy repeats the datagram list of the master copy just before it).
-// Stops before the first frame that writes an FMMU when `before_fmmus`.
-void learn(sim::Simulator& simulator, LayoutLearner& learner, std::size_t max_frames,
-           bool before_fmmus = false) {
-  auto previous = std::make_unique<EcatFrame>();
-  auto frame = std::make_unique<EcatFrame>();
-  bool previous_master = false;
-  std::size_t n = 0;
-  simulator.run([&](const sim::SimFrame& f) {
-    ByteReader bytes(f.data, f.size);
-    walkPacket(LinkType::Ethernet, bytes, *frame);
-    if (before_fmmus && frame->count > 0 && frame->datagrams[0].command == ecat::kFpwr &&
-        frame->datagrams[0].ado() == ecat::kRegFmmu0) {
-      return false;
-    }
-    const bool returned = (f.data[6] & 0x02) != 0;  // the slaves' locally-administered bit
-    const bool paired = returned && previous_master && frame->sameDatagramList(*previous);
-    learner.onFrame(*frame, bytes, returned, paired);
-    previous_master = !returned;
-    std::swap(previous, frame);
-    return ++n < max_frames;
-  });
-}
-
-void expectSameAxes(const std::vector<AxisConfig>& got,
-                    const std::vector<sim::SimAxisLayout>& want) {
-  ASSERT_EQ(got.size(), want.size());
-  for (std::size_t i = 0; i < want.size(); ++i) {
-    SCOPED_TRACE(want[i].name);
-    EXPECT_EQ(got[i].outputs, want[i].outputs);
-    EXPECT_EQ(got[i].inputs, want[i].inputs);
-    EXPECT_EQ(got[i].station, want[i].station);
-  }
-}
-
-class LearnedLayout : public ::testing::TestWithParam<SetUp> {};
-
-TEST_P(LearnedLayout, MatchesWhatTheStartUpConfigured) {
-  sim::Simulator simulator(optionsFor(GetParam()));
-  LayoutLearner learner;
-  learn(simulator, learner, 400);  // the start-up and the first cycles
-  EXPECT_TRUE(learner.sawConfiguration());
-  expectSameAxes(learner.axes(), simulator.layout());
-  const auto slaves = learner.slaves();
-  ASSERT_EQ(slaves.size(), static_cast<std::size_t>(GetParam().axes + GetParam().io_slaves));
-  for (std::size_t pos = 0; pos < slaves.size(); ++pos) {
-    EXPECT_EQ(slaves[pos].position, pos);
-    EXPECT_EQ(slaves[pos].station, 0x03E9 + pos);
-  }
-}
-
-TEST_P(LearnedLayout, EniGivesTheSameLayout) {
+TEST_P(EniOfSetUp, GivesTheSimulatedLayout) {
   sim::Simulator simulator(optionsFor(GetParam()));
   const EniResult eni = parseEni(simulator.eni(), "sim.xml");
   ASSERT_TRUE(eni.ok()) << eni.error->text();
@@ -100,32 +27,8 @@ TEST_P(LearnedLayout, EniGivesTheSameLayout) {
   expectSameAxes(eni.axes, simulator.layout());
 }
 
-INSTANTIATE_TEST_SUITE_P(SimulatedSetUps, LearnedLayout, ::testing::ValuesIn(kSetUps),
-                         test::rowName<SetUp>);
-
-TEST(LearnedLayout, NothingBeforeTheFmmusAreWritten) {
-  sim::SimOptions o;
-  o.duration_s = 1.0;
-  ASSERT_EQ(sim::resolveOptions(o), "");
-  sim::Simulator simulator(o);
-  LayoutLearner learner;
-  learn(simulator, learner, 1000, true);  // up to the SM writes, before the FMMU writes
-  EXPECT_TRUE(learner.sawConfiguration());
-  EXPECT_TRUE(learner.axes().empty());
-  EXPECT_EQ(learner.generation(), 0u);
-}
-
-TEST(LearnedLayout, NoStartUpNothingLearned) {
-  sim::SimOptions o;
-  o.duration_s = 1.0;
-  o.startup = false;
-  ASSERT_EQ(sim::resolveOptions(o), "");
-  sim::Simulator simulator(o);
-  LayoutLearner learner;
-  learn(simulator, learner, 200);
-  EXPECT_FALSE(learner.sawConfiguration());
-  EXPECT_TRUE(learner.axes().empty());
-}
+INSTANTIATE_TEST_SUITE_P(SimulatedSetUps, EniOfSetUp, ::testing::ValuesIn(kSetUps),
+                         test::rowName<test::SetUp>);
 
 struct EniCase {
   const char* name;

@@ -1,5 +1,7 @@
 // ncservo: the command-line face of the library. It parses arguments and presents; the protocol
-// knowledge lives in the library's tables.
+// knowledge lives in the library's tables. Every subcommand (kSubcommands) and every output format
+// (kRowFormats, kFieldListFormats, kRuleListFormats, kCaptureFormats, report.hpp's ReportFormat)
+// is a row: the options, their choices and help, and the dispatch are derived from the rows.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -7,7 +9,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <map>
+#include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -17,6 +20,7 @@
 #include "ncservo/capture_writer.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/eni.hpp"
+#include "ncservo/error.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
@@ -31,10 +35,117 @@ using namespace ncservo;
 
 enum ExitCode { kExitOk = 0, kExitFindings = 1, kExitUsage = 2, kExitCapture = 3 };
 
+// ---- Format tables and the --format option derived from them ----
+
+template <typename Row, std::size_t N>
+std::vector<std::string> namesOf(const Row (&rows)[N]) {
+  std::vector<std::string> names;
+  for (const Row& row : rows) names.emplace_back(row.name);
+  return names;
+}
+
+// The row `--format` chose; its check admits only the table's names.
+template <typename Row, std::size_t N>
+const Row& rowNamed(const Row (&rows)[N], const std::string& name) {
+  for (const Row& row : rows) {
+    if (name == row.name) return row;
+  }
+  return rows[0];
+}
+
+// "a, b or c".
+std::string choiceList(const std::vector<std::string>& names) {
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  }
+  return text;
+}
+
+// --format, one of `names`; its help lists them, then `note`.
+void addFormatOption(CLI::App& command, std::string& format, const std::vector<std::string>& names,
+                     const std::string& note = "") {
+  command.add_option("--format", format, choiceList(names) + note)->check(CLI::IsMember(names));
+}
+
+// ---- decode ----
+
 std::string shortName(const char* filter) {
   std::string name(filter);
   return name.substr(std::string("ncservo.").size());
 }
+
+std::string messageOf(const PdoValues& values) {
+  char message[128] = "";
+  if (values.has_tx) formatMessage(message, sizeof message, values.msgCode(), values.msgData());
+  return message;
+}
+
+const char* stateOf(const CycleRow& row) {
+  return row.state ? driveStateName(*row.state) : "";
+}
+
+std::string csvCell(const FieldDef& f, const PdoValues& values) {
+  if (!fieldApplies(f, values)) return "";
+  const FieldValue v = fieldValue(f, values);
+  switch (v.kind) {
+    case FieldValue::Kind::Float:
+      return fmt::format("{:.9g}", v.f);
+    case FieldValue::Kind::Signed:
+      return fmt::format("{}", v.i);
+    case FieldValue::Kind::Unsigned:
+      return f.kind == FieldKind::Word ? fmt::format("0x{:08x}", v.u) : fmt::format("{}", v.u);
+  }
+  return "";
+}
+
+void writeCsvHeader(std::FILE* out) {
+  std::string line = "frame,time,axis,name";
+  for (const FieldDef& f : kFields) line += "," + shortName(f.filter);
+  line += ",state,message\n";
+  std::fputs(line.c_str(), out);
+}
+
+void writeCsvRow(std::FILE* out, const CycleRow& row, const std::string& name, double time) {
+  std::string line = fmt::format("{},{:.9f},{},{}", row.frame, time, row.axis, name);
+  for (const FieldDef& f : kFields) line += "," + csvCell(f, row.values);
+  line += fmt::format(",{},\"{}\"\n", stateOf(row), messageOf(row.values));
+  std::fputs(line.c_str(), out);
+}
+
+void writeJsonRow(std::FILE* out, const CycleRow& row, const std::string& name, double time) {
+  nlohmann::ordered_json j;
+  j["frame"] = row.frame;
+  j["time"] = time;
+  j["axis"] = row.axis;
+  j["name"] = name;
+  for (const FieldDef& f : kFields) {
+    if (!fieldApplies(f, row.values)) continue;
+    const FieldValue v = fieldValue(f, row.values);
+    auto& slot = j[shortName(f.filter)];
+    if (v.kind == FieldValue::Kind::Float) {
+      slot = v.f;
+    } else if (v.kind == FieldValue::Kind::Signed) {
+      slot = v.i;
+    } else {
+      slot = v.u;
+    }
+  }
+  if (row.state) j["state"] = stateOf(row);
+  if (row.values.has_tx) j["message"] = messageOf(row.values);
+  std::fputs((j.dump() + "\n").c_str(), out);
+}
+
+// `decode`'s formats (INTERFACES.md): one line per axis and cycle, after an optional header.
+struct RowFormat {
+  const char* name;
+  void (*header)(std::FILE* out);
+  void (*row)(std::FILE* out, const CycleRow& row, const std::string& name, double time);
+};
+const RowFormat kRowFormats[] = {
+    {"csv", writeCsvHeader, writeCsvRow},
+    {"jsonl", nullptr, writeJsonRow},
+};
 
 // A PDO region the capture cut short or that straddles its datagram's end (the frame is still
 // analysed; the region is not read).
@@ -45,81 +156,40 @@ void warnIfMalformed(const std::string& capture, std::uint64_t frame, const Axis
              capture, frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
 }
 
-class RowWriter {
- public:
-  RowWriter(std::FILE* out, bool csv, const Decoder& decoder)
-      : out_(out), csv_(csv), decoder_(decoder) {}
-
-  void header() {
-    if (!csv_) return;
-    std::string line = "frame,time,axis,name";
-    for (const FieldDef& f : kFields) line += "," + shortName(f.filter);
-    line += ",state,message\n";
-    std::fputs(line.c_str(), out_);
-  }
-
-  void write(const CycleRow& row, double time) {
-    const std::string& name = decoder_.axes().at(row.axis).name;
-    char message[128] = "";
-    if (row.values.has_tx)
-      formatMessage(message, sizeof message, row.values.msgCode(), row.values.msgData());
-    const char* state = row.state ? driveStateName(*row.state) : "";
-    if (csv_) {
-      std::string line = fmt::format("{},{:.9f},{},{}", row.frame, time, row.axis, name);
-      for (const FieldDef& f : kFields) line += "," + cell(f, row.values);
-      line += fmt::format(",{},\"{}\"\n", state, message);
-      std::fputs(line.c_str(), out_);
-      return;
-    }
-    nlohmann::ordered_json j;
-    j["frame"] = row.frame;
-    j["time"] = time;
-    j["axis"] = row.axis;
-    j["name"] = name;
-    for (const FieldDef& f : kFields) {
-      if (!fieldApplies(f, row.values)) continue;
-      const FieldValue v = fieldValue(f, row.values);
-      auto& slot = j[shortName(f.filter)];
-      if (v.kind == FieldValue::Kind::Float) {
-        slot = v.f;
-      } else if (v.kind == FieldValue::Kind::Signed) {
-        slot = v.i;
-      } else {
-        slot = v.u;
-      }
-    }
-    if (row.state) j["state"] = state;
-    if (row.values.has_tx) j["message"] = message;
-    std::fputs((j.dump() + "\n").c_str(), out_);
-  }
-
- private:
-  static std::string cell(const FieldDef& f, const PdoValues& values) {
-    if (!fieldApplies(f, values)) return "";
-    const FieldValue v = fieldValue(f, values);
-    switch (v.kind) {
-      case FieldValue::Kind::Float:
-        return fmt::format("{:.9g}", v.f);
-      case FieldValue::Kind::Signed:
-        return fmt::format("{}", v.i);
-      case FieldValue::Kind::Unsigned:
-        return f.kind == FieldKind::Word ? fmt::format("0x{:08x}", v.u) : fmt::format("{}", v.u);
-    }
-    return "";
-  }
-
-  std::FILE* out_;
-  bool csv_;
-  const Decoder& decoder_;
+// The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
+struct LayoutArgs {
+  std::string config_path;
+  std::string eni_path;
+  bool no_default_layout = false;
+};
+struct LayoutFiles {
+  std::optional<Config> config;
+  std::optional<EniResult> eni;
 };
 
-// PROTOCOL.md §9: the configuration's axes, else the ENI's, else (in the decoder) the start-up's,
-// else the default layout.
-DecoderOptions decoderOptions(const std::optional<Config>& config,
-                              const std::optional<EniResult>& eni, bool no_default_layout) {
-  const bool default_layout = !no_default_layout && (!config || config->default_layout);
-  return layoutOptions(config ? &config->axes : nullptr, eni ? &eni->axes : nullptr,
-                       default_layout);
+Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args) {
+  LayoutFiles files;
+  if (!args.config_path.empty()) {
+    ConfigResult loaded = loadConfig(args.config_path);
+    if (!loaded.ok()) return fail(loaded.error->text());
+    files.config = std::move(loaded.config);
+  }
+  if (!args.eni_path.empty()) {
+    std::optional<EniResult>& eni = files.eni;
+    eni = loadEni(args.eni_path);
+    if (!eni->ok()) return fail(eni->error->text());
+    if (eni->axes.empty()) {
+      return fail(fmt::format(
+          "{}: no servo of this protocol (10-byte outputs, 40-byte inputs) among its {} slaves",
+          args.eni_path, eni->slaves));
+    }
+  }
+  return files;
+}
+
+DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args) {
+  return layoutOptions(files.config ? &*files.config : nullptr,
+                       files.eni ? &files.eni->axes : nullptr, !args.no_default_layout);
 }
 
 // `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
@@ -135,18 +205,28 @@ void printLayout(const Decoder& decoder) {
   if (!axes.empty()) fmt::print("{}", writeConfig(axes, std::nullopt));
 }
 
-int runDecode(const std::string& path, const std::optional<Config>& config,
-              const std::optional<EniResult>& eni, bool no_default_layout,
-              const std::string& format, bool layout_only) {
+struct DecodeArgs {
+  std::string capture;
+  LayoutArgs layout;
+  std::string format = kRowFormats[0].name;
+  bool layout_only = false;
+};
+
+int runDecode(const DecodeArgs& args) {
+  const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
+  if (!files) {
+    fmt::print(stderr, "ncservo: {}\n", files.error().text());
+    return kExitUsage;
+  }
   std::string error;
-  auto reader = CaptureReader::open(path, error);
+  auto reader = CaptureReader::open(args.capture, error);
   if (!reader) {
     fmt::print(stderr, "ncservo: {}\n", error);
     return kExitCapture;
   }
-  Session session(decoderOptions(config, eni, no_default_layout));
-  RowWriter writer(stdout, format == "csv", session.decoder());
-  if (!layout_only) writer.header();
+  Session session(decoderOptions(*files, args.layout));
+  const RowFormat& format = rowNamed(kRowFormats, args.format);
+  if (!args.layout_only && format.header != nullptr) format.header(stdout);
   CycleRows cycles;
   std::vector<CycleRow> rows;
   EcatFrame frame;
@@ -154,7 +234,8 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
   std::optional<std::int64_t> first_time;
   auto write = [&] {
     for (const CycleRow& row : rows) {
-      writer.write(row, static_cast<double>(row.time_ns - *first_time) / 1e9);
+      format.row(stdout, row, session.decoder().axes().at(row.axis).name,
+                 static_cast<double>(row.time_ns - *first_time) / 1e9);
     }
     rows.clear();
   };
@@ -166,7 +247,7 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
     if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
       continue;
     const FrameView& view = session.onFrame(frame, bytes);
-    if (layout_only) continue;
+    if (args.layout_only) continue;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
       warnIfMalformed(reader->path(), record.frame, view.axes[i].placement);
     }
@@ -180,57 +261,29 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", reader->error());
     return kExitCapture;
   }
-  if (layout_only) printLayout(session.decoder());
+  if (args.layout_only) printLayout(session.decoder());
   if (session.decoder().axes().empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session.decoder().noServoReason());
   }
   return kExitOk;
 }
 
-void printFields(const std::string& format) {
-  if (format == "markdown") {
-    fmt::print("| filter name | label | word | bits | values | meaning | spec |\n");
-    fmt::print("|---|---|---|---|---|---|---|\n");
-  }
-  for (const FieldDef& f : kFields) {
-    std::string values;
-    for (std::size_t i = 0; i < f.value_count; ++i) {
-      values += fmt::format("{}{}={}{}", i ? "; " : "", f.values[i].value, f.values[i].name,
-                            f.values[i].unit ? fmt::format(" [{}]", f.values[i].unit) : "");
-    }
-    const std::string mask = f.mask ? fmt::format("0x{:X}", f.mask) : "all";
-    if (format == "markdown") {
-      fmt::print("| `{}` | {} | {} | {} | {} | {} | {} |\n", f.filter, f.label,
-                 wordDef(f.word).name, mask, values, f.blurb, f.clause);
-    } else {
-      fmt::print("{}\t{}\t{}\t{}\t{}\n", f.filter, f.label, wordDef(f.word).name, mask, f.blurb);
-    }
-  }
-  for (const DerivedFieldDef& f : kDerivedFields) {
-    if (format == "markdown") {
-      fmt::print("| `{}` | {} | (derived) | | | {} | INTERFACES.md |\n", f.filter, f.label,
-                 f.blurb);
-    } else {
-      fmt::print("{}\t{}\t(derived)\t\t{}\n", f.filter, f.label, f.blurb);
-    }
-  }
-}
+// ---- validate ----
 
-struct ValidateOptions {
+struct ValidateArgs {
   std::vector<std::string> captures;
-  std::string format = "text";
+  LayoutArgs layout;
+  std::string format = cli::reportFormatNames().front();
   std::string output;
   std::string fail_on = "error";
   std::vector<std::string> disable;
   std::vector<std::string> severities;
   std::vector<std::string> timeouts;
   std::optional<int> servo_ready_mode;
-  bool no_default_layout = false;
 };
 
 // The settings from RULES.md's defaults, the config file, then the command line.
-std::optional<std::string> buildSettings(const ValidateOptions& o,
-                                         const std::optional<Config>& config,
+std::optional<std::string> buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
                                          RuleSettings& settings) {
   if (config) {
     if (auto error = settings.apply(*config)) return fmt::format("{}: {}", config->path, *error);
@@ -319,20 +372,19 @@ int combine(int a, int b) {
   return rank(a) >= rank(b) ? a : b;
 }
 
-int runValidate(const ValidateOptions& o, const std::optional<Config>& config,
-                const std::optional<EniResult>& eni) {
+int runValidate(const ValidateArgs& o) {
+  const Result<LayoutFiles> files = loadLayoutFiles(o.layout);
+  if (!files) {
+    fmt::print(stderr, "ncservo: {}\n", files.error().text());
+    return kExitUsage;
+  }
   RuleSettings settings;
-  if (auto error = buildSettings(o, config, settings)) {
+  if (auto error = buildSettings(o, files->config, settings)) {
     fmt::print(stderr, "ncservo: {}\n", *error);
     return kExitUsage;
   }
   const bool never = o.fail_on == "never";
   const Severity fail_on = never ? Severity::Error : *severityFromName(o.fail_on);
-  cli::Format format = cli::Format::Text;
-  if (o.format == "json") format = cli::Format::Json;
-  if (o.format == "jsonl") format = cli::Format::Jsonl;
-  if (o.format == "junit") format = cli::Format::Junit;
-  if (o.format == "sarif") format = cli::Format::Sarif;
   std::FILE* out = stdout;
   if (!o.output.empty() && o.output != "-") {
     out = std::fopen(o.output.c_str(), "w");
@@ -341,36 +393,111 @@ int runValidate(const ValidateOptions& o, const std::optional<Config>& config,
       return kExitUsage;
     }
   }
-  cli::ReportWriter writer(out, format, fail_on, never);
+  cli::ReportWriter writer(out, *cli::findReportFormat(o.format), fail_on, never);
   std::vector<cli::CaptureReport> reports;
   int rc = kExitOk;
   for (const std::string& path : o.captures) {
     reports.emplace_back();
-    rc = combine(rc, validateCapture(path, decoderOptions(config, eni, o.no_default_layout),
-                                     settings, writer, reports.back(), fail_on, never));
+    rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, writer,
+                                     reports.back(), fail_on, never));
   }
   writer.finish(reports);
   if (out != stdout) std::fclose(out);
   return rc;
 }
 
-void printRules(const std::string& format) {
-  if (format == "markdown") {
-    fmt::print("| ID | slug | severity | party | timeout | clause | summary |\n");
-    fmt::print("|---|---|---|---|---|---|---|\n");
+// ---- rules and fields: the library's tables as text ----
+
+void printRuleText(const RuleDef& rule) {
+  fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug, severityName(rule.severity),
+             partyName(rule.party), rule.summary);
+}
+
+void printRuleMarkdown(const RuleDef& rule) {
+  const char* timeout = rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
+  fmt::print("| {} | `{}` | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
+             severityName(rule.severity), partyName(rule.party), timeout, rule.clause,
+             rule.summary);
+}
+
+// `rules`'s formats: a header, then one line per rule.
+struct RuleListFormat {
+  const char* name;
+  const char* header;
+  void (*rule)(const RuleDef& rule);
+};
+const RuleListFormat kRuleListFormats[] = {
+    {"text", "", printRuleText},
+    {"markdown",
+     "| ID | slug | severity | party | timeout | clause | summary |\n"
+     "|---|---|---|---|---|---|---|\n",
+     printRuleMarkdown},
+};
+
+std::string maskText(const FieldDef& f) {
+  return f.mask ? fmt::format("0x{:X}", f.mask) : "all";
+}
+
+void printFieldTsv(const FieldDef& f) {
+  fmt::print("{}\t{}\t{}\t{}\t{}\n", f.filter, f.label, wordDef(f.word).name, maskText(f), f.blurb);
+}
+
+void printDerivedTsv(const DerivedFieldDef& f) {
+  fmt::print("{}\t{}\t(derived)\t\t{}\n", f.filter, f.label, f.blurb);
+}
+
+void printFieldMarkdown(const FieldDef& f) {
+  std::string values;
+  for (std::size_t i = 0; i < f.value_count; ++i) {
+    values += fmt::format("{}{}={}{}", i ? "; " : "", f.values[i].value, f.values[i].name,
+                          f.values[i].unit ? fmt::format(" [{}]", f.values[i].unit) : "");
   }
-  for (const RuleDef& rule : kRules) {
-    const char* timeout =
-        rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
-    if (format == "markdown") {
-      fmt::print("| {} | `{}` | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
-                 severityName(rule.severity), partyName(rule.party), timeout, rule.clause,
-                 rule.summary);
-    } else {
-      fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug, severityName(rule.severity),
-                 partyName(rule.party), rule.summary);
-    }
+  fmt::print("| `{}` | {} | {} | {} | {} | {} | {} |\n", f.filter, f.label, wordDef(f.word).name,
+             maskText(f), values, f.blurb, f.clause);
+}
+
+void printDerivedMarkdown(const DerivedFieldDef& f) {
+  fmt::print("| `{}` | {} | (derived) | | | {} | INTERFACES.md |\n", f.filter, f.label, f.blurb);
+}
+
+// `fields`'s formats: a header, then one line per field of the field table, then per derived field.
+struct FieldListFormat {
+  const char* name;
+  const char* header;
+  void (*field)(const FieldDef& f);
+  void (*derived)(const DerivedFieldDef& f);
+};
+const FieldListFormat kFieldListFormats[] = {
+    {"tsv", "", printFieldTsv, printDerivedTsv},
+    {"markdown",
+     "| filter name | label | word | bits | values | meaning | spec |\n"
+     "|---|---|---|---|---|---|---|\n",
+     printFieldMarkdown, printDerivedMarkdown},
+};
+
+// ---- simulate ----
+
+// `simulate`'s capture formats; without --format the output file's extension chooses, else the
+// first row.
+struct CaptureFormatRow {
+  const char* name;
+  CaptureFormat format;
+  const char* extension;
+};
+const CaptureFormatRow kCaptureFormats[] = {
+    {"pcap", CaptureFormat::Pcap, ".pcap"},
+    {"pcapng", CaptureFormat::Pcapng, ".pcapng"},
+};
+
+CaptureFormat captureFormatFor(const std::string& format, const std::string& output) {
+  if (!format.empty()) return rowNamed(kCaptureFormats, format).format;
+  for (const CaptureFormatRow& row : kCaptureFormats) {
+    const std::size_t length = std::strlen(row.extension);
+    if (output.size() >= length &&
+        output.compare(output.size() - length, length, row.extension) == 0)
+      return row.format;
   }
+  return kCaptureFormats[0].format;
 }
 
 struct SimulateArgs {
@@ -378,7 +505,7 @@ struct SimulateArgs {
   std::string scenario = "commissioning";
   std::string layout = "default";
   std::string output;
-  std::string format;  // pcap, pcapng; default from the file name
+  std::string format;  // empty: from the file name
   std::vector<std::string> faults;
   std::string layout_config;
   std::string eni;
@@ -426,10 +553,6 @@ int runSimulate(SimulateArgs& args) {
     fmt::print(stderr, "ncservo simulate: {}\n", error);
     return kExitUsage;
   }
-  const bool pcapng = args.format.empty()
-                          ? args.output.size() >= 7 &&
-                                args.output.compare(args.output.size() - 7, 7, ".pcapng") == 0
-                          : args.format == "pcapng";
   sim::Simulator simulator(o);
   if (!args.layout_config.empty()) {
     std::ofstream out(args.layout_config);
@@ -448,8 +571,7 @@ int runSimulate(SimulateArgs& args) {
     }
   }
   std::string error;
-  auto writer =
-      CaptureWriter::open(args.output, pcapng ? CaptureFormat::Pcapng : CaptureFormat::Pcap, error);
+  auto writer = CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), error);
   if (!writer) {
     fmt::print(stderr, "ncservo simulate: {}\n", error);
     return kExitCapture;
@@ -468,150 +590,144 @@ int runSimulate(SimulateArgs& args) {
   return kExitOk;
 }
 
+// ---- The subcommands ----
+
+// What runs a subcommand once its options are parsed.
+using Handler = std::function<int()>;
+
+Handler decodeCommand(CLI::App& command) {
+  auto args = std::make_shared<DecodeArgs>();
+  command.add_option("CAPTURE", args->capture, "pcap or pcapng capture, - for standard input")
+      ->required();
+  command.add_option("--config", args->layout.config_path, "TOML configuration file (layout)");
+  addFormatOption(command, args->format, namesOf(kRowFormats));
+  command.add_flag("--no-default-layout", args->layout.no_default_layout,
+                   "never assume the default layout (PROTOCOL.md §9.4)");
+  command.add_option("--eni", args->layout.eni_path,
+                     "ENI file (EtherCATConfig.xml) giving the layout");
+  command.add_flag("--layout", args->layout_only,
+                   "print the layout found (as a configuration file) and the slaves the start-up "
+                   "configured, instead of the process data");
+  return [args] { return runDecode(*args); };
+}
+
+Handler validateCommand(CLI::App& command) {
+  auto args = std::make_shared<ValidateArgs>();
+  command.add_option("CAPTURE", args->captures, "pcap or pcapng captures, - for standard input")
+      ->required();
+  command.add_option("--config", args->layout.config_path, "TOML configuration file");
+  addFormatOption(command, args->format, cli::reportFormatNames());
+  command.add_option("-o,--output", args->output,
+                     "write the report here (default: standard output)");
+  command
+      .add_option("--fail-on", args->fail_on,
+                  "exit 1 on findings at or above: error, warning, info, never")
+      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+  command.add_option("--disable", args->disable, "rule IDs to skip, comma-separated")
+      ->delimiter(',');
+  command.add_option("--severity", args->severities, "ID=LEVEL: change a rule's severity")
+      ->delimiter(',');
+  command.add_option("--timeout", args->timeouts, "NAME=MS: change a timeout of RULES.md")
+      ->delimiter(',');
+  command
+      .add_option("--servo-ready-mode", args->servo_ready_mode,
+                  "Servo_Ready_Mode of the drives (0 or 1)")
+      ->check(CLI::Range(0, 1));
+  command.add_flag("--no-default-layout", args->layout.no_default_layout,
+                   "never assume the default layout (PROTOCOL.md §9.4)");
+  command.add_option("--eni", args->layout.eni_path,
+                     "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
+  return [args] { return runValidate(*args); };
+}
+
+Handler rulesCommand(CLI::App& command) {
+  auto format = std::make_shared<std::string>(kRuleListFormats[0].name);
+  addFormatOption(command, *format, namesOf(kRuleListFormats));
+  return [format] {
+    const RuleListFormat& list = rowNamed(kRuleListFormats, *format);
+    fmt::print("{}", list.header);
+    for (const RuleDef& rule : kRules) list.rule(rule);
+    return kExitOk;
+  };
+}
+
+Handler fieldsCommand(CLI::App& command) {
+  auto format = std::make_shared<std::string>(kFieldListFormats[0].name);
+  addFormatOption(command, *format, namesOf(kFieldListFormats));
+  return [format] {
+    const FieldListFormat& list = rowNamed(kFieldListFormats, *format);
+    fmt::print("{}", list.header);
+    for (const FieldDef& f : kFields) list.field(f);
+    for (const DerivedFieldDef& f : kDerivedFields) list.derived(f);
+    return kExitOk;
+  };
+}
+
+Handler simulateCommand(CLI::App& command) {
+  auto args = std::make_shared<SimulateArgs>();
+  SimulateArgs& sa = *args;
+  command.add_option("-o,--output", sa.output, "capture to write, - for standard output");
+  command.add_option("--scenario", sa.scenario, "commissioning, faults or soak")
+      ->check(CLI::IsMember({"commissioning", "faults", "soak"}));
+  command.add_option("--axes", sa.options.axes, "servo axes, 1 to 32 (default 4)");
+  command.add_option("--io-slaves", sa.options.io_slaves,
+                     "8-bit digital output/input terminals sharing the LRW (default 0)");
+  command.add_option("--cycle-us", sa.options.cycle_us, "cycle time, 125 to 10000 (default 1000)");
+  command.add_option("--duration", sa.options.duration_s,
+                     "seconds (default: commissioning 3, faults 4.3, soak 60)");
+  command.add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
+  command.add_option("--layout", sa.layout, "default (PROTOCOL.md §9.4) or interleaved")
+      ->check(CLI::IsMember({"default", "interleaved"}));
+  command.add_flag("--no-startup", sa.no_startup,
+                   "begin with the slaves already in OP (no start-up traffic)");
+  addFormatOption(command, sa.format, namesOf(kCaptureFormats), " (default: from the file name)");
+  command.add_option("--fault", sa.faults,
+                     "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
+  command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");
+  command.add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
+  command.add_option("--loss", sa.options.loss,
+                     "probability that a returned frame is lost (COM-004 findings)");
+  command.add_option("--layout-config", sa.layout_config,
+                     "also write the layout as a configuration file for validate --config");
+  command.add_option(
+      "--eni", sa.eni,
+      "also write the set-up as an ENI file (EtherCATConfig.xml) for validate --eni");
+  command.add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
+  return [args] { return runSimulate(*args); };
+}
+
+// ninja's tool table: name, help, and the options' setup, which returns the handler.
+struct Subcommand {
+  const char* name;
+  const char* help;
+  Handler (*setup)(CLI::App& command);
+};
+const Subcommand kSubcommands[] = {
+    {"decode", "print the decoded process data, one row per axis and cycle", decodeCommand},
+    {"validate", "check captures against the rules (RULES.md)", validateCommand},
+    {"rules", "list the rules: ID, slug, severity, party, summary", rulesCommand},
+    {"fields", "list every decoded field (generated from the field table)", fieldsCommand},
+    {"simulate", "write a capture of simulated NC and drives (scenarios, faults)", simulateCommand},
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"ncservo: decode and check NC <-> servo EtherCAT process data"};
   app.set_version_flag("--version", std::string("ncservo ") + NCSERVO_VERSION);
   app.require_subcommand(1);
-
-  std::string capture;
-  std::string config_path;
-  std::string format = "csv";
-  bool no_default_layout = false;
-  auto* decode =
-      app.add_subcommand("decode", "print the decoded process data, one row per axis and cycle");
-  decode->add_option("CAPTURE", capture, "pcap or pcapng capture, - for standard input")
-      ->required();
-  decode->add_option("--config", config_path, "TOML configuration file (layout)");
-  decode->add_option("--format", format, "csv or jsonl")->check(CLI::IsMember({"csv", "jsonl"}));
-  decode->add_flag("--no-default-layout", no_default_layout,
-                   "never assume the default layout (PROTOCOL.md §9.4)");
-  std::string eni_path;
-  bool layout_only = false;
-  decode->add_option("--eni", eni_path, "ENI file (EtherCATConfig.xml) giving the layout");
-  decode->add_flag("--layout", layout_only,
-                   "print the layout found (as a configuration file) and the slaves the start-up "
-                   "configured, instead of the process data");
-
-  ValidateOptions vo;
-  std::string validate_config;
-  auto* validate = app.add_subcommand("validate", "check captures against the rules (RULES.md)");
-  validate->add_option("CAPTURE", vo.captures, "pcap or pcapng captures, - for standard input")
-      ->required();
-  validate->add_option("--config", validate_config, "TOML configuration file");
-  validate->add_option("--format", vo.format, "text, json, jsonl, junit or sarif")
-      ->check(CLI::IsMember({"text", "json", "jsonl", "junit", "sarif"}));
-  validate->add_option("-o,--output", vo.output,
-                       "write the report here (default: standard output)");
-  validate
-      ->add_option("--fail-on", vo.fail_on,
-                   "exit 1 on findings at or above: error, warning, info, never")
-      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
-  validate->add_option("--disable", vo.disable, "rule IDs to skip, comma-separated")
-      ->delimiter(',');
-  validate->add_option("--severity", vo.severities, "ID=LEVEL: change a rule's severity")
-      ->delimiter(',');
-  validate->add_option("--timeout", vo.timeouts, "NAME=MS: change a timeout of RULES.md")
-      ->delimiter(',');
-  validate
-      ->add_option("--servo-ready-mode", vo.servo_ready_mode,
-                   "Servo_Ready_Mode of the drives (0 or 1)")
-      ->check(CLI::Range(0, 1));
-  validate->add_flag("--no-default-layout", vo.no_default_layout,
-                     "never assume the default layout (PROTOCOL.md §9.4)");
-  std::string validate_eni;
-  validate->add_option("--eni", validate_eni,
-                       "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
-
-  std::string rules_format = "text";
-  auto* rules = app.add_subcommand("rules", "list the rules: ID, slug, severity, party, summary");
-  rules->add_option("--format", rules_format, "text or markdown")
-      ->check(CLI::IsMember({"text", "markdown"}));
-
-  std::string fields_format = "tsv";
-  auto* fields =
-      app.add_subcommand("fields", "list every decoded field (generated from the field table)");
-  fields->add_option("--format", fields_format, "tsv or markdown")
-      ->check(CLI::IsMember({"tsv", "markdown"}));
-
-  SimulateArgs sa;
-  auto* simulate = app.add_subcommand(
-      "simulate", "write a capture of simulated NC and drives (scenarios, faults)");
-  simulate->add_option("-o,--output", sa.output, "capture to write, - for standard output");
-  simulate->add_option("--scenario", sa.scenario, "commissioning, faults or soak")
-      ->check(CLI::IsMember({"commissioning", "faults", "soak"}));
-  simulate->add_option("--axes", sa.options.axes, "servo axes, 1 to 32 (default 4)");
-  simulate->add_option("--io-slaves", sa.options.io_slaves,
-                       "8-bit digital output/input terminals sharing the LRW (default 0)");
-  simulate->add_option("--cycle-us", sa.options.cycle_us,
-                       "cycle time, 125 to 10000 (default 1000)");
-  simulate->add_option("--duration", sa.options.duration_s,
-                       "seconds (default: commissioning 3, faults 4.3, soak 60)");
-  simulate->add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
-  simulate->add_option("--layout", sa.layout, "default (PROTOCOL.md §9.4) or interleaved")
-      ->check(CLI::IsMember({"default", "interleaved"}));
-  simulate->add_flag("--no-startup", sa.no_startup,
-                     "begin with the slaves already in OP (no start-up traffic)");
-  simulate->add_option("--format", sa.format, "pcap or pcapng (default: from the file name)")
-      ->check(CLI::IsMember({"pcap", "pcapng"}));
-  simulate->add_option(
-      "--fault", sa.faults,
-      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
-  simulate->add_option("--ready-mode", sa.options.ready_mode,
-                       "the drives' Servo_Ready_Mode, 0 or 1");
-  simulate->add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
-  simulate->add_option("--loss", sa.options.loss,
-                       "probability that a returned frame is lost (COM-004 findings)");
-  simulate->add_option("--layout-config", sa.layout_config,
-                       "also write the layout as a configuration file for validate --config");
-  simulate->add_option(
-      "--eni", sa.eni,
-      "also write the set-up as an ENI file (EtherCATConfig.xml) for validate --eni");
-  simulate->add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
-
+  std::vector<std::pair<CLI::App*, Handler>> commands;
+  for (const Subcommand& s : kSubcommands) {
+    CLI::App* command = app.add_subcommand(s.name, s.help);
+    commands.emplace_back(command, s.setup(*command));
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? kExitOk : kExitUsage;
+    return app.exit(e) == 0 ? kExitOk : kExitUsage;
   }
-
-  if (simulate->parsed()) return runSimulate(sa);
-  if (fields->parsed()) {
-    printFields(fields_format);
-    return kExitOk;
+  for (const auto& [command, handler] : commands) {
+    if (command->parsed()) return handler();
   }
-  if (rules->parsed()) {
-    printRules(rules_format);
-    return kExitOk;
-  }
-  if (validate->parsed()) config_path = validate_config;
-  std::optional<Config> config;
-  if (!config_path.empty()) {
-    ConfigResult loaded = loadConfig(config_path);
-    if (!loaded.ok()) {
-      fmt::print(stderr, "ncservo: {}\n", loaded.error->text());
-      return kExitUsage;
-    }
-    config = std::move(loaded.config);
-  }
-  if (validate->parsed()) eni_path = validate_eni;
-  std::optional<EniResult> eni;
-  if (!eni_path.empty()) {
-    eni = loadEni(eni_path);
-    if (!eni->ok()) {
-      fmt::print(stderr, "ncservo: {}\n", eni->error->text());
-      return kExitUsage;
-    }
-    if (eni->axes.empty()) {
-      fmt::print(stderr,
-                 "ncservo: {}: no servo of this protocol (10-byte outputs, 40-byte inputs) among "
-                 "its {} slaves\n",
-                 eni_path, eni->slaves);
-      return kExitUsage;
-    }
-  }
-  if (validate->parsed()) return runValidate(vo, config, eni);
-  return runDecode(capture, config, eni, no_default_layout, format, layout_only);
+  return kExitUsage;
 }

@@ -111,7 +111,7 @@ const char* sarifLevel(Severity s) {
   return "note";
 }
 
-void writeSarif(std::FILE* out, const std::vector<CaptureReport>& reports) {
+void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json rules = Json::array();
   for (const RuleDef& rule : kRules) {
     rules.push_back({{"id", rule.code},
@@ -158,11 +158,10 @@ void writeSarif(std::FILE* out, const std::vector<CaptureReport>& reports) {
                     {"rules", std::move(rules)}}}}},
                 {"artifacts", std::move(artifacts)},
                 {"results", std::move(results)}}}}};
-  std::fputs((sarif.dump(2) + "\n").c_str(), out);
+  std::fputs((sarif.dump(2) + "\n").c_str(), sink.out);
 }
 
-void writeJunit(std::FILE* out, const std::vector<CaptureReport>& reports, Severity fail_on,
-                bool never) {
+void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   pugi::xml_document doc;
   auto decl = doc.append_child(pugi::node_declaration);
   decl.append_attribute("version") = "1.0";
@@ -188,7 +187,7 @@ void writeJunit(std::FILE* out, const std::vector<CaptureReport>& reports, Sever
       bool failing = false;
       std::string body;
       for (const Finding* f : fired) {
-        failing = failing || (!never && f->severity >= fail_on);
+        failing = failing || (!sink.never && f->severity >= sink.fail_on);
         body +=
             fmt::format("frame {} (since {}) t={:.6f}s {} [{}]: {}\n", f->at.frame, f->since.frame,
                         seconds(r, f->at), f->axis ? axisName(r, *f->axis) : std::string("bus"),
@@ -226,10 +225,23 @@ void writeJunit(std::FILE* out, const std::vector<CaptureReport>& reports, Sever
   suites.append_attribute("errors") = total_errors;
   std::ostringstream text;
   doc.save(text, "  ");
-  std::fputs(text.str().c_str(), out);
+  std::fputs(text.str().c_str(), sink.out);
 }
 
-void writeTextSummary(std::FILE* out, const CaptureReport& r) {
+void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
+  fmt::print(sink.out, "== {}\n", r.path);
+}
+
+void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+  fmt::print(sink.out, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}\n", severityName(f.severity),
+             ruleDef(f.rule).code, f.axis ? axisName(r, *f.axis) : std::string("bus"), f.at.frame,
+             seconds(r, f.at),
+             f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
+             f.message);
+}
+
+void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
+  std::FILE* out = sink.out;
   fmt::print(out, "{}: {} frames, {} cycles", r.path, r.frames, r.cycles);
   if (r.cycle_time.median_us) {
     fmt::print(out, ", cycle {:.1f} us (p99 {:.1f}, max {:.1f})", *r.cycle_time.median_us,
@@ -257,7 +269,64 @@ void writeTextSummary(std::FILE* out, const CaptureReport& r) {
   if (r.note) fmt::print(out, "note: {}\n", *r.note);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
 }
+
+void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
+  std::size_t counts[3] = {0, 0, 0};
+  std::size_t unread = 0;  // captures that could not be read to their end
+  bool failed = false;
+  for (const CaptureReport& r : reports) {
+    for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
+    unread += r.error.has_value() ? 1 : 0;
+    failed = failed || (!sink.never && r.reaches(sink.fail_on)) || r.error.has_value();
+  }
+  const std::string unread_note =
+      unread == 0 ? std::string() : fmt::format(", {} not read to the end", unread);
+  fmt::print(sink.out,
+             "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
+             failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
+             counts[1] == 1 ? "" : "s", counts[0], reports.size(), reports.size() == 1 ? "" : "s",
+             unread_note, sink.never ? "never" : severityName(sink.fail_on));
+}
+
+void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
+  Json j;
+  j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
+  Json captures = Json::array();
+  for (const CaptureReport& r : reports) captures.push_back(captureJson(r));
+  j["captures"] = std::move(captures);
+  std::fputs((j.dump(2) + "\n").c_str(), sink.out);
+}
+
+void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+  Json j;
+  j["capture"] = r.path;
+  j.update(findingJson(r, f));
+  std::fputs((j.dump() + "\n").c_str(), sink.out);
+}
+
+// INTERFACES.md's formats of `validate`: name, keeps findings, begin capture, finding, end
+// capture, finish.
+const ReportFormat kReportFormats[] = {
+    {"text", false, writeTextHeading, writeTextFinding, writeTextSummary, writeTextVerdict},
+    {"json", true, nullptr, nullptr, nullptr, writeJson},
+    {"jsonl", false, nullptr, writeJsonlFinding, nullptr, nullptr},
+    {"junit", true, nullptr, nullptr, nullptr, writeJunit},
+    {"sarif", true, nullptr, nullptr, nullptr, writeSarif},
+};
 }  // namespace
+
+std::vector<std::string> reportFormatNames() {
+  std::vector<std::string> names;
+  for (const ReportFormat& format : kReportFormats) names.emplace_back(format.name);
+  return names;
+}
+
+const ReportFormat* findReportFormat(std::string_view name) {
+  for (const ReportFormat& format : kReportFormats) {
+    if (name == format.name) return &format;
+  }
+  return nullptr;
+}
 
 bool CaptureReport::reaches(Severity level) const {
   for (std::size_t s = static_cast<std::size_t>(level); s < counts.size(); ++s) {
@@ -288,72 +357,24 @@ void summarise(const Validator& validator, CaptureReport& report) {
   }
 }
 
-ReportWriter::ReportWriter(std::FILE* out, Format format, Severity fail_on, bool never)
-    : out_(out), format_(format), fail_on_(fail_on), never_(never) {}
+ReportWriter::ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never)
+    : sink_{out, fail_on, never}, format_(format) {}
 
 void ReportWriter::beginCapture(const CaptureReport& report) {
-  if (format_ == Format::Text) fmt::print(out_, "== {}\n", report.path);
+  if (format_.begin_capture != nullptr) format_.begin_capture(sink_, report);
 }
 
 void ReportWriter::finding(const CaptureReport& report, const Finding& f) {
-  const RuleDef& rule = ruleDef(f.rule);
-  if (format_ == Format::Text) {
-    fmt::print(out_, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}\n", severityName(f.severity),
-               rule.code, f.axis ? axisName(report, *f.axis) : std::string("bus"), f.at.frame,
-               seconds(report, f.at),
-               f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
-               f.message);
-  } else if (format_ == Format::Jsonl) {
-    Json j;
-    j["capture"] = report.path;
-    j.update(findingJson(report, f));
-    std::fputs((j.dump() + "\n").c_str(), out_);
-  }
+  if (format_.finding != nullptr) format_.finding(sink_, report, f);
 }
 
 void ReportWriter::endCapture(const CaptureReport& report) {
-  if (format_ == Format::Text) writeTextSummary(out_, report);
+  if (format_.end_capture != nullptr) format_.end_capture(sink_, report);
 }
 
 void ReportWriter::finish(const std::vector<CaptureReport>& reports) {
-  switch (format_) {
-    case Format::Text: {
-      std::size_t counts[3] = {0, 0, 0};
-      std::size_t unread = 0;  // captures that could not be read to their end
-      bool failed = false;
-      for (const CaptureReport& r : reports) {
-        for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
-        unread += r.error.has_value() ? 1 : 0;
-        failed = failed || (!never_ && r.reaches(fail_on_)) || r.error.has_value();
-      }
-      const std::string unread_note =
-          unread == 0 ? std::string() : fmt::format(", {} not read to the end", unread);
-      fmt::print(
-          out_, "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
-          failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
-          counts[1] == 1 ? "" : "s", counts[0], reports.size(), reports.size() == 1 ? "" : "s",
-          unread_note, never_ ? "never" : severityName(fail_on_));
-      break;
-    }
-    case Format::Json: {
-      Json j;
-      j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
-      Json captures = Json::array();
-      for (const CaptureReport& r : reports) captures.push_back(captureJson(r));
-      j["captures"] = std::move(captures);
-      std::fputs((j.dump(2) + "\n").c_str(), out_);
-      break;
-    }
-    case Format::Jsonl:
-      break;
-    case Format::Junit:
-      writeJunit(out_, reports, fail_on_, never_);
-      break;
-    case Format::Sarif:
-      writeSarif(out_, reports);
-      break;
-  }
-  std::fflush(out_);
+  if (format_.finish != nullptr) format_.finish(sink_, reports);
+  std::fflush(sink_.out);
 }
 
 }  // namespace ncservo::cli

@@ -7,14 +7,13 @@
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ncservo/finding.hpp"
 #include "ncservo/validator.hpp"
 
 namespace ncservo::cli {
-
-enum class Format { Text, Json, Jsonl, Junit, Sarif };
 
 struct AxisReport {
   std::uint16_t index = 0;
@@ -48,22 +47,43 @@ struct CaptureReport {
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);
 
-// Streaming writers get each finding as it happens; the rest write everything at the end.
+// Where a report goes and when its findings fail it: at or above `fail_on`, unless `never`.
+struct ReportSink {
+  std::FILE* out;
+  Severity fail_on;
+  bool never;
+};
+
+// One output format of `validate` (INTERFACES.md): its name and its writers, called in the order
+// beginCapture, finding (each), endCapture per capture, then finish. A null writer writes nothing.
+struct ReportFormat {
+  const char* name;
+  // Streaming formats (text, JSON Lines) write each finding as it comes and keep none (constant
+  // memory); the others write everything at the end.
+  bool keeps_findings;
+  void (*begin_capture)(const ReportSink& sink, const CaptureReport& report);
+  void (*finding)(const ReportSink& sink, const CaptureReport& report, const Finding& finding);
+  void (*end_capture)(const ReportSink& sink, const CaptureReport& report);
+  void (*finish)(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+};
+
+// The formats' names, in the order of the format table (for --format and its help).
+std::vector<std::string> reportFormatNames();
+// The format of that name; nullptr when there is none.
+const ReportFormat* findReportFormat(std::string_view name);
+
 class ReportWriter {
  public:
-  ReportWriter(std::FILE* out, Format format, Severity fail_on_or_never, bool never);
+  ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never);
   void beginCapture(const CaptureReport& report);
   void finding(const CaptureReport& report, const Finding& finding);
   void endCapture(const CaptureReport& report);
   void finish(const std::vector<CaptureReport>& reports);
-  // Text and JSON Lines write each finding as it comes and keep none (constant memory).
-  bool keepsFindings() const { return format_ != Format::Text && format_ != Format::Jsonl; }
+  bool keepsFindings() const { return format_.keeps_findings; }
 
  private:
-  std::FILE* out_;
-  Format format_;
-  Severity fail_on_;
-  bool never_;
+  ReportSink sink_;
+  const ReportFormat& format_;
 };
 
 }  // namespace ncservo::cli

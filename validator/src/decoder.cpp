@@ -85,12 +85,12 @@ const char* copyKindName(CopyKind copy) {
   return copy == CopyKind::Master ? "master" : "returned";
 }
 
-DecoderOptions layoutOptions(const std::vector<AxisConfig>* config_axes,
-                             const std::vector<AxisConfig>* eni_axes, bool default_layout) {
+DecoderOptions layoutOptions(const Config* config, const std::vector<AxisConfig>* eni_axes,
+                             bool allow_default_layout) {
   DecoderOptions options;
-  options.default_layout = default_layout;
-  if (config_axes != nullptr && !config_axes->empty()) {
-    options.axes = *config_axes;
+  options.default_layout = allow_default_layout && (config == nullptr || config->default_layout);
+  if (config != nullptr && !config->axes.empty()) {
+    options.axes = config->axes;
     options.explicit_source = LayoutSource::Config;
   } else if (eni_axes != nullptr && !eni_axes->empty()) {
     options.axes = *eni_axes;

@@ -71,9 +71,10 @@ struct DecoderOptions {
 };
 
 // The layout sources in the order PROTOCOL.md §9 tries them: a configuration's axes, else an
-// ENI's, else (in the decoder) the start-up's, else the default layout.
-DecoderOptions layoutOptions(const std::vector<AxisConfig>* config_axes,
-                             const std::vector<AxisConfig>* eni_axes, bool default_layout);
+// ENI's, else (in the decoder) the start-up's, else the default layout (§9.4) — unless the user
+// (`allow_default_layout` false) or the configuration (default_layout = false) rules it out.
+DecoderOptions layoutOptions(const Config* config, const std::vector<AxisConfig>* eni_axes,
+                             bool allow_default_layout);
 
 class Decoder {
  public:

@@ -1,0 +1,49 @@
+// The simulator's set-ups as the truth for the layout sources (PROTOCOL.md §9): what it configured
+// is what learning from its start-up and the ENI it writes must give.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "ncservo/config.hpp"
+#include "ncservo/simulator.hpp"
+
+namespace ncservo::test {
+
+struct SetUp {
+  const char* name;
+  int axes;
+  int io_slaves;
+  sim::LayoutKind layout;
+};
+inline const SetUp kSetUps[] = {
+    {"1 axis", 1, 0, sim::LayoutKind::Default},
+    {"4 axes, default layout", 4, 0, sim::LayoutKind::Default},
+    {"3 axes and 2 terminals, interleaved", 3, 2, sim::LayoutKind::Interleaved},
+    {"4 axes and 4 terminals, default layout", 4, 4, sim::LayoutKind::Default},
+    {"32 axes and 3 terminals, two frames", 32, 3, sim::LayoutKind::Interleaved},
+};
+
+inline sim::SimOptions optionsFor(const SetUp& s) {
+  sim::SimOptions o;
+  o.axes = s.axes;
+  o.io_slaves = s.io_slaves;
+  o.layout = s.layout;
+  o.duration_s = 1.0;
+  EXPECT_EQ(sim::resolveOptions(o), "");
+  return o;
+}
+
+inline void expectSameAxes(const std::vector<AxisConfig>& got,
+                           const std::vector<sim::SimAxisLayout>& want) {
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    SCOPED_TRACE(want[i].name);
+    EXPECT_EQ(got[i].outputs, want[i].outputs);
+    EXPECT_EQ(got[i].inputs, want[i].inputs);
+    EXPECT_EQ(got[i].station, want[i].station);
+  }
+}
+
+}  // namespace ncservo::test
