@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include "ncservo/rules.hpp"
+
 namespace ncservo {
 namespace {
 
@@ -88,14 +90,14 @@ TEST(Config, EmptyFileGivesDefaults) {
 TEST(Config, EveryTimeoutNameIsAccepted) {
   std::string text = "[timeouts]\n";
   std::uint32_t ms = 1;
-  for (std::string_view name : kTimeoutNames)
-    text += std::string(name) + " = " + std::to_string(ms++) + "\n";
+  for (const TimeoutDef& timeout : kTimeouts)
+    text += std::string(timeout.name) + " = " + std::to_string(ms++) + "\n";
   const ConfigResult result = parseConfig(text, "t.toml");
   ASSERT_TRUE(result.ok()) << result.error->text();
-  ASSERT_EQ(result.config->timeouts_ms.size(), kTimeoutNames.size());
+  ASSERT_EQ(result.config->timeouts_ms.size(), kTimeouts.size());
   ms = 1;
-  for (std::string_view name : kTimeoutNames) {
-    EXPECT_EQ(result.config->timeouts_ms.at(std::string(name)), ms++) << name;
+  for (const TimeoutDef& timeout : kTimeouts) {
+    EXPECT_EQ(result.config->timeouts_ms.at(timeout.name), ms++) << timeout.name;
   }
 }
 

@@ -11,10 +11,6 @@
 
 namespace ncservo {
 
-const std::vector<std::string_view> kTimeoutNames = {"drive_response",  "nc_release",
-                                                     "enable_response", "clear_response",
-                                                     "fault_reaction",  "param_table"};
-
 std::string ConfigError::text() const {
   std::string where = line > 0 ? fmt::format("{}:{}", path, line) : path;
   if (key.empty()) return fmt::format("{}: {}", where, message);
@@ -208,13 +204,12 @@ ConfigResult parseConfig(std::string_view text, const std::string& path) {
       } else {
         for (const auto& [name_node, value] : *table) {
           const std::string name{name_node.str()};
-          if (std::find(kTimeoutNames.begin(), kTimeoutNames.end(), name) == kTimeoutNames.end()) {
+          if (!timeoutFromName(name)) {
             check.fail(value, "timeouts." + name,
-                       "unknown timeout (known: drive_response, nc_release, enable_response, "
-                       "clear_response, fault_reaction, param_table)");
+                       fmt::format("unknown timeout (known: {})", timeoutNameList()));
             break;
           }
-          if (auto ms = check.integer<std::uint32_t>(value, "timeouts." + name, 0, 3600000)) {
+          if (auto ms = check.integer<std::uint32_t>(value, "timeouts." + name, 0, kMaxTimeoutMs)) {
             config.timeouts_ms[name] = *ms;
           }
         }

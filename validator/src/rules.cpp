@@ -8,6 +8,7 @@
 
 #include "ncservo/al_tracker.hpp"
 #include "ncservo/axis_model.hpp"
+#include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 
@@ -20,11 +21,6 @@ constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
 constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
 constexpr std::uint32_t kIncremental = mask32("ncservo.ssw.incremental");
 constexpr std::uint32_t kNoEncoder = mask32("ncservo.ssw.no_encoder");
-constexpr std::uint32_t kScwTable = mask32("ncservo.scw.prmtbl");
-constexpr std::uint32_t kScwExtTable = mask32("ncservo.scw.ext_prmtbl");
-constexpr std::uint32_t kSswTable = mask32("ncservo.ssw.prmtbl");
-constexpr std::uint32_t kSswExtTable = mask32("ncservo.ssw.ext_prmtbl");
-constexpr std::int32_t kLastDefinedMessageCode = 5;  // PROTOCOL.md §5
 
 std::int64_t ms(const RuleSettings& s, Timeout t) {
   return s.timeoutNs(t) / 1'000'000;
@@ -36,15 +32,11 @@ bool longerThan(const AxisModel& a, const Stamp& since, std::int64_t ns) {
   return a.now().time_ns - since.time_ns > ns;
 }
 
-// Parameter table number as PROTOCOL.md §2 computes it: ExtPRMTBL·4 + PRMTBL + 1.
-std::uint32_t table(std::uint32_t word, std::uint32_t low, std::uint32_t ext) {
-  return ((word & ext) ? 4 : 0) + ((word & low) >> lowestBit(low)) + 1;
-}
 std::uint32_t commandedTable(const AxisModel& a) {
-  return table(a.latest().scw(), kScwTable, kScwExtTable);
+  return parameterTable(Word::Scw, a.latest().scw());
 }
 std::uint32_t activeTable(const AxisModel& a) {
-  return table(a.latest().ssw(), kSswTable, kSswExtTable);
+  return parameterTable(Word::Ssw, a.latest().ssw());
 }
 
 bool driveReady(const AxisModel& a) {
@@ -246,10 +238,11 @@ std::string pt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t he
 
 bool msg001(const AxisModel& a, const RuleSettings&) {
   const std::int32_t code = a.latest().msgCode();
-  return a.knowsInputs() && (code < 0 || code > kLastDefinedMessageCode);
+  return a.knowsInputs() && !messageCodeDefined(code);
 }
 std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
-  return fmt::format("message code {} is undefined; defined codes are 0-5", a.latest().msgCode());
+  return fmt::format("message code {} is undefined; defined codes are 0-{}", a.latest().msgCode(),
+                     kLastDefinedMessageCode);
 }
 
 // --- Bus, per axis ---
@@ -539,6 +532,13 @@ std::optional<Timeout> timeoutFromName(std::string_view name) {
   return std::nullopt;
 }
 
+std::string timeoutNameList() {
+  std::string known;
+  for (const TimeoutDef& t : kTimeouts)
+    known += fmt::format("{}{}", known.empty() ? "" : ", ", t.name);
+  return known;
+}
+
 const RuleDef& ruleDef(RuleId id) {
   return kRules[static_cast<std::size_t>(id)];
 }
@@ -615,14 +615,9 @@ std::optional<std::string> RuleSettings::setSeverity(std::string_view code,
 
 std::optional<std::string> RuleSettings::setTimeout(std::string_view name, std::int64_t ms) {
   const std::optional<Timeout> t = timeoutFromName(name);
-  if (!t) {
-    std::string known;
-    for (const TimeoutDef& d : kTimeouts)
-      known += fmt::format("{}{}", known.empty() ? "" : ", ", d.name);
-    return fmt::format("unknown timeout '{}' (known: {})", name, known);
-  }
-  if (ms < 0 || ms > 3'600'000) {
-    return fmt::format("timeout {} = {} ms: expected 0 to 3600000", name, ms);
+  if (!t) return fmt::format("unknown timeout '{}' (known: {})", name, timeoutNameList());
+  if (ms < 0 || ms > kMaxTimeoutMs) {
+    return fmt::format("timeout {} = {} ms: expected 0 to {}", name, ms, kMaxTimeoutMs);
   }
   timeout_ns[static_cast<std::size_t>(*t)] = ms * 1'000'000;
   return std::nullopt;

@@ -35,8 +35,7 @@ struct SewCause {
   const char* display;  // E-number, or the bit's name where the definition gives none
   std::uint16_t canopen;
 };
-extern const std::array<SewCause, 23> kSewCauses;
-inline constexpr std::uint32_t kSewCauseMask = 0x01FFFFEE;  // bits 1–3 and 5–24
+extern const std::array<SewCause, popcount64(kSewCauseMask)> kSewCauses;
 
 struct ErrorHistoryEntry {
   const SewCause* cause = nullptr;

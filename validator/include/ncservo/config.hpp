@@ -52,9 +52,6 @@ struct ConfigResult {
   bool ok() const { return config.has_value(); }
 };
 
-// Timeout names of RULES.md, the keys [timeouts] accepts.
-extern const std::vector<std::string_view> kTimeoutNames;
-
 ConfigResult parseConfig(std::string_view text, const std::string& path);
 // The axes (and a Servo_Ready_Mode) as a configuration file that parseConfig reads back,
 // addresses in hexadecimal.

@@ -2,6 +2,7 @@
 // registration, the CLI's decoder and the field documentation are all generated from it.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -266,6 +267,60 @@ constexpr bool fieldTableIsConsistent() {
 }
 }  // namespace detail
 static_assert(detail::fieldTableIsConsistent(), "field table rows violate the table's invariants");
+
+// --- Protocol facts derived from the table ---
+
+// PROTOCOL.md §4: bit 0 summarises the cause bits, which are every other SEW flag.
+inline constexpr std::uint32_t kSewSummaryMask = mask32("ncservo.sew.servo_errors");
+inline constexpr std::uint32_t kSewCauseMask = [] {
+  std::uint32_t all = 0;
+  for (const FieldDef& f : kFields) {
+    if (f.word == Word::Sew && f.kind == FieldKind::Flag) all |= static_cast<std::uint32_t>(f.mask);
+  }
+  return all & ~kSewSummaryMask;
+}();
+static_assert(kSewCauseMask == 0x01FFFFEE, "PROTOCOL.md §4: cause bits 1-3 and 5-24");
+
+// PROTOCOL.md §5: the message codes with a meaning are the value names of ncservo.msg_code.
+constexpr bool messageCodeDefined(std::int64_t code) {
+  const FieldDef& f = field("ncservo.msg_code");
+  for (std::size_t i = 0; i < f.value_count; ++i) {
+    if (f.values[i].value == code) return true;
+  }
+  return false;
+}
+inline constexpr std::uint32_t kLastDefinedMessageCode = [] {
+  const FieldDef& f = field("ncservo.msg_code");
+  std::uint32_t last = 0;
+  for (std::size_t i = 0; i < f.value_count; ++i) last = std::max(last, f.values[i].value);
+  return last;
+}();
+
+// PROTOCOL.md §2–3: parameter table = ExtPRMTBL·4 + PRMTBL + 1, commanded in the SCW, active in
+// the SSW.
+struct ParameterTableBits {
+  std::uint32_t low;   // PRMTBL
+  std::uint32_t high;  // ExtPRMTBL
+};
+constexpr ParameterTableBits parameterTableBits(Word word) {
+  return word == Word::Scw
+             ? ParameterTableBits{mask32("ncservo.scw.prmtbl"), mask32("ncservo.scw.ext_prmtbl")}
+             : ParameterTableBits{mask32("ncservo.ssw.prmtbl"), mask32("ncservo.ssw.ext_prmtbl")};
+}
+inline constexpr unsigned kParameterTables = 8;
+// The table (1..8) that a SCW or SSW selects.
+constexpr unsigned parameterTable(Word word, std::uint32_t value) {
+  const ParameterTableBits b = parameterTableBits(word);
+  return ((value & b.high) ? 4u : 0u) + ((value & b.low) >> lowestBit(b.low)) + 1u;
+}
+// The bits of a SCW or SSW that select table 1..8.
+constexpr std::uint32_t parameterTableSelection(Word word, unsigned table) {
+  const ParameterTableBits b = parameterTableBits(word);
+  const unsigned index = table - 1u;
+  return ((index & 3u) << lowestBit(b.low)) | ((index & 4u) ? b.high : 0u);
+}
+static_assert(parameterTable(Word::Scw, parameterTableSelection(Word::Scw, 7)) == 7 &&
+              parameterTable(Word::Ssw, parameterTableSelection(Word::Ssw, 5)) == 5);
 
 }  // namespace ncservo
 

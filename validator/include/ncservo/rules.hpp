@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "ncservo/bus_events.hpp"
-#include "ncservo/config.hpp"
 #include "ncservo/fields.hpp"
 
 namespace ncservo {
@@ -48,6 +47,10 @@ inline constexpr std::array<TimeoutDef, 6> kTimeouts{{
     {Timeout::ParamTable, "param_table", 50},
 }};
 std::optional<Timeout> timeoutFromName(std::string_view name);
+// "drive_response, nc_release, ...": the names a configuration and --timeout accept.
+std::string timeoutNameList();
+// The longest timeout a user may set, in milliseconds (an hour).
+inline constexpr std::uint32_t kMaxTimeoutMs = 3'600'000;
 
 enum class RuleId : std::uint8_t {
   Se001,
@@ -83,6 +86,7 @@ enum class RuleId : std::uint8_t {
 inline constexpr std::size_t kRuleCount = 29;
 
 class AxisModel;
+struct Config;
 struct RuleSettings;
 
 // Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
