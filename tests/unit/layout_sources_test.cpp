@@ -10,7 +10,7 @@
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/layout_learner.hpp"
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {

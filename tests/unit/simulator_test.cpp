@@ -1,6 +1,6 @@
 // `ncservo simulate`'s library (simulator.hpp, capture_writer.hpp): options and faults, the
 // frame stream (PROTOCOL.md §8, §9.4), its layout, and the stream through the validator.
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

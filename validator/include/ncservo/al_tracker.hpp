@@ -24,6 +24,9 @@ namespace ncservo {
 
 // AL states in bits 3..0 of AL control and AL status (PROTOCOL.md §8).
 enum class AlState : std::uint8_t { Init = 1, PreOp = 2, Boot = 3, SafeOp = 4, Op = 8 };
+inline constexpr std::uint8_t kAlStateMask = 0x0F;
+// AL status: the error indicator; AL control: the error acknowledge.
+inline constexpr std::uint8_t kAlErrorIndicator = 0x10;
 const char* alStateName(std::uint8_t state);  // "INIT", ..., or "0x5" for a non-state
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to);
 
