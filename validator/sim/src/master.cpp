@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "le_bytes.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/pdo.hpp"
 
@@ -20,10 +21,6 @@ constexpr std::uint8_t kSmOutputs = 0x64, kSmInputs = 0x20;
 constexpr std::uint8_t kOutputTerminalPatternCycles = 100;  // the lit output moves this often
 
 constexpr auto kInit = static_cast<std::uint8_t>(AlState::Init);
-
-void putLe(std::uint8_t* out, std::uint64_t value, std::size_t size) {
-  for (std::size_t i = 0; i < size; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
 
 Framing ethernetFraming(bool returned) {
   Framing framing;

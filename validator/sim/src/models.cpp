@@ -1,4 +1,4 @@
-// The simulated drive and NC axis (sim_models.hpp). The drive follows PROTOCOL.md §2–7 unless a
+// The simulated drive and NC axis (models.hpp). The drive follows PROTOCOL.md §2–7 unless a
 // misbehaviour armed in it says otherwise; the NC commands what its plan asks and reacts to the
 // drive's status the way RULES.md expects of a well-behaved NC.
 #include "ncservo/sim/models.hpp"

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "le_bytes.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/pdo_layout.hpp"
 
@@ -32,15 +33,6 @@ constexpr std::uint32_t kLogicalBase = 0x00010000;
 constexpr std::uint32_t kLogicalFrameStride = 0x1000;
 constexpr std::size_t kMaxLrwData = 1450;  // 29 axes of 50 bytes (PROTOCOL.md §9.4)
 constexpr int kMaxServosPerFrame = 29;
-
-std::uint64_t getLe(const std::uint8_t* in, std::size_t size) {
-  std::uint64_t value = 0;
-  for (std::size_t i = 0; i < size; ++i) value |= static_cast<std::uint64_t>(in[i]) << (8 * i);
-  return value;
-}
-void putLe(std::uint8_t* out, std::uint64_t value, std::size_t size) {
-  for (std::size_t i = 0; i < size; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
 
 }  // namespace
 
