@@ -5,7 +5,8 @@ namespace {
 
 constexpr std::uint16_t kEtherTypeIpv4 = 0x0800;
 constexpr std::size_t kIpv4HeaderSize = 20;
-constexpr std::size_t kUdpHeaderSize = 8;
+constexpr std::size_t kIpv4TotalLength = 2;  // field offsets in the IPv4 and UDP headers
+constexpr std::size_t kUdpLength = 4;
 constexpr std::uint8_t kIpProtocolUdp = 17;
 // Linux cooked capture headers (LINKTYPE_LINUX_SLL, LINKTYPE_LINUX_SLL2).
 constexpr std::uint16_t kSllOutgoing = 4;  // packet type: sent by this host
@@ -108,8 +109,10 @@ void FrameEncoder::finish() {
   out_[ecat_offset_ + 1] = static_cast<std::uint8_t>(header >> 8);
   if (framing_.udp) {
     const std::size_t udp_length = out_.size() - ip_offset_ - kIpv4HeaderSize;
-    setBe16(out_, ip_offset_ + 2, static_cast<std::uint16_t>(kIpv4HeaderSize + udp_length));
-    setBe16(out_, ip_offset_ + kIpv4HeaderSize + 4, static_cast<std::uint16_t>(udp_length));
+    setBe16(out_, ip_offset_ + kIpv4TotalLength,
+            static_cast<std::uint16_t>(kIpv4HeaderSize + udp_length));
+    setBe16(out_, ip_offset_ + kIpv4HeaderSize + kUdpLength,
+            static_cast<std::uint16_t>(udp_length));
   }
   if (out_.size() < framing_.min_size) out_.resize(framing_.min_size, 0);
 }

@@ -46,9 +46,8 @@ bool AlWalk::finished() const {
   return std::all_of(done.begin(), done.end(), [](bool d) { return d; });
 }
 
-Master::Master(Segment& segment, std::int64_t cycle_ns)
+Master::Master(Segment& segment)
     : segment_(segment),
-      cycle_ns_(cycle_ns),
       // the ring's round trip: a few microseconds plus a quarter per slave
       return_delay_ns_((2 + static_cast<std::int64_t>(segment.escs.size()) / 4) * kUs),
       sent_(ethernetFraming(false)),

@@ -30,7 +30,7 @@ struct AlWalk {
 
 class Master {
  public:
-  Master(Segment& segment, std::int64_t cycle_ns);
+  explicit Master(Segment& segment);
 
   // The start-up from time `t` in steps of `step_ns`; `t` ends after it. `op_request_slave`: the
   // slave whose first SAFE-OP request asks for OP (ESM-001). False if the sink stopped.
@@ -58,7 +58,6 @@ class Master {
             std::int64_t t_ns);
 
   Segment& segment_;
-  std::int64_t cycle_ns_;
   std::int64_t return_delay_ns_;
   Framing sent_;      // the master's copy
   Framing returned_;  // the returned copy: the source MAC marked locally administered

@@ -12,7 +12,6 @@
 namespace ncservo::sim {
 namespace {
 
-constexpr auto kInit = static_cast<std::uint8_t>(AlState::Init);
 constexpr auto kSafeOp = static_cast<std::uint8_t>(AlState::SafeOp);
 constexpr auto kOp = static_cast<std::uint8_t>(AlState::Op);
 constexpr std::uint8_t kEscTypeValue = 0x11;

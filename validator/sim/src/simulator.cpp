@@ -48,7 +48,7 @@ struct Simulator::Impl {
         segment(options, rng),
         axis_layout(segment.axisLayout()),
         faults(segment, drives, ncs),
-        master(segment, cycle_ns) {
+        master(segment) {
     for (int a = 0; a < o.axes; ++a) {
       DriveSetup setup;
       setup.axis = a;
