@@ -8,9 +8,13 @@
 # set-up. In the suite with one seed (25 captures); more seeds for a longer run.
 SRC=$1 BUILD=$2 SEEDS=${3:-1}
 source "$SRC/tests/integration/lib.sh"
-RULES=(SE-001 SE-002 SE-003 SE-004 ZP-001 ZP-002 ZP-003 EC-001 EC-002 EC-003 EC-004 SEW-001
-       SEW-002 SEW-003 SSW-001 SCW-001 RDY-001 FLT-001 PT-001 MSG-001 COM-001 COM-002 COM-003
-       COM-004 COM-005)
+# The generator's rules in the order of the rule table.
+mapfile -t injectable < <(python3 "$GEN" --list-rules)
+RULES=()
+for rule in $("$NCSERVO" rules | awk '{ print $1 }'); do
+  if [[ " ${injectable[*]} " == *" $rule "* ]]; then RULES+=("$rule"); fi
+done
+[ ${#RULES[@]} -gt 0 ] || fail "no rule both in \`ncservo rules\` and in gen_capture.py --list-rules"
 ENCAPS=(eth vlan qinq udp)
 FORMATS=(pcap pcapng)
 

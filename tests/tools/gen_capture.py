@@ -1412,9 +1412,15 @@ def parse_args(argv):
     p.add_argument("--self-check", action="store_true",
                    help="assert that every axis not under an injection conforms "
                         "(on with --findings)")
-    p.add_argument("-o", "--output", required=True, help="capture file to write")
+    p.add_argument("--list-rules", action="store_true",
+                   help="print the rules --inject can violate, one per line, and exit")
+    p.add_argument("-o", "--output", help="capture file to write (required)")
     p.add_argument("--truth", help="JSON Lines truth file to write")
     args = p.parse_args(argv)
+    if args.list_rules:
+        return args
+    if not args.output:
+        p.error("the following arguments are required: -o/--output")
     if not 1 <= args.axes <= MAX_AXES:
         p.error("--axes must be 1..29 (one LRW of at most 1486 bytes)")
     if args.cycles < 200:
@@ -1436,6 +1442,9 @@ def parse_args(argv):
 
 def main(argv=None):
     args = parse_args(argv)
+    if args.list_rules:
+        print("\n".join(sorted(INJECTABLE)))
+        return 0
     truth_out = open(args.truth, "w", encoding="ascii", buffering=1 << 20) if args.truth else None
     expect = Expectations(args.cycle_us * 1000, args.return_delay_us * 1000) \
         if args.findings else None

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "ncservo/capture_reader.hpp"
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 #include "ncservo/validator.hpp"
 #include "row_name.hpp"
 

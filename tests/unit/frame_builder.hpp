@@ -1,5 +1,5 @@
-// Test helper: builds captured frames byte by byte (PROTOCOL.md §8) and PDO images (§1).
-// Only for tests: no checks, the caller decides what is well-formed.
+// Test helper: builds captured frames (PROTOCOL.md §8) through the simulator's frame encoder, and
+// PDO images (§1) byte by byte. Only for tests: no checks, the caller decides what is well-formed.
 #pragma once
 
 #include <array>
@@ -13,6 +13,7 @@
 
 #include "ncservo/byte_reader.hpp"
 #include "ncservo/ethercat.hpp"
+#include "ncservo/sim/frame_encoder.hpp"
 
 namespace ncservo::test {
 
@@ -20,10 +21,6 @@ using Bytes = std::vector<std::uint8_t>;
 
 inline void putLe(Bytes& out, std::uint64_t value, std::size_t size) {
   for (std::size_t i = 0; i < size; ++i) out.push_back(static_cast<std::uint8_t>(value >> (8 * i)));
-}
-inline void putBe16(Bytes& out, std::uint16_t value) {
-  out.push_back(static_cast<std::uint8_t>(value >> 8));
-  out.push_back(static_cast<std::uint8_t>(value));
 }
 inline void putFloat(Bytes& out, float value) {
   std::uint32_t bits;
@@ -90,137 +87,10 @@ struct Dg {
 };
 
 inline std::uint32_t physical(std::uint16_t adp, std::uint16_t ado) {
-  return adp | (std::uint32_t{ado} << 16);
+  return sim::physicalAddress(adp, ado);
 }
 
 enum class Link { Ethernet, Sll, Sll2 };
-
-// Builds a whole captured frame: link header, optional VLAN tags or IPv4/UDP, the EtherCAT
-// frame header and the datagram chain, optional padding.
-class FrameBuilder {
- public:
-  FrameBuilder& add(Dg dg) {
-    datagrams_.push_back(std::move(dg));
-    return *this;
-  }
-  FrameBuilder& link(Link l) {
-    link_ = l;
-    return *this;
-  }
-  FrameBuilder& vlan(std::uint16_t tpid = 0x8100, std::uint16_t tci = 1) {
-    tags_.push_back({tpid, tci});
-    return *this;
-  }
-  FrameBuilder& etherType(std::uint16_t type) {
-    ether_type_ = type;
-    return *this;
-  }
-  FrameBuilder& udp(std::uint16_t port = ecat::kUdpPort, std::uint16_t fragment_offset = 0) {
-    udp_ = Udp{port, fragment_offset};
-    return *this;
-  }
-  FrameBuilder& frameType(std::uint8_t type) {
-    frame_type_ = type;
-    return *this;
-  }
-  FrameBuilder& headerLength(std::uint16_t length) {
-    header_length_ = length;
-    return *this;
-  }
-  FrameBuilder& padTo(std::size_t size) {
-    pad_to_ = size;
-    return *this;
-  }
-
-  // The EtherCAT frame header and the chain.
-  Bytes ecat() const {
-    Bytes chain;
-    for (std::size_t i = 0; i < datagrams_.size(); ++i) {
-      const Dg& dg = datagrams_[i];
-      const bool more = dg.more.value_or(i + 1 < datagrams_.size());
-      const auto length = dg.length.value_or(static_cast<std::uint16_t>(dg.data.size()));
-      chain.push_back(dg.cmd);
-      chain.push_back(dg.index);
-      putLe(chain, dg.address, 4);
-      putLe(chain, (length & ecat::kLengthMask) | (more ? ecat::kMoreBit : 0), 2);
-      putLe(chain, dg.irq, 2);
-      chain.insert(chain.end(), dg.data.begin(), dg.data.end());
-      putLe(chain, dg.wkc, 2);
-    }
-    Bytes out;
-    const auto length = header_length_.value_or(static_cast<std::uint16_t>(chain.size()));
-    putLe(out, (length & ecat::kLengthMask) | (std::uint16_t{frame_type_} << 12), 2);
-    out.insert(out.end(), chain.begin(), chain.end());
-    return out;
-  }
-
-  Bytes bytes() const {
-    Bytes out;
-    switch (link_) {
-      case Link::Ethernet:
-        out = Bytes{0x01, 0x01, 0x05, 0x01, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x00, 0x01};
-        break;
-      case Link::Sll:  // packet type, ARPHRD, address length, 8 address bytes; protocol last
-        out = Bytes{0x00, 0x04, 0x00, 0x01, 0x00, 0x06, 0x02, 0x00, 0x00, 0x00, 0x00, 0x01, 0, 0};
-        break;
-      case Link::Sll2:  // protocol first, then reserved, ifindex, ARPHRD, type, length, address
-        break;
-    }
-    std::uint16_t type = ether_type_;
-    if (udp_) type = 0x0800;
-    // The outer type field, then each tag's TCI and the next type, outside in.
-    std::vector<std::uint16_t> types;
-    for (const auto& tag : tags_) types.push_back(tag.tpid);
-    types.push_back(type);
-    putBe16(out, types[0]);
-    if (link_ == Link::Sll2) {
-      Bytes sll2_rest{0, 0, 0, 0, 0, 1, 0, 1, 0, 6, 0x02, 0, 0, 0, 0, 1, 0, 0};
-      out.insert(out.end(), sll2_rest.begin(), sll2_rest.end());
-    }
-    for (std::size_t i = 0; i < tags_.size(); ++i) {
-      putBe16(out, tags_[i].tci);
-      putBe16(out, types[i + 1]);
-    }
-    Bytes payload = ecat();
-    if (udp_) {
-      Bytes ip{0x45, 0x00};
-      putBe16(ip, static_cast<std::uint16_t>(20 + 8 + payload.size()));
-      putBe16(ip, 0x1234);                 // identification
-      putBe16(ip, udp_->fragment_offset);  // flags (0x2000 MF) and offset in 8-byte units
-      ip.push_back(64);                    // TTL
-      ip.push_back(17);                    // UDP
-      putBe16(ip, 0);                      // checksum, not checked
-      Bytes addresses{192, 168, 0, 1, 192, 168, 0, 2};
-      ip.insert(ip.end(), addresses.begin(), addresses.end());
-      putBe16(ip, ecat::kUdpPort);  // source port
-      putBe16(ip, udp_->port);
-      putBe16(ip, static_cast<std::uint16_t>(8 + payload.size()));
-      putBe16(ip, 0);
-      out.insert(out.end(), ip.begin(), ip.end());
-    }
-    out.insert(out.end(), payload.begin(), payload.end());
-    if (out.size() < pad_to_) out.resize(pad_to_, 0);
-    return out;
-  }
-
- private:
-  struct Tag {
-    std::uint16_t tpid;
-    std::uint16_t tci;
-  };
-  struct Udp {
-    std::uint16_t port;
-    std::uint16_t fragment_offset;
-  };
-  std::vector<Dg> datagrams_;
-  Link link_ = Link::Ethernet;
-  std::vector<Tag> tags_;
-  std::uint16_t ether_type_ = ecat::kEtherType;
-  std::optional<Udp> udp_;
-  std::uint8_t frame_type_ = ecat::kFrameTypeDatagrams;
-  std::optional<std::uint16_t> header_length_;
-  std::size_t pad_to_ = 0;
-};
 
 inline LinkType linkType(Link l) {
   switch (l) {
@@ -233,6 +103,83 @@ inline LinkType linkType(Link l) {
   }
   return LinkType::Ethernet;
 }
+
+// Builds a whole captured frame: link header, optional VLAN tags or IPv4/UDP, the EtherCAT
+// frame header and the datagram chain, optional padding.
+class FrameBuilder {
+ public:
+  FrameBuilder() {
+    framing_.destination = {0x01, 0x01, 0x05, 0x01, 0x00, 0x00};
+    framing_.source = {0x02, 0x00, 0x00, 0x00, 0x00, 0x01};
+  }
+  FrameBuilder& add(Dg dg) {
+    datagrams_.push_back(std::move(dg));
+    return *this;
+  }
+  FrameBuilder& link(Link l) {
+    framing_.link = linkType(l);
+    return *this;
+  }
+  FrameBuilder& vlan(std::uint16_t tpid = 0x8100, std::uint16_t tci = 1) {
+    framing_.tags.push_back({tpid, tci});
+    return *this;
+  }
+  FrameBuilder& etherType(std::uint16_t type) {
+    framing_.ether_type = type;
+    return *this;
+  }
+  FrameBuilder& udp(std::uint16_t port = ecat::kUdpPort, std::uint16_t fragment_offset = 0) {
+    framing_.udp = sim::UdpFraming{port, fragment_offset};
+    return *this;
+  }
+  FrameBuilder& frameType(std::uint8_t type) {
+    framing_.frame_type = type;
+    return *this;
+  }
+  FrameBuilder& headerLength(std::uint16_t length) {
+    framing_.header_length = length;
+    return *this;
+  }
+  FrameBuilder& padTo(std::size_t size) {
+    framing_.min_size = size;
+    return *this;
+  }
+
+  Bytes bytes() const { return encode(framing_); }
+  // The EtherCAT frame header and the chain alone.
+  Bytes ecat() const {
+    sim::Framing plain;
+    plain.frame_type = framing_.frame_type;
+    plain.header_length = framing_.header_length;
+    Bytes out = encode(plain);
+    out.erase(out.begin(), out.begin() + kEthernetHeader);
+    return out;
+  }
+
+ private:
+  static constexpr std::size_t kEthernetHeader = 14;
+
+  Bytes encode(const sim::Framing& framing) const {
+    Bytes out;
+    sim::FrameEncoder encoder(framing, out);
+    for (const Dg& dg : datagrams_) {
+      sim::DatagramFields fields;
+      fields.command = dg.cmd;
+      fields.index = dg.index;
+      fields.address = dg.address;
+      fields.wkc = dg.wkc;
+      fields.irq = dg.irq;
+      fields.more = dg.more;
+      fields.length = dg.length;
+      encoder.add(fields, dg.data.data(), dg.data.size());
+    }
+    encoder.finish();
+    return out;
+  }
+
+  sim::Framing framing_;
+  std::vector<Dg> datagrams_;
+};
 
 // A frame walked over its own heap copy of exactly its size (so ASan sees any overread).
 struct Walked {

@@ -13,7 +13,7 @@
 
 #include "frame_builder.hpp"
 #include "ncservo/ethercat.hpp"
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 #include "row_name.hpp"
 #include "simulated_setups.hpp"
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "ncservo/eni.hpp"
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 #include "row_name.hpp"
 #include "simulated_setups.hpp"
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
+#include "row_name.hpp"
 
 namespace ncservo {
 namespace {
@@ -123,6 +124,64 @@ TEST(ReadPdo, FailsWhenOffsetRunsPastTheEnd) {
     PdoValues values;
     EXPECT_EQ(readPdo(row.pdo, reader, row.offset, values), row.ok) << row.offset;
   }
+}
+
+// --- writePdo: what it writes, readPdo reads back, word for word and field for field ---
+
+struct WriteRow {
+  const char* name;
+  std::uint64_t (*bits)(Word w);  // the wire bits to give each word
+};
+const WriteRow kWriteRows[] = {
+    {"zero", [](Word) { return std::uint64_t{0}; }},
+    {"all_ones", [](Word) { return ~std::uint64_t{0}; }},
+    {"distinct_bytes",  // each byte names its word and its place: a misplaced byte shows
+     [](Word w) {
+       std::uint64_t bits = 0;
+       for (unsigned i = 0; i < 8; ++i) {
+         bits |= std::uint64_t{(static_cast<unsigned>(w) + 1) << 4 | i} << (8 * i);
+       }
+       return bits;
+     }},
+    {"sign_bits_only", [](Word w) { return std::uint64_t{1} << (8 * wordDef(w).size - 1); }},
+    {"float_nan_payload", [](Word) { return std::uint64_t{0x7FC00123}; }},
+};
+class WritePdo : public ::testing::TestWithParam<WriteRow> {};
+
+TEST_P(WritePdo, ReadPdoReadsBackEveryWordAndField) {
+  PdoValues written;
+  for (const WordDef& def : kWords) written.set(def.word, GetParam().bits(def.word));
+  written.has_rx = written.has_tx = true;
+  // Both PDOs in one buffer with a guard byte around each: nothing is written outside.
+  Bytes buffer(1 + kRxPdoSize + 1 + kTxPdoSize + 1, 0xEE);
+  writePdo(Pdo::Rx, written, &buffer[1]);
+  writePdo(Pdo::Tx, written, &buffer[1 + kRxPdoSize + 1]);
+  EXPECT_EQ(buffer[0], 0xEE);
+  EXPECT_EQ(buffer[1 + kRxPdoSize], 0xEE);
+  EXPECT_EQ(buffer.back(), 0xEE);
+  PdoValues read;
+  const ByteReader reader(buffer.data(), buffer.size());
+  ASSERT_TRUE(readPdo(Pdo::Rx, reader, 1, read));
+  ASSERT_TRUE(readPdo(Pdo::Tx, reader, 1 + kRxPdoSize + 1, read));
+  for (const WordDef& def : kWords)
+    EXPECT_EQ(read.word(def.word), written.word(def.word)) << def.name;
+  for (const FieldDef& f : kFields) {
+    const FieldValue a = fieldValue(f, written), b = fieldValue(f, read);
+    EXPECT_EQ(a.kind, b.kind) << f.filter;
+    EXPECT_EQ(a.i, b.i) << f.filter;
+    EXPECT_EQ(a.u, b.u) << f.filter;
+    EXPECT_EQ(bitsOf(static_cast<float>(a.f)), bitsOf(static_cast<float>(b.f))) << f.filter;
+    EXPECT_EQ(fieldApplies(f, written), fieldApplies(f, read)) << f.filter;
+  }
+}
+INSTANTIATE_TEST_SUITE_P(Rows, WritePdo, ::testing::ValuesIn(kWriteRows), test::rowName<WriteRow>);
+
+TEST(PdoValuesSet, DropsBitsBeyondTheWord) {
+  PdoValues values;
+  values.set(Word::ExtCode, 0xFFFFFFFFFFFF8001u);  // a 2-byte word
+  values.set(Word::Ssp, static_cast<std::uint32_t>(-5));
+  EXPECT_EQ(values.word(Word::ExtCode), 0x8001u);
+  EXPECT_EQ(values.word(Word::Ssp), 0xFFFFFFFBu);
 }
 
 struct ValueCase {

@@ -1,6 +1,6 @@
 // The simulator's drive and NC models (sim_models.hpp), stepped cycle by cycle (1 ms) with
 // hand-made process data, against PROTOCOL.md §1–5 and the timeouts of RULES.md.
-#include "ncservo/sim_models.hpp"
+#include "ncservo/sim/models.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "ncservo/config.hpp"
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 
 namespace ncservo::test {
 

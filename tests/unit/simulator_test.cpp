@@ -1,6 +1,6 @@
 // `ncservo simulate`'s library (simulator.hpp, capture_writer.hpp): options and faults, the
 // frame stream (PROTOCOL.md §8, §9.4), its layout, and the stream through the validator.
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -22,6 +22,7 @@
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/rules.hpp"
+#include "ncservo/sim/faults.hpp"
 #include "ncservo/validator.hpp"
 
 namespace ncservo::sim {
@@ -308,7 +309,37 @@ std::set<std::string> documentedCompanions(const char* code) {
   return it == table.end() ? std::set<std::string>{} : it->second;
 }
 
-TEST(FaultCatalogue, EveryRuleHasARecipe) {
+TEST(FaultCatalogue, EveryRuleHasARecipeRow) {
+  std::set<RuleId> rows;
+  for (const FaultRecipe& recipe : faultRecipes()) {
+    EXPECT_TRUE(rows.insert(recipe.rule).second) << ruleDef(recipe.rule).code << ": two rows";
+  }
+  for (const RuleDef& rule : kRules) {
+    const FaultRecipe* recipe = faultRecipe(rule.id);
+    ASSERT_NE(recipe, nullptr) << rule.code << " has no row in the fault recipes (faults.cpp)";
+    if (!recipe->injectable()) {
+      EXPECT_EQ(std::string(recipe->description).rfind("not injectable: ", 0), 0U)
+          << rule.code << ": a row without a recipe says why";
+      continue;
+    }
+    // Where the faults scenario puts it: an axis of its 4 that suits the rule, or the bus.
+    const int axis = recipe->scenario.axis;
+    if (recipe->need == AxisNeed::None) {
+      EXPECT_EQ(axis, -1) << rule.code;
+    } else {
+      EXPECT_TRUE(axis >= 0 && axis < 4) << rule.code;
+      if (recipe->need == AxisNeed::Incremental) {
+        EXPECT_TRUE(isIncrementalAxis(axis)) << rule.code;
+      }
+      if (recipe->need == AxisNeed::Absolute) {
+        EXPECT_FALSE(isIncrementalAxis(axis)) << rule.code;
+      }
+    }
+  }
+  EXPECT_EQ(rows.size(), kRules.size());
+}
+
+TEST(FaultCatalogue, EveryRuleHasADescriptionAndItsCompanions) {
   for (const RuleDef& rule : kRules) {
     const char* description = faultDescription(rule.id);
     ASSERT_NE(description, nullptr) << rule.code;

@@ -25,7 +25,7 @@
 #include "ncservo/fields.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
-#include "ncservo/simulator.hpp"
+#include "ncservo/sim/simulator.hpp"
 #include "ncservo/validator.hpp"
 #include "report.hpp"
 

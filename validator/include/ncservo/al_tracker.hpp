@@ -29,6 +29,9 @@ inline constexpr std::array<std::uint8_t, 5> kAlStates{
     static_cast<std::uint8_t>(AlState::Init), static_cast<std::uint8_t>(AlState::PreOp),
     static_cast<std::uint8_t>(AlState::Boot), static_cast<std::uint8_t>(AlState::SafeOp),
     static_cast<std::uint8_t>(AlState::Op)};
+inline constexpr std::uint8_t kAlStateMask = 0x0F;
+// AL status: the error indicator; AL control: the error acknowledge.
+inline constexpr std::uint8_t kAlErrorIndicator = 0x10;
 const char* alStateName(std::uint8_t state);  // "INIT", ..., or "0x5" for a non-state
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to);
 bool alStateAboveInit(std::uint8_t state);  // a state, and not INIT

@@ -68,6 +68,7 @@ const char* commandName(std::uint8_t cmd);
 
 // ESC registers the decoder looks at (PROTOCOL.md §8).
 // ESC registers (PROTOCOL.md §8).
+inline constexpr std::uint16_t kRegEscType = 0x0000;
 inline constexpr std::uint16_t kRegStationAddress = 0x0010;
 inline constexpr std::uint16_t kRegStationAlias = 0x0012;
 inline constexpr std::uint16_t kRegAlControl = 0x0120;
@@ -80,6 +81,17 @@ inline constexpr std::uint16_t kRegSyncManager0 = 0x0800;
 inline constexpr std::uint16_t kSyncManagerStride = 8;
 inline constexpr std::size_t kSyncManagerCount = 16;
 inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;
+// Fields of one FMMU entry, from its start (ETG.1000.4 §6.6).
+namespace fmmu {
+inline constexpr std::size_t kLogicalStart = 0, kLength = 4, kLogicalStartBit = 6,
+                             kLogicalStopBit = 7, kPhysicalStart = 8, kPhysicalStartBit = 10,
+                             kType = 11, kActivate = 12;
+inline constexpr std::uint8_t kTypeRead = 1, kTypeWrite = 2;  // inputs, outputs
+}  // namespace fmmu
+// Fields of one sync manager entry, from its start (ETG.1000.4 §6.7).
+namespace sm {
+inline constexpr std::size_t kPhysicalStart = 0, kLength = 2, kControl = 4, kActivate = 6;
+}  // namespace sm
 }  // namespace ecat
 
 struct Datagram {

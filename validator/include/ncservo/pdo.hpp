@@ -21,16 +21,29 @@ struct PdoValues {
 
   bool has(Word w) const { return wordDef(w).pdo == Pdo::Rx ? has_rx : has_tx; }
   std::uint64_t word(Word w) const { return raw[static_cast<std::size_t>(w)]; }
-  std::uint32_t scw() const { return static_cast<std::uint32_t>(word(Word::Scw)); }
-  std::uint32_t ssw() const { return static_cast<std::uint32_t>(word(Word::Ssw)); }
-  std::uint32_t sew() const { return static_cast<std::uint32_t>(word(Word::Sew)); }
-  std::int32_t msgCode() const { return static_cast<std::int32_t>(word(Word::MsgCode)); }
-  float msgData() const {
-    auto bits = static_cast<std::uint32_t>(word(Word::MsgData));
+  // Sets a word from its wire bits; bits beyond the word's size are dropped, as `raw` holds them
+  // zero-extended.
+  void set(Word w, std::uint64_t bits) {
+    const unsigned width = 8u * wordDef(w).size;
+    raw[static_cast<std::size_t>(w)] =
+        width >= 64 ? bits : bits & ((std::uint64_t{1} << width) - 1);
+  }
+  void setFloat(Word w, float value) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    set(w, bits);
+  }
+  float floatOf(Word w) const {
+    auto bits = static_cast<std::uint32_t>(word(w));
     float value;
     std::memcpy(&value, &bits, sizeof value);
     return value;
   }
+  std::uint32_t scw() const { return static_cast<std::uint32_t>(word(Word::Scw)); }
+  std::uint32_t ssw() const { return static_cast<std::uint32_t>(word(Word::Ssw)); }
+  std::uint32_t sew() const { return static_cast<std::uint32_t>(word(Word::Sew)); }
+  std::int32_t msgCode() const { return static_cast<std::int32_t>(word(Word::MsgCode)); }
+  float msgData() const { return floatOf(Word::MsgData); }
 };
 
 namespace detail {
@@ -79,6 +92,31 @@ bool readPdoOf(const ByteReader& bytes, std::size_t offset, PdoValues& out) {
 inline bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoValues& out) {
   return pdo == Pdo::Rx ? readPdoOf<Pdo::Rx>(bytes, offset, out)
                         : readPdoOf<Pdo::Tx>(bytes, offset, out);
+}
+
+namespace detail {
+// Little-endian store of N bytes to a place already bounds-checked.
+template <std::size_t N>
+void storeLe(std::uint8_t* p, std::uint64_t value) {
+  for (std::size_t i = 0; i < N; ++i) p[i] = static_cast<std::uint8_t>(value >> (8 * i));
+}
+
+// Writes every word of one PDO, unrolled at compile time from kWords (readWords' mirror).
+template <Pdo P, std::size_t... I>
+void writeWords(const PdoValues& values, std::uint8_t* base, std::index_sequence<I...>) {
+  ((kWords[I].pdo == P ? storeLe<kWords[I].size>(base + kWordOffsets[I], values.raw[I]) : (void)0),
+   ...);
+}
+}  // namespace detail
+
+// Writes the words of one PDO from `values` into the sizeOfPdo(P) bytes at `out`, as readPdo
+// reads them: the same word table, so what one writes the other reads back.
+template <Pdo P>
+void writePdoOf(const PdoValues& values, std::uint8_t* out) {
+  detail::writeWords<P>(values, out, std::make_index_sequence<kWordCount>{});
+}
+inline void writePdo(Pdo pdo, const PdoValues& values, std::uint8_t* out) {
+  pdo == Pdo::Rx ? writePdoOf<Pdo::Rx>(values, out) : writePdoOf<Pdo::Tx>(values, out);
 }
 
 // One word of a PDO whose bytes start at `pdo` (already bounds-checked for the whole PDO).

@@ -11,8 +11,13 @@
 #include <vector>
 
 #include "ncservo/fields.hpp"
+#include "ncservo/pdo.hpp"
 
 namespace ncservo::sim {
+
+inline constexpr std::int64_t kUs = 1000;
+inline constexpr std::int64_t kMs = 1'000'000;
+inline constexpr std::int64_t kSecond = 1'000'000'000;
 
 // SplitMix64: a seeded generator whose output is the same on every platform (the standard
 // library's distributions are not), so a capture is a pure function of the options.
@@ -35,18 +40,7 @@ class Rng {
   std::uint64_t state_;
 };
 
-// Little-endian bytes of the simulator's own buffers (not captured bytes: those go through
-// ByteReader).
-inline void putLe(std::uint8_t* out, std::uint64_t value, std::size_t size) {
-  for (std::size_t i = 0; i < size; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-inline std::uint64_t getLe(const std::uint8_t* in, std::size_t size) {
-  std::uint64_t value = 0;
-  for (std::size_t i = 0; i < size; ++i) value |= static_cast<std::uint64_t>(in[i]) << (8 * i);
-  return value;
-}
-
-// The PDO values of PROTOCOL.md §1 (the bus model writes them little-endian).
+// The PDO values of PROTOCOL.md §1.
 struct RxPdo {
   std::int32_t ssp = 0;
   std::uint32_t scw = 0;
@@ -60,9 +54,14 @@ struct TxPdo {
   float msg_data = 0;
   std::array<float, 4> ext_data{};
 };
-void encodeRx(const RxPdo& pdo, std::uint8_t* out);  // 10 bytes
-void encodeTx(const TxPdo& pdo, std::uint8_t* out);  // 40 bytes
-RxPdo decodeRx(const std::uint8_t* in);              // 10 bytes
+// The words of the PDOs, as writePdo writes them and readPdo reads them (pdo.hpp).
+PdoValues pdoValues(const RxPdo& pdo);
+PdoValues pdoValues(const TxPdo& pdo);
+RxPdo rxPdoOf(const PdoValues& values);
+TxPdo txPdoOf(const PdoValues& values);
+void encodeRx(const RxPdo& pdo, std::uint8_t* out);  // kRxPdoSize bytes
+void encodeTx(const TxPdo& pdo, std::uint8_t* out);  // kTxPdoSize bytes
+RxPdo decodeRx(const std::uint8_t* in);              // kRxPdoSize bytes
 
 // Bits of the words, from the field table (one table, no drift).
 namespace bits {

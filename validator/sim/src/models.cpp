@@ -1,7 +1,7 @@
-// The simulated drive and NC axis (sim_models.hpp). The drive follows PROTOCOL.md §2–7 unless a
+// The simulated drive and NC axis (models.hpp). The drive follows PROTOCOL.md §2–7 unless a
 // misbehaviour armed in it says otherwise; the NC commands what its plan asks and reacts to the
 // drive's status the way RULES.md expects of a well-behaved NC.
-#include "ncservo/sim_models.hpp"
+#include "ncservo/sim/models.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,13 +10,6 @@
 namespace ncservo::sim {
 namespace {
 
-constexpr std::int64_t kMs = 1'000'000;
-
-std::uint32_t floatBits(float value) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &value, sizeof bits);
-  return bits;
-}
 constexpr unsigned shiftOf(std::uint32_t mask) {
   unsigned shift = 0;
   while (((mask >> shift) & 1U) == 0) ++shift;
@@ -63,27 +56,55 @@ constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: no data for 3 cycles 
 
 }  // namespace
 
+PdoValues pdoValues(const RxPdo& pdo) {
+  PdoValues values;
+  values.set(Word::Ssp, static_cast<std::uint32_t>(pdo.ssp));
+  values.set(Word::Scw, pdo.scw);
+  values.set(Word::ExtCode, static_cast<std::uint16_t>(pdo.ext_code));
+  values.has_rx = true;
+  return values;
+}
+PdoValues pdoValues(const TxPdo& pdo) {
+  PdoValues values;
+  values.set(Word::ActPos, static_cast<std::uint64_t>(pdo.actpos));
+  values.set(Word::Ssw, pdo.ssw);
+  values.set(Word::Sew, pdo.sew);
+  values.set(Word::MsgCode, static_cast<std::uint32_t>(pdo.msg_code));
+  values.setFloat(Word::MsgData, pdo.msg_data);
+  constexpr std::array<Word, 4> kExtData = {Word::ExtData1, Word::ExtData2, Word::ExtData3,
+                                            Word::ExtData4};
+  for (std::size_t i = 0; i < kExtData.size(); ++i) values.setFloat(kExtData[i], pdo.ext_data[i]);
+  values.has_tx = true;
+  return values;
+}
+RxPdo rxPdoOf(const PdoValues& values) {
+  RxPdo pdo;
+  pdo.ssp = static_cast<std::int32_t>(values.word(Word::Ssp));
+  pdo.scw = values.scw();
+  pdo.ext_code = static_cast<std::int16_t>(values.word(Word::ExtCode));
+  return pdo;
+}
+TxPdo txPdoOf(const PdoValues& values) {
+  TxPdo pdo;
+  pdo.actpos = static_cast<std::int64_t>(values.word(Word::ActPos));
+  pdo.ssw = values.ssw();
+  pdo.sew = values.sew();
+  pdo.msg_code = values.msgCode();
+  pdo.msg_data = values.msgData();
+  pdo.ext_data = {values.floatOf(Word::ExtData1), values.floatOf(Word::ExtData2),
+                  values.floatOf(Word::ExtData3), values.floatOf(Word::ExtData4)};
+  return pdo;
+}
 void encodeRx(const RxPdo& pdo, std::uint8_t* out) {
-  putLe(out, static_cast<std::uint32_t>(pdo.ssp), 4);
-  putLe(out + 4, pdo.scw, 4);
-  putLe(out + 8, static_cast<std::uint16_t>(pdo.ext_code), 2);
+  writePdoOf<Pdo::Rx>(pdoValues(pdo), out);
 }
 void encodeTx(const TxPdo& pdo, std::uint8_t* out) {
-  putLe(out, static_cast<std::uint64_t>(pdo.actpos), 8);
-  putLe(out + 8, pdo.ssw, 4);
-  putLe(out + 12, pdo.sew, 4);
-  putLe(out + 16, static_cast<std::uint32_t>(pdo.msg_code), 4);
-  putLe(out + 20, floatBits(pdo.msg_data), 4);
-  for (std::size_t i = 0; i < pdo.ext_data.size(); ++i) {
-    putLe(out + 24 + 4 * i, floatBits(pdo.ext_data[i]), 4);
-  }
+  writePdoOf<Pdo::Tx>(pdoValues(pdo), out);
 }
 RxPdo decodeRx(const std::uint8_t* in) {
-  RxPdo pdo;
-  pdo.ssp = static_cast<std::int32_t>(getLe(in, 4));
-  pdo.scw = static_cast<std::uint32_t>(getLe(in + 4, 4));
-  pdo.ext_code = static_cast<std::int16_t>(getLe(in + 8, 2));
-  return pdo;
+  PdoValues values;
+  readPdoOf<Pdo::Rx>(ByteReader(in, kRxPdoSize), 0, values);
+  return rxPdoOf(values);
 }
 
 namespace bits {

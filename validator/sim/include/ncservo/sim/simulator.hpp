@@ -1,4 +1,4 @@
-// `ncservo simulate`: an EtherCAT master, its slaves and the NC/drive models (sim_models.hpp)
+// `ncservo simulate`: an EtherCAT master, its slaves and the NC/drive models (models.hpp)
 // producing a capture whose truth is known. The output is a pure function of the options.
 //
 // The master does what real masters do (PROTOCOL.md §8): counts the slaves, assigns station
@@ -6,7 +6,8 @@
 // SM2/SM3 and FMMUs, then exchanges process data once per cycle in an LRW with a DC FRMW to
 // 0x0910. Each frame is captured twice: the master's copy and the copy the ring returns. The
 // slaves are small ESC models with register memory: FMMUs, sync managers and AL control work
-// from what the master wrote, so the capture is consistent by construction.
+// from what the master wrote, so the capture is consistent by construction. Each rule's fault is
+// a row of faults.hpp.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "ncservo/rules.hpp"
+#include "ncservo/sim/faults.hpp"
 
 namespace ncservo::sim {
 
@@ -39,11 +41,6 @@ struct FaultRequest {
 // The fault, or a message saying what is wrong with the text.
 std::optional<FaultRequest> parseFault(std::string_view text, std::string& error);
 
-// Other rules a fault necessarily fires as well (captures/README.md documents them).
-std::vector<RuleId> companionsOf(RuleId rule);
-// One line: what the simulator does to make the rule fire.
-const char* faultDescription(RuleId rule);
-
 struct SimOptions {
   Scenario scenario = Scenario::Commissioning;
   int axes = 4;                      // servos, 1..32
@@ -58,6 +55,14 @@ struct SimOptions {
   double loss = 0;     // probability that a returned frame is lost after the slaves
   std::vector<FaultRequest> faults;
 };
+
+// This simulator's set-up: the odd axes have an incremental encoder (zero-pulse search), the even
+// ones an absolute encoder.
+inline bool isIncrementalAxis(int axis) {
+  return axis % 2 == 1;
+}
+// The NC's plan starts this long after the capture's start, once the start-up is over.
+inline constexpr double kStartupSeconds = 0.2;
 
 // The default duration of a scenario, in seconds.
 double defaultDuration(Scenario scenario);

@@ -1,0 +1,75 @@
+// The faults of one run in time: the recipes (faults.hpp) applied to the segment, the drives and
+// the NCs, and the bus faults and drive faults waiting for their time.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ncservo/sim/faults.hpp"
+#include "ncservo/sim/models.hpp"
+#include "segment.hpp"
+
+namespace ncservo::sim {
+
+class FaultPlan final : public FaultActions {
+ public:
+  FaultPlan(Segment& segment, std::vector<DriveModel>& drives, std::vector<NcAxis>& ncs)
+      : segment_(segment), drives_(drives), ncs_(ncs) {}
+
+  // The rule's recipe at `at_s` seconds of capture time (a start-up fault: unused) on an axis
+  // (-1: the whole bus).
+  void inject(RuleId rule, double at_s, int axis);
+  // Every injectable rule where the `faults` scenario puts it.
+  void injectScenario();
+  // A drive fault of a scenario's plan (not a rule's fault).
+  void scheduleDriveFault(std::int64_t at_ns, int axis, std::uint32_t cause);
+
+  // Once per cycle, before it: raises the drive faults and starts the bus faults now due.
+  void raiseDriveFaults(std::int64_t now_ns);
+  void dropRaisedDriveFaults();
+  void startBusFaults(std::int64_t now_ns);
+  // What this cycle's frames suffer; each call takes one cycle's share.
+  bool takeSkippedCycle();
+  bool takeLossBeforeSlaves();
+  bool takeLossAfterSlaves();
+
+  std::optional<std::size_t> opRequestSlave() const { return op_request_slave_; }
+
+ private:
+  void nc(std::int64_t offset_ns, NcAction action, double value) override;
+  void quirk(DriveQuirk quirk) override;
+  void driveFault() override;
+  void bus(BusFault fault) override;
+  void startup(StartupFault fault) override;
+
+  struct TimedBusFault {
+    BusFault fault;
+    std::int64_t at_ns;
+    int axis;
+    bool done = false;
+  };
+  struct DriveFaultEvent {
+    std::int64_t at_ns;
+    int axis;
+    std::uint32_t cause;
+    bool done = false;
+  };
+
+  Segment& segment_;
+  std::vector<DriveModel>& drives_;
+  std::vector<NcAxis>& ncs_;
+  // the recipe being applied
+  std::int64_t at_ns_ = 0;
+  int axis_ = -1;
+  std::size_t axisIndex() const { return static_cast<std::size_t>(axis_ < 0 ? 0 : axis_); }
+
+  std::vector<TimedBusFault> bus_faults_;
+  std::vector<DriveFaultEvent> drive_faults_;
+  int skip_cycles_ = 0;                          // COM-002
+  int lose_before_slaves_ = 0;                   // COM-003, COM-005
+  bool lose_after_slaves_ = false;               // COM-004
+  std::optional<std::size_t> op_request_slave_;  // ESM-001
+};
+
+}  // namespace ncservo::sim

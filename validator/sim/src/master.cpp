@@ -1,0 +1,310 @@
+#include "master.hpp"
+
+#include <algorithm>
+
+#include "le_bytes.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/pdo.hpp"
+
+namespace ncservo::sim {
+namespace {
+
+constexpr MacAddress kBroadcastMac = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
+constexpr MacAddress kMasterMac = {0x00, 0x1B, 0x21, 0x4E, 0x43, 0x01};
+constexpr std::uint8_t kLocallyAdministered = 0x02;
+constexpr std::size_t kMinFrame = 60;  // Ethernet's minimum, without the FCS
+constexpr int kMaxPolls = 50;
+constexpr std::size_t kAlStatusPoll = 6;  // AL status, reserved, AL status code
+constexpr std::size_t kDcTimeSize = 8;
+// Sync manager control: buffered, write with watchdog (outputs) or read (inputs).
+constexpr std::uint8_t kSmOutputs = 0x64, kSmInputs = 0x20;
+constexpr std::uint8_t kOutputTerminalPatternCycles = 100;  // the lit output moves this often
+
+constexpr auto kInit = static_cast<std::uint8_t>(AlState::Init);
+
+Framing ethernetFraming(bool returned) {
+  Framing framing;
+  framing.destination = kBroadcastMac;
+  framing.source = kMasterMac;
+  if (returned) framing.source[0] |= kLocallyAdministered;
+  framing.min_size = kMinFrame;
+  return framing;
+}
+
+}  // namespace
+
+void AlWalk::start(AlState state, std::size_t slaves, bool request) {
+  target = static_cast<std::uint8_t>(state);
+  need_request.assign(slaves, request);
+  need_ack.assign(slaves, false);
+  done.assign(slaves, false);
+  ack_value.assign(slaves, 0);
+  first_request.assign(slaves, 0);
+  active = true;
+}
+bool AlWalk::finished() const {
+  return std::all_of(done.begin(), done.end(), [](bool d) { return d; });
+}
+
+Master::Master(Segment& segment)
+    : segment_(segment),
+      // the ring's round trip: a few microseconds plus a quarter per slave
+      return_delay_ns_((2 + static_cast<std::int64_t>(segment.escs.size()) / 4) * kUs),
+      sent_(ethernetFraming(false)),
+      returned_(ethernetFraming(true)),
+      images_(segment.groups.size()),
+      cyclic_frames_(segment.groups.size()) {
+  for (std::size_t g = 0; g < segment.groups.size(); ++g) {
+    images_[g].assign(segment.groups[g].size, 0);
+  }
+}
+
+// --- frames on the wire ---
+
+RingDatagram Master::registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
+                                      std::size_t length) {
+  RingDatagram dg;
+  dg.command = command;
+  dg.index = datagram_index_++;
+  dg.adp = adp;
+  dg.ado = ado;
+  dg.data.assign(length, 0);
+  return dg;
+}
+
+bool Master::emit(const FrameSink& sink, const std::vector<RingDatagram>& frame, bool returned,
+                  std::int64_t t_ns) {
+  FrameEncoder encoder(returned ? returned_ : sent_, bytes_);
+  DatagramFields fields;
+  for (const RingDatagram& dg : frame) {
+    fields.command = dg.command;
+    fields.index = dg.index;
+    fields.address = dg.logical();
+    fields.wkc = dg.wkc;
+    encoder.add(fields, dg.data.data(), dg.data.size());
+  }
+  encoder.finish();
+  ++frames_;
+  return sink(SimFrame{kEpochNs + t_ns, bytes_.data(), bytes_.size()});
+}
+
+bool Master::exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
+                      bool lost_before, bool lost_after, bool* came_back) {
+  if (came_back != nullptr) *came_back = false;
+  if (!emit(sink, frame, false, t_ns)) return false;
+  if (lost_before) return true;
+  segment_.pass(frame, kEpochNs + t_ns);
+  if (lost_after) return true;
+  if (came_back != nullptr) *came_back = true;
+  return emit(sink, frame, true, t_ns + return_delay_ns_);
+}
+
+// --- the start-up ---
+
+bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
+  std::vector<RingDatagram> frame;
+  const std::size_t n = segment_.escs.size();
+  const bool acks =
+      std::find(walk.need_ack.begin(), walk.need_ack.end(), true) != walk.need_ack.end();
+  const bool requests = std::find(walk.need_request.begin(), walk.need_request.end(), true) !=
+                        walk.need_request.end();
+  for (std::size_t s = 0; s < n; ++s) {
+    const auto station = static_cast<std::uint16_t>(kFirstStation + s);
+    if (acks) {
+      if (!walk.need_ack[s]) continue;
+      RingDatagram dg = registerDatagram(ecat::kFpwr, station, ecat::kRegAlControl, 2);
+      putLe(dg.data.data(), walk.ack_value[s], 2);
+      frame.push_back(std::move(dg));
+      walk.need_ack[s] = false;
+      walk.need_request[s] = true;
+    } else if (requests) {
+      if (!walk.need_request[s]) continue;
+      RingDatagram dg = registerDatagram(ecat::kFpwr, station, ecat::kRegAlControl, 2);
+      const std::uint8_t value = walk.first_request[s] != 0 ? walk.first_request[s] : walk.target;
+      walk.first_request[s] = 0;
+      putLe(dg.data.data(), value, 2);
+      frame.push_back(std::move(dg));
+      walk.need_request[s] = false;
+    } else if (!walk.done[s]) {
+      frame.push_back(registerDatagram(ecat::kFprd, station, ecat::kRegAlStatus, kAlStatusPoll));
+    }
+  }
+  const bool poll = !acks && !requests;
+  if (!exchange(sink, frame, t_ns)) return false;
+  if (poll) {
+    for (const RingDatagram& dg : frame) {
+      if (dg.wkc == 0) continue;
+      const std::size_t s = static_cast<std::size_t>(dg.adp - kFirstStation);
+      const std::uint8_t status = dg.data[0];
+      if (status & kAlErrorIndicator) {
+        walk.need_ack[s] = true;
+        walk.ack_value[s] = static_cast<std::uint8_t>((status & kAlStateMask) | kAlErrorIndicator);
+      } else if ((status & kAlStateMask) == walk.target) {
+        walk.done[s] = true;
+      }
+    }
+    if (walk.finished()) walk.active = false;
+  }
+  return true;
+}
+
+bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t t_ns) {
+  std::vector<RingDatagram> frame;
+  for (std::size_t s = 0; s < segment_.escs.size(); ++s) {
+    const Esc& esc = segment_.escs[s];
+    const auto station = static_cast<std::uint16_t>(kFirstStation + s);
+    const bool servo = esc.kind == SlaveKind::Servo;
+    struct Entry {
+      std::uint16_t phys;
+      std::size_t length;
+      std::uint32_t logical;
+      bool outputs;
+    };
+    std::vector<Entry> entries;
+    if (esc.outputBytes() > 0) {
+      entries.push_back({esc.outputsPhysical(), esc.outputBytes(), esc.outputs_logical, true});
+    }
+    if (esc.inputBytes() > 0) {
+      entries.push_back({esc.inputsPhysical(), esc.inputBytes(), esc.inputs_logical, false});
+    }
+    if (sync_managers) {
+      // Servos: SM2 outputs, SM3 inputs; the digital terminals have one SM0 (as EL2008/EL1008).
+      RingDatagram dg = registerDatagram(
+          ecat::kFpwr, station,
+          servo ? ecat::kRegSyncManager0 + 2 * ecat::kSyncManagerStride : ecat::kRegSyncManager0,
+          entries.size() * ecat::kSyncManagerStride);
+      for (std::size_t e = 0; e < entries.size(); ++e) {
+        std::uint8_t* sm = &dg.data[e * ecat::kSyncManagerStride];
+        putLe(sm + ecat::sm::kPhysicalStart, entries[e].phys, 2);
+        putLe(sm + ecat::sm::kLength, entries[e].length, 2);
+        sm[ecat::sm::kControl] = entries[e].outputs ? kSmOutputs : kSmInputs;
+        sm[ecat::sm::kActivate] = 0x01;
+      }
+      frame.push_back(std::move(dg));
+    } else {
+      RingDatagram dg = registerDatagram(ecat::kFpwr, station, ecat::kRegFmmu0,
+                                         entries.size() * ecat::kFmmuStride);
+      for (std::size_t e = 0; e < entries.size(); ++e) {
+        std::uint8_t* fmmu = &dg.data[e * ecat::kFmmuStride];
+        putLe(fmmu + ecat::fmmu::kLogicalStart, entries[e].logical, 4);
+        putLe(fmmu + ecat::fmmu::kLength, entries[e].length, 2);
+        fmmu[ecat::fmmu::kLogicalStartBit] = 0;
+        fmmu[ecat::fmmu::kLogicalStopBit] = 7;
+        putLe(fmmu + ecat::fmmu::kPhysicalStart, entries[e].phys, 2);
+        fmmu[ecat::fmmu::kPhysicalStartBit] = 0;
+        fmmu[ecat::fmmu::kType] =
+            entries[e].outputs ? ecat::fmmu::kTypeWrite : ecat::fmmu::kTypeRead;
+        fmmu[ecat::fmmu::kActivate] = 1;
+      }
+      frame.push_back(std::move(dg));
+    }
+  }
+  return exchange(sink, frame, t_ns);
+}
+
+bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_ns,
+                     std::optional<std::size_t> op_request_slave) {
+  const std::size_t n = segment_.escs.size();
+  auto next = [&] { t += step_ns; };
+  // 1. count the slaves
+  std::vector<RingDatagram> frame{registerDatagram(ecat::kBrd, 0, ecat::kRegEscType, 2)};
+  if (!exchange(sink, frame, t)) return false;
+  next();
+  // 2. station addresses by ring position
+  frame.clear();
+  for (std::size_t s = 0; s < n; ++s) {
+    RingDatagram dg = registerDatagram(
+        ecat::kApwr, static_cast<std::uint16_t>(-static_cast<int>(s)), ecat::kRegStationAddress, 2);
+    putLe(dg.data.data(), kFirstStation + s, 2);
+    frame.push_back(std::move(dg));
+  }
+  if (!exchange(sink, frame, t)) return false;
+  next();
+  // 3. read each slave's state, 4. INIT with error acknowledge to all, then wait for INIT
+  AlWalk walk;
+  walk.start(AlState::Init, n, false);
+  if (!alFrame(sink, walk, t)) return false;
+  next();
+  frame.clear();
+  RingDatagram reset = registerDatagram(ecat::kBwr, 0, ecat::kRegAlControl, 2);
+  putLe(reset.data.data(), kInit | kAlErrorIndicator, 2);
+  frame.push_back(std::move(reset));
+  if (!exchange(sink, frame, t)) return false;
+  next();
+  walk.start(AlState::Init, n, false);
+  for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
+    if (!alFrame(sink, walk, t)) return false;
+  }
+  // 5. PRE-OP, 6. sync managers and FMMUs, 7. SAFE-OP
+  walk.start(AlState::PreOp, n, true);
+  for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
+    if (!alFrame(sink, walk, t)) return false;
+  }
+  if (!configFrame(sink, true, t)) return false;
+  next();
+  if (!configFrame(sink, false, t)) return false;
+  next();
+  walk.start(AlState::SafeOp, n, true);
+  if (op_request_slave)
+    walk.first_request[*op_request_slave] = static_cast<std::uint8_t>(AlState::Op);
+  for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
+    if (!alFrame(sink, walk, t)) return false;
+  }
+  return true;
+}
+
+// --- the cycle ---
+
+bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle,
+                   const std::vector<RxPdo>& outputs, bool lost_before, bool lost_after,
+                   std::vector<std::optional<TxPdo>>& inputs) {
+  for (std::size_t g = 0; g < segment_.groups.size(); ++g) {
+    const FrameGroup& fg = segment_.groups[g];
+    std::vector<std::uint8_t>& image = images_[g];
+    // the NC's outputs, and the terminals', into the master's image
+    for (int pos : fg.slaves) {
+      const Esc& esc = segment_.escs[static_cast<std::size_t>(pos)];
+      const std::size_t at_out = esc.outputs_logical - fg.base;
+      if (esc.kind == SlaveKind::Servo) {
+        encodeRx(outputs[static_cast<std::size_t>(esc.axis)], &image[at_out]);
+      } else if (esc.kind == SlaveKind::OutputTerminal) {
+        image[at_out] = static_cast<std::uint8_t>(1U << (cycle / kOutputTerminalPatternCycles % 8));
+      }
+    }
+    // The same datagrams every cycle, refilled in place.
+    std::vector<RingDatagram>& frame = cyclic_frames_[g];
+    frame.resize(g == 0 ? 2 : 1);
+    RingDatagram& lrw = frame[0];
+    lrw.command = ecat::kLrw;
+    lrw.index = datagram_index_++;
+    lrw.adp = static_cast<std::uint16_t>(fg.base & 0xFFFF);
+    lrw.ado = static_cast<std::uint16_t>(fg.base >> 16);
+    lrw.data.assign(image.begin(), image.end());
+    lrw.wkc = 0;
+    if (g == 0) {
+      RingDatagram& dc = frame[1];
+      dc.command = ecat::kFrmw;
+      dc.index = datagram_index_++;
+      dc.adp = kFirstStation;
+      dc.ado = ecat::kRegDcSystemTime;
+      dc.data.assign(kDcTimeSize, 0);
+      dc.wkc = 0;
+    }
+    const std::int64_t at_ns = t_ns + static_cast<std::int64_t>(g) * 2 * return_delay_ns_;
+    bool came_back = false;
+    if (!exchange(sink, frame, at_ns, lost_before, lost_after, &came_back)) return false;
+    if (!came_back || frame[0].wkc == 0) continue;
+    image.assign(frame[0].data.begin(), frame[0].data.end());  // the inputs the slaves wrote
+    for (int pos : fg.slaves) {
+      const Esc& esc = segment_.escs[static_cast<std::size_t>(pos)];
+      if (esc.kind != SlaveKind::Servo) continue;
+      PdoValues values;
+      readPdoOf<Pdo::Tx>(ByteReader(image.data(), image.size()), esc.inputs_logical - fg.base,
+                         values);
+      inputs[static_cast<std::size_t>(esc.axis)] = txPdoOf(values);
+    }
+  }
+  return true;
+}
+
+}  // namespace ncservo::sim

@@ -1,0 +1,72 @@
+// The simulated EtherCAT master (PROTOCOL.md §8): its start-up — counts the slaves, assigns
+// station addresses, walks every slave INIT -> PRE-OP -> SAFE-OP -> OP with AL status polls,
+// configures SM2/SM3 and FMMUs — and its cycle: the process data in one LRW per frame group, the
+// first with a DC FRMW to 0x0910. Each frame is captured twice: the master's copy and the copy the
+// ring returns.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ncservo/sim/frame_encoder.hpp"
+#include "ncservo/sim/models.hpp"
+#include "ncservo/sim/simulator.hpp"
+#include "segment.hpp"
+
+namespace ncservo::sim {
+
+// The master's walk of every slave to one AL state, with acknowledgement of refusals.
+struct AlWalk {
+  std::uint8_t target = 0;
+  std::vector<bool> need_request, need_ack, done;
+  std::vector<std::uint8_t> ack_value;
+  std::vector<std::uint8_t> first_request;  // ESM-001: what the first request asks for
+  bool active = false;
+
+  void start(AlState state, std::size_t slaves, bool request);
+  bool finished() const;
+};
+
+class Master {
+ public:
+  explicit Master(Segment& segment);
+
+  // The start-up from time `t` in steps of `step_ns`; `t` ends after it. `op_request_slave`: the
+  // slave whose first SAFE-OP request asks for OP (ESM-001). False if the sink stopped.
+  bool startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_ns,
+               std::optional<std::size_t> op_request_slave);
+  // One cycle's frames: the NC's outputs per axis in, the inputs that came back per axis out.
+  // `lost_before`: no slave sees the frames; `lost_after`: their returned copies are lost.
+  bool cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle,
+             const std::vector<RxPdo>& outputs, bool lost_before, bool lost_after,
+             std::vector<std::optional<TxPdo>>& inputs);
+  // One step of an AL walk: acknowledgements, requests, or a poll of the AL status.
+  bool alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns);
+
+  std::uint64_t frames() const { return frames_; }
+
+ private:
+  RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
+                                std::size_t length);
+  bool configFrame(const FrameSink& sink, bool sync_managers, std::int64_t t_ns);
+  // Sends a frame round the ring and captures both copies. `came_back` (when given) says
+  // whether the returned copy reached the master.
+  bool exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
+                bool lost_before = false, bool lost_after = false, bool* came_back = nullptr);
+  bool emit(const FrameSink& sink, const std::vector<RingDatagram>& frame, bool returned,
+            std::int64_t t_ns);
+
+  Segment& segment_;
+  std::int64_t return_delay_ns_;
+  Framing sent_;      // the master's copy
+  Framing returned_;  // the returned copy: the source MAC marked locally administered
+  std::uint8_t datagram_index_ = 0;
+  std::vector<std::uint8_t> bytes_;
+  std::uint64_t frames_ = 0;
+  // Per frame group, reused every cycle: a long run allocates nothing.
+  std::vector<std::vector<std::uint8_t>> images_;  // the master's process image
+  std::vector<std::vector<RingDatagram>> cyclic_frames_;
+};
+
+}  // namespace ncservo::sim

@@ -1,0 +1,176 @@
+// `ncservo simulate`'s options: scenarios, the --fault text, and the checks and defaults that
+// make a set of options one the simulator runs.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <stdexcept>
+#include <string>
+
+#include "ncservo/sim/faults.hpp"
+#include "ncservo/sim/simulator.hpp"
+
+namespace ncservo::sim {
+
+std::optional<Scenario> scenarioFromName(std::string_view name) {
+  if (name == "commissioning") return Scenario::Commissioning;
+  if (name == "faults") return Scenario::Faults;
+  if (name == "soak") return Scenario::Soak;
+  return std::nullopt;
+}
+const char* scenarioName(Scenario scenario) {
+  switch (scenario) {
+    case Scenario::Commissioning:
+      return "commissioning";
+    case Scenario::Faults:
+      return "faults";
+    case Scenario::Soak:
+      return "soak";
+  }
+  return "?";
+}
+double defaultDuration(Scenario scenario) {
+  switch (scenario) {
+    case Scenario::Commissioning:
+      return 3.0;
+    case Scenario::Faults:
+      return 4.3;
+    case Scenario::Soak:
+      return 60.0;
+  }
+  return 3.0;
+}
+
+std::optional<FaultRequest> parseFault(std::string_view text, std::string& error) {
+  FaultRequest fault;
+  fault.text = std::string(text);
+  std::string_view rest = text;
+  std::string_view axis_text;
+  std::string_view time_text;
+  if (auto colon = rest.find(':'); colon != std::string_view::npos) {
+    axis_text = rest.substr(colon + 1);
+    rest = rest.substr(0, colon);
+  }
+  if (auto at = rest.find('@'); at != std::string_view::npos) {
+    time_text = rest.substr(at + 1);
+    rest = rest.substr(0, at);
+  }
+  std::string code(rest);
+  for (char& c : code) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  const RuleDef* rule = ruleByCode(code);
+  if (rule == nullptr) {
+    error = fmt::format("--fault {}: no rule '{}' (see `ncservo rules`)", text, code);
+    return std::nullopt;
+  }
+  fault.rule = rule->id;
+  const bool has_time = text.find('@') != std::string_view::npos;
+  const bool has_axis = text.find(':') != std::string_view::npos;
+  try {
+    std::size_t used = 0;
+    if ((has_time && time_text.empty()) || (has_axis && axis_text.empty())) {
+      throw std::invalid_argument("empty");
+    }
+    if (!time_text.empty()) {
+      fault.at_s = std::stod(std::string(time_text), &used);
+      if (used != time_text.size() || !(*fault.at_s >= 0)) throw std::invalid_argument("time");
+    }
+    if (!axis_text.empty()) {
+      fault.axis = std::stoi(std::string(axis_text), &used);
+      if (used != axis_text.size() || *fault.axis < 0) throw std::invalid_argument("axis");
+    }
+  } catch (const std::exception&) {
+    error = fmt::format("--fault {}: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0", text);
+    return std::nullopt;
+  }
+  return fault;
+}
+
+std::string resolveOptions(SimOptions& o) {
+  if (o.axes < 1 || o.axes > 32) return fmt::format("--axes {}: from 1 to 32", o.axes);
+  if (o.io_slaves < 0 || o.io_slaves > 32) {
+    return fmt::format("--io-slaves {}: from 0 to 32", o.io_slaves);
+  }
+  if (o.cycle_us < 125 || o.cycle_us > 10000) {
+    return fmt::format("--cycle-us {}: from 125 to 10000", o.cycle_us);
+  }
+  if (o.ready_mode != 0 && o.ready_mode != 1) {
+    return fmt::format("--ready-mode {}: 0 or 1", o.ready_mode);
+  }
+  // A fifth of a cycle either way keeps every interval under 1.5 cycles (COM-002).
+  if (o.jitter_us < 0 || o.jitter_us > o.cycle_us / 5) {
+    return fmt::format("--jitter-us {}: from 0 to a fifth of the cycle ({})", o.jitter_us,
+                       o.cycle_us / 5);
+  }
+  if (!(o.loss >= 0 && o.loss <= 0.5)) return fmt::format("--loss {}: from 0 to 0.5", o.loss);
+  if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);
+  const double duration = *o.duration_s;
+  const double start = o.startup ? kStartupSeconds : 0.0;
+  if (!(duration >= 1.0 && duration <= 24 * 3600.0)) {
+    return fmt::format("--duration {}: from 1 s to 24 h", duration);
+  }
+  if (o.scenario == Scenario::Faults) {
+    if (o.axes < 4) return "--scenario faults needs at least 4 axes";
+    if (!o.startup) return "--scenario faults needs the start-up (its ESM faults happen there)";
+    if (duration < defaultDuration(Scenario::Faults)) {
+      return fmt::format("--scenario faults needs --duration {} or more",
+                         defaultDuration(Scenario::Faults));
+    }
+  }
+  for (FaultRequest& f : o.faults) {
+    const char* code = ruleDef(f.rule).code;
+    const FaultRecipe* recipe = faultRecipe(f.rule);
+    if (recipe == nullptr || !recipe->injectable()) {
+      return fmt::format("--fault {}: {}", f.text, faultDescription(f.rule));
+    }
+    const FaultRecipe& r = *recipe;
+    if (r.phase == FaultPhase::Startup) {
+      if (!o.startup) return fmt::format("--fault {}: {} happens in the start-up", f.text, code);
+      if (f.at_s) {
+        return fmt::format("--fault {}: {} happens in the start-up; give no @time", f.text, code);
+      }
+    } else {
+      // After the start-up and the enables; in a commissioning run before the emergency stop
+      // and the disables that end it (at 53 % and 85 % of the run), else before the end.
+      const double earliest = start + 0.45;
+      const double latest =
+          o.scenario == Scenario::Commissioning ? 0.53 * duration - 0.25 : duration - 0.4;
+      if (latest < earliest) {
+        return fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
+                           f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5);
+      }
+      if (!f.at_s) f.at_s = std::clamp(0.43 * duration, earliest, latest);
+      if (*f.at_s < earliest || *f.at_s > latest) {
+        return fmt::format(
+            "--fault {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)", f.text,
+            *f.at_s, earliest, latest);
+      }
+    }
+    if (r.need == AxisNeed::None) {
+      if (f.axis)
+        return fmt::format("--fault {}: {} concerns the whole bus; no :axis", f.text, code);
+      continue;
+    }
+    if (!f.axis) {
+      int axis = 2 % o.axes;
+      if (r.need == AxisNeed::Incremental && !isIncrementalAxis(axis)) axis = o.axes > 1 ? 1 : -1;
+      if (r.need == AxisNeed::Absolute && isIncrementalAxis(axis)) axis = 0;
+      if (axis < 0) {
+        return fmt::format("--fault {}: {} needs an incremental axis (odd index): use --axes 2",
+                           f.text, code);
+      }
+      f.axis = axis;
+    }
+    if (*f.axis >= o.axes) {
+      return fmt::format("--fault {}: axis {} does not exist (--axes {})", f.text, *f.axis, o.axes);
+    }
+    if (r.need == AxisNeed::Incremental && !isIncrementalAxis(*f.axis)) {
+      return fmt::format("--fault {}: {} needs an incremental axis (odd index)", f.text, code);
+    }
+    if (r.need == AxisNeed::Absolute && isIncrementalAxis(*f.axis)) {
+      return fmt::format("--fault {}: {} needs an absolute axis (even index)", f.text, code);
+    }
+  }
+  return {};
+}
+
+}  // namespace ncservo::sim

@@ -1,0 +1,267 @@
+// The simulated segment in time (simulator.hpp): the scenarios' plans for the NCs, the cycle
+// that steps the NCs, the master, the slaves and the drives, and the faults due in it. The parts
+// are segment.hpp (the slaves' ESCs), master.hpp (start-up and cycle), frame_encoder.hpp and
+// fault_plan.hpp.
+#include "ncservo/sim/simulator.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "fault_plan.hpp"
+#include "master.hpp"
+#include "ncservo/config.hpp"
+#include "ncservo/sim/eni_writer.hpp"
+#include "ncservo/sim/models.hpp"
+#include "segment.hpp"
+
+namespace ncservo::sim {
+
+namespace {
+constexpr std::int64_t kSoakPeriodNs = 10 * kSecond;
+constexpr std::int64_t kInputTerminalStepNs = 50 * kMs;  // the inputs count up this often
+}  // namespace
+
+struct Simulator::Impl {
+  SimOptions o;
+  std::int64_t cycle_ns;
+  std::int64_t duration_ns;
+  std::int64_t plan_start_ns;  // since the capture's start
+  Rng rng;
+  Segment segment;
+  std::vector<SimAxisLayout> axis_layout;
+  std::vector<DriveModel> drives;
+  std::vector<NcAxis> ncs;
+  FaultPlan faults;
+  Master master;
+  std::vector<RxPdo> outputs;                       // per axis, from the NC this cycle
+  std::vector<std::optional<TxPdo>> latest_inputs;  // per axis, from this cycle's returned frame
+  std::int64_t soak_planned_until_ns = 0;
+
+  explicit Impl(const SimOptions& options)
+      : o(options),
+        cycle_ns(static_cast<std::int64_t>(options.cycle_us) * kUs),
+        duration_ns(static_cast<std::int64_t>(std::llround(*options.duration_s * 1e9))),
+        plan_start_ns(options.startup ? static_cast<std::int64_t>(kStartupSeconds * 1e9) : 0),
+        rng(options.seed),
+        segment(options, rng),
+        axis_layout(segment.axisLayout()),
+        faults(segment, drives, ncs),
+        master(segment) {
+    for (int a = 0; a < o.axes; ++a) {
+      DriveSetup setup;
+      setup.axis = a;
+      setup.incremental = isIncrementalAxis(a);
+      setup.ready_mode = o.ready_mode;
+      setup.seed = o.seed;
+      drives.emplace_back(setup);
+      ncs.emplace_back(setup.incremental);
+    }
+    latest_inputs.assign(static_cast<std::size_t>(o.axes), std::nullopt);
+    outputs.assign(static_cast<std::size_t>(o.axes), RxPdo{});
+    planScenario();
+    for (const FaultRequest& f : o.faults) {
+      faults.inject(f.rule, f.at_s.value_or(-1), f.axis.value_or(-1));
+    }
+    if (o.scenario == Scenario::Faults) faults.injectScenario();
+  }
+
+  // --- scenarios ---
+
+  static std::int64_t at(double seconds) {
+    return static_cast<std::int64_t>(std::llround(seconds * 1e9));
+  }
+
+  void planScenario() {
+    const double base = static_cast<double>(plan_start_ns) * 1e-9;
+    const double d = *o.duration_s;
+    if (o.scenario == Scenario::Soak) return;  // planned period by period (planSoak)
+    for (int a = 0; a < o.axes; ++a) {
+      NcAxis& nc = ncs[static_cast<std::size_t>(a)];
+      const double rpm = (a % 2 ? -1.0 : 1.0) * (600 + 300 * (a % 4));
+      nc.schedule({at(base + 0.05 + 0.01 * (a % 8)), NcAction::Enable});
+      nc.schedule({at(base + 0.15), NcAction::Speed, rpm});
+      if (o.scenario == Scenario::Faults) continue;
+      if (isIncrementalAxis(a)) nc.schedule({at(base + 0.30), NcAction::ZeroPulse});
+      nc.schedule({at(base + 0.55), NcAction::Table, static_cast<double>(a % 3 + 2)});
+      nc.schedule({at(0.53 * d), NcAction::Emergency, 150});
+      nc.schedule({at(0.62 * d), NcAction::Table, 1});
+      nc.schedule({at(0.78 * d), NcAction::Speed, 0});
+      nc.schedule({at(0.85 * d), NcAction::Disable});
+    }
+    if (o.scenario == Scenario::Commissioning) {
+      faults.scheduleDriveFault(at(base + 0.8), 1 % o.axes, bits::kFollowing);
+    }
+  }
+
+  // Soak: a 10 s pattern repeated, planned a period ahead (constant memory).
+  void planSoak(std::int64_t now_ns) {
+    while (soak_planned_until_ns <= now_ns + kSoakPeriodNs) {
+      const std::int64_t p = soak_planned_until_ns == 0 ? plan_start_ns : soak_planned_until_ns;
+      const std::int64_t k = (p - plan_start_ns) / kSoakPeriodNs;
+      for (int a = 0; a < o.axes; ++a) {
+        NcAxis& nc = ncs[static_cast<std::size_t>(a)];
+        const auto ka = k + a;
+        if (k == 0) nc.schedule({p + 50 * kMs + 10 * kMs * (a % 8), NcAction::Enable});
+        nc.schedule({p + 500 * kMs, NcAction::Speed,
+                     (ka % 2 ? -1.0 : 1.0) * static_cast<double>(500 + 150 * (ka % 5))});
+        if (isIncrementalAxis(a)) nc.schedule({p + 2 * kSecond, NcAction::ZeroPulse});
+        nc.schedule({p + 4 * kSecond, NcAction::Table, static_cast<double>(ka % 4 + 1)});
+        if (k % 3 == 2) nc.schedule({p + 6 * kSecond, NcAction::Emergency, 100});
+        nc.schedule({p + 9 * kSecond, NcAction::Speed, 0});
+      }
+      if (k % 6 == 5) {
+        faults.scheduleDriveFault(p + 7500 * kMs, static_cast<int>(k / 6 % o.axes),
+                                  bits::kOverload);
+      }
+      soak_planned_until_ns = p + kSoakPeriodNs;
+    }
+    faults.dropRaisedDriveFaults();
+  }
+
+  // --- the cycle ---
+
+  // The drives take the outputs their slave received and write their inputs into its RAM.
+  void stepDrives(std::int64_t now_ns) {
+    faults.raiseDriveFaults(now_ns);
+    for (int a = 0; a < o.axes; ++a) {
+      Esc& esc = segment.servo(a);
+      if (!esc.processData()) continue;
+      DriveModel& drive = drives[static_cast<std::size_t>(a)];
+      drive.setOperational(esc.state == static_cast<std::uint8_t>(AlState::Op));
+      if (esc.outputs_taken) {
+        const RxPdo rx = decodeRx(&esc.mem[esc.outputsPhysical()]);
+        drive.step(&rx, now_ns);
+      } else {
+        drive.step(nullptr, now_ns);
+      }
+      encodeTx(drive.inputs(), &esc.mem[esc.inputsPhysical()]);
+    }
+    for (Esc& esc : segment.escs) {
+      if (esc.kind == SlaveKind::InputTerminal) {
+        esc.mem[esc.inputsPhysical()] = static_cast<std::uint8_t>(now_ns / kInputTerminalStepNs);
+      }
+    }
+  }
+
+  std::optional<std::uint64_t> run(const FrameSink& sink) {
+    std::int64_t t = 0;
+    const std::int64_t step_ns = std::min<std::int64_t>(cycle_ns, kMs);
+    if (o.startup) {
+      if (!master.startup(sink, t, step_ns, faults.opRequestSlave())) return std::nullopt;
+      stepDrives(t);  // the drives' first inputs, for the first cycle
+      t = (t / cycle_ns + 1) * cycle_ns;
+    } else {
+      for (std::size_t s = 0; s < segment.escs.size(); ++s) {
+        segment.escs[s].startInOp(static_cast<std::uint16_t>(kFirstStation + s));
+      }
+      stepDrives(0);
+    }
+    // Cyclic exchange: SAFE-OP first, then the master walks every slave to OP.
+    AlWalk walk;
+    const std::uint64_t safe_op_cycles =
+        static_cast<std::uint64_t>(std::max<std::int64_t>(10, 20 * kMs / cycle_ns));
+    const std::int64_t first_cycle = t;
+    bool operational = !o.startup;
+    for (NcAxis& nc : ncs) nc.setOperational(operational);
+    for (std::uint64_t cycle = 0;; ++cycle) {
+      const std::int64_t slot = first_cycle + static_cast<std::int64_t>(cycle) * cycle_ns;
+      if (slot >= duration_ns) break;
+      if (o.scenario == Scenario::Soak) planSoak(slot);
+      faults.startBusFaults(slot);
+      std::int64_t send = slot;
+      if (o.jitter_us > 0) send += rng.between(-o.jitter_us, o.jitter_us) * kUs;
+      for (int a = 0; a < o.axes; ++a) {
+        const auto& in = latest_inputs[static_cast<std::size_t>(a)];
+        outputs[static_cast<std::size_t>(a)] =
+            ncs[static_cast<std::size_t>(a)].step(in ? &*in : nullptr, slot);
+      }
+      for (Esc& esc : segment.escs) esc.outputs_taken = false;
+      std::fill(latest_inputs.begin(), latest_inputs.end(), std::nullopt);
+      if (!faults.takeSkippedCycle()) {
+        const bool lost_before = faults.takeLossBeforeSlaves();
+        const bool lost_after =
+            faults.takeLossAfterSlaves() || (o.loss > 0 && rng.uniform() < o.loss);
+        if (!master.cycle(sink, std::max(send, slot - cycle_ns / 4), cycle, outputs, lost_before,
+                          lost_after, latest_inputs)) {
+          return std::nullopt;
+        }
+      }
+      stepDrives(slot);
+      if (!operational) {
+        if (!walk.active && cycle + 1 == safe_op_cycles) {
+          walk.start(AlState::Op, segment.escs.size(), true);
+        } else if (walk.active) {
+          if (!master.alFrame(sink, walk, slot + cycle_ns / 2)) return std::nullopt;
+          if (!walk.active) {
+            operational = true;
+            for (NcAxis& nc : ncs) nc.setOperational(true);
+          }
+        }
+      }
+    }
+    return master.frames();
+  }
+};
+
+Simulator::Simulator(const SimOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+Simulator::~Simulator() = default;
+
+const std::vector<SimAxisLayout>& Simulator::layout() const {
+  return impl_->axis_layout;
+}
+
+std::string Simulator::layoutConfig() const {
+  std::vector<AxisConfig> axes;
+  for (const SimAxisLayout& a : impl_->axis_layout) {
+    AxisConfig axis;
+    axis.name = a.name;
+    axis.outputs = a.outputs;
+    axis.inputs = a.inputs;
+    axis.station = a.station;
+    axes.push_back(std::move(axis));
+  }
+  return fmt::format(
+             "# The layout of `ncservo simulate` ({} axes, {} layout, {} terminals), for\n"
+             "# `ncservo validate --config` or the Wireshark preference ncservo.config.\n",
+             impl_->o.axes, impl_->o.layout == LayoutKind::Default ? "default" : "interleaved",
+             impl_->o.io_slaves) +
+         writeConfig(axes, impl_->o.ready_mode);
+}
+
+std::string Simulator::eni() const {
+  const Segment& segment = impl_->segment;
+  std::vector<EniSlave> slaves;
+  for (std::size_t pos = 0; pos < segment.escs.size(); ++pos) {
+    const Esc& esc = segment.escs[pos];
+    EniSlave e;
+    e.name = esc.kind == SlaveKind::Servo            ? fmt::format("axis{}", esc.axis)
+             : esc.kind == SlaveKind::OutputTerminal ? fmt::format("Term {} (EL2008)", pos)
+                                                     : fmt::format("Term {} (EL1008)", pos);
+    e.station = static_cast<std::uint16_t>(kFirstStation + pos);
+    e.position = static_cast<std::uint16_t>(pos);
+    e.outputs = esc.outputs_logical;
+    e.output_bytes = static_cast<std::uint16_t>(esc.outputBytes());
+    e.inputs = esc.inputs_logical;
+    e.input_bytes = static_cast<std::uint16_t>(esc.inputBytes());
+    slaves.push_back(std::move(e));
+  }
+  std::vector<EniCyclicCommand> commands;
+  for (const FrameGroup& g : segment.groups) {
+    std::uint16_t wkc = 0;
+    for (int pos : g.slaves) {
+      const Esc& esc = segment.escs[static_cast<std::size_t>(pos)];
+      wkc = static_cast<std::uint16_t>(wkc + (esc.inputBytes() > 0 ? 1 : 0) +
+                                       (esc.outputBytes() > 0 ? 2 : 0));
+    }
+    commands.push_back({g.base, static_cast<std::uint16_t>(g.size), wkc});
+  }
+  return writeEni(slaves, commands, static_cast<std::uint32_t>(impl_->o.cycle_us));
+}
+
+std::optional<std::uint64_t> Simulator::run(const FrameSink& sink) {
+  return impl_->run(sink);
+}
+
+}  // namespace ncservo::sim
