@@ -138,12 +138,12 @@ void printLayout(const Decoder& decoder) {
 int runDecode(const std::string& path, const std::optional<Config>& config,
               const std::optional<EniResult>& eni, bool no_default_layout,
               const std::string& format, bool layout_only) {
-  std::string error;
-  auto reader = CaptureReader::open(path, error);
-  if (!reader) {
-    fmt::print(stderr, "ncservo: {}\n", error);
+  auto opened = CaptureReader::open(path);
+  if (!opened) {
+    fmt::print(stderr, "ncservo: {}\n", opened.error().text());
     return kExitCapture;
   }
+  const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   Session session(decoderOptions(config, eni, no_default_layout));
   RowWriter writer(stdout, format == "csv", session.decoder());
   if (!layout_only) writer.header();
@@ -158,8 +158,8 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
     }
     rows.clear();
   };
-  CaptureReader::Next status;
-  while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+  Result<bool> status;
+  while ((status = reader->next(record)) && *status) {
     if (!first_time) first_time = record.time_ns;
     const ByteReader bytes(record.data, record.captured);
     walkPacket(reader->link(), bytes, frame);
@@ -176,8 +176,8 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
   cycles.finish(rows);
   write();
   std::fflush(stdout);
-  if (status == CaptureReader::Next::Error) {
-    fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", reader->error());
+  if (!status) {
+    fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
   if (layout_only) printLayout(session.decoder());
@@ -268,20 +268,20 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
                     cli::CaptureReport& report, Severity fail_on, bool never) {
   report.path = path;
   writer.beginCapture(report);
-  std::string error;
-  auto reader = CaptureReader::open(path, error);
-  if (!reader) {
-    report.error = error;
-    fmt::print(stderr, "ncservo: {}\n", error);
+  auto opened = CaptureReader::open(path);
+  if (!opened) {
+    report.error = opened.error().text();
+    fmt::print(stderr, "ncservo: {}\n", *report.error);
     writer.endCapture(report);
     return kExitCapture;
   }
+  const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   Validator validator(decoder_options, settings);
   EcatFrame frame;
   CaptureRecord record;
   bool first = true;
-  CaptureReader::Next status;
-  while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+  Result<bool> status;
+  while ((status = reader->next(record)) && *status) {
     if (first) report.first_time_ns = record.time_ns;
     first = false;
     report.frames = record.frame;
@@ -303,8 +303,8 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   cli::summarise(validator, report);
   if (validator.decoder().axes().empty()) report.note = validator.decoder().noServoReason();
   int rc = kExitOk;
-  if (status == CaptureReader::Next::Error) {
-    report.error = reader->error() + " (the frames before it were analysed)";
+  if (!status) {
+    report.error = status.error().text() + " (the frames before it were analysed)";
     fmt::print(stderr, "ncservo: {}\n", *report.error);
     rc = kExitCapture;
   }
