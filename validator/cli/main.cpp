@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -19,6 +20,7 @@
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/frame_clock.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
 #include "ncservo/simulator.hpp"
@@ -29,7 +31,13 @@ namespace {
 
 using namespace ncservo;
 
-enum ExitCode { kExitOk = 0, kExitFindings = 1, kExitUsage = 2, kExitCapture = 3 };
+enum ExitCode {
+  kExitOk = 0,
+  kExitFindings = 1,
+  kExitUsage = 2,
+  kExitCapture = 3,
+  kExitNoServo = 4
+};
 
 std::string shortName(const char* filter) {
   std::string name(filter);
@@ -137,7 +145,7 @@ void printLayout(const Decoder& decoder) {
 
 int runDecode(const std::string& path, const std::optional<Config>& config,
               const std::optional<EniResult>& eni, bool no_default_layout,
-              const std::string& format, bool layout_only) {
+              const std::string& format, bool layout_only, TimestampMode timestamps) {
   auto opened = CaptureReader::open(path);
   if (!opened) {
     fmt::print(stderr, "ncservo: {}\n", opened.error().text());
@@ -146,6 +154,7 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   Session session(decoderOptions(config, eni, no_default_layout));
   RowWriter writer(stdout, format == "csv", session.decoder());
+  FrameClock clock(timestamps);
   if (!layout_only) writer.header();
   CycleRows cycles;
   std::vector<CycleRow> rows;
@@ -163,14 +172,15 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
     if (!first_time) first_time = record.time_ns;
     const ByteReader bytes(record.data, record.captured);
     walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
-      continue;
+    if (frame.status == WalkStatus::NotEtherCat) continue;
+    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
+    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
     const FrameView& view = session.onFrame(frame, bytes);
     if (layout_only) continue;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
       warnIfMalformed(reader->path(), record.frame, view.axes[i].placement);
     }
-    cycles.onFrame(record.frame, record.time_ns, view, rows);
+    cycles.onFrame(record.frame, time_ns, view, rows);
     write();
   }
   cycles.finish(rows);
@@ -181,6 +191,10 @@ int runDecode(const std::string& path, const std::optional<Config>& config,
     return kExitCapture;
   }
   if (layout_only) printLayout(session.decoder());
+  if (clock.source() == TimestampSource::Probe || !clock.note().empty()) {
+    fmt::print(stderr, "ncservo: {}: timestamps: {}{}{}\n", reader->path(),
+               timestampSourceName(clock.source()), clock.note().empty() ? "" : "; ", clock.note());
+  }
   if (session.decoder().axes().empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session.decoder().noServoReason());
   }
@@ -226,6 +240,8 @@ struct ValidateOptions {
   std::vector<std::string> timeouts;
   std::optional<int> servo_ready_mode;
   bool no_default_layout = false;
+  std::string timestamps = "auto";
+  bool allow_empty = false;
 };
 
 // The settings from RULES.md's defaults, the config file, then the command line.
@@ -262,10 +278,10 @@ std::optional<std::string> buildSettings(const ValidateOptions& o,
   return std::nullopt;
 }
 
-// Runs one capture through the validator. Returns the capture's exit status (0, 1 or 3).
+// Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
-                    const RuleSettings& settings, cli::ReportWriter& writer,
-                    cli::CaptureReport& report, Severity fail_on, bool never) {
+                    const RuleSettings& settings, TimestampMode timestamps,
+                    cli::ReportWriter& writer, cli::CaptureReport& report) {
   report.path = path;
   writer.beginCapture(report);
   auto opened = CaptureReader::open(path);
@@ -277,6 +293,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   Validator validator(decoder_options, settings);
+  FrameClock clock(timestamps);
   EcatFrame frame;
   CaptureRecord record;
   bool first = true;
@@ -287,10 +304,10 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     report.frames = record.frame;
     const ByteReader bytes(record.data, record.captured);
     walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
-      continue;
-    const FrameDecode& decode =
-        validator.onFrame(record.frame, record.time_ns, frame, bytes).decode;
+    if (frame.status == WalkStatus::NotEtherCat) continue;
+    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
+    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
+    const FrameDecode& decode = validator.onFrame(record.frame, time_ns, frame, bytes).decode;
     for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
       warnIfMalformed(reader->path(), record.frame, decode.axes[i]);
     }
@@ -301,22 +318,33 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     }
   }
   cli::summarise(validator, report);
-  if (validator.decoder().axes().empty()) report.note = validator.decoder().noServoReason();
-  int rc = kExitOk;
+  report.coverage = coverageOf(validator);
+  report.timestamps = clock.source();
+  report.probe = clock.counts();
+  report.probe_note = clock.note();
   if (!status) {
     report.error = status.error().text() + " (the frames before it were analysed)";
     fmt::print(stderr, "ncservo: {}\n", *report.error);
-    rc = kExitCapture;
   }
   writer.endCapture(report);
-  if (rc == kExitOk && !never && report.reaches(fail_on)) rc = kExitFindings;
-  return rc;
+  switch (writer.verdict(report)) {
+    case cli::Verdict::Unreadable:
+      return kExitCapture;
+    case cli::Verdict::Fail:
+      return kExitFindings;
+    case cli::Verdict::NoServo:
+      return kExitNoServo;
+    case cli::Verdict::Pass:
+      break;
+  }
+  return kExitOk;
 }
 
-// INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 0.
+// INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
 int combine(int a, int b) {
-  auto rank = [](int rc) { return rc == kExitUsage ? 3 : rc == kExitCapture ? 2 : rc; };
-  return rank(a) >= rank(b) ? a : b;
+  constexpr int kOrder[] = {kExitUsage, kExitCapture, kExitFindings, kExitNoServo, kExitOk};
+  auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
+  return rank(a) <= rank(b) ? a : b;
 }
 
 int runValidate(const ValidateOptions& o, const std::optional<Config>& config,
@@ -341,13 +369,14 @@ int runValidate(const ValidateOptions& o, const std::optional<Config>& config,
       return kExitUsage;
     }
   }
-  cli::ReportWriter writer(out, format, fail_on, never);
+  cli::ReportWriter writer(out, format, fail_on, never, o.allow_empty);
+  const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
   std::vector<cli::CaptureReport> reports;
   int rc = kExitOk;
   for (const std::string& path : o.captures) {
     reports.emplace_back();
     rc = combine(rc, validateCapture(path, decoderOptions(config, eni, o.no_default_layout),
-                                     settings, writer, reports.back(), fail_on, never));
+                                     settings, timestamps, writer, reports.back()));
   }
   writer.finish(reports);
   if (out != stdout) std::fclose(out);
@@ -487,6 +516,12 @@ int main(int argc, char** argv) {
   decode->add_option("--format", format, "csv or jsonl")->check(CLI::IsMember({"csv", "jsonl"}));
   decode->add_flag("--no-default-layout", no_default_layout,
                    "never assume the default layout (PROTOCOL.md §9.4)");
+  std::string decode_timestamps = "auto";
+  decode
+      ->add_option("--timestamps", decode_timestamps,
+                   "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
+                   "has one)")
+      ->check(CLI::IsMember({"capture", "probe", "auto"}));
   std::string eni_path;
   bool layout_only = false;
   decode->add_option("--eni", eni_path, "ENI file (EtherCATConfig.xml) giving the layout");
@@ -520,6 +555,13 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1));
   validate->add_flag("--no-default-layout", vo.no_default_layout,
                      "never assume the default layout (PROTOCOL.md §9.4)");
+  validate
+      ->add_option("--timestamps", vo.timestamps,
+                   "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
+                   "has one)")
+      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+  validate->add_flag("--allow-empty", vo.allow_empty,
+                     "exit 0, not 4, where no servo (or not every configured axis) was decoded");
   std::string validate_eni;
   validate->add_option("--eni", validate_eni,
                        "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
@@ -613,5 +655,6 @@ int main(int argc, char** argv) {
     }
   }
   if (validate->parsed()) return runValidate(vo, config, eni);
-  return runDecode(capture, config, eni, no_default_layout, format, layout_only);
+  return runDecode(capture, config, eni, no_default_layout, format, layout_only,
+                   *timestampModeFromName(decode_timestamps));
 }

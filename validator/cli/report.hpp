@@ -9,12 +9,17 @@
 #include <string>
 #include <vector>
 
+#include "ncservo/coverage.hpp"
 #include "ncservo/finding.hpp"
+#include "ncservo/frame_clock.hpp"
 #include "ncservo/validator.hpp"
 
 namespace ncservo::cli {
 
 enum class Format { Text, Json, Jsonl, Junit, Sarif };
+
+// A capture's outcome, as its exit status has it (INTERFACES.md: 3, 1, 4, 0).
+enum class Verdict { Unreadable, Fail, NoServo, Pass };
 
 struct AxisReport {
   std::uint16_t index = 0;
@@ -39,7 +44,10 @@ struct CaptureReport {
   std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
   std::vector<AxisReport> axes;
   std::optional<std::string> error;  // the capture could not be read to its end
-  std::optional<std::string> note;   // e.g. no servo found
+  Coverage coverage;                 // whether every axis was checked
+  TimestampSource timestamps = TimestampSource::Capture;
+  ProbeCounts probe;
+  std::string probe_note;  // FrameClock::note()
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Whether any finding is at or above `level`.
   bool reaches(Severity level) const;
@@ -51,19 +59,22 @@ void summarise(const Validator& validator, CaptureReport& report);
 // Streaming writers get each finding as it happens; the rest write everything at the end.
 class ReportWriter {
  public:
-  ReportWriter(std::FILE* out, Format format, Severity fail_on_or_never, bool never);
+  ReportWriter(std::FILE* out, Format format, Severity fail_on_or_never, bool never,
+               bool allow_empty = false);
   void beginCapture(const CaptureReport& report);
   void finding(const CaptureReport& report, const Finding& finding);
   void endCapture(const CaptureReport& report);
   void finish(const std::vector<CaptureReport>& reports);
   // Text and JSON Lines write each finding as it comes and keep none (constant memory).
   bool keepsFindings() const { return format_ != Format::Text && format_ != Format::Jsonl; }
+  Verdict verdict(const CaptureReport& report) const;
 
  private:
   std::FILE* out_;
   Format format_;
   Severity fail_on_;
   bool never_;
+  bool allow_empty_;
 };
 
 }  // namespace ncservo::cli
