@@ -56,7 +56,10 @@ class DecompressedStream {
  public:
   DecompressedStream(std::FILE* raw, Compression compression, const std::uint8_t* head,
                      std::size_t head_size)
-      : raw_(raw), compression_(compression), input_(new std::uint8_t[kInputSize]) {
+      : raw_(raw),
+        compression_(compression),
+        input_(new std::uint8_t[kInputSize]),
+        output_(new char[kOutputSize]) {
     std::memcpy(input_.get(), head, head_size);
     input_end_ = head_size;
     if (compression_ == Compression::Gzip) {
@@ -79,14 +82,18 @@ class DecompressedStream {
     io.read = [](void* self, char* out, std::size_t size) -> ssize_t {
       return static_cast<DecompressedStream*>(self)->read(out, size);
     };
-    return fopencookie(this, "rb", io);
+    std::FILE* file = fopencookie(this, "rb", io);
+    // Decoding in large blocks: each call into the decoder has a fixed cost.
+    if (file != nullptr) std::setvbuf(file, output_.get(), _IOFBF, kOutputSize);
+    return file;
   }
 
   // What went wrong, if reading stopped before the end of the compressed data.
   const std::optional<std::string>& error() const { return error_; }
 
  private:
-  static constexpr std::size_t kInputSize = 1 << 16;
+  static constexpr std::size_t kInputSize = 1 << 17;
+  static constexpr std::size_t kOutputSize = 1 << 17;
 
   ssize_t read(char* out, std::size_t size) {
     if (error_) return -1;
@@ -179,6 +186,7 @@ class DecompressedStream {
   std::FILE* raw_;
   Compression compression_;
   std::unique_ptr<std::uint8_t[]> input_;
+  std::unique_ptr<char[]> output_;  // the FILE's buffer
   std::size_t input_pos_ = 0;
   std::size_t input_end_ = 0;
   bool inside_frame_ = false;  // a compressed frame or member is begun and not ended
