@@ -44,17 +44,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   cli::CaptureReport& report = reports.back();
   report.path = path;
   writer.beginCapture(report);
-  std::string error;
-  auto reader = CaptureReader::open(path, error);
-  if (!reader) {
-    if (error.find(path) == std::string::npos) std::abort();  // messages name the file
-    report.error = error;
+  auto opened = CaptureReader::open(path);
+  if (!opened) {
+    report.error = opened.error().text();
+    if (report.error->find(path) == std::string::npos) std::abort();  // messages name the file
   } else {
+    CaptureReader* reader = opened->get();
     Validator validator(DecoderOptions{}, RuleSettings{});
     static EcatFrame frame;
     CaptureRecord record;
-    CaptureReader::Next status;
-    while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+    Result<bool> status;
+    while ((status = reader->next(record)) && *status) {
       if (record.frame == 1) report.first_time_ns = record.time_ns;
       report.frames = record.frame;
       fuzz::feedFrame(validator, reader->link(), record.frame, record.time_ns, record.data,
@@ -66,9 +66,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     }
     cli::summarise(validator, report);
-    if (status == CaptureReader::Next::Error) {
-      if (reader->error().find(path) == std::string::npos) std::abort();
-      report.error = reader->error();
+    if (!status) {
+      report.error = status.error().text();
+      if (report.error->find(path) == std::string::npos) std::abort();
     }
   }
   writer.endCapture(report);

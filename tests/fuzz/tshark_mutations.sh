@@ -8,7 +8,7 @@
 # Fails on a crash, an abort, a sanitizer report, a dissector bug, an exception thrown in the
 # plugin (a "Malformed Packet: NCSERVO" item), a plugin warning or any other
 # output on tshark's standard error (a cut file may only say that it was cut short), a run over
-# the time limit, and a validate exit status other than 0 or 3 (INTERFACES.md, with
+# the time limit, and a validate exit status other than 0, 3 or 4 (INTERFACES.md, with
 # --fail-on never). Failing mutants are kept in KEEP_DIR (default BUILD_DIR/tshark-mutations).
 # MUTANTS (default 2) is per capture and rate; -n 100 makes several thousand.
 set -euo pipefail
@@ -71,7 +71,7 @@ check() {
     rc=0
     timeout $limit "$ncservo" validate --fail-on never --format json -o /dev/null "$mutant" \
       >/dev/null 2>"$work/validate.err" || rc=$?
-    if [ $rc != 0 ] && [ $rc != 3 ]; then
+    if [ $rc != 0 ] && [ $rc != 3 ] && [ $rc != 4 ]; then
       why="validate exit $rc"
     elif grep -qE "Sanitizer|runtime error" "$work/validate.err"; then
       why="validate sanitizer report"

@@ -17,7 +17,7 @@ grep -q "^# layout source: startup, 3 axes" "$WORK/decoded.txt" || fail "decode 
 grep -v '^#' "$WORK/decoded.txt" >"$WORK/learned.toml"
 
 layout() { # layout ARGS...: "source axis:station:outputs:inputs ..." of validate's JSON report
-  "$NCSERVO" validate --format json --fail-on never "$@" | python3 -c '
+  "$NCSERVO" validate --format json --fail-on never --allow-empty "$@" | python3 -c '
 import json, sys
 c = json.load(sys.stdin)["captures"][0]
 axes = [":".join(str(a.get(k)) for k in ("station", "outputs", "inputs")) for a in c["layout"]["axes"]]

@@ -2,8 +2,8 @@
 # real_captures.sh SRC BUILD
 # Over real EtherCAT captures from other people's hardware (none holds a servo of this protocol),
 # tshark with the plugin exits 0, prints nothing on stderr and shows no axis field, the only
-# NC-Servo items are the bus findings `ncservo validate` reports on the same frames, and
-# `ncservo decode` finds no axis and says so.
+# NC-Servo items are the bus findings `ncservo validate` reports on the same frames, validate
+# ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis and says so.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 real="$SRC/../shared/captures/real"
@@ -25,11 +25,16 @@ for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   set +e
   "$NCSERVO" validate --format json --fail-on never "$WORK/capture" >"$WORK/report.json"
   rc=$?
+  "$NCSERVO" validate --format json --fail-on never --allow-empty "$WORK/capture" >/dev/null
+  allowed=$?
   set -e
-  [ $rc = 0 ] || fail "$(basename "$capture"): validate exit $rc"
+  # no servo: nothing of this protocol was checked (exit 4, INTERFACES.md)
+  [ $rc = 4 ] || fail "$(basename "$capture"): validate exit $rc, expected 4 (no servo)"
+  [ $allowed = 0 ] || fail "$(basename "$capture"): validate --allow-empty exit $allowed"
   python3 - "$WORK/report.json" "$WORK/plugin.txt" <<'PY' || fail "$(basename "$capture"): plugin and validator disagree"
 import json, sys
 c = json.load(open(sys.argv[1]))["captures"][0]
+assert c["verdict"] == "no servo" and "no servo of this protocol" in c["reason"], c["verdict"]
 assert all(f["rule"].startswith("ESM-") and f["axis"] is None for f in c["findings"]), c["findings"]
 frames = sorted({f["frame"] for f in c["findings"]})
 shown = sorted({int(l) for l in open(sys.argv[2]) if l.strip()})

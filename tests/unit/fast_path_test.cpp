@@ -108,13 +108,13 @@ std::vector<CaptureRow> bundledCaptures() {
 class FastPathOnBundled : public ::testing::TestWithParam<CaptureRow> {};
 
 TEST_P(FastPathOnBundled, ChangesNothing) {
-  std::string error;
-  auto reader = CaptureReader::open(GetParam().path, error);
-  ASSERT_NE(reader, nullptr) << error;
+  auto reader = CaptureReader::open(GetParam().path);
+  ASSERT_TRUE(reader) << reader.error().text();
   Both both;
   CaptureRecord record;
-  while (reader->next(record) == CaptureReader::Next::Record) {
-    both.frame(record.frame, record.time_ns, record.data, record.captured, reader->link());
+  Result<bool> more;
+  while ((more = (*reader)->next(record)) && *more) {
+    both.frame(record.frame, record.time_ns, record.data, record.captured, (*reader)->link());
   }
   EXPECT_EQ(both.on.finish(), both.off.finish());
 }

@@ -875,13 +875,14 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
     ASSERT_TRUE(writer->write(f.time_ns, f.bytes.data(), f.bytes.size()));
   ASSERT_TRUE(writer->close(error)) << error;
 
-  auto reader = CaptureReader::open(path, error);
-  ASSERT_TRUE(reader) << error;
-  EXPECT_EQ(reader->link(), LinkType::Ethernet);
+  auto opened = CaptureReader::open(path);
+  ASSERT_TRUE(opened) << opened.error().text();
+  CaptureReader& reader = **opened;
+  EXPECT_EQ(reader.link(), LinkType::Ethernet);
   CaptureRecord record;
   std::size_t k = 0;
-  CaptureReader::Next next;
-  while ((next = reader->next(record)) == CaptureReader::Next::Record) {
+  Result<bool> next;
+  while ((next = reader.next(record)) && *next) {
     ASSERT_LT(k, frames.size());
     const Frame& f = frames[k];
     EXPECT_EQ(record.frame, k + 1);
@@ -892,7 +893,8 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
     EXPECT_TRUE(std::equal(f.bytes.begin(), f.bytes.end(), record.data)) << "frame " << k + 1;
     ++k;
   }
-  EXPECT_EQ(next, CaptureReader::Next::End) << reader->error();
+  ASSERT_TRUE(next) << next.error().text();
+  EXPECT_FALSE(*next);
   EXPECT_EQ(k, frames.size());
   std::remove(path);
 }

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -23,6 +24,7 @@
 #include "ncservo/error.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/frame_clock.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
 #include "ncservo/sim/simulator.hpp"
@@ -33,7 +35,13 @@ namespace {
 
 using namespace ncservo;
 
-enum ExitCode { kExitOk = 0, kExitFindings = 1, kExitUsage = 2, kExitCapture = 3 };
+enum ExitCode {
+  kExitOk = 0,
+  kExitFindings = 1,
+  kExitUsage = 2,
+  kExitCapture = 3,
+  kExitNoServo = 4
+};
 
 // ---- Format tables and the --format option derived from them ----
 
@@ -210,6 +218,7 @@ struct DecodeArgs {
   LayoutArgs layout;
   std::string format = kRowFormats[0].name;
   bool layout_only = false;
+  std::string timestamps = "auto";
 };
 
 int runDecode(const DecodeArgs& args) {
@@ -218,12 +227,13 @@ int runDecode(const DecodeArgs& args) {
     fmt::print(stderr, "ncservo: {}\n", files.error().text());
     return kExitUsage;
   }
-  std::string error;
-  auto reader = CaptureReader::open(args.capture, error);
-  if (!reader) {
-    fmt::print(stderr, "ncservo: {}\n", error);
+  auto opened = CaptureReader::open(args.capture);
+  if (!opened) {
+    fmt::print(stderr, "ncservo: {}\n", opened.error().text());
     return kExitCapture;
   }
+  const std::unique_ptr<CaptureReader> reader = std::move(*opened);
+  FrameClock clock(*timestampModeFromName(args.timestamps));
   Session session(decoderOptions(*files, args.layout));
   const RowFormat& format = rowNamed(kRowFormats, args.format);
   if (!args.layout_only && format.header != nullptr) format.header(stdout);
@@ -239,29 +249,34 @@ int runDecode(const DecodeArgs& args) {
     }
     rows.clear();
   };
-  CaptureReader::Next status;
-  while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+  Result<bool> status;
+  while ((status = reader->next(record)) && *status) {
     if (!first_time) first_time = record.time_ns;
     const ByteReader bytes(record.data, record.captured);
     walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
-      continue;
+    if (frame.status == WalkStatus::NotEtherCat) continue;
+    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
+    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
     const FrameView& view = session.onFrame(frame, bytes);
     if (args.layout_only) continue;
     for (std::size_t i = 0; i < view.axis_count; ++i) {
       warnIfMalformed(reader->path(), record.frame, view.axes[i].placement);
     }
-    cycles.onFrame(record.frame, record.time_ns, view, rows);
+    cycles.onFrame(record.frame, time_ns, view, rows);
     write();
   }
   cycles.finish(rows);
   write();
   std::fflush(stdout);
-  if (status == CaptureReader::Next::Error) {
-    fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", reader->error());
+  if (!status) {
+    fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
   if (args.layout_only) printLayout(session.decoder());
+  if (clock.source() == TimestampSource::Probe || !clock.note().empty()) {
+    fmt::print(stderr, "ncservo: {}: timestamps: {}{}{}\n", reader->path(),
+               timestampSourceName(clock.source()), clock.note().empty() ? "" : "; ", clock.note());
+  }
   if (session.decoder().axes().empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session.decoder().noServoReason());
   }
@@ -280,6 +295,8 @@ struct ValidateArgs {
   std::vector<std::string> severities;
   std::vector<std::string> timeouts;
   std::optional<int> servo_ready_mode;
+  std::string timestamps = "auto";
+  bool allow_empty = false;
 };
 
 // The settings from RULES.md's defaults, the config file, then the command line.
@@ -315,35 +332,36 @@ std::optional<std::string> buildSettings(const ValidateArgs& o, const std::optio
   return std::nullopt;
 }
 
-// Runs one capture through the validator. Returns the capture's exit status (0, 1 or 3).
+// Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
-                    const RuleSettings& settings, cli::ReportWriter& writer,
-                    cli::CaptureReport& report, Severity fail_on, bool never) {
+                    const RuleSettings& settings, TimestampMode timestamps,
+                    cli::ReportWriter& writer, cli::CaptureReport& report) {
   report.path = path;
   writer.beginCapture(report);
-  std::string error;
-  auto reader = CaptureReader::open(path, error);
-  if (!reader) {
-    report.error = error;
-    fmt::print(stderr, "ncservo: {}\n", error);
+  auto opened = CaptureReader::open(path);
+  if (!opened) {
+    report.error = opened.error().text();
+    fmt::print(stderr, "ncservo: {}\n", *report.error);
     writer.endCapture(report);
     return kExitCapture;
   }
+  const std::unique_ptr<CaptureReader> reader = std::move(*opened);
+  FrameClock clock(timestamps);
   Validator validator(decoder_options, settings);
   EcatFrame frame;
   CaptureRecord record;
   bool first = true;
-  CaptureReader::Next status;
-  while ((status = reader->next(record)) == CaptureReader::Next::Record) {
+  Result<bool> status;
+  while ((status = reader->next(record)) && *status) {
     if (first) report.first_time_ns = record.time_ns;
     first = false;
     report.frames = record.frame;
     const ByteReader bytes(record.data, record.captured);
     walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams)
-      continue;
-    const FrameDecode& decode =
-        validator.onFrame(record.frame, record.time_ns, frame, bytes).decode;
+    if (frame.status == WalkStatus::NotEtherCat) continue;
+    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
+    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
+    const FrameDecode& decode = validator.onFrame(record.frame, time_ns, frame, bytes).decode;
     for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
       warnIfMalformed(reader->path(), record.frame, decode.axes[i]);
     }
@@ -354,22 +372,33 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     }
   }
   cli::summarise(validator, report);
-  if (validator.decoder().axes().empty()) report.note = validator.decoder().noServoReason();
-  int rc = kExitOk;
-  if (status == CaptureReader::Next::Error) {
-    report.error = reader->error() + " (the frames before it were analysed)";
+  report.coverage = coverageOf(validator);
+  report.timestamps = clock.source();
+  report.probe = clock.counts();
+  report.probe_note = clock.note();
+  if (!status) {
+    report.error = status.error().text() + " (the frames before it were analysed)";
     fmt::print(stderr, "ncservo: {}\n", *report.error);
-    rc = kExitCapture;
   }
   writer.endCapture(report);
-  if (rc == kExitOk && !never && report.reaches(fail_on)) rc = kExitFindings;
-  return rc;
+  switch (writer.verdict(report)) {
+    case cli::Verdict::Unreadable:
+      return kExitCapture;
+    case cli::Verdict::Fail:
+      return kExitFindings;
+    case cli::Verdict::NoServo:
+      return kExitNoServo;
+    case cli::Verdict::Pass:
+      break;
+  }
+  return kExitOk;
 }
 
-// INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 0.
+// INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
 int combine(int a, int b) {
-  auto rank = [](int rc) { return rc == kExitUsage ? 3 : rc == kExitCapture ? 2 : rc; };
-  return rank(a) >= rank(b) ? a : b;
+  constexpr int kOrder[] = {kExitUsage, kExitCapture, kExitFindings, kExitNoServo, kExitOk};
+  auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
+  return rank(a) <= rank(b) ? a : b;
 }
 
 int runValidate(const ValidateArgs& o) {
@@ -393,13 +422,14 @@ int runValidate(const ValidateArgs& o) {
       return kExitUsage;
     }
   }
-  cli::ReportWriter writer(out, *cli::findReportFormat(o.format), fail_on, never);
+  cli::ReportWriter writer(out, *cli::findReportFormat(o.format), fail_on, never, o.allow_empty);
+  const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
   std::vector<cli::CaptureReport> reports;
   int rc = kExitOk;
   for (const std::string& path : o.captures) {
     reports.emplace_back();
-    rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, writer,
-                                     reports.back(), fail_on, never));
+    rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, timestamps,
+                                     writer, reports.back()));
   }
   writer.finish(reports);
   if (out != stdout) std::fclose(out);
@@ -608,6 +638,11 @@ Handler decodeCommand(CLI::App& command) {
   command.add_flag("--layout", args->layout_only,
                    "print the layout found (as a configuration file) and the slaves the start-up "
                    "configured, instead of the process data");
+  command
+      .add_option("--timestamps", args->timestamps,
+                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
+                  "has one)")
+      ->check(CLI::IsMember({"capture", "probe", "auto"}));
   return [args] { return runDecode(*args); };
 }
 
@@ -637,6 +672,13 @@ Handler validateCommand(CLI::App& command) {
                    "never assume the default layout (PROTOCOL.md §9.4)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
+  command
+      .add_option("--timestamps", args->timestamps,
+                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
+                  "has one)")
+      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+  command.add_flag("--allow-empty", args->allow_empty,
+                   "exit 0, not 4, where no servo (or not every configured axis) was decoded");
   return [args] { return runValidate(*args); };
 }
 

@@ -44,9 +44,40 @@ Json optionalNumber(const std::optional<double>& v) {
   return v ? Json(*v) : Json(nullptr);
 }
 
-Json captureJson(const CaptureReport& r) {
+const char* verdictName(Verdict v) {
+  switch (v) {
+    case Verdict::Unreadable:
+      return "unreadable";
+    case Verdict::Fail:
+      return "fail";
+    case Verdict::NoServo:
+      return "no servo";
+    case Verdict::Pass:
+      return "pass";
+  }
+  return "pass";
+}
+
+// What the ESL probe headers said (PROTOCOL.md §8), when there were any.
+Json probeJson(const CaptureReport& r) {
+  const ProbeCounts& p = r.probe;
+  Json j{{"frames", p.probed},
+         {"timestamped", p.stamped},
+         {"unstamped", p.unstamped},
+         {"first_unstamped_frame", p.first_unstamped ? Json(p.first_unstamped) : Json(nullptr)},
+         {"crc_errors", p.crc_errors},
+         {"first_crc_error_frame", p.first_crc_error ? Json(p.first_crc_error) : Json(nullptr)},
+         {"alignment_errors", p.alignment_errors}};
+  if (!r.probe_note.empty()) j["note"] = r.probe_note;
+  return j;
+}
+
+Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json c;
   c["path"] = r.path;
+  c["verdict"] = verdictName(verdict);
+  if (!r.coverage.complete()) c["reason"] = r.coverage.reason;
+  if (!r.coverage.missing.empty()) c["missing_axes"] = r.coverage.missing;
   c["frames"] = r.frames;
   c["cycles"] = r.cycles;
   c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},
@@ -60,6 +91,8 @@ Json captureJson(const CaptureReport& r) {
     a["inputs"] = hex32(info.inputs);
     layout_axes.push_back(std::move(a));
   }
+  c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}};
+  if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
   c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
   Json findings = Json::array();
   for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
@@ -95,7 +128,6 @@ Json captureJson(const CaptureReport& r) {
                   {"warning", r.count(Severity::Warning)},
                   {"info", r.count(Severity::Info)}};
   if (r.error) c["error"] = *r.error;
-  if (r.note) c["note"] = *r.note;
   return c;
 }
 
@@ -122,9 +154,20 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
   }
   Json results = Json::array();
   Json artifacts = Json::array();
+  // A capture where not every axis was checked is a notification, not a result (SARIF 2.1.0
+  // §3.58): nothing there was found, and nothing was shown to be right either.
+  Json notifications = Json::array();
   for (std::size_t c = 0; c < reports.size(); ++c) {
     const CaptureReport& r = reports[c];
     artifacts.push_back({{"location", {{"uri", r.path}}}});
+    if (!r.coverage.complete()) {
+      notifications.push_back(
+          {{"descriptor", {{"id", "NO-SERVO"}}},
+           {"level", verdictOf(sink, r) == Verdict::NoServo ? "error" : "note"},
+           {"message", {{"text", fmt::format("{}: NO SERVO: {}", r.path, r.coverage.reason)}}},
+           {"locations",
+            {{{"physicalLocation", {{"artifactLocation", {{"uri", r.path}, {"index", c}}}}}}}}});
+    }
     for (const Finding& f : r.findings) {
       const RuleDef& rule = ruleDef(f.rule);
       const std::string axis = f.axis ? axisName(r, *f.axis) : std::string("bus");
@@ -158,6 +201,10 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
                     {"rules", std::move(rules)}}}}},
                 {"artifacts", std::move(artifacts)},
                 {"results", std::move(results)}}}}};
+  if (!notifications.empty()) {
+    sarif["runs"][0]["invocations"] = {
+        {{"executionSuccessful", true}, {"toolExecutionNotifications", std::move(notifications)}}};
+  }
   std::fputs((sarif.dump(2) + "\n").c_str(), sink.out);
 }
 
@@ -173,6 +220,7 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
     auto suite = suites.append_child("testsuite");
     suite.append_attribute("name") = r.path.c_str();
     std::size_t failures = 0;
+    std::size_t skipped = 0;
     for (const RuleDef& rule : kRules) {
       auto testcase = suite.append_child("testcase");
       testcase.append_attribute("classname") = (r.path + "." + partyName(rule.party)).c_str();
@@ -182,7 +230,16 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       for (const Finding& f : r.findings) {
         if (f.rule == rule.id) fired.push_back(&f);
       }
-      if (fired.empty()) continue;
+      if (fired.empty()) {
+        // Nothing checked is not a pass: where no servo (or not every configured one) was
+        // decoded, a rule that did not fire is skipped, with the reason.
+        if (!r.coverage.complete()) {
+          testcase.append_child("skipped").append_attribute("message") =
+              ("NO SERVO: " + r.coverage.reason).c_str();
+          ++skipped;
+        }
+        continue;
+      }
       // A finding below --fail-on is listed, but does not fail the test case.
       bool failing = false;
       std::string body;
@@ -216,7 +273,7 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
     suite.append_attribute("tests") = tests;
     suite.append_attribute("failures") = failures;
     suite.append_attribute("errors") = r.error ? 1 : 0;
-    suite.append_attribute("skipped") = 0;
+    suite.append_attribute("skipped") = skipped;
     total_tests += tests;
     total_failures += failures;
   }
@@ -266,33 +323,47 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
                  e.cause->canopen, e.at.frame, seconds(r, e.at));
     }
   }
-  if (r.note) fmt::print(out, "note: {}\n", *r.note);
+  fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
+  if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
+  if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
 }
 
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   std::size_t counts[3] = {0, 0, 0};
-  std::size_t unread = 0;  // captures that could not be read to their end
+  std::size_t unread = 0;     // captures that could not be read to their end
+  std::size_t unchecked = 0;  // captures where not every axis was checked
   bool failed = false;
+  bool no_servo = false;
   for (const CaptureReport& r : reports) {
     for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
     unread += r.error.has_value() ? 1 : 0;
-    failed = failed || (!sink.never && r.reaches(sink.fail_on)) || r.error.has_value();
+    unchecked += r.coverage.complete() ? 0 : 1;
+    const Verdict v = verdictOf(sink, r);
+    failed = failed || v == Verdict::Fail || v == Verdict::Unreadable;
+    no_servo = no_servo || v == Verdict::NoServo;
   }
-  const std::string unread_note =
-      unread == 0 ? std::string() : fmt::format(", {} not read to the end", unread);
+  std::string notes;
+  if (unread > 0) notes += fmt::format(", {} not read to the end", unread);
+  if (unchecked > 0) {
+    notes += fmt::format(", {} with no servo checked{}", unchecked,
+                         sink.allow_empty ? " (--allow-empty)" : "");
+  }
   fmt::print(sink.out,
              "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
-             failed ? "FAIL" : "PASS", counts[2], counts[2] == 1 ? "" : "s", counts[1],
-             counts[1] == 1 ? "" : "s", counts[0], reports.size(), reports.size() == 1 ? "" : "s",
-             unread_note, sink.never ? "never" : severityName(sink.fail_on));
+             failed     ? "FAIL"
+             : no_servo ? "NO SERVO"
+                        : "PASS",
+             counts[2], counts[2] == 1 ? "" : "s", counts[1], counts[1] == 1 ? "" : "s", counts[0],
+             reports.size(), reports.size() == 1 ? "" : "s", notes,
+             sink.never ? "never" : severityName(sink.fail_on));
 }
 
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json j;
   j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
   Json captures = Json::array();
-  for (const CaptureReport& r : reports) captures.push_back(captureJson(r));
+  for (const CaptureReport& r : reports) captures.push_back(captureJson(r, verdictOf(sink, r)));
   j["captures"] = std::move(captures);
   std::fputs((j.dump(2) + "\n").c_str(), sink.out);
 }
@@ -304,12 +375,20 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
+// JSON Lines: a capture where not every axis was checked closes with a line that says so.
+void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
+  if (r.coverage.complete()) return;
+  Json j{{"capture", r.path}, {"verdict", verdictName(verdictOf(sink, r))}, {"reason", r.coverage.reason}};
+  if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
+  std::fputs((j.dump() + "\n").c_str(), sink.out);
+}
+
 // INTERFACES.md's formats of `validate`: name, keeps findings, begin capture, finding, end
 // capture, finish.
 const ReportFormat kReportFormats[] = {
     {"text", false, writeTextHeading, writeTextFinding, writeTextSummary, writeTextVerdict},
     {"json", true, nullptr, nullptr, nullptr, writeJson},
-    {"jsonl", false, nullptr, writeJsonlFinding, nullptr, nullptr},
+    {"jsonl", false, nullptr, writeJsonlFinding, writeJsonlCoverage, nullptr},
     {"junit", true, nullptr, nullptr, nullptr, writeJunit},
     {"sarif", true, nullptr, nullptr, nullptr, writeSarif},
 };
@@ -357,8 +436,16 @@ void summarise(const Validator& validator, CaptureReport& report) {
   }
 }
 
-ReportWriter::ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never)
-    : sink_{out, fail_on, never}, format_(format) {}
+ReportWriter::ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never,
+                           bool allow_empty)
+    : sink_{out, fail_on, never, allow_empty}, format_(format) {}
+
+Verdict verdictOf(const ReportSink& sink, const CaptureReport& r) {
+  if (r.error) return Verdict::Unreadable;
+  if (!sink.never && r.reaches(sink.fail_on)) return Verdict::Fail;
+  if (!r.coverage.complete() && !sink.allow_empty) return Verdict::NoServo;
+  return Verdict::Pass;
+}
 
 void ReportWriter::beginCapture(const CaptureReport& report) {
   if (format_.begin_capture != nullptr) format_.begin_capture(sink_, report);

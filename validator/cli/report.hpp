@@ -10,10 +10,15 @@
 #include <string_view>
 #include <vector>
 
+#include "ncservo/coverage.hpp"
 #include "ncservo/finding.hpp"
+#include "ncservo/frame_clock.hpp"
 #include "ncservo/validator.hpp"
 
 namespace ncservo::cli {
+
+// A capture's outcome, as its exit status has it (INTERFACES.md: 3, 1, 4, 0).
+enum class Verdict { Unreadable, Fail, NoServo, Pass };
 
 struct AxisReport {
   std::uint16_t index = 0;
@@ -38,7 +43,10 @@ struct CaptureReport {
   std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
   std::vector<AxisReport> axes;
   std::optional<std::string> error;  // the capture could not be read to its end
-  std::optional<std::string> note;   // e.g. no servo found
+  Coverage coverage;                 // whether every axis was checked
+  TimestampSource timestamps = TimestampSource::Capture;
+  ProbeCounts probe;
+  std::string probe_note;  // FrameClock::note()
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Whether any finding is at or above `level`.
   bool reaches(Severity level) const;
@@ -47,12 +55,15 @@ struct CaptureReport {
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);
 
-// Where a report goes and when its findings fail it: at or above `fail_on`, unless `never`.
+// Where a report goes and when its findings fail it: at or above `fail_on`, unless `never`;
+// a capture where not every axis was checked is "no servo" unless `allow_empty`.
 struct ReportSink {
   std::FILE* out;
   Severity fail_on;
   bool never;
+  bool allow_empty;
 };
+Verdict verdictOf(const ReportSink& sink, const CaptureReport& report);
 
 // One output format of `validate` (INTERFACES.md): its name and its writers, called in the order
 // beginCapture, finding (each), endCapture per capture, then finish. A null writer writes nothing.
@@ -74,12 +85,14 @@ const ReportFormat* findReportFormat(std::string_view name);
 
 class ReportWriter {
  public:
-  ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never);
+  ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never,
+               bool allow_empty = false);
   void beginCapture(const CaptureReport& report);
   void finding(const CaptureReport& report, const Finding& finding);
   void endCapture(const CaptureReport& report);
   void finish(const std::vector<CaptureReport>& reports);
   bool keepsFindings() const { return format_.keeps_findings; }
+  Verdict verdict(const CaptureReport& report) const { return verdictOf(sink_, report); }
 
  private:
   ReportSink sink_;

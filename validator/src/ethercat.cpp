@@ -66,6 +66,51 @@ void walkFromTypeField(const ByteReader& bytes, std::size_t type_offset, std::si
   }
   walkPayload(bytes, *type, payload, out);
 }
+
+// The ESL header at `offset`, if its 6 fixed bytes are there (PROTOCOL.md §8).
+std::optional<ProbeHeader> eslHeaderAt(const ByteReader& bytes, std::size_t offset) {
+  const std::optional<ByteRecord<esl::kHeaderSize>> header = bytes.record<esl::kHeaderSize>(offset);
+  if (!header) return std::nullopt;
+  const std::uint8_t fourth = header->u8<3>();
+  if (header->u8<0>() != 0x01 || header->u8<1>() != 0x01 || header->u8<2>() != 0x05 ||
+      (fourth != 0x10 && fourth != 0x11) || header->u8<4>() != 0 || header->u8<5>() != 0) {
+    return std::nullopt;
+  }
+  ProbeHeader probe;
+  probe.present = true;
+  probe.flags = header->le16<esl::kFlagsOffset>();
+  probe.timestamp_ns = header->le64<esl::kTimestampOffset>();
+  return probe;
+}
+
+void walkEthernet(const ByteReader& bytes, std::size_t start, EcatFrame& out) {
+  walkFromTypeField(bytes, start + kEthernetHeaderSize - 2, start + kEthernetHeaderSize, out);
+}
+
+// An Ethernet frame, with the probe's ESL header before it or appended after it.
+void walkProbedEthernet(const ByteReader& bytes, EcatFrame& out) {
+  if (std::optional<ProbeHeader> before = eslHeaderAt(bytes, 0)) {
+    out.probe = *before;
+    out.probe.before = true;
+    walkEthernet(bytes, esl::kHeaderSize, out);
+    return;
+  }
+  const std::size_t size = bytes.size();
+  std::optional<ProbeHeader> after;
+  if (size >= kEthernetHeaderSize + esl::kHeaderSize) {
+    after = eslHeaderAt(bytes, size - esl::kHeaderSize);
+  }
+  if (after) {
+    // The same six bytes may end an ordinary frame's data: taken as a header only when the
+    // EtherCAT frame ends before it.
+    walkEthernet(ByteReader(bytes.data(), size - esl::kHeaderSize), 0, out);
+    if (out.status != WalkStatus::Truncated) {
+      out.probe = *after;
+      return;
+    }
+  }
+  walkEthernet(bytes, 0, out);
+}
 }  // namespace
 
 const char* ecat::commandName(std::uint8_t cmd) {
@@ -148,9 +193,14 @@ void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
 void walkPacket(LinkType link, const ByteReader& bytes, EcatFrame& out) {
   out.count = 0;
   out.status = WalkStatus::NotEtherCat;
+  out.probe = ProbeHeader{};
   switch (link) {
     case LinkType::Ethernet:
-      walkFromTypeField(bytes, kEthernetHeaderSize - 2, kEthernetHeaderSize, out);
+      walkProbedEthernet(bytes, out);
+      // A frame the probe saw with a CRC error is a bus fault, not process data (§8).
+      if (out.probe.crcError() && out.status != WalkStatus::NotEtherCat) {
+        out.status = WalkStatus::BusFault;
+      }
       return;
     case LinkType::LinuxSll:
       walkFromTypeField(bytes, kSllHeaderSize - 2, kSllHeaderSize, out);

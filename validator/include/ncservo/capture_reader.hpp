@@ -1,11 +1,14 @@
-// Reads pcap and pcapng captures (libpcap) record by record, in constant memory.
+// Reads pcap and pcapng captures (libpcap) record by record, in constant memory; gzip- and
+// zstd-compressed ones too (PROTOCOL.md §8), recognised by their first bytes, not their names.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <string>
 
+#include "ncservo/error.hpp"
 #include "ncservo/ethercat.hpp"
 
 struct pcap;  // libpcap's handle, kept out of this header
@@ -20,34 +23,44 @@ struct CaptureRecord {
   std::size_t original = 0;
 };
 
+// How the capture's bytes are stored.
+enum class Compression : std::uint8_t { None, Gzip, Zstd };
+const char* compressionName(Compression compression);
+
+class DecompressedStream;  // the decompressing source libpcap reads through (capture_reader.cpp)
+
 class CaptureReader {
  public:
-  enum class Next { Record, End, Error };
-
   ~CaptureReader();
   CaptureReader(const CaptureReader&) = delete;
   CaptureReader& operator=(const CaptureReader&) = delete;
 
-  // Opens PATH ("-" = standard input); on failure returns null and a message naming the file.
-  static std::unique_ptr<CaptureReader> open(const std::string& path, std::string& error);
+  // Opens PATH ("-" = standard input). An error names the file ("standard input" for "-").
+  static Result<std::unique_ptr<CaptureReader>> open(const std::string& path);
 
-  // The next record; on Error, error() says what went wrong and at which frame.
-  Next next(CaptureRecord& record);
+  // Fills `record` with the next record and returns true; false at the end of the capture.
+  // An error names the file and the frame that could not be read; the records before it
+  // were good.
+  Result<bool> next(CaptureRecord& record);
 
   LinkType link() const { return link_; }
   int dlt() const { return dlt_; }
-  const std::string& error() const { return error_; }
+  Compression compression() const { return compression_; }
   const std::string& path() const { return path_; }
 
  private:
   CaptureReader() = default;
+  Error failure(std::uint64_t frame, const char* pcap_message) const;
+
   static constexpr std::size_t kReadBufferSize = 1 << 16;
-  std::unique_ptr<char[]> buffer_;  // the FILE's buffer: outlives the handle that closes it
+  std::unique_ptr<char[]> buffer_;              // the FILE's buffer: outlives the handle
+  std::unique_ptr<DecompressedStream> stream_;  // outlives the handle that reads it
+  std::FILE* source_ = nullptr;                 // the file opened here, closed here
   ::pcap* handle_ = nullptr;
   std::string path_;
-  std::string error_;
   LinkType link_ = LinkType::Unsupported;
   int dlt_ = 0;
+  Compression compression_ = Compression::None;
   std::uint64_t frames_ = 0;
 };
 

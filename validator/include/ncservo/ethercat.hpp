@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include "ncservo/byte_reader.hpp"
 
@@ -94,6 +95,44 @@ inline constexpr std::size_t kPhysicalStart = 0, kLength = 2, kControl = 4, kAct
 }  // namespace sm
 }  // namespace ecat
 
+// The 16-byte header an ET2000 probe or an EtherCAT switch-link port puts before or after the
+// Ethernet frame (PROTOCOL.md §8; Wireshark's `esl` dissector).
+namespace esl {
+inline constexpr std::size_t kHeaderSize = 16;
+inline constexpr std::size_t kFlagsOffset = 6;
+inline constexpr std::size_t kTimestampOffset = 8;
+inline constexpr std::uint16_t kFlagCrcError = 0x1000;
+inline constexpr std::uint16_t kFlagAlignmentError = 0x0800;
+inline constexpr std::uint16_t kFlagTimestampValid = 0x2000;
+struct PortBit {
+  std::uint16_t mask;
+  std::uint8_t port;
+};
+inline constexpr PortBit kPortBits[] = {
+    {0x0080, 0}, {0x0040, 1}, {0x0020, 2}, {0x0010, 3}, {0x0008, 4},  {0x0004, 5},
+    {0x0002, 6}, {0x0001, 7}, {0x8000, 8}, {0x4000, 9}, {0x0400, 10}, {0x0200, 11},
+};
+}  // namespace esl
+
+// What the probe recorded about a frame, when it came with an ESL header.
+struct ProbeHeader {
+  bool present = false;
+  bool before = false;  // the header precedes the Ethernet frame (else it is appended)
+  std::uint16_t flags = 0;
+  std::uint64_t timestamp_ns = 0;  // the probe's clock: only differences mean anything
+
+  bool crcError() const { return (flags & esl::kFlagCrcError) != 0; }
+  bool alignmentError() const { return (flags & esl::kFlagAlignmentError) != 0; }
+  bool timestampValid() const { return (flags & esl::kFlagTimestampValid) != 0; }
+  // The probe port the frame was seen on; none when no port bit is set.
+  std::optional<std::uint8_t> port() const {
+    for (const esl::PortBit& bit : esl::kPortBits) {
+      if ((flags & bit.mask) != 0) return bit.port;
+    }
+    return std::nullopt;
+  }
+};
+
 struct Datagram {
   std::uint8_t command = 0;
   std::uint8_t index = 0;
@@ -117,6 +156,7 @@ enum class WalkStatus : std::uint8_t {
   NotEtherCat,   // no EtherCAT frame in these bytes (other traffic)
   NotDatagrams,  // an EtherCAT frame of another type (not process data)
   Truncated,     // the captured bytes end inside the chain: datagrams before it are valid
+  BusFault,      // an EtherCAT frame the probe saw with a CRC error: walked, not process data
 };
 
 struct EcatFrame {
@@ -127,6 +167,7 @@ struct EcatFrame {
   std::size_t truncated_at = 0;     // offset where the captured bytes ran out (Truncated)
   std::size_t count = 0;            // datagrams in `datagrams`, a partial last one included
   std::array<Datagram, ecat::kMaxDatagrams> datagrams{};
+  ProbeHeader probe;  // present when the frame came through an ESL probe (Ethernet link only)
 
   // Same datagram list: what pairs a master's frame with its returned copy (PROTOCOL.md §8).
   bool sameDatagramList(const EcatFrame& other) const;
@@ -141,7 +182,8 @@ LinkType linkTypeFromDlt(int dlt);
 void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out);
 
 // Finds the EtherCAT frame in a captured packet (Ethernet II with any number of 802.1Q/802.1ad
-// tags, or IPv4/IPv6 UDP to port 34980) and walks it.
+// tags, or IPv4/IPv6 UDP to port 34980; on the Ethernet link type behind or before an ESL
+// probe header) and walks it.
 void walkPacket(LinkType link, const ByteReader& bytes, EcatFrame& out);
 
 }  // namespace ncservo
