@@ -134,7 +134,7 @@ void decodes(Decoder& decoder, const Bytes& data, std::uint16_t ado) {
     const Bytes bytes = builder.bytes();
     const test::Walked walked = test::walk(bytes, bytes.size());
     FrameDecode out;
-    decoder.decode(*walked.frame, walked.reader(), out);
+    decoder.placeAxes(*walked.frame, walked.reader(), out);
   }
 }
 TEST(CoePdoLearned, MailboxesWrittenToSm0MarkAServo) {

@@ -74,7 +74,7 @@ struct Decoded {
 
 Decoded run(Decoder& decoder, const Bytes& bytes, std::optional<std::size_t> cut = {}) {
   Decoded d{test::walk(bytes, cut.value_or(bytes.size()))};
-  decoder.decode(*d.walked.frame, d.walked.reader(), *d.out);
+  decoder.placeAxes(*d.walked.frame, d.walked.reader(), *d.out);
   return d;
 }
 
@@ -542,8 +542,8 @@ TEST(ConfiguredLayout, AxesAndSourceComeFromTheConfiguration) {
   EXPECT_EQ(decoder.axes()[1].name, "Y");
   EXPECT_FALSE(decoder.axes()[1].logical);
   EXPECT_EQ(decoder.axes()[1].station, 0x03EA);
-  EXPECT_EQ(decoder.axes()[1].outputs, 0x1100u);
-  EXPECT_EQ(decoder.axes()[1].inputs, 0x1180u);
+  EXPECT_EQ(decoder.axes()[1].sm_outputs, 0x1100u);
+  EXPECT_EQ(decoder.axes()[1].sm_inputs, 0x1180u);
   EXPECT_EQ(decoder.axes()[2].name, "axis2");
   // A configuration overrides the default layout: a default-shaped LRW elsewhere is not decoded.
   EXPECT_EQ(run(decoder, frameOf({defaultLrw(2, 0, 0x50000)})).count(), 0u);
@@ -805,8 +805,8 @@ TEST(LearnedLayout, NoFmmuButFprdFpwrAtTheSmAddressesIsPhysicalExchange) {
   run(decoder, exchange);
   ASSERT_EQ(decoder.axes().size(), 1u);
   EXPECT_FALSE(decoder.axes()[0].logical);
-  EXPECT_EQ(decoder.axes()[0].outputs, 0x1100u);
-  EXPECT_EQ(decoder.axes()[0].inputs, 0x1180u);
+  EXPECT_EQ(decoder.axes()[0].sm_outputs, 0x1100u);
+  EXPECT_EQ(decoder.axes()[0].sm_inputs, 0x1180u);
   EXPECT_EQ(decoder.axes()[0].station, 0x03E9);
   EXPECT_EQ(run(decoder, exchange).count(), 1u);
 }

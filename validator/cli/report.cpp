@@ -87,8 +87,8 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   for (const AxisInfo& info : r.layout) {
     Json a{{"index", info.index}, {"name", info.name}};
     if (info.has_station) a["station"] = fmt::format("0x{:04X}", info.station);
-    a["outputs"] = hex32(info.outputs);
-    a["inputs"] = hex32(info.inputs);
+    a["outputs"] = hex32(info.logical ? info.outputs : info.sm_outputs);
+    a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
     layout_axes.push_back(std::move(a));
   }
   c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}};
@@ -310,8 +310,11 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   for (const AxisInfo& info : r.layout) {
     fmt::print(out, "  {}:", info.name);
     if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
-    fmt::print(out, " {} 0x{:08X}, {} 0x{:08X}\n", info.logical ? "outputs" : "SM2", info.outputs,
-               info.logical ? "inputs" : "SM3", info.inputs);
+    if (info.logical) {
+      fmt::print(out, " outputs 0x{:08X}, inputs 0x{:08X}\n", info.outputs, info.inputs);
+    } else {
+      fmt::print(out, " SM2 0x{:08X}, SM3 0x{:08X}\n", info.sm_outputs, info.sm_inputs);
+    }
   }
   for (const AxisReport& a : r.axes) {
     fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,

@@ -107,8 +107,8 @@ AxisConfig axisConfigOf(const AxisInfo& info) {
     axis.outputs = info.outputs;
     axis.inputs = info.inputs;
   } else {
-    axis.sm_outputs = static_cast<std::uint16_t>(info.outputs);
-    axis.sm_inputs = static_cast<std::uint16_t>(info.inputs);
+    axis.sm_outputs = info.sm_outputs;
+    axis.sm_inputs = info.sm_inputs;
   }
   return axis;
 }
@@ -126,8 +126,10 @@ void Decoder::setAxes(const std::vector<AxisConfig>& axes) {
     info.name = axis.name.empty() ? fmt::format("axis{}", i) : axis.name;
     info.logical = !axis.physical();
     info.has_station = axis.station.has_value();
-    info.outputs = info.logical ? axis.outputs.value_or(0) : axis.sm_outputs.value_or(0);
-    info.inputs = info.logical ? axis.inputs.value_or(0) : axis.sm_inputs.value_or(0);
+    info.outputs = axis.outputs.value_or(0);
+    info.inputs = axis.inputs.value_or(0);
+    info.sm_outputs = axis.sm_outputs.value_or(0);
+    info.sm_inputs = axis.sm_inputs.value_or(0);
     info.station = axis.station.value_or(0);
     axes_.push_back(std::move(info));
   }
@@ -154,7 +156,7 @@ LayoutSource Decoder::source() const {
   return LayoutSource::None;
 }
 
-void Decoder::decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out) {
+void Decoder::placeAxes(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out) {
   out.axis_count = 0;
   out.any_malformed = false;
   out.shape_id = 0;

@@ -3,7 +3,7 @@
 namespace ncservo {
 
 const FrameView& Session::onFrame(const EcatFrame& frame, const ByteReader& bytes) {
-  decoder_.decode(frame, bytes, decode_);
+  decoder_.placeAxes(frame, bytes, decode_);
   view_.copy = decode_.copy;
   view_.paired = decode_.paired;
   view_.axis_count = decode_.axis_count;

@@ -91,7 +91,7 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   frame_time_ns_ = time_ns;
 
   FrameDecode& decode = view_.decode;
-  decoder_.decode(frame, bytes, decode);
+  decoder_.placeAxes(frame, bytes, decode);
   observeAl(frame, bytes);
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;

@@ -25,9 +25,11 @@ const char* copyKindName(CopyKind copy);
 struct AxisInfo {
   std::uint16_t index = 0;
   std::string name;
-  bool logical = true;  // logical addresses, else station + SM physical addresses
-  std::uint32_t outputs = 0;
+  bool logical = true;        // exchanged with logical commands, else with FPRD/FPWR
+  std::uint32_t outputs = 0;  // logical addresses of the RxPDO and TxPDO (when logical)
   std::uint32_t inputs = 0;
+  std::uint16_t sm_outputs = 0;  // the station's SM2 and SM3 physical addresses (when not)
+  std::uint16_t sm_inputs = 0;
   std::uint16_t station = 0;
   bool has_station = false;  // station known: the axis's AL state can be followed
 };
@@ -80,9 +82,9 @@ class Decoder {
  public:
   explicit Decoder(DecoderOptions options);
 
-  // Decodes one walked frame (any status; only complete datagram headers are used). `bytes`
-  // are the bytes the frame was walked over.
-  void decode(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out);
+  // Places each axis's PDOs in one walked frame and tells its copy (any status; only complete
+  // datagram headers are used). `bytes` are the bytes the frame was walked over.
+  void placeAxes(const EcatFrame& frame, const ByteReader& bytes, FrameDecode& out);
 
   LayoutSource source() const;
   const std::vector<AxisInfo>& axes() const { return axes_; }
