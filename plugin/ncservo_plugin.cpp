@@ -264,23 +264,23 @@ void applyPreferences() {
   std::optional<Config> config;
   std::vector<AxisConfig> eni_axes;
   if (pref_eni_path != nullptr && pref_eni_path[0] != '\0') {
-    EniResult eni = loadEni(pref_eni_path);
-    if (eni.ok()) {
-      eni_axes = std::move(eni.axes);
+    Result<EniLayout> eni = loadEni(pref_eni_path);
+    if (eni) {
+      eni_axes = std::move(eni->axes);
     } else {
-      report_failure("NCSERVO: %s", eni.error->text().c_str());
+      report_failure("NCSERVO: %s", eni.error().text().c_str());
     }
   }
   if (pref_config_path != nullptr && pref_config_path[0] != '\0') {
-    ConfigResult loaded = loadConfig(pref_config_path);
-    if (loaded.ok()) {
-      config = std::move(loaded.config);
+    Result<Config> loaded = loadConfig(pref_config_path);
+    if (loaded) {
+      config = std::move(*loaded);
       // Severity overrides are left to Wireshark's own expert-severity table (PROTOCOL.md §10).
       if (auto error = settings->apply(*config)) {
         report_failure("NCSERVO: %s: %s", pref_config_path, error->c_str());
       }
     } else {
-      report_failure("NCSERVO: %s", loaded.error->text().c_str());
+      report_failure("NCSERVO: %s", loaded.error().text().c_str());
     }
   }
   if (pref_servo_ready_mode >= 0) settings->servo_ready_mode = pref_servo_ready_mode;

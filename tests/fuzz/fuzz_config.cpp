@@ -12,18 +12,17 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace ncservo;
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  const ConfigResult result = parseConfig(text, "fuzz.toml");
-  if (result.ok() == result.error.has_value()) std::abort();  // exactly one of the two
-  if (!result.ok()) {
+  const Result<Config> result = parseConfig(text, "fuzz.toml");
+  if (!result) {
     // Errors name the file: "fuzz.toml:LINE: key 'K': MESSAGE".
-    if (result.error->text().rfind("fuzz.toml", 0) != 0) std::abort();
+    if (result.error().text().rfind("fuzz.toml", 0) != 0) std::abort();
     return 0;
   }
   RuleSettings settings;
-  (void)settings.apply(*result.config);
+  (void)settings.apply(*result);
   DecoderOptions options;
-  options.axes = result.config->axes;
-  options.default_layout = result.config->default_layout;
+  options.axes = result->axes;
+  options.default_layout = result->default_layout;
   Decoder decoder(options);
   (void)decoder.noServoReason();
   return 0;

@@ -92,11 +92,12 @@ std::string tempPath() {
 Bytes captureBytes(CaptureFormat format, Compression compression,
                    const std::vector<Frame>& frames) {
   const std::string path = tempPath();
-  std::string error;
-  auto writer = CaptureWriter::open(path, format, error);
-  EXPECT_TRUE(writer) << error;
-  for (const Frame& f : frames) writer->write(f.time_ns, f.bytes.data(), f.bytes.size());
-  EXPECT_TRUE(writer->close(error)) << error;
+  auto opened = CaptureWriter::open(path, format);
+  EXPECT_TRUE(opened) << opened.error().text();
+  CaptureWriter& writer = **opened;
+  for (const Frame& f : frames) writer.write(f.time_ns, f.bytes.data(), f.bytes.size());
+  const Status closed = writer.close();
+  EXPECT_TRUE(closed) << closed.error().text();
   Bytes plain = readFile(path);
   std::remove(path.c_str());
   switch (compression) {

@@ -41,10 +41,9 @@ severity = { "EC-002" = "error" }
 )";
 
 TEST(Config, InterfacesExampleParses) {
-  const ConfigResult result = parseConfig(kInterfacesExample, "example.toml");
-  ASSERT_TRUE(result.ok()) << result.error->text();
-  EXPECT_FALSE(result.error.has_value());
-  const Config& c = *result.config;
+  const Result<Config> result = parseConfig(kInterfacesExample, "example.toml");
+  ASSERT_TRUE(result.has_value()) << result.error().text();
+  const Config& c = *result;
   EXPECT_EQ(c.path, "example.toml");
   EXPECT_EQ(c.servo_ready_mode, 0);
   EXPECT_EQ(c.telegram_failure_limit, 3u);
@@ -75,9 +74,9 @@ TEST(Config, InterfacesExampleParses) {
 }
 
 TEST(Config, EmptyFileGivesDefaults) {
-  const ConfigResult result = parseConfig("", "empty.toml");
-  ASSERT_TRUE(result.ok());
-  const Config& c = *result.config;
+  const Result<Config> result = parseConfig("", "empty.toml");
+  ASSERT_TRUE(result.has_value());
+  const Config& c = *result;
   EXPECT_FALSE(c.servo_ready_mode.has_value());
   EXPECT_EQ(c.telegram_failure_limit, 3u);
   EXPECT_TRUE(c.default_layout);
@@ -92,12 +91,12 @@ TEST(Config, EveryTimeoutNameIsAccepted) {
   std::uint32_t ms = 1;
   for (const TimeoutDef& timeout : kTimeouts)
     text += std::string(timeout.name) + " = " + std::to_string(ms++) + "\n";
-  const ConfigResult result = parseConfig(text, "t.toml");
-  ASSERT_TRUE(result.ok()) << result.error->text();
-  ASSERT_EQ(result.config->timeouts_ms.size(), kTimeouts.size());
+  const Result<Config> result = parseConfig(text, "t.toml");
+  ASSERT_TRUE(result.has_value()) << result.error().text();
+  ASSERT_EQ(result->timeouts_ms.size(), kTimeouts.size());
   ms = 1;
   for (const TimeoutDef& timeout : kTimeouts) {
-    EXPECT_EQ(result.config->timeouts_ms.at(timeout.name), ms++) << timeout.name;
+    EXPECT_EQ(result->timeouts_ms.at(timeout.name), ms++) << timeout.name;
   }
 }
 
@@ -151,9 +150,9 @@ const GoodCase kGoodCases[] = {
 TEST(Config, GoodFiles) {
   for (const GoodCase& c : kGoodCases) {
     SCOPED_TRACE(c.name);
-    const ConfigResult result = parseConfig(c.text, "good.toml");
-    ASSERT_TRUE(result.ok()) << result.error->text();
-    c.check(*result.config);
+    const Result<Config> result = parseConfig(c.text, "good.toml");
+    ASSERT_TRUE(result.has_value()) << result.error().text();
+    c.check(*result);
   }
 }
 
@@ -232,10 +231,9 @@ const BadCase kBadCases[] = {
 TEST(Config, BadFilesNameLineAndKey) {
   for (const BadCase& c : kBadCases) {
     SCOPED_TRACE(c.name);
-    const ConfigResult result = parseConfig(c.text, "bad.toml");
-    ASSERT_FALSE(result.ok());
-    ASSERT_TRUE(result.error.has_value());
-    const ConfigError& e = *result.error;
+    const Result<Config> result = parseConfig(c.text, "bad.toml");
+    ASSERT_FALSE(result.has_value());
+    const Error& e = result.error();
     EXPECT_EQ(e.path, "bad.toml");
     EXPECT_EQ(e.line, c.line) << e.text();
     EXPECT_EQ(e.key, c.key) << e.text();
@@ -247,34 +245,33 @@ TEST(Config, BadFilesNameLineAndKey) {
 }
 
 struct TextCase {
-  ConfigError error;
+  Error error;
   const char* text;
 };
 const TextCase kTextCases[] = {
-    {{"cfg.toml", 3, "axis[0].outputs", "expected an integer"},
+    {{"cfg.toml", 3, 0, "axis[0].outputs", "expected an integer"},
      "cfg.toml:3: key 'axis[0].outputs': expected an integer"},
-    {{"/etc/ncservo.toml", 12, "timeouts.x", "unknown timeout"},
+    {{"/etc/ncservo.toml", 12, 0, "timeouts.x", "unknown timeout"},
      "/etc/ncservo.toml:12: key 'timeouts.x': unknown timeout"},
-    {{"cfg.toml", 2, "", "expected '='"}, "cfg.toml:2: expected '='"},
-    {{"missing.toml", 0, "", "cannot open the configuration file"},
+    {{"cfg.toml", 2, 0, "", "expected '='"}, "cfg.toml:2: expected '='"},
+    {{"missing.toml", 0, 0, "", "cannot open the configuration file"},
      "missing.toml: cannot open the configuration file"},
 };
 
 TEST(Config, ErrorText) {
   for (const TextCase& c : kTextCases) EXPECT_EQ(c.error.text(), c.text);
-  const ConfigResult result = parseConfig("[[axis]]\nname = \"X\"\noutputs = \"x\"\n", "my.toml");
-  ASSERT_TRUE(result.error.has_value());
-  EXPECT_EQ(result.error->text(), "my.toml:3: key 'axis[0].outputs': expected an integer");
+  const Result<Config> result = parseConfig("[[axis]]\nname = \"X\"\noutputs = \"x\"\n", "my.toml");
+  ASSERT_FALSE(result.has_value());
+  EXPECT_EQ(result.error().text(), "my.toml:3: key 'axis[0].outputs': expected an integer");
 }
 
 TEST(Config, LoadMissingFileNamesTheFile) {
   const std::string path = ::testing::TempDir() + "ncservo-no-such-config.toml";
   std::remove(path.c_str());
-  const ConfigResult result = loadConfig(path);
-  ASSERT_FALSE(result.ok());
-  ASSERT_TRUE(result.error.has_value());
-  EXPECT_EQ(result.error->path, path);
-  EXPECT_NE(result.error->text().find(path), std::string::npos) << result.error->text();
+  const Result<Config> result = loadConfig(path);
+  ASSERT_FALSE(result.has_value());
+  EXPECT_EQ(result.error().path, path);
+  EXPECT_NE(result.error().text().find(path), std::string::npos) << result.error().text();
 }
 
 TEST(Config, LoadFileFromDisk) {
@@ -283,18 +280,18 @@ TEST(Config, LoadFileFromDisk) {
   ASSERT_NE(file, nullptr);
   std::fputs(kInterfacesExample, file);
   std::fclose(file);
-  const ConfigResult good = loadConfig(path);
-  ASSERT_TRUE(good.ok()) << good.error->text();
-  EXPECT_EQ(good.config->path, path);
-  EXPECT_EQ(good.config->axes.size(), 2u);
+  const Result<Config> good = loadConfig(path);
+  ASSERT_TRUE(good.has_value()) << good.error().text();
+  EXPECT_EQ(good->path, path);
+  EXPECT_EQ(good->axes.size(), 2u);
 
   file = std::fopen(path.c_str(), "wb");
   ASSERT_NE(file, nullptr);
   std::fputs("\n\nbogus = 1\n", file);
   std::fclose(file);
-  const ConfigResult bad = loadConfig(path);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_EQ(bad.error->text(), path + ":3: key 'bogus': unknown key");
+  const Result<Config> bad = loadConfig(path);
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_EQ(bad.error().text(), path + ":3: key 'bogus': unknown key");
   std::remove(path.c_str());
 }
 

@@ -21,10 +21,10 @@ class EniOfSetUp : public ::testing::TestWithParam<test::SetUp> {};
 
 TEST_P(EniOfSetUp, GivesTheSimulatedLayout) {
   sim::Simulator simulator(optionsFor(GetParam()));
-  const EniResult eni = parseEni(simulator.eni(), "sim.xml");
-  ASSERT_TRUE(eni.ok()) << eni.error->text();
-  EXPECT_EQ(eni.slaves, static_cast<std::size_t>(GetParam().axes + GetParam().io_slaves));
-  expectSameAxes(eni.axes, simulator.layout());
+  const Result<EniLayout> eni = parseEni(simulator.eni(), "sim.xml");
+  ASSERT_TRUE(eni.has_value()) << eni.error().text();
+  EXPECT_EQ(eni->slaves, static_cast<std::size_t>(GetParam().axes + GetParam().io_slaves));
+  expectSameAxes(eni->axes, simulator.layout());
 }
 
 INSTANTIATE_TEST_SUITE_P(SimulatedSetUps, EniOfSetUp, ::testing::ValuesIn(kSetUps),
@@ -69,20 +69,20 @@ TEST_P(EniFile, ParsesOrNamesTheLine) {
   const EniCase& c = GetParam();
   std::string xml = c.xml;
   if (auto at = xml.find("%s"); at != std::string::npos) xml.replace(at, 2, kServo);
-  const EniResult r = parseEni(xml, "eni.xml");
+  const Result<EniLayout> r = parseEni(xml, "eni.xml");
   if (c.message[0] == '\0') {
-    ASSERT_TRUE(r.ok()) << r.error->text();
-    ASSERT_EQ(r.axes.size(), c.axes);
-    EXPECT_EQ(r.axes[0].outputs, 0x00010000u);
-    EXPECT_EQ(r.axes[0].inputs, 0x0001000Au);
-    EXPECT_EQ(r.axes[0].station, 0x3E9);
-    EXPECT_EQ(r.axes[0].name, "X");
+    ASSERT_TRUE(r.has_value()) << r.error().text();
+    ASSERT_EQ(r->axes.size(), c.axes);
+    EXPECT_EQ(r->axes[0].outputs, 0x00010000u);
+    EXPECT_EQ(r->axes[0].inputs, 0x0001000Au);
+    EXPECT_EQ(r->axes[0].station, 0x3E9);
+    EXPECT_EQ(r->axes[0].name, "X");
     return;
   }
-  ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error->line, c.line) << r.error->text();
-  EXPECT_NE(r.error->text().find(c.message), std::string::npos) << r.error->text();
-  EXPECT_EQ(r.error->text().rfind("eni.xml", 0), 0u);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().line, c.line) << r.error().text();
+  EXPECT_NE(r.error().text().find(c.message), std::string::npos) << r.error().text();
+  EXPECT_EQ(r.error().text().rfind("eni.xml", 0), 0u);
 }
 INSTANTIATE_TEST_SUITE_P(Cases, EniFile, ::testing::ValuesIn(kEniCases), test::rowName<EniCase>);
 

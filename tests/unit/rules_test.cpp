@@ -179,7 +179,8 @@ TEST(RuleTable, TimeoutsAndTheRulesThatUseThem) {
     EXPECT_STREQ(kTimeouts[i].name, row.name);
     EXPECT_EQ(kTimeouts[i].default_ms, row.default_ms);
     EXPECT_EQ(timeoutFromName(row.name), kTimeouts[i].id);
-    EXPECT_TRUE(parseConfig(std::string("[timeouts]\n") + row.name + " = 5\n", "t.toml").ok())
+    EXPECT_TRUE(
+        parseConfig(std::string("[timeouts]\n") + row.name + " = 5\n", "t.toml").has_value())
         << "the config file accepts it";
     std::vector<RuleId> users;
     for (const RuleDef& rule : kRules) {
@@ -411,7 +412,7 @@ TEST(RuleSettings, ApplyRejectsUnknownNamesNamingThem) {
 }
 
 TEST(RuleSettings, ApplyTheInterfacesExample) {
-  const ConfigResult parsed = parseConfig(R"(servo_ready_mode = 0
+  const Result<Config> parsed = parseConfig(R"(servo_ready_mode = 0
 telegram_failure_limit = 3
 [timeouts]
 drive_response = 20
@@ -429,10 +430,10 @@ sm_inputs  = 0x1180
 disable = ["MSG-001"]
 severity = { "EC-002" = "error" }
 )",
-                                          "example.toml");
-  ASSERT_TRUE(parsed.ok()) << parsed.error->text();
+                                            "example.toml");
+  ASSERT_TRUE(parsed.has_value()) << parsed.error().text();
   RuleSettings s;
-  ASSERT_FALSE(s.apply(*parsed.config).has_value());
+  ASSERT_FALSE(s.apply(*parsed).has_value());
   EXPECT_FALSE(s.isEnabled(RuleId::Msg001));
   EXPECT_EQ(s.severityOf(RuleId::Ec002), E);
   EXPECT_EQ(s.readyModeFor(0), 1);

@@ -579,9 +579,9 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   o.ready_mode = row.axes % 2;
   ASSERT_EQ(resolveOptions(o), "");
   const Simulator simulator(o);
-  const ConfigResult parsed = parseConfig(simulator.layoutConfig(), "sim.toml");
-  ASSERT_TRUE(parsed.ok()) << parsed.error->text() << "\n" << simulator.layoutConfig();
-  const Config& config = *parsed.config;
+  const Result<Config> parsed = parseConfig(simulator.layoutConfig(), "sim.toml");
+  ASSERT_TRUE(parsed.has_value()) << parsed.error().text() << "\n" << simulator.layoutConfig();
+  const Config& config = *parsed;
   EXPECT_EQ(config.servo_ready_mode, o.ready_mode);
   ASSERT_EQ(config.axes.size(), simulator.layout().size());
   for (std::size_t k = 0; k < config.axes.size(); ++k) {
@@ -619,11 +619,11 @@ Validated validate(const SimOptions& resolved, bool with_config) {
   DecoderOptions decoder;
   RuleSettings settings;
   if (with_config) {
-    const ConfigResult parsed = parseConfig(layout_of.layoutConfig(), "sim.toml");
-    EXPECT_TRUE(parsed.ok());
-    if (parsed.ok()) {
-      decoder.axes = parsed.config->axes;
-      EXPECT_FALSE(settings.apply(*parsed.config).has_value());
+    const Result<Config> parsed = parseConfig(layout_of.layoutConfig(), "sim.toml");
+    EXPECT_TRUE(parsed.has_value());
+    if (parsed.has_value()) {
+      decoder.axes = parsed->axes;
+      EXPECT_FALSE(settings.apply(*parsed).has_value());
     }
   }
   Validator validator(decoder, settings);
@@ -868,12 +868,12 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   const int fd = mkstemp(path);
   ASSERT_GE(fd, 0);
   close(fd);
-  std::string error;
-  auto writer = CaptureWriter::open(path, row.format, error);
-  ASSERT_TRUE(writer) << error;
+  auto writer = CaptureWriter::open(path, row.format);
+  ASSERT_TRUE(writer) << writer.error().text();
   for (const Frame& f : frames)
-    ASSERT_TRUE(writer->write(f.time_ns, f.bytes.data(), f.bytes.size()));
-  ASSERT_TRUE(writer->close(error)) << error;
+    ASSERT_TRUE((*writer)->write(f.time_ns, f.bytes.data(), f.bytes.size()));
+  const Status closed = (*writer)->close();
+  ASSERT_TRUE(closed) << closed.error().text();
 
   auto opened = CaptureReader::open(path);
   ASSERT_TRUE(opened) << opened.error().text();
@@ -907,9 +907,9 @@ INSTANTIATE_TEST_SUITE_P(Rows, WriterRoundTrip,
                          });
 
 TEST(CaptureWriter, UnwritablePathNamesTheFile) {
-  std::string error;
-  auto writer = CaptureWriter::open("/nonexistent-dir/x.pcap", CaptureFormat::Pcap, error);
-  EXPECT_FALSE(writer);
+  auto writer = CaptureWriter::open("/nonexistent-dir/x.pcap", CaptureFormat::Pcap);
+  ASSERT_FALSE(writer);
+  const std::string error = writer.error().text();
   EXPECT_NE(error.find("/nonexistent-dir/x.pcap"), std::string::npos) << error;
 }
 

@@ -511,5 +511,45 @@ TEST(Walker, CommandNames) {
   EXPECT_STREQ(ecat::commandName(255), "unknown");
 }
 
+// PROTOCOL.md §8: how each command addresses slaves and whether it reads or writes them.
+struct CommandCase {
+  std::uint8_t command;
+  const char* name;
+  bool auto_increment, configured, broadcast, logical, reads, writes;
+};
+const CommandCase kCommandCases[] = {
+    {ecat::kNop, "NOP", false, false, false, false, false, false},
+    {ecat::kAprd, "APRD", true, false, false, false, true, false},
+    {ecat::kApwr, "APWR", true, false, false, false, false, true},
+    {ecat::kAprw, "APRW", true, false, false, false, true, true},
+    {ecat::kFprd, "FPRD", false, true, false, false, true, false},
+    {ecat::kFpwr, "FPWR", false, true, false, false, false, true},
+    {ecat::kFprw, "FPRW", false, true, false, false, true, true},
+    {ecat::kBrd, "BRD", false, false, true, false, true, false},
+    {ecat::kBwr, "BWR", false, false, true, false, false, true},
+    {ecat::kBrw, "BRW", false, false, true, false, true, true},
+    {ecat::kLrd, "LRD", false, false, false, true, true, false},
+    {ecat::kLwr, "LWR", false, false, false, true, false, true},
+    {ecat::kLrw, "LRW", false, false, false, true, true, true},
+    {ecat::kArmw, "ARMW", true, false, false, false, true, false},
+    {ecat::kFrmw, "FRMW", false, true, false, false, true, false},
+    {15, "unknown", false, false, false, false, false, false},
+    {255, "unknown", false, false, false, false, false, false},
+};
+
+TEST(Walker, CommandFacts) {
+  for (const CommandCase& c : kCommandCases) {
+    SCOPED_TRACE(c.name);
+    EXPECT_STREQ(ecat::commandName(c.command), c.name);
+    EXPECT_EQ(ecat::isAutoIncrement(c.command), c.auto_increment);
+    EXPECT_EQ(ecat::isConfiguredAddress(c.command), c.configured);
+    EXPECT_EQ(ecat::isBroadcast(c.command), c.broadcast);
+    EXPECT_EQ(ecat::isLogical(c.command), c.logical);
+    EXPECT_EQ(ecat::addressSurvivesRing(c.command), c.configured || c.logical);
+    EXPECT_EQ(ecat::readsSlaves(c.command), c.reads);
+    EXPECT_EQ(ecat::writesSlaves(c.command), c.writes);
+  }
+}
+
 }  // namespace
 }  // namespace ncservo

@@ -172,25 +172,25 @@ struct LayoutArgs {
 };
 struct LayoutFiles {
   std::optional<Config> config;
-  std::optional<EniResult> eni;
+  std::optional<EniLayout> eni;
 };
 
 Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args) {
   LayoutFiles files;
   if (!args.config_path.empty()) {
-    ConfigResult loaded = loadConfig(args.config_path);
-    if (!loaded.ok()) return fail(loaded.error->text());
-    files.config = std::move(loaded.config);
+    Result<Config> loaded = loadConfig(args.config_path);
+    if (!loaded) return fail(loaded.error().text());
+    files.config = std::move(*loaded);
   }
   if (!args.eni_path.empty()) {
-    std::optional<EniResult>& eni = files.eni;
-    eni = loadEni(args.eni_path);
-    if (!eni->ok()) return fail(eni->error->text());
+    Result<EniLayout> eni = loadEni(args.eni_path);
+    if (!eni) return fail(eni.error().text());
     if (eni->axes.empty()) {
       return fail(fmt::format(
           "{}: no servo of this protocol (10-byte outputs, 40-byte inputs) among its {} slaves",
           args.eni_path, eni->slaves));
     }
+    files.eni = std::move(*eni);
   }
   return files;
 }
@@ -600,18 +600,19 @@ int runSimulate(SimulateArgs& args) {
       return kExitUsage;
     }
   }
-  std::string error;
-  auto writer = CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), error);
+  Result<std::unique_ptr<CaptureWriter>> writer =
+      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output));
   if (!writer) {
-    fmt::print(stderr, "ncservo simulate: {}\n", error);
+    fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
     return kExitCapture;
   }
   const auto frames = simulator.run([&](const sim::SimFrame& frame) {
-    return writer->write(frame.time_ns, frame.data, frame.size);
+    return (*writer)->write(frame.time_ns, frame.data, frame.size);
   });
-  if (!writer->close(error) || !frames) {
+  const Status closed = (*writer)->close();
+  if (!closed || !frames) {
     fmt::print(stderr, "ncservo simulate: {}\n",
-               error.empty() ? args.output + ": write failed" : error);
+               closed ? args.output + ": write failed" : closed.error().text());
     return kExitCapture;
   }
   if (args.output != "-") {

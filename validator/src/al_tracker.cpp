@@ -8,18 +8,16 @@
 namespace ncservo {
 
 namespace {
+using ecat::kAlBoot;
+using ecat::kAlInit;
+using ecat::kAlOp;
+using ecat::kAlPreOp;
+using ecat::kAlSafeOp;
+using ecat::kAlStates;
 using ecat::kRegAlControl;
 using ecat::kRegAlStatus;
 using ecat::kRegAlStatusCode;
 using ecat::kRegStationAddress;
-constexpr std::uint8_t kStateMask = 0x0F;
-constexpr std::uint8_t kErrorBit = 0x10;  // error indicator in AL status, acknowledge in AL control
-
-constexpr std::uint8_t kInit = static_cast<std::uint8_t>(AlState::Init);
-constexpr std::uint8_t kPreOp = static_cast<std::uint8_t>(AlState::PreOp);
-constexpr std::uint8_t kBoot = static_cast<std::uint8_t>(AlState::Boot);
-constexpr std::uint8_t kSafeOp = static_cast<std::uint8_t>(AlState::SafeOp);
-constexpr std::uint8_t kOp = static_cast<std::uint8_t>(AlState::Op);
 
 // PROTOCOL.md §8: the requested transitions a slave accepts, besides staying where it is.
 struct Transition {
@@ -27,17 +25,17 @@ struct Transition {
   std::uint8_t to;
 };
 constexpr std::array<Transition, 11> kTransitions{{
-    {kInit, kPreOp},
-    {kInit, kBoot},
-    {kBoot, kInit},
-    {kPreOp, kSafeOp},
-    {kPreOp, kInit},
-    {kSafeOp, kOp},
-    {kSafeOp, kPreOp},
-    {kSafeOp, kInit},
-    {kOp, kSafeOp},
-    {kOp, kPreOp},
-    {kOp, kInit},
+    {kAlInit, kAlPreOp},
+    {kAlInit, kAlBoot},
+    {kAlBoot, kAlInit},
+    {kAlPreOp, kAlSafeOp},
+    {kAlPreOp, kAlInit},
+    {kAlSafeOp, kAlOp},
+    {kAlSafeOp, kAlPreOp},
+    {kAlSafeOp, kAlInit},
+    {kAlOp, kAlSafeOp},
+    {kAlOp, kAlPreOp},
+    {kAlOp, kAlInit},
 }};
 
 constexpr bool isState(std::uint8_t state) {
@@ -89,7 +87,7 @@ const char* alStateName(std::uint8_t state) {
 }
 
 bool alStateAboveInit(std::uint8_t state) {
-  return isState(state) && state != kInit;
+  return isState(state) && state != kAlInit;
 }
 
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to) {
@@ -161,17 +159,17 @@ void AlTracker::setState(AlData& slave, std::uint8_t state) {
   } else {
     slave.state.reset();  // a slave that answers with a non-state: its state is not known
   }
-  if (state == kOp && previous && *previous != kOp) ++slave.op_entries;
+  if (state == kAlOp && previous && *previous != kAlOp) ++slave.op_entries;
 }
 
 void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, const Stamp& now,
                              std::vector<BusEvent>& out) {
-  const std::uint8_t state = raw & kStateMask;
-  const bool error = (raw & kErrorBit) != 0;
+  const std::uint8_t state = raw & ecat::kAlStateMask;
+  const bool error = (raw & ecat::kAlErrorBit) != 0;
   if (address.target == SlaveTarget::All) {
     // The OR of all slaves: a state only when they all agree; no error bit means none has one.
     if (isState(state)) {
-      if (state == kOp && state_all_ && *state_all_ != kOp) ++op_entries_all_;
+      if (state == kAlOp && state_all_ && *state_all_ != kAlOp) ++op_entries_all_;
       state_all_ = state;
       for (Slave& slave : directory_.slaves()) setState(slave.data, state);
     }
@@ -244,7 +242,7 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
     if (address.target == SlaveTarget::None) continue;
     if (take_writes && writesSlave(dg.command)) {
       if (auto raw = readStateRegister(dg, bytes, kRegAlControl)) {
-        onControlWrite(address, *raw & kStateMask, *raw, now, out);
+        onControlWrite(address, *raw & ecat::kAlStateMask, *raw, now, out);
       }
     }
     if (takeRead(dg)) {

@@ -7,16 +7,24 @@
 #include <cstring>
 #include <vector>
 
+#include "ncservo/ecat_wire.hpp"
+
 namespace ncservo {
 namespace {
 
 constexpr int kSnapLength = 65535;
 constexpr std::size_t kWriteBuffer = 1 << 20;
 
-std::FILE* openFile(const std::string& path, std::string& error) {
+Error writeError(const std::string& path, std::string message) {
+  return Error{path, 0, 0, {}, std::move(message)};
+}
+
+Result<std::FILE*> openFile(const std::string& path) {
   if (path == "-") return stdout;
   std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) error = fmt::format("{}: cannot write: {}", path, std::strerror(errno));
+  if (file == nullptr) {
+    return fail(writeError(path, fmt::format("cannot write: {}", std::strerror(errno))));
+  }
   return file;
 }
 
@@ -24,10 +32,7 @@ class PcapWriter final : public CaptureWriter {
  public:
   PcapWriter(std::string path, std::FILE* file, pcap_t* dead, pcap_dumper_t* dumper)
       : path_(std::move(path)), file_(file), dead_(dead), dumper_(dumper) {}
-  ~PcapWriter() override {
-    std::string ignored;
-    close(ignored);
-  }
+  ~PcapWriter() override { (void)close(); }
   bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
     if (dumper_ == nullptr) return false;
     pcap_pkthdr header{};
@@ -37,8 +42,8 @@ class PcapWriter final : public CaptureWriter {
     pcap_dump(reinterpret_cast<u_char*>(dumper_), &header, data);
     return std::ferror(file_) == 0;
   }
-  bool close(std::string& error) override {
-    if (dumper_ == nullptr) return !failed_;
+  Status close() override {
+    if (dumper_ == nullptr) return closed();
     const bool flushed = pcap_dump_flush(dumper_) == 0 && std::ferror(file_) == 0;
     if (file_ == stdout) {
       dumper_ = nullptr;  // standard output stays open for the process
@@ -49,17 +54,23 @@ class PcapWriter final : public CaptureWriter {
     pcap_close(dead_);
     if (!flushed) {
       failed_ = true;
-      error = fmt::format("{}: write failed: {}", path_, std::strerror(errno));
+      error_ = writeError(path_, fmt::format("write failed: {}", std::strerror(errno)));
     }
-    return !failed_;
+    return closed();
   }
 
  private:
+  Status closed() const {
+    if (failed_) return fail(error_);
+    return {};
+  }
+
   std::string path_;
   std::FILE* file_;
   pcap_t* dead_;
   pcap_dumper_t* dumper_;
   bool failed_ = false;
+  Error error_;
 };
 
 // pcapng: a Section Header Block, one Interface Description Block with if_tsresol = 9
@@ -76,7 +87,7 @@ class PcapngWriter final : public CaptureWriter {
     put32(0xFFFFFFFF);
     finish();
     begin(0x00000001);  // IDB
-    put16(1);           // LINKTYPE_ETHERNET
+    put16(ecat::kDltEthernet);
     put16(0);
     put32(kSnapLength);
     put16(9);  // if_tsresol
@@ -87,10 +98,7 @@ class PcapngWriter final : public CaptureWriter {
     put16(0);
     finish();
   }
-  ~PcapngWriter() override {
-    std::string ignored;
-    close(ignored);
-  }
+  ~PcapngWriter() override { (void)close(); }
   bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
     if (file_ == nullptr) return false;
     const auto ts = static_cast<std::uint64_t>(time_ns);
@@ -105,13 +113,13 @@ class PcapngWriter final : public CaptureWriter {
     finish();
     return !failed_;
   }
-  bool close(std::string& error) override {
-    if (file_ == nullptr) return !failed_;
+  Status close() override {
+    if (file_ == nullptr) return closed();
     if (std::fflush(file_) != 0 || std::ferror(file_) != 0) failed_ = true;
     if (file_ != stdout && std::fclose(file_) != 0) failed_ = true;
     file_ = nullptr;
-    if (failed_) error = fmt::format("{}: write failed: {}", path_, std::strerror(errno));
-    return !failed_;
+    if (failed_) error_ = writeError(path_, fmt::format("write failed: {}", std::strerror(errno)));
+    return closed();
   }
 
  private:
@@ -135,29 +143,37 @@ class PcapngWriter final : public CaptureWriter {
     if (std::fwrite(block_.data(), 1, block_.size(), file_) != block_.size()) failed_ = true;
   }
 
+  Status closed() const {
+    if (failed_) return fail(error_);
+    return {};
+  }
+
   std::string path_;
   std::FILE* file_;
   std::vector<std::uint8_t> block_;
   bool failed_ = false;
+  Error error_;
 };
 
 }  // namespace
 
-std::unique_ptr<CaptureWriter> CaptureWriter::open(const std::string& path, CaptureFormat format,
-                                                   std::string& error) {
-  std::FILE* file = openFile(path, error);
-  if (file == nullptr) return nullptr;
+Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& path,
+                                                           CaptureFormat format) {
+  const Result<std::FILE*> opened = openFile(path);
+  if (!opened) return fail(opened.error());
+  std::FILE* file = *opened;
   std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
   if (format == CaptureFormat::Pcapng) return std::make_unique<PcapngWriter>(path, file);
   pcap_t* dead =
       pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kSnapLength, PCAP_TSTAMP_PRECISION_MICRO);
   pcap_dumper_t* dumper = dead != nullptr ? pcap_dump_fopen(dead, file) : nullptr;
   if (dumper == nullptr) {
-    error = fmt::format("{}: cannot write a pcap: {}", path,
-                        dead != nullptr ? pcap_geterr(dead) : "libpcap failed");
+    Error error =
+        writeError(path, fmt::format("cannot write a pcap: {}",
+                                     dead != nullptr ? pcap_geterr(dead) : "libpcap failed"));
     if (dead != nullptr) pcap_close(dead);
     if (file != stdout) std::fclose(file);
-    return nullptr;
+    return fail(std::move(error));
   }
   return std::make_unique<PcapWriter>(path, file, dead, dumper);
 }

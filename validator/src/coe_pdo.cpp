@@ -2,27 +2,21 @@
 
 #include <algorithm>
 
+#include "ncservo/ecat_wire.hpp"
+
 namespace ncservo {
 namespace {
 
-// Mailbox header (6 bytes): length, address, channel/priority, type (low 4 bits; 3 = CoE) and
-// counter; then the CoE header (2 bytes: number, service in the top 4 bits: 2 SDO request,
-// 3 SDO response); then the SDO: command, index, subindex, 4 data bytes.
-constexpr std::size_t kMailboxHeader = 6;
-constexpr std::size_t kCoeHeader = 2;
-constexpr std::size_t kSdo = kMailboxHeader + kCoeHeader;
-constexpr std::uint8_t kTypeCoe = 3;
-constexpr std::uint8_t kServiceSdoRequest = 2, kServiceSdoResponse = 3;
-constexpr std::uint8_t kDownloadRequest = 1;  // command specifier of an initiate download
-constexpr std::uint8_t kUploadResponse = 2;   // of an initiate upload response
-constexpr std::uint8_t kExpedited = 0x02, kSizeIndicated = 0x01, kCompleteAccess = 0x10;
+// Where the SDO starts in a mailbox: after the mailbox and CoE headers.
+constexpr std::size_t kSdo = ecat::kMailboxHeaderSize + ecat::kCoeHeaderSize;
 
-bool kept(std::uint16_t index) {
-  return index == 0x1C12 || index == 0x1C13 || (index >= 0x1600 && index <= 0x17FF) ||
-         (index >= 0x1A00 && index <= 0x1BFF);
-}
 bool isAssignment(std::uint16_t index) {
-  return index == 0x1C12 || index == 0x1C13;
+  return index == ecat::kRxPdoAssignment || index == ecat::kTxPdoAssignment;
+}
+bool kept(std::uint16_t index) {
+  return isAssignment(index) ||
+         (index >= ecat::kRxPdoMappingFirst && index <= ecat::kRxPdoMappingLast) ||
+         (index >= ecat::kTxPdoMappingFirst && index <= ecat::kTxPdoMappingLast);
 }
 
 }  // namespace
@@ -59,24 +53,30 @@ void CoePdoObjects::storeComplete(std::uint16_t index, std::uint8_t sub, const B
 
 void CoePdoObjects::onMailbox(const ByteReader& bytes, std::size_t offset, std::size_t length,
                               bool request) {
-  auto mailbox_length = bytes.le16(offset);
-  auto type = bytes.u8(offset + 5);
-  auto coe = bytes.le16(offset + kMailboxHeader);
-  auto command = bytes.u8(offset + kSdo);
-  auto index = bytes.le16(offset + kSdo + 1);
-  auto sub = bytes.u8(offset + kSdo + 3);
+  auto mailbox_length = bytes.le16(offset + ecat::kMailboxLengthAt);
+  auto type = bytes.u8(offset + ecat::kMailboxTypeAt);
+  auto coe = bytes.le16(offset + ecat::kMailboxHeaderSize);
+  auto command = bytes.u8(offset + kSdo + ecat::kSdoCommandAt);
+  auto index = bytes.le16(offset + kSdo + ecat::kSdoIndexAt);
+  auto sub = bytes.u8(offset + kSdo + ecat::kSdoSubindexAt);
   if (!mailbox_length || !type || !coe || !command || !index || !sub) return;
-  if ((*type & 0x0F) != kTypeCoe || !kept(*index)) return;
+  if ((*type & ecat::kMailboxTypeMask) != ecat::kMailboxTypeCoe || !kept(*index)) return;
   // The mailbox's own length (after its header) bounds what is read, as does the capture.
-  const std::size_t end = offset + std::min<std::size_t>(kMailboxHeader + *mailbox_length, length);
-  const std::uint8_t service = static_cast<std::uint8_t>(*coe >> 12);
-  const std::uint8_t specifier = static_cast<std::uint8_t>(*command >> 5);
-  const bool takes = request ? service == kServiceSdoRequest && specifier == kDownloadRequest
-                             : service == kServiceSdoResponse && specifier == kUploadResponse;
+  const std::size_t end =
+      offset + std::min<std::size_t>(ecat::kMailboxHeaderSize + *mailbox_length, length);
+  const std::uint8_t service = static_cast<std::uint8_t>(*coe >> ecat::kCoeServiceShift);
+  const std::uint8_t specifier = static_cast<std::uint8_t>(*command >> ecat::kSdoSpecifierShift);
+  const bool takes = request ? service == ecat::kCoeServiceSdoRequest &&
+                                   specifier == ecat::kSdoInitiateDownloadRequest
+                             : service == ecat::kCoeServiceSdoResponse &&
+                                   specifier == ecat::kSdoInitiateUploadResponse;
   if (!takes) return;
-  const std::size_t data = offset + kSdo + 4;
-  if (*command & kExpedited) {
-    const std::size_t size = (*command & kSizeIndicated) ? 4 - ((*command >> 2) & 3) : 4;
+  const std::size_t data = offset + kSdo + ecat::kSdoDataAt;
+  if (*command & ecat::kSdoExpedited) {
+    const std::size_t size = (*command & ecat::kSdoSizeIndicated)
+                                 ? ecat::kSdoDataSize - ((*command >> ecat::kSdoUnusedBytesShift) &
+                                                         ecat::kSdoUnusedBytesMask)
+                                 : ecat::kSdoDataSize;
     if (data + size > end) return;
     std::uint32_t value = 0;
     for (std::size_t i = 0; i < size; ++i) {
@@ -84,7 +84,7 @@ void CoePdoObjects::onMailbox(const ByteReader& bytes, std::size_t offset, std::
       if (!b) return;
       value |= std::uint32_t{*b} << (8 * i);
     }
-    if (*command & kCompleteAccess) {
+    if (*command & ecat::kSdoCompleteAccess) {
       storeComplete(*index, *sub, ByteReader(bytes.data(), std::min(end, bytes.size())), data,
                     size);
     } else {
@@ -95,11 +95,11 @@ void CoePdoObjects::onMailbox(const ByteReader& bytes, std::size_t offset, std::
   // Normal transfer: a 4-byte size, then as much of the data as this mailbox holds.
   auto size = bytes.le32(data);
   if (!size) return;
-  const std::size_t first = data + 4;
+  const std::size_t first = data + ecat::kSdoDataSize;
   if (first > end) return;
   const std::size_t here = std::min<std::size_t>(*size, end - first);
   const ByteReader bounded(bytes.data(), std::min(end, bytes.size()));
-  if (*command & kCompleteAccess) {
+  if (*command & ecat::kSdoCompleteAccess) {
     storeComplete(*index, *sub, bounded, first, here);
   } else if (here >= 1 && here <= 4) {
     std::uint32_t value = 0;
@@ -131,7 +131,7 @@ std::optional<std::uint32_t> CoePdoObjects::assignedBits(std::uint16_t assignmen
     for (std::uint32_t k = 1; k <= (*entries & 0xFF); ++k) {
       auto entry = value(static_cast<std::uint16_t>(*pdo), static_cast<std::uint8_t>(k));
       if (!entry) return std::nullopt;
-      bits += *entry & 0xFF;  // the entry's bit length
+      bits += *entry & ecat::kPdoEntryBitsMask;
     }
   }
   return bits;

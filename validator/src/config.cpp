@@ -11,13 +11,12 @@
 
 namespace ncservo {
 
-std::string ConfigError::text() const {
-  std::string where = line > 0 ? fmt::format("{}:{}", path, line) : path;
-  if (key.empty()) return fmt::format("{}: {}", where, message);
-  return fmt::format("{}: key '{}': {}", where, key, message);
-}
-
 namespace {
+
+Error configError(const std::string& path, std::uint64_t line, std::string key,
+                  std::string message) {
+  return Error{path, line, 0, std::move(key), std::move(message)};
+}
 
 // Collects the first error; every check below returns false once one is recorded.
 class Checker {
@@ -26,13 +25,12 @@ class Checker {
 
   bool fail(const toml::node& node, std::string key, std::string message) {
     if (!error_) {
-      error_ = ConfigError{path_, static_cast<std::uint32_t>(node.source().begin.line),
-                           std::move(key), std::move(message)};
+      error_ = configError(path_, node.source().begin.line, std::move(key), std::move(message));
     }
     return false;
   }
   bool failed() const { return error_.has_value(); }
-  ConfigError error() const { return *error_; }
+  const Error& error() const { return *error_; }
 
   template <typename T>
   std::optional<T> integer(const toml::node& node, const std::string& key, std::int64_t lo,
@@ -56,7 +54,7 @@ class Checker {
 
  private:
   std::string path_;
-  std::optional<ConfigError> error_;
+  std::optional<Error> error_;
 };
 
 // An ID of the rule catalogue (RULES.md), e.g. "SE-001".
@@ -170,15 +168,12 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
 
 }  // namespace
 
-ConfigResult parseConfig(std::string_view text, const std::string& path) {
-  ConfigResult result;
+Result<Config> parseConfig(std::string_view text, const std::string& path) {
   toml::table root;
   try {
     root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
-    result.error = ConfigError{path, static_cast<std::uint32_t>(e.source().begin.line), "",
-                               std::string(e.description())};
-    return result;
+    return fail(configError(path, e.source().begin.line, {}, std::string(e.description())));
   }
   Config config;
   config.path = path;
@@ -236,21 +231,13 @@ ConfigResult parseConfig(std::string_view text, const std::string& path) {
     }
     if (check.failed()) break;
   }
-  if (check.failed()) {
-    result.error = check.error();
-  } else {
-    result.config = std::move(config);
-  }
-  return result;
+  if (check.failed()) return fail(check.error());
+  return config;
 }
 
-ConfigResult loadConfig(const std::string& path) {
-  ConfigResult result;
+Result<Config> loadConfig(const std::string& path) {
   std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    result.error = ConfigError{path, 0, "", "cannot open the configuration file"};
-    return result;
-  }
+  if (file == nullptr) return fail(configError(path, 0, {}, "cannot open the configuration file"));
   std::string text;
   char buffer[4096];
   std::size_t n;
@@ -260,16 +247,12 @@ ConfigResult loadConfig(const std::string& path) {
     text.append(buffer, n);
     if (text.size() > kMaxConfigBytes) {
       std::fclose(file);
-      result.error = ConfigError{path, 0, "", "the configuration file is larger than 4 MiB"};
-      return result;
+      return fail(configError(path, 0, {}, "the configuration file is larger than 4 MiB"));
     }
   }
   const bool read_error = std::ferror(file) != 0;
   std::fclose(file);
-  if (read_error) {
-    result.error = ConfigError{path, 0, "", "cannot read the configuration file"};
-    return result;
-  }
+  if (read_error) return fail(configError(path, 0, {}, "cannot read the configuration file"));
   return parseConfig(text, path);
 }
 

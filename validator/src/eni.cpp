@@ -44,6 +44,10 @@ std::optional<std::int64_t> hexDec(std::string_view text) {
   return value;
 }
 
+Error eniError(const std::string& path, std::uint64_t line, std::string message) {
+  return Error{path, line, 0, {}, std::move(message)};
+}
+
 struct Command {
   std::uint8_t cmd = 0;
   std::uint32_t address = 0;
@@ -63,68 +67,65 @@ class Reader {
     return static_cast<std::uint32_t>(
         std::count(xml_.begin(), xml_.begin() + static_cast<std::ptrdiff_t>(end), '\n') + 1);
   }
-  EniError error(const pugi::xml_node& node, std::string message) const {
-    return {path_, node ? lineOf(node) : 0, std::move(message)};
+  Error error(const pugi::xml_node& node, std::string message) const {
+    return eniError(path_, node ? lineOf(node) : 0, std::move(message));
   }
-  // The number in child `name` of `node`; an error if it is missing (when required) or no number.
-  std::optional<std::int64_t> number(const pugi::xml_node& node, const char* name, bool required,
-                                     std::optional<EniError>& error) const {
+  // The number in child `name` of `node`. A missing one (when required) or one that is no number
+  // records an error; the first one recorded is kept.
+  std::optional<std::int64_t> number(const pugi::xml_node& node, const char* name, bool required) {
     const pugi::xml_node child = node.child(name);
     if (!child) {
-      if (required && !error)
-        error = this->error(node, fmt::format("<{}> has no <{}>", node.name(), name));
+      if (required) record(error(node, fmt::format("<{}> has no <{}>", node.name(), name)));
       return std::nullopt;
     }
     auto value = hexDec(child.child_value());
-    if (!value && !error) {
-      error =
-          this->error(child, fmt::format("<{}> is not a number: '{}'", name, child.child_value()));
+    if (!value) {
+      record(error(child, fmt::format("<{}> is not a number: '{}'", name, child.child_value())));
     }
     return value;
   }
+  bool failed() const { return first_error_.has_value(); }
+  const Error& firstError() const { return *first_error_; }
 
  private:
+  void record(Error error) {
+    if (!first_error_) first_error_ = std::move(error);
+  }
+
   std::string path_;
   std::string_view xml_;
+  std::optional<Error> first_error_;
 };
 
 }  // namespace
 
-std::string EniError::text() const {
-  return line > 0 ? fmt::format("{}:{}: {}", path, line, message)
-                  : fmt::format("{}: {}", path, message);
-}
-
-EniResult parseEni(std::string_view xml, const std::string& path) {
-  EniResult result;
+Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
+  EniLayout layout;
   Reader reader(path, xml);
   pugi::xml_document doc;
   const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size());
   if (!parsed) {
-    result.error = EniError{path, reader.lineAt(parsed.offset),
-                            fmt::format("not well-formed XML: {}", parsed.description())};
-    return result;
+    return fail(eniError(path, reader.lineAt(parsed.offset),
+                         fmt::format("not well-formed XML: {}", parsed.description())));
   }
   const pugi::xml_node config = doc.child("EtherCATConfig").child("Config");
   if (!config) {
-    result.error = EniError{path, 0, "no <EtherCATConfig><Config>: not an ENI file (ETG.2100)"};
-    return result;
+    return fail(eniError(path, 0, "no <EtherCATConfig><Config>: not an ENI file (ETG.2100)"));
   }
-  std::optional<EniError>& error = result.error;
 
   std::vector<Command> commands;
   for (pugi::xml_node frame : config.child("Cyclic").children("Frame")) {
     for (pugi::xml_node cmd : frame.children("Cmd")) {
-      auto code = reader.number(cmd, "Cmd", true, error);
-      if (error) return result;
+      auto code = reader.number(cmd, "Cmd", true);
+      if (reader.failed()) return fail(reader.firstError());
       if (!ecat::isLogical(static_cast<std::uint8_t>(*code))) continue;
       Command c;
       c.cmd = static_cast<std::uint8_t>(*code);
-      auto addr = reader.number(cmd, "Addr", true, error);
-      auto length = reader.number(cmd, "DataLength", true, error);
-      c.output_offset = reader.number(cmd, "OutputOffs", false, error);
-      c.input_offset = reader.number(cmd, "InputOffs", false, error);
-      if (error) return result;
+      auto addr = reader.number(cmd, "Addr", true);
+      auto length = reader.number(cmd, "DataLength", true);
+      c.output_offset = reader.number(cmd, "OutputOffs", false);
+      c.input_offset = reader.number(cmd, "InputOffs", false);
+      if (reader.failed()) return fail(reader.firstError());
       c.address = static_cast<std::uint32_t>(*addr);
       c.length = *length;
       commands.push_back(c);
@@ -142,26 +143,26 @@ EniResult parseEni(std::string_view xml, const std::string& path) {
   };
 
   for (pugi::xml_node slave : config.children("Slave")) {
-    ++result.slaves;
+    ++layout.slaves;
     const pugi::xml_node info = slave.child("Info");
     const std::string name = info.child("Name").child_value();
-    auto station = reader.number(info, "PhysAddr", false, error);
-    if (error) return result;
+    auto station = reader.number(info, "PhysAddr", false);
+    if (reader.failed()) return fail(reader.firstError());
     // Sizes of the process data: the Send/Recv bit lengths, or the sync managers' sizes.
     const pugi::xml_node pd = slave.child("ProcessData");
     std::int64_t send_bits = 0, recv_bits = 0;
     std::optional<std::int64_t> send_start, recv_start;
     for (pugi::xml_node send : pd.children("Send")) {
-      auto start = reader.number(send, "BitStart", true, error);
-      auto bits = reader.number(send, "BitLength", true, error);
-      if (error) return result;
+      auto start = reader.number(send, "BitStart", true);
+      auto bits = reader.number(send, "BitLength", true);
+      if (reader.failed()) return fail(reader.firstError());
       if (!send_start) send_start = start;
       send_bits += *bits;
     }
     for (pugi::xml_node recv : pd.children("Recv")) {
-      auto start = reader.number(recv, "BitStart", true, error);
-      auto bits = reader.number(recv, "BitLength", true, error);
-      if (error) return result;
+      auto start = reader.number(recv, "BitStart", true);
+      auto bits = reader.number(recv, "BitLength", true);
+      if (reader.failed()) return fail(reader.firstError());
       if (!recv_start) recv_start = start;
       recv_bits += *bits;
     }
@@ -169,36 +170,30 @@ EniResult parseEni(std::string_view xml, const std::string& path) {
                        recv_bits == 8 * static_cast<std::int64_t>(kTxPdoSize);
     if (!servo) continue;
     if (*send_start % 8 != 0 || *recv_start % 8 != 0) {
-      error = reader.error(
-          pd, fmt::format("slave '{}': its process data does not start on a byte", name));
-      return result;
+      return fail(reader.error(
+          pd, fmt::format("slave '{}': its process data does not start on a byte", name)));
     }
     AxisConfig axis;
-    axis.name = name.empty() ? fmt::format("axis{}", result.axes.size()) : name;
+    axis.name = name.empty() ? fmt::format("axis{}", layout.axes.size()) : name;
     auto outputs = logical(*send_start / 8, true);
     auto inputs = logical(*recv_start / 8, false);
     if (!outputs || !inputs) {
-      error = reader.error(pd, fmt::format("slave '{}': its {} (image bit {}) are in no cyclic "
-                                           "LRD/LWR/LRW command of <Cyclic>",
-                                           name, outputs ? "inputs" : "outputs",
-                                           outputs ? *recv_start : *send_start));
-      return result;
+      return fail(reader.error(pd, fmt::format("slave '{}': its {} (image bit {}) are in no "
+                                               "cyclic LRD/LWR/LRW command of <Cyclic>",
+                                               name, outputs ? "inputs" : "outputs",
+                                               outputs ? *recv_start : *send_start)));
     }
     axis.outputs = *outputs;
     axis.inputs = *inputs;
     if (station) axis.station = static_cast<std::uint16_t>(*station);
-    result.axes.push_back(std::move(axis));
+    layout.axes.push_back(std::move(axis));
   }
-  return result;
+  return layout;
 }
 
-EniResult loadEni(const std::string& path) {
+Result<EniLayout> loadEni(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    EniResult r;
-    r.error = EniError{path, 0, "cannot open the ENI file"};
-    return r;
-  }
+  if (!in) return fail(eniError(path, 0, "cannot open the ENI file"));
   std::ostringstream text;
   text << in.rdbuf();
   return parseEni(text.str(), path);

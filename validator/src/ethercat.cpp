@@ -3,58 +3,44 @@
 namespace ncservo {
 
 namespace {
-constexpr std::uint16_t kEtherTypeVlan = 0x8100;
-constexpr std::uint16_t kEtherTypeQinQ = 0x88A8;
-constexpr std::uint16_t kEtherTypeQinQOld = 0x9100;
-constexpr std::uint16_t kEtherTypeIpv4 = 0x0800;
-constexpr std::uint16_t kEtherTypeIpv6 = 0x86DD;
-constexpr std::uint8_t kIpProtoUdp = 17;
-constexpr std::size_t kEthernetHeaderSize = 14;
-constexpr std::size_t kVlanTagSize = 4;
-constexpr std::size_t kUdpHeaderSize = 8;
-constexpr std::size_t kIpv6HeaderSize = 40;
-constexpr std::size_t kSllHeaderSize = 16;
-constexpr std::size_t kSll2HeaderSize = 20;
-constexpr int kDltEn10mb = 1;
-constexpr int kDltLinuxSll = 113;
-constexpr int kDltLinuxSll2 = 276;
-
 // Follows a payload of EtherType `type` at `payload` (VLAN tags, IP/UDP) to the EtherCAT header.
 void walkPayload(const ByteReader& bytes, std::uint16_t type, std::size_t payload, EcatFrame& out) {
   out.status = WalkStatus::NotEtherCat;
   // A VLAN tag is 2 bytes of TCI and then the next EtherType; tags may stack (802.1ad).
-  while (type == kEtherTypeVlan || type == kEtherTypeQinQ || type == kEtherTypeQinQOld) {
+  while (type == ecat::kEtherTypeVlan || type == ecat::kEtherTypeQinQ ||
+         type == ecat::kEtherTypeQinQOld) {
     auto inner = bytes.be16(payload + 2);
     if (!inner) return;
     type = *inner;
-    payload += kVlanTagSize;
+    payload += ecat::kVlanTagSize;
   }
   if (type == ecat::kEtherType) {
     walkEcat(bytes, payload, out);
     return;
   }
   std::size_t udp = 0;
-  if (type == kEtherTypeIpv4) {
+  if (type == ecat::kEtherTypeIpv4) {
     auto version_ihl = bytes.u8(payload);
     auto fragment = bytes.be16(payload + 6);
     auto protocol = bytes.u8(payload + 9);
     if (!version_ihl || !fragment || !protocol) return;
     std::size_t ihl = (*version_ihl & 0x0F) * 4u;
     bool first_fragment = (*fragment & 0x1FFF) == 0;
-    if ((*version_ihl >> 4) != 4 || ihl < 20 || *protocol != kIpProtoUdp || !first_fragment) {
+    if ((*version_ihl >> 4) != 4 || ihl < ecat::kIpv4MinHeaderSize ||
+        *protocol != ecat::kIpProtoUdp || !first_fragment) {
       return;
     }
     udp = payload + ihl;
-  } else if (type == kEtherTypeIpv6) {
+  } else if (type == ecat::kEtherTypeIpv6) {
     auto next_header = bytes.u8(payload + 6);
-    if (!next_header || *next_header != kIpProtoUdp) return;
-    udp = payload + kIpv6HeaderSize;
+    if (!next_header || *next_header != ecat::kIpProtoUdp) return;
+    udp = payload + ecat::kIpv6HeaderSize;
   } else {
     return;
   }
   auto dst_port = bytes.be16(udp + 2);
   if (!dst_port || *dst_port != ecat::kUdpPort) return;
-  walkEcat(bytes, udp + kUdpHeaderSize, out);
+  walkEcat(bytes, udp + ecat::kUdpHeaderSize, out);
 }
 
 void walkFromTypeField(const ByteReader& bytes, std::size_t type_offset, std::size_t payload,
@@ -84,7 +70,7 @@ std::optional<ProbeHeader> eslHeaderAt(const ByteReader& bytes, std::size_t offs
 }
 
 void walkEthernet(const ByteReader& bytes, std::size_t start, EcatFrame& out) {
-  walkFromTypeField(bytes, start + kEthernetHeaderSize - 2, start + kEthernetHeaderSize, out);
+  walkFromTypeField(bytes, start + ecat::kEthernetHeaderSize - 2, start + ecat::kEthernetHeaderSize, out);
 }
 
 // An Ethernet frame, with the probe's ESL header before it or appended after it.
@@ -97,7 +83,7 @@ void walkProbedEthernet(const ByteReader& bytes, EcatFrame& out) {
   }
   const std::size_t size = bytes.size();
   std::optional<ProbeHeader> after;
-  if (size >= kEthernetHeaderSize + esl::kHeaderSize) {
+  if (size >= ecat::kEthernetHeaderSize + esl::kHeaderSize) {
     after = eslHeaderAt(bytes, size - esl::kHeaderSize);
   }
   if (after) {
@@ -113,20 +99,13 @@ void walkProbedEthernet(const ByteReader& bytes, EcatFrame& out) {
 }
 }  // namespace
 
-const char* ecat::commandName(std::uint8_t cmd) {
-  static constexpr const char* kNames[] = {"NOP",  "APRD", "APWR", "APRW", "FPRD",
-                                           "FPWR", "FPRW", "BRD",  "BWR",  "BRW",
-                                           "LRD",  "LWR",  "LRW",  "ARMW", "FRMW"};
-  return cmd < std::size(kNames) ? kNames[cmd] : "unknown";
-}
-
 LinkType linkTypeFromDlt(int dlt) {
   switch (dlt) {
-    case kDltEn10mb:
+    case ecat::kDltEthernet:
       return LinkType::Ethernet;
-    case kDltLinuxSll:
+    case ecat::kDltLinuxSll:
       return LinkType::LinuxSll;
-    case kDltLinuxSll2:
+    case ecat::kDltLinuxSll2:
       return LinkType::LinuxSll2;
     default:
       return LinkType::Unsupported;
@@ -145,7 +124,7 @@ void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
     return;
   }
   out.header_length = *frame_header & ecat::kLengthMask;
-  if ((*frame_header >> 12) != ecat::kFrameTypeDatagrams) {
+  if ((*frame_header >> ecat::kFrameTypeShift) != ecat::kFrameTypeDatagrams) {
     out.status = WalkStatus::NotDatagrams;
     return;
   }
@@ -163,15 +142,15 @@ void walkEcat(const ByteReader& bytes, std::size_t offset, EcatFrame& out) {
       out.truncated_at = bytes.size();
       break;
     }
-    const std::uint16_t length_word = header->le16<6>();
+    const std::uint16_t length_word = header->le16<ecat::kDatagramLengthWordAt>();
     Datagram& dg = out.datagrams[out.count];
-    dg.command = header->u8<0>();
-    dg.index = header->u8<1>();
-    dg.address = header->le32<2>();
+    dg.command = header->u8<ecat::kDatagramCommandAt>();
+    dg.index = header->u8<ecat::kDatagramIndexAt>();
+    dg.address = header->le32<ecat::kDatagramAddressAt>();
     dg.length = length_word & ecat::kLengthMask;
     dg.circulating = (length_word & ecat::kCirculatingBit) != 0;
     more = (length_word & ecat::kMoreBit) != 0;
-    dg.irq = header->le16<8>();
+    dg.irq = header->le16<ecat::kDatagramIrqAt>();
     dg.header_offset = pos;
     dg.data_offset = pos + ecat::kDatagramHeaderSize;
     const std::size_t available = bytes.size() - dg.data_offset;  // has() above: no underflow
@@ -203,10 +182,10 @@ void walkPacket(LinkType link, const ByteReader& bytes, EcatFrame& out) {
       }
       return;
     case LinkType::LinuxSll:
-      walkFromTypeField(bytes, kSllHeaderSize - 2, kSllHeaderSize, out);
+      walkFromTypeField(bytes, ecat::kSllHeaderSize - 2, ecat::kSllHeaderSize, out);
       return;
     case LinkType::LinuxSll2:  // the protocol type comes first in SLL2
-      walkFromTypeField(bytes, 0, kSll2HeaderSize, out);
+      walkFromTypeField(bytes, 0, ecat::kSll2HeaderSize, out);
       return;
     case LinkType::Unsupported:
       return;

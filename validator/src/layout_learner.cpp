@@ -10,20 +10,6 @@
 namespace ncservo {
 namespace {
 
-// Byte offsets inside one SM (PROTOCOL.md §8: start 2, length 2, control 1, status 1, activate 1,
-// PDI 1) and one FMMU (logical start 4, length 2, start bit, stop bit, physical start 2,
-// physical start bit, type, activate).
-constexpr std::size_t kSmStart = 0, kSmLength = 2, kSmControl = 4, kSmActivate = 6;
-constexpr std::size_t kFmmuLogical = 0, kFmmuLength = 4, kFmmuPhysical = 8, kFmmuType = 11,
-                      kFmmuActivate = 12;
-constexpr std::size_t kOutputsSm = 2, kInputsSm = 3;  // by convention (PROTOCOL.md §8)
-constexpr std::uint8_t kFmmuRead = 1, kFmmuWrite = 2;
-constexpr std::size_t kMailboxOutSm = 0, kMailboxInSm = 1;  // by convention (ETG.1000.4)
-constexpr std::uint8_t kSmModeMask = 0x03, kSmModeMailbox = 0x02;
-constexpr std::uint16_t kRxAssignment = 0x1C12, kTxAssignment = 0x1C13;
-// Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
-constexpr std::uint16_t kProcessRam = 0x1000;
-
 template <std::size_t N>
 bool known(const std::bitset<N>& mask, std::size_t from, std::size_t count) {
   for (std::size_t i = from; i < from + count; ++i) {
@@ -60,9 +46,10 @@ bool copyBlock(std::array<std::uint8_t, N>& shadow, std::bitset<N>& mask, std::u
 // The start of the slave's mailbox sync manager `index`, when the start-up configured one.
 std::optional<std::uint16_t> mailboxAt(const SlaveRegisters& regs, std::size_t index) {
   const std::size_t at = index * ecat::kSyncManagerStride;
-  if (!known(regs.sm_known, at, 5)) return std::nullopt;
-  if ((regs.sm[at + 4] & kSmModeMask) != kSmModeMailbox) return std::nullopt;
-  return static_cast<std::uint16_t>(le(regs.sm, at, 2));
+  if (!known(regs.sm_known, at, ecat::kSmControlAt + 1)) return std::nullopt;
+  if ((regs.sm[at + ecat::kSmControlAt] & ecat::kSmModeMask) != ecat::kSmModeMailbox)
+    return std::nullopt;
+  return static_cast<std::uint16_t>(le(regs.sm, at + ecat::kSmStartAt, 2));
 }
 
 }  // namespace
@@ -91,26 +78,28 @@ SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_
   out.position = position;
   for (std::size_t n = 0; n < ecat::kSyncManagerCount; ++n) {
     const std::size_t at = n * ecat::kSyncManagerStride;
-    if (!known(regs.sm_known, at + kSmStart, 4)) continue;
+    if (!known(regs.sm_known, at + ecat::kSmStartAt, 4)) continue;
     SyncManagerView sm;
     sm.index = n;
-    sm.start = static_cast<std::uint16_t>(le(regs.sm, at + kSmStart, 2));
-    sm.length = static_cast<std::uint16_t>(le(regs.sm, at + kSmLength, 2));
-    sm.control = regs.sm[at + kSmControl];
-    sm.enabled = regs.sm_known[at + kSmActivate] ? (regs.sm[at + kSmActivate] & 1) != 0 : true;
+    sm.start = static_cast<std::uint16_t>(le(regs.sm, at + ecat::kSmStartAt, 2));
+    sm.length = static_cast<std::uint16_t>(le(regs.sm, at + ecat::kSmLengthAt, 2));
+    sm.control = regs.sm[at + ecat::kSmControlAt];
+    sm.enabled = regs.sm_known[at + ecat::kSmActivateAt]
+                     ? (regs.sm[at + ecat::kSmActivateAt] & 1) != 0
+                     : true;
     if (sm.length == 0) continue;
     out.sync_managers.push_back(sm);
   }
   for (std::size_t n = 0; n < ecat::kFmmuCount; ++n) {
     const std::size_t at = n * ecat::kFmmuStride;
-    if (!known(regs.fmmu_known, at, kFmmuActivate + 1)) continue;
+    if (!known(regs.fmmu_known, at, ecat::kFmmuActivateAt + 1)) continue;
     FmmuView f;
     f.index = n;
-    f.logical = le(regs.fmmu, at + kFmmuLogical, 4);
-    f.length = static_cast<std::uint16_t>(le(regs.fmmu, at + kFmmuLength, 2));
-    f.physical = static_cast<std::uint16_t>(le(regs.fmmu, at + kFmmuPhysical, 2));
-    f.type = regs.fmmu[at + kFmmuType];
-    f.active = (regs.fmmu[at + kFmmuActivate] & 1) != 0;
+    f.logical = le(regs.fmmu, at + ecat::kFmmuLogicalAt, 4);
+    f.length = static_cast<std::uint16_t>(le(regs.fmmu, at + ecat::kFmmuLengthAt, 2));
+    f.physical = static_cast<std::uint16_t>(le(regs.fmmu, at + ecat::kFmmuPhysicalAt, 2));
+    f.type = regs.fmmu[at + ecat::kFmmuTypeAt];
+    f.active = (regs.fmmu[at + ecat::kFmmuActivateAt] & 1) != 0;
     if (f.length == 0 && !f.active) continue;
     out.fmmus.push_back(f);
   }
@@ -120,10 +109,10 @@ SlaveLayout describeSlave(const SlaveRegisters& regs, std::optional<std::uint16_
     }
     return nullptr;
   };
-  const SyncManagerView* rx = smOf(kOutputsSm);
-  const SyncManagerView* tx = smOf(kInputsSm);
-  out.coe_output_bits = regs.coe.assignedBits(kRxAssignment);
-  out.coe_input_bits = regs.coe.assignedBits(kTxAssignment);
+  const SyncManagerView* rx = smOf(ecat::kOutputsSm);
+  const SyncManagerView* tx = smOf(ecat::kInputsSm);
+  out.coe_output_bits = regs.coe.assignedBits(ecat::kRxPdoAssignment);
+  out.coe_input_bits = regs.coe.assignedBits(ecat::kTxPdoAssignment);
   const bool sm_servo =
       rx != nullptr && tx != nullptr && rx->length == kRxPdoSize && tx->length == kTxPdoSize;
   // The CoE assignment marks a servo where the SM lengths were not written (they are, in every
@@ -153,7 +142,7 @@ bool LayoutLearner::observeMailbox(const Datagram& dg, const ByteReader& bytes,
   SlaveRegisters& regs = directory_.slaves()[s].data;
   const auto start = mailboxAt(regs, sm);
   if (!start || dg.ado() != *start) return false;
-  regs.coe.onMailbox(bytes, dg.data_offset, dg.data_captured, sm == kMailboxOutSm);
+  regs.coe.onMailbox(bytes, dg.data_offset, dg.data_captured, sm == ecat::kMailboxOutSm);
   dirty_ = true;
   return true;
 }
@@ -170,16 +159,16 @@ void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, boo
     // says what its PDOs hold.
     if (returned && ecat::readsSlaves(dg.command) && dg.has_wkc && dg.wkc > 0) {
       directory_.noteAlias(dg, bytes, address);
-      observeMailbox(dg, bytes, address, kMailboxInSm);
+      observeMailbox(dg, bytes, address, ecat::kMailboxInSm);
     }
     // What the master wrote configures the slave (a read-back would only repeat it).
     if (!ecat::writesSlaves(dg.command) || (returned && paired)) continue;
     directory_.noteStationWrite(dg, bytes, address);
     directory_.noteAlias(dg, bytes, address);
-    if (observeMailbox(dg, bytes, address, kMailboxOutSm)) continue;
+    if (observeMailbox(dg, bytes, address, ecat::kMailboxOutSm)) continue;
     const std::size_t ado = dg.ado();
     const std::size_t end = ado + dg.data_captured;
-    if (ado >= kProcessRam && address.target == SlaveTarget::Station) {
+    if (ado >= ecat::kProcessRam && address.target == SlaveTarget::Station) {
       // Process data exchanged with FPRD/FPWR: a configured servo's SM addresses.
       const std::size_t s = directory_.findStation(address.value);
       if (s == directory_.kNone) continue;
@@ -187,7 +176,7 @@ void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, boo
       const SlaveLayout layout = describeSlave(regs, std::nullopt, std::nullopt);
       if (!layout.servo || regs.physical_exchange) continue;
       for (const SyncManagerView& sm : layout.sync_managers) {
-        if ((sm.index == kOutputsSm || sm.index == kInputsSm) &&
+        if ((sm.index == ecat::kOutputsSm || sm.index == ecat::kInputsSm) &&
             ado < std::size_t{sm.start} + sm.length && end > sm.start) {
           regs.physical_exchange = true;
           dirty_ = true;
@@ -234,8 +223,8 @@ void LayoutLearner::rebuild() {
     const SyncManagerView* rx = nullptr;
     const SyncManagerView* tx = nullptr;
     for (const SyncManagerView& sm : slave.sync_managers) {
-      if (sm.index == kOutputsSm) rx = &sm;
-      if (sm.index == kInputsSm) tx = &sm;
+      if (sm.index == ecat::kOutputsSm) rx = &sm;
+      if (sm.index == ecat::kInputsSm) tx = &sm;
     }
     // The logical address an active FMMU of this direction gives the SM's first byte.
     auto mapped = [&](const SyncManagerView& sm,
@@ -253,8 +242,8 @@ void LayoutLearner::rebuild() {
     axis.name = fmt::format("axis{}", axes.size());
     axis.station = slave.station;
     if (rx == nullptr || tx == nullptr) continue;  // a servo by CoE, its SMs not configured yet
-    const auto outputs = mapped(*rx, kFmmuWrite);
-    const auto inputs = mapped(*tx, kFmmuRead);
+    const auto outputs = mapped(*rx, ecat::kFmmuWrite);
+    const auto inputs = mapped(*tx, ecat::kFmmuRead);
     if (outputs && inputs) {
       axis.outputs = outputs;
       axis.inputs = inputs;
@@ -292,7 +281,9 @@ std::string describeSlaveLayout(const SlaveLayout& slave) {
                         sm.control, sm.enabled ? "" : " (off)");
   }
   for (const FmmuView& f : slave.fmmus) {
-    const char* type = f.type == kFmmuRead ? "read" : f.type == kFmmuWrite ? "write" : "read/write";
+    const char* type = f.type == ecat::kFmmuRead    ? "read"
+                       : f.type == ecat::kFmmuWrite ? "write"
+                                                    : "read/write";
     text += fmt::format("; FMMU{} 0x{:08X}+{} -> 0x{:04X} {}{}", f.index, f.logical, f.length,
                         f.physical, type, f.active ? "" : " (off)");
   }

@@ -265,8 +265,8 @@ std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) 
 }
 
 // --- EtherCAT state machine, per axis (PROTOCOL.md §8) ---
-constexpr auto kAlOp = static_cast<std::uint8_t>(AlState::Op);
-constexpr auto kAlSafeOp = static_cast<std::uint8_t>(AlState::SafeOp);
+using ecat::kAlOp;
+using ecat::kAlSafeOp;
 bool esm002(const AxisModel& a, const RuleSettings&) {
   if (!a.alState()) return false;
   const std::uint8_t state = *a.alState();
@@ -316,7 +316,7 @@ std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettin
 // --- EtherCAT state machine, per slave (PROTOCOL.md §8) ---
 std::string allowedFrom(std::uint8_t from) {
   std::string out;
-  for (std::uint8_t to : kAlStates) {
+  for (std::uint8_t to : ecat::kAlStates) {
     if (!alTransitionAllowed(from, to)) continue;
     if (!out.empty()) out += ", ";
     out += alStateName(to);

@@ -23,15 +23,7 @@
 
 namespace ncservo {
 
-// AL states in bits 3..0 of AL control and AL status (PROTOCOL.md §8).
-enum class AlState : std::uint8_t { Init = 1, PreOp = 2, Boot = 3, SafeOp = 4, Op = 8 };
-inline constexpr std::array<std::uint8_t, 5> kAlStates{
-    static_cast<std::uint8_t>(AlState::Init), static_cast<std::uint8_t>(AlState::PreOp),
-    static_cast<std::uint8_t>(AlState::Boot), static_cast<std::uint8_t>(AlState::SafeOp),
-    static_cast<std::uint8_t>(AlState::Op)};
-inline constexpr std::uint8_t kAlStateMask = 0x0F;
-// AL status: the error indicator; AL control: the error acknowledge.
-inline constexpr std::uint8_t kAlErrorIndicator = 0x10;
+// AL states (ecat::AlState, PROTOCOL.md §8) by name, and the transitions a slave accepts.
 const char* alStateName(std::uint8_t state);  // "INIT", ..., or "0x5" for a non-state
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to);
 bool alStateAboveInit(std::uint8_t state);  // a state, and not INIT

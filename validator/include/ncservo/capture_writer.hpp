@@ -8,20 +8,21 @@
 #include <optional>
 #include <string>
 
+#include "ncservo/error.hpp"
+
 namespace ncservo {
 
 enum class CaptureFormat : std::uint8_t { Pcap, Pcapng };
 
 class CaptureWriter {
  public:
-  // "-" writes to standard output. On failure `error` names the file and the reason.
-  static std::unique_ptr<CaptureWriter> open(const std::string& path, CaptureFormat format,
-                                             std::string& error);
+  // "-" writes to standard output. An error names the file and the reason.
+  static Result<std::unique_ptr<CaptureWriter>> open(const std::string& path, CaptureFormat format);
   virtual ~CaptureWriter() = default;
-  // One Ethernet frame; false once a write failed.
+  // One Ethernet frame; false once a write failed (close() says why).
   virtual bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) = 0;
-  // Flushes and closes; false (with `error`) if anything failed.
-  virtual bool close(std::string& error) = 0;
+  // Flushes and closes; an error if anything failed.
+  virtual Status close() = 0;
 };
 
 }  // namespace ncservo

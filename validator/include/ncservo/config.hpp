@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "ncservo/error.hpp"
+
 namespace ncservo {
 
 struct AxisConfig {
@@ -37,25 +39,11 @@ struct Config {
   std::map<std::string, std::string> severity_overrides;
 };
 
-struct ConfigError {
-  std::string path;
-  std::uint32_t line = 0;  // 0 when the error is about the file as a whole
-  std::string key;         // dotted key path, e.g. "axis[1].outputs"
-  std::string message;
-  // "FILE:LINE: key 'K': MESSAGE"
-  std::string text() const;
-};
-
-struct ConfigResult {
-  std::optional<Config> config;
-  std::optional<ConfigError> error;
-  bool ok() const { return config.has_value(); }
-};
-
-ConfigResult parseConfig(std::string_view text, const std::string& path);
+// An error names the file, the line and the key: "FILE:LINE: key 'K': MESSAGE".
+Result<Config> parseConfig(std::string_view text, const std::string& path);
 // The axes (and a Servo_Ready_Mode) as a configuration file that parseConfig reads back,
 // addresses in hexadecimal.
 std::string writeConfig(const std::vector<AxisConfig>& axes, std::optional<int> servo_ready_mode);
-ConfigResult loadConfig(const std::string& path);
+Result<Config> loadConfig(const std::string& path);
 
 }  // namespace ncservo

@@ -9,26 +9,19 @@
 #include <vector>
 
 #include "ncservo/config.hpp"
+#include "ncservo/error.hpp"
 
 namespace ncservo {
 
-struct EniError {
-  std::string path;
-  std::uint32_t line = 0;  // 0 when the error is about the file as a whole
-  std::string message;
-  std::string text() const;  // "FILE:LINE: MESSAGE"
-};
-
-struct EniResult {
-  // One axis per servo of this protocol (10-byte RxPDO, 40-byte TxPDO), in the file's slave order,
-  // with its logical addresses and its station address.
+// One axis per servo of this protocol (10-byte RxPDO, 40-byte TxPDO), in the file's slave order,
+// with its logical addresses and its station address.
+struct EniLayout {
   std::vector<AxisConfig> axes;
   std::size_t slaves = 0;  // slaves in the file, servos or not
-  std::optional<EniError> error;
-  bool ok() const { return !error.has_value(); }
 };
 
-EniResult parseEni(std::string_view xml, const std::string& path);
-EniResult loadEni(const std::string& path);
+// An error names the file and, when it is about one element, its line: "FILE:LINE: MESSAGE".
+Result<EniLayout> parseEni(std::string_view xml, const std::string& path);
+Result<EniLayout> loadEni(const std::string& path);
 
 }  // namespace ncservo

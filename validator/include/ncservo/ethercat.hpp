@@ -1,4 +1,4 @@
-// EtherCAT wire constants and the bounds-checked frame walker (PROTOCOL.md §8).
+// The bounds-checked EtherCAT frame walker and what it asks of the wire facts (PROTOCOL.md §8).
 // The walker turns captured bytes into datagram views; it never reads past the captured bytes
 // and never allocates.
 #pragma once
@@ -9,90 +9,45 @@
 #include <optional>
 
 #include "ncservo/byte_reader.hpp"
+#include "ncservo/ecat_wire.hpp"
 
 namespace ncservo {
 
 namespace ecat {
-inline constexpr std::uint16_t kEtherType = 0x88A4;
-inline constexpr std::uint16_t kUdpPort = 34980;
-inline constexpr std::uint16_t kFrameTypeDatagrams = 1;
-inline constexpr std::size_t kFrameHeaderSize = 2;
-inline constexpr std::size_t kDatagramHeaderSize = 10;
-inline constexpr std::size_t kWkcSize = 2;
-inline constexpr std::uint16_t kLengthMask = 0x07FF;
-inline constexpr std::uint16_t kCirculatingBit = 0x4000;
-inline constexpr std::uint16_t kMoreBit = 0x8000;
-// The frame header's 11-bit length bounds a chain: at most this many minimal datagrams.
-inline constexpr std::size_t kMaxDatagrams =
-    (kLengthMask + kDatagramHeaderSize + kWkcSize) / (kDatagramHeaderSize + kWkcSize) + 1;
-
-enum Command : std::uint8_t {
-  kNop = 0,
-  kAprd = 1,
-  kApwr = 2,
-  kAprw = 3,
-  kFprd = 4,
-  kFpwr = 5,
-  kFprw = 6,
-  kBrd = 7,
-  kBwr = 8,
-  kBrw = 9,
-  kLrd = 10,
-  kLwr = 11,
-  kLrw = 12,
-  kArmw = 13,
-  kFrmw = 14,
-};
-
-inline constexpr bool isLogical(std::uint8_t cmd) {
-  return cmd == kLrd || cmd == kLwr || cmd == kLrw;
+// What the wire facts say of a command; an unknown code addresses nothing, reads and writes
+// nothing.
+inline constexpr CommandFacts kUnknownCommand{"unknown", Addressing::None, false, false};
+constexpr const CommandFacts& commandFacts(std::uint8_t cmd) {
+  return cmd < kCommands.size() ? kCommands[cmd] : kUnknownCommand;
 }
-inline constexpr bool isConfiguredAddress(std::uint8_t cmd) {
-  return cmd == kFprd || cmd == kFpwr || cmd == kFprw || cmd == kFrmw;
+constexpr const char* commandName(std::uint8_t cmd) {
+  return commandFacts(cmd).name;
+}
+
+constexpr bool isLogical(std::uint8_t cmd) {
+  return commandFacts(cmd).addressing == Addressing::Logical;
+}
+constexpr bool isConfiguredAddress(std::uint8_t cmd) {
+  return commandFacts(cmd).addressing == Addressing::Configured;
+}
+constexpr bool isAutoIncrement(std::uint8_t cmd) {
+  return commandFacts(cmd).addressing == Addressing::AutoIncrement;
+}
+constexpr bool isBroadcast(std::uint8_t cmd) {
+  return commandFacts(cmd).addressing == Addressing::Broadcast;
 }
 // Slaves increment the ADP of auto-increment and broadcast commands on the way round the ring;
 // other commands come back with the address they were sent with (PROTOCOL.md §8).
-inline constexpr bool addressSurvivesRing(std::uint8_t cmd) {
+constexpr bool addressSurvivesRing(std::uint8_t cmd) {
   return isLogical(cmd) || isConfiguredAddress(cmd);
 }
 // Whether the addressed slaves' memory is written, and read, by a command (PROTOCOL.md §8).
-// ARMW/FRMW read one slave and write the others: counted as reads of the addressed one.
-inline constexpr bool writesSlaves(std::uint8_t cmd) {
-  return cmd == kApwr || cmd == kAprw || cmd == kFpwr || cmd == kFprw || cmd == kBwr ||
-         cmd == kBrw || cmd == kLwr || cmd == kLrw;
+constexpr bool writesSlaves(std::uint8_t cmd) {
+  return commandFacts(cmd).writes;
 }
-inline constexpr bool readsSlaves(std::uint8_t cmd) {
-  return cmd == kAprd || cmd == kAprw || cmd == kFprd || cmd == kFprw || cmd == kBrd ||
-         cmd == kBrw || cmd == kLrd || cmd == kLrw || cmd == kArmw || cmd == kFrmw;
+constexpr bool readsSlaves(std::uint8_t cmd) {
+  return commandFacts(cmd).reads;
 }
-const char* commandName(std::uint8_t cmd);
-
-// ESC registers the decoder looks at (PROTOCOL.md §8).
-// ESC registers (PROTOCOL.md §8).
-inline constexpr std::uint16_t kRegEscType = 0x0000;
-inline constexpr std::uint16_t kRegStationAddress = 0x0010;
-inline constexpr std::uint16_t kRegStationAlias = 0x0012;
-inline constexpr std::uint16_t kRegAlControl = 0x0120;
-inline constexpr std::uint16_t kRegAlStatus = 0x0130;
-inline constexpr std::uint16_t kRegAlStatusCode = 0x0134;
-inline constexpr std::uint16_t kRegFmmu0 = 0x0600;
-inline constexpr std::uint16_t kFmmuStride = 16;
-inline constexpr std::size_t kFmmuCount = 16;
-inline constexpr std::uint16_t kRegSyncManager0 = 0x0800;
-inline constexpr std::uint16_t kSyncManagerStride = 8;
-inline constexpr std::size_t kSyncManagerCount = 16;
-inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;
-// Fields of one FMMU entry, from its start (ETG.1000.4 §6.6).
-namespace fmmu {
-inline constexpr std::size_t kLogicalStart = 0, kLength = 4, kLogicalStartBit = 6,
-                             kLogicalStopBit = 7, kPhysicalStart = 8, kPhysicalStartBit = 10,
-                             kType = 11, kActivate = 12;
-inline constexpr std::uint8_t kTypeRead = 1, kTypeWrite = 2;  // inputs, outputs
-}  // namespace fmmu
-// Fields of one sync manager entry, from its start (ETG.1000.4 §6.7).
-namespace sm {
-inline constexpr std::size_t kPhysicalStart = 0, kLength = 2, kControl = 4, kActivate = 6;
-}  // namespace sm
 }  // namespace ecat
 
 // The 16-byte header an ET2000 probe or an EtherCAT switch-link port puts before or after the

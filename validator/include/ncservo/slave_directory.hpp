@@ -22,13 +22,6 @@ struct SlaveAddress {
   std::uint16_t value = 0;  // station address or ring position
 };
 
-constexpr bool isAutoIncrement(std::uint8_t cmd) {
-  return cmd == ecat::kAprd || cmd == ecat::kApwr || cmd == ecat::kAprw || cmd == ecat::kArmw;
-}
-constexpr bool isBroadcast(std::uint8_t cmd) {
-  return cmd == ecat::kBrd || cmd == ecat::kBwr || cmd == ecat::kBrw;
-}
-
 // Offset in the captured bytes of register `reg` when the datagram's captured data holds all
 // `size` bytes of it.
 inline std::optional<std::size_t> registerAt(const Datagram& dg, std::uint16_t reg,
@@ -65,8 +58,8 @@ class SlaveDirectory {
 
   SlaveAddress addressOf(const Datagram& dg, std::size_t index, bool returned, bool paired) const {
     if (ecat::isConfiguredAddress(dg.command)) return {SlaveTarget::Station, dg.adp()};
-    if (isBroadcast(dg.command)) return {SlaveTarget::All, 0};
-    if (!isAutoIncrement(dg.command)) return {};
+    if (ecat::isBroadcast(dg.command)) return {SlaveTarget::All, 0};
+    if (!ecat::isAutoIncrement(dg.command)) return {};
     std::uint16_t adp = dg.adp();
     if (returned) {
       if (!paired || index >= master_.size() || master_[index].command != dg.command) return {};

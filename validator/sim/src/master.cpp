@@ -20,7 +20,7 @@ constexpr std::size_t kDcTimeSize = 8;
 constexpr std::uint8_t kSmOutputs = 0x64, kSmInputs = 0x20;
 constexpr std::uint8_t kOutputTerminalPatternCycles = 100;  // the lit output moves this often
 
-constexpr auto kInit = static_cast<std::uint8_t>(AlState::Init);
+constexpr auto kInit = ecat::kAlInit;
 
 Framing ethernetFraming(bool returned) {
   Framing framing;
@@ -33,7 +33,7 @@ Framing ethernetFraming(bool returned) {
 
 }  // namespace
 
-void AlWalk::start(AlState state, std::size_t slaves, bool request) {
+void AlWalk::start(ecat::AlState state, std::size_t slaves, bool request) {
   target = static_cast<std::uint8_t>(state);
   need_request.assign(slaves, request);
   need_ack.assign(slaves, false);
@@ -136,10 +136,10 @@ bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
       if (dg.wkc == 0) continue;
       const std::size_t s = static_cast<std::size_t>(dg.adp - kFirstStation);
       const std::uint8_t status = dg.data[0];
-      if (status & kAlErrorIndicator) {
+      if (status & ecat::kAlErrorBit) {
         walk.need_ack[s] = true;
-        walk.ack_value[s] = static_cast<std::uint8_t>((status & kAlStateMask) | kAlErrorIndicator);
-      } else if ((status & kAlStateMask) == walk.target) {
+        walk.ack_value[s] = static_cast<std::uint8_t>((status & ecat::kAlStateMask) | ecat::kAlErrorBit);
+      } else if ((status & ecat::kAlStateMask) == walk.target) {
         walk.done[s] = true;
       }
     }
@@ -175,10 +175,10 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
           entries.size() * ecat::kSyncManagerStride);
       for (std::size_t e = 0; e < entries.size(); ++e) {
         std::uint8_t* sm = &dg.data[e * ecat::kSyncManagerStride];
-        putLe(sm + ecat::sm::kPhysicalStart, entries[e].phys, 2);
-        putLe(sm + ecat::sm::kLength, entries[e].length, 2);
-        sm[ecat::sm::kControl] = entries[e].outputs ? kSmOutputs : kSmInputs;
-        sm[ecat::sm::kActivate] = 0x01;
+        putLe(sm + ecat::kSmStartAt, entries[e].phys, 2);
+        putLe(sm + ecat::kSmLengthAt, entries[e].length, 2);
+        sm[ecat::kSmControlAt] = entries[e].outputs ? kSmOutputs : kSmInputs;
+        sm[ecat::kSmActivateAt] = 0x01;
       }
       frame.push_back(std::move(dg));
     } else {
@@ -186,15 +186,15 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
                                          entries.size() * ecat::kFmmuStride);
       for (std::size_t e = 0; e < entries.size(); ++e) {
         std::uint8_t* fmmu = &dg.data[e * ecat::kFmmuStride];
-        putLe(fmmu + ecat::fmmu::kLogicalStart, entries[e].logical, 4);
-        putLe(fmmu + ecat::fmmu::kLength, entries[e].length, 2);
-        fmmu[ecat::fmmu::kLogicalStartBit] = 0;
-        fmmu[ecat::fmmu::kLogicalStopBit] = 7;
-        putLe(fmmu + ecat::fmmu::kPhysicalStart, entries[e].phys, 2);
-        fmmu[ecat::fmmu::kPhysicalStartBit] = 0;
-        fmmu[ecat::fmmu::kType] =
-            entries[e].outputs ? ecat::fmmu::kTypeWrite : ecat::fmmu::kTypeRead;
-        fmmu[ecat::fmmu::kActivate] = 1;
+        putLe(fmmu + ecat::kFmmuLogicalAt, entries[e].logical, 4);
+        putLe(fmmu + ecat::kFmmuLengthAt, entries[e].length, 2);
+        fmmu[ecat::kFmmuStartBitAt] = 0;
+        fmmu[ecat::kFmmuStopBitAt] = 7;
+        putLe(fmmu + ecat::kFmmuPhysicalAt, entries[e].phys, 2);
+        fmmu[ecat::kFmmuPhysicalStartBitAt] = 0;
+        fmmu[ecat::kFmmuTypeAt] =
+            entries[e].outputs ? ecat::kFmmuWrite : ecat::kFmmuRead;
+        fmmu[ecat::kFmmuActivateAt] = 1;
       }
       frame.push_back(std::move(dg));
     }
@@ -207,7 +207,7 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   const std::size_t n = segment_.escs.size();
   auto next = [&] { t += step_ns; };
   // 1. count the slaves
-  std::vector<RingDatagram> frame{registerDatagram(ecat::kBrd, 0, ecat::kRegEscType, 2)};
+  std::vector<RingDatagram> frame{registerDatagram(ecat::kBrd, 0, ecat::kRegType, 2)};
   if (!exchange(sink, frame, t)) return false;
   next();
   // 2. station addresses by ring position
@@ -222,21 +222,21 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   next();
   // 3. read each slave's state, 4. INIT with error acknowledge to all, then wait for INIT
   AlWalk walk;
-  walk.start(AlState::Init, n, false);
+  walk.start(ecat::kAlInit, n, false);
   if (!alFrame(sink, walk, t)) return false;
   next();
   frame.clear();
   RingDatagram reset = registerDatagram(ecat::kBwr, 0, ecat::kRegAlControl, 2);
-  putLe(reset.data.data(), kInit | kAlErrorIndicator, 2);
+  putLe(reset.data.data(), kInit | ecat::kAlErrorBit, 2);
   frame.push_back(std::move(reset));
   if (!exchange(sink, frame, t)) return false;
   next();
-  walk.start(AlState::Init, n, false);
+  walk.start(ecat::kAlInit, n, false);
   for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
     if (!alFrame(sink, walk, t)) return false;
   }
   // 5. PRE-OP, 6. sync managers and FMMUs, 7. SAFE-OP
-  walk.start(AlState::PreOp, n, true);
+  walk.start(ecat::kAlPreOp, n, true);
   for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
     if (!alFrame(sink, walk, t)) return false;
   }
@@ -244,9 +244,9 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   next();
   if (!configFrame(sink, false, t)) return false;
   next();
-  walk.start(AlState::SafeOp, n, true);
+  walk.start(ecat::kAlSafeOp, n, true);
   if (op_request_slave)
-    walk.first_request[*op_request_slave] = static_cast<std::uint8_t>(AlState::Op);
+    walk.first_request[*op_request_slave] = ecat::kAlOp;
   for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
     if (!alFrame(sink, walk, t)) return false;
   }

@@ -24,7 +24,7 @@ struct AlWalk {
   std::vector<std::uint8_t> first_request;  // ESM-001: what the first request asks for
   bool active = false;
 
-  void start(AlState state, std::size_t slaves, bool request);
+  void start(ecat::AlState state, std::size_t slaves, bool request);
   bool finished() const;
 };
 

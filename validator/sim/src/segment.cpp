@@ -12,8 +12,8 @@
 namespace ncservo::sim {
 namespace {
 
-constexpr auto kSafeOp = static_cast<std::uint8_t>(AlState::SafeOp);
-constexpr auto kOp = static_cast<std::uint8_t>(AlState::Op);
+constexpr auto kSafeOp = ecat::kAlSafeOp;
+constexpr auto kOp = ecat::kAlOp;
 constexpr std::uint8_t kEscTypeValue = 0x11;
 // AL status codes (register 0x0134, ETG.1000.6).
 constexpr std::uint16_t kCodeInvalidTransition = 0x0011;  // invalid requested state change
@@ -58,7 +58,7 @@ bool Esc::processData() const {
 }
 void Esc::publishAlStatus() {
   putLe(&mem[ecat::kRegAlStatus],
-        static_cast<std::uint16_t>(state | (error_ ? kAlErrorIndicator : 0)), 2);
+        static_cast<std::uint16_t>(state | (error_ ? ecat::kAlErrorBit : 0)), 2);
   putLe(&mem[ecat::kRegAlStatusCode], code_, 2);
 }
 void Esc::powerUpError() {
@@ -75,23 +75,23 @@ void Esc::startInOp(std::uint16_t station_address) {
   auto fmmu = [&](std::uint32_t logical, std::size_t length, std::uint16_t phys,
                   std::uint8_t type) {
     std::uint8_t* p = &mem[ecat::kRegFmmu0 + ecat::kFmmuStride * f++];
-    putLe(p + ecat::fmmu::kLogicalStart, logical, 4);
-    putLe(p + ecat::fmmu::kLength, length, 2);
-    p[ecat::fmmu::kLogicalStopBit] = 7;
-    putLe(p + ecat::fmmu::kPhysicalStart, phys, 2);
-    p[ecat::fmmu::kType] = type;
-    p[ecat::fmmu::kActivate] = 1;
+    putLe(p + ecat::kFmmuLogicalAt, logical, 4);
+    putLe(p + ecat::kFmmuLengthAt, length, 2);
+    p[ecat::kFmmuStopBitAt] = 7;
+    putLe(p + ecat::kFmmuPhysicalAt, phys, 2);
+    p[ecat::kFmmuTypeAt] = type;
+    p[ecat::kFmmuActivateAt] = 1;
   };
   if (outputBytes() > 0) {
-    fmmu(outputs_logical, outputBytes(), outputsPhysical(), ecat::fmmu::kTypeWrite);
+    fmmu(outputs_logical, outputBytes(), outputsPhysical(), ecat::kFmmuWrite);
   }
-  if (inputBytes() > 0) fmmu(inputs_logical, inputBytes(), inputsPhysical(), ecat::fmmu::kTypeRead);
+  if (inputBytes() > 0) fmmu(inputs_logical, inputBytes(), inputsPhysical(), ecat::kFmmuRead);
 }
 
 void Esc::onAlControl(std::uint16_t value) {
-  const auto requested = static_cast<std::uint8_t>(value & kAlStateMask);
+  const auto requested = static_cast<std::uint8_t>(value & ecat::kAlStateMask);
   if (error_) {
-    if ((value & kAlErrorIndicator) == 0) return;  // an error must be acknowledged first
+    if ((value & ecat::kAlErrorBit) == 0) return;  // an error must be acknowledged first
     error_ = false;
     code_ = 0;
   }
@@ -152,20 +152,20 @@ std::uint16_t Esc::logicalAccess(RingDatagram& dg) {
   const std::uint64_t end = start + dg.data.size();
   for (std::size_t f = 0; f < kActiveFmmus; ++f) {
     const std::uint8_t* fmmu = &mem[ecat::kRegFmmu0 + ecat::kFmmuStride * f];
-    if ((fmmu[ecat::fmmu::kActivate] & 1) == 0) continue;
-    const std::uint64_t lstart = getLe(fmmu + ecat::fmmu::kLogicalStart, 4);
-    const std::uint64_t lend = lstart + getLe(fmmu + ecat::fmmu::kLength, 2);
+    if ((fmmu[ecat::kFmmuActivateAt] & 1) == 0) continue;
+    const std::uint64_t lstart = getLe(fmmu + ecat::kFmmuLogicalAt, 4);
+    const std::uint64_t lend = lstart + getLe(fmmu + ecat::kFmmuLengthAt, 2);
     const std::uint64_t from = std::max(start, lstart), to = std::min(end, lend);
     if (from >= to) continue;
-    const std::size_t phys = getLe(fmmu + ecat::fmmu::kPhysicalStart, 2) + (from - lstart);
+    const std::size_t phys = getLe(fmmu + ecat::kFmmuPhysicalAt, 2) + (from - lstart);
     const std::size_t offset = from - start;
     const std::size_t count = to - from;
     if (phys + count > kEscMemory) continue;
-    const std::uint8_t type = fmmu[ecat::fmmu::kType];
-    if (type == ecat::fmmu::kTypeRead && ecat::readsSlaves(dg.command)) {
+    const std::uint8_t type = fmmu[ecat::kFmmuTypeAt];
+    if (type == ecat::kFmmuRead && ecat::readsSlaves(dg.command)) {
       std::memcpy(&dg.data[offset], &mem[phys], count);
       read = true;
-    } else if (type == ecat::fmmu::kTypeWrite && ecat::writesSlaves(dg.command)) {
+    } else if (type == ecat::kFmmuWrite && ecat::writesSlaves(dg.command)) {
       std::memcpy(&mem[phys], &dg.data[offset], count);
       wrote = true;
       outputs_taken = true;
@@ -245,7 +245,7 @@ Segment::Segment(const SimOptions& o, Rng& rng) {
       esc.kind = terminal % 2 == 0 ? SlaveKind::OutputTerminal : SlaveKind::InputTerminal;
       ++terminal;
     }
-    esc.mem[ecat::kRegEscType] = kEscTypeValue;
+    esc.mem[ecat::kRegType] = kEscTypeValue;
     esc.transition_frames = static_cast<int>(rng.between(1, 3));
     esc.publishAlStatus();
     escs.push_back(std::move(esc));

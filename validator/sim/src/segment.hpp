@@ -37,7 +37,7 @@ class Esc {
   SlaveKind kind = SlaveKind::Servo;
   int axis = -1;  // for a servo
   std::vector<std::uint8_t> mem = std::vector<std::uint8_t>(kEscMemory, 0);
-  std::uint8_t state = static_cast<std::uint8_t>(AlState::Init);
+  std::uint8_t state = ecat::kAlInit;
   int transition_frames = 1;    // frames a state change takes
   bool refuse_next_op = false;  // ESM-003
   bool outputs_taken = false;   // this cycle's LRW wrote its outputs

@@ -129,7 +129,7 @@ struct Simulator::Impl {
       Esc& esc = segment.servo(a);
       if (!esc.processData()) continue;
       DriveModel& drive = drives[static_cast<std::size_t>(a)];
-      drive.setOperational(esc.state == static_cast<std::uint8_t>(AlState::Op));
+      drive.setOperational(esc.state == ecat::kAlOp);
       if (esc.outputs_taken) {
         const RxPdo rx = decodeRx(&esc.mem[esc.outputsPhysical()]);
         drive.step(&rx, now_ns);
@@ -191,7 +191,7 @@ struct Simulator::Impl {
       stepDrives(slot);
       if (!operational) {
         if (!walk.active && cycle + 1 == safe_op_cycles) {
-          walk.start(AlState::Op, segment.escs.size(), true);
+          walk.start(ecat::kAlOp, segment.escs.size(), true);
         } else if (walk.active) {
           if (!master.alFrame(sink, walk, slot + cycle_ns / 2)) return std::nullopt;
           if (!walk.active) {

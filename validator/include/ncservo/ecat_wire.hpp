@@ -1,0 +1,208 @@
+// EtherCAT wire facts (PROTOCOL.md §8, ETG.1000.4, ETG.1000.6): frame and datagram layout,
+// commands, ESC registers and their fields, AL states, the CoE mailbox and the PDO objects, and
+// the carriers an EtherCAT frame travels in. Facts only; what reads them lives elsewhere
+// (ethercat.hpp walks frames).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace ncservo::ecat {
+
+// --- Carriers: Ethernet II, 802.1Q/802.1ad tags, IPv4/IPv6 UDP, capture link types ---
+inline constexpr std::uint16_t kEtherType = 0x88A4;
+inline constexpr std::uint16_t kUdpPort = 34980;
+inline constexpr std::size_t kEthernetHeaderSize = 14;         // destination, source, EtherType
+inline constexpr std::size_t kEthernetMinFrame = 60;           // without the FCS
+inline constexpr std::uint8_t kMacLocallyAdministered = 0x02;  // in the first byte of a MAC
+inline constexpr std::uint16_t kEtherTypeVlan = 0x8100;
+inline constexpr std::uint16_t kEtherTypeQinQ = 0x88A8;
+inline constexpr std::uint16_t kEtherTypeQinQOld = 0x9100;
+inline constexpr std::uint16_t kEtherTypeIpv4 = 0x0800;
+inline constexpr std::uint16_t kEtherTypeIpv6 = 0x86DD;
+inline constexpr std::size_t kVlanTagSize = 4;  // TCI, then the next EtherType
+inline constexpr std::uint8_t kIpProtoUdp = 17;
+inline constexpr std::size_t kIpv4MinHeaderSize = 20;
+inline constexpr std::size_t kIpv6HeaderSize = 40;
+inline constexpr std::size_t kUdpHeaderSize = 8;
+inline constexpr std::size_t kSllHeaderSize = 16;   // Linux cooked v1, protocol type last
+inline constexpr std::size_t kSll2HeaderSize = 20;  // Linux cooked v2, protocol type first
+inline constexpr int kDltEthernet = 1;              // tcpdump.org link types
+inline constexpr int kDltLinuxSll = 113;
+inline constexpr int kDltLinuxSll2 = 276;
+
+// --- Frame header (2 bytes): chain length in bits 10..0, type in bits 15..12 ---
+inline constexpr std::size_t kFrameHeaderSize = 2;
+inline constexpr std::uint16_t kLengthMask = 0x07FF;
+inline constexpr unsigned kFrameTypeShift = 12;
+inline constexpr std::uint16_t kFrameTypeDatagrams = 1;
+
+// --- Datagram: header, data, working counter ---
+inline constexpr std::size_t kDatagramCommandAt = 0;     // 1 byte
+inline constexpr std::size_t kDatagramIndexAt = 1;       // 1 byte
+inline constexpr std::size_t kDatagramAddressAt = 2;     // 4 bytes: ADP/ADO or logical address
+inline constexpr std::size_t kDatagramLengthWordAt = 6;  // 2 bytes: length and the flags below
+inline constexpr std::size_t kDatagramIrqAt = 8;         // 2 bytes
+inline constexpr std::size_t kDatagramHeaderSize = 10;
+static_assert(kDatagramIrqAt + 2 == kDatagramHeaderSize);
+inline constexpr std::uint16_t kCirculatingBit = 0x4000;
+inline constexpr std::uint16_t kMoreBit = 0x8000;
+inline constexpr std::size_t kWkcSize = 2;
+// The frame header's 11-bit length bounds a chain: at most this many minimal datagrams.
+inline constexpr std::size_t kMaxDatagrams =
+    (kLengthMask + kDatagramHeaderSize + kWkcSize) / (kDatagramHeaderSize + kWkcSize) + 1;
+
+enum Command : std::uint8_t {
+  kNop = 0,
+  kAprd = 1,
+  kApwr = 2,
+  kAprw = 3,
+  kFprd = 4,
+  kFpwr = 5,
+  kFprw = 6,
+  kBrd = 7,
+  kBwr = 8,
+  kBrw = 9,
+  kLrd = 10,
+  kLwr = 11,
+  kLrw = 12,
+  kArmw = 13,
+  kFrmw = 14,
+};
+
+// How a command addresses slaves: ADP/ADO with ADP = −ring position (auto-increment), ADP =
+// configured station address, every slave (broadcast), or a 32-bit logical address.
+enum class Addressing : std::uint8_t { None, AutoIncrement, Configured, Broadcast, Logical };
+
+// Whether the addressed slaves' memory is read into the datagram and written from it.
+// ARMW/FRMW read one slave and write the others: counted as reads of the addressed one.
+struct CommandFacts {
+  const char* name;
+  Addressing addressing;
+  bool reads;
+  bool writes;
+};
+inline constexpr std::array<CommandFacts, 15> kCommands{{
+    {"NOP", Addressing::None, false, false},
+    {"APRD", Addressing::AutoIncrement, true, false},
+    {"APWR", Addressing::AutoIncrement, false, true},
+    {"APRW", Addressing::AutoIncrement, true, true},
+    {"FPRD", Addressing::Configured, true, false},
+    {"FPWR", Addressing::Configured, false, true},
+    {"FPRW", Addressing::Configured, true, true},
+    {"BRD", Addressing::Broadcast, true, false},
+    {"BWR", Addressing::Broadcast, false, true},
+    {"BRW", Addressing::Broadcast, true, true},
+    {"LRD", Addressing::Logical, true, false},
+    {"LWR", Addressing::Logical, false, true},
+    {"LRW", Addressing::Logical, true, true},
+    {"ARMW", Addressing::AutoIncrement, true, false},
+    {"FRMW", Addressing::Configured, true, false},
+}};
+static_assert(kCommands.size() == kFrmw + 1, "one row per command, indexed by its code");
+
+// --- ESC registers ---
+inline constexpr std::uint16_t kRegType = 0x0000;
+inline constexpr std::uint16_t kRegStationAddress = 0x0010;
+inline constexpr std::uint16_t kRegStationAlias = 0x0012;
+inline constexpr std::uint16_t kRegAlControl = 0x0120;
+inline constexpr std::uint16_t kRegAlStatus = 0x0130;
+inline constexpr std::uint16_t kRegAlStatusCode = 0x0134;
+inline constexpr std::uint16_t kRegFmmu0 = 0x0600;
+inline constexpr std::uint16_t kFmmuStride = 16;
+inline constexpr std::size_t kFmmuCount = 16;
+inline constexpr std::uint16_t kRegSyncManager0 = 0x0800;
+inline constexpr std::uint16_t kSyncManagerStride = 8;
+inline constexpr std::size_t kSyncManagerCount = 16;
+inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;
+// Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
+inline constexpr std::uint16_t kProcessRam = 0x1000;
+static_assert(kRegFmmu0 + kFmmuCount * kFmmuStride <= kRegSyncManager0);
+static_assert(kRegSyncManager0 + kSyncManagerCount * kSyncManagerStride <= kRegDcSystemTime);
+
+// Fields of one sync manager: byte offsets in its 8 bytes.
+inline constexpr std::size_t kSmStartAt = 0;   // 2 bytes, physical start address
+inline constexpr std::size_t kSmLengthAt = 2;  // 2 bytes
+inline constexpr std::size_t kSmControlAt = 4;
+inline constexpr std::size_t kSmStatusAt = 5;
+inline constexpr std::size_t kSmActivateAt = 6;  // bit 0: enabled
+inline constexpr std::size_t kSmPdiControlAt = 7;
+static_assert(kSmPdiControlAt + 1 == kSyncManagerStride);
+inline constexpr std::uint8_t kSmModeMask = 0x03;  // in the control byte
+inline constexpr std::uint8_t kSmModeMailbox = 0x02;
+// Sync managers by convention (ETG.1000.4, PROTOCOL.md §8).
+inline constexpr std::size_t kMailboxOutSm = 0;  // master to slave
+inline constexpr std::size_t kMailboxInSm = 1;   // slave to master
+inline constexpr std::size_t kOutputsSm = 2;     // RxPDO
+inline constexpr std::size_t kInputsSm = 3;      // TxPDO
+
+// Fields of one FMMU: byte offsets in its 16 bytes.
+inline constexpr std::size_t kFmmuLogicalAt = 0;  // 4 bytes
+inline constexpr std::size_t kFmmuLengthAt = 4;   // 2 bytes
+inline constexpr std::size_t kFmmuStartBitAt = 6;
+inline constexpr std::size_t kFmmuStopBitAt = 7;
+inline constexpr std::size_t kFmmuPhysicalAt = 8;  // 2 bytes
+inline constexpr std::size_t kFmmuPhysicalStartBitAt = 10;
+inline constexpr std::size_t kFmmuTypeAt = 11;
+inline constexpr std::size_t kFmmuActivateAt = 12;  // bit 0: active
+static_assert(kFmmuActivateAt < kFmmuStride);
+inline constexpr std::uint8_t kFmmuRead = 1;   // type: the slave's inputs
+inline constexpr std::uint8_t kFmmuWrite = 2;  // type: the slave's outputs
+
+// --- AL states, in bits 3..0 of AL control and AL status ---
+enum AlState : std::uint8_t {
+  kAlInit = 1,
+  kAlPreOp = 2,
+  kAlBoot = 3,
+  kAlSafeOp = 4,
+  kAlOp = 8,
+};
+inline constexpr std::array<std::uint8_t, 5> kAlStates{kAlInit, kAlPreOp, kAlBoot, kAlSafeOp,
+                                                       kAlOp};
+inline constexpr std::uint8_t kAlStateMask = 0x0F;
+// Error indicator in AL status, error acknowledge in AL control.
+inline constexpr std::uint8_t kAlErrorBit = 0x10;
+// AL status codes (ETG.1000.6).
+inline constexpr std::uint16_t kAlCodeInvalidTransition = 0x0011;
+inline constexpr std::uint16_t kAlCodeInvalidOutputs = 0x001D;
+inline constexpr std::uint16_t kAlCodeEepromNoAccess = 0x0050;
+
+// --- Mailbox and CoE SDO (ETG.1000.4 mailbox, ETG.1000.6 CoE) ---
+// Mailbox header: length 2 (of what follows the header), address 2, channel/priority 1,
+// type 1 (low 4 bits) and counter.
+inline constexpr std::size_t kMailboxLengthAt = 0;
+inline constexpr std::size_t kMailboxTypeAt = 5;
+inline constexpr std::size_t kMailboxHeaderSize = 6;
+inline constexpr std::uint8_t kMailboxTypeMask = 0x0F;
+inline constexpr std::uint8_t kMailboxTypeCoe = 3;
+// CoE header: number, service in bits 15..12.
+inline constexpr std::size_t kCoeHeaderSize = 2;
+inline constexpr unsigned kCoeServiceShift = 12;
+inline constexpr std::uint8_t kCoeServiceSdoRequest = 2;
+inline constexpr std::uint8_t kCoeServiceSdoResponse = 3;
+// SDO: command 1, index 2, subindex 1, then 4 bytes of data (expedited) or of size (normal).
+inline constexpr std::size_t kSdoCommandAt = 0;
+inline constexpr std::size_t kSdoIndexAt = 1;
+inline constexpr std::size_t kSdoSubindexAt = 3;
+inline constexpr std::size_t kSdoDataAt = 4;
+inline constexpr std::size_t kSdoDataSize = 4;
+inline constexpr unsigned kSdoSpecifierShift = 5;  // command specifier in bits 7..5
+inline constexpr std::uint8_t kSdoInitiateDownloadRequest = 1;
+inline constexpr std::uint8_t kSdoInitiateUploadResponse = 2;
+inline constexpr std::uint8_t kSdoSizeIndicated = 0x01;
+inline constexpr std::uint8_t kSdoExpedited = 0x02;
+inline constexpr unsigned kSdoUnusedBytesShift = 2;  // of an expedited transfer, bits 3..2
+inline constexpr std::uint8_t kSdoUnusedBytesMask = 0x03;
+inline constexpr std::uint8_t kSdoCompleteAccess = 0x10;
+
+// --- CoE objects that size the process data ---
+inline constexpr std::uint16_t kRxPdoAssignment = 0x1C12;  // PDOs assigned to SM2 (outputs)
+inline constexpr std::uint16_t kTxPdoAssignment = 0x1C13;  // PDOs assigned to SM3 (inputs)
+inline constexpr std::uint16_t kRxPdoMappingFirst = 0x1600;
+inline constexpr std::uint16_t kRxPdoMappingLast = 0x17FF;
+inline constexpr std::uint16_t kTxPdoMappingFirst = 0x1A00;
+inline constexpr std::uint16_t kTxPdoMappingLast = 0x1BFF;
+inline constexpr std::uint32_t kPdoEntryBitsMask = 0xFF;  // low byte of a mapping entry
+
+}  // namespace ncservo::ecat
