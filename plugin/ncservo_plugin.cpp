@@ -276,8 +276,8 @@ void applyPreferences() {
     if (loaded) {
       config = std::move(*loaded);
       // Severity overrides are left to Wireshark's own expert-severity table (PROTOCOL.md §10).
-      if (auto error = settings->apply(*config)) {
-        report_failure("NCSERVO: %s: %s", pref_config_path, error->c_str());
+      if (Status applied = applyConfig(*config, *settings); !applied) {
+        report_failure("NCSERVO: %s", applied.error().text().c_str());
       }
     } else {
       report_failure("NCSERVO: %s", loaded.error().text().c_str());

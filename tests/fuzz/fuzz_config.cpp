@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   RuleSettings settings;
-  (void)settings.apply(*result);
+  (void)applyConfig(*result, settings);
   DecoderOptions options;
   options.axes = result->axes;
   options.default_layout = result->default_layout;

@@ -623,7 +623,7 @@ Validated validate(const SimOptions& resolved, bool with_config) {
     EXPECT_TRUE(parsed.has_value());
     if (parsed.has_value()) {
       decoder.axes = parsed->axes;
-      EXPECT_FALSE(settings.apply(*parsed).has_value());
+      EXPECT_TRUE(applyConfig(*parsed, settings));
     }
   }
   Validator validator(decoder, settings);

@@ -300,23 +300,27 @@ struct ValidateArgs {
 };
 
 // The settings from RULES.md's defaults, the config file, then the command line.
-std::optional<std::string> buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
-                                         RuleSettings& settings) {
+Status buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
+                     RuleSettings& settings) {
+  // An error of an option names the option.
+  auto option = [](const char* name, const Status& status) {
+    return fail(fmt::format("{}: {}", name, status.error().message));
+  };
   if (config) {
-    if (auto error = settings.apply(*config)) return fmt::format("{}: {}", config->path, *error);
+    if (Status s = applyConfig(*config, settings); !s) return s;
   }
   for (const std::string& id : o.disable) {
-    if (auto error = settings.disable(id)) return "--disable: " + *error;
+    if (Status s = settings.disable(id); !s) return option("--disable", s);
   }
   for (const std::string& pair : o.severities) {
     const auto eq = pair.find('=');
-    if (eq == std::string::npos) return "--severity " + pair + ": expected ID=LEVEL";
-    if (auto error = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)))
-      return "--severity: " + *error;
+    if (eq == std::string::npos) return fail("--severity " + pair + ": expected ID=LEVEL");
+    if (Status s = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)); !s)
+      return option("--severity", s);
   }
   for (const std::string& pair : o.timeouts) {
     const auto eq = pair.find('=');
-    if (eq == std::string::npos) return "--timeout " + pair + ": expected NAME=MS";
+    if (eq == std::string::npos) return fail("--timeout " + pair + ": expected NAME=MS");
     std::int64_t ms = -1;
     try {
       std::size_t used = 0;
@@ -325,11 +329,11 @@ std::optional<std::string> buildSettings(const ValidateArgs& o, const std::optio
     } catch (const std::exception&) {
       ms = -1;
     }
-    if (ms < 0) return "--timeout " + pair + ": expected a number of milliseconds";
-    if (auto error = settings.setTimeout(pair.substr(0, eq), ms)) return "--timeout: " + *error;
+    if (ms < 0) return fail("--timeout " + pair + ": expected a number of milliseconds");
+    if (Status s = settings.setTimeout(pair.substr(0, eq), ms); !s) return option("--timeout", s);
   }
   if (o.servo_ready_mode) settings.servo_ready_mode = o.servo_ready_mode;
-  return std::nullopt;
+  return {};
 }
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
@@ -408,8 +412,8 @@ int runValidate(const ValidateArgs& o) {
     return kExitUsage;
   }
   RuleSettings settings;
-  if (auto error = buildSettings(o, files->config, settings)) {
-    fmt::print(stderr, "ncservo: {}\n", *error);
+  if (Status built = buildSettings(o, files->config, settings); !built) {
+    fmt::print(stderr, "ncservo: {}\n", built.error().text());
     return kExitUsage;
   }
   const bool never = o.fail_on == "never";

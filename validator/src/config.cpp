@@ -282,4 +282,26 @@ std::string writeConfig(const std::vector<AxisConfig>& axes, std::optional<int> 
   return text.str();
 }
 
+Status applyConfig(const Config& config, RuleSettings& settings) {
+  auto named = [&config](Error error) {
+    error.path = config.path;
+    return fail(std::move(error));
+  };
+  if (config.servo_ready_mode) settings.servo_ready_mode = config.servo_ready_mode;
+  settings.telegram_failure_limit = config.telegram_failure_limit;
+  for (const auto& [name, value] : config.timeouts_ms) {
+    if (Status s = settings.setTimeout(name, value); !s) return named(s.error());
+  }
+  for (const std::string& code : config.disabled_rules) {
+    if (Status s = settings.disable(code); !s) return named(s.error());
+  }
+  for (const auto& [code, level] : config.severity_overrides) {
+    if (Status s = settings.setSeverity(code, level); !s) return named(s.error());
+  }
+  settings.axis_ready_mode.clear();
+  for (const AxisConfig& axis : config.axes)
+    settings.axis_ready_mode.push_back(axis.servo_ready_mode);
+  return {};
+}
+
 }  // namespace ncservo

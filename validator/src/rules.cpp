@@ -8,7 +8,6 @@
 
 #include "ncservo/al_tracker.hpp"
 #include "ncservo/axis_model.hpp"
-#include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 
@@ -596,48 +595,32 @@ std::optional<int> RuleSettings::readyModeFor(std::size_t axis) const {
   return servo_ready_mode;
 }
 
-std::optional<std::string> RuleSettings::disable(std::string_view code) {
+Status RuleSettings::disable(std::string_view code) {
   const RuleDef* rule = ruleByCode(code);
-  if (rule == nullptr) return fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code);
+  if (rule == nullptr) return fail(fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code));
   enabled[static_cast<std::size_t>(rule->id)] = false;
-  return std::nullopt;
+  return {};
 }
 
-std::optional<std::string> RuleSettings::setSeverity(std::string_view code,
-                                                     std::string_view level) {
+Status RuleSettings::setSeverity(std::string_view code, std::string_view level) {
   const RuleDef* rule = ruleByCode(code);
-  if (rule == nullptr) return fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code);
+  if (rule == nullptr) return fail(fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code));
   const std::optional<Severity> s = severityFromName(level);
-  if (!s) return fmt::format("severity '{}' for {}: expected error, warning or info", level, code);
+  if (!s) {
+    return fail(fmt::format("severity '{}' for {}: expected error, warning or info", level, code));
+  }
   severity[static_cast<std::size_t>(rule->id)] = *s;
-  return std::nullopt;
+  return {};
 }
 
-std::optional<std::string> RuleSettings::setTimeout(std::string_view name, std::int64_t ms) {
+Status RuleSettings::setTimeout(std::string_view name, std::int64_t ms) {
   const std::optional<Timeout> t = timeoutFromName(name);
-  if (!t) return fmt::format("unknown timeout '{}' (known: {})", name, timeoutNameList());
+  if (!t) return fail(fmt::format("unknown timeout '{}' (known: {})", name, timeoutNameList()));
   if (ms < 0 || ms > kMaxTimeoutMs) {
-    return fmt::format("timeout {} = {} ms: expected 0 to {}", name, ms, kMaxTimeoutMs);
+    return fail(fmt::format("timeout {} = {} ms: expected 0 to {}", name, ms, kMaxTimeoutMs));
   }
   timeout_ns[static_cast<std::size_t>(*t)] = ms * 1'000'000;
-  return std::nullopt;
-}
-
-std::optional<std::string> RuleSettings::apply(const Config& config) {
-  if (config.servo_ready_mode) servo_ready_mode = config.servo_ready_mode;
-  telegram_failure_limit = config.telegram_failure_limit;
-  for (const auto& [name, value] : config.timeouts_ms) {
-    if (auto error = setTimeout(name, value)) return error;
-  }
-  for (const std::string& code : config.disabled_rules) {
-    if (auto error = disable(code)) return error;
-  }
-  for (const auto& [code, level] : config.severity_overrides) {
-    if (auto error = setSeverity(code, level)) return error;
-  }
-  axis_ready_mode.clear();
-  for (const AxisConfig& axis : config.axes) axis_ready_mode.push_back(axis.servo_ready_mode);
-  return std::nullopt;
+  return {};
 }
 
 }  // namespace ncservo

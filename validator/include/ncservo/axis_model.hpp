@@ -10,8 +10,9 @@
 #include <vector>
 
 #include "ncservo/drive_state.hpp"
-#include "ncservo/finding.hpp"
 #include "ncservo/pdo.hpp"
+#include "ncservo/reads.hpp"
+#include "ncservo/stamp.hpp"
 
 namespace ncservo {
 

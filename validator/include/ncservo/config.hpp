@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "ncservo/error.hpp"
+#include "ncservo/rules.hpp"
 
 namespace ncservo {
 
@@ -45,5 +46,8 @@ Result<Config> parseConfig(std::string_view text, const std::string& path);
 // addresses in hexadecimal.
 std::string writeConfig(const std::vector<AxisConfig>& axes, std::optional<int> servo_ready_mode);
 Result<Config> loadConfig(const std::string& path);
+// The file's settings over RULES.md's defaults (the parser checked all but the rule IDs); an error
+// names the file.
+Status applyConfig(const Config& config, RuleSettings& settings);
 
 }  // namespace ncservo

@@ -13,7 +13,9 @@
 #include <vector>
 
 #include "ncservo/bus_events.hpp"
+#include "ncservo/error.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/reads.hpp"
 
 namespace ncservo {
 
@@ -86,46 +88,12 @@ enum class RuleId : std::uint8_t {
 inline constexpr std::size_t kRuleCount = 29;
 
 class AxisModel;
-struct Config;
 struct RuleSettings;
 
 // Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
 // cycles) or on what a slave's state machine did (AL control and status).
 enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
 const char* ruleKindName(RuleKind kind);
-
-// What an axis rule's check reads (STYLE.md "A rule declares what it reads"): bits of the PDO
-// words, and the slave's AL state. The validator's fast path compares exactly what the rules and
-// the axis model read, so a check that reads something undeclared is caught by the fast-path
-// test (tests/unit/fast_path_test.cpp), never silently skipped.
-struct Reads {
-  std::array<std::uint64_t, kWordCount> bits{};  // per word (kWords order), the bits read
-  bool al_state = false;  // the slave's AL state, and which PDOs each frame carries
-
-  constexpr Reads operator|(const Reads& other) const {
-    Reads out = *this;
-    for (std::size_t w = 0; w < kWordCount; ++w) out.bits[w] |= other.bits[w];
-    out.al_state = al_state || other.al_state;
-    return out;
-  }
-  constexpr bool any() const {
-    for (std::uint64_t b : bits) {
-      if (b != 0) return true;
-    }
-    return al_state;
-  }
-};
-// The fields of the field table named by their filter names (a whole word for a word's row);
-// an unknown name does not compile.
-constexpr Reads readsOf(std::initializer_list<std::string_view> filters, bool al_state = false) {
-  Reads out;
-  for (std::string_view filter : filters) {
-    const FieldDef& f = field(filter);
-    out.bits[static_cast<std::size_t>(f.word)] |= f.mask != 0 ? f.mask : wordMask(f.word);
-  }
-  out.al_state = al_state;
-  return out;
-}
 
 // What a check looks at: the axis's model (axis rules) or one event of the bus and slave models.
 struct RuleSubject {
@@ -189,12 +157,10 @@ struct RuleSettings {
   std::int64_t timeoutNs(Timeout t) const { return timeout_ns[static_cast<std::size_t>(t)]; }
   std::optional<int> readyModeFor(std::size_t axis) const;
 
-  // Each returns an error message naming what was wrong, or nothing.
-  std::optional<std::string> disable(std::string_view code);
-  std::optional<std::string> setSeverity(std::string_view code, std::string_view level);
-  std::optional<std::string> setTimeout(std::string_view name, std::int64_t ms);
-  // Applies a configuration file (already validated by the parser except for rule IDs).
-  std::optional<std::string> apply(const Config& config);
+  // Each fails with a message naming what was wrong.
+  Status disable(std::string_view code);
+  Status setSeverity(std::string_view code, std::string_view level);
+  Status setTimeout(std::string_view name, std::int64_t ms);
 };
 
 }  // namespace ncservo
