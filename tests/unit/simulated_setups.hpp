@@ -15,21 +15,21 @@ struct SetUp {
   const char* name;
   int axes;
   int io_slaves;
-  sim::LayoutKind layout;
+  sim::ImageStyle image;
 };
 inline const SetUp kSetUps[] = {
-    {"1 axis", 1, 0, sim::LayoutKind::Default},
-    {"4 axes, default layout", 4, 0, sim::LayoutKind::Default},
-    {"3 axes and 2 terminals, interleaved", 3, 2, sim::LayoutKind::Interleaved},
-    {"4 axes and 4 terminals, default layout", 4, 4, sim::LayoutKind::Default},
-    {"32 axes and 3 terminals, two frames", 32, 3, sim::LayoutKind::Interleaved},
+    {"1 axis", 1, 0, sim::ImageStyle::Soem},
+    {"4 axes, default layout", 4, 0, sim::ImageStyle::Soem},
+    {"3 axes and 2 terminals, interleaved", 3, 2, sim::ImageStyle::EtherLab},
+    {"4 axes and 4 terminals, default layout", 4, 4, sim::ImageStyle::Soem},
+    {"32 axes and 3 terminals, two frames", 32, 3, sim::ImageStyle::EtherLab},
 };
 
 inline sim::SimOptions optionsFor(const SetUp& s) {
   sim::SimOptions o;
   o.axes = s.axes;
   o.io_slaves = s.io_slaves;
-  o.layout = s.layout;
+  o.image = s.image;
   o.duration_s = 1.0;
   EXPECT_EQ(sim::resolveOptions(o), "");
   return o;

@@ -366,7 +366,7 @@ const std::vector<StreamRow>& streamRows() {
   rows.push_back({"commissioning_4", options(Scenario::Commissioning, 4, 1.0)});
   SimOptions io = options(Scenario::Commissioning, 3, 1.0);
   io.io_slaves = 3;
-  io.layout = LayoutKind::Interleaved;
+  io.image = ImageStyle::EtherLab;
   rows.push_back({"interleaved_3_io_3", io});
   SimOptions fast = options(Scenario::Soak, 2, 1.0);
   fast.cycle_us = 250;
@@ -443,7 +443,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, Stream, ::testing::Range<std::size_t>(0, 6),
 struct WkcRow {
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
 };
 class CyclicWkc : public ::testing::TestWithParam<WkcRow> {};
 
@@ -451,7 +451,7 @@ TEST_P(CyclicWkc, ThreePerServoTwoPerOutputOnePerInputTerminal) {
   const WkcRow& row = GetParam();
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   // terminals alternate output, input, ... (8-bit digital terminals)
   const int outputs = (row.io_slaves + 1) / 2, inputs = row.io_slaves / 2;
   const int expected = 3 * row.axes + 2 * outputs + inputs;
@@ -490,16 +490,16 @@ TEST_P(CyclicWkc, ThreePerServoTwoPerOutputOnePerInputTerminal) {
 
 INSTANTIATE_TEST_SUITE_P(
     Rows, CyclicWkc,
-    ::testing::Values(WkcRow{1, 0, LayoutKind::Default}, WkcRow{4, 0, LayoutKind::Default},
-                      WkcRow{4, 3, LayoutKind::Default}, WkcRow{4, 4, LayoutKind::Interleaved},
-                      WkcRow{32, 0, LayoutKind::Default}, WkcRow{30, 5, LayoutKind::Interleaved}));
+    ::testing::Values(WkcRow{1, 0, ImageStyle::Soem}, WkcRow{4, 0, ImageStyle::Soem},
+                      WkcRow{4, 3, ImageStyle::Soem}, WkcRow{4, 4, ImageStyle::EtherLab},
+                      WkcRow{32, 0, ImageStyle::Soem}, WkcRow{30, 5, ImageStyle::EtherLab}));
 
 // --- layout ---
 
 struct LayoutRow {
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
 };
 class Layout : public ::testing::TestWithParam<LayoutRow> {};
 
@@ -521,7 +521,7 @@ TEST_P(Layout, AddressesAndStations) {
   const LayoutRow& row = GetParam();
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   ASSERT_EQ(resolveOptions(o), "");
   const Simulator simulator(o);
   const std::vector<SimAxisLayout>& layout = simulator.layout();
@@ -552,7 +552,7 @@ TEST_P(Layout, AddressesAndStations) {
   }
   for (const auto& [base, axes] : by_frame) {
     for (std::size_t k = 0; k < axes.size(); ++k) {
-      if (row.layout == LayoutKind::Interleaved) {
+      if (row.image == ImageStyle::EtherLab) {
         EXPECT_EQ(axes[k]->inputs, axes[k]->outputs + 10) << "axis " << axes[k]->index;
       } else {
         // §9.4: all outputs first, then all inputs, in axis order
@@ -575,7 +575,7 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   const LayoutRow& row = GetParam();
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   o.ready_mode = row.axes % 2;
   ASSERT_EQ(resolveOptions(o), "");
   const Simulator simulator(o);
@@ -593,15 +593,12 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, Layout,
-                         ::testing::Values(LayoutRow{1, 0, LayoutKind::Default},
-                                           LayoutRow{4, 0, LayoutKind::Default},
-                                           LayoutRow{4, 0, LayoutKind::Interleaved},
-                                           LayoutRow{3, 5, LayoutKind::Default},
-                                           LayoutRow{3, 5, LayoutKind::Interleaved},
-                                           LayoutRow{29, 0, LayoutKind::Default},
-                                           LayoutRow{30, 0, LayoutKind::Default},
-                                           LayoutRow{32, 2, LayoutKind::Interleaved}));
+INSTANTIATE_TEST_SUITE_P(
+    Rows, Layout,
+    ::testing::Values(LayoutRow{1, 0, ImageStyle::Soem}, LayoutRow{4, 0, ImageStyle::Soem},
+                      LayoutRow{4, 0, ImageStyle::EtherLab}, LayoutRow{3, 5, ImageStyle::Soem},
+                      LayoutRow{3, 5, ImageStyle::EtherLab}, LayoutRow{29, 0, ImageStyle::Soem},
+                      LayoutRow{30, 0, ImageStyle::Soem}, LayoutRow{32, 2, ImageStyle::EtherLab}));
 
 // --- through the validator ---
 
@@ -659,7 +656,7 @@ struct CleanRow {
   const char* name;
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
   bool with_config;
   int ready_mode;
   int cycle_us;
@@ -676,7 +673,7 @@ TEST_P(CleanRun, NoFindingAtWarningOrError) {
   if (row.bug != nullptr) GTEST_SKIP() << row.bug;
   SimOptions o = options(row.scenario, row.axes, row.duration_s);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   o.ready_mode = row.ready_mode;
   o.cycle_us = row.cycle_us;
   o.startup = row.startup;
@@ -701,20 +698,19 @@ TEST_P(CleanRun, NoFindingAtWarningOrError) {
 INSTANTIATE_TEST_SUITE_P(
     Rows, CleanRun,
     ::testing::Values(
-        CleanRow{"default_layout_4", 4, 0, LayoutKind::Default, false, 0, 1000, true},
-        CleanRow{"config_4", 4, 0, LayoutKind::Default, true, 0, 1000, true},
-        CleanRow{"ready_mode_1", 4, 0, LayoutKind::Default, true, 1, 1000, true},
-        CleanRow{"interleaved_io", 3, 4, LayoutKind::Interleaved, true, 0, 1000, true},
-        CleanRow{"one_axis", 1, 0, LayoutKind::Default, false, 0, 1000, true},
-        CleanRow{"cycle_500us_no_startup", 4, 0, LayoutKind::Default, false, 0, 500, false},
-        CleanRow{"32_axes", 32, 0, LayoutKind::Default, true, 0, 2000, true},
-        CleanRow{"32_axes_default_layout", 32, 0, LayoutKind::Default, false, 0, 2000, true},
-        CleanRow{"cycle_125us", 2, 0, LayoutKind::Default, false, 0, 125, true},
-        CleanRow{"cycle_10ms", 4, 0, LayoutKind::Default, false, 0, 10000, true},
-        CleanRow{"jitter_200us", 4, 0, LayoutKind::Default, false, 0, 1000, true, 200},
-        CleanRow{"soak_12s", 4, 0, LayoutKind::Default, false, 0, 1000, true, 0, Scenario::Soak,
-                 12.0},
-        CleanRow{"soak_62s", 2, 0, LayoutKind::Default, false, 0, 1000, true, 0, Scenario::Soak,
+        CleanRow{"default_layout_4", 4, 0, ImageStyle::Soem, false, 0, 1000, true},
+        CleanRow{"config_4", 4, 0, ImageStyle::Soem, true, 0, 1000, true},
+        CleanRow{"ready_mode_1", 4, 0, ImageStyle::Soem, true, 1, 1000, true},
+        CleanRow{"interleaved_io", 3, 4, ImageStyle::EtherLab, true, 0, 1000, true},
+        CleanRow{"one_axis", 1, 0, ImageStyle::Soem, false, 0, 1000, true},
+        CleanRow{"cycle_500us_no_startup", 4, 0, ImageStyle::Soem, false, 0, 500, false},
+        CleanRow{"32_axes", 32, 0, ImageStyle::Soem, true, 0, 2000, true},
+        CleanRow{"32_axes_default_layout", 32, 0, ImageStyle::Soem, false, 0, 2000, true},
+        CleanRow{"cycle_125us", 2, 0, ImageStyle::Soem, false, 0, 125, true},
+        CleanRow{"cycle_10ms", 4, 0, ImageStyle::Soem, false, 0, 10000, true},
+        CleanRow{"jitter_200us", 4, 0, ImageStyle::Soem, false, 0, 1000, true, 200},
+        CleanRow{"soak_12s", 4, 0, ImageStyle::Soem, false, 0, 1000, true, 0, Scenario::Soak, 12.0},
+        CleanRow{"soak_62s", 2, 0, ImageStyle::Soem, false, 0, 1000, true, 0, Scenario::Soak,
                  62.0}),
     [](const ::testing::TestParamInfo<CleanRow>& row) { return std::string(row.param.name); });
 
@@ -724,7 +720,7 @@ struct FaultSetup {
   const char* name;
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
   int cycle_us;
   int ready_mode;
   std::uint64_t seed;
@@ -732,12 +728,12 @@ struct FaultSetup {
 };
 const std::vector<FaultSetup>& faultSetups() {
   static const std::vector<FaultSetup> setups = {
-      {"4_axes", 4, 0, LayoutKind::Default, 1000, 0, 1},
-      {"2_axes_500us_ready_mode_1", 2, 0, LayoutKind::Default, 500, 1, 7},
-      {"5_axes_io_interleaved", 5, 2, LayoutKind::Interleaved, 1000, 0, 3},
-      {"earliest", 4, 0, LayoutKind::Default, 1000, 0, 4, 0.65},  // start-up 0.2 + 0.45
-      {"late", 4, 0, LayoutKind::Default, 1000, 0, 6, 1.3},
-      {"latest", 4, 0, LayoutKind::Default, 1000, 0, 5, 1.34},  // 0.53 x 3 s - 0.25
+      {"4_axes", 4, 0, ImageStyle::Soem, 1000, 0, 1},
+      {"2_axes_500us_ready_mode_1", 2, 0, ImageStyle::Soem, 500, 1, 7},
+      {"5_axes_io_interleaved", 5, 2, ImageStyle::EtherLab, 1000, 0, 3},
+      {"earliest", 4, 0, ImageStyle::Soem, 1000, 0, 4, 0.65},  // start-up 0.2 + 0.45
+      {"late", 4, 0, ImageStyle::Soem, 1000, 0, 6, 1.3},
+      {"latest", 4, 0, ImageStyle::Soem, 1000, 0, 5, 1.34},  // 0.53 x 3 s - 0.25
   };
   return setups;
 }
@@ -748,7 +744,7 @@ TEST_P(FaultRun, FiresItsRuleAndCompanionsOnly) {
   const FaultSetup& setup = faultSetups()[std::get<1>(GetParam())];
   SimOptions o = options(Scenario::Commissioning, setup.axes, 3.0);
   o.io_slaves = setup.io_slaves;
-  o.layout = setup.layout;
+  o.image = setup.image;
   o.cycle_us = setup.cycle_us;
   o.ready_mode = setup.ready_mode;
   o.seed = setup.seed;

@@ -7,6 +7,8 @@
 #include <cstring>
 #include <vector>
 
+#include "ncservo/compressed_output.hpp"
+
 namespace ncservo {
 namespace {
 
@@ -144,9 +146,18 @@ class PcapngWriter final : public CaptureWriter {
 }  // namespace
 
 std::unique_ptr<CaptureWriter> CaptureWriter::open(const std::string& path, CaptureFormat format,
-                                                   std::string& error) {
+                                                   std::string& error, Compression compression) {
   std::FILE* file = openFile(path, error);
   if (file == nullptr) return nullptr;
+  if (compression != Compression::None) {
+    Result<std::FILE*> compressed = openCompressedOutput(file, file != stdout, compression);
+    if (!compressed) {
+      error = fmt::format("{}: {}", path, compressed.error().text());
+      if (file != stdout) std::fclose(file);
+      return nullptr;
+    }
+    file = *compressed;
+  }
   std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
   if (format == CaptureFormat::Pcapng) return std::make_unique<PcapngWriter>(path, file);
   pcap_t* dead =

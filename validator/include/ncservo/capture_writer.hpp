@@ -8,15 +8,19 @@
 #include <optional>
 #include <string>
 
+#include "ncservo/capture_reader.hpp"
+
 namespace ncservo {
 
 enum class CaptureFormat : std::uint8_t { Pcap, Pcapng };
 
 class CaptureWriter {
  public:
-  // "-" writes to standard output. On failure `error` names the file and the reason.
+  // "-" writes to standard output; `compression` compresses the stream (compressed_output.hpp).
+  // On failure `error` names the file and the reason.
   static std::unique_ptr<CaptureWriter> open(const std::string& path, CaptureFormat format,
-                                             std::string& error);
+                                             std::string& error,
+                                             Compression compression = Compression::None);
   virtual ~CaptureWriter() = default;
   // One Ethernet frame; false once a write failed.
   virtual bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) = 0;
