@@ -2,6 +2,7 @@
 // frame stream (PROTOCOL.md §8, §9.4), its layout, and the stream through the validator.
 #include "ncservo/sim/simulator.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -21,6 +22,7 @@
 #include "ncservo/capture_writer.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
+#include "ncservo/layout_learner.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/sim/faults.hpp"
 #include "ncservo/validator.hpp"
@@ -652,6 +654,189 @@ std::string findingsText(const std::vector<Finding>& findings) {
   return text;
 }
 
+// --- process-image styles (PROTOCOL.md §9.4) ---
+
+struct StyleRow {
+  const char* name;
+  ImageStyle image;
+  int axes;
+  bool startup;
+};
+class ImageStyleRun : public ::testing::TestWithParam<StyleRow> {};
+
+SimOptions styleOptions(const StyleRow& row, double duration_s) {
+  SimOptions o = options(Scenario::Commissioning, row.axes, duration_s);
+  o.image = row.image;
+  o.startup = row.startup;
+  EXPECT_EQ(resolveOptions(o), "");
+  return o;
+}
+
+// The cyclic frames' logical datagrams, from one returned copy in OP.
+std::vector<Datagram> cyclicLogicalDatagrams(const std::vector<Frame>& frames) {
+  std::vector<Datagram> out;
+  std::int64_t first_of_cycle = -1;
+  for (const Frame& f : frames) {
+    if (f.time_ns - frames.front().time_ns < 500'000'000 || !returnedMac(f.bytes)) continue;
+    const EcatFrame frame = walked(f.bytes);
+    if (frame.count == 0 || !ecat::isLogical(frame.datagrams[0].command)) continue;
+    if (first_of_cycle >= 0 && f.time_ns - first_of_cycle > 100'000) break;  // the next cycle
+    if (first_of_cycle < 0) first_of_cycle = f.time_ns;
+    for (std::size_t i = 0; i < frame.count; ++i) {
+      if (ecat::isLogical(frame.datagrams[i].command)) out.push_back(frame.datagrams[i]);
+    }
+  }
+  return out;
+}
+
+TEST_P(ImageStyleRun, DatagramsOfTheStyle) {
+  const StyleRow& row = GetParam();
+  const std::vector<Datagram> dgs = cyclicLogicalDatagrams(simulate(styleOptions(row, 1.0)));
+  ASSERT_FALSE(dgs.empty());
+  if (row.image != ImageStyle::TwinCat) {
+    for (const Datagram& dg : dgs) EXPECT_EQ(dg.command, ecat::kLrw);
+    return;
+  }
+  // Outputs written by LWRs, then inputs read by LRDs, each area contiguous and the two apart.
+  std::size_t lwr = 0, lrd = 0;
+  for (const Datagram& dg : dgs) {
+    ASSERT_TRUE(dg.command == ecat::kLwr || dg.command == ecat::kLrd);
+    (dg.command == ecat::kLwr ? lwr : lrd) += 1;
+  }
+  for (const std::size_t area : {lwr, lrd}) {
+    EXPECT_GE(area, 1U);
+    EXPECT_LE(area, 2U) << "split in two once two slaves share it";
+  }
+  EXPECT_EQ(dgs[0].command, ecat::kLwr);
+  for (std::size_t i = 1; i < dgs.size(); ++i) {
+    if (dgs[i].command == dgs[i - 1].command) {
+      EXPECT_EQ(dgs[i].address, dgs[i - 1].address + dgs[i - 1].length) << "one area";
+    } else {
+      EXPECT_GT(dgs[i].address, dgs[i - 1].address + dgs[i - 1].length + 0x1000) << "apart";
+    }
+  }
+}
+
+// The slaves as the start-up of these options (with a start-up) configures them.
+std::vector<SlaveLayout> startUpSlaves(SimOptions o) {
+  o.startup = true;
+  LayoutLearner learner;
+  bool previous_master = false;
+  EcatFrame previous;
+  for (const Frame& f : simulate(o)) {
+    const ByteReader bytes(f.bytes.data(), f.bytes.size());
+    EcatFrame frame;
+    walkPacket(LinkType::Ethernet, bytes, frame);
+    const bool returned = returnedMac(f.bytes);
+    learner.onFrame(frame, bytes, returned,
+                    returned && previous_master && frame.sameDatagramList(previous));
+    previous_master = !returned;
+    previous = frame;
+  }
+  return learner.slaves();
+}
+
+// PROTOCOL.md §8: each returned logical datagram's WKC is what the FMMUs of the start-up add:
+// LRW 2 per slave written and 1 per slave read, LRD and LWR 1 per slave; a capture without the
+// start-up has the same set-up.
+TEST_P(ImageStyleRun, WorkingCountersFromTheStartUpsFmmus) {
+  const StyleRow& row = GetParam();
+  const SimOptions o = styleOptions(row, 1.0);
+  const std::vector<SlaveLayout> slaves = startUpSlaves(o);
+  ASSERT_FALSE(slaves.empty());
+  const std::vector<Frame> frames = simulate(o);
+  std::size_t checked = 0;
+  for (const Frame& f : frames) {
+    if (!returnedMac(f.bytes) || f.time_ns - frames.front().time_ns < 500'000'000) continue;
+    const EcatFrame frame = walked(f.bytes);
+    for (std::size_t i = 0; i < frame.count; ++i) {
+      const Datagram& dg = frame.datagrams[i];
+      if (!ecat::isLogical(dg.command)) continue;
+      int expected = 0;
+      for (const SlaveLayout& slave : slaves) {
+        bool writes = false, reads = false;
+        for (const FmmuView& fmmu : slave.fmmus) {
+          const bool overlaps = fmmu.active && fmmu.logical < dg.address + dg.length &&
+                                fmmu.logical + fmmu.length > dg.address;
+          writes = writes || (overlaps && fmmu.type == ecat::fmmu::kTypeWrite &&
+                              ecat::writesSlaves(dg.command));
+          reads = reads ||
+                  (overlaps && fmmu.type == ecat::fmmu::kTypeRead && ecat::readsSlaves(dg.command));
+        }
+        expected += dg.command == ecat::kLrw ? 2 * writes + reads : (writes || reads);
+      }
+      ASSERT_EQ(dg.wkc, expected) << ecat::commandName(dg.command) << " at " << dg.address;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400U);
+}
+
+// The commissioning scenario through the Validator with the layout file the simulator writes:
+// every axis decoded, no finding at all.
+TEST_P(ImageStyleRun, ValidatesWithItsLayoutFile) {
+  const StyleRow& row = GetParam();
+  const Validated v = validate(styleOptions(row, 3.0), true);
+  ASSERT_EQ(v.axes, static_cast<std::size_t>(row.axes));
+  EXPECT_TRUE(v.findings.empty()) << row.name << ":\n" << findingsText(v.findings);
+  EXPECT_GE(v.history[1 % static_cast<std::size_t>(row.axes)], 1U) << "the planned drive fault";
+}
+
+std::vector<StyleRow> styleRows() {
+  std::vector<StyleRow> rows;
+  static std::vector<std::string> names;  // the rows' names outlive the table
+  for (const ImageStyleName& style : kImageStyles) {
+    for (const bool startup : {true, false}) {
+      for (const int axes : {1, 3, 8}) {
+        names.push_back(
+            fmt::format("{}_{}_axes{}", style.name, axes, startup ? "" : "_no_startup"));
+        rows.push_back({nullptr, style.style, axes, startup});
+      }
+    }
+  }
+  for (std::size_t i = 0; i < rows.size(); ++i) rows[i].name = names[i].c_str();
+  return rows;
+}
+
+INSTANTIATE_TEST_SUITE_P(Rows, ImageStyleRun, ::testing::ValuesIn(styleRows()),
+                         [](const ::testing::TestParamInfo<StyleRow>& row) {
+                           return std::string(row.param.name);
+                         });
+
+// --- the ESL probe (PROTOCOL.md §8) ---
+
+TEST(EslProbe, EachFrameBehindAHeaderWithTheExactTime) {
+  SimOptions plain = options(Scenario::Commissioning, 2, 1.0);
+  plain.image = ImageStyle::TwinCat;
+  ASSERT_EQ(resolveOptions(plain), "");
+  SimOptions probed = plain;
+  probed.probe = Probe::Esl;
+  const std::vector<Frame> exact = simulate(plain);
+  const std::vector<Frame> captured = simulate(probed);
+  ASSERT_EQ(captured.size(), exact.size());
+  std::int64_t previous = 0;
+  for (std::size_t k = 0; k < exact.size(); ++k) {
+    SCOPED_TRACE("frame " + std::to_string(k + 1));
+    const Bytes& bytes = captured[k].bytes;
+    const EcatFrame frame = walked(bytes);
+    ASSERT_TRUE(frame.probe.present);
+    EXPECT_TRUE(frame.probe.before);
+    EXPECT_TRUE(frame.probe.timestampValid());
+    EXPECT_EQ(frame.probe.port(), returnedMac(exact[k].bytes) ? 1 : 0);
+    EXPECT_EQ(frame.probe.timestamp_ns, static_cast<std::uint64_t>(exact[k].time_ns));
+    ASSERT_EQ(bytes.size(), exact[k].bytes.size() + esl::kHeaderSize);
+    EXPECT_TRUE(
+        std::equal(exact[k].bytes.begin(), exact[k].bytes.end(), bytes.begin() + esl::kHeaderSize));
+    // the PC's stamp: late by a few hundred microseconds at most, never back
+    const std::int64_t late = captured[k].time_ns - exact[k].time_ns;
+    EXPECT_GE(late, 0);
+    EXPECT_LE(late, 400'000);
+    EXPECT_GT(captured[k].time_ns, previous);
+    previous = captured[k].time_ns;
+  }
+  EXPECT_EQ(fnv1a(captured), fnv1a(simulate(probed))) << "the noise comes from the seed";
+}
+
 struct CleanRow {
   const char* name;
   int axes;
@@ -849,6 +1034,7 @@ struct WriterRow {
   const char* name;
   CaptureFormat format;
   std::int64_t resolution_ns;  // what the format keeps of a timestamp
+  Compression compression = Compression::None;
 };
 class WriterRoundTrip : public ::testing::TestWithParam<WriterRow> {};
 
@@ -865,7 +1051,7 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   ASSERT_GE(fd, 0);
   close(fd);
   std::string error;
-  auto writer = CaptureWriter::open(path, row.format, error);
+  auto writer = CaptureWriter::open(path, row.format, error, row.compression);
   ASSERT_TRUE(writer) << error;
   for (const Frame& f : frames)
     ASSERT_TRUE(writer->write(f.time_ns, f.bytes.data(), f.bytes.size()));
@@ -875,6 +1061,7 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   ASSERT_TRUE(opened) << opened.error().text();
   CaptureReader& reader = **opened;
   EXPECT_EQ(reader.link(), LinkType::Ethernet);
+  EXPECT_EQ(reader.compression(), row.compression);
   CaptureRecord record;
   std::size_t k = 0;
   Result<bool> next;
@@ -895,12 +1082,13 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   std::remove(path);
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, WriterRoundTrip,
-                         ::testing::Values(WriterRow{"pcapng_ns", CaptureFormat::Pcapng, 1},
-                                           WriterRow{"pcap_us", CaptureFormat::Pcap, 1000}),
-                         [](const ::testing::TestParamInfo<WriterRow>& row) {
-                           return std::string(row.param.name);
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Rows, WriterRoundTrip,
+    ::testing::Values(WriterRow{"pcapng_ns", CaptureFormat::Pcapng, 1},
+                      WriterRow{"pcap_us", CaptureFormat::Pcap, 1000},
+                      WriterRow{"pcapng_zstd", CaptureFormat::Pcapng, 1, Compression::Zstd},
+                      WriterRow{"pcap_gzip", CaptureFormat::Pcap, 1000, Compression::Gzip}),
+    [](const ::testing::TestParamInfo<WriterRow>& row) { return std::string(row.param.name); });
 
 TEST(CaptureWriter, UnwritablePathNamesTheFile) {
   std::string error;
