@@ -149,7 +149,7 @@ std::vector<SimRow> simRows() {
   rows.push_back({"faults", opts(Scenario::Faults, 4, 4.3), true});
   {
     SimRow r{"faults_interleaved_io", opts(Scenario::Faults, 5, 4.3), true};
-    r.options.layout = sim::LayoutKind::Interleaved;
+    r.options.image = sim::ImageStyle::EtherLab;
     r.options.io_slaves = 3;
     r.options.seed = 3;
     rows.push_back(r);

@@ -2,6 +2,7 @@
 // frame stream (PROTOCOL.md §8, §9.4), its layout, and the stream through the validator.
 #include "ncservo/sim/simulator.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -21,6 +22,7 @@
 #include "ncservo/capture_writer.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
+#include "ncservo/layout_learner.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/sim/faults.hpp"
 #include "ncservo/validator.hpp"
@@ -366,7 +368,7 @@ const std::vector<StreamRow>& streamRows() {
   rows.push_back({"commissioning_4", options(Scenario::Commissioning, 4, 1.0)});
   SimOptions io = options(Scenario::Commissioning, 3, 1.0);
   io.io_slaves = 3;
-  io.layout = LayoutKind::Interleaved;
+  io.image = ImageStyle::EtherLab;
   rows.push_back({"interleaved_3_io_3", io});
   SimOptions fast = options(Scenario::Soak, 2, 1.0);
   fast.cycle_us = 250;
@@ -443,7 +445,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, Stream, ::testing::Range<std::size_t>(0, 6),
 struct WkcRow {
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
 };
 class CyclicWkc : public ::testing::TestWithParam<WkcRow> {};
 
@@ -451,7 +453,7 @@ TEST_P(CyclicWkc, ThreePerServoTwoPerOutputOnePerInputTerminal) {
   const WkcRow& row = GetParam();
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   // terminals alternate output, input, ... (8-bit digital terminals)
   const int outputs = (row.io_slaves + 1) / 2, inputs = row.io_slaves / 2;
   const int expected = 3 * row.axes + 2 * outputs + inputs;
@@ -490,16 +492,16 @@ TEST_P(CyclicWkc, ThreePerServoTwoPerOutputOnePerInputTerminal) {
 
 INSTANTIATE_TEST_SUITE_P(
     Rows, CyclicWkc,
-    ::testing::Values(WkcRow{1, 0, LayoutKind::Default}, WkcRow{4, 0, LayoutKind::Default},
-                      WkcRow{4, 3, LayoutKind::Default}, WkcRow{4, 4, LayoutKind::Interleaved},
-                      WkcRow{32, 0, LayoutKind::Default}, WkcRow{30, 5, LayoutKind::Interleaved}));
+    ::testing::Values(WkcRow{1, 0, ImageStyle::Soem}, WkcRow{4, 0, ImageStyle::Soem},
+                      WkcRow{4, 3, ImageStyle::Soem}, WkcRow{4, 4, ImageStyle::EtherLab},
+                      WkcRow{32, 0, ImageStyle::Soem}, WkcRow{30, 5, ImageStyle::EtherLab}));
 
 // --- layout ---
 
 struct LayoutRow {
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
 };
 class Layout : public ::testing::TestWithParam<LayoutRow> {};
 
@@ -521,7 +523,7 @@ TEST_P(Layout, AddressesAndStations) {
   const LayoutRow& row = GetParam();
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   ASSERT_EQ(resolveOptions(o), "");
   const Simulator simulator(o);
   const std::vector<SimAxisLayout>& layout = simulator.layout();
@@ -552,7 +554,7 @@ TEST_P(Layout, AddressesAndStations) {
   }
   for (const auto& [base, axes] : by_frame) {
     for (std::size_t k = 0; k < axes.size(); ++k) {
-      if (row.layout == LayoutKind::Interleaved) {
+      if (row.image == ImageStyle::EtherLab) {
         EXPECT_EQ(axes[k]->inputs, axes[k]->outputs + 10) << "axis " << axes[k]->index;
       } else {
         // §9.4: all outputs first, then all inputs, in axis order
@@ -575,7 +577,7 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   const LayoutRow& row = GetParam();
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   o.ready_mode = row.axes % 2;
   ASSERT_EQ(resolveOptions(o), "");
   const Simulator simulator(o);
@@ -593,15 +595,12 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, Layout,
-                         ::testing::Values(LayoutRow{1, 0, LayoutKind::Default},
-                                           LayoutRow{4, 0, LayoutKind::Default},
-                                           LayoutRow{4, 0, LayoutKind::Interleaved},
-                                           LayoutRow{3, 5, LayoutKind::Default},
-                                           LayoutRow{3, 5, LayoutKind::Interleaved},
-                                           LayoutRow{29, 0, LayoutKind::Default},
-                                           LayoutRow{30, 0, LayoutKind::Default},
-                                           LayoutRow{32, 2, LayoutKind::Interleaved}));
+INSTANTIATE_TEST_SUITE_P(
+    Rows, Layout,
+    ::testing::Values(LayoutRow{1, 0, ImageStyle::Soem}, LayoutRow{4, 0, ImageStyle::Soem},
+                      LayoutRow{4, 0, ImageStyle::EtherLab}, LayoutRow{3, 5, ImageStyle::Soem},
+                      LayoutRow{3, 5, ImageStyle::EtherLab}, LayoutRow{29, 0, ImageStyle::Soem},
+                      LayoutRow{30, 0, ImageStyle::Soem}, LayoutRow{32, 2, ImageStyle::EtherLab}));
 
 // --- through the validator ---
 
@@ -655,11 +654,194 @@ std::string findingsText(const std::vector<Finding>& findings) {
   return text;
 }
 
+// --- process-image styles (PROTOCOL.md §9.4) ---
+
+struct StyleRow {
+  const char* name;
+  ImageStyle image;
+  int axes;
+  bool startup;
+};
+class ImageStyleRun : public ::testing::TestWithParam<StyleRow> {};
+
+SimOptions styleOptions(const StyleRow& row, double duration_s) {
+  SimOptions o = options(Scenario::Commissioning, row.axes, duration_s);
+  o.image = row.image;
+  o.startup = row.startup;
+  EXPECT_EQ(resolveOptions(o), "");
+  return o;
+}
+
+// The cyclic frames' logical datagrams, from one returned copy in OP.
+std::vector<Datagram> cyclicLogicalDatagrams(const std::vector<Frame>& frames) {
+  std::vector<Datagram> out;
+  std::int64_t first_of_cycle = -1;
+  for (const Frame& f : frames) {
+    if (f.time_ns - frames.front().time_ns < 500'000'000 || !returnedMac(f.bytes)) continue;
+    const EcatFrame frame = walked(f.bytes);
+    if (frame.count == 0 || !ecat::isLogical(frame.datagrams[0].command)) continue;
+    if (first_of_cycle >= 0 && f.time_ns - first_of_cycle > 100'000) break;  // the next cycle
+    if (first_of_cycle < 0) first_of_cycle = f.time_ns;
+    for (std::size_t i = 0; i < frame.count; ++i) {
+      if (ecat::isLogical(frame.datagrams[i].command)) out.push_back(frame.datagrams[i]);
+    }
+  }
+  return out;
+}
+
+TEST_P(ImageStyleRun, DatagramsOfTheStyle) {
+  const StyleRow& row = GetParam();
+  const std::vector<Datagram> dgs = cyclicLogicalDatagrams(simulate(styleOptions(row, 1.0)));
+  ASSERT_FALSE(dgs.empty());
+  if (row.image != ImageStyle::TwinCat) {
+    for (const Datagram& dg : dgs) EXPECT_EQ(dg.command, ecat::kLrw);
+    return;
+  }
+  // Outputs written by LWRs, then inputs read by LRDs, each area contiguous and the two apart.
+  std::size_t lwr = 0, lrd = 0;
+  for (const Datagram& dg : dgs) {
+    ASSERT_TRUE(dg.command == ecat::kLwr || dg.command == ecat::kLrd);
+    (dg.command == ecat::kLwr ? lwr : lrd) += 1;
+  }
+  for (const std::size_t area : {lwr, lrd}) {
+    EXPECT_GE(area, 1U);
+    EXPECT_LE(area, 2U) << "split in two once two slaves share it";
+  }
+  EXPECT_EQ(dgs[0].command, ecat::kLwr);
+  for (std::size_t i = 1; i < dgs.size(); ++i) {
+    if (dgs[i].command == dgs[i - 1].command) {
+      EXPECT_EQ(dgs[i].address, dgs[i - 1].address + dgs[i - 1].length) << "one area";
+    } else {
+      EXPECT_GT(dgs[i].address, dgs[i - 1].address + dgs[i - 1].length + 0x1000) << "apart";
+    }
+  }
+}
+
+// The slaves as the start-up of these options (with a start-up) configures them.
+std::vector<SlaveLayout> startUpSlaves(SimOptions o) {
+  o.startup = true;
+  LayoutLearner learner;
+  bool previous_master = false;
+  EcatFrame previous;
+  for (const Frame& f : simulate(o)) {
+    const ByteReader bytes(f.bytes.data(), f.bytes.size());
+    EcatFrame frame;
+    walkPacket(LinkType::Ethernet, bytes, frame);
+    const bool returned = returnedMac(f.bytes);
+    learner.onFrame(frame, bytes, returned,
+                    returned && previous_master && frame.sameDatagramList(previous));
+    previous_master = !returned;
+    previous = frame;
+  }
+  return learner.slaves();
+}
+
+// PROTOCOL.md §8: each returned logical datagram's WKC is what the FMMUs of the start-up add:
+// LRW 2 per slave written and 1 per slave read, LRD and LWR 1 per slave; a capture without the
+// start-up has the same set-up.
+TEST_P(ImageStyleRun, WorkingCountersFromTheStartUpsFmmus) {
+  const StyleRow& row = GetParam();
+  const SimOptions o = styleOptions(row, 1.0);
+  const std::vector<SlaveLayout> slaves = startUpSlaves(o);
+  ASSERT_FALSE(slaves.empty());
+  const std::vector<Frame> frames = simulate(o);
+  std::size_t checked = 0;
+  for (const Frame& f : frames) {
+    if (!returnedMac(f.bytes) || f.time_ns - frames.front().time_ns < 500'000'000) continue;
+    const EcatFrame frame = walked(f.bytes);
+    for (std::size_t i = 0; i < frame.count; ++i) {
+      const Datagram& dg = frame.datagrams[i];
+      if (!ecat::isLogical(dg.command)) continue;
+      int expected = 0;
+      for (const SlaveLayout& slave : slaves) {
+        bool writes = false, reads = false;
+        for (const FmmuView& fmmu : slave.fmmus) {
+          const bool overlaps = fmmu.active && fmmu.logical < dg.address + dg.length &&
+                                fmmu.logical + fmmu.length > dg.address;
+          writes = writes || (overlaps && fmmu.type == ecat::kFmmuWrite &&
+                              ecat::writesSlaves(dg.command));
+          reads = reads ||
+                  (overlaps && fmmu.type == ecat::kFmmuRead && ecat::readsSlaves(dg.command));
+        }
+        expected += dg.command == ecat::kLrw ? 2 * writes + reads : (writes || reads);
+      }
+      ASSERT_EQ(dg.wkc, expected) << ecat::commandName(dg.command) << " at " << dg.address;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400U);
+}
+
+// The commissioning scenario through the Validator with the layout file the simulator writes:
+// every axis decoded, no finding at all.
+TEST_P(ImageStyleRun, ValidatesWithItsLayoutFile) {
+  const StyleRow& row = GetParam();
+  const Validated v = validate(styleOptions(row, 3.0), true);
+  ASSERT_EQ(v.axes, static_cast<std::size_t>(row.axes));
+  EXPECT_TRUE(v.findings.empty()) << row.name << ":\n" << findingsText(v.findings);
+  EXPECT_GE(v.history[1 % static_cast<std::size_t>(row.axes)], 1U) << "the planned drive fault";
+}
+
+std::vector<StyleRow> styleRows() {
+  std::vector<StyleRow> rows;
+  static std::vector<std::string> names;  // the rows' names outlive the table
+  for (const ImageStyleName& style : kImageStyles) {
+    for (const bool startup : {true, false}) {
+      for (const int axes : {1, 3, 8}) {
+        names.push_back(
+            fmt::format("{}_{}_axes{}", style.name, axes, startup ? "" : "_no_startup"));
+        rows.push_back({nullptr, style.style, axes, startup});
+      }
+    }
+  }
+  for (std::size_t i = 0; i < rows.size(); ++i) rows[i].name = names[i].c_str();
+  return rows;
+}
+
+INSTANTIATE_TEST_SUITE_P(Rows, ImageStyleRun, ::testing::ValuesIn(styleRows()),
+                         [](const ::testing::TestParamInfo<StyleRow>& row) {
+                           return std::string(row.param.name);
+                         });
+
+// --- the ESL probe (PROTOCOL.md §8) ---
+
+TEST(EslProbe, EachFrameBehindAHeaderWithTheExactTime) {
+  SimOptions plain = options(Scenario::Commissioning, 2, 1.0);
+  plain.image = ImageStyle::TwinCat;
+  ASSERT_EQ(resolveOptions(plain), "");
+  SimOptions probed = plain;
+  probed.probe = Probe::Esl;
+  const std::vector<Frame> exact = simulate(plain);
+  const std::vector<Frame> captured = simulate(probed);
+  ASSERT_EQ(captured.size(), exact.size());
+  std::int64_t previous = 0;
+  for (std::size_t k = 0; k < exact.size(); ++k) {
+    SCOPED_TRACE("frame " + std::to_string(k + 1));
+    const Bytes& bytes = captured[k].bytes;
+    const EcatFrame frame = walked(bytes);
+    ASSERT_TRUE(frame.probe.present);
+    EXPECT_TRUE(frame.probe.before);
+    EXPECT_TRUE(frame.probe.timestampValid());
+    EXPECT_EQ(frame.probe.port(), returnedMac(exact[k].bytes) ? 1 : 0);
+    EXPECT_EQ(frame.probe.timestamp_ns, static_cast<std::uint64_t>(exact[k].time_ns));
+    ASSERT_EQ(bytes.size(), exact[k].bytes.size() + esl::kHeaderSize);
+    EXPECT_TRUE(
+        std::equal(exact[k].bytes.begin(), exact[k].bytes.end(), bytes.begin() + esl::kHeaderSize));
+    // the PC's stamp: late by a few hundred microseconds at most, never back
+    const std::int64_t late = captured[k].time_ns - exact[k].time_ns;
+    EXPECT_GE(late, 0);
+    EXPECT_LE(late, 400'000);
+    EXPECT_GT(captured[k].time_ns, previous);
+    previous = captured[k].time_ns;
+  }
+  EXPECT_EQ(fnv1a(captured), fnv1a(simulate(probed))) << "the noise comes from the seed";
+}
+
 struct CleanRow {
   const char* name;
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
   bool with_config;
   int ready_mode;
   int cycle_us;
@@ -676,7 +858,7 @@ TEST_P(CleanRun, NoFindingAtWarningOrError) {
   if (row.bug != nullptr) GTEST_SKIP() << row.bug;
   SimOptions o = options(row.scenario, row.axes, row.duration_s);
   o.io_slaves = row.io_slaves;
-  o.layout = row.layout;
+  o.image = row.image;
   o.ready_mode = row.ready_mode;
   o.cycle_us = row.cycle_us;
   o.startup = row.startup;
@@ -701,20 +883,19 @@ TEST_P(CleanRun, NoFindingAtWarningOrError) {
 INSTANTIATE_TEST_SUITE_P(
     Rows, CleanRun,
     ::testing::Values(
-        CleanRow{"default_layout_4", 4, 0, LayoutKind::Default, false, 0, 1000, true},
-        CleanRow{"config_4", 4, 0, LayoutKind::Default, true, 0, 1000, true},
-        CleanRow{"ready_mode_1", 4, 0, LayoutKind::Default, true, 1, 1000, true},
-        CleanRow{"interleaved_io", 3, 4, LayoutKind::Interleaved, true, 0, 1000, true},
-        CleanRow{"one_axis", 1, 0, LayoutKind::Default, false, 0, 1000, true},
-        CleanRow{"cycle_500us_no_startup", 4, 0, LayoutKind::Default, false, 0, 500, false},
-        CleanRow{"32_axes", 32, 0, LayoutKind::Default, true, 0, 2000, true},
-        CleanRow{"32_axes_default_layout", 32, 0, LayoutKind::Default, false, 0, 2000, true},
-        CleanRow{"cycle_125us", 2, 0, LayoutKind::Default, false, 0, 125, true},
-        CleanRow{"cycle_10ms", 4, 0, LayoutKind::Default, false, 0, 10000, true},
-        CleanRow{"jitter_200us", 4, 0, LayoutKind::Default, false, 0, 1000, true, 200},
-        CleanRow{"soak_12s", 4, 0, LayoutKind::Default, false, 0, 1000, true, 0, Scenario::Soak,
-                 12.0},
-        CleanRow{"soak_62s", 2, 0, LayoutKind::Default, false, 0, 1000, true, 0, Scenario::Soak,
+        CleanRow{"default_layout_4", 4, 0, ImageStyle::Soem, false, 0, 1000, true},
+        CleanRow{"config_4", 4, 0, ImageStyle::Soem, true, 0, 1000, true},
+        CleanRow{"ready_mode_1", 4, 0, ImageStyle::Soem, true, 1, 1000, true},
+        CleanRow{"interleaved_io", 3, 4, ImageStyle::EtherLab, true, 0, 1000, true},
+        CleanRow{"one_axis", 1, 0, ImageStyle::Soem, false, 0, 1000, true},
+        CleanRow{"cycle_500us_no_startup", 4, 0, ImageStyle::Soem, false, 0, 500, false},
+        CleanRow{"32_axes", 32, 0, ImageStyle::Soem, true, 0, 2000, true},
+        CleanRow{"32_axes_default_layout", 32, 0, ImageStyle::Soem, false, 0, 2000, true},
+        CleanRow{"cycle_125us", 2, 0, ImageStyle::Soem, false, 0, 125, true},
+        CleanRow{"cycle_10ms", 4, 0, ImageStyle::Soem, false, 0, 10000, true},
+        CleanRow{"jitter_200us", 4, 0, ImageStyle::Soem, false, 0, 1000, true, 200},
+        CleanRow{"soak_12s", 4, 0, ImageStyle::Soem, false, 0, 1000, true, 0, Scenario::Soak, 12.0},
+        CleanRow{"soak_62s", 2, 0, ImageStyle::Soem, false, 0, 1000, true, 0, Scenario::Soak,
                  62.0}),
     [](const ::testing::TestParamInfo<CleanRow>& row) { return std::string(row.param.name); });
 
@@ -724,7 +905,7 @@ struct FaultSetup {
   const char* name;
   int axes;
   int io_slaves;
-  LayoutKind layout;
+  ImageStyle image;
   int cycle_us;
   int ready_mode;
   std::uint64_t seed;
@@ -732,12 +913,12 @@ struct FaultSetup {
 };
 const std::vector<FaultSetup>& faultSetups() {
   static const std::vector<FaultSetup> setups = {
-      {"4_axes", 4, 0, LayoutKind::Default, 1000, 0, 1},
-      {"2_axes_500us_ready_mode_1", 2, 0, LayoutKind::Default, 500, 1, 7},
-      {"5_axes_io_interleaved", 5, 2, LayoutKind::Interleaved, 1000, 0, 3},
-      {"earliest", 4, 0, LayoutKind::Default, 1000, 0, 4, 0.65},  // start-up 0.2 + 0.45
-      {"late", 4, 0, LayoutKind::Default, 1000, 0, 6, 1.3},
-      {"latest", 4, 0, LayoutKind::Default, 1000, 0, 5, 1.34},  // 0.53 x 3 s - 0.25
+      {"4_axes", 4, 0, ImageStyle::Soem, 1000, 0, 1},
+      {"2_axes_500us_ready_mode_1", 2, 0, ImageStyle::Soem, 500, 1, 7},
+      {"5_axes_io_interleaved", 5, 2, ImageStyle::EtherLab, 1000, 0, 3},
+      {"earliest", 4, 0, ImageStyle::Soem, 1000, 0, 4, 0.65},  // start-up 0.2 + 0.45
+      {"late", 4, 0, ImageStyle::Soem, 1000, 0, 6, 1.3},
+      {"latest", 4, 0, ImageStyle::Soem, 1000, 0, 5, 1.34},  // 0.53 x 3 s - 0.25
   };
   return setups;
 }
@@ -748,7 +929,7 @@ TEST_P(FaultRun, FiresItsRuleAndCompanionsOnly) {
   const FaultSetup& setup = faultSetups()[std::get<1>(GetParam())];
   SimOptions o = options(Scenario::Commissioning, setup.axes, 3.0);
   o.io_slaves = setup.io_slaves;
-  o.layout = setup.layout;
+  o.image = setup.image;
   o.cycle_us = setup.cycle_us;
   o.ready_mode = setup.ready_mode;
   o.seed = setup.seed;
@@ -853,6 +1034,7 @@ struct WriterRow {
   const char* name;
   CaptureFormat format;
   std::int64_t resolution_ns;  // what the format keeps of a timestamp
+  Compression compression = Compression::None;
 };
 class WriterRoundTrip : public ::testing::TestWithParam<WriterRow> {};
 
@@ -868,7 +1050,7 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   const int fd = mkstemp(path);
   ASSERT_GE(fd, 0);
   close(fd);
-  auto writer = CaptureWriter::open(path, row.format);
+  auto writer = CaptureWriter::open(path, row.format, row.compression);
   ASSERT_TRUE(writer) << writer.error().text();
   for (const Frame& f : frames)
     ASSERT_TRUE((*writer)->write(f.time_ns, f.bytes.data(), f.bytes.size()));
@@ -879,6 +1061,7 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   ASSERT_TRUE(opened) << opened.error().text();
   CaptureReader& reader = **opened;
   EXPECT_EQ(reader.link(), LinkType::Ethernet);
+  EXPECT_EQ(reader.compression(), row.compression);
   CaptureRecord record;
   std::size_t k = 0;
   Result<bool> next;
@@ -899,12 +1082,13 @@ TEST_P(WriterRoundTrip, ReadsBackWithTheCaptureReader) {
   std::remove(path);
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, WriterRoundTrip,
-                         ::testing::Values(WriterRow{"pcapng_ns", CaptureFormat::Pcapng, 1},
-                                           WriterRow{"pcap_us", CaptureFormat::Pcap, 1000}),
-                         [](const ::testing::TestParamInfo<WriterRow>& row) {
-                           return std::string(row.param.name);
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Rows, WriterRoundTrip,
+    ::testing::Values(WriterRow{"pcapng_ns", CaptureFormat::Pcapng, 1},
+                      WriterRow{"pcap_us", CaptureFormat::Pcap, 1000},
+                      WriterRow{"pcapng_zstd", CaptureFormat::Pcapng, 1, Compression::Zstd},
+                      WriterRow{"pcap_gzip", CaptureFormat::Pcap, 1000, Compression::Gzip}),
+    [](const ::testing::TestParamInfo<WriterRow>& row) { return std::string(row.param.name); });
 
 TEST(CaptureWriter, UnwritablePathNamesTheFile) {
   auto writer = CaptureWriter::open("/nonexistent-dir/x.pcap", CaptureFormat::Pcap);

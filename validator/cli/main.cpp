@@ -19,6 +19,7 @@
 
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/capture_writer.hpp"
+#include "ncservo/compressed_output.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/eni.hpp"
 #include "ncservo/error.hpp"
@@ -523,23 +524,48 @@ const CaptureFormatRow kCaptureFormats[] = {
     {"pcapng", CaptureFormat::Pcapng, ".pcapng"},
 };
 
+// The format by the name under a compression extension ("x.pcapng.zst" is a pcapng).
 CaptureFormat captureFormatFor(const std::string& format, const std::string& output) {
   if (!format.empty()) return rowNamed(kCaptureFormats, format).format;
+  const std::string_view name = withoutCompressionExtension(output);
   for (const CaptureFormatRow& row : kCaptureFormats) {
     const std::size_t length = std::strlen(row.extension);
-    if (output.size() >= length &&
-        output.compare(output.size() - length, length, row.extension) == 0)
+    if (name.size() >= length && name.substr(name.size() - length) == row.extension)
       return row.format;
   }
   return kCaptureFormats[0].format;
 }
 
+// `simulate --compress`; without it the output file's extension chooses (.gz, .zst).
+struct CompressionRow {
+  const char* name;
+  Compression compression;
+};
+const CompressionRow kCompressions[] = {
+    {"none", Compression::None},
+    {"gzip", Compression::Gzip},
+    {"zstd", Compression::Zstd},
+};
+
+// `simulate --probe`.
+struct ProbeRow {
+  const char* name;
+  sim::Probe probe;
+};
+const ProbeRow kProbes[] = {
+    {"none", sim::Probe::None},
+    {"esl", sim::Probe::Esl},
+};
+
 struct SimulateArgs {
   sim::SimOptions options;
   std::string scenario = "commissioning";
-  std::string layout = "default";
+  std::string image;   // empty: soem
+  std::string layout;  // the older name of --image
+  std::string probe = "none";
   std::string output;
-  std::string format;  // empty: from the file name
+  std::string format;    // empty: from the file name
+  std::string compress;  // empty: from the file name
   std::vector<std::string> faults;
   std::string layout_config;
   std::string eni;
@@ -572,7 +598,9 @@ int runSimulate(SimulateArgs& args) {
   }
   sim::SimOptions& o = args.options;
   o.scenario = *sim::scenarioFromName(args.scenario);
-  o.layout = args.layout == "interleaved" ? sim::LayoutKind::Interleaved : sim::LayoutKind::Default;
+  const std::string& style = !args.image.empty() ? args.image : args.layout;
+  o.image = style.empty() ? sim::ImageStyle::Soem : *sim::imageStyleFromName(style);
+  o.probe = rowNamed(kProbes, args.probe).probe;
   o.startup = !args.no_startup;
   for (const std::string& text : args.faults) {
     std::string error;
@@ -604,8 +632,11 @@ int runSimulate(SimulateArgs& args) {
       return kExitUsage;
     }
   }
+  const Compression compression = args.compress.empty()
+                                      ? compressionForName(args.output)
+                                      : rowNamed(kCompressions, args.compress).compression;
   Result<std::unique_ptr<CaptureWriter>> writer =
-      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output));
+      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), compression);
   if (!writer) {
     fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
     return kExitCapture;
@@ -718,16 +749,39 @@ Handler simulateCommand(CLI::App& command) {
       ->check(CLI::IsMember({"commissioning", "faults", "soak"}));
   command.add_option("--axes", sa.options.axes, "servo axes, 1 to 32 (default 4)");
   command.add_option("--io-slaves", sa.options.io_slaves,
-                     "8-bit digital output/input terminals sharing the LRW (default 0)");
+                     "other slaves sharing the process image, 0 to 32 (default: soem and "
+                     "etherlab 0, 8-bit digital terminals; mixed 8 and twincat 4, terminals and "
+                     "drives of other sizes)");
   command.add_option("--cycle-us", sa.options.cycle_us, "cycle time, 125 to 10000 (default 1000)");
   command.add_option("--duration", sa.options.duration_s,
                      "seconds (default: commissioning 3, faults 4.3, soak 60)");
   command.add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
-  command.add_option("--layout", sa.layout, "default (PROTOCOL.md §9.4) or interleaved")
-      ->check(CLI::IsMember({"default", "interleaved"}));
+  std::vector<std::string> styles, aliases;
+  std::string style_help = "the master's process image (PROTOCOL.md §9.4; default soem):";
+  for (const sim::ImageStyleName& row : sim::kImageStyles) {
+    styles.emplace_back(row.name);
+    style_help += fmt::format(" {} ({}),", row.name, row.summary);
+    if (row.layout_alias != nullptr) aliases.emplace_back(row.layout_alias);
+  }
+  style_help.back() = '.';
+  CLI::Option* image =
+      command.add_option("--image", sa.image, style_help)->check(CLI::IsMember(styles));
+  command.add_option("--layout", sa.layout, "older names: default = soem, interleaved = etherlab")
+      ->check(CLI::IsMember(aliases))
+      ->excludes(image);
+  command
+      .add_option("--probe", sa.probe,
+                  "none, or esl: an ET2000 probe's capture (each frame behind an ESL header "
+                  "with the exact time; the capture's own timestamps late by up to 300 us)")
+      ->check(CLI::IsMember(namesOf(kProbes)));
   command.add_flag("--no-startup", sa.no_startup,
                    "begin with the slaves already in OP (no start-up traffic)");
-  addFormatOption(command, sa.format, namesOf(kCaptureFormats), " (default: from the file name)");
+  addFormatOption(command, sa.format, namesOf(kCaptureFormats),
+                  " (default: from the file name, under .gz or .zst)");
+  command
+      .add_option("--compress", sa.compress,
+                  "none, gzip or zstd (default: from the file name: .gz gzip, .zst zstd)")
+      ->check(CLI::IsMember(namesOf(kCompressions)));
   command.add_option("--fault", sa.faults,
                      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
   command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ncservo/ecat_wire.hpp"
+#include "ncservo/compressed_output.hpp"
 
 namespace ncservo {
 namespace {
@@ -158,10 +159,21 @@ class PcapngWriter final : public CaptureWriter {
 }  // namespace
 
 Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& path,
-                                                           CaptureFormat format) {
+                                                           CaptureFormat format,
+                                                           Compression compression) {
   const Result<std::FILE*> opened = openFile(path);
   if (!opened) return fail(opened.error());
   std::FILE* file = *opened;
+  if (compression != Compression::None) {
+    Result<std::FILE*> compressed = openCompressedOutput(file, file != stdout, compression);
+    if (!compressed) {
+      if (file != stdout) std::fclose(file);
+      Error error = compressed.error();
+      error.path = path;
+      return fail(std::move(error));
+    }
+    file = *compressed;
+  }
   std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
   if (format == CaptureFormat::Pcapng) return std::make_unique<PcapngWriter>(path, file);
   pcap_t* dead =

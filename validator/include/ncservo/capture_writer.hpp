@@ -9,6 +9,7 @@
 #include <string>
 
 #include "ncservo/error.hpp"
+#include "ncservo/capture_reader.hpp"
 
 namespace ncservo {
 
@@ -16,8 +17,10 @@ enum class CaptureFormat : std::uint8_t { Pcap, Pcapng };
 
 class CaptureWriter {
  public:
-  // "-" writes to standard output. An error names the file and the reason.
-  static Result<std::unique_ptr<CaptureWriter>> open(const std::string& path, CaptureFormat format);
+  // "-" writes to standard output; `compression` compresses the stream (compressed_output.hpp).
+  // An error names the file and the reason.
+  static Result<std::unique_ptr<CaptureWriter>> open(const std::string& path, CaptureFormat format,
+                                                     Compression compression = Compression::None);
   virtual ~CaptureWriter() = default;
   // One Ethernet frame; false once a write failed (close() says why).
   virtual bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) = 0;

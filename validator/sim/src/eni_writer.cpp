@@ -63,18 +63,20 @@ std::string writeEni(const std::vector<EniSlave>& slaves,
   }
   pugi::xml_node cyclic = config.append_child("Cyclic");
   cyclic.append_child("CycleTime").text().set(cycle_us);
+  pugi::xml_node frame;
   for (std::size_t i = 0; i < commands.size(); ++i) {
     const EniCyclicCommand& c = commands[i];
-    pugi::xml_node cmd = cyclic.append_child("Frame").append_child("Cmd");
+    if (i == 0 || c.frame != commands[i - 1].frame) frame = cyclic.append_child("Frame");
+    pugi::xml_node cmd = frame.append_child("Cmd");
     cmd.append_child("State").text().set("SAFEOP");
     cmd.append_child("State").text().set("OP");
-    cmd.append_child("Cmd").text().set(static_cast<int>(ecat::kLrw));
+    cmd.append_child("Cmd").text().set(static_cast<int>(c.command));
     cmd.append_child("Addr").text().set(hex(c.address, 8).c_str());
     cmd.append_child("DataLength").text().set(c.length);
     cmd.append_child("Cnt").text().set(c.expected_wkc);
     const std::uint32_t offset = kFirstOffset + static_cast<std::uint32_t>(i) * kRegion;
-    cmd.append_child("InputOffs").text().set(offset);
-    cmd.append_child("OutputOffs").text().set(offset);
+    if (ecat::readsSlaves(c.command)) cmd.append_child("InputOffs").text().set(offset);
+    if (ecat::writesSlaves(c.command)) cmd.append_child("OutputOffs").text().set(offset);
   }
   std::ostringstream out;
   doc.save(out, "  ");

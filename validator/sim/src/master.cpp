@@ -18,7 +18,6 @@ constexpr std::size_t kAlStatusPoll = 6;  // AL status, reserved, AL status code
 constexpr std::size_t kDcTimeSize = 8;
 // Sync manager control: buffered, write with watchdog (outputs) or read (inputs).
 constexpr std::uint8_t kSmOutputs = 0x64, kSmInputs = 0x20;
-constexpr std::uint8_t kOutputTerminalPatternCycles = 100;  // the lit output moves this often
 
 constexpr auto kInit = ecat::kAlInit;
 
@@ -55,7 +54,9 @@ Master::Master(Segment& segment)
       images_(segment.groups.size()),
       cyclic_frames_(segment.groups.size()) {
   for (std::size_t g = 0; g < segment.groups.size(); ++g) {
-    images_[g].assign(segment.groups[g].size, 0);
+    for (const ImageDatagram& dg : segment.groups[g].datagrams) {
+      images_[g].emplace_back(dg.size, 0);
+    }
   }
 }
 
@@ -85,7 +86,7 @@ bool Master::emit(const FrameSink& sink, const std::vector<RingDatagram>& frame,
   }
   encoder.finish();
   ++frames_;
-  return sink(SimFrame{kEpochNs + t_ns, bytes_.data(), bytes_.size()});
+  return sink(SimFrame{kEpochNs + t_ns, bytes_.data(), bytes_.size(), returned});
 }
 
 bool Master::exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
@@ -153,8 +154,8 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
   for (std::size_t s = 0; s < segment_.escs.size(); ++s) {
     const Esc& esc = segment_.escs[s];
     const auto station = static_cast<std::uint16_t>(kFirstStation + s);
-    const bool servo = esc.kind == SlaveKind::Servo;
     struct Entry {
+      std::uint8_t sm;
       std::uint16_t phys;
       std::size_t length;
       std::uint32_t logical;
@@ -162,19 +163,26 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
     };
     std::vector<Entry> entries;
     if (esc.outputBytes() > 0) {
-      entries.push_back({esc.outputsPhysical(), esc.outputBytes(), esc.outputs_logical, true});
+      entries.push_back({esc.model->output_sm, esc.outputsPhysical(), esc.outputBytes(),
+                         esc.outputs_logical, true});
     }
     if (esc.inputBytes() > 0) {
-      entries.push_back({esc.inputsPhysical(), esc.inputBytes(), esc.inputs_logical, false});
+      entries.push_back(
+          {esc.model->input_sm, esc.inputsPhysical(), esc.inputBytes(), esc.inputs_logical, false});
     }
+    if (entries.empty()) continue;
     if (sync_managers) {
-      // Servos: SM2 outputs, SM3 inputs; the digital terminals have one SM0 (as EL2008/EL1008).
+      // One write over the sync managers the slave uses (SM2 and SM3 of a servo, SM0 of a
+      // digital terminal).
+      const std::uint8_t first = std::min(entries.front().sm, entries.back().sm);
+      const std::uint8_t last = std::max(entries.front().sm, entries.back().sm);
+      const auto slots = static_cast<std::size_t>(last - first + 1);
       RingDatagram dg = registerDatagram(
           ecat::kFpwr, station,
-          servo ? ecat::kRegSyncManager0 + 2 * ecat::kSyncManagerStride : ecat::kRegSyncManager0,
-          entries.size() * ecat::kSyncManagerStride);
+          static_cast<std::uint16_t>(ecat::kRegSyncManager0 + first * ecat::kSyncManagerStride),
+          slots * ecat::kSyncManagerStride);
       for (std::size_t e = 0; e < entries.size(); ++e) {
-        std::uint8_t* sm = &dg.data[e * ecat::kSyncManagerStride];
+        std::uint8_t* sm = &dg.data[(entries[e].sm - first) * ecat::kSyncManagerStride];
         putLe(sm + ecat::kSmStartAt, entries[e].phys, 2);
         putLe(sm + ecat::kSmLengthAt, entries[e].length, 2);
         sm[ecat::kSmControlAt] = entries[e].outputs ? kSmOutputs : kSmInputs;
@@ -260,47 +268,68 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
                    std::vector<std::optional<TxPdo>>& inputs) {
   for (std::size_t g = 0; g < segment_.groups.size(); ++g) {
     const FrameGroup& fg = segment_.groups[g];
-    std::vector<std::uint8_t>& image = images_[g];
+    std::vector<std::vector<std::uint8_t>>& images = images_[g];  // per datagram
     // the NC's outputs, and the terminals', into the master's image
     for (int pos : fg.slaves) {
       const Esc& esc = segment_.escs[static_cast<std::size_t>(pos)];
-      const std::size_t at_out = esc.outputs_logical - fg.base;
-      if (esc.kind == SlaveKind::Servo) {
-        encodeRx(outputs[static_cast<std::size_t>(esc.axis)], &image[at_out]);
-      } else if (esc.kind == SlaveKind::OutputTerminal) {
-        image[at_out] = static_cast<std::uint8_t>(1U << (cycle / kOutputTerminalPatternCycles % 8));
+      if (esc.outputBytes() == 0) continue;
+      const std::optional<ImagePlace> at = fg.place(esc.outputs_logical);
+      if (!at) continue;
+      std::uint8_t* out = &images[at->datagram][at->offset];
+      if (esc.servo()) {
+        encodeRx(outputs[static_cast<std::size_t>(esc.axis)], out);
+      } else {
+        writeTerminalOutputs(*esc.model, cycle, out);
       }
     }
-    // The same datagrams every cycle, refilled in place.
+    // The same datagrams every cycle, refilled in place; the first frame also carries the DC
+    // time (and, in the TwinCAT style, the AL status of all slaves).
     std::vector<RingDatagram>& frame = cyclic_frames_[g];
-    frame.resize(g == 0 ? 2 : 1);
-    RingDatagram& lrw = frame[0];
-    lrw.command = ecat::kLrw;
-    lrw.index = datagram_index_++;
-    lrw.adp = static_cast<std::uint16_t>(fg.base & 0xFFFF);
-    lrw.ado = static_cast<std::uint16_t>(fg.base >> 16);
-    lrw.data.assign(image.begin(), image.end());
-    lrw.wkc = 0;
+    const std::size_t extra = g == 0 ? (segment_.status_poll ? 2 : 1) : 0;
+    frame.resize(fg.datagrams.size() + extra);
+    for (std::size_t d = 0; d < fg.datagrams.size(); ++d) {
+      RingDatagram& dg = frame[d];
+      dg.command = fg.datagrams[d].command;
+      dg.index = datagram_index_++;
+      dg.adp = static_cast<std::uint16_t>(fg.datagrams[d].logical & 0xFFFF);
+      dg.ado = static_cast<std::uint16_t>(fg.datagrams[d].logical >> 16);
+      dg.data.assign(images[d].begin(), images[d].end());
+      dg.wkc = 0;
+    }
     if (g == 0) {
-      RingDatagram& dc = frame[1];
+      RingDatagram& dc = frame[fg.datagrams.size()];
       dc.command = ecat::kFrmw;
       dc.index = datagram_index_++;
       dc.adp = kFirstStation;
       dc.ado = ecat::kRegDcSystemTime;
       dc.data.assign(kDcTimeSize, 0);
       dc.wkc = 0;
+      if (segment_.status_poll) {
+        RingDatagram& status = frame[fg.datagrams.size() + 1];
+        status.command = ecat::kBrd;
+        status.index = datagram_index_++;
+        status.adp = 0;
+        status.ado = ecat::kRegAlStatus;
+        status.data.assign(2, 0);
+        status.wkc = 0;
+      }
     }
     const std::int64_t at_ns = t_ns + static_cast<std::int64_t>(g) * 2 * return_delay_ns_;
     bool came_back = false;
     if (!exchange(sink, frame, at_ns, lost_before, lost_after, &came_back)) return false;
-    if (!came_back || frame[0].wkc == 0) continue;
-    image.assign(frame[0].data.begin(), frame[0].data.end());  // the inputs the slaves wrote
+    if (!came_back) continue;
+    for (std::size_t d = 0; d < fg.datagrams.size(); ++d) {
+      // the inputs the slaves wrote
+      if (frame[d].wkc > 0) images[d].assign(frame[d].data.begin(), frame[d].data.end());
+    }
     for (int pos : fg.slaves) {
       const Esc& esc = segment_.escs[static_cast<std::size_t>(pos)];
-      if (esc.kind != SlaveKind::Servo) continue;
+      if (!esc.servo()) continue;
+      const std::optional<ImagePlace> at = fg.place(esc.inputs_logical);
+      if (!at || frame[at->datagram].wkc == 0) continue;
+      const std::vector<std::uint8_t>& image = images[at->datagram];
       PdoValues values;
-      readPdoOf<Pdo::Tx>(ByteReader(image.data(), image.size()), esc.inputs_logical - fg.base,
-                         values);
+      readPdoOf<Pdo::Tx>(ByteReader(image.data(), image.size()), at->offset, values);
       inputs[static_cast<std::size_t>(esc.axis)] = txPdoOf(values);
     }
   }

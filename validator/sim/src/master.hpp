@@ -1,8 +1,8 @@
 // The simulated EtherCAT master (PROTOCOL.md §8): its start-up — counts the slaves, assigns
 // station addresses, walks every slave INIT -> PRE-OP -> SAFE-OP -> OP with AL status polls,
-// configures SM2/SM3 and FMMUs — and its cycle: the process data in one LRW per frame group, the
-// first with a DC FRMW to 0x0910. Each frame is captured twice: the master's copy and the copy the
-// ring returns.
+// configures the sync managers and FMMUs — and its cycle: the process data in the datagrams of
+// each frame group (segment.hpp), the first frame with a DC FRMW to 0x0910. Each frame is captured
+// twice: the master's copy and the copy the ring returns.
 #pragma once
 
 #include <cstdint>
@@ -65,7 +65,7 @@ class Master {
   std::vector<std::uint8_t> bytes_;
   std::uint64_t frames_ = 0;
   // Per frame group, reused every cycle: a long run allocates nothing.
-  std::vector<std::vector<std::uint8_t>> images_;  // the master's process image
+  std::vector<std::vector<std::vector<std::uint8_t>>> images_;  // per datagram of each group
   std::vector<std::vector<RingDatagram>> cyclic_frames_;
 };
 

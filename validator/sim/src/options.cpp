@@ -29,6 +29,33 @@ const char* scenarioName(Scenario scenario) {
   }
   return "?";
 }
+std::optional<ImageStyle> imageStyleFromName(std::string_view name) {
+  for (const ImageStyleName& row : kImageStyles) {
+    if (name == row.name || (row.layout_alias != nullptr && name == row.layout_alias)) {
+      return row.style;
+    }
+  }
+  return std::nullopt;
+}
+const ImageStyleName& imageStyleRow(ImageStyle style) {
+  for (const ImageStyleName& row : kImageStyles) {
+    if (row.style == style) return row;
+  }
+  return kImageStyles[0];
+}
+int defaultIoSlaves(ImageStyle style) {
+  switch (style) {
+    case ImageStyle::Mixed:
+      return 8;
+    case ImageStyle::TwinCat:
+      return 4;
+    case ImageStyle::Soem:
+    case ImageStyle::EtherLab:
+      break;
+  }
+  return 0;
+}
+
 double defaultDuration(Scenario scenario) {
   switch (scenario) {
     case Scenario::Commissioning:
@@ -87,8 +114,9 @@ std::optional<FaultRequest> parseFault(std::string_view text, std::string& error
 
 std::string resolveOptions(SimOptions& o) {
   if (o.axes < 1 || o.axes > 32) return fmt::format("--axes {}: from 1 to 32", o.axes);
-  if (o.io_slaves < 0 || o.io_slaves > 32) {
-    return fmt::format("--io-slaves {}: from 0 to 32", o.io_slaves);
+  if (!o.io_slaves) o.io_slaves = defaultIoSlaves(o.image);
+  if (*o.io_slaves < 0 || *o.io_slaves > 32) {
+    return fmt::format("--io-slaves {}: from 0 to 32", *o.io_slaves);
   }
   if (o.cycle_us < 125 || o.cycle_us > 10000) {
     return fmt::format("--cycle-us {}: from 125 to 10000", o.cycle_us);

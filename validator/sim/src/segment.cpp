@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <iterator>
 
 #include "le_bytes.hpp"
 #include "ncservo/ethercat.hpp"
@@ -23,31 +24,105 @@ constexpr std::size_t kAlStatusRegisters = 6;             // AL status to AL sta
 constexpr std::size_t kActiveFmmus = 3;
 
 // Process RAM of the slaves.
-constexpr std::uint16_t kServoRxPhys = 0x1100;
-constexpr std::uint16_t kServoTxPhys = 0x1180;
+constexpr std::uint16_t kRxPhys = 0x1100;
+constexpr std::uint16_t kTxPhys = 0x1180;
 constexpr std::uint16_t kOutTerminalPhys = 0x0F00;
 constexpr std::uint16_t kInTerminalPhys = 0x1000;
+constexpr SlaveModel kServo = {"servo", SlaveRole::Servo, kRxPdoSize, kTxPdoSize, 2,
+                               3,       kRxPhys,          kTxPhys};
+// The terminals of the SOEM and EtherLab set-ups, in turn.
+constexpr SlaveModel kDigitalOut = {"EL2008", SlaveRole::Digital, 1, 0, 0, 0, kOutTerminalPhys, 0};
+constexpr SlaveModel kDigitalIn = {"EL1008", SlaveRole::Digital, 0, 1, 0, 0, 0, kInTerminalPhys};
+// The mixed and TwinCAT set-ups draw from all of these: sizes a servo's 10 and 40 bytes are not,
+// output-only, input-only, and a drive of another protocol.
+constexpr SlaveModel kTerminalModels[] = {
+    kDigitalOut,
+    kDigitalIn,
+    {"EL2809", SlaveRole::Digital, 2, 0, 0, 0, kOutTerminalPhys, 0},
+    {"EL1809", SlaveRole::Digital, 0, 2, 0, 0, 0, kInTerminalPhys},
+    {"EL4004", SlaveRole::Analog, 8, 0, 2, 0, kRxPhys, 0},
+    {"EL3064", SlaveRole::Analog, 0, 16, 0, 3, 0, kTxPhys},
+    {"EL3102", SlaveRole::Analog, 0, 4, 0, 3, 0, kTxPhys},
+    {"EL5101", SlaveRole::Analog, 4, 6, 2, 3, kRxPhys, kTxPhys},
+    {"CiA 402 drive", SlaveRole::Drive, 12, 28, 2, 3, kRxPhys, kTxPhys},
+    {"EL6692", SlaveRole::Bridge, 32, 32, 2, 3, kRxPhys, kTxPhys},
+};
+constexpr std::uint64_t kMixSeedSalt = 0x6D69786564ULL;  // the set-up's own random stream
+
 // The master's process image: one region per cyclic frame.
 constexpr std::uint32_t kLogicalBase = 0x00010000;
 constexpr std::uint32_t kLogicalFrameStride = 0x1000;
+// TwinCAT-like: the outputs and the inputs in areas of their own, far apart.
+constexpr std::uint32_t kOutputArea = 0x01000000;
+constexpr std::uint32_t kInputArea = 0x01008000;
 constexpr std::size_t kMaxLrwData = 1450;  // 29 axes of 50 bytes (PROTOCOL.md §9.4)
+// Several datagrams' headers, the DC FRMW and the status BRD must fit too (1498 bytes in all).
+constexpr std::size_t kMaxSplitData = 1400;
 constexpr int kMaxServosPerFrame = 29;
+constexpr std::int64_t kInputTerminalStepNs = 50 * kMs;  // the inputs count up this often
+constexpr std::uint64_t kOutputPatternCycles = 100;      // the lit output moves this often
 
 }  // namespace
 
+const SlaveModel& servoModel() {
+  return kServo;
+}
+
+void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uint8_t* out) {
+  const std::size_t size = model.output_bytes;
+  switch (model.role) {
+    case SlaveRole::Servo:
+      break;
+    case SlaveRole::Digital:
+      putLe(out, std::uint64_t{1} << (cycle / kOutputPatternCycles % (8 * size)), size);
+      break;
+    case SlaveRole::Analog:
+      for (std::size_t c = 0; c + 2 <= size; c += 2) putLe(out + c, cycle * (c + 1) * 37, 2);
+      break;
+    case SlaveRole::Drive:  // control word "enable operation", target position, velocity, mode
+      putLe(out, 0x000F, 2);
+      putLe(out + 2, cycle * 100, 4);
+      putLe(out + 6, 1000, 4);
+      out[10] = 8;  // cyclic synchronous position
+      out[11] = 0;
+      break;
+    case SlaveRole::Bridge:
+      for (std::size_t i = 0; i < size; ++i) out[i] = static_cast<std::uint8_t>(cycle + i);
+      break;
+  }
+}
+
 // --- one ESC ---
 
-std::size_t Esc::outputBytes() const {
-  return kind == SlaveKind::Servo ? kRxPdoSize : kind == SlaveKind::OutputTerminal ? 1 : 0;
-}
-std::size_t Esc::inputBytes() const {
-  return kind == SlaveKind::Servo ? kTxPdoSize : kind == SlaveKind::InputTerminal ? 1 : 0;
-}
-std::uint16_t Esc::outputsPhysical() const {
-  return kind == SlaveKind::Servo ? kServoRxPhys : kOutTerminalPhys;
-}
-std::uint16_t Esc::inputsPhysical() const {
-  return kind == SlaveKind::Servo ? kServoTxPhys : kInTerminalPhys;
+void Esc::updateTerminalInputs(std::int64_t now_ns) {
+  if (inputBytes() == 0) return;
+  std::uint8_t* in = &mem[inputsPhysical()];
+  const std::size_t size = inputBytes();
+  const auto step = static_cast<std::uint64_t>(now_ns / kInputTerminalStepNs);
+  const auto us = static_cast<std::uint64_t>(now_ns / kUs);
+  switch (model->role) {
+    case SlaveRole::Servo:
+      break;
+    case SlaveRole::Digital:
+      putLe(in, step, size);
+      break;
+    case SlaveRole::Analog:  // triangles of 16-bit values, one channel after the other
+      for (std::size_t c = 0; c + 2 <= size; c += 2) {
+        const std::uint64_t phase = (step + 7 * c) % 64;
+        putLe(in + c, (phase < 32 ? phase : 64 - phase) * 1000, 2);
+      }
+      break;
+    case SlaveRole::Drive:  // status word, actual position and velocity, torque, the rest zero
+      std::fill(in, in + size, 0);
+      putLe(in, 0x1237, 2);
+      putLe(in + 2, us / 10, 4);
+      putLe(in + 6, 1000, 4);
+      putLe(in + 10, step % 200, 2);
+      break;
+    case SlaveRole::Bridge:
+      for (std::size_t i = 0; i < size; ++i) in[i] = static_cast<std::uint8_t>(step + 3 * i);
+      break;
+  }
 }
 
 std::uint16_t Esc::station() const {
@@ -230,54 +305,128 @@ void Esc::process(RingDatagram& dg) {
 
 // --- the segment ---
 
-Segment::Segment(const SimOptions& o, Rng& rng) {
-  const int total = o.axes + o.io_slaves;
-  int servo_count = 0, terminal = 0;
-  for (int pos = 0; pos < total; ++pos) {
-    Esc esc;
+std::optional<ImagePlace> FrameGroup::place(std::uint32_t logical) const {
+  for (std::size_t d = 0; d < datagrams.size(); ++d) {
+    const ImageDatagram& dg = datagrams[d];
+    if (logical >= dg.logical && logical < dg.logical + dg.size) {
+      return ImagePlace{d, logical - dg.logical};
+    }
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+// Ring order: SOEM and EtherLab alternate servos and 8-bit digital terminals; mixed and TwinCAT
+// draw each position and each terminal's model.
+std::vector<const SlaveModel*> ringOrder(const SimOptions& o, Rng& mix) {
+  const int io_slaves = *o.io_slaves;
+  const bool drawn = o.image == ImageStyle::Mixed || o.image == ImageStyle::TwinCat;
+  std::vector<const SlaveModel*> ring;
+  int servos = 0, terminals = 0;
+  for (int pos = 0; pos < o.axes + io_slaves; ++pos) {
+    const int servos_left = o.axes - servos, terminals_left = io_slaves - terminals;
     const bool take_servo =
-        servo_count < o.axes && (terminal >= o.io_slaves || servo_count <= terminal);
+        drawn ? mix.between(1, servos_left + terminals_left) <= servos_left
+              : servos < o.axes && (terminals >= io_slaves || servos <= terminals);
     if (take_servo) {
-      esc.kind = SlaveKind::Servo;
-      esc.axis = servo_count++;
-      servo_slave.push_back(pos);
+      ring.push_back(&kServo);
+      ++servos;
+      continue;
+    }
+    if (drawn) {
+      const auto model = mix.between(0, static_cast<std::int64_t>(std::size(kTerminalModels)) - 1);
+      ring.push_back(&kTerminalModels[static_cast<std::size_t>(model)]);
     } else {
-      esc.kind = terminal % 2 == 0 ? SlaveKind::OutputTerminal : SlaveKind::InputTerminal;
-      ++terminal;
+      ring.push_back(terminals % 2 == 0 ? &kDigitalOut : &kDigitalIn);
+    }
+    ++terminals;
+  }
+  return ring;
+}
+
+// TwinCAT-like: one area split in two datagrams at a slave boundary once it holds two slaves.
+void splitArea(std::vector<ImageDatagram>& out, std::uint8_t command, std::uint32_t base,
+               const std::vector<std::size_t>& sizes) {
+  if (sizes.empty()) return;
+  const std::size_t first = (sizes.size() + 1) / 2;
+  std::uint32_t cursor = base;
+  for (std::size_t part = 0; part < 2; ++part) {
+    const std::size_t from = part == 0 ? 0 : first, to = part == 0 ? first : sizes.size();
+    if (from == to) continue;
+    ImageDatagram dg{command, cursor, 0};
+    for (std::size_t i = from; i < to; ++i) dg.size += sizes[i];
+    cursor += static_cast<std::uint32_t>(dg.size);
+    out.push_back(dg);
+  }
+}
+
+}  // namespace
+
+Segment::Segment(const SimOptions& o, Rng& rng) : style(o.image) {
+  Rng mix(o.seed ^ kMixSeedSalt);
+  const std::vector<const SlaveModel*> ring = ringOrder(o, mix);
+  for (std::size_t pos = 0; pos < ring.size(); ++pos) {
+    Esc esc;
+    esc.model = ring[pos];
+    if (esc.servo()) {
+      esc.axis = static_cast<int>(servo_slave.size());
+      servo_slave.push_back(static_cast<int>(pos));
     }
     esc.mem[ecat::kRegType] = kEscTypeValue;
     esc.transition_frames = static_cast<int>(rng.between(1, 3));
     esc.publishAlStatus();
     escs.push_back(std::move(esc));
   }
-  // Frames: at most 29 servos and 1450 bytes of process data each.
+  const bool split = style == ImageStyle::TwinCat;
+  outputs_first =
+      style == ImageStyle::Soem || split || (style == ImageStyle::Mixed && mix.between(0, 1) == 0);
+  status_poll = split;
+  // Frames: at most 29 servos and 1450 bytes of process data each (1400 when split).
+  const std::size_t max_data = split ? kMaxSplitData : kMaxLrwData;
   FrameGroup group;
   int servos_in_group = 0;
-  for (int pos = 0; pos < total; ++pos) {
-    const Esc& esc = escs[static_cast<std::size_t>(pos)];
+  for (std::size_t pos = 0; pos < escs.size(); ++pos) {
+    const Esc& esc = escs[pos];
     const std::size_t need = esc.outputBytes() + esc.inputBytes();
-    const bool is_servo = esc.kind == SlaveKind::Servo;
     if (!group.slaves.empty() &&
-        (group.size + need > kMaxLrwData || (is_servo && servos_in_group == kMaxServosPerFrame))) {
+        (group.bytes + need > max_data || (esc.servo() && servos_in_group == kMaxServosPerFrame))) {
       groups.push_back(std::move(group));
       group = FrameGroup{};
       servos_in_group = 0;
     }
-    group.slaves.push_back(pos);
-    group.size += need;
-    if (is_servo) ++servos_in_group;
+    group.slaves.push_back(static_cast<int>(pos));
+    group.bytes += need;
+    if (esc.servo()) ++servos_in_group;
   }
   groups.push_back(std::move(group));
-  // Logical addresses of each slave's outputs and inputs.
+  // Logical addresses of each slave's outputs and inputs, and the datagrams over them.
   for (std::size_t g = 0; g < groups.size(); ++g) {
     FrameGroup& fg = groups[g];
-    fg.base = kLogicalBase + static_cast<std::uint32_t>(g) * kLogicalFrameStride;
-    std::uint32_t cursor = fg.base;
+    const auto stride = static_cast<std::uint32_t>(g) * kLogicalFrameStride;
+    if (split) {
+      std::vector<std::size_t> output_sizes, input_sizes;
+      std::uint32_t out_cursor = kOutputArea + stride, in_cursor = kInputArea + stride;
+      for (int pos : fg.slaves) {
+        Esc& esc = escs[static_cast<std::size_t>(pos)];
+        esc.outputs_logical = out_cursor;
+        esc.inputs_logical = in_cursor;
+        out_cursor += static_cast<std::uint32_t>(esc.outputBytes());
+        in_cursor += static_cast<std::uint32_t>(esc.inputBytes());
+        if (esc.outputBytes() > 0) output_sizes.push_back(esc.outputBytes());
+        if (esc.inputBytes() > 0) input_sizes.push_back(esc.inputBytes());
+      }
+      splitArea(fg.datagrams, ecat::kLwr, kOutputArea + stride, output_sizes);
+      splitArea(fg.datagrams, ecat::kLrd, kInputArea + stride, input_sizes);
+      continue;
+    }
+    const std::uint32_t base = kLogicalBase + stride;
+    std::uint32_t cursor = base;
     auto place = [&](std::uint32_t& address, std::size_t bytes) {
       address = cursor;
       cursor += static_cast<std::uint32_t>(bytes);
     };
-    if (o.layout == LayoutKind::Default) {
+    if (outputs_first) {
       for (int pos : fg.slaves) {
         Esc& esc = escs[static_cast<std::size_t>(pos)];
         place(esc.outputs_logical, esc.outputBytes());
@@ -293,7 +442,36 @@ Segment::Segment(const SimOptions& o, Rng& rng) {
         place(esc.inputs_logical, esc.inputBytes());
       }
     }
+    fg.datagrams.push_back({ecat::kLrw, base, fg.bytes});
   }
+}
+
+std::uint16_t Segment::expectedWkc(const ImageDatagram& dg) const {
+  const std::uint64_t start = dg.logical, end = start + dg.size;
+  auto overlaps = [&](std::uint32_t logical, std::size_t bytes) {
+    return bytes > 0 && logical < end && logical + bytes > start;
+  };
+  std::uint16_t wkc = 0;
+  for (const Esc& esc : escs) {
+    const bool writes =
+        ecat::writesSlaves(dg.command) && overlaps(esc.outputs_logical, esc.outputBytes());
+    const bool reads =
+        ecat::readsSlaves(dg.command) && overlaps(esc.inputs_logical, esc.inputBytes());
+    if (dg.command == ecat::kLrw) {
+      wkc = static_cast<std::uint16_t>(wkc + (writes ? 2 : 0) + (reads ? 1 : 0));
+    } else if (writes || reads) {
+      ++wkc;
+    }
+  }
+  return wkc;
+}
+
+std::string Segment::describe() const {
+  const ImageStyleName& row = imageStyleRow(style);
+  if (style == ImageStyle::Mixed) {
+    return fmt::format("mixed ({}) layout", outputs_first ? "outputs first" : "per slave");
+  }
+  return fmt::format("{} layout", row.layout_alias != nullptr ? row.layout_alias : row.name);
 }
 
 std::vector<SimAxisLayout> Segment::axisLayout() const {

@@ -5,6 +5,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "ncservo/al_tracker.hpp"
@@ -17,7 +19,29 @@ inline constexpr std::size_t kEscMemory = 0x2000;  // registers and process RAM
 inline constexpr std::uint16_t kFirstStation = 0x03E9;
 inline constexpr std::int64_t kEpochNs = 1'767'225'600 * kSecond;  // 2026-01-01 00:00:00 UTC
 
-enum class SlaveKind : std::uint8_t { Servo, OutputTerminal, InputTerminal };
+// What a slave's process data is, for what the master writes and the slave answers.
+enum class SlaveRole : std::uint8_t {
+  Servo,    // this protocol (PROTOCOL.md §1-5)
+  Digital,  // a walking output bit; inputs count up
+  Analog,   // 16-bit channels: ramps out, triangles in
+  Drive,    // another protocol's drive (CiA 402-like control and status words)
+  Bridge,   // a gateway's bytes: counters both ways
+};
+
+// A kind of slave: its process data's sizes, and where its sync managers put it in its RAM.
+// Terminals without a mailbox carry theirs in SM0 (as EL2008/EL1008); the others by convention
+// outputs in SM2 and inputs in SM3 (PROTOCOL.md §8).
+struct SlaveModel {
+  const char* name;
+  SlaveRole role;
+  std::uint16_t output_bytes;
+  std::uint16_t input_bytes;
+  std::uint8_t output_sm;
+  std::uint8_t input_sm;
+  std::uint16_t output_phys;
+  std::uint16_t input_phys;
+};
+const SlaveModel& servoModel();
 
 // A datagram on its way round the ring: the slaves read and write its data and count its WKC.
 struct RingDatagram {
@@ -34,7 +58,7 @@ struct RingDatagram {
 
 class Esc {
  public:
-  SlaveKind kind = SlaveKind::Servo;
+  const SlaveModel* model = &servoModel();
   int axis = -1;  // for a servo
   std::vector<std::uint8_t> mem = std::vector<std::uint8_t>(kEscMemory, 0);
   std::uint8_t state = ecat::kAlInit;
@@ -45,12 +69,14 @@ class Esc {
   std::uint32_t outputs_logical = 0;
   std::uint32_t inputs_logical = 0;
 
-  // Process data: bytes, and where they lie in the process RAM (SM2/SM3 of a servo, SM0 of a
-  // digital terminal).
-  std::size_t outputBytes() const;
-  std::size_t inputBytes() const;
-  std::uint16_t outputsPhysical() const;
-  std::uint16_t inputsPhysical() const;
+  bool servo() const { return model->role == SlaveRole::Servo; }
+  // Process data: bytes, and where they lie in the process RAM.
+  std::size_t outputBytes() const { return model->output_bytes; }
+  std::size_t inputBytes() const { return model->input_bytes; }
+  std::uint16_t outputsPhysical() const { return model->output_phys; }
+  std::uint16_t inputsPhysical() const { return model->input_phys; }
+  // A slave other than a servo writes its inputs into its RAM (a servo's drive does that).
+  void updateTerminalInputs(std::int64_t now_ns);
 
   std::uint16_t station() const;
   bool processData() const;  // SAFE-OP or OP
@@ -76,19 +102,45 @@ class Esc {
   int pending_frames_ = 0;
 };
 
-struct FrameGroup {  // the slaves whose process data one cyclic frame carries
-  std::vector<int> slaves;
-  std::uint32_t base = 0;
+// The master's outputs for a slave other than a servo, this cycle.
+void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uint8_t* out);
+
+// One logical datagram of the process image (PROTOCOL.md §8): LRW, LWR or LRD.
+struct ImageDatagram {
+  std::uint8_t command = 0;
+  std::uint32_t logical = 0;
   std::size_t size = 0;
 };
+// Where a logical address lies in a frame group: which datagram, how far into its data.
+struct ImagePlace {
+  std::size_t datagram = 0;
+  std::size_t offset = 0;
+};
 
-// The slaves in ring order: servo 0, terminal 0, servo 1, terminal 1, ..., then the rest.
+struct FrameGroup {  // the slaves whose process data one cyclic frame carries
+  std::vector<int> slaves;
+  std::vector<ImageDatagram> datagrams;  // in frame order
+  std::size_t bytes = 0;                 // the slaves' process data
+  std::optional<ImagePlace> place(std::uint32_t logical) const;
+};
+
+// The slaves in ring order, where their process data lies (PROTOCOL.md §9.4's styles) and the
+// cyclic datagrams that carry it. SOEM and EtherLab: servo 0, terminal 0, servo 1, terminal 1,
+// ..., then the rest, the terminals 8-bit digital outputs and inputs in turn; mixed and TwinCAT:
+// terminals of every model in kTerminalModels, drawn with the positions from the seed.
 struct Segment {
   std::vector<Esc> escs;
   std::vector<int> servo_slave;  // axis -> ring position
   std::vector<FrameGroup> groups;
+  ImageStyle style = ImageStyle::Soem;
+  bool outputs_first = true;  // all outputs, then all inputs (else per slave)
+  bool status_poll = false;   // the cycle's first frame also reads the AL status (BRD 0x0130)
 
   Segment(const SimOptions& options, Rng& rng);
+  // PROTOCOL.md §8: what the slaves' FMMUs add to the WKC of a logical datagram.
+  std::uint16_t expectedWkc(const ImageDatagram& dg) const;
+  // How the slaves are laid out, for the layout file's header.
+  std::string describe() const;
   Esc& servo(int axis) {
     return escs[static_cast<std::size_t>(servo_slave[static_cast<std::size_t>(axis)])];
   }

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "esl_probe.hpp"
 #include "fault_plan.hpp"
 #include "master.hpp"
 #include "ncservo/config.hpp"
@@ -20,7 +21,6 @@ namespace ncservo::sim {
 
 namespace {
 constexpr std::int64_t kSoakPeriodNs = 10 * kSecond;
-constexpr std::int64_t kInputTerminalStepNs = 50 * kMs;  // the inputs count up this often
 }  // namespace
 
 struct Simulator::Impl {
@@ -139,13 +139,12 @@ struct Simulator::Impl {
       encodeTx(drive.inputs(), &esc.mem[esc.inputsPhysical()]);
     }
     for (Esc& esc : segment.escs) {
-      if (esc.kind == SlaveKind::InputTerminal) {
-        esc.mem[esc.inputsPhysical()] = static_cast<std::uint8_t>(now_ns / kInputTerminalStepNs);
-      }
+      if (!esc.servo()) esc.updateTerminalInputs(now_ns);
     }
   }
 
-  std::optional<std::uint64_t> run(const FrameSink& sink) {
+  std::optional<std::uint64_t> run(const FrameSink& captured) {
+    const FrameSink sink = o.probe == Probe::Esl ? eslProbeSink(captured, o.seed) : captured;
     std::int64_t t = 0;
     const std::int64_t step_ns = std::min<std::int64_t>(cycle_ns, kMs);
     if (o.startup) {
@@ -223,10 +222,9 @@ std::string Simulator::layoutConfig() const {
     axes.push_back(std::move(axis));
   }
   return fmt::format(
-             "# The layout of `ncservo simulate` ({} axes, {} layout, {} terminals), for\n"
+             "# The layout of `ncservo simulate` ({} axes, {}, {} terminals), for\n"
              "# `ncservo validate --config` or the Wireshark preference ncservo.config.\n",
-             impl_->o.axes, impl_->o.layout == LayoutKind::Default ? "default" : "interleaved",
-             impl_->o.io_slaves) +
+             impl_->o.axes, impl_->segment.describe(), *impl_->o.io_slaves) +
          writeConfig(axes, impl_->o.ready_mode);
 }
 
@@ -236,9 +234,8 @@ std::string Simulator::eni() const {
   for (std::size_t pos = 0; pos < segment.escs.size(); ++pos) {
     const Esc& esc = segment.escs[pos];
     EniSlave e;
-    e.name = esc.kind == SlaveKind::Servo            ? fmt::format("axis{}", esc.axis)
-             : esc.kind == SlaveKind::OutputTerminal ? fmt::format("Term {} (EL2008)", pos)
-                                                     : fmt::format("Term {} (EL1008)", pos);
+    e.name = esc.servo() ? fmt::format("axis{}", esc.axis)
+                         : fmt::format("Term {} ({})", pos, esc.model->name);
     e.station = static_cast<std::uint16_t>(kFirstStation + pos);
     e.position = static_cast<std::uint16_t>(pos);
     e.outputs = esc.outputs_logical;
@@ -248,14 +245,11 @@ std::string Simulator::eni() const {
     slaves.push_back(std::move(e));
   }
   std::vector<EniCyclicCommand> commands;
-  for (const FrameGroup& g : segment.groups) {
-    std::uint16_t wkc = 0;
-    for (int pos : g.slaves) {
-      const Esc& esc = segment.escs[static_cast<std::size_t>(pos)];
-      wkc = static_cast<std::uint16_t>(wkc + (esc.inputBytes() > 0 ? 1 : 0) +
-                                       (esc.outputBytes() > 0 ? 2 : 0));
+  for (std::size_t g = 0; g < segment.groups.size(); ++g) {
+    for (const ImageDatagram& dg : segment.groups[g].datagrams) {
+      commands.push_back({dg.command, dg.logical, static_cast<std::uint16_t>(dg.size),
+                          segment.expectedWkc(dg), g});
     }
-    commands.push_back({g.base, static_cast<std::uint16_t>(g.size), wkc});
   }
   return writeEni(slaves, commands, static_cast<std::uint32_t>(impl_->o.cycle_us));
 }

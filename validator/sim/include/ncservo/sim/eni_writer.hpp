@@ -2,6 +2,7 @@
 // parseEni (ncservo/eni.hpp) reads.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -20,9 +21,11 @@ struct EniSlave {
   std::uint16_t input_bytes = 0;
 };
 struct EniCyclicCommand {
-  std::uint32_t address = 0;  // logical address of the LRW
+  std::uint8_t command = 0;   // LRW, LWR or LRD
+  std::uint32_t address = 0;  // logical address
   std::uint16_t length = 0;
   std::uint16_t expected_wkc = 0;
+  std::size_t frame = 0;  // the cyclic frame that carries it; the commands in frame order
 };
 std::string writeEni(const std::vector<EniSlave>& slaves,
                      const std::vector<EniCyclicCommand>& commands, std::uint32_t cycle_us);

@@ -3,11 +3,11 @@
 //
 // The master does what real masters do (PROTOCOL.md §8): counts the slaves, assigns station
 // addresses, walks every slave INIT -> PRE-OP -> SAFE-OP -> OP with AL status polls, configures
-// SM2/SM3 and FMMUs, then exchanges process data once per cycle in an LRW with a DC FRMW to
-// 0x0910. Each frame is captured twice: the master's copy and the copy the ring returns. The
-// slaves are small ESC models with register memory: FMMUs, sync managers and AL control work
-// from what the master wrote, so the capture is consistent by construction. Each rule's fault is
-// a row of faults.hpp.
+// SM2/SM3 and FMMUs, then exchanges process data once per cycle in the datagrams of its image
+// style (ImageStyle) with a DC FRMW to 0x0910. Each frame is captured twice: the master's copy and
+// the copy the ring returns. The slaves are small ESC models with register memory: FMMUs, sync
+// managers and AL control work from what the master wrote, so the capture is consistent by
+// construction. Each rule's fault is a row of faults.hpp.
 #pragma once
 
 #include <cstdint>
@@ -24,10 +24,37 @@
 namespace ncservo::sim {
 
 enum class Scenario : std::uint8_t { Commissioning, Faults, Soak };
-enum class LayoutKind : std::uint8_t {
-  Default,      // PROTOCOL.md §9.4: all outputs, then all inputs
-  Interleaved,  // per slave in ring order: its outputs, then its inputs
+// How the master lays out the process image (PROTOCOL.md §9.4).
+enum class ImageStyle : std::uint8_t {
+  Soem,      // one LRW per frame: all outputs, then all inputs, in ring order
+  EtherLab,  // one LRW per frame: per slave in ring order, its outputs, then its inputs
+  Mixed,     // one LRW among terminals and drives of other sizes, in either order (by the seed)
+  TwinCat,   // an output area written by LWRs and an input area read by LRDs, apart
 };
+struct ImageStyleName {
+  const char* name;
+  ImageStyle style;
+  const char* layout_alias;  // `--layout`'s older name, or null
+  const char* summary;
+};
+inline constexpr ImageStyleName kImageStyles[] = {
+    {"soem", ImageStyle::Soem, "default", "one LRW, all outputs then all inputs"},
+    {"etherlab", ImageStyle::EtherLab, "interleaved", "one LRW, per slave its outputs then inputs"},
+    {"mixed", ImageStyle::Mixed, nullptr,
+     "one LRW among terminals and drives of other sizes, set-up and order drawn from the seed"},
+    {"twincat", ImageStyle::TwinCat, nullptr,
+     "LWRs of an output area, LRDs of an input area apart, a BRD of the AL status"},
+};
+// By its name or its `--layout` alias.
+std::optional<ImageStyle> imageStyleFromName(std::string_view name);
+const ImageStyleName& imageStyleRow(ImageStyle style);
+
+// A probe in the line between the master and the first slave.
+enum class Probe : std::uint8_t {
+  None,
+  Esl,  // an ET2000: each frame behind a 16-byte ESL header with its own exact timestamp
+};
+
 std::optional<Scenario> scenarioFromName(std::string_view name);
 const char* scenarioName(Scenario scenario);
 
@@ -44,11 +71,12 @@ std::optional<FaultRequest> parseFault(std::string_view text, std::string& error
 struct SimOptions {
   Scenario scenario = Scenario::Commissioning;
   int axes = 4;                      // servos, 1..32
-  int io_slaves = 0;                 // 8-bit digital output/input terminals sharing the LRW, 0..32
+  std::optional<int> io_slaves;      // other slaves sharing the image, 0..32 (default per style)
   int cycle_us = 1000;               // 125..10000
   std::optional<double> duration_s;  // default per scenario
   std::uint64_t seed = 1;
-  LayoutKind layout = LayoutKind::Default;
+  ImageStyle image = ImageStyle::Soem;
+  Probe probe = Probe::None;
   bool startup = true;
   int ready_mode = 0;  // the drives' Servo_Ready_Mode
   int jitter_us = 0;   // master send jitter, at most a quarter cycle
@@ -64,6 +92,8 @@ inline bool isIncrementalAxis(int axis) {
 // The NC's plan starts this long after the capture's start, once the start-up is over.
 inline constexpr double kStartupSeconds = 0.2;
 
+// The other slaves a style has when --io-slaves does not say.
+int defaultIoSlaves(ImageStyle style);
 // The default duration of a scenario, in seconds.
 double defaultDuration(Scenario scenario);
 // Checks the options and resolves defaults (fault times and axes). Empty on success, else the
@@ -80,9 +110,10 @@ struct SimAxisLayout {
 };
 
 struct SimFrame {
-  std::int64_t time_ns;  // since the Unix epoch
+  std::int64_t time_ns;  // since the Unix epoch: the capturing PC's stamp
   const std::uint8_t* data;
   std::size_t size;
+  bool returned = false;  // the copy the ring returned (else the master's)
 };
 // Receives each frame in capture order; returns false to stop (e.g. a write error).
 using FrameSink = std::function<bool(const SimFrame&)>;
