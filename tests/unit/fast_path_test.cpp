@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "status_text.hpp"
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "ncservo/validator.hpp"
@@ -201,7 +202,7 @@ class FastPathOnSimulated : public ::testing::TestWithParam<SimRow> {};
 
 TEST_P(FastPathOnSimulated, ChangesNothing) {
   sim::SimOptions options = GetParam().options;
-  ASSERT_EQ(sim::resolveOptions(options), "");
+  ASSERT_EQ(test::statusText(sim::resolveOptions(options)), "");
   sim::Simulator simulator(options);
   Both both;
   std::uint64_t frame = 0;

@@ -1,5 +1,6 @@
 // Learning the servos' layout from the capture's start-up (layout_learner.hpp, PROTOCOL.md §9.3):
 // the SM and FMMU register writes, byte by byte, then the simulator's start-ups as the truth.
+#include "status_text.hpp"
 #include "ncservo/layout_learner.hpp"
 
 #include <gtest/gtest.h>
@@ -227,7 +228,7 @@ INSTANTIATE_TEST_SUITE_P(SimulatedSetUps, LearnedLayout, ::testing::ValuesIn(kSe
 TEST(LearnedLayout, NothingBeforeTheFmmusAreWritten) {
   sim::SimOptions o;
   o.duration_s = 1.0;
-  ASSERT_EQ(sim::resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(sim::resolveOptions(o)), "");
   sim::Simulator simulator(o);
   LayoutLearner learner;
   learn(simulator, learner, 1000, true);  // up to the SM writes, before the FMMU writes
@@ -240,7 +241,7 @@ TEST(LearnedLayout, NoStartUpNothingLearned) {
   sim::SimOptions o;
   o.duration_s = 1.0;
   o.startup = false;
-  ASSERT_EQ(sim::resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(sim::resolveOptions(o)), "");
   sim::Simulator simulator(o);
   LayoutLearner learner;
   learn(simulator, learner, 200);

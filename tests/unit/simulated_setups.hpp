@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "status_text.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/sim/simulator.hpp"
 
@@ -40,7 +41,7 @@ inline sim::SimOptions optionsFor(const SetUp& s) {
   o.image = s.image;
   o.seed = s.seed;
   o.duration_s = 1.0;
-  EXPECT_EQ(sim::resolveOptions(o), "");
+  EXPECT_EQ(test::statusText(sim::resolveOptions(o)), "");
   return o;
 }
 

@@ -26,6 +26,7 @@
 #include "ncservo/rules.hpp"
 #include "ncservo/sim/faults.hpp"
 #include "ncservo/validator.hpp"
+#include "status_text.hpp"
 
 namespace ncservo::sim {
 namespace {
@@ -39,7 +40,7 @@ struct Frame {
 
 // Runs a simulation (its options must resolve) and keeps every frame.
 std::vector<Frame> simulate(SimOptions options) {
-  const std::string error = resolveOptions(options);
+  const std::string error = test::statusText(resolveOptions(options));
   EXPECT_EQ(error, "");
   std::vector<Frame> frames;
   Simulator simulator(options);
@@ -98,8 +99,10 @@ class ParseFault : public ::testing::TestWithParam<ParseRow> {};
 TEST_P(ParseFault, Rows) {
   const ParseRow& row = GetParam();
   if (row.bug != nullptr) GTEST_SKIP() << row.bug;
-  std::string error;
-  const auto fault = parseFault(row.text, error);
+  const Result<FaultRequest> parsed = parseFault(row.text);
+  const std::optional<FaultRequest> fault =
+      parsed ? std::optional<FaultRequest>(*parsed) : std::nullopt;
+  const std::string error = parsed ? std::string() : parsed.error().text();
   if (!row.rule) {
     EXPECT_FALSE(fault.has_value()) << row.text;
     EXPECT_FALSE(error.empty()) << row.text;
@@ -147,9 +150,8 @@ struct ResolveRow {
 class ResolveOptions : public ::testing::TestWithParam<ResolveRow> {};
 
 FaultRequest fault(const char* text) {
-  std::string error;
-  auto f = parseFault(text, error);
-  EXPECT_TRUE(f.has_value()) << error;
+  const Result<FaultRequest> f = parseFault(text);
+  EXPECT_TRUE(f.has_value()) << f.error().text();
   return f.value_or(FaultRequest{});
 }
 
@@ -157,7 +159,7 @@ TEST_P(ResolveOptions, Rows) {
   const ResolveRow& row = GetParam();
   SimOptions o;
   row.change(o);
-  const std::string error = resolveOptions(o);
+  const std::string error = test::statusText(resolveOptions(o));
   if (std::string(row.error).empty()) {
     EXPECT_EQ(error, "") << row.name;
   } else {
@@ -263,7 +265,7 @@ TEST_P(ResolveDefaults, TimeAndAxisFilledIn) {
   o.axes = row.axes;
   o.startup = row.startup;
   o.faults = {fault(row.fault)};
-  ASSERT_EQ(resolveOptions(o), "") << row.fault;
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "") << row.fault;
   ASSERT_TRUE(o.duration_s.has_value());
   const FaultRequest& f = o.faults[0];
   if (row.in_startup) {
@@ -524,7 +526,7 @@ TEST_P(Layout, AddressesAndStations) {
   SimOptions o = options(Scenario::Commissioning, row.axes, 1.0);
   o.io_slaves = row.io_slaves;
   o.image = row.image;
-  ASSERT_EQ(resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   const Simulator simulator(o);
   const std::vector<SimAxisLayout>& layout = simulator.layout();
   ASSERT_EQ(layout.size(), static_cast<std::size_t>(row.axes));
@@ -579,7 +581,7 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   o.io_slaves = row.io_slaves;
   o.image = row.image;
   o.ready_mode = row.axes % 2;
-  ASSERT_EQ(resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   const Simulator simulator(o);
   const Result<Config> parsed = parseConfig(simulator.layoutConfig(), "sim.toml");
   ASSERT_TRUE(parsed.has_value()) << parsed.error().text() << "\n" << simulator.layoutConfig();
@@ -668,7 +670,7 @@ SimOptions styleOptions(const StyleRow& row, double duration_s) {
   SimOptions o = options(Scenario::Commissioning, row.axes, duration_s);
   o.image = row.image;
   o.startup = row.startup;
-  EXPECT_EQ(resolveOptions(o), "");
+  EXPECT_EQ(test::statusText(resolveOptions(o)), "");
   return o;
 }
 
@@ -758,10 +760,10 @@ TEST_P(ImageStyleRun, WorkingCountersFromTheStartUpsFmmus) {
         for (const FmmuView& fmmu : slave.fmmus) {
           const bool overlaps = fmmu.active && fmmu.logical < dg.address + dg.length &&
                                 fmmu.logical + fmmu.length > dg.address;
-          writes = writes || (overlaps && fmmu.type == ecat::kFmmuWrite &&
-                              ecat::writesSlaves(dg.command));
-          reads = reads ||
-                  (overlaps && fmmu.type == ecat::kFmmuRead && ecat::readsSlaves(dg.command));
+          writes = writes ||
+                   (overlaps && fmmu.type == ecat::kFmmuWrite && ecat::writesSlaves(dg.command));
+          reads =
+              reads || (overlaps && fmmu.type == ecat::kFmmuRead && ecat::readsSlaves(dg.command));
         }
         expected += dg.command == ecat::kLrw ? 2 * writes + reads : (writes || reads);
       }
@@ -808,7 +810,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, ImageStyleRun, ::testing::ValuesIn(styleRows()),
 TEST(EslProbe, EachFrameBehindAHeaderWithTheExactTime) {
   SimOptions plain = options(Scenario::Commissioning, 2, 1.0);
   plain.image = ImageStyle::TwinCat;
-  ASSERT_EQ(resolveOptions(plain), "");
+  ASSERT_EQ(test::statusText(resolveOptions(plain)), "");
   SimOptions probed = plain;
   probed.probe = Probe::Esl;
   const std::vector<Frame> exact = simulate(plain);
@@ -863,7 +865,7 @@ TEST_P(CleanRun, NoFindingAtWarningOrError) {
   o.cycle_us = row.cycle_us;
   o.startup = row.startup;
   o.jitter_us = row.jitter_us;
-  ASSERT_EQ(resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   const Validated v = validate(o, row.with_config);
   ASSERT_EQ(v.axes, static_cast<std::size_t>(row.axes)) << row.name << ": every axis decoded";
   std::vector<Finding> serious;
@@ -937,7 +939,7 @@ TEST_P(FaultRun, FiresItsRuleAndCompanionsOnly) {
   if (setup.at_s >= 0 && std::string(rule.code).rfind("ESM-", 0) != 0) {
     o.faults[0].at_s = setup.at_s;
   }
-  ASSERT_EQ(resolveOptions(o), "") << rule.code;
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "") << rule.code;
   std::set<std::string> expected = documentedCompanions(rule.code);
   expected.insert(rule.code);
   const Validated v = validate(o, true);
@@ -989,7 +991,7 @@ TEST_P(LossyRun, OnlyFramesNotReturned) {
   SimOptions o = options(Scenario::Commissioning, 4, 2.0);
   o.loss = GetParam().loss;
   o.seed = GetParam().seed;
-  ASSERT_EQ(resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   const Validated v = validate(o, false);
   std::size_t not_returned = 0;
   for (const Finding& f : v.findings) {
@@ -1008,7 +1010,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, LossyRun, ::testing::Values(LossRow{0.01, 1}, Los
 
 TEST(Simulator, StopsWhenTheSinkDoes) {
   SimOptions o = options(Scenario::Commissioning, 2, 1.0);
-  ASSERT_EQ(resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   for (std::size_t stop_at : {1U, 2U, 500U}) {
     Simulator simulator(o);
     std::size_t seen = 0;
@@ -1020,7 +1022,7 @@ TEST(Simulator, StopsWhenTheSinkDoes) {
 
 TEST(FaultsScenario, FiresEveryRule) {
   SimOptions o = options(Scenario::Faults, 4, 4.3);
-  ASSERT_EQ(resolveOptions(o), "");
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   const Validated v = validate(o, true);
   std::set<std::string> fired, all;
   for (const Finding& f : v.findings) fired.insert(ruleDef(f.rule).code);

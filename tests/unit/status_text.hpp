@@ -13,4 +13,9 @@ inline std::optional<std::string> errorOf(const Status& status) {
   return status.error().text();
 }
 
+// "" for success, else the error's text: for rows that expect a message or none.
+inline std::string statusText(const Status& status) {
+  return status ? std::string() : status.error().text();
+}
+
 }  // namespace ncservo::test

@@ -603,16 +603,15 @@ int runSimulate(SimulateArgs& args) {
   o.probe = rowNamed(kProbes, args.probe).probe;
   o.startup = !args.no_startup;
   for (const std::string& text : args.faults) {
-    std::string error;
-    auto fault = sim::parseFault(text, error);
+    Result<sim::FaultRequest> fault = sim::parseFault(text);
     if (!fault) {
-      fmt::print(stderr, "ncservo simulate: {}\n", error);
+      fmt::print(stderr, "ncservo simulate: {}\n", fault.error().text());
       return kExitUsage;
     }
     o.faults.push_back(std::move(*fault));
   }
-  if (std::string error = sim::resolveOptions(o); !error.empty()) {
-    fmt::print(stderr, "ncservo simulate: {}\n", error);
+  if (Status resolved = sim::resolveOptions(o); !resolved) {
+    fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
     return kExitUsage;
   }
   sim::Simulator simulator(o);

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "ncservo/sim/simulator.hpp"
+#include "ncservo/sim/options.hpp"
 
 namespace ncservo::sim {
 

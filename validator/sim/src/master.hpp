@@ -11,7 +11,7 @@
 
 #include "ncservo/sim/frame_encoder.hpp"
 #include "ncservo/sim/models.hpp"
-#include "ncservo/sim/simulator.hpp"
+#include "ncservo/sim/options.hpp"
 #include "segment.hpp"
 
 namespace ncservo::sim {

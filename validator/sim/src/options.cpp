@@ -1,5 +1,7 @@
 // `ncservo simulate`'s options: scenarios, the --fault text, and the checks and defaults that
 // make a set of options one the simulator runs.
+#include "ncservo/sim/options.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -8,7 +10,6 @@
 #include <string>
 
 #include "ncservo/sim/faults.hpp"
-#include "ncservo/sim/simulator.hpp"
 
 namespace ncservo::sim {
 
@@ -68,7 +69,7 @@ double defaultDuration(Scenario scenario) {
   return 3.0;
 }
 
-std::optional<FaultRequest> parseFault(std::string_view text, std::string& error) {
+Result<FaultRequest> parseFault(std::string_view text) {
   FaultRequest fault;
   fault.text = std::string(text);
   std::string_view rest = text;
@@ -86,8 +87,7 @@ std::optional<FaultRequest> parseFault(std::string_view text, std::string& error
   for (char& c : code) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   const RuleDef* rule = ruleByCode(code);
   if (rule == nullptr) {
-    error = fmt::format("--fault {}: no rule '{}' (see `ncservo rules`)", text, code);
-    return std::nullopt;
+    return fail(fmt::format("--fault {}: no rule '{}' (see `ncservo rules`)", text, code));
   }
   fault.rule = rule->id;
   const bool has_time = text.find('@') != std::string_view::npos;
@@ -106,55 +106,57 @@ std::optional<FaultRequest> parseFault(std::string_view text, std::string& error
       if (used != axis_text.size() || *fault.axis < 0) throw std::invalid_argument("axis");
     }
   } catch (const std::exception&) {
-    error = fmt::format("--fault {}: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0", text);
-    return std::nullopt;
+    return fail(fmt::format("--fault {}: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0", text));
   }
   return fault;
 }
 
-std::string resolveOptions(SimOptions& o) {
-  if (o.axes < 1 || o.axes > 32) return fmt::format("--axes {}: from 1 to 32", o.axes);
+Status resolveOptions(SimOptions& o) {
+  if (o.axes < 1 || o.axes > 32) return fail(fmt::format("--axes {}: from 1 to 32", o.axes));
   if (!o.io_slaves) o.io_slaves = defaultIoSlaves(o.image);
   if (*o.io_slaves < 0 || *o.io_slaves > 32) {
-    return fmt::format("--io-slaves {}: from 0 to 32", *o.io_slaves);
+    return fail(fmt::format("--io-slaves {}: from 0 to 32", *o.io_slaves));
   }
   if (o.cycle_us < 125 || o.cycle_us > 10000) {
-    return fmt::format("--cycle-us {}: from 125 to 10000", o.cycle_us);
+    return fail(fmt::format("--cycle-us {}: from 125 to 10000", o.cycle_us));
   }
   if (o.ready_mode != 0 && o.ready_mode != 1) {
-    return fmt::format("--ready-mode {}: 0 or 1", o.ready_mode);
+    return fail(fmt::format("--ready-mode {}: 0 or 1", o.ready_mode));
   }
   // A fifth of a cycle either way keeps every interval under 1.5 cycles (COM-002).
   if (o.jitter_us < 0 || o.jitter_us > o.cycle_us / 5) {
-    return fmt::format("--jitter-us {}: from 0 to a fifth of the cycle ({})", o.jitter_us,
-                       o.cycle_us / 5);
+    return fail(fmt::format("--jitter-us {}: from 0 to a fifth of the cycle ({})", o.jitter_us,
+                            o.cycle_us / 5));
   }
-  if (!(o.loss >= 0 && o.loss <= 0.5)) return fmt::format("--loss {}: from 0 to 0.5", o.loss);
+  if (!(o.loss >= 0 && o.loss <= 0.5)) return fail(fmt::format("--loss {}: from 0 to 0.5", o.loss));
   if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);
   const double duration = *o.duration_s;
   const double start = o.startup ? kStartupSeconds : 0.0;
   if (!(duration >= 1.0 && duration <= 24 * 3600.0)) {
-    return fmt::format("--duration {}: from 1 s to 24 h", duration);
+    return fail(fmt::format("--duration {}: from 1 s to 24 h", duration));
   }
   if (o.scenario == Scenario::Faults) {
-    if (o.axes < 4) return "--scenario faults needs at least 4 axes";
-    if (!o.startup) return "--scenario faults needs the start-up (its ESM faults happen there)";
+    if (o.axes < 4) return fail("--scenario faults needs at least 4 axes");
+    if (!o.startup)
+      return fail("--scenario faults needs the start-up (its ESM faults happen there)");
     if (duration < defaultDuration(Scenario::Faults)) {
-      return fmt::format("--scenario faults needs --duration {} or more",
-                         defaultDuration(Scenario::Faults));
+      return fail(fmt::format("--scenario faults needs --duration {} or more",
+                              defaultDuration(Scenario::Faults)));
     }
   }
   for (FaultRequest& f : o.faults) {
     const char* code = ruleDef(f.rule).code;
     const FaultRecipe* recipe = faultRecipe(f.rule);
     if (recipe == nullptr || !recipe->injectable()) {
-      return fmt::format("--fault {}: {}", f.text, faultDescription(f.rule));
+      return fail(fmt::format("--fault {}: {}", f.text, faultDescription(f.rule)));
     }
     const FaultRecipe& r = *recipe;
     if (r.phase == FaultPhase::Startup) {
-      if (!o.startup) return fmt::format("--fault {}: {} happens in the start-up", f.text, code);
+      if (!o.startup)
+        return fail(fmt::format("--fault {}: {} happens in the start-up", f.text, code));
       if (f.at_s) {
-        return fmt::format("--fault {}: {} happens in the start-up; give no @time", f.text, code);
+        return fail(
+            fmt::format("--fault {}: {} happens in the start-up; give no @time", f.text, code));
       }
     } else {
       // After the start-up and the enables; in a commissioning run before the emergency stop
@@ -163,19 +165,19 @@ std::string resolveOptions(SimOptions& o) {
       const double latest =
           o.scenario == Scenario::Commissioning ? 0.53 * duration - 0.25 : duration - 0.4;
       if (latest < earliest) {
-        return fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
-                           f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5);
+        return fail(fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
+                                f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5));
       }
       if (!f.at_s) f.at_s = std::clamp(0.43 * duration, earliest, latest);
       if (*f.at_s < earliest || *f.at_s > latest) {
-        return fmt::format(
-            "--fault {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)", f.text,
-            *f.at_s, earliest, latest);
+        return fail(
+            fmt::format("--fault {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)",
+                        f.text, *f.at_s, earliest, latest));
       }
     }
     if (r.need == AxisNeed::None) {
       if (f.axis)
-        return fmt::format("--fault {}: {} concerns the whole bus; no :axis", f.text, code);
+        return fail(fmt::format("--fault {}: {} concerns the whole bus; no :axis", f.text, code));
       continue;
     }
     if (!f.axis) {
@@ -183,19 +185,21 @@ std::string resolveOptions(SimOptions& o) {
       if (r.need == AxisNeed::Incremental && !isIncrementalAxis(axis)) axis = o.axes > 1 ? 1 : -1;
       if (r.need == AxisNeed::Absolute && isIncrementalAxis(axis)) axis = 0;
       if (axis < 0) {
-        return fmt::format("--fault {}: {} needs an incremental axis (odd index): use --axes 2",
-                           f.text, code);
+        return fail(fmt::format(
+            "--fault {}: {} needs an incremental axis (odd index): use --axes 2", f.text, code));
       }
       f.axis = axis;
     }
     if (*f.axis >= o.axes) {
-      return fmt::format("--fault {}: axis {} does not exist (--axes {})", f.text, *f.axis, o.axes);
+      return fail(
+          fmt::format("--fault {}: axis {} does not exist (--axes {})", f.text, *f.axis, o.axes));
     }
     if (r.need == AxisNeed::Incremental && !isIncrementalAxis(*f.axis)) {
-      return fmt::format("--fault {}: {} needs an incremental axis (odd index)", f.text, code);
+      return fail(
+          fmt::format("--fault {}: {} needs an incremental axis (odd index)", f.text, code));
     }
     if (r.need == AxisNeed::Absolute && isIncrementalAxis(*f.axis)) {
-      return fmt::format("--fault {}: {} needs an absolute axis (even index)", f.text, code);
+      return fail(fmt::format("--fault {}: {} needs an absolute axis (even index)", f.text, code));
     }
   }
   return {};

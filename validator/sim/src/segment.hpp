@@ -11,7 +11,7 @@
 
 #include "ncservo/al_tracker.hpp"
 #include "ncservo/sim/models.hpp"
-#include "ncservo/sim/simulator.hpp"
+#include "ncservo/sim/options.hpp"
 
 namespace ncservo::sim {
 

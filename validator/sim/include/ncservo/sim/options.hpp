@@ -1,0 +1,113 @@
+// What `ncservo simulate` is asked for: scenario, set-up, image style, probe, faults; the frames it
+// gives and the layout it reports. Parsed and checked here, used by every part of the simulator.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ncservo/error.hpp"
+#include "ncservo/rules.hpp"
+#include "ncservo/sim/faults.hpp"
+
+namespace ncservo::sim {
+
+enum class Scenario : std::uint8_t { Commissioning, Faults, Soak };
+// How the master lays out the process image (PROTOCOL.md §9.4).
+enum class ImageStyle : std::uint8_t {
+  Soem,      // one LRW per frame: all outputs, then all inputs, in ring order
+  EtherLab,  // one LRW per frame: per slave in ring order, its outputs, then its inputs
+  Mixed,     // one LRW among terminals and drives of other sizes, in either order (by the seed)
+  TwinCat,   // an output area written by LWRs and an input area read by LRDs, apart
+};
+struct ImageStyleName {
+  const char* name;
+  ImageStyle style;
+  const char* layout_alias;  // `--layout`'s older name, or null
+  const char* summary;
+};
+inline constexpr ImageStyleName kImageStyles[] = {
+    {"soem", ImageStyle::Soem, "default", "one LRW, all outputs then all inputs"},
+    {"etherlab", ImageStyle::EtherLab, "interleaved", "one LRW, per slave its outputs then inputs"},
+    {"mixed", ImageStyle::Mixed, nullptr,
+     "one LRW among terminals and drives of other sizes, set-up and order drawn from the seed"},
+    {"twincat", ImageStyle::TwinCat, nullptr,
+     "LWRs of an output area, LRDs of an input area apart, a BRD of the AL status"},
+};
+// By its name or its `--layout` alias.
+std::optional<ImageStyle> imageStyleFromName(std::string_view name);
+const ImageStyleName& imageStyleRow(ImageStyle style);
+
+// A probe in the line between the master and the first slave.
+enum class Probe : std::uint8_t {
+  None,
+  Esl,  // an ET2000: each frame behind a 16-byte ESL header with its own exact timestamp
+};
+
+std::optional<Scenario> scenarioFromName(std::string_view name);
+const char* scenarioName(Scenario scenario);
+
+// --fault RULE[@SECONDS][:AXIS]
+struct FaultRequest {
+  RuleId rule{};
+  std::optional<double> at_s;  // capture time; default: the scenario's quiet time
+  std::optional<int> axis;     // default: an axis that suits the rule
+  std::string text;            // as given, for messages
+};
+// The fault, or an error saying what is wrong with the text.
+Result<FaultRequest> parseFault(std::string_view text);
+
+struct SimOptions {
+  Scenario scenario = Scenario::Commissioning;
+  int axes = 4;                      // servos, 1..32
+  std::optional<int> io_slaves;      // other slaves sharing the image, 0..32 (default per style)
+  int cycle_us = 1000;               // 125..10000
+  std::optional<double> duration_s;  // default per scenario
+  std::uint64_t seed = 1;
+  ImageStyle image = ImageStyle::Soem;
+  Probe probe = Probe::None;
+  bool startup = true;
+  int ready_mode = 0;  // the drives' Servo_Ready_Mode
+  int jitter_us = 0;   // master send jitter, at most a quarter cycle
+  double loss = 0;     // probability that a returned frame is lost after the slaves
+  std::vector<FaultRequest> faults;
+};
+
+// This simulator's set-up: the odd axes have an incremental encoder (zero-pulse search), the even
+// ones an absolute encoder.
+inline bool isIncrementalAxis(int axis) {
+  return axis % 2 == 1;
+}
+// The NC's plan starts this long after the capture's start, once the start-up is over.
+inline constexpr double kStartupSeconds = 0.2;
+
+// The other slaves a style has when --io-slaves does not say.
+int defaultIoSlaves(ImageStyle style);
+// The default duration of a scenario, in seconds.
+double defaultDuration(Scenario scenario);
+// Checks the options and resolves defaults (fault times and axes); an error is the message for
+// the user.
+Status resolveOptions(SimOptions& options);
+
+// Where one axis's PDOs are, as a configuration file (INTERFACES.md) would give them.
+struct SimAxisLayout {
+  int index = 0;
+  std::string name;
+  std::uint16_t station = 0;
+  std::uint32_t outputs = 0;
+  std::uint32_t inputs = 0;
+};
+
+struct SimFrame {
+  std::int64_t time_ns;  // since the Unix epoch: the capturing PC's stamp
+  const std::uint8_t* data;
+  std::size_t size;
+  bool returned = false;  // the copy the ring returned (else the master's)
+};
+// Receives each frame in capture order; returns false to stop (e.g. a write error).
+using FrameSink = std::function<bool(const SimFrame&)>;
+
+}  // namespace ncservo::sim
