@@ -33,7 +33,7 @@ BusModel::CyclicFrame& BusModel::cyclicFrame(std::uint16_t first_axis) {
 
 // Telegram accounting (RULES.md COM-002, COM-004; failures for COM-003 and COM-005). The clock is
 // the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
-void BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
+bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
                              std::int64_t frame_time_ns, std::vector<BusEvent>& events,
                              std::vector<AxisAccount>& accounts) {
   now_ = now;
@@ -69,12 +69,12 @@ void BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
       cyclic.axes_shape_id = decode.shape_id;
     }
     tick(cyclic, decode);
-  } else {
-    if (!master_copies_seen_) tick(cyclic, decode);
-    cyclic.awaiting_return = false;
-    cyclic.not_returned_episode = false;
-    checkWorkingCounters(frame, decode);
+    return false;
   }
+  if (!master_copies_seen_) tick(cyclic, decode);
+  cyclic.awaiting_return = false;
+  cyclic.not_returned_episode = false;
+  return checkWorkingCounters(frame, decode);
 }
 
 // One tick of a cyclic frame's clock: the interval statistics and COM-002.
@@ -167,7 +167,7 @@ BusModel::WkcPlan& BusModel::wkcPlan(const EcatFrame& frame, const FrameDecode& 
 
 // RULES.md COM-001 on each returned datagram that carries servo PDOs, and each axis's cycle:
 // lost (WKC 0), failed (another wrong WKC) or good.
-void BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode) {
+bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode) {
   WkcPlan& plan = wkcPlan(frame, decode);
   bool all_good = true;
   for (WkcCheck& check : plan.checks) {
@@ -209,12 +209,7 @@ void BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
       record->wrong_episode = false;
     }
   }
-  if (all_good) {
-    for (std::size_t i = 0; i < decode.axis_count; ++i) {
-      accounts_->push_back({decode.axes[i].axis, Outcome::Good, 1});
-    }
-    return;
-  }
+  if (all_good) return true;
   std::array<Outcome, ecat::kMaxDatagrams> outcomes{};
   for (const WkcCheck& check : plan.checks) outcomes[check.datagram] = check.outcome;
   const std::size_t count = std::min(frame.count, outcomes.size());
@@ -225,6 +220,7 @@ void BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
     if (p.tx_placed && p.tx_datagram < count) outcome = std::max(outcome, outcomes[p.tx_datagram]);
     accounts_->push_back({p.axis, outcome, 1});
   }
+  return false;
 }
 
 }  // namespace ncservo

@@ -235,6 +235,9 @@ std::string pt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t he
       activeTable(a), commandedTable(a), heldMs(held), ms(s, Timeout::ParamTable));
 }
 
+bool definedMessageCode(std::uint64_t raw) {
+  return messageCodeDefined(static_cast<std::int32_t>(raw));
+}
 bool msg001(const AxisModel& a, const RuleSettings&) {
   const std::int32_t code = a.latest().msgCode();
   return a.knowsInputs() && !messageCodeDefined(code);
@@ -459,7 +462,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
    readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl", "ncservo.ssw.ext_prmtbl"}), NCSERVO_AXIS(pt001),
    "the active parameter table differs from the commanded one"},
   {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "PROTOCOL.md §5", kNone, false,
-   readsOf({"ncservo.msg_code"}), NCSERVO_AXIS(msg001),
+   readsThrough("ncservo.msg_code", definedMessageCode), NCSERVO_AXIS(msg001),
    "a message code outside 0-5"},
   {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "PROTOCOL.md §8 WKC", kNone, false,
    kNothing, NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),

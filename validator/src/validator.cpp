@@ -21,8 +21,12 @@ Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath f
   if (fast_path == FastPath::Off) return judged;
   for (const WordDef& def : kWords) {
     const std::uint64_t bits = reads.bits[static_cast<std::size_t>(def.word)];
-    if (bits == 0) continue;
-    (def.pdo == Pdo::Rx ? judged.rx : judged.tx).push_back(JudgedWord{def.word, bits});
+    const WordClass word_class = reads.classes[static_cast<std::size_t>(def.word)];
+    if (bits == 0 && word_class == nullptr) continue;
+    JudgedPdo& pdo = def.pdo == Pdo::Rx ? judged.rx : judged.tx;
+    pdo.words[pdo.count++] = JudgedWord{static_cast<std::uint8_t>(def.word),
+                                        static_cast<std::uint8_t>(wordOffset(def.word)),
+                                        static_cast<std::uint8_t>(def.size), bits, word_class};
   }
   judged.al_state = reads.al_state;
   return judged;
@@ -34,13 +38,20 @@ bool Validator::unchanged(const AxisPlacement& placement, const ByteReader& byte
                           const AxisModel& model) const {
   if (judged_.al_state && model.alState()) return false;  // which PDOs a frame carries counts
   const PdoValues& latest = model.latest();
-  auto same = [&](const std::vector<JudgedWord>& words, bool has, std::size_t offset,
-                  std::size_t size, bool had) {
+  auto same = [&](const JudgedPdo& judged, bool has, std::size_t offset, std::size_t size,
+                  bool had) {
     if (!has || !bytes.has(offset, size)) return true;
     if (!had) return false;
     const std::uint8_t* pdo = bytes.data() + offset;
-    for (const JudgedWord& w : words) {
-      if (((loadWordAt(pdo, w.word) ^ latest.word(w.word)) & w.bits) != 0) return false;
+    for (std::size_t i = 0; i < judged.count; ++i) {
+      const JudgedWord& w = judged.words[i];
+      const std::uint8_t* at = pdo + w.offset;
+      const std::uint64_t now = w.size == 4   ? detail::loadLe<4>(at)
+                                : w.size == 2 ? detail::loadLe<2>(at)
+                                              : detail::loadLe<8>(at);
+      const std::uint64_t then = latest.raw[w.index];
+      if (((now ^ then) & w.bits) != 0) return false;
+      if (w.word_class != nullptr && w.word_class(now) != w.word_class(then)) return false;
     }
     return true;
   };
@@ -113,7 +124,7 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   }
   events_.clear();
   accounts_.clear();
-  bus_.onCyclicFrame(frame, decode, now_, frame_time_ns_, events_, accounts_);
+  const bool all_good = bus_.onCyclicFrame(frame, decode, now_, frame_time_ns_, events_, accounts_);
   reportEvents();
   for (const AxisAccount& account : accounts_) {
     AxisModel& model = *slot(account.axis).model;
@@ -124,7 +135,12 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
     }
   }
   // slot() may have grown the slots for an axis of an earlier master copy.
-  for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i] = &axes_[decode.axes[i].axis];
+  if (!accounts_.empty()) {
+    for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i] = &axes_[decode.axes[i].axis];
+  }
+  if (all_good) {
+    for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i]->model->cycleOk(now_);
+  }
   for (std::size_t i = 0; i < axis_count; ++i) {
     const AxisPlacement& placement = decode.axes[i];
     AxisSlot& s = *frame_slots_[i];

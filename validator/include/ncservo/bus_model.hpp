@@ -28,8 +28,9 @@ class BusModel {
  public:
   // One frame that carries servo PDOs, at `now` on the timers' monotonic clock; `frame_time_ns`
   // is its own timestamp. Appends the events the bus rules judge and the axes' accounting, in the
-  // order they happened.
-  void onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
+  // order they happened. True when the frame is a returned copy whose every axis had a good cycle
+  // (the usual case, left out of `accounts`).
+  bool onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
                      std::int64_t frame_time_ns, std::vector<BusEvent>& events,
                      std::vector<AxisAccount>& accounts);
 
@@ -76,7 +77,7 @@ class BusModel {
   std::int16_t wkcRecord(const Datagram& dg);
   WkcPlan& wkcPlan(const EcatFrame& frame, const FrameDecode& decode);
   void tick(CyclicFrame& cyclic, const FrameDecode& decode);
-  void checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode);
+  bool checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode);
 
   // This frame's.
   Stamp now_;

@@ -282,17 +282,24 @@ inline constexpr std::uint32_t kSewCauseMask = [] {
 static_assert(kSewCauseMask == 0x01FFFFEE, "PROTOCOL.md §4: cause bits 1-3 and 5-24");
 
 // PROTOCOL.md §5: the message codes with a meaning are the value names of ncservo.msg_code.
-constexpr bool messageCodeDefined(std::int64_t code) {
-  const FieldDef& f = field("ncservo.msg_code");
-  for (std::size_t i = 0; i < f.value_count; ++i) {
-    if (f.values[i].value == code) return true;
+inline constexpr const FieldDef& kMessageCodeField = field("ncservo.msg_code");
+inline constexpr std::uint64_t kDefinedMessageCodes = [] {  // bit n: code n has a meaning
+  std::uint64_t codes = 0;
+  for (std::size_t i = 0; i < kMessageCodeField.value_count; ++i) {
+    codes |= std::uint64_t{1} << kMessageCodeField.values[i].value;
   }
-  return false;
+  return codes;
+}();
+static_assert(popcount64(kDefinedMessageCodes) == kMessageCodeField.value_count,
+              "message codes below 64, each named once");
+constexpr bool messageCodeDefined(std::int64_t code) {
+  return code >= 0 && code < 64 && ((kDefinedMessageCodes >> code) & 1) != 0;
 }
 inline constexpr std::uint32_t kLastDefinedMessageCode = [] {
-  const FieldDef& f = field("ncservo.msg_code");
   std::uint32_t last = 0;
-  for (std::size_t i = 0; i < f.value_count; ++i) last = std::max(last, f.values[i].value);
+  for (std::size_t i = 0; i < kMessageCodeField.value_count; ++i) {
+    last = std::max(last, kMessageCodeField.values[i].value);
+  }
   return last;
 }();
 
@@ -302,20 +309,22 @@ struct ParameterTableBits {
   std::uint32_t low;   // PRMTBL
   std::uint32_t high;  // ExtPRMTBL
 };
-constexpr ParameterTableBits parameterTableBits(Word word) {
-  return word == Word::Scw
-             ? ParameterTableBits{mask32("ncservo.scw.prmtbl"), mask32("ncservo.scw.ext_prmtbl")}
-             : ParameterTableBits{mask32("ncservo.ssw.prmtbl"), mask32("ncservo.ssw.ext_prmtbl")};
+inline constexpr ParameterTableBits kScwTableBits{mask32("ncservo.scw.prmtbl"),
+                                                  mask32("ncservo.scw.ext_prmtbl")};
+inline constexpr ParameterTableBits kSswTableBits{mask32("ncservo.ssw.prmtbl"),
+                                                  mask32("ncservo.ssw.ext_prmtbl")};
+constexpr const ParameterTableBits& parameterTableBits(Word word) {
+  return word == Word::Scw ? kScwTableBits : kSswTableBits;
 }
 inline constexpr unsigned kParameterTables = 8;
 // The table (1..8) that a SCW or SSW selects.
 constexpr unsigned parameterTable(Word word, std::uint32_t value) {
-  const ParameterTableBits b = parameterTableBits(word);
+  const ParameterTableBits& b = parameterTableBits(word);
   return ((value & b.high) ? 4u : 0u) + ((value & b.low) >> lowestBit(b.low)) + 1u;
 }
 // The bits of a SCW or SSW that select table 1..8.
 constexpr std::uint32_t parameterTableSelection(Word word, unsigned table) {
-  const ParameterTableBits b = parameterTableBits(word);
+  const ParameterTableBits& b = parameterTableBits(word);
   const unsigned index = table - 1u;
   return ((index & 3u) << lowestBit(b.low)) | ((index & 4u) ? b.high : 0u);
 }

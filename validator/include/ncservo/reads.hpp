@@ -12,21 +12,34 @@
 
 namespace ncservo {
 
-// Bits of the PDO words, and the slave's AL state. A check that reads something it does not
-// declare is caught by the fast-path test (tests/unit/fast_path_test.cpp), never skipped silently.
+// Bits of the PDO words, words read only through a classification of their value, and the
+// slave's AL state. A check that reads something it does not declare is caught by the fast-path
+// test (tests/unit/fast_path_test.cpp), never skipped silently.
+using WordClass = bool (*)(std::uint64_t raw);
 struct Reads {
   std::array<std::uint64_t, kWordCount> bits{};  // per word (kWords order), the bits read
+  // Per word, a class the value is read through (MSG-001: defined or not): a change of value
+  // within its class changes nothing. Two different classes of one word read the whole word.
+  std::array<WordClass, kWordCount> classes{};
   bool al_state = false;  // the slave's AL state, and which PDOs each frame carries
 
   constexpr Reads operator|(const Reads& other) const {
     Reads out = *this;
-    for (std::size_t w = 0; w < kWordCount; ++w) out.bits[w] |= other.bits[w];
+    for (std::size_t w = 0; w < kWordCount; ++w) {
+      out.bits[w] |= other.bits[w];
+      if (out.classes[w] == nullptr) {
+        out.classes[w] = other.classes[w];
+      } else if (other.classes[w] != nullptr && other.classes[w] != out.classes[w]) {
+        out.classes[w] = nullptr;
+        out.bits[w] = wordMask(kWords[w].word);
+      }
+    }
     out.al_state = al_state || other.al_state;
     return out;
   }
   constexpr bool any() const {
-    for (std::uint64_t b : bits) {
-      if (b != 0) return true;
+    for (std::size_t w = 0; w < kWordCount; ++w) {
+      if (bits[w] != 0 || classes[w] != nullptr) return true;
     }
     return al_state;
   }
@@ -40,6 +53,12 @@ constexpr Reads readsOf(std::initializer_list<std::string_view> filters, bool al
     out.bits[static_cast<std::size_t>(f.word)] |= f.mask != 0 ? f.mask : wordMask(f.word);
   }
   out.al_state = al_state;
+  return out;
+}
+// A word (by its row's filter name) read only through `word_class`.
+constexpr Reads readsThrough(std::string_view filter, WordClass word_class) {
+  Reads out;
+  out.classes[static_cast<std::size_t>(field(filter).word)] = word_class;
   return out;
 }
 

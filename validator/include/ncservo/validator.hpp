@@ -69,11 +69,18 @@ class Validator {
   // The bits of each PDO word that the axis model or an enabled rule reads, as the fast path
   // compares them.
   struct JudgedWord {
-    Word word;
+    std::uint8_t index;   // in kWords and PdoValues::raw
+    std::uint8_t offset;  // in its PDO
+    std::uint8_t size;
     std::uint64_t bits;
+    WordClass word_class;  // or null
+  };
+  struct JudgedPdo {
+    std::array<JudgedWord, kWordCount> words{};
+    std::size_t count = 0;
   };
   struct Judged {
-    std::vector<JudgedWord> rx, tx;
+    JudgedPdo rx, tx;
     bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
