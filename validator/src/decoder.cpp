@@ -141,7 +141,7 @@ std::string Decoder::noServoReason() const {
            "give the layout in a --config file";
   }
   if (!options_.inference_refusal.empty()) {
-    return "no servo of this protocol inferred from the cyclic traffic (PROTOCOL.md §9.4): " +
+    return "no servo of this protocol found in the cyclic traffic (PROTOCOL.md §9.4): " +
            options_.inference_refusal;
   }
   return "no servo of this protocol found (PROTOCOL.md §9); give the layout in a --config file";
