@@ -26,6 +26,7 @@
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/layout_window.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/validator.hpp"
@@ -77,10 +78,14 @@ const enum_val_t kReadyModes[] = {{"auto", "Inferred from the capture", -1},
                                   {"1", "Servo_Ready_Mode 1", 1},
                                   {nullptr, nullptr, 0}};
 
-// Options from the preferences, and the state of the capture being dissected.
+// Options from the preferences, and the state of the capture being dissected: the learning
+// window (PROTOCOL.md §9.4), then the validator once the layout is known, and what it found in
+// each frame by frame number (the window's frames are validated when it ends, not in their turn).
 DecoderOptions* g_options = nullptr;
 RuleSettings* g_settings = nullptr;
+LayoutWindow* g_window = nullptr;
 Validator* g_validator = nullptr;
+wmem_map_t* g_records = nullptr;
 
 // What the first pass found in a frame, kept in file scope for later passes.
 enum AxisFlags : guint8 {
@@ -292,16 +297,28 @@ void applyPreferences() {
   g_settings = settings;
 }
 
+void startValidator() {
+  delete g_validator;
+  g_validator =
+      new Validator(g_window->options(), g_settings != nullptr ? *g_settings : RuleSettings{});
+}
+
 void initCapture() {
   plugin::resetItemTexts();
+  g_records = wmem_map_new(wmem_file_scope(), g_direct_hash, g_direct_equal);
+  delete g_window;
+  g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
   delete g_validator;
-  g_validator = new Validator(g_options != nullptr ? *g_options : DecoderOptions{},
-                              g_settings != nullptr ? *g_settings : RuleSettings{});
+  g_validator = nullptr;
+  if (!g_window->learning()) startValidator();
 }
 
 void cleanupCapture() {
   delete g_validator;
   g_validator = nullptr;
+  delete g_window;
+  g_window = nullptr;
+  g_records = nullptr;
 }
 
 const char* axisName(guint16 axis) {
@@ -327,22 +344,13 @@ LinkType linkTypeOf(const packet_info* pinfo) {
   }
 }
 
-// First pass: run the library over the frame and keep what it found.
-const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
-  const LinkType link = linkTypeOf(pinfo);
-  if (link == LinkType::Unsupported || g_validator == nullptr) return nullptr;
-  const guint length = tvb_captured_length(tvb);
-  const guint8* data = length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr;
-  const ByteReader bytes(data, data != nullptr ? length : 0);
-  static EcatFrame frame;  // 8 KiB; dissection is single-threaded
-  walkPacket(link, bytes, frame);
-  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return nullptr;
-  const std::int64_t time_ns =
-      static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
-  const ValidatedFrame& view = g_validator->onFrame(pinfo->num, time_ns, frame, bytes);
+// Runs the validator over one frame and keeps what it found, by frame number.
+void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+                   const ByteReader& bytes) {
+  const ValidatedFrame& view = g_validator->onFrame(number, time_ns, frame, bytes);
   const FrameDecode& decode = view.decode;
   const std::vector<Finding>& findings = g_validator->findings();
-  if (decode.axis_count == 0 && findings.empty()) return nullptr;
+  if (decode.axis_count == 0 && findings.empty()) return;
   const std::size_t slots = decode.axis_count > 0 ? decode.axis_count : 1;
   const std::size_t size = sizeof(FrameRecord) + (slots - 1) * sizeof(AxisRecord);
   auto* record = static_cast<FrameRecord*>(wmem_alloc0(wmem_file_scope(), size));
@@ -376,8 +384,38 @@ const FrameRecord* analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
     r.rx_offset = static_cast<guint32>(placement.rx_offset);
     r.tx_offset = static_cast<guint32>(placement.tx_offset);
   }
-  p_add_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0, record);
-  return record;
+  wmem_map_insert(g_records, GUINT_TO_POINTER(static_cast<guint>(number)), record);
+}
+
+// The window ended: validate its frames with the layout it found, then go on streaming.
+void windowDecided() {
+  startValidator();
+  g_window->replay(validateFrame);
+}
+
+const FrameRecord* recordOf(const packet_info* pinfo) {
+  return static_cast<const FrameRecord*>(
+      wmem_map_lookup(g_records, GUINT_TO_POINTER(static_cast<guint>(pinfo->num))));
+}
+
+// First pass: run the library over the frame (or hold it in the learning window).
+void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
+  const LinkType link = linkTypeOf(pinfo);
+  if (link == LinkType::Unsupported || g_window == nullptr) return;
+  const guint length = tvb_captured_length(tvb);
+  const guint8* data = length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr;
+  const ByteReader bytes(data, data != nullptr ? length : 0);
+  static EcatFrame frame;  // 8 KiB; dissection is single-threaded
+  walkPacket(link, bytes, frame);
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  const std::int64_t time_ns =
+      static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
+  if (g_window->learning()) {
+    g_window->hold(pinfo->num, time_ns, link, bytes, frame);
+    if (!g_window->learning()) windowDecided();
+    return;
+  }
+  validateFrame(pinfo->num, time_ns, frame, bytes);
 }
 
 // Whether a word's items are needed: the tree is shown, or a filter or column asks for the word or
@@ -500,13 +538,15 @@ void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRec
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
-  const FrameRecord* record = nullptr;
+  if (g_records == nullptr) return 0;
   if (!PINFO_FD_VISITED(pinfo)) {
-    record = analyseFrame(tvb, pinfo);
-  } else {
-    record = static_cast<const FrameRecord*>(
-        p_get_proto_data(wmem_file_scope(), pinfo, proto_ncservo, 0));
+    analyseFrame(tvb, pinfo);
+  } else if (g_window != nullptr && g_window->learning()) {
+    // The capture ended inside the learning window: decide with what the first pass held.
+    g_window->finish();
+    windowDecided();
   }
+  const FrameRecord* record = recordOf(pinfo);
   if (record == nullptr) return 0;
   proto_item* root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, -1, ENC_NA);
   proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
@@ -578,9 +618,9 @@ void registerProtocol() {
       "The drives' Servo_Ready_Mode parameter (PROTOCOL.md §5); auto infers it per axis",
       &pref_servo_ready_mode, kReadyModes, FALSE);
   prefs_register_bool_preference(
-      prefs, "default_layout", "Use the default layout",
-      "Assume the layout of a master that maps all outputs, then all inputs (PROTOCOL.md §9.4) "
-      "when nothing else gives the layout",
+      prefs, "default_layout", "Infer the layout from the cyclic traffic",
+      "When no configuration, ENI or start-up gives the layout, infer it from the process data "
+      "(PROTOCOL.md §9.4); in a single pass the frames of the learning window are not decoded",
       &pref_default_layout);
 
   register_init_routine(initCapture);

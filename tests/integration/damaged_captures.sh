@@ -9,11 +9,12 @@ python3 "$GEN" --axes 8 --cycles 200 -o "$WORK/capture"
 # Snap length 100: an 8-axis LRW (400 data bytes) keeps 7 RxPDOs and no TxPDO.
 editcap -s 100 "$WORK/capture" "$WORK/snapped" >/dev/null
 chmod a+r "$WORK"/*
-"$TSHARK" "$PLUGIN" -r "$WORK/snapped" -Y ncservo.malformed -T fields -e frame.number \
+"$TSHARK" "$PLUGIN" -2 -r "$WORK/snapped" -Y ncservo.malformed -T fields -e frame.number \
   >"$WORK/malformed.txt" 2>"$WORK/err.txt" || fail "tshark exit $? on a snapped capture"
 [ ! -s "$WORK/err.txt" ] || fail "stderr: $(cat "$WORK/err.txt")"
 [ "$(wc -l <"$WORK/malformed.txt")" = 400 ] || fail "expected all 400 frames marked, got $(wc -l <"$WORK/malformed.txt")"
-"$TSHARK" "$PLUGIN" -r "$WORK/snapped" -T fields -E occurrence=a -e ncservo.axis -e ncservo.scw -c 1 \
+# Frame 1 after the whole first pass (-c 1 would end the first pass, and so the learning window, there).
+"$TSHARK" "$PLUGIN" -2 -r "$WORK/snapped" -T fields -E occurrence=a -e ncservo.axis -e ncservo.scw -Y "frame.number == 1" \
   >"$WORK/first.txt"
 [ "$(cut -f1 "$WORK/first.txt")" = "0,1,2,3,4,5,6,7" ] || fail "axes: $(cat "$WORK/first.txt")"
 [ "$(cut -f2 "$WORK/first.txt" | tr ',' '\n' | wc -l)" = 7 ] || fail "expected 7 RxPDOs: $(cat "$WORK/first.txt")"

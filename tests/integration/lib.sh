@@ -24,7 +24,7 @@ tshark_fields() {
   shift 2
   local args=()
   for f in "${ALL_FIELDS[@]}"; do args+=(-e "$f"); done
-  "$TSHARK" "$PLUGIN" -r "$capture" "$@" -T fields -E occurrence=a -E separator=/t -E aggregator=, \
+  "$TSHARK" "$PLUGIN" -2 -r "$capture" "$@" -T fields -E occurrence=a -E separator=/t -E aggregator=, \
     -e frame.number "${args[@]}" >"$out" 2>"$WORK/tshark.err" || fail "tshark exited $? on $capture: $(cat "$WORK/tshark.err")"
   if [ -s "$WORK/tshark.err" ]; then fail "tshark printed on stderr: $(head -5 "$WORK/tshark.err")"; fi
 }

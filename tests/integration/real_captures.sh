@@ -18,10 +18,10 @@ for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   if cut -f2- "$WORK/out.tsv" | grep -q '[^[:space:]]'; then
     fail "$(basename "$capture"): ncservo fields shown: $(cut -f2- "$WORK/out.tsv" | grep -m1 '[^[:space:]]')"
   fi
-  "$TSHARK" "$PLUGIN" -r "$WORK/capture" -V >"$WORK/verbose.txt" 2>"$WORK/err.txt" || fail "tshark -V exit $?"
+  "$TSHARK" "$PLUGIN" -2 -r "$WORK/capture" -V >"$WORK/verbose.txt" 2>"$WORK/err.txt" || fail "tshark -V exit $?"
   [ ! -s "$WORK/err.txt" ] || fail "$(basename "$capture"): stderr: $(head -3 "$WORK/err.txt")"
   # The only NC-Servo items are bus findings (ESM-*), on the frames where the validator reports them.
-  "$TSHARK" "$PLUGIN" -r "$WORK/capture" -Y ncservo -T fields -e frame.number >"$WORK/plugin.txt"
+  "$TSHARK" "$PLUGIN" -2 -r "$WORK/capture" -Y ncservo -T fields -e frame.number >"$WORK/plugin.txt"
   set +e
   "$NCSERVO" validate --format json --fail-on never "$WORK/capture" >"$WORK/report.json"
   rc=$?

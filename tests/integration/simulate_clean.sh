@@ -26,13 +26,13 @@ for row in "${cases[@]}"; do
     fail "$name: validate exit $?: $(grep -v '^  ' "$WORK/report.txt" | head -20)"
   grep -q "^verdict: PASS - 0 errors, 0 warnings, 0 info" "$WORK/report.txt" ||
     fail "$name: $(tail -1 "$WORK/report.txt")"
-  # with no configuration: the layout learned from the start-up (or the default one)
+  # with no configuration: the layout learned from the start-up (or inferred from the cyclic traffic)
   "$NCSERVO" validate --fail-on warning "$cap" >"$WORK/learned.txt" ||
     fail "$name, learned layout: validate exit $?: $(grep -v '^  ' "$WORK/learned.txt" | head -20)"
   grep -q "^verdict: PASS - 0 errors, 0 warnings, 0 info" "$WORK/learned.txt" ||
     fail "$name, learned layout: $(tail -1 "$WORK/learned.txt")"
   axes=$(grep -c '^  axis[0-9]* (axis' "$WORK/report.txt")
-  grep -q "^layout: \(startup\|default\), $axes ax" "$WORK/learned.txt" ||
+  grep -q "^layout: \(startup\|inferred\), $axes ax" "$WORK/learned.txt" ||
     fail "$name: learned $(grep '^layout' "$WORK/learned.txt"), configured $axes axes"
   "$TSHARK" none -r "$cap" -Y "_ws.malformed || _ws.expert" -T fields -e frame.number \
     >"$WORK/stock.txt" 2>"$WORK/tshark.err" || fail "$name: tshark exit $?: $(cat "$WORK/tshark.err")"
@@ -40,11 +40,11 @@ for row in "${cases[@]}"; do
     fail "$name: the stock dissector flags frames $(head -c 200 "$WORK/stock.txt" | tr '\n' ' ')"
 done
 
-# Without a start-up in the capture, the default layout decodes the plain set-ups.
+# Without a start-up in the capture, the layout inferred from the cyclic traffic decodes the plain set-ups.
 "$NCSERVO" simulate --axes 5 --duration 1.5 --no-startup -o "$WORK/plain.pcap" 2>/dev/null
 "$NCSERVO" validate --fail-on warning "$WORK/plain.pcap" >"$WORK/plain.txt" ||
   fail "default layout: validate exit $?"
-grep -q "^layout: default, 5 axes" "$WORK/plain.txt" || fail "default layout: $(grep '^layout' "$WORK/plain.txt")"
+grep -q "^layout: inferred, 5 axes" "$WORK/plain.txt" || fail "default layout: $(grep '^layout' "$WORK/plain.txt")"
 
 # Every ncservo field (`ncservo fields`: the PDO fields and the derived ones) is shown by the plugin on a simulated capture.
 "$NCSERVO" simulate --axes 4 --io-slaves 2 --layout interleaved --duration 1.2 -o "$WORK/fields.pcap" \

@@ -44,7 +44,7 @@ PY
 
 slug=$("$NCSERVO" rules | awk -v id="$RULE" '$1 == id { print $2 }')
 field="ncservo.rule.${slug//-/_}"
-"$TSHARK" "$PLUGIN" -r "$WORK/capture.pcap" -Y "$field" \
+"$TSHARK" "$PLUGIN" -2 -r "$WORK/capture.pcap" -Y "$field" \
   -T fields -e frame.number >"$WORK/plugin.txt" 2>"$WORK/tshark.err" ||
   fail "tshark exit $?: $(cat "$WORK/tshark.err")"
 [ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"

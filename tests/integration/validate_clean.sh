@@ -14,7 +14,7 @@ while read -r name args; do
 import json, sys
 c = json.load(open(sys.argv[1]))["captures"][0]
 assert c["findings"] == [], c["findings"][:3]
-assert c["layout"]["source"] == "default"
+assert c["layout"]["source"] == "inferred"
 history = [e["code"] for a in c["axes"] for e in a["error_history"]]
 if sys.argv[2] != "master_only":  # no inputs: no state, no history
     assert "E09" in history, history  # the following error the drive reported and cleared

@@ -94,7 +94,7 @@ for key in ("path", "frames", "cycles", "cycle_time_us", "layout", "findings", "
     assert key in c, key
 assert c["frames"] == 1200 and c["cycles"] == 600, (c["frames"], c["cycles"])
 assert c["cycle_time_us"]["median"] == 1000.0
-assert c["layout"]["source"] == "default" and len(c["layout"]["axes"]) == 2
+assert c["layout"]["source"] == "inferred" and len(c["layout"]["axes"]) == 2
 assert c["layout"]["axes"][1]["outputs"] == "0x0001000A", c["layout"]["axes"][1]
 assert c["summary"] == {"error": 1, "warning": 1, "info": 0}, c["summary"]
 want = sorted((f["rule"], f["axis"], f["frame"]) for f in c["findings"])

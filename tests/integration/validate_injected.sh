@@ -21,7 +21,7 @@ python3 "$SRC/tests/tools/check_findings.py" "$WORK/report.json" "$WORK/expected
 slug=$("$NCSERVO" rules | awk -v id="$RULE" '$1 == id { print $2 }')
 [ -n "$slug" ] || fail "no rule $RULE"
 field="ncservo.rule.${slug//-/_}"
-"$TSHARK" "$PLUGIN" -r "$WORK/capture.pcap" -Y "$field" -T fields -e frame.number \
+"$TSHARK" "$PLUGIN" -2 -r "$WORK/capture.pcap" -Y "$field" -T fields -e frame.number \
   >"$WORK/plugin.txt" 2>"$WORK/tshark.err" || fail "tshark exit $?: $(cat "$WORK/tshark.err")"
 [ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"
 python3 - "$WORK/report.json" "$WORK/plugin.txt" "$RULE" <<'PY' || fail "$RULE: plugin and validator disagree"

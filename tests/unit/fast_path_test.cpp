@@ -13,6 +13,7 @@
 
 #include "status_text.hpp"
 #include "ncservo/capture_reader.hpp"
+#include "ncservo/layout_window.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "ncservo/validator.hpp"
 #include "row_name.hpp"
@@ -23,16 +24,37 @@ namespace {
 // Everything a run shows of the rules and the models, as text: a difference reads as a diff.
 class Transcript {
  public:
-  explicit Transcript(FastPath fast_path)
-      : validator_(DecoderOptions{}, RuleSettings{}, fast_path) {}
+  explicit Transcript(FastPath fast_path) : fast_path_(fast_path) {}
 
+  // As the CLI does: the learning window's frames are validated once the layout is known.
   void frame(std::uint64_t number, std::int64_t time_ns, const std::uint8_t* data, std::size_t size,
              LinkType link) {
     const ByteReader bytes(data, size);
     EcatFrame walked;
     walkPacket(link, bytes, walked);
-    const ValidatedFrame& v = validator_.onFrame(number, time_ns, walked, bytes);
-    for (const Finding& f : validator_.findings()) {
+    if (window_.learning()) {
+      window_.hold(number, time_ns, link, bytes, walked);
+      if (!window_.learning()) decided();
+      return;
+    }
+    validate(number, time_ns, walked, bytes);
+  }
+  void end() {
+    if (!window_.learning()) return;
+    window_.finish();
+    decided();
+  }
+
+ private:
+  void decided() {
+    validator_.emplace(window_.options(), RuleSettings{}, fast_path_);
+    window_.replay([this](std::uint64_t n, std::int64_t t, const EcatFrame& f,
+                          const ByteReader& b) { validate(n, t, f, b); });
+  }
+  void validate(std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                const ByteReader& bytes) {
+    const ValidatedFrame& v = validator_->onFrame(number, time_ns, walked, bytes);
+    for (const Finding& f : validator_->findings()) {
       lines_.push_back(std::to_string(number) + " " + ruleDef(f.rule).code + " axis " +
                        (f.axis ? std::to_string(*f.axis) : "-") + " since " +
                        std::to_string(f.since.frame) + ": " + f.message);
@@ -44,12 +66,14 @@ class Transcript {
     states_ += ';';
   }
 
-  std::string finish() const {
+ public:
+  std::string finish() {
+    end();
     std::string out;
     for (const std::string& line : lines_) out += line + "\n";
     out += "states " + std::to_string(std::hash<std::string>{}(states_)) + "\n";
-    for (std::size_t a = 0; a < validator_.axisCount(); ++a) {
-      const AxisModel* m = validator_.axis(a);
+    for (std::size_t a = 0; validator_ && a < validator_->axisCount(); ++a) {
+      const AxisModel* m = validator_->axis(a);
       if (m == nullptr) continue;
       out += "axis " + std::to_string(a) + " state " +
              std::to_string(m->state() ? static_cast<int>(*m->state()) : -1) + " failures " +
@@ -69,7 +93,9 @@ class Transcript {
   std::size_t findingCount() const { return lines_.size(); }
 
  private:
-  Validator validator_;
+  FastPath fast_path_;
+  LayoutWindow window_{DecoderOptions{}};
+  std::optional<Validator> validator_;
   std::vector<std::string> lines_;
   std::string states_;
 };

@@ -23,6 +23,7 @@
 #include "ncservo/config.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/layout_learner.hpp"
+#include "ncservo/layout_window.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/sim/faults.hpp"
 #include "ncservo/validator.hpp"
@@ -627,18 +628,39 @@ Validated validate(const SimOptions& resolved, bool with_config) {
       EXPECT_TRUE(applyConfig(*parsed, settings));
     }
   }
-  Validator validator(decoder, settings);
+  // As the CLI does: the learning window's frames are validated once the layout is known.
+  LayoutWindow window(decoder);
+  std::optional<Validator> checked;
   Validated out;
+  const auto validate_frame = [&](std::uint64_t n, std::int64_t t, const EcatFrame& walked,
+                                  const ByteReader& bytes) {
+    checked->onFrame(n, t, walked, bytes);
+    out.findings.insert(out.findings.end(), checked->findings().begin(), checked->findings().end());
+  };
+  const auto decided = [&] {
+    checked.emplace(window.options(), settings);
+    window.replay(validate_frame);
+  };
+  if (!window.learning()) checked.emplace(window.options(), settings);
   std::uint64_t number = 0;
   EcatFrame frame;
   for (const Frame& f : simulate(resolved)) {
     if (number == 0) out.first_ns = f.time_ns;
     const ByteReader bytes(f.bytes.data(), f.bytes.size());
     walkPacket(LinkType::Ethernet, bytes, frame);
-    validator.onFrame(++number, f.time_ns, frame, bytes);
-    out.findings.insert(out.findings.end(), validator.findings().begin(),
-                        validator.findings().end());
+    ++number;
+    if (window.learning()) {
+      window.hold(number, f.time_ns, LinkType::Ethernet, bytes, frame);
+      if (!window.learning()) decided();
+      continue;
+    }
+    validate_frame(number, f.time_ns, frame, bytes);
   }
+  if (window.learning()) {
+    window.finish();
+    decided();
+  }
+  const Validator& validator = *checked;
   out.axes = validator.axisCount();
   for (std::size_t a = 0; a < validator.axisCount(); ++a) {
     out.history.push_back(validator.axis(a) ? validator.axis(a)->errorHistory().size() : 0);

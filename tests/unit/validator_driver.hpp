@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "default_layout.hpp"
 #include "frame_builder.hpp"
 #include "ncservo/finding.hpp"
 #include "ncservo/rules.hpp"
@@ -213,16 +214,24 @@ inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std:
 // Feeds frames to one Validator, numbering them from 1, and keeps every finding.
 class ValidatorDriver {
  public:
+  // Without explicit axes, the layout is the outputs-first one of the first frame (what the
+  // inference decides for these frames, default_layout.hpp).
   explicit ValidatorDriver(RuleSettings settings = RuleSettings{},
                            DecoderOptions options = DecoderOptions{})
-      : validator_(std::move(options), std::move(settings)) {}
+      : settings_(std::move(settings)), options_(std::move(options)) {}
 
   // One captured frame at `time_ns`; returns the findings reported on it.
   const std::vector<Finding>& feed(const Bytes& bytes, std::int64_t time_ns) {
     const Walked w = walk(bytes);
-    validator_.onFrame(++frame_, time_ns, *w.frame, w.reader());
-    all_.insert(all_.end(), validator_.findings().begin(), validator_.findings().end());
-    return validator_.findings();
+    if (!validator_) {
+      if (options_.axes.empty() && options_.default_layout) {
+        options_ = defaultLayoutOf(*w.frame, options_);
+      }
+      validator_.emplace(options_, settings_);
+    }
+    validator_->onFrame(++frame_, time_ns, *w.frame, w.reader());
+    all_.insert(all_.end(), validator_->findings().begin(), validator_->findings().end());
+    return validator_->findings();
   }
 
   // Every frame of a script, in capture order; records where each cycle's copies went.
@@ -249,11 +258,13 @@ class ValidatorDriver {
   }
 
   const std::vector<Finding>& findings() const { return all_; }
-  const Validator& validator() const { return validator_; }
+  const Validator& validator() const { return *validator_; }
   std::uint64_t frames() const { return frame_; }
 
  private:
-  Validator validator_;
+  RuleSettings settings_;
+  DecoderOptions options_;
+  std::optional<Validator> validator_;
   std::uint64_t frame_ = 0;
   std::vector<Finding> all_;
   std::vector<std::pair<At, std::uint64_t>> frames_;

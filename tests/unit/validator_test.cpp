@@ -932,8 +932,11 @@ std::vector<ViewRow> viewRows() {
 }
 
 TEST(ValidatorView, SameAsSessionFrameByFrame) {
-  Validator validator(DecoderOptions{}, RuleSettings{});
-  Session session(DecoderOptions{});
+  // The rows' outputs-first layouts: 2 axes in the LRW, 3 in the LWR and LRD.
+  DecoderOptions layout = test::inferredDefault(2);
+  test::appendDefaultAxes(layout, 3, 0x00020000, 0x00030000);
+  Validator validator(layout, RuleSettings{});
+  Session session(layout);
   session.trackStates(false);
   std::uint64_t frame = 0;
   std::size_t axes_seen = 0;

@@ -26,6 +26,7 @@
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
 #include "ncservo/frame_clock.hpp"
+#include "ncservo/layout_window.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
 #include "ncservo/sim/simulator.hpp"
@@ -202,12 +203,19 @@ DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args) 
 }
 
 // `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
-void printLayout(const Decoder& decoder) {
+void printLayout(const Decoder& decoder, const std::optional<InferenceResult>& inference) {
   std::vector<AxisConfig> axes;
   for (const AxisInfo& info : decoder.axes()) axes.push_back(axisConfigOf(info));
   fmt::print("# layout source: {}, {} ax{}{}\n", layoutSourceName(decoder.source()), axes.size(),
              axes.size() == 1 ? "is" : "es",
              axes.empty() ? " (" + decoder.noServoReason() + ")" : std::string());
+  if (inference && !inference->axes.empty()) {
+    fmt::print("# inferred from {} cycles of cyclic traffic (PROTOCOL.md §9.4)\n",
+               inference->cycles);
+    for (const InferredAxis& axis : inference->axes) {
+      fmt::print("# {}: {}\n", axis.config.name, describeEvidence(axis));
+    }
+  }
   for (const SlaveLayout& slave : decoder.learner().slaves()) {
     fmt::print("# slave {}\n", describeSlaveLayout(slave));
   }
@@ -235,7 +243,8 @@ int runDecode(const DecodeArgs& args) {
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   FrameClock clock(*timestampModeFromName(args.timestamps));
-  Session session(decoderOptions(*files, args.layout));
+  LayoutWindow window(decoderOptions(*files, args.layout));
+  std::optional<Session> session;
   const RowFormat& format = rowNamed(kRowFormats, args.format);
   if (!args.layout_only && format.header != nullptr) format.header(stdout);
   CycleRows cycles;
@@ -245,11 +254,26 @@ int runDecode(const DecodeArgs& args) {
   std::optional<std::int64_t> first_time;
   auto write = [&] {
     for (const CycleRow& row : rows) {
-      format.row(stdout, row, session.decoder().axes().at(row.axis).name,
+      format.row(stdout, row, session->decoder().axes().at(row.axis).name,
                  static_cast<double>(row.time_ns - *first_time) / 1e9);
     }
     rows.clear();
   };
+  const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                          const ByteReader& bytes) {
+    const FrameView& view = session->onFrame(walked, bytes);
+    if (args.layout_only) return;
+    for (std::size_t i = 0; i < view.axis_count; ++i) {
+      warnIfMalformed(reader->path(), number, view.axes[i].placement);
+    }
+    cycles.onFrame(number, time_ns, view, rows);
+    write();
+  };
+  const auto decided = [&] {
+    session.emplace(window.options());
+    window.replay(decode);
+  };
+  if (!window.learning()) session.emplace(window.options());
   Result<bool> status;
   while ((status = reader->next(record)) && *status) {
     if (!first_time) first_time = record.time_ns;
@@ -258,13 +282,16 @@ int runDecode(const DecodeArgs& args) {
     if (frame.status == WalkStatus::NotEtherCat) continue;
     const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
     if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
-    const FrameView& view = session.onFrame(frame, bytes);
-    if (args.layout_only) continue;
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      warnIfMalformed(reader->path(), record.frame, view.axes[i].placement);
+    if (window.learning()) {
+      window.hold(record.frame, time_ns, reader->link(), bytes, frame);
+      if (!window.learning()) decided();
+      continue;
     }
-    cycles.onFrame(record.frame, time_ns, view, rows);
-    write();
+    decode(record.frame, time_ns, frame, bytes);
+  }
+  if (window.learning()) {
+    window.finish();
+    decided();
   }
   cycles.finish(rows);
   write();
@@ -273,13 +300,13 @@ int runDecode(const DecodeArgs& args) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
-  if (args.layout_only) printLayout(session.decoder());
+  if (args.layout_only) printLayout(session->decoder(), window.inference());
   if (clock.source() == TimestampSource::Probe || !clock.note().empty()) {
     fmt::print(stderr, "ncservo: {}: timestamps: {}{}{}\n", reader->path(),
                timestampSourceName(clock.source()), clock.note().empty() ? "" : "; ", clock.note());
   }
-  if (session.decoder().axes().empty()) {
-    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session.decoder().noServoReason());
+  if (session->decoder().axes().empty()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session->decoder().noServoReason());
   }
   return kExitOk;
 }
@@ -352,7 +379,25 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   FrameClock clock(timestamps);
-  Validator validator(decoder_options, settings);
+  LayoutWindow window(decoder_options);
+  std::optional<Validator> validator;
+  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                            const ByteReader& bytes) {
+    const FrameDecode& decode = validator->onFrame(number, time_ns, walked, bytes).decode;
+    for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
+      warnIfMalformed(reader->path(), number, decode.axes[i]);
+    }
+    for (const Finding& f : validator->findings()) {
+      ++report.counts[static_cast<std::size_t>(f.severity)];
+      if (writer.keepsFindings()) report.findings.push_back(f);
+      writer.finding(report, f);
+    }
+  };
+  const auto decided = [&] {
+    validator.emplace(window.options(), settings);
+    window.replay(validate);
+  };
+  if (!window.learning()) validator.emplace(window.options(), settings);
   EcatFrame frame;
   CaptureRecord record;
   bool first = true;
@@ -366,18 +411,19 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     if (frame.status == WalkStatus::NotEtherCat) continue;
     const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
     if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
-    const FrameDecode& decode = validator.onFrame(record.frame, time_ns, frame, bytes).decode;
-    for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
-      warnIfMalformed(reader->path(), record.frame, decode.axes[i]);
+    if (window.learning()) {
+      window.hold(record.frame, time_ns, reader->link(), bytes, frame);
+      if (!window.learning()) decided();
+      continue;
     }
-    for (const Finding& f : validator.findings()) {
-      ++report.counts[static_cast<std::size_t>(f.severity)];
-      if (writer.keepsFindings()) report.findings.push_back(f);
-      writer.finding(report, f);
-    }
+    validate(record.frame, time_ns, frame, bytes);
   }
-  cli::summarise(validator, report);
-  report.coverage = coverageOf(validator);
+  if (window.learning()) {
+    window.finish();
+    decided();
+  }
+  cli::summarise(*validator, report);
+  report.coverage = coverageOf(*validator);
   report.timestamps = clock.source();
   report.probe = clock.counts();
   report.probe_note = clock.note();
@@ -667,7 +713,7 @@ Handler decodeCommand(CLI::App& command) {
   command.add_option("--config", args->layout.config_path, "TOML configuration file (layout)");
   addFormatOption(command, args->format, namesOf(kRowFormats));
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never assume the default layout (PROTOCOL.md §9.4)");
+                   "never infer the layout from the cyclic traffic (PROTOCOL.md §9.4)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout");
   command.add_flag("--layout", args->layout_only,
@@ -704,7 +750,7 @@ Handler validateCommand(CLI::App& command) {
                   "Servo_Ready_Mode of the drives (0 or 1)")
       ->check(CLI::Range(0, 1));
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never assume the default layout (PROTOCOL.md §9.4)");
+                   "never infer the layout from the cyclic traffic (PROTOCOL.md §9.4)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
   command

@@ -9,11 +9,6 @@
 namespace ncservo {
 
 namespace {
-// PROTOCOL.md §9.4: one frame holds at most 29 axes in the default layout.
-constexpr std::uint16_t kMaxDefaultAxesPerDatagram = 29;
-// Bounds on what a hostile capture can make the decoder remember.
-constexpr std::size_t kMaxDefaultKeys = 64;
-
 // What the decoder needs to know of a frame's datagram list, gathered in one pass.
 struct FrameShape {
   // Commands, indexes, lengths and the addresses that survive the ring: what pairs a master's
@@ -69,8 +64,8 @@ const char* layoutSourceName(LayoutSource source) {
   switch (source) {
     case LayoutSource::None:
       return "none";
-    case LayoutSource::Default:
-      return "default";
+    case LayoutSource::Inferred:
+      return "inferred";
     case LayoutSource::Startup:
       return "startup";
     case LayoutSource::Config:
@@ -142,17 +137,19 @@ std::string Decoder::noServoReason() const {
            "sync managers (PROTOCOL.md §9.3)";
   }
   if (!options_.default_layout) {
-    return "no servo of this protocol found: the default layout is off; give the layout in a "
-           "--config file";
+    return "no servo of this protocol found: inferring the layout from the cyclic traffic is off; "
+           "give the layout in a --config file";
   }
-  return "no servo of this protocol found: no datagram matches the default layout (PROTOCOL.md "
-         "§9.4); give the layout in a --config file";
+  if (!options_.inference_refusal.empty()) {
+    return "no servo of this protocol found in the cyclic traffic (PROTOCOL.md §9.4): " +
+           options_.inference_refusal;
+  }
+  return "no servo of this protocol found (PROTOCOL.md §9); give the layout in a --config file";
 }
 
 LayoutSource Decoder::source() const {
   if (!options_.axes.empty()) return options_.explicit_source;
   if (!learned_axes_.empty()) return LayoutSource::Startup;
-  if (!default_keys_.empty()) return LayoutSource::Default;
   return LayoutSource::None;
 }
 
@@ -184,11 +181,7 @@ void Decoder::placeAxes(const EcatFrame& frame, const ByteReader& bytes, FrameDe
   const std::uint64_t key = shape.layout_key ^ (out.copy == CopyKind::Returned ? 0x5bd1e995ull : 0);
   if (cacheable && fromCache(key, out)) return;
   const std::uint64_t generation = generation_;
-  if (!placedAxes().empty()) {
-    placeConfigured(frame, out);
-  } else if (options_.default_layout && !startupShowsNoServo()) {
-    placeDefault(frame, out);
-  }
+  if (!placedAxes().empty()) placeConfigured(frame, out);
   const auto end = out.axes.begin() + static_cast<std::ptrdiff_t>(out.axis_count);
   const auto by_axis = [](const AxisPlacement& a, const AxisPlacement& b) {
     return a.axis < b.axis;
@@ -325,86 +318,6 @@ void Decoder::placeConfigured(const EcatFrame& frame, FrameDecode& out) {
       }
     }
   }
-}
-
-// PROTOCOL.md §9.4: an LRW of n×10 output bytes then n×40 input bytes, or an LWR of n×10 and an
-// LRD of n×40 bytes in one frame. A datagram is taken once it repeats, or at first sight when its
-// WKC is 0 (a master's copy) or exactly what n servos give.
-void Decoder::placeDefault(const EcatFrame& frame, FrameDecode& out) {
-  const bool returned = out.copy == CopyKind::Returned;
-  for (std::size_t d = 0; d < frame.count; ++d) {
-    const Datagram& dg = frame.datagrams[d];
-    std::uint16_t n = 0;
-    std::size_t inputs_index = d;
-    if (dg.command == ecat::kLrw && dg.length % (kRxPdoSize + kTxPdoSize) == 0) {
-      n = static_cast<std::uint16_t>(dg.length / (kRxPdoSize + kTxPdoSize));
-    } else if (dg.command == ecat::kLwr && dg.length % kRxPdoSize == 0) {
-      n = static_cast<std::uint16_t>(dg.length / kRxPdoSize);
-      inputs_index = frame.count;
-      for (std::size_t j = 0; j < frame.count; ++j) {
-        if (frame.datagrams[j].command == ecat::kLrd &&
-            frame.datagrams[j].length == n * kTxPdoSize) {
-          inputs_index = j;
-          break;
-        }
-      }
-      if (inputs_index == frame.count) continue;
-    } else {
-      continue;
-    }
-    if (n == 0 || n > kMaxDefaultAxesPerDatagram) continue;
-    const std::uint16_t expected_wkc = dg.command == ecat::kLrw ? 3 * n : n;
-    const Datagram& inputs = frame.datagrams[inputs_index];
-    const std::size_t inputs_start = dg.command == ecat::kLrw ? n * kRxPdoSize : 0;
-    const DefaultKey* key = defaultKeyFor(
-        dg, n, expected_wkc, static_cast<std::uint32_t>(inputs.address + inputs_start));
-    if (key == nullptr) continue;
-    for (std::uint16_t k = 0; k < n; ++k) {
-      const auto axis = static_cast<std::uint16_t>(key->first_axis + k);
-      placeRegion(dg, static_cast<std::uint16_t>(d), k * kRxPdoSize, Pdo::Rx, returned, out, axis);
-      placeRegion(inputs, static_cast<std::uint16_t>(inputs_index), inputs_start + k * kTxPdoSize,
-                  Pdo::Tx, returned, out, axis);
-    }
-  }
-}
-
-const Decoder::DefaultKey* Decoder::defaultKeyFor(const Datagram& dg, std::uint16_t axis_count,
-                                                  std::uint16_t expected_wkc,
-                                                  std::uint32_t inputs_address) {
-  for (const DefaultKey& key : default_keys_) {
-    if (key.command == dg.command && key.address == dg.address && key.length == dg.length) {
-      return &key;
-    }
-  }
-  // A frame cut before the WKC (snap length) cannot contradict the layout: take it.
-  const bool plausible = !dg.has_wkc || dg.wkc == 0 || dg.wkc == expected_wkc;
-  if (default_keys_.size() >= kMaxDefaultKeys) return nullptr;
-  if (!plausible) {
-    auto seen =
-        std::find_if(candidate_keys_.begin(), candidate_keys_.end(), [&dg](const DefaultKey& k) {
-          return k.command == dg.command && k.address == dg.address && k.length == dg.length;
-        });
-    if (seen == candidate_keys_.end()) {
-      if (candidate_keys_.size() < kMaxDefaultKeys) {
-        candidate_keys_.push_back(DefaultKey{dg.command, dg.address, dg.length, 0, axis_count});
-        ++generation_;
-      }
-      return nullptr;
-    }
-    candidate_keys_.erase(seen);  // it repeats: take it
-  }
-  const auto first_axis = static_cast<std::uint16_t>(axes_.size());
-  for (std::uint16_t k = 0; k < axis_count; ++k) {
-    AxisInfo info;
-    info.index = static_cast<std::uint16_t>(first_axis + k);
-    info.name = fmt::format("axis{}", info.index);
-    info.outputs = dg.address + k * kRxPdoSize;
-    info.inputs = static_cast<std::uint32_t>(inputs_address + k * kTxPdoSize);
-    axes_.push_back(std::move(info));
-  }
-  default_keys_.push_back(DefaultKey{dg.command, dg.address, dg.length, first_axis, axis_count});
-  ++generation_;
-  return &default_keys_.back();
 }
 
 }  // namespace ncservo

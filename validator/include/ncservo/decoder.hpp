@@ -16,7 +16,7 @@
 
 namespace ncservo {
 
-enum class LayoutSource : std::uint8_t { None, Default, Startup, Config, Eni };
+enum class LayoutSource : std::uint8_t { None, Inferred, Startup, Config, Eni };
 const char* layoutSourceName(LayoutSource source);
 
 enum class CopyKind : std::uint8_t { Master, Returned };
@@ -67,14 +67,19 @@ struct FrameDecode {
 AxisConfig axisConfigOf(const AxisInfo& info);
 
 struct DecoderOptions {
-  std::vector<AxisConfig> axes;  // explicit layout (a configuration or an ENI); empty = none
+  // Explicit layout (a configuration, an ENI, or inferred by a LayoutWindow); empty = none.
+  std::vector<AxisConfig> axes;
   LayoutSource explicit_source = LayoutSource::Config;  // where `axes` came from
-  bool default_layout = true;                           // PROTOCOL.md §9.4 may be used
+  // The layout may be inferred from the cyclic traffic (PROTOCOL.md §9.4; a LayoutWindow does).
+  bool default_layout = true;
+  // Why the inference refused to decide (for noServoReason); empty when it did not run.
+  std::string inference_refusal;
 };
 
 // The layout sources in the order PROTOCOL.md §9 tries them: a configuration's axes, else an
-// ENI's, else (in the decoder) the start-up's, else the default layout (§9.4) — unless the user
-// (`allow_default_layout` false) or the configuration (default_layout = false) rules it out.
+// ENI's, else (in the decoder) the start-up's, else the layout inferred from the cyclic traffic
+// (§9.4, by a LayoutWindow) — unless the user (`allow_default_layout` false) or the
+// configuration (default_layout = false) rules it out.
 DecoderOptions layoutOptions(const Config* config, const std::vector<AxisConfig>* eni_axes,
                              bool allow_default_layout);
 
@@ -96,14 +101,6 @@ class Decoder {
   std::string noServoReason() const;
 
  private:
-  struct DefaultKey {
-    std::uint8_t command;
-    std::uint32_t address;
-    std::uint16_t length;
-    std::uint16_t first_axis;
-    std::uint16_t axis_count;
-  };
-
   // `signature`: of the datagram list; `any_wkc`: some WKC is above zero.
   void classifyCopy(const EcatFrame& frame, std::uint64_t signature, bool any_wkc,
                     FrameDecode& out);
@@ -114,18 +111,12 @@ class Decoder {
     return options_.axes.empty() ? learned_axes_ : options_.axes;
   }
   void placeConfigured(const EcatFrame& frame, FrameDecode& out);
-  void placeDefault(const EcatFrame& frame, FrameDecode& out);
-  const DefaultKey* defaultKeyFor(const Datagram& dg, std::uint16_t axis_count,
-                                  std::uint16_t expected_wkc, std::uint32_t inputs_address);
   AxisPlacement* placementFor(FrameDecode& out, std::uint16_t axis);
   void placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_t start, Pdo pdo,
                    bool returned, FrameDecode& out, std::uint16_t axis);
 
   DecoderOptions options_;
   std::vector<AxisInfo> axes_;
-  std::vector<DefaultKey> default_keys_;
-  // Candidates first seen with an unexpected WKC: taken when they repeat (PROTOCOL.md §9.4).
-  std::vector<DefaultKey> candidate_keys_;
   std::uint64_t previous_signature_ = 0;
   bool previous_was_master_ = false;
   // The start-up's SM/FMMU configuration (PROTOCOL.md §9.3), and the axes it gave so far.
