@@ -496,9 +496,9 @@ void printRuleText(const RuleDef& rule) {
 
 void printRuleMarkdown(const RuleDef& rule) {
   const char* timeout = rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
-  fmt::print("| {} | `{}` | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
-             severityName(rule.severity), partyName(rule.party), timeout, rule.clause,
-             rule.summary);
+  fmt::print("| {} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
+             severityName(rule.severity), partyName(rule.party), ruleKindName(rule.kind),
+             describeReads(rule.reads), timeout, rule.clause, rule.summary);
 }
 
 // `rules`'s formats: a header, then one line per rule.
@@ -510,8 +510,8 @@ struct RuleListFormat {
 const RuleListFormat kRuleListFormats[] = {
     {"text", "", printRuleText},
     {"markdown",
-     "| ID | slug | severity | party | timeout | clause | summary |\n"
-     "|---|---|---|---|---|---|---|\n",
+     "| ID | slug | severity | party | judged on | reads | timeout | clause | summary |\n"
+     "|---|---|---|---|---|---|---|---|---|\n",
      printRuleMarkdown},
 };
 

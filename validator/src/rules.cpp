@@ -552,6 +552,27 @@ const RuleDef* ruleByCode(std::string_view code) {
   return nullptr;
 }
 
+std::string describeReads(const Reads& reads) {
+  std::string out;
+  auto add = [&out](std::string_view filter, const char* suffix) {
+    out += fmt::format("{}{}{}", out.empty() ? "" : ", ", filter.substr(8), suffix);
+  };
+  for (const FieldDef& f : kFields) {
+    const std::size_t w = static_cast<std::size_t>(f.word);
+    const std::uint64_t bits = reads.bits[w];
+    const bool whole = bits == wordMask(f.word);
+    if (f.kind == FieldKind::Word) {
+      if (whole) add(f.filter, "");
+      if (reads.classes[w] != nullptr) add(f.filter, " (its class)");
+    } else if ((f.kind == FieldKind::Flag || f.kind == FieldKind::BitRange) && !whole &&
+               (bits & f.mask) == f.mask) {
+      add(f.filter, "");
+    }
+  }
+  if (reads.al_state) add("ncservo.al_state", "");
+  return out.empty() ? "-" : out;
+}
+
 const char* ruleKindName(RuleKind kind) {
   switch (kind) {
     case RuleKind::Axis:

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <string>
 #include <string_view>
 
 #include "ncservo/fields.hpp"
@@ -55,6 +56,10 @@ constexpr Reads readsOf(std::initializer_list<std::string_view> filters, bool al
   out.al_state = al_state;
   return out;
 }
+// "scw.se, ssw.servo_en, msg_code (its class)": the field-table rows a declaration covers, for
+// the rule reference; "-" for none.
+std::string describeReads(const Reads& reads);
+
 // A word (by its row's filter name) read only through `word_class`.
 constexpr Reads readsThrough(std::string_view filter, WordClass word_class) {
   Reads out;
