@@ -7,9 +7,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "status_text.hpp"
 #include "ncservo/config.hpp"
 #include "ncservo/sim/simulator.hpp"
+#include "status_text.hpp"
 
 namespace ncservo::test {
 
@@ -46,7 +46,7 @@ inline sim::SimOptions optionsFor(const SetUp& s) {
 }
 
 inline void expectSameAxes(const std::vector<AxisConfig>& got,
-                           const std::vector<sim::SimAxisLayout>& want) {
+                           const std::vector<AxisConfig>& want) {
   ASSERT_EQ(got.size(), want.size());
   for (std::size_t i = 0; i < want.size(); ++i) {
     SCOPED_TRACE(want[i].name);

@@ -529,7 +529,7 @@ TEST_P(Layout, AddressesAndStations) {
   o.image = row.image;
   ASSERT_EQ(test::statusText(resolveOptions(o)), "");
   const Simulator simulator(o);
-  const std::vector<SimAxisLayout>& layout = simulator.layout();
+  const std::vector<AxisConfig>& layout = simulator.layout();
   ASSERT_EQ(layout.size(), static_cast<std::size_t>(row.axes));
   const auto lrws = cyclicLrws(simulate(o));
   ASSERT_FALSE(lrws.empty());
@@ -539,37 +539,36 @@ TEST_P(Layout, AddressesAndStations) {
   EXPECT_EQ(lrws.size(), row.axes > 29 ? 2U : 1U);
 
   // Every axis's PDOs inside one cyclic LRW; the LRW's axes by frame.
-  std::map<std::uint32_t, std::vector<const SimAxisLayout*>> by_frame;
+  std::map<std::uint32_t, std::vector<const AxisConfig*>> by_frame;
   for (std::size_t k = 0; k < layout.size(); ++k) {
-    const SimAxisLayout& a = layout[k];
-    EXPECT_EQ(a.index, static_cast<int>(k));
+    const AxisConfig& a = layout[k];
     EXPECT_EQ(a.name, "axis" + std::to_string(k));
     if (k > 0) {
       EXPECT_GT(a.station, layout[k - 1].station) << "stations in ring order";
     }
     const auto lrw = std::find_if(lrws.begin(), lrws.end(), [&](const auto& l) {
-      return a.outputs >= l.first && a.outputs + 10 <= l.first + l.second;
+      return *a.outputs >= l.first && *a.outputs + 10 <= l.first + l.second;
     });
     ASSERT_NE(lrw, lrws.end()) << "axis " << k;
-    EXPECT_GE(a.inputs, lrw->first);
-    EXPECT_LE(a.inputs + 40, lrw->first + lrw->second) << "axis " << k;
+    EXPECT_GE(*a.inputs, lrw->first);
+    EXPECT_LE(*a.inputs + 40, lrw->first + lrw->second) << "axis " << k;
     by_frame[lrw->first].push_back(&a);
   }
   for (const auto& [base, axes] : by_frame) {
     for (std::size_t k = 0; k < axes.size(); ++k) {
       if (row.image == ImageStyle::EtherLab) {
-        EXPECT_EQ(axes[k]->inputs, axes[k]->outputs + 10) << "axis " << axes[k]->index;
+        EXPECT_EQ(*axes[k]->inputs, *axes[k]->outputs + 10) << axes[k]->name;
       } else {
         // §9.4: all outputs first, then all inputs, in axis order
-        for (const SimAxisLayout* other : axes) {
-          EXPECT_LE(other->outputs + 10, axes[k]->inputs);
+        for (const AxisConfig* other : axes) {
+          EXPECT_LE(*other->outputs + 10, *axes[k]->inputs);
         }
         if (row.io_slaves == 0) {
-          EXPECT_EQ(axes[k]->outputs, base + 10 * k);
-          EXPECT_EQ(axes[k]->inputs, base + 10 * axes.size() + 40 * k);
+          EXPECT_EQ(*axes[k]->outputs, base + 10 * k);
+          EXPECT_EQ(*axes[k]->inputs, base + 10 * axes.size() + 40 * k);
         } else if (k > 0) {
-          EXPECT_GT(axes[k]->outputs, axes[k - 1]->outputs);
-          EXPECT_GT(axes[k]->inputs, axes[k - 1]->inputs);
+          EXPECT_GT(*axes[k]->outputs, *axes[k - 1]->outputs);
+          EXPECT_GT(*axes[k]->inputs, *axes[k - 1]->inputs);
         }
       }
     }
@@ -590,7 +589,7 @@ TEST_P(Layout, ConfigFileGivesTheSameLayout) {
   EXPECT_EQ(config.servo_ready_mode, o.ready_mode);
   ASSERT_EQ(config.axes.size(), simulator.layout().size());
   for (std::size_t k = 0; k < config.axes.size(); ++k) {
-    const SimAxisLayout& a = simulator.layout()[k];
+    const AxisConfig& a = simulator.layout()[k];
     EXPECT_EQ(config.axes[k].name, a.name);
     EXPECT_EQ(config.axes[k].outputs, a.outputs);
     EXPECT_EQ(config.axes[k].inputs, a.inputs);

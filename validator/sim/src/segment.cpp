@@ -474,13 +474,16 @@ std::string Segment::describe() const {
   return fmt::format("{} layout", row.layout_alias != nullptr ? row.layout_alias : row.name);
 }
 
-std::vector<SimAxisLayout> Segment::axisLayout() const {
-  std::vector<SimAxisLayout> layout;
+std::vector<AxisConfig> Segment::axisLayout() const {
+  std::vector<AxisConfig> layout;
   for (std::size_t a = 0; a < servo_slave.size(); ++a) {
     const auto pos = static_cast<std::size_t>(servo_slave[a]);
-    layout.push_back({static_cast<int>(a), fmt::format("axis{}", a),
-                      static_cast<std::uint16_t>(kFirstStation + pos), escs[pos].outputs_logical,
-                      escs[pos].inputs_logical});
+    AxisConfig axis;
+    axis.name = fmt::format("axis{}", a);
+    axis.station = static_cast<std::uint16_t>(kFirstStation + pos);
+    axis.outputs = escs[pos].outputs_logical;
+    axis.inputs = escs[pos].inputs_logical;
+    layout.push_back(std::move(axis));
   }
   return layout;
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ncservo/al_tracker.hpp"
+#include "ncservo/config.hpp"
 #include "ncservo/sim/models.hpp"
 #include "ncservo/sim/options.hpp"
 
@@ -144,7 +145,7 @@ struct Segment {
   Esc& servo(int axis) {
     return escs[static_cast<std::size_t>(servo_slave[static_cast<std::size_t>(axis)])];
   }
-  std::vector<SimAxisLayout> axisLayout() const;
+  std::vector<AxisConfig> axisLayout() const;
   // A frame round the ring at this time (since the Unix epoch).
   void pass(std::vector<RingDatagram>& frame, std::int64_t now_ns);
 };

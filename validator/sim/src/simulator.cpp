@@ -30,7 +30,7 @@ struct Simulator::Impl {
   std::int64_t plan_start_ns;  // since the capture's start
   Rng rng;
   Segment segment;
-  std::vector<SimAxisLayout> axis_layout;
+  std::vector<AxisConfig> axis_layout;
   std::vector<DriveModel> drives;
   std::vector<NcAxis> ncs;
   FaultPlan faults;
@@ -207,25 +207,16 @@ struct Simulator::Impl {
 Simulator::Simulator(const SimOptions& options) : impl_(std::make_unique<Impl>(options)) {}
 Simulator::~Simulator() = default;
 
-const std::vector<SimAxisLayout>& Simulator::layout() const {
+const std::vector<AxisConfig>& Simulator::layout() const {
   return impl_->axis_layout;
 }
 
 std::string Simulator::layoutConfig() const {
-  std::vector<AxisConfig> axes;
-  for (const SimAxisLayout& a : impl_->axis_layout) {
-    AxisConfig axis;
-    axis.name = a.name;
-    axis.outputs = a.outputs;
-    axis.inputs = a.inputs;
-    axis.station = a.station;
-    axes.push_back(std::move(axis));
-  }
   return fmt::format(
              "# The layout of `ncservo simulate` ({} axes, {}, {} terminals), for\n"
              "# `ncservo validate --config` or the Wireshark preference ncservo.config.\n",
              impl_->o.axes, impl_->segment.describe(), *impl_->o.io_slaves) +
-         writeConfig(axes, impl_->o.ready_mode);
+         writeConfig(impl_->axis_layout, impl_->o.ready_mode);
 }
 
 std::string Simulator::eni() const {

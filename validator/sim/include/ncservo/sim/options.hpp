@@ -92,15 +92,6 @@ double defaultDuration(Scenario scenario);
 // the user.
 Status resolveOptions(SimOptions& options);
 
-// Where one axis's PDOs are, as a configuration file (INTERFACES.md) would give them.
-struct SimAxisLayout {
-  int index = 0;
-  std::string name;
-  std::uint16_t station = 0;
-  std::uint32_t outputs = 0;
-  std::uint32_t inputs = 0;
-};
-
 struct SimFrame {
   std::int64_t time_ns;  // since the Unix epoch: the capturing PC's stamp
   const std::uint8_t* data;

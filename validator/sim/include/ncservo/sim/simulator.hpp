@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ncservo/config.hpp"
 #include "ncservo/sim/options.hpp"
 
 namespace ncservo::sim {
@@ -30,7 +31,9 @@ class Simulator {
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
 
-  const std::vector<SimAxisLayout>& layout() const;
+  // Where each axis's PDOs are, as a configuration file gives them: name, logical addresses and
+  // station, in axis order.
+  const std::vector<AxisConfig>& layout() const;
   // The layout as a TOML configuration file that `ncservo validate --config` reads.
   std::string layoutConfig() const;
   // The set-up as an ENI file (ETG.2100 EtherCATConfig.xml), for `ncservo validate --eni`.
