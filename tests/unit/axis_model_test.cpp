@@ -19,25 +19,21 @@
 namespace ncservo {
 namespace {
 
+using test::kClear;
+using test::kClearAck;
+using test::kEcatTErr;
+using test::kEncoderErr;
 using test::kEpochNs;
 using test::kMs;
+using test::kScwArmed;
+using test::kScwOff;
 using test::kScwRunning;
+using test::kScwSe3;
+using test::kSswNone;
+using test::kSswReady;
 using test::kSswRunning;
-
-// SCW values (PROTOCOL.md §2). EMGON and Brake are 1.
-constexpr std::uint32_t kScwOff = 0x404;    // SE 0x0
-constexpr std::uint32_t kScwArmed = 0x405;  // SE 0x1
-constexpr std::uint32_t kScwSe3 = 0x407;    // SE 0x3
-constexpr std::uint32_t kZRequest = 0x800;  // ZPulseRequest
-constexpr std::uint32_t kClear = 0x200;     // ErrorClear
-// SSW values (§3).
-constexpr std::uint32_t kSswReady = 0x02;  // ServoRDY only: disabled, ready
-constexpr std::uint32_t kSswNone = 0x00;
-constexpr std::uint32_t kClearAck = 0x10;
-// SEW values (§4).
-constexpr std::uint32_t kSummary = 0x1;
-constexpr std::uint32_t kEncoderErr = 0x2;
-constexpr std::uint32_t kEcatTErr = 0x8000;
+using test::kSummary;
+using test::kZRequest;
 
 PdoValues pdo(std::optional<std::uint32_t> scw, std::optional<std::uint32_t> ssw,
               std::uint32_t sew = 0) {

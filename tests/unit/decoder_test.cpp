@@ -20,9 +20,11 @@ namespace {
 using test::Bytes;
 using test::concat;
 using test::Dg;
+using test::fmmuBlock;
 using test::FrameBuilder;
 using test::physical;
 using test::rxPdo;
+using test::smBlock;
 using test::txPdo;
 using test::TxValues;
 
@@ -238,18 +240,6 @@ TEST(DefaultLayout, TwoCyclicDatagramsNumberTheirAxesInOrderOfFirstSight) {
 }
 
 // ---- Start-up (PROTOCOL.md §9.3, §9.4: no default layout when the start-up shows no servo) ----
-
-// A sync manager's 8-byte register block: start, length, control, status, activate, PDI.
-Bytes smBlock(std::uint16_t start, std::uint16_t length, std::uint8_t control) {
-  Bytes out;
-  test::putLe(out, start, 2);
-  test::putLe(out, length, 2);
-  out.push_back(control);
-  out.push_back(0);
-  out.push_back(1);
-  out.push_back(0);
-  return out;
-}
 
 struct StartupCase {
   const char* name;
@@ -686,21 +676,6 @@ TEST(CycleRows, PairsMasterOutputsWithReturnedInputs) {
 
 // ---- Layout learned from the start-up, and the precedence of the sources (PROTOCOL.md §9) ----
 
-// An FMMU's 16-byte register block.
-Bytes fmmuBlock(std::uint32_t logical, std::uint16_t length, std::uint16_t phys,
-                std::uint8_t type) {
-  Bytes out;
-  test::putLe(out, logical, 4);
-  test::putLe(out, length, 2);
-  out.push_back(0);
-  out.push_back(7);
-  test::putLe(out, phys, 2);
-  out.push_back(0);
-  out.push_back(type);
-  out.push_back(1);
-  out.resize(16, 0);
-  return out;
-}
 // A servo's start-up at `adp` (a station or an alias): SM2/SM3 of 10/40 bytes and, when
 // `logical` is given, FMMUs mapping them there (outputs, then inputs).
 std::vector<Bytes> servoStartup(std::uint16_t adp, std::optional<std::uint32_t> logical) {

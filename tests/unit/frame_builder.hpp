@@ -207,4 +207,31 @@ inline Walked walk(const Bytes& bytes, Link link = Link::Ethernet) {
 inline constexpr std::size_t kEcatOffset = 14;
 inline constexpr std::size_t kChainOffset = kEcatOffset + ecat::kFrameHeaderSize;
 
+// A sync manager's 8-byte register block: start, length, control, status, activate, PDI.
+inline Bytes smBlock(std::uint16_t start, std::uint16_t length, std::uint8_t control) {
+  Bytes out;
+  putLe(out, start, 2);
+  putLe(out, length, 2);
+  out.push_back(control);
+  out.push_back(0);
+  out.push_back(1);
+  out.push_back(0);
+  return out;
+}
+// An FMMU's 16-byte register block.
+inline Bytes fmmuBlock(std::uint32_t logical, std::uint16_t length, std::uint16_t phys,
+                       std::uint8_t type) {
+  Bytes out;
+  putLe(out, logical, 4);
+  putLe(out, length, 2);
+  out.push_back(0);
+  out.push_back(7);
+  putLe(out, phys, 2);
+  out.push_back(0);
+  out.push_back(type);
+  out.push_back(1);
+  out.resize(16, 0);
+  return out;
+}
+
 }  // namespace ncservo::test

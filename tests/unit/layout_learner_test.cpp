@@ -1,6 +1,5 @@
 // Learning the servos' layout from the capture's start-up (layout_learner.hpp, PROTOCOL.md §9.3):
 // the SM and FMMU register writes, byte by byte, then the simulator's start-ups as the truth.
-#include "status_text.hpp"
 #include "ncservo/layout_learner.hpp"
 
 #include <gtest/gtest.h>
@@ -17,6 +16,7 @@
 #include "ncservo/sim/simulator.hpp"
 #include "row_name.hpp"
 #include "simulated_setups.hpp"
+#include "status_text.hpp"
 
 namespace ncservo {
 namespace {
@@ -25,38 +25,14 @@ using test::Bytes;
 using test::concat;
 using test::Dg;
 using test::expectSameAxes;
+using test::fmmuBlock;
 using test::kSetUps;
 using test::optionsFor;
 using test::physical;
+using test::smBlock;
 
 // ---- SM and FMMU writes built byte by byte ----
 
-// A sync manager's 8-byte register block: start, length, control, status, activate, PDI.
-Bytes smBlock(std::uint16_t start, std::uint16_t length, std::uint8_t control) {
-  Bytes out;
-  test::putLe(out, start, 2);
-  test::putLe(out, length, 2);
-  out.push_back(control);
-  out.push_back(0);
-  out.push_back(1);
-  out.push_back(0);
-  return out;
-}
-// An FMMU's 16-byte register block.
-Bytes fmmuBlock(std::uint32_t logical, std::uint16_t length, std::uint16_t phys,
-                std::uint8_t type) {
-  Bytes out;
-  test::putLe(out, logical, 4);
-  test::putLe(out, length, 2);
-  out.push_back(0);
-  out.push_back(7);
-  test::putLe(out, phys, 2);
-  out.push_back(0);
-  out.push_back(type);
-  out.push_back(1);
-  out.resize(16, 0);
-  return out;
-}
 // SM2 and SM3 of the slave at `station`, of these lengths.
 Dg smWrite(std::uint16_t station, std::uint16_t outputs, std::uint16_t inputs,
            std::uint8_t command = ecat::kFpwr) {

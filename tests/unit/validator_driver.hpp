@@ -32,6 +32,24 @@ inline constexpr std::uint32_t kLrwAddress = 0x00010000;
 inline constexpr std::uint32_t kScwRunning = 0x406;
 inline constexpr std::uint32_t kSswRunning = 0x83;
 
+// SCW values (PROTOCOL.md §2). EMGON and Brake are 1 unless a name says otherwise.
+inline constexpr std::uint32_t kScwOff = 0x404;    // SE 0x0
+inline constexpr std::uint32_t kScwArmed = 0x405;  // SE 0x1
+inline constexpr std::uint32_t kScwSe3 = 0x407;    // SE 0x3
+inline constexpr std::uint32_t kZRequest = 0x800;  // ZPulseRequest
+inline constexpr std::uint32_t kClear = 0x200;     // ErrorClear
+// SSW values (§3).
+inline constexpr std::uint32_t kSswReady = 0x02;  // ServoRDY only: disabled, ready
+inline constexpr std::uint32_t kSswNone = 0x00;
+inline constexpr std::uint32_t kIncremental = 0x04;
+inline constexpr std::uint32_t kZAck = 0x08;
+inline constexpr std::uint32_t kClearAck = 0x10;
+inline constexpr std::uint32_t kNoEncoder = 0x400;
+// SEW values (§4).
+inline constexpr std::uint32_t kSummary = 0x1;
+inline constexpr std::uint32_t kEncoderErr = 0x2;
+inline constexpr std::uint32_t kEcatTErr = 0x8000;
+
 struct AxisCycle {
   std::uint32_t scw = kScwRunning;
   std::uint32_t ssw = kSswRunning;

@@ -28,35 +28,31 @@ using test::At;
 using test::Bytes;
 using test::Dg;
 using test::FrameBuilder;
+using test::kClear;
+using test::kClearAck;
+using test::kEcatTErr;
+using test::kEncoderErr;
 using test::kEnd;
 using test::kEpochNs;
+using test::kIncremental;
 using test::kMs;
+using test::kNoEncoder;
+using test::kScwArmed;
+using test::kScwOff;
 using test::kScwRunning;
+using test::kScwSe3;
+using test::kSswNone;
+using test::kSswReady;
 using test::kSswRunning;
+using test::kSummary;
 using test::kUs;
+using test::kZAck;
+using test::kZRequest;
 using test::M;
 using test::physical;
 using test::R;
 using test::Script;
 using test::ValidatorDriver;
-
-// SCW values (PROTOCOL.md §2). EMGON and Brake are 1 unless a name says otherwise.
-constexpr std::uint32_t kScwOff = 0x404;    // SE 0x0
-constexpr std::uint32_t kScwArmed = 0x405;  // SE 0x1
-constexpr std::uint32_t kScwSe3 = 0x407;    // SE 0x3
-constexpr std::uint32_t kZRequest = 0x800;  // ZPulseRequest
-constexpr std::uint32_t kClear = 0x200;     // ErrorClear
-// SSW values (§3).
-constexpr std::uint32_t kSswReady = 0x02;  // ServoRDY only: disabled, ready
-constexpr std::uint32_t kSswNone = 0x00;
-constexpr std::uint32_t kIncremental = 0x04;
-constexpr std::uint32_t kZAck = 0x08;
-constexpr std::uint32_t kClearAck = 0x10;
-constexpr std::uint32_t kNoEncoder = 0x400;
-// SEW values (§4).
-constexpr std::uint32_t kSummary = 0x1;
-constexpr std::uint32_t kEncoderErr = 0x2;
-constexpr std::uint32_t kEcatTErr = 0x8000;
 
 RuleSettings readyMode(int mode) {
   RuleSettings s;

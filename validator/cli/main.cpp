@@ -78,6 +78,15 @@ void addFormatOption(CLI::App& command, std::string& format, const std::vector<s
   command.add_option("--format", format, choiceList(names) + note)->check(CLI::IsMember(names));
 }
 
+// --timestamps (PROTOCOL.md §8: a probe's clock or the capturing PC's).
+void addTimestampsOption(CLI::App& command, std::string& timestamps) {
+  command
+      .add_option("--timestamps", timestamps,
+                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
+                  "has one)")
+      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+}
+
 // ---- decode ----
 
 std::string shortName(const char* filter) {
@@ -719,11 +728,7 @@ Handler decodeCommand(CLI::App& command) {
   command.add_flag("--layout", args->layout_only,
                    "print the layout found (as a configuration file) and the slaves the start-up "
                    "configured, instead of the process data");
-  command
-      .add_option("--timestamps", args->timestamps,
-                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
-                  "has one)")
-      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+  addTimestampsOption(command, args->timestamps);
   return [args] { return runDecode(*args); };
 }
 
@@ -753,11 +758,7 @@ Handler validateCommand(CLI::App& command) {
                    "never infer the layout from the cyclic traffic (PROTOCOL.md §9.4)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
-  command
-      .add_option("--timestamps", args->timestamps,
-                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
-                  "has one)")
-      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+  addTimestampsOption(command, args->timestamps);
   command.add_flag("--allow-empty", args->allow_empty,
                    "exit 0, not 4, where no servo (or not every configured axis) was decoded");
   return [args] { return runValidate(*args); };
