@@ -11,12 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "status_text.hpp"
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/layout_window.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "ncservo/validator.hpp"
 #include "row_name.hpp"
+#include "status_text.hpp"
 
 namespace ncservo {
 namespace {

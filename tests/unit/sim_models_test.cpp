@@ -1,7 +1,5 @@
 // The simulator's drive and NC models (sim_models.hpp), stepped cycle by cycle (1 ms) with
 // hand-made process data, against PROTOCOL.md §1–5 and the timeouts of RULES.md.
-#include "ncservo/sim/models.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cctype>
@@ -12,6 +10,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
+#include "ncservo/sim/models.hpp"
 #include "row_name.hpp"
 
 namespace ncservo::sim {

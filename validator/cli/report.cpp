@@ -381,7 +381,9 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 // JSON Lines: a capture where not every axis was checked closes with a line that says so.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   if (r.coverage.complete()) return;
-  Json j{{"capture", r.path}, {"verdict", verdictName(verdictOf(sink, r))}, {"reason", r.coverage.reason}};
+  Json j{{"capture", r.path},
+         {"verdict", verdictName(verdictOf(sink, r))},
+         {"reason", r.coverage.reason}};
   if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }

@@ -7,8 +7,8 @@
 #include <cstring>
 #include <vector>
 
-#include "ncservo/ecat_wire.hpp"
 #include "ncservo/compressed_output.hpp"
+#include "ncservo/ecat_wire.hpp"
 
 namespace ncservo {
 namespace {

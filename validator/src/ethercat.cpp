@@ -70,7 +70,8 @@ std::optional<ProbeHeader> eslHeaderAt(const ByteReader& bytes, std::size_t offs
 }
 
 void walkEthernet(const ByteReader& bytes, std::size_t start, EcatFrame& out) {
-  walkFromTypeField(bytes, start + ecat::kEthernetHeaderSize - 2, start + ecat::kEthernetHeaderSize, out);
+  walkFromTypeField(bytes, start + ecat::kEthernetHeaderSize - 2, start + ecat::kEthernetHeaderSize,
+                    out);
 }
 
 // An Ethernet frame, with the probe's ESL header before it or appended after it.

@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "ncservo/error.hpp"
 #include "ncservo/capture_reader.hpp"
+#include "ncservo/error.hpp"
 
 namespace ncservo {
 

@@ -139,7 +139,8 @@ bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
       const std::uint8_t status = dg.data[0];
       if (status & ecat::kAlErrorBit) {
         walk.need_ack[s] = true;
-        walk.ack_value[s] = static_cast<std::uint8_t>((status & ecat::kAlStateMask) | ecat::kAlErrorBit);
+        walk.ack_value[s] =
+            static_cast<std::uint8_t>((status & ecat::kAlStateMask) | ecat::kAlErrorBit);
       } else if ((status & ecat::kAlStateMask) == walk.target) {
         walk.done[s] = true;
       }
@@ -200,8 +201,7 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
         fmmu[ecat::kFmmuStopBitAt] = 7;
         putLe(fmmu + ecat::kFmmuPhysicalAt, entries[e].phys, 2);
         fmmu[ecat::kFmmuPhysicalStartBitAt] = 0;
-        fmmu[ecat::kFmmuTypeAt] =
-            entries[e].outputs ? ecat::kFmmuWrite : ecat::kFmmuRead;
+        fmmu[ecat::kFmmuTypeAt] = entries[e].outputs ? ecat::kFmmuWrite : ecat::kFmmuRead;
         fmmu[ecat::kFmmuActivateAt] = 1;
       }
       frame.push_back(std::move(dg));
@@ -253,8 +253,7 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   if (!configFrame(sink, false, t)) return false;
   next();
   walk.start(ecat::kAlSafeOp, n, true);
-  if (op_request_slave)
-    walk.first_request[*op_request_slave] = ecat::kAlOp;
+  if (op_request_slave) walk.first_request[*op_request_slave] = ecat::kAlOp;
   for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
     if (!alFrame(sink, walk, t)) return false;
   }
