@@ -57,10 +57,10 @@ void walkFromTypeField(const ByteReader& bytes, std::size_t type_offset, std::si
 std::optional<ProbeHeader> eslHeaderAt(const ByteReader& bytes, std::size_t offset) {
   const std::optional<ByteRecord<esl::kHeaderSize>> header = bytes.record<esl::kHeaderSize>(offset);
   if (!header) return std::nullopt;
-  const std::uint8_t fourth = header->u8<3>();
-  if (header->u8<0>() != 0x01 || header->u8<1>() != 0x01 || header->u8<2>() != 0x05 ||
-      (fourth != 0x10 && fourth != 0x11) || header->u8<4>() != 0 || header->u8<5>() != 0) {
-    return std::nullopt;
+  const std::uint8_t* magic = bytes.data() + offset;  // inside the record just read
+  for (std::size_t i = 0; i < esl::kMagic.size(); ++i) {
+    const bool variant = i == esl::kMagicVariantAt && magic[i] == esl::kMagicVariant;
+    if (magic[i] != esl::kMagic[i] && !variant) return std::nullopt;
   }
   ProbeHeader probe;
   probe.present = true;

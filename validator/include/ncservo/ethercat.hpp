@@ -54,6 +54,10 @@ constexpr bool readsSlaves(std::uint8_t cmd) {
 // Ethernet frame (PROTOCOL.md §8; Wireshark's `esl` dissector).
 namespace esl {
 inline constexpr std::size_t kHeaderSize = 16;
+// The header's first 6 bytes; the fourth is 0x10 or 0x11.
+inline constexpr std::array<std::uint8_t, 6> kMagic{0x01, 0x01, 0x05, 0x10, 0x00, 0x00};
+inline constexpr std::uint8_t kMagicVariant = 0x11;
+inline constexpr std::size_t kMagicVariantAt = 3;
 inline constexpr std::size_t kFlagsOffset = 6;
 inline constexpr std::size_t kTimestampOffset = 8;
 inline constexpr std::uint16_t kFlagCrcError = 0x1000;

@@ -13,9 +13,10 @@ namespace ncservo::sim {
 std::string writeEni(const std::vector<EniSlave>& slaves,
                      const std::vector<EniCyclicCommand>& commands, std::uint32_t cycle_us) {
   // Image offsets: each command's data at its own place in the process image, as a frame's
-  // first datagram would sit (Ethernet 14 + EtherCAT 2 + datagram header 10 = 26), one region per
+  // first datagram would sit (after the Ethernet, EtherCAT and datagram headers), one region per
   // command.
-  constexpr std::uint32_t kFirstOffset = 26;
+  constexpr std::uint32_t kFirstOffset =
+      ecat::kEthernetHeaderSize + ecat::kFrameHeaderSize + ecat::kDatagramHeaderSize;
   constexpr std::uint32_t kRegion = 2048;
   auto offsetOf = [&](std::uint32_t address, std::size_t& which) -> std::optional<std::uint32_t> {
     for (std::size_t i = 0; i < commands.size(); ++i) {

@@ -11,10 +11,9 @@
 namespace ncservo::sim {
 namespace {
 
-constexpr std::uint8_t kEslMagic[] = {0x01, 0x01, 0x05, 0x10, 0x00, 0x00};
-static_assert(sizeof(kEslMagic) == esl::kFlagsOffset);
+static_assert(esl::kMagic.size() == esl::kFlagsOffset);
 // The master's frames pass the probe on its port 0, the returned ones on port 1.
-constexpr std::uint16_t kMasterPort = 0x0080, kReturnPort = 0x0040;
+constexpr std::uint16_t kMasterPort = esl::kPortBits[0].mask, kReturnPort = esl::kPortBits[1].mask;
 constexpr std::int64_t kPcStampStepNs = 1000;  // the PC's stamps never repeat or go back
 constexpr std::uint64_t kNoiseSeedSalt = 0x45534CULL;
 
@@ -25,7 +24,7 @@ struct EslProbe {
   std::vector<std::uint8_t> bytes;
 
   bool capture(const SimFrame& frame) {
-    bytes.assign(kEslMagic, kEslMagic + sizeof(kEslMagic));
+    bytes.assign(esl::kMagic.begin(), esl::kMagic.end());
     bytes.resize(esl::kHeaderSize);
     const std::uint16_t flags =
         (frame.returned ? kReturnPort : kMasterPort) | esl::kFlagTimestampValid;

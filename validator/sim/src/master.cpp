@@ -11,8 +11,6 @@ namespace {
 
 constexpr MacAddress kBroadcastMac = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
 constexpr MacAddress kMasterMac = {0x00, 0x1B, 0x21, 0x4E, 0x43, 0x01};
-constexpr std::uint8_t kLocallyAdministered = 0x02;
-constexpr std::size_t kMinFrame = 60;  // Ethernet's minimum, without the FCS
 constexpr int kMaxPolls = 50;
 constexpr std::size_t kAlStatusPoll = 6;  // AL status, reserved, AL status code
 constexpr std::size_t kDcTimeSize = 8;
@@ -25,8 +23,8 @@ Framing ethernetFraming(bool returned) {
   Framing framing;
   framing.destination = kBroadcastMac;
   framing.source = kMasterMac;
-  if (returned) framing.source[0] |= kLocallyAdministered;
-  framing.min_size = kMinFrame;
+  if (returned) framing.source[0] |= ecat::kMacLocallyAdministered;
+  framing.min_size = ecat::kEthernetMinFrame;
   return framing;
 }
 
