@@ -128,4 +128,19 @@ PY
 "$NCSERVO" rules >"$WORK/rules.txt"
 [ "$(wc -l <"$WORK/rules.txt")" = 29 ] || fail "rules: $(wc -l <"$WORK/rules.txt") lines"
 "$NCSERVO" validate --help | grep -q -- "--fail-on" || fail "validate --help"
+# An output that is one of the inputs, under any name, is a usage error and the capture is intact.
+cp "$SRC/captures/faults-4axis.pcap" "$WORK/input.pcap"
+ln -s "$WORK/input.pcap" "$WORK/alias.pcap"
+before=$(sha256sum <"$WORK/input.pcap")
+for output in "$WORK/input.pcap" "$WORK/./input.pcap" "$WORK/alias.pcap"; do
+  set +e
+  "$NCSERVO" validate -o "$output" "$SRC/captures/commissioning-4axis.pcap" "$WORK/input.pcap" \
+    2>"$WORK/over.err"
+  rc=$?
+  set -e
+  [ $rc = 2 ] || fail "validate -o $output over its input: exit $rc, expected 2"
+  grep -q "refusing to write over an input" "$WORK/over.err" || fail "no message: $(cat "$WORK/over.err")"
+  [ "$(sha256sum <"$WORK/input.pcap")" = "$before" ] || fail "validate -o $output wrote over its input"
+done
+
 echo "validate_cli: exit codes, formats, several captures, stdin, overrides"

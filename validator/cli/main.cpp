@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <memory>
@@ -476,6 +477,17 @@ int runValidate(const ValidateArgs& o) {
   const Severity fail_on = never ? Severity::Error : *severityFromName(o.fail_on);
   std::FILE* out = stdout;
   if (!o.output.empty() && o.output != "-") {
+    // INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
+    // checked before anything is opened for writing.
+    for (const std::string& capture : o.captures) {
+      std::error_code ec;
+      if (capture != "-" && std::filesystem::equivalent(o.output, capture, ec)) {
+        fmt::print(stderr,
+                   "ncservo: --output {} is the capture {}: refusing to write over an input\n",
+                   o.output, capture);
+        return kExitUsage;
+      }
+    }
     out = std::fopen(o.output.c_str(), "w");
     if (out == nullptr) {
       fmt::print(stderr, "ncservo: {}: cannot write: {}\n", o.output, std::strerror(errno));
