@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ncservo/capture_reader.hpp"
+#include "ncservo/capture_stream.hpp"
 #include "ncservo/capture_writer.hpp"
 #include "ncservo/compressed_output.hpp"
 #include "ncservo/config.hpp"
@@ -259,13 +260,11 @@ int runDecode(const DecodeArgs& args) {
   if (!args.layout_only && format.header != nullptr) format.header(stdout);
   CycleRows cycles;
   std::vector<CycleRow> rows;
-  EcatFrame frame;
-  CaptureRecord record;
-  std::optional<std::int64_t> first_time;
+  CaptureRun run;
   auto write = [&] {
     for (const CycleRow& row : rows) {
       format.row(stdout, row, session->decoder().axes().at(row.axis).name,
-                 static_cast<double>(row.time_ns - *first_time) / 1e9);
+                 static_cast<double>(row.time_ns - *run.first_time_ns) / 1e9);
     }
     rows.clear();
   };
@@ -279,30 +278,8 @@ int runDecode(const DecodeArgs& args) {
     cycles.onFrame(number, time_ns, view, rows);
     write();
   };
-  const auto decided = [&] {
-    session.emplace(window.options());
-    window.replay(decode);
-  };
-  if (!window.learning()) session.emplace(window.options());
-  Result<bool> status;
-  while ((status = reader->next(record)) && *status) {
-    if (!first_time) first_time = record.time_ns;
-    const ByteReader bytes(record.data, record.captured);
-    walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat) continue;
-    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
-    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
-    if (window.learning()) {
-      window.hold(record.frame, time_ns, reader->link(), bytes, frame);
-      if (!window.learning()) decided();
-      continue;
-    }
-    decode(record.frame, time_ns, frame, bytes);
-  }
-  if (window.learning()) {
-    window.finish();
-    decided();
-  }
+  const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
+  const Status status = streamCapture(*reader, clock, window, {start, decode}, run);
   cycles.finish(rows);
   write();
   std::fflush(stdout);
@@ -391,8 +368,10 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   FrameClock clock(timestamps);
   LayoutWindow window(decoder_options);
   std::optional<Validator> validator;
+  CaptureRun run;
   const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                             const ByteReader& bytes) {
+    report.first_time_ns = *run.first_time_ns;  // findings are written as they come
     const FrameDecode& decode = validator->onFrame(number, time_ns, walked, bytes).decode;
     for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
       warnIfMalformed(reader->path(), number, decode.axes[i]);
@@ -403,35 +382,10 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
       writer.finding(report, f);
     }
   };
-  const auto decided = [&] {
-    validator.emplace(window.options(), settings);
-    window.replay(validate);
-  };
-  if (!window.learning()) validator.emplace(window.options(), settings);
-  EcatFrame frame;
-  CaptureRecord record;
-  bool first = true;
-  Result<bool> status;
-  while ((status = reader->next(record)) && *status) {
-    if (first) report.first_time_ns = record.time_ns;
-    first = false;
-    report.frames = record.frame;
-    const ByteReader bytes(record.data, record.captured);
-    walkPacket(reader->link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat) continue;
-    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
-    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
-    if (window.learning()) {
-      window.hold(record.frame, time_ns, reader->link(), bytes, frame);
-      if (!window.learning()) decided();
-      continue;
-    }
-    validate(record.frame, time_ns, frame, bytes);
-  }
-  if (window.learning()) {
-    window.finish();
-    decided();
-  }
+  const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
+  const Status status = streamCapture(*reader, clock, window, {start, validate}, run);
+  report.first_time_ns = run.first_time_ns.value_or(0);
+  report.frames = run.records;
   cli::summarise(*validator, report);
   report.coverage = coverageOf(*validator);
   report.timestamps = clock.source();
