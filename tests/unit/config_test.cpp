@@ -113,13 +113,14 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.servo_ready_mode, 1);
        EXPECT_EQ(c.telegram_failure_limit, 10u);
      }},
-    {"unnamed axes get index names", "[[axis]]\noutputs = 0\n[[axis]]\ninputs = 40\n",
+    {"unnamed axes get index names",
+     "[[axis]]\noutputs = 0\ninputs = 20\n[[axis]]\noutputs = 10\ninputs = 60\n",
      [](const Config& c) {
        ASSERT_EQ(c.axes.size(), 2u);
        EXPECT_EQ(c.axes[0].name, "axis0");
        EXPECT_EQ(c.axes[1].name, "axis1");
-       EXPECT_EQ(c.axes[1].inputs, 40u);
-       EXPECT_FALSE(c.axes[1].outputs.has_value());
+       EXPECT_EQ(c.axes[1].inputs, 60u);
+       EXPECT_EQ(c.axes[1].outputs, 10u);
      }},
     {"logical axis naming its station (ESM-002)",
      "[[axis]]\nname = \"L\"\noutputs = 0x10000\ninputs = 0x10028\nstation = 0x3E9\n",
@@ -129,13 +130,15 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.axes[0].outputs, 0x10000u);
        EXPECT_FALSE(c.axes[0].physical());
      }},
-    {"station axis with SM3 only", "[[axis]]\nname = \"S\"\nstation = 1001\nsm_inputs = 0x1180\n",
+    {"station axis",
+     "[[axis]]\nname = \"S\"\nstation = 1001\nsm_outputs = 0x1100\nsm_inputs = 0x1180\n",
      [](const Config& c) {
        ASSERT_EQ(c.axes.size(), 1u);
        EXPECT_EQ(c.axes[0].station, 1001);
-       EXPECT_FALSE(c.axes[0].sm_outputs.has_value());
+       EXPECT_EQ(c.axes[0].sm_outputs, 0x1100);
+       EXPECT_TRUE(c.axes[0].physical());
      }},
-    {"largest logical address", "[[axis]]\noutputs = 0xFFFFFFFF\n",
+    {"largest logical address", "[[axis]]\noutputs = 0xFFFFFFFF\ninputs = 0\n",
      [](const Config& c) { EXPECT_EQ(c.axes[0].outputs, 0xFFFFFFFFu); }},
     {"several rules",
      "[rules]\ndisable = [\"MSG-001\", \"COM-002\"]\n"
@@ -144,6 +147,12 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.disabled_rules, (std::vector<std::string>{"MSG-001", "COM-002"}));
        EXPECT_EQ(c.severity_overrides.at("SE-001"), "warning");
        EXPECT_EQ(c.severity_overrides.at("ZP-003"), "info");
+     }},
+    {"rule IDs in any case, kept as the catalogue spells them",
+     "[rules]\ndisable = [\"msg-001\", \"Com-002\"]\nseverity = { \"se-001\" = \"warning\" }\n",
+     [](const Config& c) {
+       EXPECT_EQ(c.disabled_rules, (std::vector<std::string>{"MSG-001", "COM-002"}));
+       EXPECT_EQ(c.severity_overrides.at("SE-001"), "warning");
      }},
 };
 
@@ -169,7 +178,7 @@ const BadCase kBadCases[] = {
     {"unknown axis key", "[[axis]]\nname = \"X\"\noutputs = 1\ncolour = \"red\"\n", 4,
      "axis[0].colour", "unknown key"},
     {"unknown key in the second axis",
-     "[[axis]]\nname = \"X\"\noutputs = 1\n\n[[axis]]\nname = \"Y\"\nstatoin = 3\n", 7,
+     "[[axis]]\nname = \"X\"\noutputs = 1\ninputs = 11\n\n[[axis]]\nname = \"Y\"\nstatoin = 3\n", 8,
      "axis[1].statoin", "unknown key"},
     {"servo_ready_mode 2", "servo_ready_mode = 2\n", 1, "servo_ready_mode", "out of range"},
     {"servo_ready_mode -1", "\nservo_ready_mode = -1\n", 2, "servo_ready_mode", "out of range"},
@@ -198,8 +207,32 @@ const BadCase kBadCases[] = {
      "station axis needs"},
     {"axis without addresses", "[[axis]]\nname = \"Z\"\n", 1, "axis[0]", "needs"},
     {"duplicate axis names",
-     "[[axis]]\nname = \"X\"\noutputs = 0\n\n[[axis]]\nname = \"X\"\noutputs = 50\n", 5,
-     "axis[1].name", "used twice"},
+     "[[axis]]\nname = \"X\"\noutputs = 0\ninputs = 20\n\n[[axis]]\nname = \"X\"\noutputs = "
+     "50\ninputs = 70\n",
+     6, "axis[1].name", "used twice"},
+    {"axis without inputs", "\n[[axis]]\nname = \"X\"\noutputs = 0x10000\n", 2, "axis[0].inputs",
+     "missing"},
+    {"axis without outputs", "[[axis]]\nname = \"X\"\ninputs = 0x10028\n", 1, "axis[0].outputs",
+     "missing"},
+    {"second axis without inputs",
+     "[[axis]]\noutputs = 0\ninputs = 10\n\n[[axis]]\nname = \"Y\"\noutputs = 50\n", 5,
+     "axis[1].inputs", "missing"},
+    {"station axis without sm_inputs", "[[axis]]\nstation = 1001\nsm_outputs = 0x1100\n", 1,
+     "axis[0].sm_inputs", "missing"},
+    {"station axis without sm_outputs", "[[axis]]\nstation = 1001\nsm_inputs = 0x1180\n", 1,
+     "axis[0].sm_outputs", "missing"},
+    {"mistyped top-level key", "telegram_failure_limt = 3\n", 1, "telegram_failure_limt",
+     "unknown key; did you mean 'telegram_failure_limit'?"},
+    {"mistyped axis key", "[[axis]]\noutputs = 0\ninput = 40\n", 3, "axis[0].input",
+     "unknown key; did you mean 'inputs'?"},
+    {"mistyped rules key", "[rules]\ndisabel = []\n", 2, "rules.disabel",
+     "unknown key; did you mean 'disable'?"},
+    {"mistyped rule ID", "[rules]\ndisable = [\"MSG-01\"]\n", 2, "rules.disable",
+     "did you mean 'MSG-001'?"},
+    {"mistyped rule ID in severity", "[rules]\nseverity = { \"ec-02\" = \"error\" }\n", 2,
+     "rules.severity.ec-02", "did you mean 'EC-002'?"},
+    {"mistyped timeout", "[timeouts]\nfault_reactoin = 50\n", 2, "timeouts.fault_reactoin",
+     "did you mean 'fault_reaction'?"},
     {"axis not an array of tables", "axis = 5\n", 1, "axis", "[[axis]]"},
     {"unknown timeout name", "[timeouts]\ndrive_response = 20\ndrive_respons = 20\n", 3,
      "timeouts.drive_respons", "unknown timeout"},

@@ -123,9 +123,44 @@ TEST(RuleTable, RuleByCodeRoundTrips) {
   for (const RuleDef& rule : kRules) {
     EXPECT_EQ(ruleByCode(rule.code), &rule) << rule.code;
   }
-  for (const char* unknown : {"", "SE-000", "SE-005", "se-001", "SE001", "SE-001 ", "ESM-005"}) {
+  for (const char* unknown : {"", "SE-000", "SE-005", "SE001", "SE-001 ", "ESM-005"}) {
     EXPECT_EQ(ruleByCode(unknown), nullptr) << "'" << unknown << "'";
   }
+}
+
+// IDs are matched in any case; an unknown one is named with the closest ID.
+struct FindRuleCase {
+  const char* typed;
+  std::optional<RuleId> found;  // none: an error
+  const char* error;            // a text the error contains
+};
+const FindRuleCase kFindRuleCases[] = {
+    {"SE-001", RuleId::Se001, nullptr},
+    {"se-001", RuleId::Se001, nullptr},
+    {"Msg-001", RuleId::Msg001, nullptr},
+    {"esm-004", RuleId::Esm004, nullptr},
+    {"SE-01", std::nullopt,
+     "unknown rule ID 'SE-01' (see `ncservo rules`); did you mean 'SE-001'?"},
+    {"msg-01", std::nullopt, "did you mean 'MSG-001'?"},
+    {"COM-0005", std::nullopt, "did you mean 'COM-005'?"},
+    {"XX-999", std::nullopt, "unknown rule ID 'XX-999' (see `ncservo rules`)"},
+};
+
+TEST(RuleTable, FindRuleInAnyCase) {
+  for (const FindRuleCase& c : kFindRuleCases) {
+    SCOPED_TRACE(c.typed);
+    const Result<const RuleDef*> rule = findRule(c.typed);
+    if (c.found) {
+      ASSERT_TRUE(rule.has_value()) << rule.error().text();
+      EXPECT_EQ((*rule)->id, *c.found);
+    } else {
+      ASSERT_FALSE(rule.has_value());
+      EXPECT_NE(rule.error().text().find(c.error), std::string::npos) << rule.error().text();
+    }
+  }
+  const Result<const RuleDef*> unknown = findRule("XX-999");
+  ASSERT_FALSE(unknown.has_value());
+  EXPECT_EQ(unknown.error().text().find("did you mean"), std::string::npos);
 }
 
 TEST(RuleTable, FilterNames) {
@@ -235,7 +270,9 @@ const DisableCase kDisableCases[] = {
     {"MSG-001", RuleId::Msg001, nullptr},
     {"ESM-004", RuleId::Esm004, nullptr},
     {"MSG-009", std::nullopt, "unknown rule ID 'MSG-009'"},
-    {"msg-001", std::nullopt, "unknown rule ID 'msg-001'"},
+    {"msg-001", RuleId::Msg001, nullptr},
+    {"MSG-01", std::nullopt,
+     "unknown rule ID 'MSG-01' (see `ncservo rules`); did you mean 'MSG-001'?"},
     {"", std::nullopt, "unknown rule ID ''"},
 };
 
@@ -268,6 +305,8 @@ const SeverityCase kSeverityCases[] = {
     {"COM-003", "warning", W, {}},
     {"SE-001", "error", E, {}},
     {"XX-001", "error", std::nullopt, {"unknown rule ID 'XX-001'"}},
+    {"se-001", "warning", W, {}},
+    {"EC-02", "error", std::nullopt, {"unknown rule ID 'EC-02'", "did you mean 'EC-002'?"}},
     {"SE-001", "fatal", std::nullopt, {"'fatal'", "SE-001", "error, warning or info"}},
     {"SE-001", "", std::nullopt, {"''", "SE-001"}},
     {"SE-001", "Error", std::nullopt, {"'Error'"}},
@@ -308,7 +347,8 @@ const TimeoutCase kTimeoutCases[] = {
     {"drive-response",
      5,
      false,
-     {"unknown timeout 'drive-response'", "drive_response, nc_release"}},
+     {"unknown timeout 'drive-response'", "drive_response, nc_release",
+      "did you mean 'drive_response'?"}},
     {"", 5, false, {"unknown timeout ''"}},
 };
 

@@ -32,6 +32,7 @@
 #include "ncservo/pdo.hpp"
 #include "ncservo/session.hpp"
 #include "ncservo/sim/simulator.hpp"
+#include "ncservo/text.hpp"
 #include "ncservo/validator.hpp"
 #include "report.hpp"
 
@@ -128,9 +129,9 @@ void writeCsvHeader(std::FILE* out) {
 }
 
 void writeCsvRow(std::FILE* out, const CycleRow& row, const std::string& name, double time) {
-  std::string line = fmt::format("{},{:.9f},{},{}", row.frame, time, row.axis, name);
+  std::string line = fmt::format("{},{:.9f},{},{}", row.frame, time, row.axis, csvField(name));
   for (const FieldDef& f : kFields) line += "," + csvCell(f, row.values);
-  line += fmt::format(",{},\"{}\"\n", stateOf(row), messageOf(row.values));
+  line += fmt::format(",{},{}\n", stateOf(row), csvField(messageOf(row.values), true));
   std::fputs(line.c_str(), out);
 }
 
@@ -221,8 +222,7 @@ void printLayout(const Decoder& decoder, const std::optional<InferenceResult>& i
              axes.size() == 1 ? "is" : "es",
              axes.empty() ? " (" + decoder.noServoReason() + ")" : std::string());
   if (inference && !inference->axes.empty()) {
-    fmt::print("# inferred from {} cycles of cyclic traffic (PROTOCOL.md §9.4)\n",
-               inference->cycles);
+    fmt::print("# inferred from {} cycles of cyclic traffic (docs/layout.md)\n", inference->cycles);
     for (const InferredAxis& axis : inference->axes) {
       fmt::print("# {}: {}\n", axis.config.name, describeEvidence(axis));
     }
@@ -314,7 +314,7 @@ struct ValidateArgs {
   bool allow_empty = false;
 };
 
-// The settings from RULES.md's defaults, the config file, then the command line.
+// The settings from the rules' defaults, the config file, then the command line.
 Status buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
                      RuleSettings& settings) {
   // An error of an option names the option.
@@ -417,6 +417,10 @@ int combine(int a, int b) {
 }
 
 int runValidate(const ValidateArgs& o) {
+  if (std::count(o.captures.begin(), o.captures.end(), "-") > 1) {
+    fmt::print(stderr, "ncservo: standard input (-) can be read only once\n");
+    return kExitUsage;
+  }
   const Result<LayoutFiles> files = loadLayoutFiles(o.layout);
   if (!files) {
     fmt::print(stderr, "ncservo: {}\n", files.error().text());
@@ -469,26 +473,73 @@ void printRuleText(const RuleDef& rule) {
              partyName(rule.party), rule.summary);
 }
 
-void printRuleMarkdown(const RuleDef& rule) {
-  const char* timeout = rule.timeout ? kTimeouts[static_cast<std::size_t>(*rule.timeout)].name : "";
-  fmt::print("| {} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
-             severityName(rule.severity), partyName(rule.party), ruleKindName(rule.kind),
-             describeReads(rule.reads), timeout, rule.clause, rule.summary);
+const TimeoutDef& timeoutDef(Timeout timeout) {
+  return kTimeouts[static_cast<std::size_t>(timeout)];
 }
 
-// `rules`'s formats: a header, then one line per rule.
+// "drive_response (20 ms)", or "" for a rule without a timeout.
+std::string timeoutText(const RuleDef& rule) {
+  if (!rule.timeout) return "";
+  const TimeoutDef& t = timeoutDef(*rule.timeout);
+  return fmt::format("{} ({} ms)", t.name, t.default_ms);
+}
+
+void printRuleMarkdown(const RuleDef& rule) {
+  fmt::print("| {} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
+             severityName(rule.severity), partyName(rule.party), ruleKindName(rule.kind),
+             describeReads(rule.reads), timeoutText(rule), rule.clause, rule.summary);
+}
+
+// The timeouts, their defaults and the rules that use them, after the rule table.
+void printTimeoutsMarkdown() {
+  fmt::print(
+      "\n| timeout | default | rules |\n"
+      "|---|---|---|\n");
+  for (const TimeoutDef& t : kTimeouts) {
+    std::string users;
+    for (const RuleDef& rule : kRules) {
+      if (rule.timeout == t.id) users += (users.empty() ? "" : ", ") + std::string(rule.code);
+    }
+    fmt::print("| `{}` | {} ms | {} |\n", t.name, t.default_ms, users);
+  }
+}
+
+// `rules`'s formats: a header, one line per rule, then what follows the rules.
 struct RuleListFormat {
   const char* name;
   const char* header;
   void (*rule)(const RuleDef& rule);
+  void (*footer)();
 };
 const RuleListFormat kRuleListFormats[] = {
-    {"text", "", printRuleText},
+    {"text", "", printRuleText, nullptr},
     {"markdown",
-     "| ID | slug | severity | party | judged on | reads | timeout | clause | summary |\n"
+     "| ID | slug | severity | party | judged on | reads | timeout (default) | clause | summary |\n"
      "|---|---|---|---|---|---|---|---|---|\n",
-     printRuleMarkdown},
+     printRuleMarkdown, printTimeoutsMarkdown},
 };
+
+// `rules --explain ID`: one rule in full, from its row of the rule table.
+void explainRule(const RuleDef& rule) {
+  fmt::print("{} {}\n", rule.code, rule.slug);
+  fmt::print("  fires when:  {}\n", rule.summary);
+  fmt::print("  severity:    {} (change it with --severity {}=LEVEL)\n",
+             severityName(rule.severity), rule.code);
+  fmt::print("  party:       {}\n", partyName(rule.party));
+  fmt::print("  judged on:   {}\n", ruleKindName(rule.kind));
+  if (rule.timeout) {
+    const TimeoutDef& t = timeoutDef(*rule.timeout);
+    fmt::print("  timeout:     {}, default {} ms (--timeout {}=MS, [timeouts] {})\n", t.name,
+               t.default_ms, t.name, t.name);
+  }
+  fmt::print("  reported:    {}\n", rule.delayed
+                                        ? "once the condition has held longer than the timeout"
+                                        : "when the condition begins");
+  fmt::print("  reads:       {}\n", describeReads(rule.reads));
+  fmt::print("  clause:      {}\n", rule.clause);
+  fmt::print("  filter:      {}\n", ruleFilterName(rule));
+  fmt::print("  docs:        docs/rules.md\n");
+}
 
 std::string maskText(const FieldDef& f) {
   return f.mask ? fmt::format("0x{:X}", f.mask) : "all";
@@ -513,7 +564,7 @@ void printFieldMarkdown(const FieldDef& f) {
 }
 
 void printDerivedMarkdown(const DerivedFieldDef& f) {
-  fmt::print("| `{}` | {} | (derived) | | | {} | INTERFACES.md |\n", f.filter, f.label, f.blurb);
+  fmt::print("| `{}` | {} | (derived) | | | {} | docs/plugin.md |\n", f.filter, f.label, f.blurb);
 }
 
 // `fields`'s formats: a header, then one line per field of the field table, then per derived field.
@@ -688,7 +739,7 @@ Handler decodeCommand(CLI::App& command) {
   command.add_option("--config", args->layout.config_path, "TOML configuration file (layout)");
   addFormatOption(command, args->format, namesOf(kRowFormats));
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never infer the layout from the cyclic traffic (PROTOCOL.md §9.4)");
+                   "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout");
   command.add_flag("--layout", args->layout_only,
@@ -714,14 +765,14 @@ Handler validateCommand(CLI::App& command) {
       ->delimiter(',');
   command.add_option("--severity", args->severities, "ID=LEVEL: change a rule's severity")
       ->delimiter(',');
-  command.add_option("--timeout", args->timeouts, "NAME=MS: change a timeout of RULES.md")
+  command.add_option("--timeout", args->timeouts, "NAME=MS: change a timeout (docs/rules.md)")
       ->delimiter(',');
   command
       .add_option("--servo-ready-mode", args->servo_ready_mode,
                   "Servo_Ready_Mode of the drives (0 or 1)")
       ->check(CLI::Range(0, 1));
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never infer the layout from the cyclic traffic (PROTOCOL.md §9.4)");
+                   "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
   addTimestampsOption(command, args->timestamps);
@@ -731,12 +782,29 @@ Handler validateCommand(CLI::App& command) {
 }
 
 Handler rulesCommand(CLI::App& command) {
-  auto format = std::make_shared<std::string>(kRuleListFormats[0].name);
-  addFormatOption(command, *format, namesOf(kRuleListFormats));
-  return [format] {
-    const RuleListFormat& list = rowNamed(kRuleListFormats, *format);
+  struct RulesArgs {
+    std::string format = kRuleListFormats[0].name;
+    std::string explain;
+  };
+  auto args = std::make_shared<RulesArgs>();
+  addFormatOption(command, args->format, namesOf(kRuleListFormats));
+  command.add_option("--explain", args->explain,
+                     "print one rule in full: what fires it, its timeout and default, what it "
+                     "reads (ID in any case)");
+  return [args] {
+    if (!args->explain.empty()) {
+      const Result<const RuleDef*> rule = findRule(args->explain);
+      if (!rule) {
+        fmt::print(stderr, "ncservo rules: {}\n", rule.error().text());
+        return kExitUsage;
+      }
+      explainRule(**rule);
+      return kExitOk;
+    }
+    const RuleListFormat& list = rowNamed(kRuleListFormats, args->format);
     fmt::print("{}", list.header);
     for (const RuleDef& rule : kRules) list.rule(rule);
+    if (list.footer != nullptr) list.footer();
     return kExitOk;
   };
 }
@@ -769,7 +837,7 @@ Handler simulateCommand(CLI::App& command) {
                      "seconds (default: commissioning 3, faults 4.3, soak 60)");
   command.add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
   std::vector<std::string> styles, aliases;
-  std::string style_help = "the master's process image (PROTOCOL.md §9.4; default soem):";
+  std::string style_help = "the master's process image (docs/simulate.md; default soem):";
   for (const sim::ImageStyleName& row : sim::kImageStyles) {
     styles.emplace_back(row.name);
     style_help += fmt::format(" {} ({}),", row.name, row.summary);
@@ -817,7 +885,7 @@ struct Subcommand {
 };
 const Subcommand kSubcommands[] = {
     {"decode", "print the decoded process data, one row per axis and cycle", decodeCommand},
-    {"validate", "check captures against the rules (RULES.md)", validateCommand},
+    {"validate", "check captures against the rules (docs/rules.md)", validateCommand},
     {"rules", "list the rules: ID, slug, severity, party, summary", rulesCommand},
     {"fields", "list every decoded field (generated from the field table)", fieldsCommand},
     {"simulate", "write a capture of simulated NC and drives (scenarios, faults)", simulateCommand},
@@ -825,19 +893,61 @@ const Subcommand kSubcommands[] = {
 
 }  // namespace
 
+// A first word that names no subcommand, with the closest one; "" when it names one or is an
+// option (--help, --version).
+std::string unknownCommandMessage(int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return "";
+  const std::string word = argv[1];
+  const std::vector<std::string> names = namesOf(kSubcommands);
+  if (std::find(names.begin(), names.end(), word) != names.end()) return "";
+  return fmt::format("ncservo: unknown command '{}'{} (commands: {})", word,
+                     didYouMean(word, names), choiceList(names));
+}
+
+// The first --option of the subcommand's words that it does not take, with the closest one; ""
+// when it takes them all.
+std::string unknownOptionMessage(const CLI::App& app, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return "";
+  const CLI::App* command = app.get_subcommand(argv[1]);
+  std::vector<std::string> options;
+  for (const CLI::Option* option : command->get_options()) {
+    for (const std::string& name : option->get_lnames()) options.push_back("--" + name);
+  }
+  for (int i = 2; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--") break;
+    if (word.rfind("--", 0) != 0) continue;
+    const std::string name = word.substr(0, word.find('='));
+    if (std::find(options.begin(), options.end(), name) != options.end()) continue;
+    return fmt::format("ncservo {}: unknown option '{}'{}", argv[1], name,
+                       didYouMean(name, options));
+  }
+  return "";
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"ncservo: decode and check NC <-> servo EtherCAT process data"};
-  app.set_version_flag("--version", std::string("ncservo ") + NCSERVO_VERSION);
+  const std::string version = std::string("ncservo ") + NCSERVO_VERSION;
+  app.set_version_flag("--version", version);
   app.require_subcommand(1);
   std::vector<std::pair<CLI::App*, Handler>> commands;
   for (const Subcommand& s : kSubcommands) {
     CLI::App* command = app.add_subcommand(s.name, s.help);
+    command->set_version_flag("--version", version);
     commands.emplace_back(command, s.setup(*command));
+  }
+  if (const std::string unknown = unknownCommandMessage(argc, argv); !unknown.empty()) {
+    fmt::print(stderr, "{}\n", unknown);
+    return kExitUsage;
   }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? kExitOk : kExitUsage;
+    if (app.exit(e) == 0) return kExitOk;
+    if (const std::string unknown = unknownOptionMessage(app, argc, argv); !unknown.empty()) {
+      fmt::print(stderr, "{}\n", unknown);
+    }
+    return kExitUsage;
   }
   for (const auto& [command, handler] : commands) {
     if (command->parsed()) return handler();

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "ncservo/rules.hpp"
+#include "ncservo/text.hpp"
 
 namespace ncservo {
 
@@ -57,9 +58,15 @@ class Checker {
   std::optional<Error> error_;
 };
 
-// An ID of the rule catalogue (RULES.md), e.g. "SE-001".
-bool isRuleId(std::string_view id) {
-  return ruleByCode(id) != nullptr;
+// The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
+const std::vector<std::string> kTopKeys{
+    "servo_ready_mode", "telegram_failure_limit", "default_layout", "timeouts", "axis", "rules"};
+const std::vector<std::string> kAxisKeys{"name",       "outputs",   "inputs",          "station",
+                                         "sm_outputs", "sm_inputs", "servo_ready_mode"};
+const std::vector<std::string> kRulesKeys{"disable", "severity"};
+
+std::string unknownKey(std::string_view key, const std::vector<std::string>& known) {
+  return "unknown key" + didYouMean(key, known);
 }
 
 void readAxis(Checker& check, const toml::table& table, std::size_t index, Config& config) {
@@ -87,7 +94,7 @@ void readAxis(Checker& check, const toml::table& table, std::size_t index, Confi
     } else if (key == "servo_ready_mode") {
       axis.servo_ready_mode = check.readyMode(node, name);
     } else {
-      check.fail(node, name, "unknown key");
+      check.fail(node, name, unknownKey(key, kAxisKeys));
     }
     if (check.failed()) return;
   }
@@ -109,9 +116,18 @@ void readAxis(Checker& check, const toml::table& table, std::size_t index, Confi
     return;
   }
   if (physical && !axis.station) {
-    check.fail(table, prefix, "a station axis needs station and sm_outputs and/or sm_inputs");
+    check.fail(table, prefix, "a station axis needs station, sm_outputs and sm_inputs");
     return;
   }
+  // Every axis has both PDOs (docs/protocol.md §1): a missing address is a mistake, not an axis
+  // whose other half is ignored.
+  const auto missing = [&](const char* key, const char* what) {
+    check.fail(table, prefix + "." + key, fmt::format("missing: {}", what));
+  };
+  if (logical && !axis.outputs) return missing("outputs", "the logical address of the RxPDO");
+  if (logical && !axis.inputs) return missing("inputs", "the logical address of the TxPDO");
+  if (physical && !axis.sm_outputs) return missing("sm_outputs", "the address of SM2 (RxPDO)");
+  if (physical && !axis.sm_inputs) return missing("sm_inputs", "the address of SM3 (TxPDO)");
   if (axis.name.empty()) axis.name = fmt::format("axis{}", index);
   for (const AxisConfig& other : config.axes) {
     if (other.name == axis.name) {
@@ -132,13 +148,17 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
         return;
       }
       for (const toml::node& id : *ids) {
-        auto text = id.value<std::string>();
-        if (!id.is_string() || !isRuleId(*text)) {
+        if (!id.is_string()) {
           check.fail(id, key,
                      "expected rule IDs of the catalogue (`ncservo rules`), such as \"MSG-001\"");
           return;
         }
-        config.disabled_rules.push_back(*text);
+        const Result<const RuleDef*> rule = findRule(*id.value<std::string>());
+        if (!rule) {
+          check.fail(id, key, "expected rule IDs of the catalogue: " + rule.error().message);
+          return;
+        }
+        config.disabled_rules.emplace_back((*rule)->code);
       }
     } else if (key_node.str() == "severity") {
       const toml::table* table = node.as_table();
@@ -149,18 +169,20 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
       for (const auto& [id_node, level] : *table) {
         const std::string id{id_node.str()};
         auto text = level.value<std::string>();
-        if (!isRuleId(id)) {
-          check.fail(level, key + "." + id, "not a rule ID of the catalogue (`ncservo rules`)");
+        const Result<const RuleDef*> rule = findRule(id);
+        if (!rule) {
+          check.fail(level, key + "." + id,
+                     "not a rule ID of the catalogue: " + rule.error().message);
           return;
         }
         if (!level.is_string() || (*text != "error" && *text != "warning" && *text != "info")) {
           check.fail(level, key + "." + id, "expected \"error\", \"warning\" or \"info\"");
           return;
         }
-        config.severity_overrides[id] = *text;
+        config.severity_overrides[(*rule)->code] = *text;
       }
     } else {
-      check.fail(node, key, "unknown key");
+      check.fail(node, key, unknownKey(key_node.str(), kRulesKeys));
       return;
     }
   }
@@ -200,8 +222,7 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
         for (const auto& [name_node, value] : *table) {
           const std::string name{name_node.str()};
           if (!timeoutFromName(name)) {
-            check.fail(value, "timeouts." + name,
-                       fmt::format("unknown timeout (known: {})", timeoutNameList()));
+            check.fail(value, "timeouts." + name, unknownTimeoutMessage(name));
             break;
           }
           if (auto ms = check.integer<std::uint32_t>(value, "timeouts." + name, 0, kMaxTimeoutMs)) {
@@ -227,7 +248,7 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
         check.fail(node, key, "expected a table");
       }
     } else {
-      check.fail(node, key, "unknown key");
+      check.fail(node, key, unknownKey(key, kTopKeys));
     }
     if (check.failed()) break;
   }

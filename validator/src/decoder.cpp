@@ -134,17 +134,17 @@ std::string Decoder::noServoReason() const {
   if (!axes_.empty()) return {};
   if (startupShowsNoServo()) {
     return "no servo of this protocol found: the start-up configures slaves, none with 10/40-byte "
-           "sync managers (PROTOCOL.md §9.3)";
+           "sync managers (docs/layout.md)";
   }
   if (!options_.default_layout) {
     return "no servo of this protocol found: inferring the layout from the cyclic traffic is off; "
            "give the layout in a --config file";
   }
   if (!options_.inference_refusal.empty()) {
-    return "no servo of this protocol found in the cyclic traffic (PROTOCOL.md §9.4): " +
+    return "no servo of this protocol found in the cyclic traffic (docs/layout.md): " +
            options_.inference_refusal;
   }
-  return "no servo of this protocol found (PROTOCOL.md §9); give the layout in a --config file";
+  return "no servo of this protocol found (docs/layout.md); give the layout in a --config file";
 }
 
 LayoutSource Decoder::source() const {

@@ -10,6 +10,7 @@
 #include "ncservo/axis_model.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/text.hpp"
 
 namespace ncservo {
 
@@ -403,92 +404,92 @@ constexpr Reads kNothing{};
 #define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
 // clang-format off
 const std::array<RuleDef, kRuleCount> kRules{{
-  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "PROTOCOL.md §2 SE", kNone, false,
+  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false,
    readsOf({"ncservo.scw.se"}), NCSERVO_AXIS(se001),
    "SCW.SE becomes 0x2 from a value other than 0x1"},
-  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "PROTOCOL.md §2 SE", kDrive, false,
+  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, false,
    readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se002),
    "SSW.ServoEn rises with no valid enable"},
-  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "PROTOCOL.md §2 SE", kDrive, true,
+  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, true,
    readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se003),
    "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
-  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "PROTOCOL.md §2 SE, §5", Timeout::EnableResponse, true,
+  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "docs/protocol.md §2 SE, §5", Timeout::EnableResponse, true,
    readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake", "ncservo.ssw.servo_en",
             "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(se004),
    "a valid enable to a ready drive is not answered with ServoEn"},
-  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "PROTOCOL.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true,
+  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true,
    readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp001),
    "ZPulseAck stays 1 after ZPulseRequest fell"},
-  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "PROTOCOL.md §3 ZPulseAck", kDrive, false,
+  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ZPulseAck", kDrive, false,
    readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp002),
    "ZPulseAck rises with no ZPulseRequest"},
-  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "PROTOCOL.md §1, §2 ZPulseRequest", kNone, false,
+  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "docs/protocol.md §1, §2 ZPulseRequest", kNone, false,
    readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.incremental", "ncservo.ssw.no_encoder"}), NCSERVO_AXIS(zp003),
    "ZPulseRequest on an axis with an absolute encoder or none"},
-  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "PROTOCOL.md §3 ErrClearAck", kDrive, false,
+  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, false,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec001),
    "ErrClearAck rises with no ErrorClear"},
-  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "PROTOCOL.md §2 ErrorClear", Timeout::NcRelease, true,
+  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "docs/protocol.md §2 ErrorClear", Timeout::NcRelease, true,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec002),
    "ErrorClear held after ErrClearAck rose"},
-  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "PROTOCOL.md §3 ErrClearAck", kDrive, true,
+  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, true,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec003),
    "ErrClearAck stays 1 after ErrorClear fell"},
-  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "PROTOCOL.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true,
+  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "docs/protocol.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}), NCSERVO_AXIS(ec004),
    "ErrorClear on a drive in error is not acknowledged"},
-  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "PROTOCOL.md §4", kNone, false,
+  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "docs/protocol.md §4", kNone, false,
    readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew001),
    "a SEW cause bit without the summary bit 0"},
-  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "PROTOCOL.md §4", kDrive, true,
+  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "docs/protocol.md §4", kDrive, true,
    readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew002),
    "SEW summary bit 0 with no cause bit"},
-  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "PROTOCOL.md §4", kNone, false,
+  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "docs/protocol.md §4", kNone, false,
    readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew003),
    "reserved SEW bits set"},
-  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "PROTOCOL.md §3", kNone, false,
+  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "docs/protocol.md §3", kNone, false,
    readsOf({"ncservo.ssw.reserved"}), NCSERVO_AXIS(ssw001),
    "reserved SSW bits set"},
-  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "PROTOCOL.md §2", kNone, false,
+  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "docs/protocol.md §2", kNone, false,
    readsOf({"ncservo.scw.reserved"}), NCSERVO_AXIS(scw001),
    "reserved SCW bits set"},
-  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "PROTOCOL.md §5", kDrive, true,
+  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "docs/protocol.md §5", kDrive, true,
    readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(rdy001),
    "ServoRDY differs from the Servo_Ready_Mode table"},
-  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "PROTOCOL.md §4, §6", Timeout::FaultReaction, true,
+  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "docs/protocol.md §4, §6", Timeout::FaultReaction, true,
    readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}), NCSERVO_AXIS(flt001),
    "the drive stays enabled while reporting an error"},
-  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "PROTOCOL.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true,
+  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "docs/protocol.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true,
    readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl", "ncservo.ssw.ext_prmtbl"}), NCSERVO_AXIS(pt001),
    "the active parameter table differs from the commanded one"},
-  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "PROTOCOL.md §5", kNone, false,
+  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "docs/protocol.md §5", kNone, false,
    readsThrough("ncservo.msg_code", definedMessageCode), NCSERVO_AXIS(msg001),
    "a message code outside 0-5"},
-  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "PROTOCOL.md §8 WKC", kNone, false,
+  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "docs/protocol.md §8 WKC", kNone, false,
    kNothing, NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),
    "a returned cyclic datagram with servo PDOs has an unexpected WKC"},
-  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "PROTOCOL.md §8; RULES.md Time", kNone, false,
+  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "docs/protocol.md §8; docs/rules.md timeouts", kNone, false,
    kNothing, NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
    "cycles missing between two master frames"},
-  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "PROTOCOL.md §4 ECatTErr", kDrive, true,
+  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "docs/protocol.md §4 ECatTErr", kDrive, true,
    readsOf({"ncservo.sew.ecat_timeout"}), NCSERVO_AXIS(com003),
    "3 or more failed cycles without SEW.ECatTErr"},
-  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "PROTOCOL.md §8", kNone, false,
+  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "docs/protocol.md §8", kNone, false,
    kNothing, NCSERVO_EVENT(NotReturnedEvent, com004, com004Text),
    "a master frame with servo outputs was not returned"},
-  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "PROTOCOL.md §8; seed 001", kNone, false,
+  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "docs/protocol.md §8", kNone, false,
    kNothing, NCSERVO_AXIS(com005),
    "consecutive failed cycles of an axis exceed the limit"},
-  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "PROTOCOL.md §8 AL control", kNone, false,
+  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "docs/protocol.md §8 AL control", kNone, false,
    kNothing, NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
    "an AL control write requests a transition the state machine does not allow"},
-  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "PROTOCOL.md §8 AL states", kNone, false,
+  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "docs/protocol.md §8 AL states", kNone, false,
    readsOf({"ncservo.scw.se"}, true), NCSERVO_AXIS(esm002),
    "process data exchanged with an axis outside OP/SAFE-OP"},
-  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "PROTOCOL.md §8 AL status", kNone, false,
+  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false,
    kNothing, NCSERVO_EVENT(AlErrorEvent, esm003, alErrorText),
    "AL status shows the error indicator above INIT"},
-  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "PROTOCOL.md §8 AL status", kNone, false,
+  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false,
    kNothing, NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
    "AL status shows the error indicator at INIT"},
 }};
@@ -534,6 +535,13 @@ std::optional<Timeout> timeoutFromName(std::string_view name) {
   return std::nullopt;
 }
 
+std::string unknownTimeoutMessage(std::string_view name) {
+  std::vector<std::string> names;
+  for (const TimeoutDef& t : kTimeouts) names.emplace_back(t.name);
+  return fmt::format("unknown timeout '{}' (known: {}){}", name, timeoutNameList(),
+                     didYouMean(name, names));
+}
+
 std::string timeoutNameList() {
   std::string known;
   for (const TimeoutDef& t : kTimeouts)
@@ -547,9 +555,17 @@ const RuleDef& ruleDef(RuleId id) {
 
 const RuleDef* ruleByCode(std::string_view code) {
   for (const RuleDef& rule : kRules) {
-    if (code == rule.code) return &rule;
+    if (equalsIgnoringCase(code, rule.code)) return &rule;
   }
   return nullptr;
+}
+
+Result<const RuleDef*> findRule(std::string_view code) {
+  if (const RuleDef* rule = ruleByCode(code)) return rule;
+  std::vector<std::string> codes;
+  for (const RuleDef& rule : kRules) codes.emplace_back(rule.code);
+  return fail(
+      fmt::format("unknown rule ID '{}' (see `ncservo rules`){}", code, didYouMean(code, codes)));
 }
 
 std::string describeReads(const Reads& reads) {
@@ -620,26 +636,27 @@ std::optional<int> RuleSettings::readyModeFor(std::size_t axis) const {
 }
 
 Status RuleSettings::disable(std::string_view code) {
-  const RuleDef* rule = ruleByCode(code);
-  if (rule == nullptr) return fail(fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code));
-  enabled[static_cast<std::size_t>(rule->id)] = false;
+  const Result<const RuleDef*> rule = findRule(code);
+  if (!rule) return fail(rule.error());
+  enabled[static_cast<std::size_t>((*rule)->id)] = false;
   return {};
 }
 
 Status RuleSettings::setSeverity(std::string_view code, std::string_view level) {
-  const RuleDef* rule = ruleByCode(code);
-  if (rule == nullptr) return fail(fmt::format("unknown rule ID '{}' (see `ncservo rules`)", code));
+  const Result<const RuleDef*> rule = findRule(code);
+  if (!rule) return fail(rule.error());
   const std::optional<Severity> s = severityFromName(level);
   if (!s) {
-    return fail(fmt::format("severity '{}' for {}: expected error, warning or info", level, code));
+    return fail(
+        fmt::format("severity '{}' for {}: expected error, warning or info", level, (*rule)->code));
   }
-  severity[static_cast<std::size_t>(rule->id)] = *s;
+  severity[static_cast<std::size_t>((*rule)->id)] = *s;
   return {};
 }
 
 Status RuleSettings::setTimeout(std::string_view name, std::int64_t ms) {
   const std::optional<Timeout> t = timeoutFromName(name);
-  if (!t) return fail(fmt::format("unknown timeout '{}' (known: {})", name, timeoutNameList()));
+  if (!t) return fail(unknownTimeoutMessage(name));
   if (ms < 0 || ms > kMaxTimeoutMs) {
     return fail(fmt::format("timeout {} = {} ms: expected 0 to {}", name, ms, kMaxTimeoutMs));
   }

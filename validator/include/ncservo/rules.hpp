@@ -51,6 +51,8 @@ inline constexpr std::array<TimeoutDef, 6> kTimeouts{{
 std::optional<Timeout> timeoutFromName(std::string_view name);
 // "drive_response, nc_release, ...": the names a configuration and --timeout accept.
 std::string timeoutNameList();
+// "unknown timeout 'X' (known: ...)", with the closest name.
+std::string unknownTimeoutMessage(std::string_view name);
 // The longest timeout a user may set, in milliseconds (an hour).
 inline constexpr std::uint32_t kMaxTimeoutMs = 3'600'000;
 
@@ -128,7 +130,10 @@ struct RuleDef {
 extern const std::array<RuleDef, kRuleCount> kRules;
 
 const RuleDef& ruleDef(RuleId id);
+// The rule of an ID in any case ("se-001" is SE-001), or null.
 const RuleDef* ruleByCode(std::string_view code);
+// As ruleByCode; the error names the ID and the closest one ("did you mean").
+Result<const RuleDef*> findRule(std::string_view code);
 // "ncservo.rule.illegal_enable_edge"
 std::string ruleFilterName(const RuleDef& rule);
 

@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# cli_usage.sh SRC BUILD: the command line and the configuration as a user types them (issue 14,
+# item 9): rule IDs in any case, "did you mean" for mistyped commands, options, keys and IDs,
+# standard input given twice, --version of a subcommand, an [[axis]] missing an address, names
+# that need CSV quoting, and `rules --explain`.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+
+expect() {  # expect RC ARGS...: runs ncservo ARGS, checks its exit status; output in out and err
+  local expected=$1
+  shift
+  set +e
+  "$NCSERVO" "$@" >"$WORK/out" 2>"$WORK/err"
+  local rc=$?
+  set -e
+  [ "$rc" = "$expected" ] || fail "ncservo $*: exit $rc, expected $expected; stderr: $(head -3 "$WORK/err")"
+}
+says() {  # says FILE TEXT: FILE (out or err) holds TEXT
+  grep -qF -- "$2" "$WORK/$1" || fail "expected '$2' in $1: $(head -5 "$WORK/$1")"
+}
+
+"$NCSERVO" simulate --axes 2 --duration 1 -o "$WORK/clean.pcap" --layout-config "$WORK/layout.toml" 2>/dev/null
+"$NCSERVO" simulate --axes 2 --duration 2.5 --fault SE-001 --fault MSG-001:1 -o "$WORK/faults.pcap" 2>/dev/null
+
+# Rule IDs in any case: on the command line and in the configuration.
+expect 1 validate "$WORK/faults.pcap"
+expect 0 validate --disable se-001,Msg-001 "$WORK/faults.pcap"
+expect 0 validate --severity se-001=info --disable msg-001 "$WORK/faults.pcap"
+printf '[rules]\ndisable = ["se-001", "msg-001"]\n' >"$WORK/lower.toml"
+expect 0 validate --config "$WORK/lower.toml" "$WORK/faults.pcap"
+printf '[rules]\nseverity = { "se-001" = "info", "Msg-001" = "info" }\n' >"$WORK/severity.toml"
+expect 0 validate --config "$WORK/severity.toml" "$WORK/faults.pcap"
+
+# "Did you mean": commands, options, rule IDs, configuration keys and timeouts.
+expect 2 valdate "$WORK/clean.pcap"
+says err "unknown command 'valdate'; did you mean 'validate'?"
+expect 2 validate --formt json "$WORK/clean.pcap"
+says err "unknown option '--formt'; did you mean '--format'?"
+expect 2 decode --layuot "$WORK/clean.pcap"
+says err "unknown option '--layuot'; did you mean '--layout'?"
+expect 2 validate --disable MSG-01 "$WORK/clean.pcap"
+says err "unknown rule ID 'MSG-01' (see \`ncservo rules\`); did you mean 'MSG-001'?"
+expect 2 validate --severity ec-02=error "$WORK/clean.pcap"
+says err "did you mean 'EC-002'?"
+expect 2 validate --timeout drive_respons=30 "$WORK/clean.pcap"
+says err "did you mean 'drive_response'?"
+printf 'telegram_failure_limt = 3\n' >"$WORK/typo.toml"
+expect 2 validate --config "$WORK/typo.toml" "$WORK/clean.pcap"
+says err "typo.toml:1: key 'telegram_failure_limt': unknown key; did you mean 'telegram_failure_limit'?"
+printf '[rules]\ndisable = ["SE-01"]\n' >"$WORK/id.toml"
+expect 2 validate --config "$WORK/id.toml" "$WORK/clean.pcap"
+says err "id.toml:2: key 'rules.disable'"
+says err "did you mean 'SE-001'?"
+
+# Standard input can be read once.
+expect 2 validate - - <"$WORK/clean.pcap"
+says err "standard input (-) can be read only once"
+expect 0 validate - <"$WORK/clean.pcap"
+
+# --version of a subcommand prints the version, as `ncservo --version` does.
+expect 0 --version
+version=$(cat "$WORK/out")
+[[ "$version" == "ncservo "* ]] || fail "ncservo --version: $version"
+for command in decode validate rules fields simulate; do
+  expect 0 "$command" --version
+  [ "$(cat "$WORK/out")" = "$version" ] || fail "$command --version: $(cat "$WORK/out" "$WORK/err")"
+done
+
+# An [[axis]] needs both addresses: the error names the file, the line and the key.
+printf 'servo_ready_mode = 0\n\n[[axis]]\nname = "X"\noutputs = 0x10000\n' >"$WORK/no-inputs.toml"
+expect 2 validate --config "$WORK/no-inputs.toml" "$WORK/clean.pcap"
+says err "no-inputs.toml:3: key 'axis[0].inputs': missing"
+printf '[[axis]]\nname = "X"\ninputs = 0x10014\n' >"$WORK/no-outputs.toml"
+expect 2 decode --config "$WORK/no-outputs.toml" "$WORK/clean.pcap"
+says err "no-outputs.toml:1: key 'axis[0].outputs': missing"
+printf '[[axis]]\nname = "Y"\nstation = 0x3EA\nsm_inputs = 0x1180\n' >"$WORK/no-sm.toml"
+expect 2 validate --config "$WORK/no-sm.toml" "$WORK/clean.pcap"
+says err "no-sm.toml:1: key 'axis[0].sm_outputs': missing"
+
+# CSV (RFC 4180): names holding a comma, a quote or a line break are quoted and read back whole.
+sed -e "s/name = 'axis0'/name = \"X, left\"/" -e "s/name = 'axis1'/name = \"the \\\\\"Y\\\\\"\\\\nspindle\"/" \
+  "$WORK/layout.toml" >"$WORK/names.toml"
+expect 0 decode --config "$WORK/names.toml" "$WORK/clean.pcap"
+python3 - "$WORK/out" <<'PY' || fail "decode CSV with quoted names"
+import csv, sys
+with open(sys.argv[1], newline="") as f:
+    rows = list(csv.reader(f))
+header = rows[0]
+assert all(len(r) == len(header) for r in rows), "a row with another number of columns"
+names = {r[header.index("name")] for r in rows[1:]}
+assert names == {"X, left", 'the "Y"\nspindle'}, names
+PY
+
+# rules --explain: one rule in full, ID in any case; a typo is named, an unknown ID is exit 2.
+expect 0 rules --explain se-003
+for text in "SE-003 not-disabled" "severity:    error" "party:       drive" \
+  "timeout:     drive_response, default 20 ms" "reads:       scw.se, ssw.servo_en" \
+  "docs/protocol.md §2 SE" "ncservo.rule.not_disabled" "docs/rules.md"; do
+  says out "$text"
+done
+expect 0 rules --explain COM-004
+says out "COM-004 frame-not-returned"
+if grep -q "timeout:" "$WORK/out"; then fail "COM-004 has no timeout: $(cat "$WORK/out")"; fi
+expect 2 rules --explain SE-03
+says err "did you mean 'SE-003'?"
+expect 2 rules --explain XX-999
+says err "unknown rule ID 'XX-999'"
+echo "cli_usage: IDs in any case, did-you-mean, stdin once, --version, axis addresses, CSV, --explain"
