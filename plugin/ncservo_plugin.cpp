@@ -29,6 +29,7 @@
 #include "ncservo/layout_window.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/rules.hpp"
+#include "ncservo/text.hpp"
 #include "ncservo/validator.hpp"
 
 extern "C" {
@@ -72,11 +73,32 @@ expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<sl
 const char* pref_config_path = "";
 const char* pref_eni_path = "";
 gboolean pref_default_layout = TRUE;
-gint pref_servo_ready_mode = -1;  // auto
-const enum_val_t kReadyModes[] = {{"auto", "Inferred from the capture", -1},
-                                  {"0", "Servo_Ready_Mode 0", 0},
-                                  {"1", "Servo_Ready_Mode 1", 1},
-                                  {nullptr, nullptr, 0}};
+// A string preference, checked in applyPreferences: Wireshark 4.0 keeps an enum preference as it
+// was, silently, when `-o` names none of its values (epan/prefs.c, PREF_ENUM), and a mistyped
+// mode must be reported. The descriptions are what 4.0's enum preference wrote to preference
+// files, still read.
+const char* pref_servo_ready_mode = "auto";
+struct ReadyModeName {
+  const char* name;
+  const char* description;
+  std::optional<int> mode;  // none: inferred per axis
+};
+const ReadyModeName kReadyModes[] = {{"auto", "Inferred from the capture", std::nullopt},
+                                     {"0", "Servo_Ready_Mode 0", 0},
+                                     {"1", "Servo_Ready_Mode 1", 1}};
+
+// The mode the preference names, or an error saying what it takes.
+Result<std::optional<int>> readyModeOf(const char* text) {
+  const std::string_view value = text != nullptr ? text : "";
+  if (value.empty()) return std::nullopt;
+  for (const ReadyModeName& row : kReadyModes) {
+    if (equalsIgnoringCase(value, row.name) || equalsIgnoringCase(value, row.description)) {
+      return row.mode;
+    }
+  }
+  return fail(
+      fmt::format("ncservo.servo_ready_mode: '{}' is not auto, 0 or 1; auto is used", value));
+}
 
 // Options from the preferences, and the state of the capture being dissected: the learning
 // window (PROTOCOL.md §9.4), then the validator once the layout is known, and what it found in
@@ -288,7 +310,11 @@ void applyPreferences() {
       report_failure("NCSERVO: %s", loaded.error().text().c_str());
     }
   }
-  if (pref_servo_ready_mode >= 0) settings->servo_ready_mode = pref_servo_ready_mode;
+  if (const Result<std::optional<int>> mode = readyModeOf(pref_servo_ready_mode); mode) {
+    settings->servo_ready_mode = *mode;
+  } else {
+    report_failure("NCSERVO: %s", mode.error().text().c_str());
+  }
   auto* options = new DecoderOptions(
       layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != FALSE));
   delete g_options;
@@ -606,21 +632,23 @@ void registerProtocol() {
   module_t* prefs = prefs_register_protocol(proto_ncservo, applyPreferences);
   prefs_register_filename_preference(
       prefs, "config", "Configuration file",
-      "TOML configuration file with the axes' layout (see the ncservo README)", &pref_config_path,
-      FALSE);
+      "TOML configuration file: the axes' layout, timeouts, disabled rules "
+      "(docs/configuration.md)",
+      &pref_config_path, FALSE);
   prefs_register_filename_preference(
       prefs, "eni", "ENI file",
       "EtherCATConfig.xml (ETG.2100) exported by the configuration tool: the servos' layout when "
       "no configuration file gives one",
       &pref_eni_path, FALSE);
-  prefs_register_enum_preference(
+  prefs_register_string_preference(
       prefs, "servo_ready_mode", "Servo_Ready_Mode",
-      "The drives' Servo_Ready_Mode parameter (PROTOCOL.md §5); auto infers it per axis",
-      &pref_servo_ready_mode, kReadyModes, FALSE);
+      "The drives' Servo_Ready_Mode parameter (docs/protocol.md §5): auto (inferred per axis), 0 "
+      "or 1",
+      &pref_servo_ready_mode);
   prefs_register_bool_preference(
       prefs, "default_layout", "Infer the layout from the cyclic traffic",
       "When no configuration, ENI or start-up gives the layout, infer it from the process data "
-      "(PROTOCOL.md §9.4); in a single pass the frames of the learning window are not decoded",
+      "(docs/layout.md); in a single pass the frames of the learning window are not decoded",
       &pref_default_layout);
 
   register_init_routine(initCapture);
