@@ -803,8 +803,11 @@ Handler decodeCommand(CLI::App& command) {
   addFormatOption(command, args->format, namesOf(kDecodeFormats),
                   " (vcd: waveforms for GTKWave, and beside -o OUT.vcd the save file OUT.gtkw)");
   command.add_option("-o,--output", args->output, "write here (default: standard output)");
-  command.add_option("--axis", args->axes, "only these axes, by name or index, comma-separated")
-      ->delimiter(',');
+  command
+      .add_option("--axis", args->axes,
+                  "only these axes, by name or index (comma-separated, repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
                    "never infer the layout from the cyclic traffic (PROTOCOL.md §9.4)");
   command.add_option("--eni", args->layout.eni_path,

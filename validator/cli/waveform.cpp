@@ -248,7 +248,7 @@ Status WaveformWriter::writeHeader(const Decoder& decoder) {
 
 void WaveformWriter::stamp() {
   if (time_written_) return;
-  buffer_ += fmt::format("#{}\n", time_ns_);
+  fmt::format_to(std::back_inserter(buffer_), "#{}\n", time_ns_);
   time_written_ = true;
 }
 
@@ -263,29 +263,58 @@ void WaveformWriter::advance(std::int64_t time_ns) {
   for (AxisSlot& slot : axes_) clearFindings(slot);
 }
 
+// The signals of each word: the field table holds a word's rows together.
+struct SignalRange {
+  std::size_t begin = 0, end = 0;
+};
+const std::array<SignalRange, kWordCount>& signalsOfWords() {
+  static const std::array<SignalRange, kWordCount> ranges = [] {
+    std::array<SignalRange, kWordCount> out{};
+    const std::vector<VcdSignal>& signals = vcdSignals();
+    for (std::size_t i = signals.size(); i-- > 0;) {
+      SignalRange& range = out[static_cast<std::size_t>(signals[i].field->word)];
+      if (range.end == 0) range.end = i + 1;
+      range.begin = i;
+    }
+    return out;
+  }();
+  return ranges;
+}
+
 void WaveformWriter::writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo) {
   const std::vector<VcdSignal>& signals = vcdSignals();
-  for (std::size_t i = 0; i < signals.size(); ++i) {
-    const VcdSignal& s = signals[i];
-    if (wordDef(s.field->word).pdo != pdo) continue;
-    const std::optional<std::uint64_t> bits = fieldBits(s, values);
-    Value& last = slot.values[i];
-    if (bits ? last.known && last.bits == *bits : !last.known) continue;
-    stamp();
-    const std::string& id = ids_[slot.first_id + i];
-    if (!bits) {
-      buffer_ += s.width == 1 ? "x" : "bx ";
-    } else if (s.kind == VcdVarKind::Real) {
-      appendVcdReal(buffer_, values.floatOf(s.field->word));
-      buffer_ += ' ';
-    } else {
-      appendVcdBits(buffer_, *bits, s.width);
-      if (s.width > 1) buffer_ += ' ';
+  for (std::size_t w = firstWordOf(pdo); w < firstWordOf(pdo) + wordCountOf(pdo); ++w) {
+    // An unchanged word changes none of its fields but those shown under another word's
+    // condition.
+    const std::uint64_t raw = values.raw[w];
+    const bool same = slot.word_known[w] && slot.words[w] == raw;
+    slot.words[w] = raw;
+    slot.word_known[w] = true;
+    const SignalRange range = signalsOfWords()[w];
+    for (std::size_t i = range.begin; i < range.end; ++i) {
+      if (!same || signals[i].field->when != FieldWhen::Always) writeSignal(slot, i, values);
     }
-    buffer_ += id;
-    buffer_ += '\n';
-    last = Value{bits.value_or(0), bits.has_value()};
   }
+}
+
+void WaveformWriter::writeSignal(AxisSlot& slot, std::size_t i, const PdoValues& values) {
+  const VcdSignal& s = vcdSignals()[i];
+  const std::optional<std::uint64_t> bits = fieldBits(s, values);
+  Value& last = slot.values[i];
+  if (bits ? last.known && last.bits == *bits : !last.known) return;
+  stamp();
+  if (!bits) {
+    buffer_ += s.width == 1 ? "x" : "bx ";
+  } else if (s.kind == VcdVarKind::Real) {
+    appendVcdReal(buffer_, values.floatOf(s.field->word));
+    buffer_ += ' ';
+  } else {
+    appendVcdBits(buffer_, *bits, s.width);
+    if (s.width > 1) buffer_ += ' ';
+  }
+  buffer_ += ids_[slot.first_id + i];
+  buffer_ += '\n';
+  last = Value{bits.value_or(0), bits.has_value()};
 }
 
 void WaveformWriter::writeState(AxisSlot& slot, std::optional<DriveState> state) {

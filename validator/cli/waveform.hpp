@@ -81,7 +81,9 @@ class WaveformWriter {
   };
   struct AxisSlot {
     std::size_t first_id = 0;
-    std::vector<Value> values;  // by vcdSignals() index
+    std::vector<Value> values;                      // by vcdSignals() index
+    std::array<std::uint64_t, kWordCount> words{};  // as last written
+    std::array<bool, kWordCount> word_known{};
     std::optional<DriveState> state;
     bool outputs_from_master = false;  // a master copy gave the outputs since the last return
     std::string findings;              // the rule IDs shown at the current time
@@ -90,6 +92,7 @@ class WaveformWriter {
   void advance(std::int64_t time_ns);
   void stamp();
   void writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo);
+  void writeSignal(AxisSlot& slot, std::size_t signal, const PdoValues& values);
   void writeState(AxisSlot& slot, std::optional<DriveState> state);
   AxisSlot* findingSlot(std::optional<std::uint16_t> axis);
   const std::string& findingsId(const AxisSlot& slot) const;
