@@ -116,15 +116,23 @@ void appendVcdBits(std::string& out, std::uint64_t bits, unsigned width) {
     out.push_back((bits & 1) != 0 ? '1' : '0');
     return;
   }
-  out.push_back('b');
-  int top = 63;
-  while (top > 0 && ((bits >> top) & 1) == 0) --top;
-  for (int bit = top; bit >= 0; --bit) out.push_back(((bits >> bit) & 1) != 0 ? '1' : '0');
+  // Digits written from the lowest up into a buffer, then appended at once: the hot path of
+  // ActPos, which changes every cycle.
+  char digits[65];
+  char* first = std::end(digits);
+  do {
+    *--first = static_cast<char>('0' + (bits & 1));
+    bits >>= 1;
+  } while (bits != 0);
+  *--first = 'b';
+  out.append(first, std::end(digits));
 }
 
 void appendVcdReal(std::string& out, float value) {
-  out.push_back('r');
-  fmt::format_to(std::back_inserter(out), "{}", value);
+  char text[32];
+  text[0] = 'r';
+  const auto written = fmt::format_to_n(text + 1, sizeof text - 1, "{}", value);
+  out.append(text, written.out);
 }
 
 void appendVcdString(std::string& out, std::string_view text) {
