@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "axis_selection.hpp"
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/capture_stream.hpp"
 #include "ncservo/capture_writer.hpp"
@@ -35,6 +36,7 @@
 #include "ncservo/text.hpp"
 #include "ncservo/validator.hpp"
 #include "report.hpp"
+#include "waveform.hpp"
 
 namespace {
 
@@ -158,15 +160,23 @@ void writeJsonRow(std::FILE* out, const CycleRow& row, const std::string& name, 
   std::fputs((j.dump() + "\n").c_str(), out);
 }
 
-// `decode`'s formats (INTERFACES.md): one line per axis and cycle, after an optional header.
-struct RowFormat {
+struct DecodeArgs;
+struct DecodeInput;
+int decodeRows(const DecodeArgs& args, DecodeInput& input);
+int decodeWaveforms(const DecodeArgs& args, DecodeInput& input);
+
+// `decode`'s formats (INTERFACES.md): one line per axis and cycle after an optional header, or
+// the waveforms of every copy with the findings (waveform.hpp).
+struct DecodeFormat {
   const char* name;
+  int (*decode)(const DecodeArgs& args, DecodeInput& input);
   void (*header)(std::FILE* out);
   void (*row)(std::FILE* out, const CycleRow& row, const std::string& name, double time);
 };
-const RowFormat kRowFormats[] = {
-    {"csv", writeCsvHeader, writeCsvRow},
-    {"jsonl", nullptr, writeJsonRow},
+const DecodeFormat kDecodeFormats[] = {
+    {"csv", decodeRows, writeCsvHeader, writeCsvRow},
+    {"jsonl", decodeRows, nullptr, writeJsonRow},
+    {"vcd", decodeWaveforms, nullptr, nullptr},
 };
 
 // A PDO region the capture cut short or that straddles its datagram's end (the frame is still
@@ -236,35 +246,47 @@ void printLayout(const Decoder& decoder, const std::optional<InferenceResult>& i
 struct DecodeArgs {
   std::string capture;
   LayoutArgs layout;
-  std::string format = kRowFormats[0].name;
+  std::string format = kDecodeFormats[0].name;
+  std::string output;
+  std::vector<std::string> axes;
   bool layout_only = false;
   std::string timestamps = "auto";
 };
 
-int runDecode(const DecodeArgs& args) {
-  const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
-  if (!files) {
-    fmt::print(stderr, "ncservo: {}\n", files.error().text());
-    return kExitUsage;
+// What every decode format reads and writes.
+struct DecodeInput {
+  LayoutFiles files;
+  std::unique_ptr<CaptureReader> reader;
+  std::FILE* out = stdout;
+};
+
+// The notes after a decode: which clock timed the frames, and why no axis was found.
+void noteDecoded(const CaptureReader& reader, const FrameClock& clock, const Decoder& decoder) {
+  if (clock.source() == TimestampSource::Probe || !clock.note().empty()) {
+    fmt::print(stderr, "ncservo: {}: timestamps: {}{}{}\n", reader.path(),
+               timestampSourceName(clock.source()), clock.note().empty() ? "" : "; ", clock.note());
   }
-  auto opened = CaptureReader::open(args.capture);
-  if (!opened) {
-    fmt::print(stderr, "ncservo: {}\n", opened.error().text());
-    return kExitCapture;
+  if (decoder.axes().empty()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), decoder.noServoReason());
   }
-  const std::unique_ptr<CaptureReader> reader = std::move(*opened);
+}
+
+int decodeRows(const DecodeArgs& args, DecodeInput& input) {
+  CaptureReader* reader = input.reader.get();
+  std::FILE* out = input.out;
   FrameClock clock(*timestampModeFromName(args.timestamps));
-  LayoutWindow window(decoderOptions(*files, args.layout));
+  LayoutWindow window(decoderOptions(input.files, args.layout));
   std::optional<Session> session;
-  const RowFormat& format = rowNamed(kRowFormats, args.format);
-  if (!args.layout_only && format.header != nullptr) format.header(stdout);
+  const DecodeFormat& format = rowNamed(kDecodeFormats, args.format);
+  if (!args.layout_only && format.header != nullptr) format.header(out);
   CycleRows cycles;
   std::vector<CycleRow> rows;
   CaptureRun run;
   auto write = [&] {
     for (const CycleRow& row : rows) {
-      format.row(stdout, row, session->decoder().axes().at(row.axis).name,
-                 static_cast<double>(row.time_ns - *run.first_time_ns) / 1e9);
+      const AxisInfo& axis = session->decoder().axes().at(row.axis);
+      if (!cli::axisSelected(args.axes, axis)) continue;
+      format.row(out, row, axis.name, static_cast<double>(row.time_ns - *run.first_time_ns) / 1e9);
     }
     rows.clear();
   };
@@ -282,20 +304,125 @@ int runDecode(const DecodeArgs& args) {
   const Status status = streamCapture(*reader, clock, window, {start, decode}, run);
   cycles.finish(rows);
   write();
-  std::fflush(stdout);
+  std::fflush(out);
   if (!status) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
   if (args.layout_only) printLayout(session->decoder(), window.inference());
-  if (clock.source() == TimestampSource::Probe || !clock.note().empty()) {
-    fmt::print(stderr, "ncservo: {}: timestamps: {}{}{}\n", reader->path(),
-               timestampSourceName(clock.source()), clock.note().empty() ? "" : "; ", clock.note());
-  }
-  if (session->decoder().axes().empty()) {
-    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), session->decoder().noServoReason());
+  noteDecoded(*reader, clock, session->decoder());
+  if (Status selected = cli::checkAxisSelection(args.axes, session->decoder().axes()); !selected) {
+    fmt::print(stderr, "ncservo: {}\n", selected.error().text());
+    return kExitUsage;
   }
   return kExitOk;
+}
+
+// The waveforms need the findings, so the capture goes through the validator, with the
+// configuration's rule settings.
+int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
+  CaptureReader& reader = *input.reader;
+  RuleSettings settings;
+  if (input.files.config) {
+    if (Status s = applyConfig(*input.files.config, settings); !s) {
+      fmt::print(stderr, "ncservo: {}\n", s.error().text());
+      return kExitUsage;
+    }
+  }
+  FrameClock clock(*timestampModeFromName(args.timestamps));
+  LayoutWindow window(decoderOptions(input.files, args.layout));
+  std::optional<Validator> validator;
+  cli::WaveformWriter waveforms(input.out, args.axes);
+  CaptureRun run;
+  Status written;
+  std::int64_t end_ns = 0;
+  const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                          const ByteReader& bytes) {
+    const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
+    for (std::size_t i = 0; frame.decode.any_malformed && i < frame.decode.axis_count; ++i) {
+      warnIfMalformed(reader.path(), number, frame.decode.axes[i]);
+    }
+    end_ns = std::max(end_ns, time_ns - *run.first_time_ns);
+    if (written) {
+      written = waveforms.frame(time_ns - *run.first_time_ns, frame, bytes, validator->findings(),
+                                validator->decoder());
+    }
+  };
+  const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
+  const Status status = streamCapture(reader, clock, window, {start, decode}, run);
+  if (written) written = waveforms.finish(end_ns, validator->decoder());
+  std::fflush(input.out);
+  if (!written) {
+    fmt::print(stderr, "ncservo: {}\n", written.error().text());
+    return kExitUsage;
+  }
+  if (!status) {
+    fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
+    return kExitCapture;
+  }
+  noteDecoded(reader, clock, validator->decoder());
+  if (input.out != stdout) {
+    const std::string save = cli::gtkwPathFor(args.output);
+    std::FILE* file = std::fopen(save.c_str(), "w");
+    if (file == nullptr) {
+      fmt::print(stderr, "ncservo: {}: cannot write: {}\n", save, std::strerror(errno));
+      return kExitUsage;
+    }
+    cli::writeGtkwSave(file, std::filesystem::absolute(args.output).string(),
+                       std::filesystem::absolute(save).string(), waveforms.scopes());
+    std::fclose(file);
+  }
+  return kExitOk;
+}
+
+// INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
+// checked before anything is opened for writing.
+Status refuseInputAsOutput(const std::string& output, const std::vector<std::string>& captures) {
+  for (const std::string& capture : captures) {
+    std::error_code ec;
+    if (capture != "-" && std::filesystem::equivalent(output, capture, ec)) {
+      return fail(fmt::format("--output {} is the capture {}: refusing to write over an input",
+                              output, capture));
+    }
+  }
+  return {};
+}
+
+// `-o FILE`, or standard output for none or "-".
+Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::string>& captures) {
+  if (output.empty() || output == "-") return stdout;
+  if (Status refused = refuseInputAsOutput(output, captures); !refused)
+    return fail(refused.error());
+  std::FILE* out = std::fopen(output.c_str(), "w");
+  if (out == nullptr)
+    return fail(fmt::format("{}: cannot write: {}", output, std::strerror(errno)));
+  return out;
+}
+
+int runDecode(const DecodeArgs& args) {
+  DecodeInput input;
+  Result<LayoutFiles> files = loadLayoutFiles(args.layout);
+  if (!files) {
+    fmt::print(stderr, "ncservo: {}\n", files.error().text());
+    return kExitUsage;
+  }
+  input.files = std::move(*files);
+  auto opened = CaptureReader::open(args.capture);
+  if (!opened) {
+    fmt::print(stderr, "ncservo: {}\n", opened.error().text());
+    return kExitCapture;
+  }
+  input.reader = std::move(*opened);
+  Result<std::FILE*> out = openOutput(args.output, {args.capture});
+  if (!out) {
+    fmt::print(stderr, "ncservo: {}\n", out.error().text());
+    return kExitUsage;
+  }
+  input.out = *out;
+  const auto decode = args.layout_only ? decodeRows : rowNamed(kDecodeFormats, args.format).decode;
+  const int rc = decode(args, input);
+  if (input.out != stdout) std::fclose(input.out);
+  return rc;
 }
 
 // ---- validate ----
@@ -433,25 +560,12 @@ int runValidate(const ValidateArgs& o) {
   }
   const bool never = o.fail_on == "never";
   const Severity fail_on = never ? Severity::Error : *severityFromName(o.fail_on);
-  std::FILE* out = stdout;
-  if (!o.output.empty() && o.output != "-") {
-    // INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
-    // checked before anything is opened for writing.
-    for (const std::string& capture : o.captures) {
-      std::error_code ec;
-      if (capture != "-" && std::filesystem::equivalent(o.output, capture, ec)) {
-        fmt::print(stderr,
-                   "ncservo: --output {} is the capture {}: refusing to write over an input\n",
-                   o.output, capture);
-        return kExitUsage;
-      }
-    }
-    out = std::fopen(o.output.c_str(), "w");
-    if (out == nullptr) {
-      fmt::print(stderr, "ncservo: {}: cannot write: {}\n", o.output, std::strerror(errno));
-      return kExitUsage;
-    }
+  Result<std::FILE*> opened = openOutput(o.output, o.captures);
+  if (!opened) {
+    fmt::print(stderr, "ncservo: {}\n", opened.error().text());
+    return kExitUsage;
   }
+  std::FILE* out = *opened;
   cli::ReportWriter writer(out, *cli::findReportFormat(o.format), fail_on, never, o.allow_empty);
   const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
   std::vector<cli::CaptureReport> reports;
@@ -737,7 +851,14 @@ Handler decodeCommand(CLI::App& command) {
   command.add_option("CAPTURE", args->capture, "pcap or pcapng capture, - for standard input")
       ->required();
   command.add_option("--config", args->layout.config_path, "TOML configuration file (layout)");
-  addFormatOption(command, args->format, namesOf(kRowFormats));
+  addFormatOption(command, args->format, namesOf(kDecodeFormats),
+                  " (vcd: waveforms for GTKWave, and beside -o OUT.vcd the save file OUT.gtkw)");
+  command.add_option("-o,--output", args->output, "write here (default: standard output)");
+  command
+      .add_option("--axis", args->axes,
+                  "only these axes, by name or index (comma-separated, repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
                    "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,

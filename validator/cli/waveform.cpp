@@ -1,0 +1,481 @@
+#include "waveform.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "axis_selection.hpp"
+#include "ncservo/axis_model.hpp"
+#include "ncservo/rules.hpp"
+#include "ncservo/session.hpp"
+
+namespace ncservo::cli {
+
+namespace {
+
+constexpr char kFirstIdChar = '!';
+constexpr std::size_t kIdChars = '~' - '!' + 1;
+constexpr std::string_view kBusScope = "bus";
+constexpr std::size_t kFlushAt = 1u << 16;
+
+std::string_view shortName(const FieldDef& f) {
+  return std::string_view(f.filter).substr(std::strlen("ncservo."));
+}
+
+constexpr unsigned highestBit(std::uint64_t mask) {
+  unsigned bit = 63;
+  while (bit > 0 && !((mask >> bit) & 1)) --bit;
+  return bit;
+}
+
+bool wordHasBitFields(Word word) {
+  return std::any_of(std::begin(kFields), std::end(kFields), [&](const FieldDef& f) {
+    return f.word == word && f.kind != FieldKind::Word;
+  });
+}
+
+VcdSignal signalOf(const FieldDef& f) {
+  const WordDef& word = wordDef(f.word);
+  const std::string_view name = shortName(f);
+  const std::size_t dot = name.find('.');
+  VcdSignal s{&f, VcdVarKind::Wire, 1, "", std::string(name.substr(dot + 1))};
+  if (dot != std::string_view::npos) {
+    s.scope = std::string(name.substr(0, dot));
+  } else if (wordHasBitFields(f.word)) {
+    s.scope = s.name;
+  }
+  switch (f.kind) {
+    case FieldKind::Word:
+      s.kind = word.type == WireType::F32   ? VcdVarKind::Real
+               : word.type == WireType::U32 ? VcdVarKind::Wire
+                                            : VcdVarKind::Integer;
+      s.width = s.kind == VcdVarKind::Real ? 64u : 8u * word.size;  // a VCD real is a double
+      break;
+    case FieldKind::Part:
+      s.kind = VcdVarKind::Integer;
+      s.width = static_cast<unsigned>(popcount64(f.mask));
+      break;
+    case FieldKind::Flag:
+    case FieldKind::BitRange:
+      // As fieldValue shows it: shifted down to its lowest bit, gaps kept (SEW's reserved bits).
+      s.width = highestBit(f.mask) - lowestBit(f.mask) + 1u;
+      break;
+  }
+  return s;
+}
+
+const char* varKeyword(VcdVarKind kind) {
+  switch (kind) {
+    case VcdVarKind::Wire:
+      return "wire";
+    case VcdVarKind::Integer:
+      return "integer";
+    case VcdVarKind::Real:
+      return "real";
+    case VcdVarKind::String:
+      return "string";
+  }
+  return "wire";
+}
+
+// The name GTKWave gives the variable: a wire vector carries its declared range.
+std::string declaredName(const std::string& name, VcdVarKind kind, unsigned width) {
+  return kind == VcdVarKind::Wire && width > 1 ? fmt::format("{} [{}:0]", name, width - 1) : name;
+}
+
+// The variables of an axis after the field table's: the drive state and the findings.
+constexpr std::size_t kStateVar = 0;
+constexpr std::size_t kFindingsVar = 1;
+constexpr std::size_t kDerivedVars = 2;
+
+// The bits a field shows for these values (a float's own bits, an integer's two's complement
+// of its width), or unknown where the field does not apply.
+std::optional<std::uint64_t> fieldBits(const VcdSignal& s, const PdoValues& values) {
+  if (!fieldApplies(*s.field, values)) return std::nullopt;
+  if (s.kind == VcdVarKind::Real) return values.word(s.field->word);
+  const FieldValue v = fieldValue(*s.field, values);
+  const std::uint64_t bits =
+      v.kind == FieldValue::Kind::Signed ? static_cast<std::uint64_t>(v.i) : v.u;
+  return s.width >= 64 ? bits : bits & ((std::uint64_t{1} << s.width) - 1);
+}
+
+}  // namespace
+
+std::string vcdIdCode(std::size_t n) {
+  std::string id;
+  do {
+    id.push_back(static_cast<char>(kFirstIdChar + n % kIdChars));
+    n /= kIdChars;
+  } while (n-- != 0);
+  return id;
+}
+
+void appendVcdBits(std::string& out, std::uint64_t bits, unsigned width) {
+  if (width == 1) {
+    out.push_back((bits & 1) != 0 ? '1' : '0');
+    return;
+  }
+  // Digits written from the lowest up into a buffer, then appended at once: the hot path of
+  // ActPos, which changes every cycle.
+  char digits[65];
+  char* first = std::end(digits);
+  do {
+    *--first = static_cast<char>('0' + (bits & 1));
+    bits >>= 1;
+  } while (bits != 0);
+  *--first = 'b';
+  out.append(first, std::end(digits));
+}
+
+void appendVcdReal(std::string& out, float value) {
+  char text[32];
+  text[0] = 'r';
+  const auto written = fmt::format_to_n(text + 1, sizeof text - 1, "{}", value);
+  out.append(text, written.out);
+}
+
+void appendVcdString(std::string& out, std::string_view text) {
+  out.push_back('s');
+  if (text.empty()) {
+    out += "\\000";
+    return;
+  }
+  for (char c : text) out.push_back(c == ' ' || c == '\t' || c == '\n' ? '_' : c);
+}
+
+const std::vector<VcdSignal>& vcdSignals() {
+  static const std::vector<VcdSignal> signals = [] {
+    std::vector<VcdSignal> all;
+    for (const FieldDef& f : kFields) all.push_back(signalOf(f));
+    return all;
+  }();
+  return signals;
+}
+
+std::vector<std::string> vcdScopeNames(const std::vector<AxisInfo>& axes) {
+  std::vector<std::string> names;
+  for (const AxisInfo& axis : axes) {
+    std::string name = axis.name.empty() ? fmt::format("axis{}", axis.index) : axis.name;
+    for (char& c : name) {
+      const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                         (c >= '0' && c <= '9') || c == '_' || c == '-';
+      if (!plain) c = '_';
+    }
+    const bool clash =
+        name == kBusScope || std::find(names.begin(), names.end(), name) != names.end();
+    if (clash) name += fmt::format("_{}", axis.index);
+    names.push_back(std::move(name));
+  }
+  return names;
+}
+
+WaveformWriter::WaveformWriter(std::FILE* out, std::vector<std::string> wanted)
+    : out_(out), wanted_(std::move(wanted)) {}
+
+Status WaveformWriter::writeHeader(const Decoder& decoder) {
+  header_written_ = true;
+  const std::vector<AxisInfo>& axes = decoder.axes();
+  if (Status checked = checkAxisSelection(wanted_, axes); !checked) return checked;
+  const std::vector<VcdSignal>& signals = vcdSignals();
+  const std::vector<std::string> names = vcdScopeNames(axes);
+  scopes_.push_back(Scope{std::string(kBusScope), std::nullopt});
+  ids_.push_back(vcdIdCode(0));
+  slot_of_.assign(axes.size(), -1);
+  for (const AxisInfo& axis : axes) {
+    if (!axisSelected(wanted_, axis)) continue;
+    slot_of_[axis.index] = static_cast<std::ptrdiff_t>(axes_.size());
+    scopes_.push_back(Scope{names[axis.index], axis.index});
+    AxisSlot& slot = axes_.emplace_back();
+    slot.first_id = ids_.size();
+    slot.values.resize(signals.size());
+    for (std::size_t i = 0; i < signals.size() + kDerivedVars; ++i) {
+      ids_.push_back(vcdIdCode(ids_.size()));
+    }
+  }
+
+  buffer_ += fmt::format("$version ncservo {} $end\n", NCSERVO_VERSION);
+  buffer_ += "$comment layout source: ";
+  buffer_ += layoutSourceName(decoder.source());
+  buffer_ += "; time 0 is the capture's first frame $end\n$timescale 1 ns $end\n";
+  buffer_ += fmt::format("$scope module {} $end\n$var string 1 {} findings $end\n$upscope $end\n",
+                         kBusScope, ids_[0]);
+  for (std::size_t a = 0; a < axes_.size(); ++a) {
+    const AxisSlot& slot = axes_[a];
+    buffer_ += fmt::format("$scope module {} $end\n", scopes_[a + 1].name);
+    std::string open;
+    for (std::size_t i = 0; i < signals.size(); ++i) {
+      const VcdSignal& s = signals[i];
+      if (s.scope != open) {
+        if (!open.empty()) buffer_ += "$upscope $end\n";
+        if (!s.scope.empty()) buffer_ += fmt::format("$scope module {} $end\n", s.scope);
+        open = s.scope;
+      }
+      buffer_ += fmt::format("$var {} {} {} {} $end\n", varKeyword(s.kind), s.width,
+                             ids_[slot.first_id + i], declaredName(s.name, s.kind, s.width));
+    }
+    if (!open.empty()) buffer_ += "$upscope $end\n";
+    const std::size_t derived = slot.first_id + signals.size();
+    buffer_ += fmt::format("$var string 1 {} state $end\n", ids_[derived + kStateVar]);
+    buffer_ += fmt::format("$var string 1 {} findings $end\n", ids_[derived + kFindingsVar]);
+    buffer_ += "$upscope $end\n";
+  }
+  buffer_ += "$enddefinitions $end\n#0\n$dumpvars\n";
+  time_written_ = true;
+  auto unknown = [&](std::size_t id, VcdVarKind kind, unsigned width) {
+    if (kind == VcdVarKind::Real) return;  // a real has no unknown value
+    if (kind == VcdVarKind::String) {
+      appendVcdString(buffer_, "");
+      buffer_ += ' ';
+    } else {
+      buffer_ += width == 1 ? "x" : "bx ";
+    }
+    buffer_ += ids_[id] + "\n";
+  };
+  unknown(0, VcdVarKind::String, 1);
+  for (const AxisSlot& slot : axes_) {
+    for (std::size_t i = 0; i < signals.size(); ++i) {
+      unknown(slot.first_id + i, signals[i].kind, signals[i].width);
+    }
+    for (std::size_t d = 0; d < kDerivedVars; ++d) {
+      unknown(slot.first_id + signals.size() + d, VcdVarKind::String, 1);
+    }
+  }
+  buffer_ += "$end\n";
+  for (const EarlyFinding& f : early_findings_) {
+    advance(f.time_ns);
+    if (AxisSlot* slot = findingSlot(f.axis)) showFinding(*slot, f.rule);
+  }
+  if (early_findings_dropped_ != 0) {
+    buffer_ += fmt::format("$comment {} more findings before the first axis was placed $end\n",
+                           early_findings_dropped_);
+  }
+  early_findings_.clear();
+  return {};
+}
+
+void WaveformWriter::stamp() {
+  if (time_written_) return;
+  fmt::format_to(std::back_inserter(buffer_), "#{}\n", time_ns_);
+  time_written_ = true;
+}
+
+// Moves to `time_ns` (never back); a finding shown at an earlier time ends there.
+void WaveformWriter::advance(std::int64_t time_ns) {
+  if (time_ns <= time_ns_) return;
+  time_ns_ = time_ns;
+  time_written_ = false;
+  if (!findings_shown_) return;
+  findings_shown_ = false;
+  clearFindings(bus_);
+  for (AxisSlot& slot : axes_) clearFindings(slot);
+}
+
+// The signals of each word: the field table holds a word's rows together.
+struct SignalRange {
+  std::size_t begin = 0, end = 0;
+};
+const std::array<SignalRange, kWordCount>& signalsOfWords() {
+  static const std::array<SignalRange, kWordCount> ranges = [] {
+    std::array<SignalRange, kWordCount> out{};
+    const std::vector<VcdSignal>& signals = vcdSignals();
+    for (std::size_t i = signals.size(); i-- > 0;) {
+      SignalRange& range = out[static_cast<std::size_t>(signals[i].field->word)];
+      if (range.end == 0) range.end = i + 1;
+      range.begin = i;
+    }
+    return out;
+  }();
+  return ranges;
+}
+
+void WaveformWriter::writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo) {
+  const std::vector<VcdSignal>& signals = vcdSignals();
+  for (std::size_t w = firstWordOf(pdo); w < firstWordOf(pdo) + wordCountOf(pdo); ++w) {
+    // An unchanged word changes none of its fields but those shown under another word's
+    // condition.
+    const std::uint64_t raw = values.raw[w];
+    const bool same = slot.word_known[w] && slot.words[w] == raw;
+    slot.words[w] = raw;
+    slot.word_known[w] = true;
+    const SignalRange range = signalsOfWords()[w];
+    for (std::size_t i = range.begin; i < range.end; ++i) {
+      if (!same || signals[i].field->when != FieldWhen::Always) writeSignal(slot, i, values);
+    }
+  }
+}
+
+void WaveformWriter::writeSignal(AxisSlot& slot, std::size_t i, const PdoValues& values) {
+  const VcdSignal& s = vcdSignals()[i];
+  const std::optional<std::uint64_t> bits = fieldBits(s, values);
+  Value& last = slot.values[i];
+  if (bits ? last.known && last.bits == *bits : !last.known) return;
+  stamp();
+  if (!bits) {
+    buffer_ += s.width == 1 ? "x" : "bx ";
+  } else if (s.kind == VcdVarKind::Real) {
+    appendVcdReal(buffer_, values.floatOf(s.field->word));
+    buffer_ += ' ';
+  } else {
+    appendVcdBits(buffer_, *bits, s.width);
+    if (s.width > 1) buffer_ += ' ';
+  }
+  buffer_ += ids_[slot.first_id + i];
+  buffer_ += '\n';
+  last = Value{bits.value_or(0), bits.has_value()};
+}
+
+void WaveformWriter::writeState(AxisSlot& slot, std::optional<DriveState> state) {
+  if (state == slot.state) return;
+  slot.state = state;
+  stamp();
+  appendVcdString(buffer_, state ? driveStateName(*state) : "");
+  buffer_ += ' ';
+  buffer_ += ids_[slot.first_id + vcdSignals().size() + kStateVar];
+  buffer_ += '\n';
+}
+
+const std::string& WaveformWriter::findingsId(const AxisSlot& slot) const {
+  return &slot == &bus_ ? ids_[0] : ids_[slot.first_id + vcdSignals().size() + kFindingsVar];
+}
+
+// Where a finding about `axis` (none: the bus) is shown; null for an axis not written.
+WaveformWriter::AxisSlot* WaveformWriter::findingSlot(std::optional<std::uint16_t> axis) {
+  if (!axis) return &bus_;
+  if (*axis >= slot_of_.size() || slot_of_[*axis] < 0) return nullptr;
+  return &axes_[static_cast<std::size_t>(slot_of_[*axis])];
+}
+
+// The rule joins those shown at this time on the slot's findings signal.
+void WaveformWriter::showFinding(AxisSlot& slot, std::string_view rule) {
+  if (!slot.findings.empty()) slot.findings += ',';
+  slot.findings += rule;
+  findings_shown_ = true;
+  stamp();
+  appendVcdString(buffer_, slot.findings);
+  buffer_ += ' ';
+  buffer_ += findingsId(slot);
+  buffer_ += '\n';
+}
+
+void WaveformWriter::clearFindings(AxisSlot& slot) {
+  if (slot.findings.empty()) return;
+  slot.findings.clear();
+  stamp();
+  appendVcdString(buffer_, "");
+  buffer_ += ' ';
+  buffer_ += findingsId(slot);
+  buffer_ += '\n';
+}
+
+Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
+                             const ByteReader& bytes, const std::vector<Finding>& findings,
+                             const Decoder& decoder) {
+  if (!header_written_ && frame.decode.axis_count == 0) {
+    for (const Finding& f : findings) {
+      if (early_findings_.size() >= kMaxEarlyFindings) {
+        ++early_findings_dropped_;
+      } else {
+        early_findings_.push_back(EarlyFinding{time_ns, f.axis, ruleDef(f.rule).code});
+      }
+    }
+    return {};
+  }
+  if (!header_written_) {
+    if (Status written = writeHeader(decoder); !written) return written;
+  }
+  advance(time_ns);
+  const FrameDecode& decode = frame.decode;
+  const bool returned = decode.copy == CopyKind::Returned;
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& placement = decode.axes[i];
+    if (placement.axis >= slot_of_.size() || slot_of_[placement.axis] < 0) continue;
+    AxisSlot& slot = axes_[static_cast<std::size_t>(slot_of_[placement.axis])];
+    PdoValues values;
+    readFrameValues(placement, bytes, values);
+    if (!returned) {
+      if (values.has_rx) writeWords(slot, values, Pdo::Rx);
+      slot.outputs_from_master = values.has_rx;
+    } else {
+      if (values.has_rx && !slot.outputs_from_master) writeWords(slot, values, Pdo::Rx);
+      if (values.has_tx) writeWords(slot, values, Pdo::Tx);
+      slot.outputs_from_master = false;
+    }
+    writeState(slot, frame.states[i]);
+  }
+  for (const Finding& f : findings) {
+    if (AxisSlot* slot = findingSlot(f.axis)) showFinding(*slot, ruleDef(f.rule).code);
+  }
+  if (buffer_.size() >= kFlushAt) flush();
+  return {};
+}
+
+Status WaveformWriter::finish(std::int64_t end_ns, const Decoder& decoder) {
+  Status status;
+  if (!header_written_) status = writeHeader(decoder);
+  advance(end_ns);
+  stamp();
+  flush();
+  return status;
+}
+
+void WaveformWriter::flush() {
+  std::fwrite(buffer_.data(), 1, buffer_.size(), out_);
+  buffer_.clear();
+}
+
+std::string gtkwPathFor(const std::string& vcd_path) {
+  constexpr std::string_view kVcd = ".vcd";
+  if (vcd_path.size() > kVcd.size() &&
+      vcd_path.compare(vcd_path.size() - kVcd.size(), kVcd.size(), kVcd) == 0) {
+    return vcd_path.substr(0, vcd_path.size() - kVcd.size()) + ".gtkw";
+  }
+  return vcd_path + ".gtkw";
+}
+
+void writeGtkwSave(std::FILE* out, const std::string& vcd_path, const std::string& save_path,
+                   const std::vector<WaveformWriter::Scope>& scopes) {
+  // GTKWave's trace flags (its analyzer.h): hexadecimal, binary, signed decimal, a blank trace,
+  // and the beginning and end of a group.
+  constexpr unsigned kHex = 0x22, kBinary = 0x28, kSigned = 0x420;
+  constexpr unsigned kGroupBegin = 0x800200, kGroupEnd = 0x1000200;
+  const std::vector<VcdSignal>& signals = vcdSignals();
+  // What the drive state and the handshakes are judged on: a word read whole is shown as the
+  // word, else its bit fields that are read.
+  const Reads& reads = AxisModel::kReads;
+  std::vector<std::size_t> shown;
+  for (std::size_t i = 0; i < signals.size(); ++i) {
+    const FieldDef& f = *signals[i].field;
+    const std::uint64_t read = reads.bits[static_cast<std::size_t>(f.word)];
+    const bool whole = read == wordMask(f.word);
+    if (f.kind == FieldKind::Word ? whole : !whole && (read & f.mask) != 0) shown.push_back(i);
+  }
+  std::string text = fmt::format(
+      "[*] ncservo {}: per axis, the signals its drive state and handshakes are judged on\n"
+      "[dumpfile] \"{}\"\n[savefile] \"{}\"\n[timestart] 0\n",
+      NCSERVO_VERSION, vcd_path, save_path);
+  unsigned flags = 0;
+  auto trace = [&](unsigned trace_flags, const std::string& line) {
+    if (trace_flags != flags) text += fmt::format("@{:x}\n", trace_flags);
+    flags = trace_flags;
+    text += line + "\n";
+  };
+  for (const WaveformWriter::Scope& scope : scopes) {
+    trace(kGroupBegin, "-" + scope.name);
+    if (scope.axis) {
+      for (std::size_t i : shown) {
+        const VcdSignal& s = signals[i];
+        const std::string path =
+            scope.name + "." + (s.scope.empty() ? "" : s.scope + ".") + s.name +
+            (s.kind == VcdVarKind::Wire && s.width > 1 ? fmt::format("[{}:0]", s.width - 1) : "");
+        trace(s.kind == VcdVarKind::Integer ? kSigned : s.width == 1 ? kBinary : kHex, path);
+      }
+      trace(kBinary, scope.name + ".state");
+    }
+    trace(kBinary, scope.name + ".findings");
+    trace(kGroupEnd, "-" + scope.name);
+  }
+  std::fputs(text.c_str(), out);
+}
+
+}  // namespace ncservo::cli
