@@ -177,6 +177,7 @@ grep -q "standard output has the --format report" "$WORK/err" || fail "--report 
 for f in r1 r2 r3; do [ ! -e "$WORK/$f" ] || fail "$f written by a refused run"; done
 
 # An interrupted run leaves no half report: the old report stays, no temporary file remains.
+# (SIGTERM: a background job of a script ignores SIGINT, and validate leaves it ignored.)
 echo "old report" >"$WORK/reports/long.json"
 mkfifo "$WORK/pipe"
 "$NCSERVO" validate --format json -o "$WORK/reports/long.json" --report sarif:"$WORK/reports/long.sarif" \
@@ -185,7 +186,7 @@ exec 3>"$WORK/pipe"
 head -c 30000 "$WORK/faults.pcap" >&3  # part of a capture; the rest never comes
 sleep 1
 ls -A "$WORK/reports" | grep -q '^\.long\.json\.' || fail "no temporary report while running: $(ls -A "$WORK/reports")"
-kill -INT $! || fail "validate ended before it was interrupted"
+kill -TERM $! || fail "validate ended before it was interrupted"
 wait $! 2>/dev/null || true
 exec 3>&-
 [ "$(cat "$WORK/reports/long.json")" = "old report" ] || fail "interrupted run replaced the report"

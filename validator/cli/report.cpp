@@ -11,6 +11,7 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <pugixml.hpp>
 #include <sstream>
@@ -509,6 +510,8 @@ extern "C" void removeTemporaries(int signal) {
 }
 
 constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+// What each was before: a signal the caller ignores (nohup, a background job) stays ignored.
+void (*g_previous[std::size(kInterrupts)])(int) = {};
 }  // namespace
 
 std::vector<std::string> reportFormatNames() {
@@ -584,13 +587,13 @@ Status locateFindings(CaptureReport& report) {
   CaptureRecord record;
   auto wanted = frames.begin();
   Result<bool> more;
+  // The findings' frames were all read before any damage, which the report already names.
   while (wanted != frames.end() && (more = (*opened)->next(record)) && *more) {
     if (!record.stored) return {};  // compressed: no record has a place in the file
     if (record.frame != *wanted) continue;
     report.frame_spans.emplace_back(record.frame, *record.stored);
     ++wanted;
   }
-  if (!more) return fail(more.error());
   return {};
 }
 
@@ -659,12 +662,17 @@ Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<Repor
     if (!o.temporary.empty()) temporaries.push_back(o.temporary);
   }
   g_temporaries = &temporaries;
-  for (int signal : kInterrupts) std::signal(signal, removeTemporaries);
+  for (std::size_t i = 0; i < std::size(kInterrupts); ++i) {
+    g_previous[i] = std::signal(kInterrupts[i], removeTemporaries);
+    if (g_previous[i] == SIG_IGN) std::signal(kInterrupts[i], SIG_IGN);
+  }
   return writer;
 }
 
 ReportWriter::~ReportWriter() {
-  for (int signal : kInterrupts) std::signal(signal, SIG_DFL);
+  for (std::size_t i = 0; i < std::size(kInterrupts); ++i) {
+    if (g_previous[i] != SIG_ERR) std::signal(kInterrupts[i], g_previous[i]);
+  }
   g_temporaries = nullptr;
   for (const Output& o : outputs_) {
     if (o.temporary.empty()) continue;
