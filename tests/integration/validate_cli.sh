@@ -25,6 +25,8 @@ run 0 "$WORK/clean.pcap"
 grep -q "^verdict: PASS" "$WORK/out" || fail "clean verdict: $(tail -1 "$WORK/out")"
 run 1 "$WORK/faults.pcap"
 grep -q "^verdict: FAIL - 1 error, 1 warning" "$WORK/out" || fail "faults verdict: $(tail -1 "$WORK/out")"
+grep -q "^error   SE-001  axis0 1 finding, frame" "$WORK/out" || fail "text finding line: $(grep SE-001 "$WORK/out")"
+run 1 --verbose "$WORK/faults.pcap"
 grep -q "^error   SE-001  axis0 frame" "$WORK/out" || fail "text finding line: $(grep SE-001 "$WORK/out")"
 run 0 --fail-on never "$WORK/faults.pcap"
 run 0 --disable SE-001 "$WORK/faults.pcap"
@@ -99,7 +101,8 @@ assert c["layout"]["axes"][1]["outputs"] == "0x0001000A", c["layout"]["axes"][1]
 assert c["summary"] == {"error": 1, "warning": 1, "info": 0}, c["summary"]
 want = sorted((f["rule"], f["axis"], f["frame"]) for f in c["findings"])
 for f in c["findings"]:
-    assert set(f) == {"rule", "slug", "severity", "axis", "frame", "since_frame", "time", "message"}, f
+    assert set(f) == {"rule", "slug", "severity", "axis", "axis_name", "frame", "since_frame", "time",
+                      "time_utc", "message"}, f
     assert f["message"]
 for a in c["axes"]:
     assert {"index", "name", "state", "state_timeline", "error_history", "telegram_failures"} <= set(a)

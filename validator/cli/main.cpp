@@ -377,11 +377,12 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
 
 // INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
 // checked before anything is opened for writing.
-Status refuseInputAsOutput(const std::string& output, const std::vector<std::string>& captures) {
+Status refuseInputAsOutput(const std::string& option, const std::string& output,
+                           const std::vector<std::string>& captures) {
   for (const std::string& capture : captures) {
     std::error_code ec;
     if (capture != "-" && std::filesystem::equivalent(output, capture, ec)) {
-      return fail(fmt::format("--output {} is the capture {}: refusing to write over an input",
+      return fail(fmt::format("{} {} is the capture {}: refusing to write over an input", option,
                               output, capture));
     }
   }
@@ -391,7 +392,7 @@ Status refuseInputAsOutput(const std::string& output, const std::vector<std::str
 // `-o FILE`, or standard output for none or "-".
 Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::string>& captures) {
   if (output.empty() || output == "-") return stdout;
-  if (Status refused = refuseInputAsOutput(output, captures); !refused)
+  if (Status refused = refuseInputAsOutput("--output", output, captures); !refused)
     return fail(refused.error());
   std::FILE* out = std::fopen(output.c_str(), "w");
   if (out == nullptr)
@@ -439,6 +440,8 @@ struct ValidateArgs {
   std::optional<int> servo_ready_mode;
   std::string timestamps = "auto";
   bool allow_empty = false;
+  bool verbose = false;
+  std::vector<std::string> reports;  // FORMAT:FILE
 };
 
 // The settings from the rules' defaults, the config file, then the command line.
@@ -492,6 +495,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     return kExitCapture;
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
+  report.timestamp_digits = reader->timestampDigits();
   FrameClock clock(timestamps);
   LayoutWindow window(decoder_options);
   std::optional<Validator> validator;
@@ -504,12 +508,15 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
       warnIfMalformed(reader->path(), number, decode.axes[i]);
     }
     for (const Finding& f : validator->findings()) {
-      ++report.counts[static_cast<std::size_t>(f.severity)];
+      report.tally(f);
       if (writer.keepsFindings()) report.findings.push_back(f);
       writer.finding(report, f);
     }
   };
-  const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
+  const auto start = [&](const DecoderOptions& layout) {
+    validator.emplace(layout, settings);
+    report.layout = validator->decoder().axes();  // the axes' names, for findings as they come
+  };
   const Status status = streamCapture(*reader, clock, window, {start, validate}, run);
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
@@ -521,6 +528,12 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   if (!status) {
     report.error = status.error().text() + " (the frames before it were analysed)";
     fmt::print(stderr, "ncservo: {}\n", *report.error);
+  }
+  if (writer.locatesFrames()) {
+    if (Status located = cli::locateFindings(report); !located) {
+      fmt::print(stderr, "ncservo: {}: frames not located in the file: {}\n", path,
+                 located.error().text());
+    }
   }
   writer.endCapture(report);
   switch (writer.verdict(report)) {
@@ -543,6 +556,54 @@ int combine(int a, int b) {
   return rank(a) <= rank(b) ? a : b;
 }
 
+// Whether two paths name one file, however spelt (links, "./"), whether or not it exists yet.
+bool sameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(a, b, ec)) return true;
+  const auto canonical_a = std::filesystem::weakly_canonical(a, ec);
+  if (ec) return false;
+  const auto canonical_b = std::filesystem::weakly_canonical(b, ec);
+  return !ec && canonical_a == canonical_b;
+}
+
+// The reports of a run: --format to --output (standard output by default), then each
+// --report FORMAT:FILE. INTERFACES.md: a report file that is one of the inputs, however named,
+// is a usage error, and so are two reports to one file; checked before anything is written.
+Result<std::vector<cli::ReportTarget>> reportTargets(const ValidateArgs& o) {
+  std::vector<cli::ReportTarget> targets{{cli::findReportFormat(o.format), o.output}};
+  std::vector<std::string> options{"--output"};
+  for (const std::string& spec : o.reports) {
+    const auto colon = spec.find(':');
+    const cli::ReportFormat* format =
+        colon == std::string::npos ? nullptr : cli::findReportFormat(spec.substr(0, colon));
+    if (format == nullptr || colon + 1 == spec.size()) {
+      return fail(fmt::format("--report {}: expected FORMAT:FILE, FORMAT one of {}", spec,
+                              choiceList(cli::reportFormatNames())));
+    }
+    const std::string path = spec.substr(colon + 1);
+    if (path == "-") {
+      return fail(
+          fmt::format("--report {}: standard output has the --format report; give a file", spec));
+    }
+    targets.push_back({format, path});
+    options.push_back("--report " + spec.substr(0, colon) + ":");
+  }
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    const std::string& path = targets[t].path;
+    if (path.empty() || path == "-") continue;
+    if (Status refused = refuseInputAsOutput(options[t], path, o.captures); !refused)
+      return fail(refused.error());
+    for (std::size_t u = 0; u < t; ++u) {
+      const std::string& other = targets[u].path;
+      if (!other.empty() && other != "-" && sameFile(path, other)) {
+        return fail(fmt::format("{} {} and {} {} are one file: give each report its own",
+                                options[u], other, options[t], path));
+      }
+    }
+  }
+  return targets;
+}
+
 int runValidate(const ValidateArgs& o) {
   if (std::count(o.captures.begin(), o.captures.end(), "-") > 1) {
     fmt::print(stderr, "ncservo: standard input (-) can be read only once\n");
@@ -558,25 +619,34 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: {}\n", built.error().text());
     return kExitUsage;
   }
-  const bool never = o.fail_on == "never";
-  const Severity fail_on = never ? Severity::Error : *severityFromName(o.fail_on);
-  Result<std::FILE*> opened = openOutput(o.output, o.captures);
-  if (!opened) {
-    fmt::print(stderr, "ncservo: {}\n", opened.error().text());
+  const Result<std::vector<cli::ReportTarget>> targets = reportTargets(o);
+  if (!targets) {
+    fmt::print(stderr, "ncservo: {}\n", targets.error().text());
     return kExitUsage;
   }
-  std::FILE* out = *opened;
-  cli::ReportWriter writer(out, *cli::findReportFormat(o.format), fail_on, never, o.allow_empty);
+  cli::ReportPolicy policy;
+  policy.never = o.fail_on == "never";
+  policy.fail_on = policy.never ? Severity::Error : *severityFromName(o.fail_on);
+  policy.allow_empty = o.allow_empty;
+  policy.verbose = o.verbose;
+  policy.enabled = settings.enabled;
+  auto writer = cli::ReportWriter::open(*targets, policy);
+  if (!writer) {
+    fmt::print(stderr, "ncservo: {}\n", writer.error().text());
+    return kExitUsage;
+  }
   const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
   std::vector<cli::CaptureReport> reports;
   int rc = kExitOk;
   for (const std::string& path : o.captures) {
     reports.emplace_back();
     rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, timestamps,
-                                     writer, reports.back()));
+                                     **writer, reports.back()));
   }
-  writer.finish(reports);
-  if (out != stdout) std::fclose(out);
+  if (Status written = (*writer)->finish(reports); !written) {
+    fmt::print(stderr, "ncservo: {}\n", written.error().text());
+    return kExitUsage;
+  }
   return rc;
 }
 
@@ -599,9 +669,11 @@ std::string timeoutText(const RuleDef& rule) {
 }
 
 void printRuleMarkdown(const RuleDef& rule) {
-  fmt::print("| {} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n", rule.code, rule.slug,
-             severityName(rule.severity), partyName(rule.party), ruleKindName(rule.kind),
-             describeReads(rule.reads), timeoutText(rule), rule.clause, rule.summary);
+  // An anchor per rule: SARIF's helpUri (report.cpp) links each rule here.
+  fmt::print("| <a id=\"{}\"></a>{} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n",
+             cli::ruleAnchor(rule), rule.code, rule.slug, severityName(rule.severity),
+             partyName(rule.party), ruleKindName(rule.kind), describeReads(rule.reads),
+             timeoutText(rule), rule.clause, rule.summary);
 }
 
 // The timeouts, their defaults and the rules that use them, after the rule table.
@@ -878,6 +950,12 @@ Handler validateCommand(CLI::App& command) {
   addFormatOption(command, args->format, cli::reportFormatNames());
   command.add_option("-o,--output", args->output,
                      "write the report here (default: standard output)");
+  command
+      .add_option("--report", args->reports,
+                  "FORMAT:FILE: also write that report to that file (repeatable)")
+      ->allow_extra_args(false);
+  command.add_flag("-v,--verbose", args->verbose,
+                   "text: every finding, not one line per rule and axis");
   command
       .add_option("--fail-on", args->fail_on,
                   "exit 1 on findings at or above: error, warning, info, never")

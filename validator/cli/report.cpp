@@ -1,7 +1,17 @@
 #include "report.hpp"
 
 #include <fmt/format.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <pugixml.hpp>
 #include <sstream>
@@ -10,6 +20,9 @@ namespace ncservo::cli {
 
 namespace {
 using Json = nlohmann::ordered_json;
+
+// The project's repository: SARIF's informationUri, and the base of each rule's helpUri.
+constexpr const char* kRepositoryUri = "https://github.com/ncservo/ncservo";
 
 double seconds(const CaptureReport& r, const Stamp& at) {
   return static_cast<double>(at.time_ns - r.first_time_ns) / 1e9;
@@ -20,6 +33,14 @@ std::string axisName(const CaptureReport& r, std::uint16_t axis) {
     if (info.index == axis) return info.name;
   }
   return fmt::format("axis{}", axis);
+}
+
+std::string axisLabel(const CaptureReport& r, const std::optional<std::uint16_t>& axis) {
+  return axis ? axisName(r, *axis) : std::string("bus");
+}
+
+std::string utcOf(const CaptureReport& r, const Stamp& at) {
+  return isoUtc(at.time_ns, r.timestamp_digits);
 }
 
 std::string hex32(std::uint32_t v) {
@@ -33,9 +54,11 @@ Json findingJson(const CaptureReport& r, const Finding& f) {
   j["slug"] = rule.slug;
   j["severity"] = severityName(f.severity);
   j["axis"] = f.axis ? Json(*f.axis) : Json(nullptr);
+  j["axis_name"] = f.axis ? Json(axisName(r, *f.axis)) : Json(nullptr);
   j["frame"] = f.at.frame;
   j["since_frame"] = f.since.frame;
   j["time"] = seconds(r, f.at);
+  j["time_utc"] = utcOf(r, f.at);
   j["message"] = f.message;
   return j;
 }
@@ -44,6 +67,7 @@ Json optionalNumber(const std::optional<double>& v) {
   return v ? Json(*v) : Json(nullptr);
 }
 
+// The verdicts as JSON names them, and as text shouts them.
 const char* verdictName(Verdict v) {
   switch (v) {
     case Verdict::Unreadable:
@@ -56,6 +80,20 @@ const char* verdictName(Verdict v) {
       return "pass";
   }
   return "pass";
+}
+
+const char* verdictHeadline(Verdict v) {
+  switch (v) {
+    case Verdict::Unreadable:
+      return "UNREADABLE";
+    case Verdict::Fail:
+      return "FAIL";
+    case Verdict::NoServo:
+      return "NO SERVO";
+    case Verdict::Pass:
+      break;
+  }
+  return "PASS";
 }
 
 // What the ESL probe headers said (PROTOCOL.md §8), when there were any.
@@ -104,14 +142,16 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
       timeline.push_back({{"state", driveStateName(s.state)},
                           {"transition", s.transition ? Json(s.transition) : Json(nullptr)},
                           {"frame", s.at.frame},
-                          {"time", seconds(r, s.at)}});
+                          {"time", seconds(r, s.at)},
+                          {"time_utc", utcOf(r, s.at)}});
     }
     Json history = Json::array();
     for (const ErrorHistoryEntry& e : a.error_history) {
       history.push_back({{"code", e.cause->display},
                          {"canopen", fmt::format("0x{:04X}", e.cause->canopen)},
                          {"frame", e.at.frame},
-                         {"time", seconds(r, e.at)}});
+                         {"time", seconds(r, e.at)},
+                         {"time_utc", utcOf(r, e.at)}});
     }
     Json axis{{"index", a.index},
               {"name", a.name},
@@ -143,53 +183,88 @@ const char* sarifLevel(Severity s) {
   return "note";
 }
 
+// A capture is a notification, not a result (SARIF 2.1.0 §3.58), where it could not be read to its
+// end or not every axis was checked: nothing there was found, nor shown to be right.
+void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_t artifact,
+                      Json& notifications) {
+  const Json where = {
+      {{"physicalLocation", {{"artifactLocation", {{"uri", r.path}, {"index", artifact}}}}}}};
+  if (r.error) {
+    notifications.push_back({{"descriptor", {{"id", "UNREADABLE"}}},
+                             {"level", "error"},
+                             {"message", {{"text", fmt::format("{}: {}", r.path, *r.error)}}},
+                             {"locations", where}});
+  }
+  if (!r.coverage.complete()) {
+    notifications.push_back(
+        {{"descriptor", {{"id", "NO-SERVO"}}},
+         {"level", verdictOf(sink.policy, r) == Verdict::NoServo ? "error" : "note"},
+         {"message", {{"text", fmt::format("{}: NO SERVO: {}", r.path, r.coverage.reason)}}},
+         {"locations", where}});
+  }
+}
+
+// A finding's place: the capture, the region of the file that stores its frame where that is
+// known (a pcap has no lines), and the frame as a logical location (an element of the capture).
+Json sarifLocation(const CaptureReport& r, std::size_t artifact, const Finding& f) {
+  Json physical{{"artifactLocation", {{"uri", r.path}, {"index", artifact}}}};
+  const auto stored = std::lower_bound(r.frame_spans.begin(), r.frame_spans.end(), f.at.frame,
+                                       [](const std::pair<std::uint64_t, RecordSpan>& s,
+                                          std::uint64_t frame) { return s.first < frame; });
+  if (stored != r.frame_spans.end() && stored->first == f.at.frame) {
+    physical["region"] = {{"byteOffset", stored->second.offset},
+                          {"byteLength", stored->second.length}};
+  }
+  const std::string frame = fmt::format("frame {}", f.at.frame);
+  return {{"physicalLocation", std::move(physical)},
+          {"logicalLocations",
+           {{{"name", frame},
+             {"fullyQualifiedName", fmt::format("{}/{}", r.path, frame)},
+             {"kind", "element"}}}}};
+}
+
 void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json rules = Json::array();
   for (const RuleDef& rule : kRules) {
     rules.push_back({{"id", rule.code},
                      {"name", rule.slug},
                      {"shortDescription", {{"text", rule.summary}}},
+                     {"helpUri", ruleHelpUri(rule)},
                      {"defaultConfiguration", {{"level", sarifLevel(rule.severity)}}},
                      {"properties", {{"party", partyName(rule.party)}, {"clause", rule.clause}}}});
   }
   Json results = Json::array();
   Json artifacts = Json::array();
-  // A capture where not every axis was checked is a notification, not a result (SARIF 2.1.0
-  // §3.58): nothing there was found, and nothing was shown to be right either.
   Json notifications = Json::array();
+  bool all_read = true;
   for (std::size_t c = 0; c < reports.size(); ++c) {
     const CaptureReport& r = reports[c];
     artifacts.push_back({{"location", {{"uri", r.path}}}});
-    if (!r.coverage.complete()) {
-      notifications.push_back(
-          {{"descriptor", {{"id", "NO-SERVO"}}},
-           {"level", verdictOf(sink, r) == Verdict::NoServo ? "error" : "note"},
-           {"message", {{"text", fmt::format("{}: NO SERVO: {}", r.path, r.coverage.reason)}}},
-           {"locations",
-            {{{"physicalLocation", {{"artifactLocation", {{"uri", r.path}, {"index", c}}}}}}}}});
-    }
+    addNotifications(sink, r, c, notifications);
+    all_read = all_read && !r.error;
     for (const Finding& f : r.findings) {
       const RuleDef& rule = ruleDef(f.rule);
-      const std::string axis = f.axis ? axisName(r, *f.axis) : std::string("bus");
+      const std::string axis = axisLabel(r, f.axis);
       results.push_back(
           {{"ruleId", rule.code},
-           {"ruleIndex", static_cast<std::size_t>(rule.id)},
+           {"ruleIndex", static_cast<std::size_t>(&rule - kRules.data())},
            {"level", sarifLevel(f.severity)},
            {"message", {{"text", fmt::format("{} frame {}: {}", axis, f.at.frame, f.message)}}},
-           {"locations",
-            {{{"physicalLocation",
-               {{"artifactLocation", {{"uri", r.path}, {"index", c}}},
-                {"region", {{"startLine", 1}}}}},
-              {"logicalLocations", {{{"name", axis}, {"kind", "object"}}}}}}},
+           {"locations", {sarifLocation(r, c, f)}},
            {"partialFingerprints",
             {{"ncservoFinding/v1", fmt::format("{}:{}:{}", rule.code, axis, f.since.frame)}}},
            {"properties",
             {{"frame", f.at.frame},
              {"since_frame", f.since.frame},
              {"time", seconds(r, f.at)},
-             {"axis", f.axis ? Json(*f.axis) : Json(nullptr)}}}});
+             {"time_utc", utcOf(r, f.at)},
+             {"axis", f.axis ? Json(*f.axis) : Json(nullptr)},
+             {"axis_name", f.axis ? Json(axis) : Json(nullptr)}}}});
     }
   }
+  // executionSuccessful (§3.20.14): false where a capture could not be read (exit status 3).
+  Json invocation{{"executionSuccessful", all_read}};
+  if (!notifications.empty()) invocation["toolExecutionNotifications"] = std::move(notifications);
   Json sarif{{"$schema", "https://json.schemastore.org/sarif-2.1.0.json"},
              {"version", "2.1.0"},
              {"runs",
@@ -197,17 +272,16 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
                  {{"driver",
                    {{"name", "ncservo"},
                     {"version", NCSERVO_VERSION},
-                    {"informationUri", "https://github.com/ncservo/ncservo"},
+                    {"informationUri", kRepositoryUri},
                     {"rules", std::move(rules)}}}}},
+                {"invocations", {std::move(invocation)}},
                 {"artifacts", std::move(artifacts)},
                 {"results", std::move(results)}}}}};
-  if (!notifications.empty()) {
-    sarif["runs"][0]["invocations"] = {
-        {{"executionSuccessful", true}, {"toolExecutionNotifications", std::move(notifications)}}};
-  }
   std::fputs((sarif.dump(2) + "\n").c_str(), sink.out);
 }
 
+// One test case per rule (GitLab keys a case by classname and name and shows classname as its
+// suite): failed when the rule fired at or above --fail-on, skipped where it was not judged.
 void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   pugi::xml_document doc;
   auto decl = doc.append_child(pugi::node_declaration);
@@ -230,25 +304,31 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       for (const Finding& f : r.findings) {
         if (f.rule == rule.id) fired.push_back(&f);
       }
-      if (fired.empty()) {
-        // Nothing checked is not a pass: where no servo (or not every configured one) was
-        // decoded, a rule that did not fire is skipped, with the reason.
-        if (!r.coverage.complete()) {
-          testcase.append_child("skipped").append_attribute("message") =
-              ("NO SERVO: " + r.coverage.reason).c_str();
-          ++skipped;
-        }
+      // Not judged is not a pass: a disabled rule, a capture that could not be read, and (for a
+      // rule that did not fire) a capture where not every configured servo was decoded.
+      std::string not_judged;
+      if (!sink.policy.enabled[static_cast<std::size_t>(rule.id)]) {
+        not_judged = "disabled (--disable or the configuration's [rules])";
+      } else if (r.unopened()) {
+        not_judged = "UNREADABLE: " + *r.error;
+      } else if (fired.empty() && !r.coverage.complete()) {
+        not_judged = "NO SERVO: " + r.coverage.reason;
+      }
+      if (!not_judged.empty()) {
+        // The schema Jenkins and GitLab read has <skipped> hold text, not attributes.
+        testcase.append_child("skipped").text() = not_judged.c_str();
+        ++skipped;
         continue;
       }
+      if (fired.empty()) continue;
       // A finding below --fail-on is listed, but does not fail the test case.
       bool failing = false;
       std::string body;
       for (const Finding* f : fired) {
-        failing = failing || (!sink.never && f->severity >= sink.fail_on);
-        body +=
-            fmt::format("frame {} (since {}) t={:.6f}s {} [{}]: {}\n", f->at.frame, f->since.frame,
-                        seconds(r, f->at), f->axis ? axisName(r, *f->axis) : std::string("bus"),
-                        severityName(f->severity), f->message);
+        failing = failing || (!sink.policy.never && f->severity >= sink.policy.fail_on);
+        body += fmt::format("frame {} (since {}) t={:.6f}s {} {} [{}]: {}\n", f->at.frame,
+                            f->since.frame, seconds(r, f->at), utcOf(r, f->at),
+                            axisLabel(r, f->axis), severityName(f->severity), f->message);
       }
       auto node = testcase.append_child(failing ? "failure" : "system-out");
       if (failing) {
@@ -290,15 +370,29 @@ void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
 }
 
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+  if (!sink.policy.verbose) return;
   fmt::print(sink.out, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}\n", severityName(f.severity),
-             ruleDef(f.rule).code, f.axis ? axisName(r, *f.axis) : std::string("bus"), f.at.frame,
-             seconds(r, f.at),
+             ruleDef(f.rule).code, axisLabel(r, f.axis), f.at.frame, seconds(r, f.at),
              f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
              f.message);
 }
 
+// One line per rule and axis: how many findings, the first and last frame, the first message.
+void writeTextGroups(const ReportSink& sink, const CaptureReport& r) {
+  for (const FindingGroup& g : r.groups) {
+    const std::string first = fmt::format("{} ({:.6f} s)", g.first.frame, seconds(r, g.first));
+    fmt::print(sink.out, "{:<7} {:<7} {} {} finding{}, {}: {}\n", severityName(g.severity),
+               ruleDef(g.rule).code, axisLabel(r, g.axis), g.count, g.count == 1 ? "" : "s",
+               g.count == 1 ? "frame " + first
+                            : fmt::format("frames {} to {} ({:.6f} s), first", first, g.last.frame,
+                                          seconds(r, g.last)),
+               g.first_message);
+  }
+}
+
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   std::FILE* out = sink.out;
+  if (!sink.policy.verbose) writeTextGroups(sink, r);
   fmt::print(out, "{}: {} frames, {} cycles", r.path, r.frames, r.cycles);
   if (r.cycle_time.median_us) {
     fmt::print(out, ", cycle {:.1f} us (p99 {:.1f}, max {:.1f})", *r.cycle_time.median_us,
@@ -330,6 +424,10 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
+  fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({})\n",
+             verdictHeadline(verdictOf(sink.policy, r)), r.count(Severity::Error),
+             r.count(Severity::Error) == 1 ? "" : "s", r.count(Severity::Warning),
+             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path);
 }
 
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
@@ -342,7 +440,7 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
     for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
     unread += r.error.has_value() ? 1 : 0;
     unchecked += r.coverage.complete() ? 0 : 1;
-    const Verdict v = verdictOf(sink, r);
+    const Verdict v = verdictOf(sink.policy, r);
     failed = failed || v == Verdict::Fail || v == Verdict::Unreadable;
     no_servo = no_servo || v == Verdict::NoServo;
   }
@@ -350,7 +448,7 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
   if (unread > 0) notes += fmt::format(", {} not read to the end", unread);
   if (unchecked > 0) {
     notes += fmt::format(", {} with no servo checked{}", unchecked,
-                         sink.allow_empty ? " (--allow-empty)" : "");
+                         sink.policy.allow_empty ? " (--allow-empty)" : "");
   }
   fmt::print(sink.out,
              "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
@@ -359,14 +457,15 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
                         : "PASS",
              counts[2], counts[2] == 1 ? "" : "s", counts[1], counts[1] == 1 ? "" : "s", counts[0],
              reports.size(), reports.size() == 1 ? "" : "s", notes,
-             sink.never ? "never" : severityName(sink.fail_on));
+             sink.policy.never ? "never" : severityName(sink.policy.fail_on));
 }
 
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json j;
   j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
   Json captures = Json::array();
-  for (const CaptureReport& r : reports) captures.push_back(captureJson(r, verdictOf(sink, r)));
+  for (const CaptureReport& r : reports)
+    captures.push_back(captureJson(r, verdictOf(sink.policy, r)));
   j["captures"] = std::move(captures);
   std::fputs((j.dump(2) + "\n").c_str(), sink.out);
 }
@@ -382,21 +481,37 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   if (r.coverage.complete()) return;
   Json j{{"capture", r.path},
-         {"verdict", verdictName(verdictOf(sink, r))},
+         {"verdict", verdictName(verdictOf(sink.policy, r))},
          {"reason", r.coverage.reason}};
   if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-// INTERFACES.md's formats of `validate`: name, keeps findings, begin capture, finding, end
-// capture, finish.
+// INTERFACES.md's formats of `validate`: name, keeps findings, locates frames, begin capture,
+// finding, end capture, finish.
 const ReportFormat kReportFormats[] = {
-    {"text", false, writeTextHeading, writeTextFinding, writeTextSummary, writeTextVerdict},
-    {"json", true, nullptr, nullptr, nullptr, writeJson},
-    {"jsonl", false, nullptr, writeJsonlFinding, writeJsonlCoverage, nullptr},
-    {"junit", true, nullptr, nullptr, nullptr, writeJunit},
-    {"sarif", true, nullptr, nullptr, nullptr, writeSarif},
+    {"text", false, false, writeTextHeading, writeTextFinding, writeTextSummary, writeTextVerdict},
+    {"json", true, false, nullptr, nullptr, nullptr, writeJson},
+    {"jsonl", false, false, nullptr, writeJsonlFinding, writeJsonlCoverage, nullptr},
+    {"junit", true, false, nullptr, nullptr, nullptr, writeJunit},
+    {"sarif", true, true, nullptr, nullptr, nullptr, writeSarif},
 };
+
+// Temporary reports are removed if the run is interrupted; the list is fixed while the handler
+// may run (between ReportWriter::open and finish).
+const std::vector<std::string>* g_temporaries = nullptr;
+
+extern "C" void removeTemporaries(int signal) {
+  if (g_temporaries != nullptr) {
+    for (const std::string& path : *g_temporaries) ::unlink(path.c_str());
+  }
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+}
+
+constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+// What each was before: a signal the caller ignores (nohup, a background job) stays ignored.
+void (*g_previous[std::size(kInterrupts)])(int) = {};
 }  // namespace
 
 std::vector<std::string> reportFormatNames() {
@@ -441,32 +556,177 @@ void summarise(const Validator& validator, CaptureReport& report) {
   }
 }
 
-ReportWriter::ReportWriter(std::FILE* out, const ReportFormat& format, Severity fail_on, bool never,
-                           bool allow_empty)
-    : sink_{out, fail_on, never, allow_empty}, format_(format) {}
-
-Verdict verdictOf(const ReportSink& sink, const CaptureReport& r) {
+Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& r) {
   if (r.error) return Verdict::Unreadable;
-  if (!sink.never && r.reaches(sink.fail_on)) return Verdict::Fail;
-  if (!r.coverage.complete() && !sink.allow_empty) return Verdict::NoServo;
+  if (!policy.never && r.reaches(policy.fail_on)) return Verdict::Fail;
+  if (!r.coverage.complete() && !policy.allow_empty) return Verdict::NoServo;
   return Verdict::Pass;
 }
 
+void CaptureReport::tally(const Finding& f) {
+  ++counts[static_cast<std::size_t>(f.severity)];
+  for (FindingGroup& g : groups) {
+    if (g.rule == f.rule && g.axis == f.axis) {
+      ++g.count;
+      g.last = f.at;
+      return;
+    }
+  }
+  groups.push_back({f.rule, f.severity, f.axis, 1, f.at, f.at, f.message});
+}
+
+Status locateFindings(CaptureReport& report) {
+  std::vector<std::uint64_t> frames;
+  for (const Finding& f : report.findings) frames.push_back(f.at.frame);
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  report.frame_spans.clear();
+  if (frames.empty() || report.path == "-") return {};
+  auto opened = CaptureReader::open(report.path);
+  if (!opened) return fail(opened.error());
+  CaptureRecord record;
+  auto wanted = frames.begin();
+  Result<bool> more;
+  // The findings' frames were all read before any damage, which the report already names.
+  while (wanted != frames.end() && (more = (*opened)->next(record)) && *more) {
+    if (!record.stored) return {};  // compressed: no record has a place in the file
+    if (record.frame != *wanted) continue;
+    report.frame_spans.emplace_back(record.frame, *record.stored);
+    ++wanted;
+  }
+  return {};
+}
+
+std::string isoUtc(std::int64_t time_ns, int digits) {
+  constexpr std::int64_t kNsPerSecond = 1000000000;
+  const std::int64_t seconds =
+      time_ns >= 0 ? time_ns / kNsPerSecond : -((-time_ns + kNsPerSecond - 1) / kNsPerSecond);
+  const std::int64_t nanoseconds = time_ns - seconds * kNsPerSecond;
+  const std::time_t whole = static_cast<std::time_t>(seconds);
+  std::tm utc{};
+  gmtime_r(&whole, &utc);
+  std::string text = fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}", utc.tm_year + 1900,
+                                 utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec);
+  digits = std::clamp(digits, 0, 9);
+  if (digits > 0) {
+    std::int64_t fraction = nanoseconds;
+    for (int d = digits; d < 9; ++d) fraction /= 10;
+    text += fmt::format(".{:0{}}", fraction, digits);
+  }
+  return text + "Z";
+}
+
+std::string ruleAnchor(const RuleDef& rule) {
+  std::string anchor(rule.code);
+  std::transform(anchor.begin(), anchor.end(), anchor.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return anchor;
+}
+
+// An absolute address: SARIF's helpUri is a URI (the 2.1.0 schema's format "uri"), and a relative
+// one would resolve against wherever the SARIF file is uploaded, not the repository.
+std::string ruleHelpUri(const RuleDef& rule) {
+  return fmt::format("{}/blob/main/docs/rules.md#{}", kRepositoryUri, ruleAnchor(rule));
+}
+
+Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<ReportTarget>& targets,
+                                                         const ReportPolicy& policy) {
+  std::unique_ptr<ReportWriter> writer(new ReportWriter(policy));
+  for (const ReportTarget& target : targets) {
+    Output output{target.format, stdout, {}, {}};
+    if (!target.path.empty() && target.path != "-") {
+      const std::filesystem::path path(target.path);
+      std::string temporary = (path.parent_path() / ("." + path.filename().string() + ".XXXXXX"))
+                                  .lexically_normal()
+                                  .string();
+      const int fd = ::mkstemp(temporary.data());
+      // mkstemp's file is private (0600); the report gets the mode a new file would have.
+      const mode_t mask = ::umask(0);
+      ::umask(mask);
+      if (fd >= 0) ::fchmod(fd, 0666 & ~mask);
+      std::FILE* out = fd >= 0 ? ::fdopen(fd, "w") : nullptr;
+      if (out == nullptr) {
+        if (fd >= 0) {
+          ::close(fd);
+          ::unlink(temporary.c_str());
+        }
+        return fail(fmt::format("{}: cannot write: {}", target.path, std::strerror(errno)));
+      }
+      output = {target.format, out, target.path, std::move(temporary)};
+    }
+    writer->outputs_.push_back(std::move(output));
+  }
+  static std::vector<std::string> temporaries;
+  temporaries.clear();
+  for (const Output& o : writer->outputs_) {
+    if (!o.temporary.empty()) temporaries.push_back(o.temporary);
+  }
+  g_temporaries = &temporaries;
+  for (std::size_t i = 0; i < std::size(kInterrupts); ++i) {
+    g_previous[i] = std::signal(kInterrupts[i], removeTemporaries);
+    if (g_previous[i] == SIG_IGN) std::signal(kInterrupts[i], SIG_IGN);
+  }
+  return writer;
+}
+
+ReportWriter::~ReportWriter() {
+  for (std::size_t i = 0; i < std::size(kInterrupts); ++i) {
+    if (g_previous[i] != SIG_ERR) std::signal(kInterrupts[i], g_previous[i]);
+  }
+  g_temporaries = nullptr;
+  for (const Output& o : outputs_) {
+    if (o.temporary.empty()) continue;
+    std::fclose(o.out);
+    ::unlink(o.temporary.c_str());
+  }
+}
+
+bool ReportWriter::keepsFindings() const {
+  return std::any_of(outputs_.begin(), outputs_.end(),
+                     [](const Output& o) { return o.format->keeps_findings; });
+}
+
+bool ReportWriter::locatesFrames() const {
+  return std::any_of(outputs_.begin(), outputs_.end(),
+                     [](const Output& o) { return o.format->locates_frames; });
+}
+
 void ReportWriter::beginCapture(const CaptureReport& report) {
-  if (format_.begin_capture != nullptr) format_.begin_capture(sink_, report);
+  for (const Output& o : outputs_) {
+    if (o.format->begin_capture != nullptr) o.format->begin_capture({o.out, policy_}, report);
+  }
 }
 
 void ReportWriter::finding(const CaptureReport& report, const Finding& f) {
-  if (format_.finding != nullptr) format_.finding(sink_, report, f);
+  for (const Output& o : outputs_) {
+    if (o.format->finding != nullptr) o.format->finding({o.out, policy_}, report, f);
+  }
 }
 
 void ReportWriter::endCapture(const CaptureReport& report) {
-  if (format_.end_capture != nullptr) format_.end_capture(sink_, report);
+  for (const Output& o : outputs_) {
+    if (o.format->end_capture != nullptr) o.format->end_capture({o.out, policy_}, report);
+  }
 }
 
-void ReportWriter::finish(const std::vector<CaptureReport>& reports) {
-  if (format_.finish != nullptr) format_.finish(sink_, reports);
-  std::fflush(sink_.out);
+Status ReportWriter::finish(const std::vector<CaptureReport>& reports) {
+  Status status;
+  for (Output& o : outputs_) {
+    if (o.format->finish != nullptr) o.format->finish({o.out, policy_}, reports);
+    if (o.temporary.empty()) {
+      std::fflush(o.out);
+      continue;
+    }
+    const bool written = std::fflush(o.out) == 0 && ::fsync(fileno(o.out)) == 0;
+    const bool closed = std::fclose(o.out) == 0;
+    const std::string temporary = std::exchange(o.temporary, {});
+    if (!written || !closed || std::rename(temporary.c_str(), o.path.c_str()) != 0) {
+      const int error = errno;
+      ::unlink(temporary.c_str());
+      if (status) status = fail(fmt::format("{}: cannot write: {}", o.path, std::strerror(error)));
+    }
+  }
+  return status;
 }
 
 }  // namespace ncservo::cli

@@ -1,8 +1,10 @@
 #include "ncservo/capture_reader.hpp"
 
+#include <arpa/inet.h>
 #include <fmt/format.h>
 #include <pcap/pcap.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <zlib.h>
 #include <zstd.h>
 
@@ -40,7 +42,62 @@ Compression sniff(const std::uint8_t* head, std::size_t size) {
   return Compression::None;
 }
 
+// Enough of a capture's beginning to hold a pcapng section header and its first interface.
+constexpr std::size_t kHeadSize = 1024;
+
+std::uint32_t load32(const std::uint8_t* p, bool big_endian) {
+  return big_endian ? (std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 |
+                       std::uint32_t{p[2]} << 8 | p[3])
+                    : (std::uint32_t{p[3]} << 24 | std::uint32_t{p[2]} << 16 |
+                       std::uint32_t{p[1]} << 8 | p[0]);
+}
+
+std::uint16_t load16(const std::uint8_t* p, bool big_endian) {
+  return static_cast<std::uint16_t>(big_endian ? (p[0] << 8 | p[1]) : (p[1] << 8 | p[0]));
+}
+
+// pcap file header magics (pcap-savefile(5)) and pcapng's block types and option
+// (draft-ietf-opsawg-pcapng §4.1, §4.2: if_tsresol is option 9).
+constexpr std::uint32_t kPcapMicroMagic = 0xA1B2C3D4;
+constexpr std::uint32_t kPcapNanoMagic = 0xA1B23C4D;
+constexpr std::uint32_t kSectionHeaderBlock = 0x0A0D0D0A;
+constexpr std::uint32_t kByteOrderMagic = 0x1A2B3C4D;
+constexpr std::uint32_t kInterfaceBlock = 1;
+constexpr std::uint16_t kOptionEnd = 0;
+constexpr std::uint16_t kOptionTsresol = 9;
+constexpr int kMicrosecondDigits = 6;
+constexpr int kNanosecondDigits = 9;
+
+// pcapng's if_tsresol: 10^-v, or 2^-v when the top bit is set; as decimal digits, at most 9.
+int tsresolDigits(std::uint8_t value) {
+  const int exponent = value & 0x7F;
+  const int digits = (value & 0x80) != 0 ? (exponent * 30103 + 99999) / 100000 : exponent;
+  return std::min(digits, kNanosecondDigits);
+}
+
 }  // namespace
+
+int timestampDigits(const std::uint8_t* head, std::size_t size) {
+  if (size < 12) return kMicrosecondDigits;
+  for (const bool big : {false, true}) {
+    const std::uint32_t magic = load32(head, big);
+    if (magic == kPcapMicroMagic) return kMicrosecondDigits;
+    if (magic == kPcapNanoMagic) return kNanosecondDigits;
+  }
+  if (load32(head, false) != kSectionHeaderBlock) return kMicrosecondDigits;
+  const bool big = load32(head + 8, true) == kByteOrderMagic;
+  const std::size_t idb = load32(head + 4, big);
+  if (idb + 16 > size || load32(head + idb, big) != kInterfaceBlock) return kMicrosecondDigits;
+  const std::size_t end = std::min<std::size_t>(size, idb + load32(head + idb + 4, big) - 4);
+  for (std::size_t at = idb + 16; at + 4 <= end;) {
+    const std::uint16_t code = load16(head + at, big);
+    const std::uint16_t length = load16(head + at + 2, big);
+    if (code == kOptionEnd) break;
+    if (code == kOptionTsresol && length == 1 && at + 5 <= end) return tsresolDigits(head[at + 4]);
+    at += 4 + (length + 3u) / 4 * 4;
+  }
+  return kMicrosecondDigits;
+}
 
 const char* compressionName(Compression compression) {
   for (const CompressionMagic& m : kMagics) {
@@ -88,6 +145,15 @@ class DecompressedStream {
     return file;
   }
 
+  // Decodes the capture's first `size` bytes ahead, so its header can be looked at; reads give
+  // them first.
+  const std::string& peek(std::size_t size) {
+    ahead_.resize(size);
+    const ssize_t got = decodeInto(ahead_.data(), size);
+    ahead_.resize(got > 0 ? static_cast<std::size_t>(got) : 0);
+    return ahead_;
+  }
+
   // What went wrong, if reading stopped before the end of the compressed data.
   const std::optional<std::string>& error() const { return error_; }
 
@@ -96,6 +162,16 @@ class DecompressedStream {
   static constexpr std::size_t kOutputSize = 1 << 17;
 
   ssize_t read(char* out, std::size_t size) {
+    if (ahead_pos_ < ahead_.size()) {
+      const std::size_t n = std::min(size, ahead_.size() - ahead_pos_);
+      std::memcpy(out, ahead_.data() + ahead_pos_, n);
+      ahead_pos_ += n;
+      return static_cast<ssize_t>(n);
+    }
+    return decodeInto(out, size);
+  }
+
+  ssize_t decodeInto(char* out, std::size_t size) {
     if (error_) return -1;
     std::size_t done = 0;
     while (done < size) {
@@ -194,6 +270,8 @@ class DecompressedStream {
   bool zlib_ready_ = false;
   ZSTD_DStream* zstd_ = nullptr;
   std::optional<std::string> error_;
+  std::string ahead_;  // peek()'s bytes
+  std::size_t ahead_pos_ = 0;
 };
 
 CaptureReader::~CaptureReader() {
@@ -232,7 +310,7 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
     reader->buffer_ = std::make_unique<char[]>(kReadBufferSize);
     std::setvbuf(file, reader->buffer_.get(), _IOFBF, kReadBufferSize);
   }
-  std::uint8_t head[kMagicSize] = {};
+  std::uint8_t head[kHeadSize] = {};
   const std::size_t head_size = std::fread(head, 1, sizeof head, file);
   reader->compression_ = sniff(head, head_size);
   std::FILE* pcap_file = file;
@@ -241,9 +319,15 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
   if (reader->compression_ != Compression::None || std::fseek(file, 0, SEEK_SET) != 0) {
     reader->stream_ =
         std::make_unique<DecompressedStream>(file, reader->compression_, head, head_size);
+    const std::string& ahead = reader->stream_->peek(kHeadSize);
+    reader->timestamp_digits_ =
+        ncservo::timestampDigits(reinterpret_cast<const std::uint8_t*>(ahead.data()), ahead.size());
+    reader->pcapng_ = false;  // records are not located in a stream
     pcap_file = reader->stream_->file();
     if (pcap_file == nullptr) return cannot(std::strerror(errno));
   } else {
+    reader->timestamp_digits_ = ncservo::timestampDigits(head, head_size);
+    reader->pcapng_ = head_size >= 4 && load32(head, false) == kSectionHeaderBlock;
     reader->source_ = nullptr;  // libpcap closes it with its handle
   }
   char errbuf[PCAP_ERRBUF_SIZE] = {};
@@ -279,6 +363,32 @@ Error CaptureReader::failure(std::uint64_t frame, const char* pcap_message) cons
   return Error{path_, 0, frame, {}, pcap_message};
 }
 
+// A plain file is read by libpcap record by record, so its position is the record's end. pcap
+// records follow each other from the end of the 24-byte file header (pcap-savefile(5)); a pcapng
+// block, which other blocks may precede, ends with its total length (pcapng §3.1).
+std::optional<RecordSpan> CaptureReader::storedSpan() {
+  constexpr std::uint64_t kPcapFileHeader = 24;
+  std::FILE* file = pcap_file(handle_);
+  const long end = file != nullptr ? std::ftell(file) : -1;
+  if (end < 0) return std::nullopt;
+  const auto at = static_cast<std::uint64_t>(end);
+  const std::uint64_t start = record_end_ == 0 ? kPcapFileHeader : record_end_;
+  record_end_ = at;
+  std::uint64_t length = at - std::min(at, start);
+  if (pcapng_) {
+    std::uint8_t trailer[4];
+    if (at < sizeof trailer ||
+        pread(fileno(file), trailer, sizeof trailer, static_cast<off_t>(at - sizeof trailer)) !=
+            static_cast<ssize_t>(sizeof trailer)) {
+      return std::nullopt;
+    }
+    const bool host_big = htonl(1) == 1;
+    length = load32(trailer, host_big != (pcap_is_swapped(handle_) == 1));
+  }
+  if (length == 0 || length > at) return std::nullopt;
+  return RecordSpan{at - length, length};
+}
+
 Result<bool> CaptureReader::next(CaptureRecord& record) {
   pcap_pkthdr* header = nullptr;
   const u_char* data = nullptr;
@@ -298,6 +408,7 @@ Result<bool> CaptureReader::next(CaptureRecord& record) {
   record.data = data;
   record.captured = header->caplen;
   record.original = header->len;
+  record.stored = stream_ ? std::nullopt : storedSpan();
   return true;
 }
 

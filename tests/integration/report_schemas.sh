@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# report_schemas.sh SRC BUILD: every kind of JUnit and SARIF report `validate` writes (findings,
+# disabled rules, NO SERVO, unreadable and compressed captures, several captures) is valid against
+# the schema its readers use: Jenkins' JUnit XSD (xmllint) and the OASIS SARIF 2.1.0 JSON schema
+# (python3-jsonschema). The schemas are fetched from npm packages into the build tree
+# (tests/tools/fetch_schemas.sh, run by .ci/setup), never kept in the repository.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+schemas="$BUILD/schemas"
+if ! "$SRC/tests/tools/fetch_schemas.sh" "$schemas" || ! command -v xmllint >/dev/null ||
+  ! python3 -c "import jsonschema" 2>/dev/null; then
+  [ -z "${CI:-}" ] || fail "schemas, xmllint or python3-jsonschema missing (.ci/setup installs them)"
+  echo "SKIPPED: schemas (npm), xmllint or python3-jsonschema missing"
+  exit 77
+fi
+
+"$NCSERVO" simulate --scenario faults --axes 4 --seed 5 -o "$WORK/faults.pcap" 2>/dev/null
+"$NCSERVO" simulate --scenario faults --axes 4 --seed 3 -o "$WORK/nano.pcapng" 2>/dev/null
+gzip -c "$WORK/nano.pcapng" >"$WORK/nano.pcapng.gz"
+python3 "$GEN" --axes 2 --cycles 200 -o "$WORK/clean.pcap"
+printf 'not a capture\n' >"$WORK/text.pcap"
+printf '[[axis]]\nname = "ghost"\noutputs = 0x00090000\ninputs = 0x00090028\n' >"$WORK/ghost.toml"
+
+cases=(  # NAME|ARGS (captures from $WORK)
+  "findings|faults.pcap nano.pcapng nano.pcapng.gz"
+  "disabled|faults.pcap --disable SE-001,COM-004 --fail-on warning"
+  "clean|clean.pcap"
+  "no_servo|clean.pcap --config ghost.toml"
+  "unreadable|text.pcap missing.pcap faults.pcap"
+)
+n=0
+for row in "${cases[@]}"; do
+  name=${row%%|*}
+  args=()
+  for a in ${row#*|}; do [ -e "$WORK/$a" ] || [[ $a == missing* ]] && args+=("$WORK/$a") || args+=("$a"); done
+  "$NCSERVO" validate --report junit:"$WORK/$name.xml" --report sarif:"$WORK/$name.sarif" "${args[@]}" \
+    >/dev/null 2>&1 || true
+  [ -s "$WORK/$name.xml" ] && [ -s "$WORK/$name.sarif" ] || fail "$name: no report"
+  xmllint --noout --schema "$schemas/jenkins-junit.xsd" "$WORK/$name.xml" 2>"$WORK/xmllint.err" ||
+    fail "$name: JUnit not valid: $(head -5 "$WORK/xmllint.err")"
+  python3 - "$schemas/sarif-schema-2.1.0.json" "$WORK/$name.sarif" <<'PY' || fail "$name: SARIF not valid"
+import json, sys, jsonschema
+schema = json.load(open(sys.argv[1]))
+cls = jsonschema.validators.validator_for(schema)
+errors = sorted(cls(schema).iter_errors(json.load(open(sys.argv[2]))), key=lambda e: list(e.path))
+for e in errors[:5]:
+    print(list(e.path), e.message[:300], file=sys.stderr)
+sys.exit(1 if errors else 0)
+PY
+  n=$((n + 1))
+done
+echo "report_schemas: $n runs' JUnit and SARIF valid against Jenkins' XSD and SARIF 2.1.0"

@@ -1,0 +1,142 @@
+// The pure parts of `validate`'s reports (report.hpp): absolute times in ISO 8601, the capture's
+// timestamp precision from its header, findings counted by rule and axis, the rules' anchors.
+#include "report.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "row_name.hpp"
+
+namespace ncservo::cli {
+namespace {
+
+struct IsoRow {
+  const char* name;
+  std::int64_t time_ns;
+  int digits;
+  const char* expected;
+};
+
+class IsoUtc : public ::testing::TestWithParam<IsoRow> {};
+
+TEST_P(IsoUtc, FormatsInUtcWithTheCapturesDigits) {
+  const IsoRow& row = GetParam();
+  EXPECT_EQ(isoUtc(row.time_ns, row.digits), row.expected);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rows, IsoUtc,
+    ::testing::Values(
+        IsoRow{"epoch_micro", 0, 6, "1970-01-01T00:00:00.000000Z"},
+        IsoRow{"micro_truncates", 1714564800123456789, 6, "2024-05-01T12:00:00.123456Z"},
+        IsoRow{"nano", 1714564800123456789, 9, "2024-05-01T12:00:00.123456789Z"},
+        IsoRow{"whole_seconds", 1714564800999999999, 0, "2024-05-01T12:00:00Z"},
+        IsoRow{"millis", 1714564800007000000, 3, "2024-05-01T12:00:00.007Z"},
+        IsoRow{"leap_day", 951782400000000000, 6, "2000-02-29T00:00:00.000000Z"},
+        IsoRow{"end_of_pcap_range", 4294967295000000000, 6, "2106-02-07T06:28:15.000000Z"},
+        IsoRow{"digits_clamped", 1500000000, 12, "1970-01-01T00:00:01.500000000Z"}),
+    test::rowName<IsoRow>);
+
+struct DigitsRow {
+  const char* name;
+  std::vector<std::uint8_t> head;
+  int expected;
+};
+
+// A pcapng section header (28 bytes, little-endian) and an interface block with these options.
+std::vector<std::uint8_t> pcapng(std::vector<std::uint8_t> options, bool big_endian = false) {
+  auto put32 = [&](std::vector<std::uint8_t>& out, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) {
+      const int shift = big_endian ? 24 - 8 * i : 8 * i;
+      out.push_back(static_cast<std::uint8_t>(v >> shift));
+    }
+  };
+  std::vector<std::uint8_t> out;
+  put32(out, 0x0A0D0D0A);
+  put32(out, 28);
+  put32(out, 0x1A2B3C4D);
+  for (int i = 0; i < 12; ++i) out.push_back(i < 4 ? (big_endian ? i == 1 : i == 0) : 0xFF);
+  put32(out, 28);
+  const std::uint32_t length = 20 + static_cast<std::uint32_t>(options.size());
+  put32(out, 1);
+  put32(out, length);
+  put32(out, 1);       // link type, reserved
+  put32(out, 0xFFFF);  // snap length
+  out.insert(out.end(), options.begin(), options.end());
+  put32(out, length);
+  return out;
+}
+
+class TimestampDigits : public ::testing::TestWithParam<DigitsRow> {};
+
+TEST_P(TimestampDigits, ReadsThePrecisionFromTheHeader) {
+  const DigitsRow& row = GetParam();
+  EXPECT_EQ(timestampDigits(row.head.data(), row.head.size()), row.expected);
+}
+
+// Options: code 2 (if_name, 3 bytes padded to 4) first, then if_tsresol (code 9), then the end.
+INSTANTIATE_TEST_SUITE_P(
+    Rows, TimestampDigits,
+    ::testing::Values(
+        DigitsRow{"pcap_micro_le", {0xD4, 0xC3, 0xB2, 0xA1, 2, 0, 4, 0, 0, 0, 0, 0}, 6},
+        DigitsRow{"pcap_micro_be", {0xA1, 0xB2, 0xC3, 0xD4, 0, 2, 0, 4, 0, 0, 0, 0}, 6},
+        DigitsRow{"pcap_nano_le", {0x4D, 0x3C, 0xB2, 0xA1, 2, 0, 4, 0, 0, 0, 0, 0}, 9},
+        DigitsRow{"pcap_nano_be", {0xA1, 0xB2, 0x3C, 0x4D, 0, 2, 0, 4, 0, 0, 0, 0}, 9},
+        DigitsRow{"pcapng_default_micro", pcapng({0, 0, 0, 0}), 6},
+        DigitsRow{"pcapng_nano", pcapng({9, 0, 1, 0, 9, 0, 0, 0, 0, 0, 0, 0}), 9},
+        DigitsRow{"pcapng_after_name",
+                  pcapng({2, 0, 3, 0, 'e', 't', 'h', 0, 9, 0, 1, 0, 3, 0, 0, 0, 0, 0, 0, 0}), 3},
+        DigitsRow{"pcapng_power_of_two", pcapng({9, 0, 1, 0, 0x80 | 20, 0, 0, 0, 0, 0, 0, 0}), 7},
+        DigitsRow{"pcapng_big_endian", pcapng({0, 9, 0, 1, 9, 0, 0, 0, 0, 0, 0, 0}, true), 9},
+        DigitsRow{"too_short", {0xD4, 0xC3}, 6},
+        DigitsRow{
+            "not_a_capture", {'h', 'e', 'l', 'l', 'o', ' ', 'w', 'o', 'r', 'l', 'd', '!'}, 6}),
+    test::rowName<DigitsRow>);
+
+Finding finding(RuleId rule, std::optional<std::uint16_t> axis, std::uint64_t frame,
+                Severity severity = Severity::Warning) {
+  return {rule, severity, axis, {frame, 0}, {frame, 0}, "at " + std::to_string(frame)};
+}
+
+TEST(FindingGroups, OneGroupPerRuleAndAxisInTheOrderOfTheFirstFinding) {
+  CaptureReport report;
+  const std::vector<Finding> findings = {
+      finding(RuleId::Com004, std::nullopt, 10), finding(RuleId::Se001, 0, 12, Severity::Error),
+      finding(RuleId::Com004, std::nullopt, 20), finding(RuleId::Se001, 1, 30, Severity::Error),
+      finding(RuleId::Com004, std::nullopt, 40)};
+  for (const Finding& f : findings) report.tally(f);
+  ASSERT_EQ(report.groups.size(), 3u);
+  const FindingGroup& bus = report.groups[0];
+  EXPECT_EQ(bus.rule, RuleId::Com004);
+  EXPECT_FALSE(bus.axis.has_value());
+  EXPECT_EQ(bus.count, 3u);
+  EXPECT_EQ(bus.first.frame, 10u);
+  EXPECT_EQ(bus.last.frame, 40u);
+  EXPECT_EQ(bus.first_message, "at 10");
+  EXPECT_EQ(report.groups[1].axis, std::optional<std::uint16_t>(0));
+  EXPECT_EQ(report.groups[2].axis, std::optional<std::uint16_t>(1));
+  EXPECT_EQ(report.groups[2].count, 1u);
+  EXPECT_EQ(report.count(Severity::Warning), 3u);
+  EXPECT_EQ(report.count(Severity::Error), 2u);
+}
+
+TEST(RuleAnchors, AreTheLowerCaseIdsAndUniqueAndHelpUrisPointIntoTheRuleReference) {
+  std::vector<std::string> anchors;
+  for (const RuleDef& rule : kRules) {
+    const std::string anchor = ruleAnchor(rule);
+    EXPECT_EQ(anchor.size(), std::string(rule.code).size());
+    EXPECT_NE(ruleHelpUri(rule).find("/docs/rules.md#" + anchor), std::string::npos);
+    EXPECT_EQ(ruleHelpUri(rule).rfind("https://", 0), 0u);
+    anchors.push_back(anchor);
+  }
+  EXPECT_EQ(ruleAnchor(ruleDef(RuleId::Se001)), "se-001");
+  std::sort(anchors.begin(), anchors.end());
+  EXPECT_EQ(std::unique(anchors.begin(), anchors.end()), anchors.end());
+}
+
+}  // namespace
+}  // namespace ncservo::cli
