@@ -960,12 +960,18 @@ Handler validateCommand(CLI::App& command) {
       .add_option("--fail-on", args->fail_on,
                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
-  command.add_option("--disable", args->disable, "rule IDs to skip, comma-separated")
-      ->delimiter(',');
-  command.add_option("--severity", args->severities, "ID=LEVEL: change a rule's severity")
-      ->delimiter(',');
-  command.add_option("--timeout", args->timeouts, "NAME=MS: change a timeout (docs/rules.md)")
-      ->delimiter(',');
+  command.add_option("--disable", args->disable, "rule IDs to skip, comma-separated (repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
+      .add_option("--severity", args->severities, "ID=LEVEL: change a rule's severity (repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
+      .add_option("--timeout", args->timeouts,
+                  "NAME=MS: change a timeout (docs/rules.md; repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   command
       .add_option("--servo-ready-mode", args->servo_ready_mode,
                   "Servo_Ready_Mode of the drives (0 or 1)")
