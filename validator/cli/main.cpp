@@ -476,18 +476,35 @@ void printRuleMarkdown(const RuleDef& rule) {
              describeReads(rule.reads), timeout, rule.clause, rule.summary);
 }
 
-// `rules`'s formats: a header, then one line per rule.
+// The timeouts of RULES.md "Time" with their defaults and the rules that use them.
+void printTimeoutsMarkdown() {
+  fmt::print(
+      "\n| timeout | default (ms) | used by |\n"
+      "|---|---|---|\n");
+  for (const TimeoutDef& t : kTimeouts) {
+    std::vector<std::string> users;
+    for (const RuleDef& rule : kRules) {
+      if (rule.timeout == t.id) users.emplace_back(rule.code);
+    }
+    fmt::print("| `{}` | {} | {} |\n", t.name, t.default_ms,
+               users.empty() ? std::string("capture segments (a longer pause starts one)")
+                             : fmt::format("{}", fmt::join(users, ", ")));
+  }
+}
+
+// `rules`'s formats: a header, then one line per rule, then an optional footer.
 struct RuleListFormat {
   const char* name;
   const char* header;
   void (*rule)(const RuleDef& rule);
+  void (*footer)();
 };
 const RuleListFormat kRuleListFormats[] = {
-    {"text", "", printRuleText},
+    {"text", "", printRuleText, nullptr},
     {"markdown",
      "| ID | slug | severity | party | judged on | reads | timeout | clause | summary |\n"
      "|---|---|---|---|---|---|---|---|---|\n",
-     printRuleMarkdown},
+     printRuleMarkdown, printTimeoutsMarkdown},
 };
 
 std::string maskText(const FieldDef& f) {
@@ -737,6 +754,7 @@ Handler rulesCommand(CLI::App& command) {
     const RuleListFormat& list = rowNamed(kRuleListFormats, *format);
     fmt::print("{}", list.header);
     for (const RuleDef& rule : kRules) list.rule(rule);
+    if (list.footer != nullptr) list.footer();
     return kExitOk;
   };
 }

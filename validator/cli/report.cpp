@@ -72,6 +72,18 @@ Json probeJson(const CaptureReport& r) {
   return j;
 }
 
+// The capture's segments (RULES.md "Time"), times in the capture's own seconds.
+Json segmentsJson(const CaptureReport& r) {
+  Json segments = Json::array();
+  for (const CaptureSegment& s : r.segments) {
+    segments.push_back({{"first_frame", s.first_frame},
+                        {"last_frame", s.last_frame},
+                        {"start", seconds(r, Stamp{s.first_frame, s.start_ns})},
+                        {"end", seconds(r, Stamp{s.last_frame, s.end_ns})}});
+  }
+  return segments;
+}
+
 Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json c;
   c["path"] = r.path;
@@ -91,7 +103,9 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
     layout_axes.push_back(std::move(a));
   }
-  c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}};
+  c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}, {"segments", segmentsJson(r)}};
+  if (r.segment_count > r.segments.size())
+    c["timing"]["segments_omitted"] = r.segment_count - r.segments.size();
   if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
   c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
   Json findings = Json::array();
@@ -327,6 +341,15 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     }
   }
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
+  if (r.segment_count > 1) {
+    fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
+               r.segment_count);
+    for (const CaptureSegment& s : r.segments) {
+      fmt::print(out, "  frames {}-{}, {:.6f} s to {:.6f} s\n", s.first_frame, s.last_frame,
+                 seconds(r, Stamp{s.first_frame, s.start_ns}),
+                 seconds(r, Stamp{s.last_frame, s.end_ns}));
+    }
+  }
   if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
@@ -379,12 +402,13 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 }
 
 // JSON Lines: a capture where not every axis was checked closes with a line that says so.
+// So does one with several segments.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
-  if (r.coverage.complete()) return;
-  Json j{{"capture", r.path},
-         {"verdict", verdictName(verdictOf(sink, r))},
-         {"reason", r.coverage.reason}};
+  if (r.coverage.complete() && r.segment_count <= 1) return;
+  Json j{{"capture", r.path}, {"verdict", verdictName(verdictOf(sink, r))}};
+  if (!r.coverage.complete()) j["reason"] = r.coverage.reason;
   if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
+  if (r.segment_count > 1) j["segments"] = segmentsJson(r);
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
@@ -424,6 +448,8 @@ void summarise(const Validator& validator, CaptureReport& report) {
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();
   report.layout = validator.decoder().axes();
+  report.segments = validator.segments().segments();
+  report.segment_count = validator.segments().count();
   report.axes.clear();
   for (std::size_t i = 0; i < validator.axisCount(); ++i) {
     const AxisModel* model = validator.axis(i);

@@ -46,7 +46,9 @@ struct CaptureReport {
   Coverage coverage;                 // whether every axis was checked
   TimestampSource timestamps = TimestampSource::Capture;
   ProbeCounts probe;
-  std::string probe_note;  // FrameClock::note()
+  std::string probe_note;                // FrameClock::note()
+  std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
+  std::uint64_t segment_count = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Whether any finding is at or above `level`.
   bool reaches(Severity level) const;
