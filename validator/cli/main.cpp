@@ -168,13 +168,28 @@ const RowFormat kRowFormats[] = {
     {"jsonl", nullptr, writeJsonRow},
 };
 
-// A PDO region the capture cut short or that straddles its datagram's end (the frame is still
-// analysed; the region is not read).
-void warnIfMalformed(const std::string& capture, std::uint64_t frame, const AxisPlacement& p) {
-  if (!p.rx_malformed && !p.tx_malformed) return;
-  fmt::print(stderr,
-             "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
-             capture, frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
+// --from/--to (INTERFACES.md), seconds since the capture's first frame.
+struct WindowArgs {
+  std::optional<double> from_s, to_s;
+};
+void addWindowOptions(CLI::App& command, WindowArgs& window) {
+  command.add_option("--from", window.from_s,
+                     "only frames at or after SECONDS since the capture's first frame");
+  command.add_option("--to", window.to_s,
+                     "only frames at or before SECONDS since the capture's first frame");
+}
+
+// What a snap length cut, on one line (never one per frame).
+void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation) {
+  if (truncation.any()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
+  }
+}
+
+// No frame of the capture in the window is said as such.
+std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
+  if (!window.limited() || run.in_window > 0) return "";
+  return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
 }
 
 // The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
@@ -239,12 +254,18 @@ struct DecodeArgs {
   std::string format = kRowFormats[0].name;
   bool layout_only = false;
   std::string timestamps = "auto";
+  WindowArgs window;
 };
 
 int runDecode(const DecodeArgs& args) {
   const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
   if (!files) {
     fmt::print(stderr, "ncservo: {}\n", files.error().text());
+    return kExitUsage;
+  }
+  const Result<TimeWindow> window_range = timeWindowOf(args.window.from_s, args.window.to_s);
+  if (!window_range) {
+    fmt::print(stderr, "ncservo: {}\n", window_range.error().text());
     return kExitUsage;
   }
   auto opened = CaptureReader::open(args.capture);
@@ -261,6 +282,7 @@ int runDecode(const DecodeArgs& args) {
   CycleRows cycles;
   std::vector<CycleRow> rows;
   CaptureRun run;
+  CutRegions cut;
   auto write = [&] {
     for (const CycleRow& row : rows) {
       format.row(stdout, row, session->decoder().axes().at(row.axis).name,
@@ -272,17 +294,26 @@ int runDecode(const DecodeArgs& args) {
                           const ByteReader& bytes) {
     const FrameView& view = session->onFrame(walked, bytes);
     if (args.layout_only) return;
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      warnIfMalformed(reader->path(), number, view.axes[i].placement);
-    }
+    for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(number, view.axes[i].placement);
     cycles.onFrame(number, time_ns, view, rows);
     write();
   };
   const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
-  const Status status = streamCapture(*reader, clock, window, {start, decode}, run);
+  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
+                               const ByteReader& bytes) {
+    session->onLayoutOnlyFrame(walked, bytes);
+  };
+  const Status status =
+      streamCapture(*reader, clock, window, {start, decode, *window_range, layout_only}, run);
   cycles.finish(rows);
   write();
   std::fflush(stdout);
+  warnIfTruncated(reader->path(), cli::truncationOf(run.snapped, run.first_snapped, cut,
+                                                    session->decoder().axes()));
+  if (const std::string empty = emptyWindowReason(*window_range, run); !empty.empty()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), empty);
+    return kExitNoServo;
+  }
   if (!status) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
@@ -312,6 +343,7 @@ struct ValidateArgs {
   std::optional<int> servo_ready_mode;
   std::string timestamps = "auto";
   bool allow_empty = false;
+  WindowArgs window;
 };
 
 // The settings from RULES.md's defaults, the config file, then the command line.
@@ -354,7 +386,8 @@ Status buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
                     const RuleSettings& settings, TimestampMode timestamps,
-                    cli::ReportWriter& writer, cli::CaptureReport& report) {
+                    const TimeWindow& time_window, cli::ReportWriter& writer,
+                    cli::CaptureReport& report) {
   report.path = path;
   writer.beginCapture(report);
   auto opened = CaptureReader::open(path);
@@ -372,10 +405,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                             const ByteReader& bytes) {
     report.first_time_ns = *run.first_time_ns;  // findings are written as they come
-    const FrameDecode& decode = validator->onFrame(number, time_ns, walked, bytes).decode;
-    for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
-      warnIfMalformed(reader->path(), number, decode.axes[i]);
-    }
+    validator->onFrame(number, time_ns, walked, bytes);
     for (const Finding& f : validator->findings()) {
       ++report.counts[static_cast<std::size_t>(f.severity)];
       if (writer.keepsFindings()) report.findings.push_back(f);
@@ -383,11 +413,22 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     }
   };
   const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
-  const Status status = streamCapture(*reader, clock, window, {start, validate}, run);
+  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
+                               const ByteReader& bytes) {
+    validator->onLayoutOnlyFrame(walked, bytes);
+  };
+  const Status status =
+      streamCapture(*reader, clock, window, {start, validate, time_window, layout_only}, run);
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
   cli::summarise(*validator, report);
   report.coverage = coverageOf(*validator);
+  if (const std::string empty = emptyWindowReason(time_window, run); !empty.empty()) {
+    report.coverage.reason = empty;
+  }
+  report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
+                                        validator->decoder().axes());
+  warnIfTruncated(reader->path(), report.truncation);
   report.timestamps = clock.source();
   report.probe = clock.counts();
   report.probe_note = clock.note();
@@ -427,6 +468,11 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: {}\n", built.error().text());
     return kExitUsage;
   }
+  const Result<TimeWindow> time_window = timeWindowOf(o.window.from_s, o.window.to_s);
+  if (!time_window) {
+    fmt::print(stderr, "ncservo: {}\n", time_window.error().text());
+    return kExitUsage;
+  }
   const bool never = o.fail_on == "never";
   const Severity fail_on = never ? Severity::Error : *severityFromName(o.fail_on);
   std::FILE* out = stdout;
@@ -455,7 +501,7 @@ int runValidate(const ValidateArgs& o) {
   for (const std::string& path : o.captures) {
     reports.emplace_back();
     rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, timestamps,
-                                     writer, reports.back()));
+                                     *time_window, writer, reports.back()));
   }
   writer.finish(reports);
   if (out != stdout) std::fclose(out);
@@ -712,6 +758,7 @@ Handler decodeCommand(CLI::App& command) {
                    "print the layout found (as a configuration file) and the slaves the start-up "
                    "configured, instead of the process data");
   addTimestampsOption(command, args->timestamps);
+  addWindowOptions(command, args->window);
   return [args] { return runDecode(*args); };
 }
 
@@ -742,6 +789,7 @@ Handler validateCommand(CLI::App& command) {
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
   addTimestampsOption(command, args->timestamps);
+  addWindowOptions(command, args->window);
   command.add_flag("--allow-empty", args->allow_empty,
                    "exit 0, not 4, where no servo (or not every configured axis) was decoded");
   return [args] { return runValidate(*args); };

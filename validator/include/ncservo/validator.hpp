@@ -43,6 +43,10 @@ class Validator {
   const ValidatedFrame& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                 const EcatFrame& frame, const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
+  // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
+  void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
+    decoder_.placeAxes(frame, bytes, view_.decode);
+  }
 
   const Decoder& decoder() const { return decoder_; }
   const RuleSettings& settings() const { return settings_; }
