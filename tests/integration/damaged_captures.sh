@@ -19,7 +19,9 @@ chmod a+r "$WORK"/*
 [ "$(cut -f1 "$WORK/first.txt")" = "0,1,2,3,4,5,6,7" ] || fail "axes: $(cat "$WORK/first.txt")"
 [ "$(cut -f2 "$WORK/first.txt" | tr ',' '\n' | wc -l)" = 7 ] || fail "expected 7 RxPDOs: $(cat "$WORK/first.txt")"
 "$NCSERVO" decode "$WORK/snapped" >"$WORK/snapped.csv" 2>"$WORK/snapped.err" || fail "decode exit $?"
-grep -q "frame 1: axis 7: RxPDO region cut short" "$WORK/snapped.err" || fail "no malformed message: $(head -2 "$WORK/snapped.err")"
+# One summary line, not one per frame and axis: the cut frames, the first, every axis cut.
+grep -q "PDO words not captured in 400 frames (first: frame 1) for .*axis7" "$WORK/snapped.err" || fail "no malformed message: $(head -2 "$WORK/snapped.err")"
+[ "$(wc -l <"$WORK/snapped.err")" = 1 ] || fail "more than one line: $(head -3 "$WORK/snapped.err")"
 
 # A capture cut in the middle of a record.
 size=$(stat -c %s "$WORK/capture")
@@ -50,7 +52,7 @@ cases=(
   "truncated-global-header|3|cannot read capture: truncated dump file; tried to read 24 file header bytes, only got 9|0"
   "truncated-record-header|3|frame 101: truncated dump file; tried to read 16 header bytes, only got 9 $after|100"
   "truncated-record-data|3|frame 101: truncated dump file; tried to read 148 captured bytes, only got 24 $after|100"
-  "caplen-above-snaplen|0|frame 2: axis 0: TxPDO region cut short or outside its datagram|100"
+  "caplen-above-snaplen|0|PDO words not captured in 50 frames (first: frame 2) for axis0|100"
   "caplen-above-record|3|frame 101: truncated dump file; tried to read 5148 captured bytes, only got 148 $after|100"
   "caplen-above-original|0|-|100"
   "absurd-caplen|3|frame 101: invalid packet capture length 4294967280, bigger than snaplen of 65535 $after|100"

@@ -10,4 +10,9 @@ for doc in rules fields; do
   diff -u "$WORK/$doc.doc" "$WORK/$doc.md" >"$WORK/$doc.diff" ||
     fail "docs/$doc.md differs from \`ncservo $doc --format markdown\`: $(head -8 "$WORK/$doc.diff")"
 done
-echo "docs_generated: docs/rules.md and docs/fields.md match the tables"
+# docs/configuration.md explains each timeout in words: every timeout of the table has its row.
+for timeout in $(grep -o '^| `[a-z_]*` | [0-9]* |' "$WORK/rules.md" | cut -d'`' -f2); do
+  grep -q "^| \`$timeout\` |" "$SRC/docs/configuration.md" ||
+    fail "docs/configuration.md [timeouts] has no row for the timeout $timeout"
+done
+echo "docs_generated: docs/rules.md and docs/fields.md match the tables; configuration.md names every timeout"

@@ -189,5 +189,48 @@ TEST_P(IntervalStatsKnown, MedianQuantilesAndMax) {
 INSTANTIATE_TEST_SUITE_P(Cases, IntervalStatsKnown, ::testing::ValuesIn(kKnownCases),
                          test::rowName<KnownCase>);
 
+struct MergeCase {
+  const char* name;
+  std::vector<std::int64_t> first, second;
+};
+
+// Merging a segment's intervals into the capture's gives what adding them all to one would.
+TEST(IntervalStats, MergeEqualsAddingEverything) {
+  std::vector<std::int64_t> many;
+  for (std::int64_t i = 0; i < 40000; ++i) many.push_back(1000 * (i % 20000) + 7);
+  const MergeCase cases[] = {
+      {"both empty", {}, {}},
+      {"into empty", {}, {1000, 2000, 3000}},
+      {"from empty", {1000, 2000}, {}},
+      {"two segments", {1000, 1000, 1001, 999}, {250, 251, 249, 5000}},
+      {"a coarsened one into a fine one", {1000, 2000}, many},
+      {"a fine one into a coarsened one", many, {1000, 2000}},
+  };
+  for (const MergeCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    IntervalStats all, first, second;
+    for (std::int64_t v : c.first) {
+      all.add(v);
+      first.add(v);
+    }
+    for (std::int64_t v : c.second) {
+      all.add(v);
+      second.add(v);
+    }
+    first.merge(second);
+    const IntervalStats copy(first);
+    for (const IntervalStats* merged : {static_cast<const IntervalStats*>(&first), &copy}) {
+      EXPECT_EQ(merged->count(), all.count());
+      EXPECT_EQ(merged->resolutionNs(), all.resolutionNs());
+      EXPECT_EQ(merged->medianNs(), all.medianNs());
+      EXPECT_EQ(merged->quantileNs(0.99), all.quantileNs(0.99));
+      EXPECT_EQ(merged->maxNs(), all.maxNs());
+    }
+    second.clear();
+    EXPECT_EQ(second.count(), 0u);
+    EXPECT_FALSE(second.medianNs().has_value());
+  }
+}
+
 }  // namespace
 }  // namespace ncservo

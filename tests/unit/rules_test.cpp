@@ -206,6 +206,7 @@ TEST(RuleTable, TimeoutsAndTheRulesThatUseThem) {
       {"clear_response", 100, {RuleId::Ec004}},
       {"fault_reaction", 100, {RuleId::Flt001}},
       {"param_table", 50, {RuleId::Pt001}},
+      {"capture_pause", 1000, {}},
   };
   ASSERT_EQ(std::size(rows), kTimeouts.size());
   for (std::size_t i = 0; i < kTimeouts.size(); ++i) {

@@ -122,6 +122,13 @@ class Script {
     times_.push_back({at, ns});
     return *this;
   }
+  // Frames of cycle `from` on are timed `ns` later (earlier when negative): a capture
+  // discontinuity (RULES.md "Time").
+  Script& shift(std::int64_t from, std::int64_t ns) {
+    shift_from_ = from;
+    shift_ns_ = ns;
+    return *this;
+  }
   // Every cycle's datagram has the same index (by default it counts the cycles).
   Script& constantIndex() {
     constant_index_ = true;
@@ -182,7 +189,8 @@ class Script {
     for (const auto& [where, ns] : times_) {
       if (where.copy == at.copy && where.cycle == at.cycle) return ns;
     }
-    return kEpochNs + at.cycle * kCycleNs + (at.copy == Copy::Returned ? delay_ns_ : 0);
+    return kEpochNs + at.cycle * kCycleNs + (at.copy == Copy::Returned ? delay_ns_ : 0) +
+           (at.cycle >= shift_from_ ? shift_ns_ : 0);
   }
 
  private:
@@ -202,6 +210,8 @@ class Script {
   std::int64_t cycles_;
   std::size_t axes_ = 1;
   std::int64_t delay_ns_ = 0;
+  std::int64_t shift_from_ = kEnd;
+  std::int64_t shift_ns_ = 0;
   bool constant_index_ = false;
   AxisCycle base_;
   std::vector<Span> spans_;

@@ -446,11 +446,26 @@ std::vector<RuleCase> ruleCases() {
      Script(120).base(kScwRunning, kSswReady), {on(SE4, M(101), R(0))}},
     {"first seen with ServoEn 1 and SE 0: no edge, but no enable", {SE2, SE3},
      Script().base(kScwOff, kSswRunning), {on(SE3, M(21), R(0))}},
-    {"a returned copy's timestamp going backwards changes nothing", {SE3, COM2},
-     Script().scw(10, kEnd, kScwOff).time(R(15), kEpochNs), {on(SE3, M(31), M(10))}},
+    {"a returned copy's timestamp going backwards within a cycle changes nothing", {SE3, COM2},
+     Script().scw(10, kEnd, kScwOff).time(R(15), kEpochNs + 15 * kMs - 500 * kUs),
+     {on(SE3, M(31), M(10))}},
     {"a condition beginning on a backwards timestamp starts at the latest time", {SE3},
-     Script().scw(10, kEnd, kScwOff).time(M(10), kEpochNs + kMs).time(R(10), kEpochNs + kMs),
+     Script().scw(10, kEnd, kScwOff).time(M(10), kEpochNs + 9 * kMs - 500 * kUs)
+         .time(R(10), kEpochNs + 9 * kMs - 500 * kUs),
      {on(SE3, M(30), M(10))}},
+
+    // ---- "Time": capture discontinuities start a segment, whose timers restart ----
+    {"a jump back by more than a cycle: the condition restarts with the segment", {SE3},
+     Script(80).scw(10, kEnd, kScwOff).shift(20, -60 * kMs), {on(SE3, M(41), R(20))}},
+    {"a jump back: no gap, no failure, the same finding as a capture starting there",
+     {SE3, COM2, COM3, COM4, COM5}, Script(80).base(kScwOff, kSswRunning).shift(20, -60 * kMs),
+     {on(SE3, M(41), R(20))}},
+    {"a pause longer than capture_pause: no gap, no lost cycles", {COM2, COM3, COM4, COM5},
+     Script().shift(20, 3'600'000 * kMs), {}},
+    {"a pause of capture_pause exactly is a gap", {COM2},
+     Script().shift(20, 999 * kMs), {bus(COM2, M(20), M(19))}},
+    {"capture_pause 100 ms: a pause of 500 ms starts a segment", {COM2, COM3, COM5},
+     Script().shift(20, 500 * kMs).settings(timeoutMs("capture_pause", 100)), {}},
   };
 }
 // clang-format on

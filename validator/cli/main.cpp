@@ -179,13 +179,28 @@ const DecodeFormat kDecodeFormats[] = {
     {"vcd", decodeWaveforms, nullptr, nullptr},
 };
 
-// A PDO region the capture cut short or that straddles its datagram's end (the frame is still
-// analysed; the region is not read).
-void warnIfMalformed(const std::string& capture, std::uint64_t frame, const AxisPlacement& p) {
-  if (!p.rx_malformed && !p.tx_malformed) return;
-  fmt::print(stderr,
-             "ncservo: {}: frame {}: axis {}: {} region cut short or outside its datagram\n",
-             capture, frame, p.axis, p.rx_malformed ? "RxPDO" : "TxPDO");
+// --from/--to (INTERFACES.md), seconds since the capture's first frame.
+struct WindowArgs {
+  std::optional<double> from_s, to_s;
+};
+void addWindowOptions(CLI::App& command, WindowArgs& window) {
+  command.add_option("--from", window.from_s,
+                     "only frames at or after SECONDS since the capture's first frame");
+  command.add_option("--to", window.to_s,
+                     "only frames at or before SECONDS since the capture's first frame");
+}
+
+// What a snap length cut, on one line (never one per frame).
+void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation) {
+  if (truncation.any()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
+  }
+}
+
+// No frame of the capture in the window is said as such.
+std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
+  if (!window.limited() || run.in_window > 0) return "";
+  return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
 }
 
 // The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
@@ -251,6 +266,7 @@ struct DecodeArgs {
   std::vector<std::string> axes;
   bool layout_only = false;
   std::string timestamps = "auto";
+  WindowArgs window;
 };
 
 // What every decode format reads and writes.
@@ -258,6 +274,7 @@ struct DecodeInput {
   LayoutFiles files;
   std::unique_ptr<CaptureReader> reader;
   std::FILE* out = stdout;
+  TimeWindow window;  // --from/--to
 };
 
 // The notes after a decode: which clock timed the frames, and why no axis was found.
@@ -282,6 +299,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   CycleRows cycles;
   std::vector<CycleRow> rows;
   CaptureRun run;
+  CutRegions cut;
   auto write = [&] {
     for (const CycleRow& row : rows) {
       const AxisInfo& axis = session->decoder().axes().at(row.axis);
@@ -294,17 +312,26 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
                           const ByteReader& bytes) {
     const FrameView& view = session->onFrame(walked, bytes);
     if (args.layout_only) return;
-    for (std::size_t i = 0; i < view.axis_count; ++i) {
-      warnIfMalformed(reader->path(), number, view.axes[i].placement);
-    }
+    for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(number, view.axes[i].placement);
     cycles.onFrame(number, time_ns, view, rows);
     write();
   };
   const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
-  const Status status = streamCapture(*reader, clock, window, {start, decode}, run);
+  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
+                               const ByteReader& bytes) {
+    session->onLayoutOnlyFrame(walked, bytes);
+  };
+  const Status status =
+      streamCapture(*reader, clock, window, {start, decode, input.window, layout_only}, run);
   cycles.finish(rows);
   write();
   std::fflush(out);
+  warnIfTruncated(reader->path(), cli::truncationOf(run.snapped, run.first_snapped, cut,
+                                                    session->decoder().axes()));
+  if (const std::string empty = emptyWindowReason(input.window, run); !empty.empty()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), empty);
+    return kExitNoServo;
+  }
   if (!status) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
@@ -339,9 +366,6 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                           const ByteReader& bytes) {
     const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
-    for (std::size_t i = 0; frame.decode.any_malformed && i < frame.decode.axis_count; ++i) {
-      warnIfMalformed(reader.path(), number, frame.decode.axes[i]);
-    }
     end_ns = std::max(end_ns, time_ns - *run.first_time_ns);
     if (written) {
       written = waveforms.frame(time_ns - *run.first_time_ns, frame, bytes, validator->findings(),
@@ -349,9 +373,21 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
     }
   };
   const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
-  const Status status = streamCapture(reader, clock, window, {start, decode}, run);
+  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
+                               const ByteReader& bytes) {
+    validator->onLayoutOnlyFrame(walked, bytes);
+  };
+  const Status status =
+      streamCapture(reader, clock, window, {start, decode, input.window, layout_only}, run);
   if (written) written = waveforms.finish(end_ns, validator->decoder());
   std::fflush(input.out);
+  warnIfTruncated(reader.path(),
+                  cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
+                                    validator->decoder().axes()));
+  if (const std::string empty = emptyWindowReason(input.window, run); !empty.empty()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), empty);
+    return kExitNoServo;
+  }
   if (!written) {
     fmt::print(stderr, "ncservo: {}\n", written.error().text());
     return kExitUsage;
@@ -402,6 +438,12 @@ Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::
 
 int runDecode(const DecodeArgs& args) {
   DecodeInput input;
+  const Result<TimeWindow> window = timeWindowOf(args.window.from_s, args.window.to_s);
+  if (!window) {
+    fmt::print(stderr, "ncservo: {}\n", window.error().text());
+    return kExitUsage;
+  }
+  input.window = *window;
   Result<LayoutFiles> files = loadLayoutFiles(args.layout);
   if (!files) {
     fmt::print(stderr, "ncservo: {}\n", files.error().text());
@@ -442,6 +484,7 @@ struct ValidateArgs {
   bool allow_empty = false;
   bool verbose = false;
   std::vector<std::string> reports;  // FORMAT:FILE
+  WindowArgs window;
 };
 
 // The settings from the rules' defaults, the config file, then the command line.
@@ -484,7 +527,8 @@ Status buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
                     const RuleSettings& settings, TimestampMode timestamps,
-                    cli::ReportWriter& writer, cli::CaptureReport& report) {
+                    const TimeWindow& time_window, cli::ReportWriter& writer,
+                    cli::CaptureReport& report) {
   report.path = path;
   writer.beginCapture(report);
   auto opened = CaptureReader::open(path);
@@ -503,10 +547,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                             const ByteReader& bytes) {
     report.first_time_ns = *run.first_time_ns;  // findings are written as they come
-    const FrameDecode& decode = validator->onFrame(number, time_ns, walked, bytes).decode;
-    for (std::size_t i = 0; decode.any_malformed && i < decode.axis_count; ++i) {
-      warnIfMalformed(reader->path(), number, decode.axes[i]);
-    }
+    validator->onFrame(number, time_ns, walked, bytes);
     for (const Finding& f : validator->findings()) {
       report.tally(f);
       if (writer.keepsFindings()) report.findings.push_back(f);
@@ -517,11 +558,22 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     validator.emplace(layout, settings);
     report.layout = validator->decoder().axes();  // the axes' names, for findings as they come
   };
-  const Status status = streamCapture(*reader, clock, window, {start, validate}, run);
+  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
+                               const ByteReader& bytes) {
+    validator->onLayoutOnlyFrame(walked, bytes);
+  };
+  const Status status =
+      streamCapture(*reader, clock, window, {start, validate, time_window, layout_only}, run);
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
   cli::summarise(*validator, report);
   report.coverage = coverageOf(*validator);
+  if (const std::string empty = emptyWindowReason(time_window, run); !empty.empty()) {
+    report.coverage.reason = empty;
+  }
+  report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
+                                        validator->decoder().axes());
+  warnIfTruncated(reader->path(), report.truncation);
   report.timestamps = clock.source();
   report.probe = clock.counts();
   report.probe_note = clock.note();
@@ -619,6 +671,11 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: {}\n", built.error().text());
     return kExitUsage;
   }
+  const Result<TimeWindow> time_window = timeWindowOf(o.window.from_s, o.window.to_s);
+  if (!time_window) {
+    fmt::print(stderr, "ncservo: {}\n", time_window.error().text());
+    return kExitUsage;
+  }
   const Result<std::vector<cli::ReportTarget>> targets = reportTargets(o);
   if (!targets) {
     fmt::print(stderr, "ncservo: {}\n", targets.error().text());
@@ -641,7 +698,7 @@ int runValidate(const ValidateArgs& o) {
   for (const std::string& path : o.captures) {
     reports.emplace_back();
     rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, timestamps,
-                                     **writer, reports.back()));
+                                     *time_window, **writer, reports.back()));
   }
   if (Status written = (*writer)->finish(reports); !written) {
     fmt::print(stderr, "ncservo: {}\n", written.error().text());
@@ -676,21 +733,23 @@ void printRuleMarkdown(const RuleDef& rule) {
              timeoutText(rule), rule.clause, rule.summary);
 }
 
-// The timeouts, their defaults and the rules that use them, after the rule table.
+// The timeouts with their defaults and the rules that use them.
 void printTimeoutsMarkdown() {
   fmt::print(
-      "\n| timeout | default | rules |\n"
+      "\n| timeout | default (ms) | used by |\n"
       "|---|---|---|\n");
   for (const TimeoutDef& t : kTimeouts) {
-    std::string users;
+    std::vector<std::string> users;
     for (const RuleDef& rule : kRules) {
-      if (rule.timeout == t.id) users += (users.empty() ? "" : ", ") + std::string(rule.code);
+      if (rule.timeout == t.id) users.emplace_back(rule.code);
     }
-    fmt::print("| `{}` | {} ms | {} |\n", t.name, t.default_ms, users);
+    fmt::print("| `{}` | {} | {} |\n", t.name, t.default_ms,
+               users.empty() ? std::string("capture segments (a longer pause starts one)")
+                             : fmt::format("{}", fmt::join(users, ", ")));
   }
 }
 
-// `rules`'s formats: a header, one line per rule, then what follows the rules.
+// `rules`'s formats: a header, then one line per rule, then an optional footer.
 struct RuleListFormat {
   const char* name;
   const char* header;
@@ -939,6 +998,7 @@ Handler decodeCommand(CLI::App& command) {
                    "print the layout found (as a configuration file) and the slaves the start-up "
                    "configured, instead of the process data");
   addTimestampsOption(command, args->timestamps);
+  addWindowOptions(command, args->window);
   return [args] { return runDecode(*args); };
 }
 
@@ -981,6 +1041,7 @@ Handler validateCommand(CLI::App& command) {
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
   addTimestampsOption(command, args->timestamps);
+  addWindowOptions(command, args->window);
   command.add_flag("--allow-empty", args->allow_empty,
                    "exit 0, not 4, where no servo (or not every configured axis) was decoded");
   return [args] { return runValidate(*args); };

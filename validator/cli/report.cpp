@@ -110,6 +110,36 @@ Json probeJson(const CaptureReport& r) {
   return j;
 }
 
+Json notJudgedJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const NotJudged& n : r.coverage.not_judged) {
+    list.push_back({{"rule", ruleDef(n.rule).code},
+                    {"axis", n.axis ? Json(*n.axis) : Json(nullptr)},
+                    {"reason", n.reason}});
+  }
+  return list;
+}
+
+Json truncationJson(const Truncation& t) {
+  return {{"frames", t.snapped},
+          {"first_frame", t.first_snapped ? Json(t.first_snapped) : Json(nullptr)},
+          {"cut_pdo_frames", t.cut_frames},
+          {"first_cut_pdo_frame", t.first_cut ? Json(t.first_cut) : Json(nullptr)},
+          {"axes", t.axes}};
+}
+
+// The capture's segments (RULES.md "Time"), times in the capture's own seconds.
+Json segmentsJson(const CaptureReport& r) {
+  Json segments = Json::array();
+  for (const CaptureSegment& s : r.segments) {
+    segments.push_back({{"first_frame", s.first_frame},
+                        {"last_frame", s.last_frame},
+                        {"start", seconds(r, Stamp{s.first_frame, s.start_ns})},
+                        {"end", seconds(r, Stamp{s.last_frame, s.end_ns})}});
+  }
+  return segments;
+}
+
 Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json c;
   c["path"] = r.path;
@@ -129,8 +159,12 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
     layout_axes.push_back(std::move(a));
   }
-  c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}};
+  c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}, {"segments", segmentsJson(r)}};
+  if (r.segment_count > r.segments.size())
+    c["timing"]["segments_omitted"] = r.segment_count - r.segments.size();
   if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
+  if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
+  if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
   c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
   Json findings = Json::array();
   for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
@@ -421,7 +455,26 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     }
   }
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
+  if (r.segment_count > 1) {
+    fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
+               r.segment_count);
+    for (const CaptureSegment& s : r.segments) {
+      fmt::print(out, "  frames {}-{}, {:.6f} s to {:.6f} s\n", s.first_frame, s.last_frame,
+                 seconds(r, Stamp{s.first_frame, s.start_ns}),
+                 seconds(r, Stamp{s.last_frame, s.end_ns}));
+    }
+  }
   if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
+  if (r.truncation.any()) fmt::print(out, "truncated: {}\n", describeTruncation(r.truncation));
+  if (!r.coverage.not_judged.empty()) {
+    // One line: rules by the reason and axes they share.
+    std::vector<std::string> items;
+    for (const NotJudged& n : r.coverage.not_judged) {
+      items.push_back(fmt::format("{} ({})", ruleDef(n.rule).code,
+                                  n.axis ? axisName(r, *n.axis) : std::string("bus")));
+    }
+    fmt::print(out, "not judged: {} - what they read was never captured\n", fmt::join(items, ", "));
+  }
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
   fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({})\n",
@@ -478,12 +531,18 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 }
 
 // JSON Lines: a capture where not every axis was checked closes with a line that says so.
+// So does one with several segments.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
-  if (r.coverage.complete()) return;
-  Json j{{"capture", r.path},
-         {"verdict", verdictName(verdictOf(sink.policy, r))},
-         {"reason", r.coverage.reason}};
+  if (r.coverage.complete() && r.segment_count <= 1 && r.coverage.not_judged.empty() &&
+      !r.truncation.any()) {
+    return;
+  }
+  Json j{{"capture", r.path}, {"verdict", verdictName(verdictOf(sink.policy, r))}};
+  if (!r.coverage.complete()) j["reason"] = r.coverage.reason;
   if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
+  if (r.segment_count > 1) j["segments"] = segmentsJson(r);
+  if (r.truncation.any()) j["truncated"] = truncationJson(r.truncation);
+  if (!r.coverage.not_judged.empty()) j["not_judged"] = notJudgedJson(r);
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
@@ -514,6 +573,29 @@ constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
 void (*g_previous[std::size(kInterrupts)])(int) = {};
 }  // namespace
 
+std::string describeTruncation(const Truncation& t) {
+  std::string out;
+  if (t.snapped > 0) {
+    out = fmt::format("{} frame{} cut short by the capture's snap length (first: frame {})",
+                      t.snapped, t.snapped == 1 ? "" : "s", t.first_snapped);
+  }
+  if (t.cut_frames > 0) {
+    out += fmt::format("{}PDO words not captured in {} frame{} (first: frame {}) for {}",
+                       out.empty() ? "" : "; ", t.cut_frames, t.cut_frames == 1 ? "" : "s",
+                       t.first_cut, fmt::join(t.axes, ", "));
+  }
+  return out;
+}
+
+Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
+                        const std::vector<AxisInfo>& axes) {
+  Truncation t{snapped, first_snapped, cut.frames(), cut.firstFrame(), {}};
+  for (std::uint16_t axis : cut.axes()) {
+    t.axes.push_back(axis < axes.size() ? axes[axis].name : fmt::format("axis{}", axis));
+  }
+  return t;
+}
+
 std::vector<std::string> reportFormatNames() {
   std::vector<std::string> names;
   for (const ReportFormat& format : kReportFormats) names.emplace_back(format.name);
@@ -539,6 +621,8 @@ void summarise(const Validator& validator, CaptureReport& report) {
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();
   report.layout = validator.decoder().axes();
+  report.segments = validator.segments().segments();
+  report.segment_count = validator.segments().count();
   report.axes.clear();
   for (std::size_t i = 0; i < validator.axisCount(); ++i) {
     const AxisModel* model = validator.axis(i);

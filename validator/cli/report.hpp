@@ -45,6 +45,21 @@ struct FindingGroup {
   std::string first_message;
 };
 
+// What a capture's snap length (or damage) cut off: the records cut short, and the frames where
+// placed PDO regions were cut short or lay outside their datagram, with those axes' names.
+struct Truncation {
+  std::uint64_t snapped = 0;
+  std::uint64_t first_snapped = 0;
+  std::uint64_t cut_frames = 0;
+  std::uint64_t first_cut = 0;
+  std::vector<std::string> axes;
+  bool any() const { return snapped > 0 || cut_frames > 0; }
+};
+// One line (stderr, the text report); empty when nothing was cut.
+std::string describeTruncation(const Truncation& truncation);
+Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
+                        const std::vector<AxisInfo>& axes);
+
 struct CaptureReport {
   std::string path;
   std::uint64_t frames = 0;
@@ -65,6 +80,9 @@ struct CaptureReport {
   TimestampSource timestamps = TimestampSource::Capture;
   ProbeCounts probe;
   std::string probe_note;  // FrameClock::note()
+  Truncation truncation;
+  std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
+  std::uint64_t segment_count = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);

@@ -194,6 +194,18 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
                                    previous, slave.status_code, slave.status_code_frame}});
 }
 
+void AlTracker::startSegment() {
+  for (Slave& slave : directory_.slaves()) {
+    slave.data.state.reset();
+    slave.data.requested.reset();
+    slave.data.status_code.reset();
+    slave.data.status_code_frame = 0;
+    slave.data.error_reported = false;
+  }
+  requested_all_.reset();
+  state_all_.reset();
+}
+
 void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                         const Stamp& now, std::vector<BusEvent>& out) {
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;

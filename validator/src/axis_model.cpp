@@ -121,6 +121,25 @@ void AxisModel::observe(const PdoValues& values, const Stamp& now) {
   updateState(now);
 }
 
+void AxisModel::startSegment() {
+  ++revision_;
+  for (Signal* s : {&se_, &emgon_, &brake_, &zpulse_request_, &error_clear_, &servo_en_,
+                    &servo_rdy_, &zpulse_ack_, &err_clear_ack_, &servo_errors_, &ecat_timeout_}) {
+    *s = Signal{};
+  }
+  latest_.has_rx = false;
+  latest_.has_tx = false;
+  illegal_enable_edge_ = false;
+  previous_se_ = 0;
+  valid_enable_ = false;
+  valid_enable_ended_.reset();
+  clear_acknowledged_ = false;
+  consecutive_lost_ = 0;
+  consecutive_failed_ = 0;
+  awaiting_timeout_report_ = false;
+  last_outage_cycles_ = 0;
+}
+
 void AxisModel::observeOutputs(const PdoValues& values, const Stamp& now) {
   const std::uint32_t scw = values.scw();
   const std::uint32_t se = scw & kSe;
@@ -149,6 +168,7 @@ void AxisModel::observeOutputs(const PdoValues& values, const Stamp& now) {
       latest_.raw[static_cast<std::size_t>(word.word)] = values.word(word.word);
   }
   latest_.has_rx = true;
+  saw_outputs_ = true;
 }
 
 void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
@@ -178,6 +198,7 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
       latest_.raw[static_cast<std::size_t>(word.word)] = values.word(word.word);
   }
   latest_.has_tx = true;
+  saw_inputs_ = true;
 
   // RULES.md RDY-001: the mode is inferred from the first observation with ServoEn 0 and no error.
   if (!ready_mode_ && servo_en_.off() && servo_errors_.off()) {

@@ -31,6 +31,28 @@ BusModel::CyclicFrame& BusModel::cyclicFrame(std::uint16_t first_axis) {
   return cyclic_.back();
 }
 
+void BusModel::startSegment() {
+  earlier_intervals_.merge(intervals_);
+  intervals_.clear();
+  for (CyclicFrame& c : cyclic_) {
+    c.last_tick.reset();
+    c.awaiting_return = false;
+    c.not_returned_episode = false;
+  }
+  for (WkcRecord& r : wkc_) r.wrong_episode = false;
+}
+
+std::optional<std::int64_t> BusModel::nominalCycleNs() const {
+  if (intervals_.count() < kIntervalsBeforeGaps) return std::nullopt;
+  return intervals_.medianNs();
+}
+
+IntervalStats BusModel::captureIntervals() const {
+  IntervalStats all(earlier_intervals_);
+  all.merge(intervals_);
+  return all;
+}
+
 // Telegram accounting (RULES.md COM-002, COM-004; failures for COM-003 and COM-005). The clock is
 // the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
 bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
@@ -173,7 +195,10 @@ bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
   for (WkcCheck& check : plan.checks) {
     const Datagram& dg = frame.datagrams[check.datagram];
     check.outcome = Outcome::Good;
-    if (!dg.has_wkc) continue;
+    if (!dg.has_wkc) {
+      if (uncaptured_wkcs_++ == 0) first_uncaptured_wkc_frame_ = now_.frame;
+      continue;
+    }
     if (check.record == kUnresolvedWkcRecord) check.record = wkcRecord(dg);
     WkcRecord* record = check.record >= 0 ? &wkc_[static_cast<std::size_t>(check.record)] : nullptr;
     std::uint16_t expected = check.expected;

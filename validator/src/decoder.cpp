@@ -147,6 +147,24 @@ std::string Decoder::noServoReason() const {
   return "no servo of this protocol found (docs/layout.md); give the layout in a --config file";
 }
 
+void CutRegions::add(std::uint64_t frame, const AxisPlacement& placement) {
+  if (!placement.rx_malformed && !placement.tx_malformed) return;
+  if (frames_ == 0 || frame != last_frame_) {
+    if (frames_++ == 0) first_frame_ = frame;
+    last_frame_ = frame;
+  }
+  if (placement.axis >= axes_.size()) axes_.resize(placement.axis + 1u);
+  axes_[placement.axis] = true;
+}
+
+std::vector<std::uint16_t> CutRegions::axes() const {
+  std::vector<std::uint16_t> out;
+  for (std::size_t i = 0; i < axes_.size(); ++i) {
+    if (axes_[i]) out.push_back(static_cast<std::uint16_t>(i));
+  }
+  return out;
+}
+
 LayoutSource Decoder::source() const {
   if (!options_.axes.empty()) return options_.explicit_source;
   if (!learned_axes_.empty()) return LayoutSource::Startup;
@@ -257,7 +275,8 @@ AxisPlacement* Decoder::placementFor(FrameDecode& out, std::uint16_t axis) {
 }
 
 // Records that `axis`'s PDO starts `start` bytes into the datagram's data. A region that is not
-// wholly captured is malformed; inputs count only in a returned copy whose WKC is above zero.
+// wholly captured is malformed; inputs count only in a returned copy whose WKC (where captured)
+// is above zero.
 void Decoder::placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_t start, Pdo pdo,
                           bool returned, FrameDecode& out, std::uint16_t axis) {
   AxisPlacement* placement = placementFor(out, axis);
@@ -274,7 +293,8 @@ void Decoder::placeRegion(const Datagram& dg, std::uint16_t dg_index, std::size_
     placement->tx_placed = true;
     placement->tx_datagram = dg_index;
     placement->tx_offset = dg.data_offset + start;
-    placement->has_tx = captured && returned && dg.has_wkc && dg.wkc > 0;
+    // A WKC the capture cut off cannot say the inputs are invalid: they were captured.
+    placement->has_tx = captured && returned && (!dg.has_wkc || dg.wkc > 0);
     placement->tx_malformed = returned && !captured;
   }
 }

@@ -26,6 +26,29 @@ void IntervalStats::add(std::int64_t interval_ns) {
   if (buckets_.size() > kMaxBuckets) coarsen();
 }
 
+void IntervalStats::merge(const IntervalStats& other) {
+  if (other.count_ == 0) return;
+  if (count_ == 0) resolution_ns_ = std::max(resolution_ns_, other.resolution_ns_);
+  while (resolution_ns_ < other.resolution_ns_) coarsen();
+  for (const auto& [bucket, n] : other.buckets_) {
+    buckets_[bucketOf(bucket * other.resolution_ns_)] += n;
+  }
+  max_ns_ = count_ == 0 ? other.max_ns_ : std::max(max_ns_, other.max_ns_);
+  count_ += other.count_;
+  median_ = buckets_.begin();
+  below_median_ = 0;
+  rebalance();
+  while (buckets_.size() > kMaxBuckets) coarsen();
+}
+
+void IntervalStats::clear() {
+  buckets_.clear();
+  below_median_ = 0;
+  count_ = 0;
+  resolution_ns_ = 1000;
+  max_ns_ = 0;
+}
+
 // Moves the median iterator so that it holds the element of rank (count - 1) / 2.
 void IntervalStats::rebalance() {
   const std::uint64_t rank = (count_ - 1) / 2;

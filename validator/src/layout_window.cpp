@@ -14,10 +14,10 @@ LayoutWindow::LayoutWindow(DecoderOptions options, WindowLimits limits)
 LayoutWindow::~LayoutWindow() = default;
 
 void LayoutWindow::hold(std::uint64_t frame_number, std::int64_t time_ns, LinkType link,
-                        const ByteReader& bytes, const EcatFrame& frame) {
+                        const ByteReader& bytes, const EcatFrame& frame, bool judged) {
   if (!learning_) return;
   if (!first_time_ns_) first_time_ns_ = time_ns;
-  held_.push_back(Held{frame_number, time_ns, link, bytes_.size(), bytes.size()});
+  held_.push_back(Held{frame_number, time_ns, link, bytes_.size(), bytes.size(), judged});
   bytes_.insert(bytes_.end(), bytes.data(), bytes.data() + bytes.size());
   probe_->placeAxes(frame, bytes, *decode_);
   // PROTOCOL.md §9.3 before §9.4: a captured start-up gives the layout (or shows no servo).
@@ -52,12 +52,16 @@ void LayoutWindow::decide() {
   inference_.reset();
 }
 
-void LayoutWindow::replay(const Sink& sink) {
+void LayoutWindow::replay(const Sink& sink, const Sink& outside) {
   EcatFrame frame;
   for (const Held& h : held_) {
     const ByteReader bytes(bytes_.data() + h.offset, h.size);
     walkPacket(h.link, bytes, frame);
-    sink(h.number, h.time_ns, frame, bytes);
+    if (h.judged) {
+      sink(h.number, h.time_ns, frame, bytes);
+    } else if (outside) {
+      outside(h.number, h.time_ns, frame, bytes);
+    }
   }
   held_.clear();
   held_.shrink_to_fit();

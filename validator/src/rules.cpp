@@ -249,8 +249,9 @@ std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
 }
 
 // --- Bus, per axis ---
+// Judged only on inputs the capture gave: ECatTErr may have risen in inputs it cut off.
 bool com003(const AxisModel& a, const RuleSettings&) {
-  return a.awaitingTimeoutReport();
+  return a.awaitingTimeoutReport() && a.knowsInputs();
 }
 std::string com003Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
   return fmt::format(

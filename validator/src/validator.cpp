@@ -8,7 +8,8 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
     : decoder_(std::move(options)),
       settings_(std::move(settings)),
       judged_(judgedBits(settings_, fast_path)),
-      fast_path_(fast_path == FastPath::On) {}
+      fast_path_(fast_path == FastPath::On),
+      segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules
 // declare they read (STYLE.md "A rule declares what it reads").
@@ -70,7 +71,7 @@ CycleTimeSummary Validator::cycleTime() const {
     if (!ns) return std::nullopt;
     return static_cast<double>(*ns) / 1000.0;
   };
-  const IntervalStats& intervals = bus_.intervals();
+  const IntervalStats intervals = bus_.captureIntervals();
   summary.median_us = us(intervals.medianNs());
   summary.p99_us = us(intervals.quantileNs(0.99));
   summary.max_us = us(intervals.maxNs());
@@ -95,14 +96,15 @@ Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
 const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                          const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
-  // RULES.md: timestamps that go backwards do not move timers back.
-  const std::int64_t monotonic = any_frame_ ? std::max(now_.time_ns, time_ns) : time_ns;
-  any_frame_ = true;
-  now_ = Stamp{frame_number, monotonic};
+  // RULES.md "Time": timestamps that go back a little do not move timers back; a discontinuity
+  // starts a segment with timers of its own.
+  if (segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs())) startSegment();
+  now_ = Stamp{frame_number, segments_.now()};
   frame_time_ns_ = time_ns;
 
   FrameDecode& decode = view_.decode;
   decoder_.placeAxes(frame, bytes, decode);
+  if (decode.any_malformed) cut_.add(frame_number, decode);
   observeAl(frame, bytes);
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
@@ -159,6 +161,19 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
     view_.states[i] = model.state();
   }
   return view_;
+}
+
+void Validator::startSegment() {
+  bus_.startSegment();
+  al_.startSegment();
+  ++al_epoch_;  // the AL states are taken again
+  for (AxisSlot& s : axes_) {
+    if (!s.model) continue;
+    s.model->startSegment();
+    s.episodes = {};
+    s.pending = 0;
+    s.evaluated_revision.reset();
+  }
 }
 
 // The AL state of the axis's slave, where its station is known (ESM-002), and its entries into

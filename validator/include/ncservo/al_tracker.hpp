@@ -41,6 +41,11 @@ class AlTracker {
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                const Stamp& now, std::vector<BusEvent>& out);
 
+  // A capture segment starts (capture_segments.hpp): what was requested of the slaves and the
+  // states they showed are not known any more, as in a capture that began mid-operation; their
+  // addresses carry on.
+  void startSegment();
+
   // The slave's known AL state (its last AL status read), if any. A station the tracker has not
   // seen addressed has the state of the last BRD of AL status that returned a state, if any.
   std::optional<std::uint8_t> stateOfStation(std::uint16_t station) const;

@@ -99,6 +99,10 @@ class AxisModel {
 
   // This frame's values of the axis (outputs and/or inputs), at `now`.
   void observe(const PdoValues& values, const Stamp& now);
+  // A capture segment starts (capture_segments.hpp): the next observation is a first one, as in
+  // a capture that began mid-operation (RULES.md "Time"), and the telegram-failure run restarts;
+  // the drive state, its timeline, the error history and Servo_Ready_Mode carry on.
+  void startSegment();
 
   // --- state, for rules and reports ---
   std::uint16_t index() const { return index_; }
@@ -107,6 +111,9 @@ class AxisModel {
   const PdoValues& latest() const { return latest_; }
   bool knowsOutputs() const { return latest_.has_rx; }
   bool knowsInputs() const { return latest_.has_tx; }
+  // Whether any frame of the capture, in any segment, gave the axis's outputs or inputs.
+  bool sawOutputs() const { return saw_outputs_; }
+  bool sawInputs() const { return saw_inputs_; }
 
   // SCW.SE this frame moved to 0x2 from something other than 0x1 (SE-001).
   bool illegalEnableEdge() const { return illegal_enable_edge_; }
@@ -162,6 +169,8 @@ class AxisModel {
   std::optional<std::uint8_t> al_state_;
   bool inputs_in_al_state_ = false;
   PdoValues latest_;
+  bool saw_outputs_ = false;
+  bool saw_inputs_ = false;
 
   bool illegal_enable_edge_ = false;
   std::uint32_t previous_se_ = 0;

@@ -34,8 +34,19 @@ class BusModel {
                      std::int64_t frame_time_ns, std::vector<BusEvent>& events,
                      std::vector<AxisAccount>& accounts);
 
+  // A capture segment starts (capture_segments.hpp): the interval statistics, the cycle-gap
+  // clocks, the frames awaiting their return and the working-counter episodes start again; what
+  // the capture showed of the bus (copies, usual working counters) carries on.
+  void startSegment();
+
   std::uint64_t cycles() const { return cycles_; }
-  const IntervalStats& intervals() const { return intervals_; }
+  // The segment's nominal cycle, once enough intervals give it (RULES.md "Time", COM-002).
+  std::optional<std::int64_t> nominalCycleNs() const;
+  // The intervals of every segment, for reports.
+  IntervalStats captureIntervals() const;
+  // Returned datagrams carrying servo PDOs whose WKC was not captured (COM-001 not judged).
+  std::uint64_t uncapturedWkcs() const { return uncaptured_wkcs_; }
+  std::uint64_t firstUncapturedWkcFrame() const { return first_uncaptured_wkc_frame_; }
 
  private:
   // What a frame shape's datagrams that carry servo PDOs should return (COM-001), worked out
@@ -89,9 +100,12 @@ class BusModel {
   std::vector<WkcRecord> wkc_;
   std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
   std::size_t wkc_plan_next_ = 0;
-  WkcPlan uncached_plan_;  // for a frame whose shape is not cached
-  IntervalStats intervals_;
+  WkcPlan uncached_plan_;            // for a frame whose shape is not cached
+  IntervalStats intervals_;          // this segment's
+  IntervalStats earlier_intervals_;  // the segments' before it
   std::uint64_t cycles_ = 0;
+  std::uint64_t uncaptured_wkcs_ = 0;
+  std::uint64_t first_uncaptured_wkc_frame_ = 0;
   bool master_copies_seen_ = false;
   bool returned_copies_seen_ = false;
 };

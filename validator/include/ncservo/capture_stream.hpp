@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/decoder.hpp"
@@ -16,15 +17,38 @@
 
 namespace ncservo {
 
+// INTERFACES.md `--from SECONDS --to SECONDS`: the frames whose time, in the capture's own
+// seconds (since its first record, as Wireshark's frame.time_relative), lies in [from, to]. The
+// frames outside are neither decoded for their values nor judged: the capture seen starts
+// mid-operation at `from`. They still show the layout (a start-up before the window, the
+// learning window's cyclic traffic): the stream gives them to `CaptureStream::layout_only`.
+struct TimeWindow {
+  std::optional<std::int64_t> from_ns, to_ns;
+  bool contains(std::int64_t relative_ns) const {
+    return (!from_ns || relative_ns >= *from_ns) && (!to_ns || relative_ns <= *to_ns);
+  }
+  bool limited() const { return from_ns || to_ns; }
+};
+// The window of `--from`/`--to` in seconds; fails when `to` is before `from` or either is not a
+// finite number.
+Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s);
+// "--from 1.5 --to 2", "--from 1.5", for messages.
+std::string describeTimeWindow(const TimeWindow& window);
+
 struct CaptureStream {
   // Called once, with the layout to decode with, before the first frame is delivered.
   std::function<void(const DecoderOptions& layout)> start;
   LayoutWindow::Sink frame;
+  TimeWindow window;
+  LayoutWindow::Sink layout_only;  // frames outside the window (may be null)
 };
 
 struct CaptureRun {
   std::uint64_t records = 0;                  // read, of any kind
   std::optional<std::int64_t> first_time_ns;  // of the first record
+  std::uint64_t in_window = 0;                // EtherCAT frames inside the time window
+  std::uint64_t snapped = 0;                  // records cut by the capture's snap length
+  std::uint64_t first_snapped = 0;            // the first of them (0: none)
 };
 
 // Reads to the end, or to the reader's error (everything before it is delivered); `start` is

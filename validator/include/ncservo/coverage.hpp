@@ -2,6 +2,8 @@
 // pass" (INTERFACES.md, exit status 4).
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,10 +11,19 @@
 
 namespace ncservo {
 
+// A rule that could not be judged (for an axis, or on the bus) because what it reads was never
+// captured, e.g. cut off by a snap length.
+struct NotJudged {
+  RuleId rule{};
+  std::optional<std::uint16_t> axis;
+  std::string reason;
+};
+
 struct Coverage {
-  bool any_axis = false;             // some servo axis was decoded
-  std::vector<std::string> missing;  // configured axes (config, ENI) that never appeared
-  std::string reason;                // why not everything was checked; empty when it was
+  bool any_axis = false;              // some servo axis's PDO words were read
+  std::vector<std::string> missing;   // configured axes (config, ENI) that never appeared
+  std::string reason;                 // why not everything was checked; empty when it was
+  std::vector<NotJudged> not_judged;  // enabled rules, in axis then table order; the bus's last
 
   bool complete() const { return any_axis && missing.empty(); }
 };

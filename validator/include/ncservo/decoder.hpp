@@ -63,6 +63,27 @@ struct FrameDecode {
   std::array<AxisPlacement, kMaxAxesPerFrame> axes{};  // in axis order
 };
 
+// The placed PDO regions a capture cut short (a snap length): in how many frames, the first, and
+// of which axes. One flag per axis: bounded.
+class CutRegions {
+ public:
+  // One placement of a frame; only a cut region counts.
+  void add(std::uint64_t frame, const AxisPlacement& placement);
+  void add(std::uint64_t frame, const FrameDecode& decode) {
+    for (std::size_t i = 0; i < decode.axis_count; ++i) add(frame, decode.axes[i]);
+  }
+  std::uint64_t frames() const { return frames_; }
+  std::uint64_t firstFrame() const { return first_frame_; }
+  // The axes with a region cut in some frame, in axis order.
+  std::vector<std::uint16_t> axes() const;
+
+ private:
+  std::uint64_t frames_ = 0;
+  std::uint64_t first_frame_ = 0;
+  std::uint64_t last_frame_ = 0;
+  std::vector<bool> axes_;
+};
+
 // An axis as a configuration file would give it (for `decode --layout`).
 AxisConfig axisConfigOf(const AxisInfo& info);
 

@@ -14,7 +14,14 @@ class IntervalStats {
   // Distinct bucket values kept; beyond it the resolution halves (rare: jitter spans few µs).
   static constexpr std::size_t kMaxBuckets = 16384;
 
+  IntervalStats() = default;
+  IntervalStats(const IntervalStats& other) { merge(other); }
+  IntervalStats& operator=(const IntervalStats&) = delete;
+
   void add(std::int64_t interval_ns);
+  // Adds another's intervals (a capture segment's to those of the segments before it).
+  void merge(const IntervalStats& other);
+  void clear();
   std::uint64_t count() const { return count_; }
   // The running median (lower median), in ns at the current resolution (1 µs to start with).
   std::optional<std::int64_t> medianNs() const;

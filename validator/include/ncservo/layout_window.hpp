@@ -34,9 +34,10 @@ class LayoutWindow {
   // Frames are still being held back: give the next one to hold().
   bool learning() const { return learning_; }
   // A walked frame (any status but NotEtherCat, NotDatagrams and BusFault) with its 1-based
-  // number and capture time; its bytes are copied.
+  // number and capture time; its bytes are copied. `judged`: inside the time window (replayed to
+  // the judging sink, else to the layout-only one).
   void hold(std::uint64_t frame_number, std::int64_t time_ns, LinkType link,
-            const ByteReader& bytes, const EcatFrame& frame);
+            const ByteReader& bytes, const EcatFrame& frame, bool judged = true);
   // The capture ended while learning: decide with what was seen.
   void finish();
   // The layout to decode with, once no longer learning.
@@ -46,8 +47,9 @@ class LayoutWindow {
 
   using Sink = std::function<void(std::uint64_t frame_number, std::int64_t time_ns,
                                   const EcatFrame& frame, const ByteReader& bytes)>;
-  // The held frames, walked again, in capture order; then forgets them.
-  void replay(const Sink& sink);
+  // The held frames, walked again, in capture order (those outside the time window to
+  // `outside`, when given); then forgets them.
+  void replay(const Sink& sink, const Sink& outside = nullptr);
 
  private:
   struct Held {
@@ -56,6 +58,7 @@ class LayoutWindow {
     LinkType link;
     std::size_t offset;
     std::size_t size;
+    bool judged;
   };
   void decide();
 

@@ -26,7 +26,8 @@ std::optional<Severity> severityFromName(std::string_view name);
 enum class Party : std::uint8_t { Nc, Drive, Bus };
 const char* partyName(Party party);
 
-// RULES.md "Time": the configurable timeouts, in milliseconds.
+// RULES.md "Time": the configurable timeouts, in milliseconds. `capture_pause` is no rule's: a
+// forward jump of the capture's timestamps longer than it starts a new segment (PROTOCOL.md §8).
 enum class Timeout : std::uint8_t {
   DriveResponse,
   NcRelease,
@@ -34,19 +35,21 @@ enum class Timeout : std::uint8_t {
   ClearResponse,
   FaultReaction,
   ParamTable,
+  CapturePause,
 };
 struct TimeoutDef {
   Timeout id;
   const char* name;  // the [timeouts] key and --timeout NAME
   std::uint32_t default_ms;
 };
-inline constexpr std::array<TimeoutDef, 6> kTimeouts{{
+inline constexpr std::array<TimeoutDef, 7> kTimeouts{{
     {Timeout::DriveResponse, "drive_response", 20},
     {Timeout::NcRelease, "nc_release", 50},
     {Timeout::EnableResponse, "enable_response", 100},
     {Timeout::ClearResponse, "clear_response", 100},
     {Timeout::FaultReaction, "fault_reaction", 100},
     {Timeout::ParamTable, "param_table", 50},
+    {Timeout::CapturePause, "capture_pause", 1000},
 }};
 std::optional<Timeout> timeoutFromName(std::string_view name);
 // "drive_response, nc_release, ...": the names a configuration and --timeout accept.

@@ -70,6 +70,10 @@ class Session {
   // The frame must have been walked over `bytes`. The returned view lives until the next call.
   const FrameView& onFrame(const EcatFrame& frame, const ByteReader& bytes);
 
+  // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
+  void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
+    decoder_.placeAxes(frame, bytes, decode_);
+  }
   const Decoder& decoder() const { return decoder_; }
   // A caller with its own model of each axis (the validator) keeps the states itself.
   void trackStates(bool on) { track_states_ = on; }

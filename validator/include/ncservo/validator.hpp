@@ -11,6 +11,7 @@
 #include "ncservo/al_tracker.hpp"
 #include "ncservo/axis_model.hpp"
 #include "ncservo/bus_model.hpp"
+#include "ncservo/capture_segments.hpp"
 #include "ncservo/finding.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/session.hpp"
@@ -42,6 +43,10 @@ class Validator {
   const ValidatedFrame& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                 const EcatFrame& frame, const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
+  // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
+  void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
+    decoder_.placeAxes(frame, bytes, view_.decode);
+  }
 
   const Decoder& decoder() const { return decoder_; }
   const RuleSettings& settings() const { return settings_; }
@@ -50,6 +55,11 @@ class Validator {
   const AxisModel* axis(std::size_t index) const;
   std::uint64_t cycles() const { return bus_.cycles(); }
   CycleTimeSummary cycleTime() const;
+  // The capture's segments (RULES.md "Time"): the rules judge each on its own clock.
+  const SegmentTracker& segments() const { return segments_; }
+  const BusModel& bus() const { return bus_; }
+  // The placed PDO regions the capture cut short (a snap length).
+  const CutRegions& cutRegions() const { return cut_; }
 
  private:
   struct Episode {
@@ -94,6 +104,7 @@ class Validator {
   void observeAl(const EcatFrame& frame, const ByteReader& bytes);
   void reportEvents();
   void syncAlState(const AxisPlacement& placement, AxisSlot& slot);
+  void startSegment();
 
   Decoder decoder_;
   ValidatedFrame view_;  // this frame's placements and states
@@ -102,15 +113,16 @@ class Validator {
   bool fast_path_;
   AlTracker al_;
   BusModel bus_;
+  SegmentTracker segments_;
+  CutRegions cut_;
   std::vector<BusEvent> events_;  // this frame's, from the slave and bus models
   std::vector<EventFinding> event_findings_;
   std::vector<AxisAccount> accounts_;  // this frame's telegram accounting
   std::vector<AxisSlot> axes_;
   std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
   std::uint64_t al_epoch_ = 1;      // frames so far that could move an AL state or a station
-  Stamp now_;                       // this frame, on the monotonic clock of the timers
+  Stamp now_;                       // this frame, on its segment's clock (the timers')
   std::int64_t frame_time_ns_ = 0;  // this frame's own timestamp
-  bool any_frame_ = false;
   std::vector<Finding> findings_;
 };
 
