@@ -47,6 +47,10 @@ wkc_cut = any(n["rule"] == "COM-001" for n in cut.get("not_judged", []))
 if any(f["rule"] == "COM-001" for f in whole["findings"]) and not any(
         f["rule"] == "COM-001" for f in cut["findings"]):
     assert wkc_cut, f"{name}: COM-001 silently dropped"
+# Axes lost with a start-up's cut register writes are said to be missing, never silently.
+if len(cut["layout"]["axes"]) < len(whole["layout"]["axes"]):
+    assert cut["layout"]["source"] != "startup" or cut["layout"].get("startup_frames_cut", 0) > 0, \
+        f"{name}: {len(cut['layout']['axes'])} of {len(whole['layout']['axes'])} axes, not said"
 for a in cut["axes"]:
     if a["state"] is None and a["name"] in cut_axes:
         assert any(axis == a["index"] for _, axis in judged), f"{name}: {a['name']} not listed"

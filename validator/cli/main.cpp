@@ -574,6 +574,10 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
                                         validator->decoder().axes());
   warnIfTruncated(reader->path(), report.truncation);
+  if (report.startup_frames_cut > 0) {
+    fmt::print(stderr, "ncservo: {}: layout {}\n", reader->path(),
+               cli::describeStartupCut(report.startup_frames_cut));
+  }
   report.timestamps = clock.source();
   report.probe = clock.counts();
   report.probe_note = clock.note();

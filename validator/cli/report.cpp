@@ -166,6 +166,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
   if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
   c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
+  if (r.startup_frames_cut > 0) c["layout"]["startup_frames_cut"] = r.startup_frames_cut;
   Json findings = Json::array();
   for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
   c["findings"] = std::move(findings);
@@ -434,6 +435,9 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   }
   fmt::print(out, "\nlayout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
              r.layout.size() == 1 ? "is" : "es");
+  if (r.startup_frames_cut > 0) {
+    fmt::print(out, "  {}\n", describeStartupCut(r.startup_frames_cut));
+  }
   // Where each axis was found: its station and its PDOs' logical (or SM) addresses.
   for (const AxisInfo& info : r.layout) {
     fmt::print(out, "  {}:", info.name);
@@ -467,13 +471,34 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
   if (r.truncation.any()) fmt::print(out, "truncated: {}\n", describeTruncation(r.truncation));
   if (!r.coverage.not_judged.empty()) {
-    // One line: rules by the reason and axes they share.
-    std::vector<std::string> items;
+    // One line: the rules of each axis (or the bus), axes with the same rules named together.
+    std::vector<std::pair<std::string, std::vector<std::string>>> groups;  // rules, axes
+    std::optional<std::uint16_t> current;
+    std::vector<std::string> codes;
+    const auto close = [&] {
+      if (codes.empty()) return;
+      const std::string rules = fmt::format("{}", fmt::join(codes, ", "));
+      const std::string who = current ? axisName(r, *current) : std::string("bus");
+      auto same = std::find_if(groups.begin(), groups.end(),
+                               [&](const auto& g) { return g.first == rules; });
+      if (same == groups.end()) {
+        groups.push_back({rules, {who}});
+      } else {
+        same->second.push_back(who);
+      }
+      codes.clear();
+    };
     for (const NotJudged& n : r.coverage.not_judged) {
-      items.push_back(fmt::format("{} ({})", ruleDef(n.rule).code,
-                                  n.axis ? axisName(r, *n.axis) : std::string("bus")));
+      if (!codes.empty() && n.axis != current) close();
+      current = n.axis;
+      codes.emplace_back(ruleDef(n.rule).code);
     }
-    fmt::print(out, "not judged: {} - what they read was never captured\n", fmt::join(items, ", "));
+    close();
+    std::vector<std::string> items;
+    for (const auto& [rules, who] : groups) {
+      items.push_back(fmt::format("{}: {}", fmt::join(who, ", "), rules));
+    }
+    fmt::print(out, "not judged (what they read was never captured): {}\n", fmt::join(items, "; "));
   }
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
@@ -573,6 +598,13 @@ constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
 void (*g_previous[std::size(kInterrupts)])(int) = {};
 }  // namespace
 
+std::string describeStartupCut(std::uint64_t frames) {
+  return fmt::format(
+      "incomplete: the snap length cut {} start-up frame{} short; a servo configured after a cut "
+      "is missing from this layout (give the layout with --config or --eni)",
+      frames, frames == 1 ? "" : "s");
+}
+
 std::string describeTruncation(const Truncation& t) {
   std::string out;
   if (t.snapped > 0) {
@@ -621,6 +653,9 @@ void summarise(const Validator& validator, CaptureReport& report) {
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();
   report.layout = validator.decoder().axes();
+  if (report.layout_source == LayoutSource::Startup) {
+    report.startup_frames_cut = validator.decoder().learner().configurationFramesCut();
+  }
   report.segments = validator.segments().segments();
   report.segment_count = validator.segments().count();
   report.axes.clear();

@@ -57,6 +57,8 @@ struct Truncation {
 };
 // One line (stderr, the text report); empty when nothing was cut.
 std::string describeTruncation(const Truncation& truncation);
+// The layout learnt from a start-up the snap length cut: axes may be missing.
+std::string describeStartupCut(std::uint64_t frames);
 Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
                         const std::vector<AxisInfo>& axes);
 
@@ -81,6 +83,7 @@ struct CaptureReport {
   ProbeCounts probe;
   std::string probe_note;  // FrameClock::note()
   Truncation truncation;
+  std::uint64_t startup_frames_cut = 0;  // layout from a start-up cut by the snap length
   std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
   std::uint64_t segment_count = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }

@@ -150,6 +150,16 @@ bool LayoutLearner::observeMailbox(const Datagram& dg, const ByteReader& bytes,
 void LayoutLearner::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned,
                             bool paired) {
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  // A cut frame that writes slaves' registers (distributed-clock registers aside, which cyclic
+  // frames write too) belongs to a start-up; what it wrote after the cut is lost.
+  if (frame.status == WalkStatus::Truncated && (!returned || !paired) &&
+      std::any_of(
+          frame.datagrams.begin(), frame.datagrams.begin() + frame.count, [](const Datagram& dg) {
+            return !ecat::isLogical(dg.command) && ecat::writesSlaves(dg.command) &&
+                   dg.ado() < ecat::kProcessRam && (dg.ado() >> 8) != (ecat::kRegDcSystemTime >> 8);
+          })) {
+    ++configuration_frames_cut_;
+  }
   directory_.beginFrame(frame, returned);
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];

@@ -74,6 +74,10 @@ class LayoutLearner {
   bool sawConfiguration() const { return saw_configuration_; }
   // Every slave seen, with its registers, in ring order (for `decode --layout` and tests).
   std::vector<SlaveLayout> slaves() const;
+  // Frames addressing slaves' registers (not only logical process data) that the capture's snap
+  // length cut short: what the start-up wrote after the cut is unknown, so a slave configured
+  // there may be missing from axes().
+  std::uint64_t configurationFramesCut() const { return configuration_frames_cut_; }
 
  private:
   // A mailbox write to SM `sm` (0) or read of it (1) of the addressed slave; whether it was one.
@@ -89,6 +93,7 @@ class LayoutLearner {
   bool saw_configuration_ = false;
   bool saw_servo_ = false;
   bool dirty_ = false;
+  std::uint64_t configuration_frames_cut_ = 0;
 };
 
 // One line for a person: "3 station 0x03EC; SM2 0x1100+10 control 0x64; FMMU0 ... write; servo".
