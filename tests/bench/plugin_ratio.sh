@@ -66,12 +66,12 @@ run() { # run ARGS... > OUT: the runner, failing loudly with tshark's messages
 sanity_check() {
   local selected with_fields
   # shellcheck disable=SC2086
-  selected=$(run ${side_args[filter_plugin]} -c 2000 | wc -l)
+  selected=$(run ${side_args[filter_plugin]} -2 -c 2000 | wc -l)
   # shellcheck disable=SC2086
-  with_fields=$(run ${side_args[fields_plugin]} -c 20 | awk -F'\t' '$5 != ""' | wc -l)
+  with_fields=$(run ${side_args[fields_plugin]} -2 -c 2000 | awk -F'\t' '$5 != ""' | wc -l)
   if [ "$selected" -lt 1 ] || [ "$with_fields" -lt 5 ]; then
     echo "plugin_ratio: the plugin decoded too little ($selected frames with SE 2 in the" \
-      "first 2000, $with_fields of the first 20 with inputs)" >&2
+      "first 2000, $with_fields of them with inputs)" >&2
     exit 2
   fi
 }
