@@ -557,10 +557,6 @@ bool wanted(proto_tree* tree, int hf) {
 bool shown(proto_tree* tree) {
   return tree != nullptr && PTREE_DATA(tree)->visible;
 }
-// Whether a filter, column or tap names the field, whether or not the tree is shown.
-bool named(int hf) {
-  return proto_registrar_get_nth(static_cast<guint>(hf))->ref_type != HF_REF_TYPE_NONE;
-}
 
 bool wordWanted(proto_tree* tree, const WordItems& word) {
   for (std::size_t i = word.row; i < word.row_end; ++i) {
@@ -588,17 +584,17 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
 }
 
 // The word's bit fields one by one, for a shown tree: the parameter table by its number
-// (ExtPRMTBL·4 + PRMTBL + 1), and SEW cause bits that are clear gathered into one line unless a
-// filter names them.
+// (ExtPRMTBL·4 + PRMTBL + 1), and SEW cause bits that are clear hidden behind one line (hidden
+// items still serve filters and -T fields; -V and the details pane skip them).
 void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const WordItems& word,
                   std::uint32_t value) {
   guint clear_causes = 0;
   for (std::size_t c = 0; word.children[c] != nullptr; ++c) {
     const int hf = *word.children[c];
     const FieldDef& f = kFields[word.child_rows[c]];
-    if (f.word == Word::Sew && (f.mask & kSewCauseMask) != 0 && (value & f.mask) == 0 &&
-        !named(hf)) {
+    if (f.word == Word::Sew && (f.mask & kSewCauseMask) != 0 && (value & f.mask) == 0) {
       ++clear_causes;
+      proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
     if ((f.word == Word::Scw || f.word == Word::Ssw) && f.mask == parameterTableBits(f.word).low) {
