@@ -9,8 +9,8 @@ namespace ncservo::plugin {
 
 namespace {
 
-// Each axis's subtree label ("Axis 3 (x): control active") per drive state, formatted once per
-// capture: formatting it on every frame cost more than creating the item it names.
+// Each axis's layer label ("NC-Servo axis 3 (x): control active") per drive state, formatted
+// once per capture: formatting it on every frame cost more than creating the item it names.
 constexpr std::size_t kStateSlots = 9;  // the eight drive states, then "no state"
 struct AxisLabel {
   std::string name;             // the axis name and
@@ -29,9 +29,17 @@ const char* axisLabel(guint16 axis, std::optional<DriveState> known_state, const
   if (label.text.empty() || label.state != state || label.name != name) {
     label.name = name;
     label.state = state;
-    label.text = fmt::format("Axis {} ({}){}{}", axis, name, state ? ": " : "", state ? state : "");
+    label.text =
+        fmt::format("NC-Servo axis {} ({}){}{}", axis, name, state ? ": " : "", state ? state : "");
   }
   return label.text.c_str();
+}
+
+void copyTo(const std::string& text, char* out, std::size_t size) {
+  if (size == 0) return;
+  const std::size_t n = std::min(text.size(), size - 1);
+  text.copy(out, n);
+  out[n] = '\0';
 }
 
 }  // namespace
@@ -49,10 +57,22 @@ void messageText(const PdoValues& values, char* out, std::size_t size) {
   formatMessage(out, size, values.msgCode(), values.msgData());
 }
 
-const char* describeCopy(proto_item* root, CopyKind copy, unsigned axis_count) {
-  const char* text = copyKindName(copy);
-  proto_item_append_text(root, ", %s copy, %u axes", text, axis_count);
-  return text;
+void sewCausesText(std::uint32_t sew, char* out, std::size_t size) {
+  std::string text;
+  for (const SewCause& cause : kSewCauses) {
+    if (!(sew & cause.mask)) continue;
+    fmt::format_to(std::back_inserter(text), "{}{} / {:#06x}", text.empty() ? "" : ", ",
+                   cause.display, cause.canopen);
+  }
+  copyTo(text, out, size);
+}
+
+void edgeText(const FieldEdge& edge, char* out, std::size_t size) {
+  copyTo(ncservo::edgeText(edge), out, size);
+}
+
+void transitionText(const StateChange& change, char* out, std::size_t size) {
+  copyTo(ncservo::transitionText(change), out, size);
 }
 
 }  // namespace ncservo::plugin

@@ -16,7 +16,9 @@
 #include <wiretap/wtap.h>
 #include <wsutil/report_message.h>
 
+#include <array>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,7 +56,11 @@ int hf_field[kFieldCount];
 int hf_derived[kDerivedCount];
 int ett_ncservo = -1;
 int ett_axis = -1;
+int ett_finding = -1;
+int ett_clear_causes = -1;
 int ett_word[kWordCount];
+// The protocol's layer, one per axis of a frame; called by the postdissector.
+dissector_handle_t layer_handle = nullptr;
 // What each PDO word adds, prepared once from the field table so that no frame scans the table.
 constexpr std::size_t kMaxParts = 2;
 struct WordItems {
@@ -62,8 +68,9 @@ struct WordItems {
   std::size_t row_end;  // one past the word's last row
   guint offset;         // in its PDO
   gint length;
-  int* children[kMaxChildren];   // bit fields drawn by one bitmask call, NULL-terminated
-  std::size_t parts[kMaxParts];  // rows of byte-aligned parts, each shown when it applies
+  int* children[kMaxChildren];           // bit fields drawn by one bitmask call, NULL-terminated
+  std::size_t child_rows[kMaxChildren];  // their rows in kFields
+  std::size_t parts[kMaxParts];          // rows of byte-aligned parts, each shown when it applies
   std::size_t part_count;
 };
 WordItems word_items[kWordCount];
@@ -109,6 +116,16 @@ LayoutWindow* g_window = nullptr;
 Validator* g_validator = nullptr;
 wmem_map_t* g_records = nullptr;
 
+// The Info column's last text and what it was made from (infoText).
+struct InfoKey {
+  guint16 axis_count = 0;
+  guint16 finding_count = 0;
+  std::array<guint32, kMaxAxesPerFrame> axes{};  // axis << 8 | state slot
+  std::array<guint8, 16> rules{};                // the first findings' rules
+};
+InfoKey g_info_key;
+const char* g_info_text = nullptr;  // for g_info_key, in file scope
+
 // What the first pass found in a frame, kept in file scope for later passes.
 enum AxisFlags : guint8 {
   kHasRx = 1,
@@ -121,8 +138,11 @@ struct AxisRecord {
   guint16 axis;
   guint8 flags;
   guint8 state;
+  guint8 edge_count;
   guint32 rx_offset;
   guint32 tx_offset;
+  const FieldEdge* edges;     // edge_count entries, in file scope
+  const StateChange* change;  // the drive-state change in this frame, or null; in file scope
 };
 constexpr guint16 kBusAxis = 0xFFFF;
 struct FindingRecord {
@@ -136,6 +156,7 @@ struct FrameRecord {
   guint16 axis_count;
   guint16 finding_count;
   const FindingRecord* findings;
+  const char* info;    // the Info column's text, in file scope
   AxisRecord axes[1];  // axis_count entries (at least one slot allocated)
 };
 
@@ -228,6 +249,9 @@ hf_register_info* buildFieldRegistrations(std::size_t& count) {
     r.p_id = &hf_derived[i];
     if (d.id == Derived::Axis) {
       fillHeader(r.hfinfo, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
+    } else if (d.id == Derived::SinceFrame) {
+      fillHeader(r.hfinfo, d.label, d.filter, FT_FRAMENUM, BASE_NONE,
+                 FRAMENUM_TYPE(FT_FRAMENUM_NONE), 0, d.blurb);
     } else {
       fillHeader(r.hfinfo, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
     }
@@ -247,7 +271,7 @@ ei_register_info* buildRuleRegistrations() {
     ei[i].eiinfo.severity = rule.severity == Severity::Error     ? PI_ERROR
                             : rule.severity == Severity::Warning ? PI_WARN
                                                                  : PI_NOTE;
-    ei[i].eiinfo.summary = g_strdup_printf("%s %s: %s", rule.code, rule.slug, rule.summary);
+    ei[i].eiinfo.summary = g_strdup_printf("%s %s", rule.code, rule.slug);
     // As EXPFILL and HFILL fill them.
     ei[i].eiinfo.hf_info.p_id = nullptr;
     ei[i].eiinfo.hf_info.hfinfo.id = -1;
@@ -275,7 +299,10 @@ void buildWordItems() {
       case FieldKind::BitRange: {
         std::size_t used = 0;
         while (word.children[used] != nullptr) ++used;
-        if (used + 1 < kMaxChildren) word.children[used] = &hf_field[i];
+        if (used + 1 < kMaxChildren) {
+          word.children[used] = &hf_field[i];
+          word.child_rows[used] = i;
+        }
         break;
       }
       case FieldKind::Part:
@@ -331,6 +358,7 @@ void startValidator() {
 
 void initCapture() {
   plugin::resetItemTexts();
+  g_info_text = nullptr;
   g_records = wmem_map_new(wmem_file_scope(), g_direct_hash, g_direct_equal);
   delete g_window;
   g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
@@ -368,6 +396,70 @@ LinkType linkTypeOf(const packet_info* pinfo) {
     default:
       return LinkType::Unsupported;
   }
+}
+
+// The Info column's text: the axes grouped by drive state, the most common state counted
+// ("control active ×30, error: axis3, axis17"), then the rule IDs fired. Frames in a row mostly
+// look the same, so the text of the previous frame is kept and reused when its inputs repeat.
+
+constexpr guint8 kNoState = 0xFF;
+const char* stateLabel(guint8 state) {
+  return state == kNoState ? "no state" : driveStateName(static_cast<DriveState>(state));
+}
+
+const char* infoText(const FrameRecord& record) {
+  InfoKey key;
+  key.axis_count = record.axis_count;
+  key.finding_count = record.finding_count;
+  for (guint i = 0; i < record.axis_count; ++i) {
+    const AxisRecord& r = record.axes[i];
+    key.axes[i] = guint32{r.axis} << 8 | ((r.flags & kHasState) ? r.state : kNoState);
+  }
+  for (guint i = 0; i < record.finding_count && i < key.rules.size(); ++i) {
+    key.rules[i] = record.findings[i].rule;
+  }
+  if (g_info_text != nullptr && record.finding_count <= key.rules.size() &&
+      std::memcmp(&key, &g_info_key, sizeof key) == 0) {
+    return g_info_text;
+  }
+  // Distinct states in order of first appearance, with their counts.
+  guint8 states[kMaxAxesPerFrame];
+  guint counts[kMaxAxesPerFrame] = {};
+  guint distinct = 0;
+  for (guint i = 0; i < record.axis_count; ++i) {
+    const guint8 state = static_cast<guint8>(key.axes[i] & 0xFF);
+    guint d = 0;
+    while (d < distinct && states[d] != state) ++d;
+    if (d == distinct) states[distinct++] = state;
+    ++counts[d];
+  }
+  guint most = 0;
+  for (guint d = 1; d < distinct; ++d) {
+    if (counts[d] > counts[most]) most = d;
+  }
+  wmem_strbuf_t* text = wmem_strbuf_new(wmem_file_scope(), " [NCSERVO");
+  if (distinct > 0 && counts[most] > 2) {
+    wmem_strbuf_append_printf(text, " %s \u00d7%u", stateLabel(states[most]), counts[most]);
+  }
+  for (guint d = 0; d < distinct; ++d) {
+    if (d == most && counts[most] > 2) continue;
+    wmem_strbuf_append(text, wmem_strbuf_get_len(text) > 9 ? ", " : " ");
+    wmem_strbuf_append_printf(text, "%s:", stateLabel(states[d]));
+    const char* separator = " ";
+    for (guint i = 0; i < record.axis_count; ++i) {
+      if (static_cast<guint8>(key.axes[i] & 0xFF) != states[d]) continue;
+      wmem_strbuf_append_printf(text, "%s%s", separator, axisName(record.axes[i].axis));
+      separator = ", ";
+    }
+  }
+  for (guint i = 0; i < record.finding_count; ++i) {
+    wmem_strbuf_append_printf(text, "%s%s", i == 0 ? " | " : " ",
+                              ruleDef(static_cast<RuleId>(record.findings[i].rule)).code);
+  }
+  wmem_strbuf_append_c(text, ']');
+  g_info_key = key;
+  g_info_text = wmem_strbuf_finalize(text);
+  return g_info_text;
 }
 
 // Runs the validator over one frame and keeps what it found, by frame number.
@@ -409,7 +501,20 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
     r.state = state ? static_cast<guint8>(*state) : 0;
     r.rx_offset = static_cast<guint32>(placement.rx_offset);
     r.tx_offset = static_cast<guint32>(placement.tx_offset);
+    const AxisModel* model = g_validator->axis(placement.axis);
+    if (model == nullptr) continue;
+    const std::vector<FieldEdge>& edges = model->edgesIn(number);
+    if (!edges.empty()) {
+      r.edge_count = static_cast<guint8>(std::min<std::size_t>(edges.size(), 0xFF));
+      r.edges = static_cast<const FieldEdge*>(
+          wmem_memdup(wmem_file_scope(), edges.data(), r.edge_count * sizeof(FieldEdge)));
+    }
+    if (const StateChange* change = model->stateChangeIn(number)) {
+      r.change = static_cast<const StateChange*>(
+          wmem_memdup(wmem_file_scope(), change, sizeof(StateChange)));
+    }
   }
+  record->info = infoText(*record);
   wmem_map_insert(g_records, GUINT_TO_POINTER(static_cast<guint>(number)), record);
 }
 
@@ -444,11 +549,18 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   validateFrame(pinfo->num, time_ns, frame, bytes);
 }
 
-// Whether a word's items are needed: the tree is shown, or a filter or column asks for the word or
-// one of its fields. Skipping the rest keeps filtering with an invisible tree fast.
+// Whether an item is needed: the tree is shown, or a filter, column or tap asks for the field.
+bool wanted(proto_tree* tree, int hf) {
+  return proto_field_is_referenced(tree, hf);
+}
+// Whether the tree is shown (-V, -O, the GUI's details), where labels are read.
+bool shown(proto_tree* tree) {
+  return tree != nullptr && PTREE_DATA(tree)->visible;
+}
+
 bool wordWanted(proto_tree* tree, const WordItems& word) {
   for (std::size_t i = word.row; i < word.row_end; ++i) {
-    if (proto_field_is_referenced(tree, hf_field[i])) return true;
+    if (wanted(tree, hf_field[i])) return true;
   }
   return false;
 }
@@ -471,14 +583,57 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
+// The word's bit fields one by one, for a shown tree: the parameter table by its number
+// (ExtPRMTBL·4 + PRMTBL + 1), and SEW cause bits that are clear hidden behind one line (hidden
+// items still serve filters and -T fields; -V and the details pane skip them).
+void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const WordItems& word,
+                  std::uint32_t value) {
+  guint clear_causes = 0;
+  for (std::size_t c = 0; word.children[c] != nullptr; ++c) {
+    const int hf = *word.children[c];
+    const FieldDef& f = kFields[word.child_rows[c]];
+    if (f.word == Word::Sew && (f.mask & kSewCauseMask) != 0 && (value & f.mask) == 0) {
+      ++clear_causes;
+      proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
+      continue;
+    }
+    if ((f.word == Word::Scw || f.word == Word::Ssw) && f.mask == parameterTableBits(f.word).low) {
+      proto_tree_add_uint_format_value(word_tree, hf, tvb, offset, word.length, value, "table %u",
+                                       parameterTable(f.word, value));
+      continue;
+    }
+    if (f.kind == FieldKind::Flag) {
+      proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value);
+    } else {
+      proto_tree_add_uint(word_tree, hf, tvb, offset, word.length, value);
+    }
+  }
+  if (clear_causes > 0) {
+    proto_tree_add_subtree_format(word_tree, tvb, offset, word.length, ett_clear_causes, nullptr,
+                                  "%u cause bits clear", clear_causes);
+  }
+}
+
 // Adds the words of one PDO, each bit field under its word, as the field table defines them.
 void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
   const std::size_t first = firstWordOf(pdo);
+  const bool tree_shown = shown(tree);
   for (std::size_t w = first; w < first + wordCountOf(pdo); ++w) {
     const WordItems& word = word_items[w];
     if (!wordWanted(tree, word)) continue;
     proto_item* item = nullptr;
-    if (word.children[0] != nullptr) {
+    if (word.children[0] != nullptr && tree_shown) {
+      const auto value = static_cast<std::uint32_t>(values.raw[w]);
+      item = proto_tree_add_uint(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
+                                 value);
+      if (kFields[word.row].word == Word::Sew && (value & kSewCauseMask) != 0) {
+        char causes[256];
+        plugin::sewCausesText(value, causes, sizeof causes);
+        proto_item_append_text(item, " (%s)", causes);
+      }
+      addBitsShown(proto_item_add_subtree(item, ett_word[w]), tvb, offset + word.offset, word,
+                   value);
+    } else if (word.children[0] != nullptr) {
       // BMT_NO_APPEND: the bits are children; appending their names to the word's label
       // would format every bit of every word on every frame.
       item = proto_tree_add_bitmask_value_with_flags(tree, tvb, offset + word.offset,
@@ -500,71 +655,131 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
   }
 }
 
-// Each finding as the expert item of its rule, on the axis's subtree (or the protocol's item).
-void addFindings(packet_info* pinfo, const FrameRecord& record, guint16 axis, proto_item* item) {
-  for (guint i = 0; i < record.finding_count; ++i) {
-    const FindingRecord& f = record.findings[i];
-    if (f.axis != axis) continue;
-    expert_add_info_format(pinfo, item, &ei_rule[f.rule], "%s", f.text);
+// A finding as an item with its details, carrying the expert info of its rule. The expert
+// summary is the rule's alone, so that Expert Information groups a rule's findings in one row.
+void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint anchor,
+                const FindingRecord& f) {
+  proto_item* item =
+      proto_tree_add_string(tree, derivedHf(Derived::Finding), tvb, anchor, 0, f.text);
+  proto_item_set_generated(item);
+  if (f.since != 0 && wanted(tree, derivedHf(Derived::SinceFrame))) {
+    proto_tree* details = proto_item_add_subtree(item, ett_finding);
+    proto_item_set_generated(
+        proto_tree_add_uint(details, derivedHf(Derived::SinceFrame), tvb, anchor, 0, f.since));
   }
+  expert_add_info(pinfo, item, &ei_rule[f.rule]);
 }
 
-bool findingsFor(const FrameRecord& record, guint16 axis) {
-  for (guint i = 0; i < record.finding_count; ++i) {
-    if (record.findings[i].axis == axis) return true;
+// What the frame dissector hands each axis's layer.
+struct LayerData {
+  const FrameRecord* record;
+  const AxisRecord* axis;  // null: a layer only for findings about the bus
+  bool first;              // the frame's first layer, which carries the bus's findings
+};
+
+// Findings about the bus, or about an axis this frame does not carry.
+bool frameLevel(const FrameRecord& record, const FindingRecord& f) {
+  if (f.axis == kBusAxis) return true;
+  for (guint a = 0; a < record.axis_count; ++a) {
+    if (record.axes[a].axis == f.axis) return false;
   }
-  return false;
+  return true;
 }
 
-void addAxis(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, const FrameRecord& record,
-             const AxisRecord& r) {
-  const std::optional<DriveState> known_state =
-      (r.flags & kHasState) ? std::optional(static_cast<DriveState>(r.state)) : std::nullopt;
-  const plugin::AxisTexts texts = plugin::axisTexts(r.axis, axisName(r.axis), known_state);
-  const char* name = texts.name;
-  const char* state = texts.state;
-  // Anchor the axis at its first PDO that was captured; an item past the captured bytes would
-  // raise an exception.
-  const guint start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
-  proto_item* axis_item = nullptr;
-  proto_tree* axis_tree =
-      proto_tree_add_subtree(tree, tvb, start, 0, ett_axis, &axis_item, texts.label);
-  proto_tree_add_uint(axis_tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
-  proto_tree_add_string(axis_tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
+void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, const AxisRecord& r,
+                  guint start, const char* name, const char* state) {
+  proto_item_set_generated(proto_tree_add_string(tree, derivedHf(Derived::Copy), tvb, start, 0,
+                                                 copyKindName(static_cast<CopyKind>(record.copy))));
+  proto_tree_add_uint(tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
+  proto_tree_add_string(tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
 
-  // Values for conditions and derived fields; the items themselves read the bytes through tvb.
   const guint length = tvb_captured_length(tvb);
   const ByteReader bytes(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length);
   PdoValues values;
   if (r.flags & kHasRx) readPdo(Pdo::Rx, bytes, r.rx_offset, values);
   if (r.flags & kHasTx) readPdo(Pdo::Tx, bytes, r.tx_offset, values);
-  if (values.has_rx) addPdo(axis_tree, tvb, Pdo::Rx, r.rx_offset, values);
-  if (values.has_tx) addPdo(axis_tree, tvb, Pdo::Tx, r.tx_offset, values);
+  if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values);
+  if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values);
   if (state != nullptr) {
     proto_item_set_generated(
-        proto_tree_add_string(axis_tree, derivedHf(Derived::State), tvb, start, 0, state));
+        proto_tree_add_string(tree, derivedHf(Derived::State), tvb, start, 0, state));
   }
-  if (values.has_tx) {
+  if (values.has_tx && wanted(tree, derivedHf(Derived::Message))) {
     char message[128];
     plugin::messageText(values, message, sizeof message);
-    proto_item_set_generated(proto_tree_add_string(axis_tree, derivedHf(Derived::Message), tvb,
-                                                   r.tx_offset, 0, message));
+    proto_item_set_generated(
+        proto_tree_add_string(tree, derivedHf(Derived::Message), tvb, r.tx_offset, 0, message));
   }
-  for (const bool rx : {true, false}) {
-    if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
-    expert_add_info_format(pinfo, axis_item, &ei_region_malformed,
-                           "Axis %u: the %s (%u bytes at frame offset %u) is cut short or lies "
-                           "partly outside its datagram",
-                           r.axis, rx ? "RxPDO" : "TxPDO",
-                           static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
-                           rx ? r.rx_offset : r.tx_offset);
+  if (r.change != nullptr && wanted(tree, derivedHf(Derived::Transition))) {
+    char transition[96];
+    plugin::transitionText(*r.change, transition, sizeof transition);
+    proto_item_set_generated(
+        proto_tree_add_string(tree, derivedHf(Derived::Transition), tvb, start, 0, transition));
   }
-  col_append_fstr(pinfo->cinfo, COL_INFO, "%s%s%s", name, state ? " " : "", state ? state : "");
-  if (findingsFor(record, r.axis)) addFindings(pinfo, record, r.axis, axis_item);
+  if (r.edge_count > 0 && wanted(tree, derivedHf(Derived::Edge))) {
+    for (guint e = 0; e < r.edge_count; ++e) {
+      char edge[64];
+      plugin::edgeText(r.edges[e], edge, sizeof edge);
+      proto_item_set_generated(
+          proto_tree_add_string(tree, derivedHf(Derived::Edge), tvb, start, 0, edge));
+    }
+  }
+}
+
+// One layer of the protocol per axis, so that Wireshark's layer operator selects an axis:
+// `ncservo.state#3` is the third axis of the frame (INTERFACES.md).
+int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
+  const auto& layer = *static_cast<const LayerData*>(data);
+  const FrameRecord& record = *layer.record;
+  proto_item* root = nullptr;
+  proto_tree* layer_tree = nullptr;
+  guint start = 0;
+  if (layer.axis != nullptr) {
+    const AxisRecord& r = *layer.axis;
+    const std::optional<DriveState> known_state =
+        (r.flags & kHasState) ? std::optional(static_cast<DriveState>(r.state)) : std::nullopt;
+    const plugin::AxisTexts texts = plugin::axisTexts(r.axis, axisName(r.axis), known_state);
+    // Anchor the axis at its first PDO that was captured; an item past the captured bytes
+    // would raise an exception.
+    start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
+    root = proto_tree_add_protocol_format(tree, proto_ncservo, tvb, start, 0, "%s", texts.label);
+    layer_tree = proto_item_add_subtree(root, ett_axis);
+    addAxisItems(layer_tree, tvb, record, r, start, texts.name, texts.state);
+    for (const bool rx : {true, false}) {
+      if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
+      expert_add_info_format(pinfo, root, &ei_region_malformed,
+                             "Axis %u: the %s (%u bytes at frame offset %u) is cut short or lies "
+                             "partly outside its datagram",
+                             r.axis, rx ? "RxPDO" : "TxPDO",
+                             static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
+                             rx ? r.rx_offset : r.tx_offset);
+    }
+  } else {
+    root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
+    layer_tree = proto_item_add_subtree(root, ett_ncservo);
+  }
+  for (guint i = 0; i < record.finding_count; ++i) {
+    const FindingRecord& f = record.findings[i];
+    const bool here = layer.axis != nullptr && f.axis == layer.axis->axis;
+    if (here || (layer.first && frameLevel(record, f))) {
+      addFinding(layer_tree, tvb, pinfo, start, f);
+    }
+  }
+  return static_cast<int>(tvb_captured_length(tvb));
+}
+
+// Without a tree (the packet list) only the findings' expert info and the Info column are
+// needed: Wireshark counts and colours by them.
+void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
+  for (guint i = 0; i < record.finding_count; ++i) {
+    expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);
+  }
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
-  if (g_records == nullptr) return 0;
+  if (g_records == nullptr || !proto_is_protocol_enabled(find_protocol_by_id(proto_ncservo))) {
+    return 0;
+  }
   if (!PINFO_FD_VISITED(pinfo)) {
     analyseFrame(tvb, pinfo);
   } else if (g_window != nullptr && g_window->learning()) {
@@ -574,33 +789,22 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   }
   const FrameRecord* record = recordOf(pinfo);
   if (record == nullptr) return 0;
-  proto_item* root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, -1, ENC_NA);
-  proto_tree* ncservo_tree = proto_item_add_subtree(root, ett_ncservo);
-  col_append_str(pinfo->cinfo, COL_INFO, " [NCSERVO ");
-  if (record->axis_count > 0) {
-    const char* copy =
-        plugin::describeCopy(root, static_cast<CopyKind>(record->copy), record->axis_count);
-    proto_item_set_generated(
-        proto_tree_add_string(ncservo_tree, derivedHf(Derived::Copy), tvb, 0, 0, copy));
+  // The postdissector has no protocol of its own: expert info added here names this one.
+  pinfo->current_proto = "NCSERVO";
+  col_append_str(pinfo->cinfo, COL_INFO, record->info);
+  if (tree == nullptr) {
+    addExpertOnly(pinfo, *record);
+    return static_cast<int>(tvb_captured_length(tvb));
+  }
+  LayerData layer{record, nullptr, true};
+  if (record->axis_count == 0) {
+    call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
   }
   for (guint i = 0; i < record->axis_count; ++i) {
-    if (i > 0) col_append_str(pinfo->cinfo, COL_INFO, "; ");
-    addAxis(ncservo_tree, tvb, pinfo, *record, record->axes[i]);
+    layer.axis = &record->axes[i];
+    layer.first = i == 0;
+    call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
   }
-  // Findings about the bus, or about an axis this frame does not carry, go on the root item.
-  for (guint i = 0; i < record->finding_count; ++i) {
-    const FindingRecord& f = record->findings[i];
-    bool shown = false;
-    for (guint a = 0; a < record->axis_count && f.axis != kBusAxis; ++a) {
-      shown = shown || record->axes[a].axis == f.axis;
-    }
-    if (!shown) expert_add_info_format(pinfo, root, &ei_rule[f.rule], "%s", f.text);
-  }
-  for (guint i = 0; i < record->finding_count; ++i) {
-    col_append_fstr(pinfo->cinfo, COL_INFO, "%s%s", i == 0 ? " | " : " ",
-                    ruleDef(static_cast<RuleId>(record->findings[i].rule)).code);
-  }
-  col_append_str(pinfo->cinfo, COL_INFO, "]");
   return static_cast<int>(tvb_captured_length(tvb));
 }
 
@@ -611,12 +815,14 @@ void registerProtocol() {
   proto_register_field_array(proto_ncservo, hf, static_cast<int>(count));
   buildWordItems();
 
-  static gint* ett[2 + kWordCount];
+  static gint* ett[4 + kWordCount];
   ett[0] = &ett_ncservo;
   ett[1] = &ett_axis;
+  ett[2] = &ett_finding;
+  ett[3] = &ett_clear_causes;
   for (std::size_t w = 0; w < kWordCount; ++w) {
     ett_word[w] = -1;
-    ett[2 + w] = &ett_word[w];
+    ett[4 + w] = &ett_word[w];
   }
   proto_register_subtree_array(ett, static_cast<int>(std::size(ett)));
 
@@ -656,8 +862,10 @@ void registerProtocol() {
 }
 
 void registerHandoff() {
-  dissector_handle_t handle = create_dissector_handle(dissectNcservo, proto_ncservo);
-  register_postdissector(handle);
+  layer_handle = create_dissector_handle(dissectLayer, proto_ncservo);
+  // The postdissector belongs to no protocol, so that it adds no layer: the axes' layers are
+  // numbered from 1.
+  register_postdissector(create_dissector_handle(dissectNcservo, -1));
   applyPreferences();
 }
 

@@ -464,5 +464,82 @@ TEST(AxisModelTimeline, KeepsAtMostMaxTimelineChanges) {
   EXPECT_EQ(axis.timeline().back().at.frame, AxisModel::kMaxTimeline);
 }
 
+// The edges of an observation (the bit fields the model reads that changed, never on the first)
+// and their texts, as the plugin shows them in ncservo.edge.
+struct EdgeCase {
+  const char* name;
+  std::vector<std::pair<std::optional<std::uint32_t>, std::optional<std::uint32_t>>>
+      steps;                            // SCW, SSW
+  std::vector<std::string> last_edges;  // edgeText of the last observation's edges, in table order
+};
+const std::vector<EdgeCase>& edgeCases() {
+  static const std::vector<EdgeCase> cases = {
+      {"first observation: none", {{kScwRunning, kSswRunning}}, {}},
+      {"SE armed then enabled", {{kScwArmed, kSswReady}, {kScwRunning, kSswReady}}, {"SE 0x1→0x2"}},
+      {"ServoEn rises",
+       {{kScwRunning, kSswReady}, {kScwRunning, kSswRunning}},
+       {"ServoEn ↑", "PulseEnabled ↑"}},
+      {"ServoEn falls",
+       {{kScwRunning, kSswRunning}, {kScwRunning, kSswReady}},
+       {"ServoEn ↓", "PulseEnabled ↓"}},
+      {"outputs alone leave the inputs' bits",
+       {{kScwRunning, kSswRunning}, {kScwOff, std::nullopt}},
+       {"SE 0x2→0x0"}},
+      {"unchanged: none", {{kScwRunning, kSswRunning}, {kScwRunning, kSswRunning}}, {}},
+      {"ZPulseRequest rises",
+       {{kScwRunning, kSswRunning}, {kScwRunning | kZRequest, kSswRunning}},
+       {"ZPulseRequest ↑"}},
+  };
+  return cases;
+}
+
+TEST(AxisModelEdges, ChangedReadFieldsOfTheObservation) {
+  for (const EdgeCase& c : edgeCases()) {
+    SCOPED_TRACE(c.name);
+    AxisModel axis(0, std::nullopt);
+    std::uint64_t frame = 0;
+    for (const auto& [scw, ssw] : c.steps) axis.observe(pdo(scw, ssw), stamp(++frame));
+    std::vector<std::string> texts;
+    for (const FieldEdge& edge : axis.edgesIn(frame)) texts.push_back(edgeText(edge));
+    EXPECT_EQ(texts, c.last_edges);
+    EXPECT_TRUE(axis.edgesIn(frame + 1).empty());  // no observation taken there
+  }
+}
+
+// ncservo.transition: seed 003's name where the change has one, else the two states.
+struct TransitionTextCase {
+  const char* name;
+  StateChange change;
+  const char* text;
+};
+TEST(AxisModelTimeline, TransitionTexts) {
+  const TransitionTextCase cases[] = {
+      {"named",
+       {DriveState::ControlActive, "ENABLE OPERATION", {}, DriveState::ReadyToSwitchOn},
+       "ENABLE OPERATION"},
+      {"unnamed",
+       {DriveState::SwitchedOn, nullptr, {}, DriveState::ReadyToSwitchOn},
+       "ready to switch on → switched on"},
+      {"first known",
+       {DriveState::ReadyToSwitchOn, nullptr, {}, std::nullopt},
+       "→ ready to switch on"},
+  };
+  for (const TransitionTextCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    EXPECT_EQ(transitionText(c.change), c.text);
+  }
+}
+
+TEST(AxisModelTimeline, StateChangeInItsFrameOnly) {
+  AxisModel axis(0, std::nullopt);
+  axis.observe(pdo(kScwRunning, kSswReady), stamp(1));
+  axis.observe(pdo(kScwRunning, kSswRunning), stamp(2));
+  axis.observe(pdo(kScwRunning, kSswRunning), stamp(3));
+  ASSERT_NE(axis.stateChangeIn(2), nullptr);
+  EXPECT_EQ(axis.stateChangeIn(2)->from, axis.timeline().front().state);
+  EXPECT_EQ(axis.stateChangeIn(2)->state, axis.timeline().back().state);
+  EXPECT_EQ(axis.stateChangeIn(3), nullptr);
+}
+
 }  // namespace
 }  // namespace ncservo

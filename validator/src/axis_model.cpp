@@ -1,5 +1,7 @@
 #include "ncservo/axis_model.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "ncservo/fields.hpp"
@@ -28,6 +30,24 @@ static_assert(declared(Word::Scw, kSe | kEmgon | kBrake | kZPulseRequest | kErro
                   declared(Word::Ssw, kServoEn | kServoRdy | kZPulseAck | kErrClearAck) &&
                   declared(Word::Sew, kServoErrors | kEcatTimeout | kSewCauseMask),
               "AxisModel::kReads declares every bit observe() reads");
+
+// The rows of the bit fields the model reads, whose changes are its edges.
+constexpr std::size_t kEdgeFieldCount = [] {
+  std::size_t n = 0;
+  for (const FieldDef& f : kFields)
+    n += (f.mask & AxisModel::kReads.bits[static_cast<std::size_t>(f.word)]) != 0;
+  return n;
+}();
+constexpr std::array<std::uint16_t, kEdgeFieldCount> kEdgeFields = [] {
+  std::array<std::uint16_t, kEdgeFieldCount> rows{};
+  std::size_t n = 0;
+  for (std::size_t row = 0; row < kFieldCount; ++row) {
+    const FieldDef& f = kFields[row];
+    if ((f.mask & AxisModel::kReads.bits[static_cast<std::size_t>(f.word)]) != 0)
+      rows[n++] = static_cast<std::uint16_t>(row);
+  }
+  return rows;
+}();
 
 const char* transitionName(std::optional<DriveState> from, DriveState to, const AxisModel& axis) {
   if (!from) return nullptr;
@@ -109,6 +129,7 @@ void AxisModel::endOutage() {
 }
 
 void AxisModel::observe(const PdoValues& values, const Stamp& now) {
+  const PdoValues before = latest_;
   now_ = now;
   illegal_enable_edge_ = false;
   inputs_in_al_state_ = inputs_in_al_state_ || values.has_tx;
@@ -118,7 +139,39 @@ void AxisModel::observe(const PdoValues& values, const Stamp& now) {
   }
   if (values.has_rx) observeOutputs(values, now);
   if (values.has_tx) observeInputs(values, now);
+  observed_frame_ = now.frame;
+  takeEdges(before);
   updateState(now);
+}
+
+// The read bit fields whose value differs from the previous observation of their PDO (never on
+// the first, as Signal's edges).
+void AxisModel::takeEdges(const PdoValues& before) {
+  edges_.clear();
+  for (const std::uint16_t row : kEdgeFields) {
+    const FieldDef& f = kFields[row];
+    const std::size_t word = static_cast<std::size_t>(f.word);
+    const std::uint64_t mask = f.mask & kReads.bits[word];
+    if (mask == 0 || !before.has(f.word) || !latest_.has(f.word)) continue;
+    const std::uint64_t then = before.raw[word] & mask;
+    const std::uint64_t now = latest_.raw[word] & mask;
+    if (then == now) continue;
+    const unsigned shift = lowestBit(f.mask);
+    edges_.push_back(FieldEdge{row, static_cast<std::uint32_t>(then >> shift),
+                               static_cast<std::uint32_t>(now >> shift)});
+  }
+}
+
+std::string edgeText(const FieldEdge& edge) {
+  const FieldDef& f = kFields[edge.field];
+  if (f.kind == FieldKind::Flag) return std::string(f.label) + (edge.to != 0 ? " ↑" : " ↓");
+  return fmt::format("{} {:#x}→{:#x}", f.label, edge.from, edge.to);
+}
+
+std::string transitionText(const StateChange& change) {
+  if (change.transition != nullptr) return change.transition;
+  if (!change.from) return fmt::format("→ {}", driveStateName(change.state));
+  return fmt::format("{} → {}", driveStateName(*change.from), driveStateName(change.state));
 }
 
 void AxisModel::startSegment() {
@@ -218,12 +271,13 @@ void AxisModel::updateState(const Stamp& now) {
   const std::optional<DriveState> state = driveState(latest_);
   if (!state || state == state_) return;
   const char* transition = transitionName(state_, *state, *this);
+  last_change_ = StateChange{*state, transition, now, state_};
   state_ = state;
   if (timeline_.size() >= kMaxTimeline) {
     ++timeline_omitted_;
     return;
   }
-  timeline_.push_back(StateChange{*state, transition, now});
+  timeline_.push_back(*last_change_);
 }
 
 }  // namespace ncservo

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "ncservo/drive_state.hpp"
@@ -47,7 +48,19 @@ struct StateChange {
   DriveState state{};
   const char* transition = nullptr;  // seed 003's name, where it has one
   Stamp at;
+  std::optional<DriveState> from;  // none when the state first became known
 };
+
+// A bit field the model reads (AxisModel::kReads) that changed value in one observation.
+struct FieldEdge {
+  std::uint16_t field;  // row in kFields
+  std::uint32_t from, to;
+};
+// "SE 0x1→0x2" for a multi-bit field, "ServoEn ↑" / "ServoEn ↓" for a flag.
+std::string edgeText(const FieldEdge& edge);
+// The change's seed 003 transition name, else "switched on → control active", else
+// "→ ready to switch on" when the state first became known.
+std::string transitionText(const StateChange& change);
 
 class AxisModel {
  public:
@@ -151,6 +164,15 @@ class AxisModel {
   std::uint32_t lastOutageCycles() const { return last_outage_cycles_; }
 
   std::optional<DriveState> state() const { return state_; }
+  // The edges of the observation taken in `frame`; empty when none was taken there.
+  const std::vector<FieldEdge>& edgesIn(std::uint64_t frame) const {
+    static const std::vector<FieldEdge> kNone;
+    return observed_frame_ == frame ? edges_ : kNone;
+  }
+  // The state change taken in `frame`, kept even when the timeline is full.
+  const StateChange* stateChangeIn(std::uint64_t frame) const {
+    return last_change_ && last_change_->at.frame == frame ? &*last_change_ : nullptr;
+  }
   const std::vector<StateChange>& timeline() const { return timeline_; }
   std::uint64_t timelineOmitted() const { return timeline_omitted_; }
   // Newest first, at most kErrorHistoryDepth.
@@ -160,6 +182,7 @@ class AxisModel {
   void observeOutputs(const PdoValues& values, const Stamp& now);
   void observeInputs(const PdoValues& values, const Stamp& now);
   void updateState(const Stamp& now);
+  void takeEdges(const PdoValues& before);
   void copyWords(Pdo pdo, const PdoValues& values);
   void endOutage();
 
@@ -192,6 +215,9 @@ class AxisModel {
   std::uint32_t last_outage_cycles_ = 0;
 
   std::optional<DriveState> state_;
+  std::uint64_t observed_frame_ = 0;
+  std::vector<FieldEdge> edges_;  // of the observation in observed_frame_
+  std::optional<StateChange> last_change_;
   std::vector<StateChange> timeline_;
   std::uint64_t timeline_omitted_ = 0;
   std::vector<ErrorHistoryEntry> error_history_;

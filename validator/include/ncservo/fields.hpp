@@ -336,7 +336,17 @@ static_assert(parameterTable(Word::Scw, parameterTableSelection(Word::Scw, 7)) =
 namespace ncservo {
 
 // Fields the decoder derives rather than reads from one word (INTERFACES.md, "Wireshark plugin").
-enum class Derived : std::uint8_t { Axis, AxisName, Copy, State, Message };
+enum class Derived : std::uint8_t {
+  Axis,
+  AxisName,
+  Copy,
+  State,
+  Message,
+  Edge,
+  Transition,
+  Finding,
+  SinceFrame,
+};
 struct DerivedFieldDef {
   Derived id;
   const char* label;
@@ -352,6 +362,14 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
      "Drive state shown by the process data (docs/protocol.md §6)"},
     {Derived::Message, "Message", "ncservo.message",
      "Message data with its meaning and unit (docs/protocol.md §5)"},
+    {Derived::Edge, "Edge", "ncservo.edge",
+     "A judged bit field that changed in this frame, e.g. \"SE 0x1→0x2\", \"ServoEn ↑\""},
+    {Derived::Transition, "Transition", "ncservo.transition",
+     "The drive-state change in this frame, named as in the state timeline (docs/protocol.md §6)"},
+    {Derived::Finding, "Finding", "ncservo.finding",
+     "A rule's finding with its details (docs/rules.md)"},
+    {Derived::SinceFrame, "Since frame", "ncservo.since_frame",
+     "Frame where the finding's condition began"},
 };
 
 }  // namespace ncservo

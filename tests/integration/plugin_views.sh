@@ -1,0 +1,135 @@
+#!/usr/bin/env bash
+# plugin_views.sh SRC BUILD
+# The plugin's views against the CLI on the bundled faults capture (issue 17):
+# - each axis is its own ncservo layer: `ncservo.state#N == "S"` selects exactly the frames whose
+#   N-th `ncservo decode` row has state S (of those where decode gives one);
+# - ncservo.transition appears on exactly the (frame, axis) of the CLI's state timeline, named as
+#   there; ncservo.edge on every such change after the first, and SE / ServoEn edges exactly where
+#   the decode rows change;
+# - ncservo.since_frame equals the CLI's since_frame on every finding;
+# - `tshark -z expert` shows one line per rule, counting its findings.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+cap="$SRC/captures/faults-4axis.pcap"
+"$NCSERVO" decode "$cap" >"$WORK/decode.csv" || fail "ncservo decode exited $?"
+"$NCSERVO" validate --format json --fail-on never "$cap" >"$WORK/validate.json" ||
+  fail "ncservo validate exited $?"
+
+run_tshark() { # OUT tshark-args...
+  local out=$1
+  shift
+  "$TSHARK" "$PLUGIN" -2 -r "$cap" "$@" >"$out" 2>"$WORK/tshark.err" ||
+    fail "tshark $* exited $?: $(cat "$WORK/tshark.err")"
+  [ ! -s "$WORK/tshark.err" ] || fail "tshark $* printed on stderr: $(head -3 "$WORK/tshark.err")"
+}
+
+for layer in 1 2 3 4; do
+  for state in "error" "control active" "ready to switch on"; do
+    run_tshark "$WORK/layer-$layer-${state// /_}.txt" -Y "ncservo.state#$layer == \"$state\"" \
+      -T fields -e frame.number
+  done
+done
+run_tshark "$WORK/views.json" -Y "ncservo.edge || ncservo.transition" -T json --no-duplicate-keys \
+  -j "frame ncservo"
+run_tshark "$WORK/findings.tsv" -Y ncservo.finding -T fields -E occurrence=a -E aggregator='|' \
+  -e frame.number -e ncservo.finding -e ncservo.since_frame
+run_tshark "$WORK/expert.txt" -q -z expert
+
+python3 - "$WORK" <<'PY' || fail "the plugin's views differ from the CLI's"
+import bisect, collections, csv, json, re, sys
+work = sys.argv[1]
+ok = True
+def check(what, expected, actual):
+    global ok
+    if expected != actual:
+        ok = False
+        print(f"{what}: expected {sorted(expected)[:10]} got {sorted(actual)[:10]}"
+              f" (missing {sorted(expected - actual)[:5]}, extra {sorted(actual - expected)[:5]})")
+
+rows = collections.defaultdict(list)  # frame -> decode rows in axis order
+with open(f"{work}/decode.csv") as f:
+    for row in csv.DictReader(f):
+        rows[int(row["frame"])].append(row)
+for layer in range(1, 5):
+    for state in ("error", "control active", "ready to switch on"):
+        # decode gives a state only with inputs; the plugin also shows it in master copies
+        judged = {fr for fr, rs in rows.items() if len(rs) >= layer and rs[layer - 1]["state"]}
+        expected = {fr for fr in judged if rows[fr][layer - 1]["state"] == state}
+        with open(f"{work}/layer-{layer}-{state.replace(' ', '_')}.txt") as f:
+            actual = {int(line) for line in f if line.strip()} & judged
+        check(f"ncservo.state#{layer} == {state!r}", expected, actual)
+
+report = json.load(open(f"{work}/validate.json"))["captures"][0]
+timeline = {}
+first_changes = set()
+for axis in report["axes"]:
+    for i, change in enumerate(axis["state_timeline"]):
+        timeline[(change["frame"], axis["index"])] = change["transition"]
+        if i == 0:
+            first_changes.add((change["frame"], axis["index"]))
+transitions, edges = {}, collections.defaultdict(set)
+def layers(value):
+    return value if isinstance(value, list) else [value]
+for packet in json.load(open(f"{work}/views.json")):
+    source = packet["_source"]["layers"]
+    frame = int(source["frame"]["frame.number"])
+    for layer in layers(source.get("ncservo", [])):
+        axis = int(layer["ncservo.axis"])
+        if "ncservo.transition" in layer:
+            transitions[(frame, axis)] = layer["ncservo.transition"]
+        for edge in layers(layer.get("ncservo.edge", [])):
+            edges[(frame, axis)].add(edge)
+check("ncservo.transition frames", set(timeline), set(transitions))
+for key, name in timeline.items():
+    if name is not None and transitions.get(key) != name:
+        ok = False
+        print(f"transition at {key}: expected {name!r}, got {transitions.get(key)!r}")
+check("state changes without an edge", set(), set(timeline) - first_changes - set(edges))
+# SE and ServoEn edges exactly where the decode rows of the axis change. decode writes a row per
+# cycle (at its returned copy); an output's edge is seen first in the master copy before it.
+for column, label in (("scw.se", "SE"), ("ssw.servo_en", "ServoEn")):
+    expected, last, row_frames = set(), {}, collections.defaultdict(list)
+    for frame in sorted(rows):
+        for row in rows[frame]:
+            if row[column] == "":
+                continue
+            axis = int(row["axis"])
+            row_frames[axis].append(frame)
+            if axis in last and last[axis] != row[column]:
+                expected.add((frame, axis))
+            last[axis] = row[column]
+    def cycle_row(frame, axis):
+        frames = row_frames[axis]
+        i = bisect.bisect_left(frames, frame)
+        return (frames[i] if i < len(frames) else frame, axis)
+    actual = {cycle_row(*key) for key, texts in edges.items()
+              if any(t.split(" ")[0] == label for t in texts)}
+    check(f"{label} edges", expected, actual)
+
+expected = collections.Counter()
+for finding in report["findings"]:
+    expected[(finding["frame"], finding["rule"], finding["since_frame"])] += 1
+actual = collections.Counter()
+with open(f"{work}/findings.tsv") as f:
+    for line in f:
+        frame, texts, sinces = line.rstrip("\n").split("\t")
+        for text, since in zip(texts.split("|"), sinces.split("|")):
+            actual[(int(frame), text.split(" ")[0], int(since))] += 1
+check("findings (frame, rule, since_frame)", set(expected), set(actual))
+
+per_rule = collections.Counter(f["rule"] for f in report["findings"])
+lines = collections.Counter()
+counts = {}
+for line in open(f"{work}/expert.txt"):
+    m = re.match(r"\s*(\d+)\s+\S+\s+NCSERVO\s+([A-Z]+-\d{3}) \S+$", line)
+    if m:
+        lines[m.group(2)] += 1
+        counts[m.group(2)] = int(m.group(1))
+check("-z expert rules", set(per_rule), set(lines))
+for rule, n in lines.items():
+    if n != 1 or counts[rule] != per_rule[rule]:
+        ok = False
+        print(f"-z expert: {rule} on {n} lines counting {counts[rule]}, expected 1 line counting {per_rule[rule]}")
+sys.exit(0 if ok else 1)
+PY
+echo "plugin_views: layers, edges, transitions, since_frame and expert groups match the CLI"
