@@ -1,5 +1,3 @@
-#include "html_report.hpp"
-
 #include <fmt/format.h>
 
 #include <cstring>
@@ -8,11 +6,15 @@
 
 #include "chartjs_source.hpp"
 #include "ncservo/drive_state.hpp"
+#include "report.hpp"
 
 namespace ncservo::cli {
 
 namespace {
 using Json = nlohmann::ordered_json;
+
+// The findings listed in the table, per capture; past it the page says how many were left out.
+constexpr std::size_t kHtmlMaxTableRows = 20000;
 
 double seconds(const CaptureReport& r, const Stamp& at) {
   return static_cast<double>(at.time_ns - r.first_time_ns) / 1e9;

@@ -16,8 +16,6 @@
 #include <pugixml.hpp>
 #include <sstream>
 
-#include "html_report.hpp"
-
 namespace ncservo::cli {
 
 namespace {

@@ -152,6 +152,12 @@ struct ReportFormat {
   void (*finish)(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 };
 
+// `validate --format html` (html_report.cpp): one self-contained page with the verdict and counts,
+// a findings table that sorts and filters, each drawn finding's bit timeline, each axis's state
+// timeline and error history, and the cycle-time histogram; Chart.js (Debian's libjs-chart.js) is
+// inlined at build time, so the page fetches nothing when it opens.
+void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+
 // The formats' names, in the order of the format table (for --format and its help).
 std::vector<std::string> reportFormatNames();
 // The format of that name; nullptr when there is none.
