@@ -14,7 +14,8 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:-$root/build}
 ncservo=$build/validator/ncservo
 images=$root/docs/images
-capture=$root/captures/faults-4axis.pcap
+cd "$root"
+capture=captures/faults-4axis.pcap  # relative: the page shows the path as given
 for tool in chromium gtkwave xvfb-run import; do
   command -v "$tool" >/dev/null || { echo "make.sh: $tool not found (.ci/setup installs it)" >&2; exit 1; }
 done
