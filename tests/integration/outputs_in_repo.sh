@@ -22,7 +22,7 @@ for id in $("$NCSERVO" rules | awk '{print $1}'); do say rules --explain "$id"; 
 say simulate --list-faults
 "$NCSERVO" simulate --axes 2 --duration 1 --no-startup -o "$WORK/no-startup.pcap" 2>/dev/null
 for capture in "$SRC/captures/faults-4axis.pcap" "$SRC/captures/sim-io-interleaved.pcapng"; do
-  for format in text json jsonl junit sarif; do say validate --format "$format" "$capture"; done
+  for format in text json jsonl junit sarif html; do say validate --format "$format" "$capture"; done
   say decode --layout "$capture"
 done
 say validate --no-default-layout "$WORK/no-startup.pcap"

@@ -543,14 +543,19 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   FrameClock clock(timestamps);
   LayoutWindow window(decoder_options);
   std::optional<Validator> validator;
+  std::optional<cli::TimelineRecorder> timelines;
+  if (writer.drawsTimelines()) timelines.emplace(settings);
   CaptureRun run;
   const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                             const ByteReader& bytes) {
     report.first_time_ns = *run.first_time_ns;  // findings are written as they come
-    validator->onFrame(number, time_ns, walked, bytes);
+    report.last_time_ns = time_ns;
+    const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
+    if (timelines) timelines->frame(number, time_ns - report.first_time_ns, frame, bytes);
     for (const Finding& f : validator->findings()) {
       report.tally(f);
       if (writer.keepsFindings()) report.findings.push_back(f);
+      if (timelines) timelines->finding(f);
       writer.finding(report, f);
     }
   };
@@ -566,6 +571,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
       streamCapture(*reader, clock, window, {start, validate, time_window, layout_only}, run);
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
+  if (timelines) report.timelines = timelines->finish();
   cli::summarise(*validator, report);
   report.coverage = coverageOf(*validator);
   if (const std::string empty = emptyWindowReason(time_window, run); !empty.empty()) {

@@ -19,6 +19,33 @@
 namespace ncservo::cli {
 
 namespace {
+std::string axisName(const CaptureReport& r, std::uint16_t axis) {
+  for (const AxisInfo& info : r.layout) {
+    if (info.index == axis) return info.name;
+  }
+  return fmt::format("axis{}", axis);
+}
+}  // namespace
+
+std::string axisLabel(const CaptureReport& r, const std::optional<std::uint16_t>& axis) {
+  return axis ? axisName(r, *axis) : std::string("bus");
+}
+
+const char* verdictName(Verdict v) {
+  switch (v) {
+    case Verdict::Unreadable:
+      return "unreadable";
+    case Verdict::Fail:
+      return "fail";
+    case Verdict::NoServo:
+      return "no servo";
+    case Verdict::Pass:
+      return "pass";
+  }
+  return "pass";
+}
+
+namespace {
 using Json = nlohmann::ordered_json;
 
 // The project's repository: SARIF's informationUri, and the base of each rule's helpUri.
@@ -26,17 +53,6 @@ constexpr const char* kRepositoryUri = "https://github.com/ncservo/ncservo";
 
 double seconds(const CaptureReport& r, const Stamp& at) {
   return static_cast<double>(at.time_ns - r.first_time_ns) / 1e9;
-}
-
-std::string axisName(const CaptureReport& r, std::uint16_t axis) {
-  for (const AxisInfo& info : r.layout) {
-    if (info.index == axis) return info.name;
-  }
-  return fmt::format("axis{}", axis);
-}
-
-std::string axisLabel(const CaptureReport& r, const std::optional<std::uint16_t>& axis) {
-  return axis ? axisName(r, *axis) : std::string("bus");
 }
 
 std::string utcOf(const CaptureReport& r, const Stamp& at) {
@@ -67,21 +83,7 @@ Json optionalNumber(const std::optional<double>& v) {
   return v ? Json(*v) : Json(nullptr);
 }
 
-// The verdicts as JSON names them, and as text shouts them.
-const char* verdictName(Verdict v) {
-  switch (v) {
-    case Verdict::Unreadable:
-      return "unreadable";
-    case Verdict::Fail:
-      return "fail";
-    case Verdict::NoServo:
-      return "no servo";
-    case Verdict::Pass:
-      return "pass";
-  }
-  return "pass";
-}
-
+// The verdicts as text shouts them.
 const char* verdictHeadline(Verdict v) {
   switch (v) {
     case Verdict::Unreadable:
@@ -571,14 +573,16 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-// INTERFACES.md's formats of `validate`: name, keeps findings, locates frames, begin capture,
-// finding, end capture, finish.
+// INTERFACES.md's formats of `validate`: name, keeps findings, locates frames, draws timelines,
+// begin capture, finding, end capture, finish.
 const ReportFormat kReportFormats[] = {
-    {"text", false, false, writeTextHeading, writeTextFinding, writeTextSummary, writeTextVerdict},
-    {"json", true, false, nullptr, nullptr, nullptr, writeJson},
-    {"jsonl", false, false, nullptr, writeJsonlFinding, writeJsonlCoverage, nullptr},
-    {"junit", true, false, nullptr, nullptr, nullptr, writeJunit},
-    {"sarif", true, true, nullptr, nullptr, nullptr, writeSarif},
+    {"text", false, false, false, writeTextHeading, writeTextFinding, writeTextSummary,
+     writeTextVerdict},
+    {"json", true, false, false, nullptr, nullptr, nullptr, writeJson},
+    {"jsonl", false, false, false, nullptr, writeJsonlFinding, writeJsonlCoverage, nullptr},
+    {"junit", true, false, false, nullptr, nullptr, nullptr, writeJunit},
+    {"sarif", true, true, false, nullptr, nullptr, nullptr, writeSarif},
+    {"html", true, false, true, nullptr, nullptr, nullptr, writeHtml},
 };
 
 // Temporary reports are removed if the run is interrupted; the list is fixed while the handler
@@ -803,6 +807,11 @@ ReportWriter::~ReportWriter() {
 bool ReportWriter::keepsFindings() const {
   return std::any_of(outputs_.begin(), outputs_.end(),
                      [](const Output& o) { return o.format->keeps_findings; });
+}
+
+bool ReportWriter::drawsTimelines() const {
+  return std::any_of(outputs_.begin(), outputs_.end(),
+                     [](const Output& o) { return o.format->draws_timelines; });
 }
 
 bool ReportWriter::locatesFrames() const {

@@ -17,6 +17,7 @@
 #include "ncservo/finding.hpp"
 #include "ncservo/frame_clock.hpp"
 #include "ncservo/validator.hpp"
+#include "report_charts.hpp"
 
 namespace ncservo::cli {
 
@@ -86,6 +87,11 @@ struct CaptureReport {
   std::uint64_t startup_frames_cut = 0;  // layout from a start-up cut by the snap length
   std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
   std::uint64_t segment_count = 0;
+  std::int64_t last_time_ns = 0;  // the last frame's
+  // What the HTML report draws: the bits around findings (when a format draws them) and the
+  // cycle-time histogram (empty until the timing statistics give its bins).
+  FindingTimelines timelines;
+  std::vector<HistogramBin> cycle_histogram;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);
@@ -94,6 +100,11 @@ struct CaptureReport {
   // Whether any finding is at or above `level`.
   bool reaches(Severity level) const;
 };
+
+// "fail", "pass", "no servo", "unreadable": as the JSON report names a verdict.
+const char* verdictName(Verdict verdict);
+// An axis's configured name ("axis3" when it has none), "bus" for none.
+std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
 
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);
@@ -136,11 +147,19 @@ struct ReportFormat {
   bool keeps_findings;
   // The format names where each finding's frame is stored in the file (SARIF regions).
   bool locates_frames;
+  // The format draws the bits around findings (CaptureReport::timelines, fed by the frames).
+  bool draws_timelines;
   void (*begin_capture)(const ReportSink& sink, const CaptureReport& report);
   void (*finding)(const ReportSink& sink, const CaptureReport& report, const Finding& finding);
   void (*end_capture)(const ReportSink& sink, const CaptureReport& report);
   void (*finish)(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 };
+
+// `validate --format html` (html_report.cpp): one self-contained page with the verdict and counts,
+// a findings table that sorts and filters, each drawn finding's bit timeline, each axis's state
+// timeline and error history, and the cycle-time histogram; Chart.js (Debian's libjs-chart.js) is
+// inlined at build time, so the page fetches nothing when it opens.
+void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 
 // The formats' names, in the order of the format table (for --format and its help).
 std::vector<std::string> reportFormatNames();
@@ -169,6 +188,7 @@ class ReportWriter {
   Status finish(const std::vector<CaptureReport>& reports);
   bool keepsFindings() const;
   bool locatesFrames() const;
+  bool drawsTimelines() const;
   Verdict verdict(const CaptureReport& report) const { return verdictOf(policy_, report); }
 
  private:

@@ -1,5 +1,6 @@
 #include "waveform.hpp"
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -89,17 +90,6 @@ constexpr std::size_t kStateVar = 0;
 constexpr std::size_t kFindingsVar = 1;
 constexpr std::size_t kDerivedVars = 2;
 
-// The bits a field shows for these values (a float's own bits, an integer's two's complement
-// of its width), or unknown where the field does not apply.
-std::optional<std::uint64_t> fieldBits(const VcdSignal& s, const PdoValues& values) {
-  if (!fieldApplies(*s.field, values)) return std::nullopt;
-  if (s.kind == VcdVarKind::Real) return values.word(s.field->word);
-  const FieldValue v = fieldValue(*s.field, values);
-  const std::uint64_t bits =
-      v.kind == FieldValue::Kind::Signed ? static_cast<std::uint64_t>(v.i) : v.u;
-  return s.width >= 64 ? bits : bits & ((std::uint64_t{1} << s.width) - 1);
-}
-
 }  // namespace
 
 std::string vcdIdCode(std::size_t n) {
@@ -111,28 +101,53 @@ std::string vcdIdCode(std::size_t n) {
   return id;
 }
 
-void appendVcdBits(std::string& out, std::uint64_t bits, unsigned width) {
+namespace {
+// The longest value line: 'b', 64 digits, a space, an identifier code and the newline.
+constexpr std::size_t kMaxValueLine = 1 + 64 + 1 + 8 + 1;
+
+// A vector's or scalar's value at `out`; returns the end. The digits come eight at a time from
+// a table: the hot path of ActPos, which changes every cycle.
+char* writeVcdBits(char* out, std::uint64_t bits, unsigned width) {
   if (width == 1) {
-    out.push_back((bits & 1) != 0 ? '1' : '0');
-    return;
+    *out++ = (bits & 1) != 0 ? '1' : '0';
+    return out;
   }
-  // Digits written from the lowest up into a buffer, then appended at once: the hot path of
-  // ActPos, which changes every cycle.
-  char digits[65];
-  char* first = std::end(digits);
-  do {
-    *--first = static_cast<char>('0' + (bits & 1));
-    bits >>= 1;
-  } while (bits != 0);
-  *--first = 'b';
-  out.append(first, std::end(digits));
+  static const auto kDigits = [] {
+    std::array<std::array<char, 8>, 256> table{};
+    for (unsigned byte = 0; byte < 256; ++byte) {
+      for (unsigned bit = 0; bit < 8; ++bit) table[byte][7 - bit] = (byte >> bit) & 1 ? '1' : '0';
+    }
+    return table;
+  }();
+  *out++ = 'b';
+  const unsigned digits = bits == 0 ? 1u : 64u - static_cast<unsigned>(__builtin_clzll(bits));
+  unsigned shift = (digits - 1) / 8 * 8;
+  const unsigned lead = digits - shift;  // digits of the highest byte written
+  std::memcpy(out, kDigits[(bits >> shift) & 0xFF].data() + 8 - lead, lead);
+  out += lead;
+  while (shift != 0) {
+    shift -= 8;
+    std::memcpy(out, kDigits[(bits >> shift) & 0xFF].data(), 8);
+    out += 8;
+  }
+  return out;
+}
+
+// A real's value at `out` (at most 1 + 16 characters); returns the end.
+char* writeVcdReal(char* out, float value) {
+  *out++ = 'r';
+  return fmt::format_to(out, FMT_COMPILE("{}"), value);
+}
+}  // namespace
+
+void appendVcdBits(std::string& out, std::uint64_t bits, unsigned width) {
+  char text[kMaxValueLine];
+  out.append(text, writeVcdBits(text, bits, width));
 }
 
 void appendVcdReal(std::string& out, float value) {
   char text[32];
-  text[0] = 'r';
-  const auto written = fmt::format_to_n(text + 1, sizeof text - 1, "{}", value);
-  out.append(text, written.out);
+  out.append(text, writeVcdReal(text, value));
 }
 
 void appendVcdString(std::string& out, std::string_view text) {
@@ -170,8 +185,45 @@ std::vector<std::string> vcdScopeNames(const std::vector<AxisInfo>& axes) {
   return names;
 }
 
+// The bits a field shows for these values (a float's own bits, an integer's two's complement
+// of its width: as fieldValue's value, masked to the width), or unknown where the field does not
+// apply.
+WaveformWriter::SignalBits WaveformWriter::signalBitsOf(const VcdSignal& s) {
+  const bool real = s.kind == VcdVarKind::Real;
+  return {real ? 0 : s.field->mask, real || s.field->mask == 0 ? 0u : lowestBit(s.field->mask),
+          real || s.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << s.width) - 1,
+          s.field->when != FieldWhen::Always};
+}
+
+std::optional<std::uint64_t> WaveformWriter::fieldBits(const VcdSignal& s, const SignalBits& b,
+                                                       const PdoValues& values) {
+  if (b.conditional ? !fieldApplies(*s.field, values) : !values.has(s.field->word)) {
+    return std::nullopt;
+  }
+  const std::uint64_t raw = values.word(s.field->word);
+  return (b.mask != 0 ? (raw & b.mask) >> b.shift : raw) & b.width_mask;
+}
+
+// The signals of each word: the field table holds a word's rows together.
+std::array<WaveformWriter::SignalRange, kWordCount> WaveformWriter::signalsOfWords() {
+  std::array<SignalRange, kWordCount> out{};
+  const std::vector<VcdSignal>& signals = vcdSignals();
+  for (std::size_t i = signals.size(); i-- > 0;) {
+    SignalRange& range = out[static_cast<std::size_t>(signals[i].field->word)];
+    if (range.end == 0) range.end = i + 1;
+    range.begin = i;
+  }
+  return out;
+}
+
 WaveformWriter::WaveformWriter(std::FILE* out, std::vector<std::string> wanted)
-    : out_(out), wanted_(std::move(wanted)) {}
+    : out_(out),
+      wanted_(std::move(wanted)),
+      signals_(vcdSignals()),
+      signal_ranges_(signalsOfWords()) {
+  for (const VcdSignal& s : signals_) signal_bits_.push_back(signalBitsOf(s));
+  buffer_.resize(kFlushAt + kMaxValueLine);
+}
 
 Status WaveformWriter::writeHeader(const Decoder& decoder) {
   header_written_ = true;
@@ -194,43 +246,43 @@ Status WaveformWriter::writeHeader(const Decoder& decoder) {
     }
   }
 
-  buffer_ += fmt::format("$version ncservo {} $end\n", NCSERVO_VERSION);
-  buffer_ += "$comment layout source: ";
-  buffer_ += layoutSourceName(decoder.source());
-  buffer_ += "; time 0 is the capture's first frame $end\n$timescale 1 ns $end\n";
-  buffer_ += fmt::format("$scope module {} $end\n$var string 1 {} findings $end\n$upscope $end\n",
-                         kBusScope, ids_[0]);
+  put(fmt::format("$version ncservo {} $end\n", NCSERVO_VERSION));
+  put("$comment layout source: ");
+  put(layoutSourceName(decoder.source()));
+  put("; time 0 is the capture's first frame $end\n$timescale 1 ns $end\n");
+  put(fmt::format("$scope module {} $end\n$var string 1 {} findings $end\n$upscope $end\n",
+                  kBusScope, ids_[0]));
   for (std::size_t a = 0; a < axes_.size(); ++a) {
     const AxisSlot& slot = axes_[a];
-    buffer_ += fmt::format("$scope module {} $end\n", scopes_[a + 1].name);
+    put(fmt::format("$scope module {} $end\n", scopes_[a + 1].name));
     std::string open;
     for (std::size_t i = 0; i < signals.size(); ++i) {
       const VcdSignal& s = signals[i];
       if (s.scope != open) {
-        if (!open.empty()) buffer_ += "$upscope $end\n";
-        if (!s.scope.empty()) buffer_ += fmt::format("$scope module {} $end\n", s.scope);
+        if (!open.empty()) put("$upscope $end\n");
+        if (!s.scope.empty()) put(fmt::format("$scope module {} $end\n", s.scope));
         open = s.scope;
       }
-      buffer_ += fmt::format("$var {} {} {} {} $end\n", varKeyword(s.kind), s.width,
-                             ids_[slot.first_id + i], declaredName(s.name, s.kind, s.width));
+      put(fmt::format("$var {} {} {} {} $end\n", varKeyword(s.kind), s.width,
+                      ids_[slot.first_id + i], declaredName(s.name, s.kind, s.width)));
     }
-    if (!open.empty()) buffer_ += "$upscope $end\n";
+    if (!open.empty()) put("$upscope $end\n");
     const std::size_t derived = slot.first_id + signals.size();
-    buffer_ += fmt::format("$var string 1 {} state $end\n", ids_[derived + kStateVar]);
-    buffer_ += fmt::format("$var string 1 {} findings $end\n", ids_[derived + kFindingsVar]);
-    buffer_ += "$upscope $end\n";
+    put(fmt::format("$var string 1 {} state $end\n", ids_[derived + kStateVar]));
+    put(fmt::format("$var string 1 {} findings $end\n", ids_[derived + kFindingsVar]));
+    put("$upscope $end\n");
   }
-  buffer_ += "$enddefinitions $end\n#0\n$dumpvars\n";
+  put("$enddefinitions $end\n#0\n$dumpvars\n");
   time_written_ = true;
   auto unknown = [&](std::size_t id, VcdVarKind kind, unsigned width) {
     if (kind == VcdVarKind::Real) return;  // a real has no unknown value
     if (kind == VcdVarKind::String) {
-      appendVcdString(buffer_, "");
-      buffer_ += ' ';
+      putString("");
     } else {
-      buffer_ += width == 1 ? "x" : "bx ";
+      put(width == 1 ? "x" : "bx ");
     }
-    buffer_ += ids_[id] + "\n";
+    put(ids_[id]);
+    put("\n");
   };
   unknown(0, VcdVarKind::String, 1);
   for (const AxisSlot& slot : axes_) {
@@ -241,14 +293,14 @@ Status WaveformWriter::writeHeader(const Decoder& decoder) {
       unknown(slot.first_id + signals.size() + d, VcdVarKind::String, 1);
     }
   }
-  buffer_ += "$end\n";
+  put("$end\n");
   for (const EarlyFinding& f : early_findings_) {
     advance(f.time_ns);
     if (AxisSlot* slot = findingSlot(f.axis)) showFinding(*slot, f.rule);
   }
   if (early_findings_dropped_ != 0) {
-    buffer_ += fmt::format("$comment {} more findings before the first axis was placed $end\n",
-                           early_findings_dropped_);
+    put(fmt::format("$comment {} more findings before the first axis was placed $end\n",
+                    early_findings_dropped_));
   }
   early_findings_.clear();
   return {};
@@ -256,7 +308,10 @@ Status WaveformWriter::writeHeader(const Decoder& decoder) {
 
 void WaveformWriter::stamp() {
   if (time_written_) return;
-  fmt::format_to(std::back_inserter(buffer_), "#{}\n", time_ns_);
+  const fmt::format_int digits(time_ns_);
+  put("#");
+  put(std::string_view(digits.data(), digits.size()));
+  put("\n");
   time_written_ = true;
 }
 
@@ -271,26 +326,7 @@ void WaveformWriter::advance(std::int64_t time_ns) {
   for (AxisSlot& slot : axes_) clearFindings(slot);
 }
 
-// The signals of each word: the field table holds a word's rows together.
-struct SignalRange {
-  std::size_t begin = 0, end = 0;
-};
-const std::array<SignalRange, kWordCount>& signalsOfWords() {
-  static const std::array<SignalRange, kWordCount> ranges = [] {
-    std::array<SignalRange, kWordCount> out{};
-    const std::vector<VcdSignal>& signals = vcdSignals();
-    for (std::size_t i = signals.size(); i-- > 0;) {
-      SignalRange& range = out[static_cast<std::size_t>(signals[i].field->word)];
-      if (range.end == 0) range.end = i + 1;
-      range.begin = i;
-    }
-    return out;
-  }();
-  return ranges;
-}
-
 void WaveformWriter::writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo) {
-  const std::vector<VcdSignal>& signals = vcdSignals();
   for (std::size_t w = firstWordOf(pdo); w < firstWordOf(pdo) + wordCountOf(pdo); ++w) {
     // An unchanged word changes none of its fields but those shown under another word's
     // condition.
@@ -298,30 +334,33 @@ void WaveformWriter::writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo
     const bool same = slot.word_known[w] && slot.words[w] == raw;
     slot.words[w] = raw;
     slot.word_known[w] = true;
-    const SignalRange range = signalsOfWords()[w];
+    const SignalRange range = signal_ranges_[w];
     for (std::size_t i = range.begin; i < range.end; ++i) {
-      if (!same || signals[i].field->when != FieldWhen::Always) writeSignal(slot, i, values);
+      if (!same || signals_[i].field->when != FieldWhen::Always) writeSignal(slot, i, values);
     }
   }
 }
 
 void WaveformWriter::writeSignal(AxisSlot& slot, std::size_t i, const PdoValues& values) {
-  const VcdSignal& s = vcdSignals()[i];
-  const std::optional<std::uint64_t> bits = fieldBits(s, values);
+  const VcdSignal& s = signals_[i];
+  const std::optional<std::uint64_t> bits = fieldBits(s, signal_bits_[i], values);
   Value& last = slot.values[i];
   if (bits ? last.known && last.bits == *bits : !last.known) return;
   stamp();
+  // Written straight into the buffer: the hot path.
+  char* end = room(kMaxValueLine);
   if (!bits) {
-    buffer_ += s.width == 1 ? "x" : "bx ";
+    end = s.width == 1 ? std::copy_n("x", 1, end) : std::copy_n("bx ", 3, end);
   } else if (s.kind == VcdVarKind::Real) {
-    appendVcdReal(buffer_, values.floatOf(s.field->word));
-    buffer_ += ' ';
+    end = writeVcdReal(end, values.floatOf(s.field->word));
+    *end++ = ' ';
   } else {
-    appendVcdBits(buffer_, *bits, s.width);
-    if (s.width > 1) buffer_ += ' ';
+    end = writeVcdBits(end, *bits, s.width);
+    if (s.width > 1) *end++ = ' ';
   }
-  buffer_ += ids_[slot.first_id + i];
-  buffer_ += '\n';
+  for (char c : ids_[slot.first_id + i]) *end++ = c;
+  *end++ = '\n';
+  used_ = static_cast<std::size_t>(end - buffer_.data());
   last = Value{bits.value_or(0), bits.has_value()};
 }
 
@@ -329,10 +368,9 @@ void WaveformWriter::writeState(AxisSlot& slot, std::optional<DriveState> state)
   if (state == slot.state) return;
   slot.state = state;
   stamp();
-  appendVcdString(buffer_, state ? driveStateName(*state) : "");
-  buffer_ += ' ';
-  buffer_ += ids_[slot.first_id + vcdSignals().size() + kStateVar];
-  buffer_ += '\n';
+  putString(state ? driveStateName(*state) : "");
+  put(ids_[slot.first_id + signals_.size() + kStateVar]);
+  put("\n");
 }
 
 const std::string& WaveformWriter::findingsId(const AxisSlot& slot) const {
@@ -352,20 +390,18 @@ void WaveformWriter::showFinding(AxisSlot& slot, std::string_view rule) {
   slot.findings += rule;
   findings_shown_ = true;
   stamp();
-  appendVcdString(buffer_, slot.findings);
-  buffer_ += ' ';
-  buffer_ += findingsId(slot);
-  buffer_ += '\n';
+  putString(slot.findings);
+  put(findingsId(slot));
+  put("\n");
 }
 
 void WaveformWriter::clearFindings(AxisSlot& slot) {
   if (slot.findings.empty()) return;
   slot.findings.clear();
   stamp();
-  appendVcdString(buffer_, "");
-  buffer_ += ' ';
-  buffer_ += findingsId(slot);
-  buffer_ += '\n';
+  putString("");
+  put(findingsId(slot));
+  put("\n");
 }
 
 Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
@@ -406,7 +442,7 @@ Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
   for (const Finding& f : findings) {
     if (AxisSlot* slot = findingSlot(f.axis)) showFinding(*slot, ruleDef(f.rule).code);
   }
-  if (buffer_.size() >= kFlushAt) flush();
+  if (used_ >= kFlushAt) flush();
   return {};
 }
 
@@ -419,9 +455,32 @@ Status WaveformWriter::finish(std::int64_t end_ns, const Decoder& decoder) {
   return status;
 }
 
+char* WaveformWriter::room(std::size_t size) {
+  if (used_ + size > buffer_.size()) flush();
+  return buffer_.data() + used_;
+}
+
+void WaveformWriter::put(std::string_view text) {
+  if (used_ + text.size() > buffer_.size()) flush();
+  if (text.size() > buffer_.size()) {
+    std::fwrite(text.data(), 1, text.size(), out_);
+    return;
+  }
+  std::memcpy(buffer_.data() + used_, text.data(), text.size());
+  used_ += text.size();
+}
+
+// A string variable's value and the space before its identifier code.
+void WaveformWriter::putString(std::string_view text) {
+  std::string value;
+  appendVcdString(value, text);
+  value += ' ';
+  put(value);
+}
+
 void WaveformWriter::flush() {
-  std::fwrite(buffer_.data(), 1, buffer_.size(), out_);
-  buffer_.clear();
+  std::fwrite(buffer_.data(), 1, used_, out_);
+  used_ = 0;
 }
 
 std::string gtkwPathFor(const std::string& vcd_path) {

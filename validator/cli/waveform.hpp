@@ -88,6 +88,20 @@ class WaveformWriter {
     bool outputs_from_master = false;  // a master copy gave the outputs since the last return
     std::string findings;              // the rule IDs shown at the current time
   };
+  struct SignalRange {
+    std::size_t begin = 0, end = 0;
+  };
+  // How a signal's bits come out of its word, worked out once (the hot path).
+  struct SignalBits {
+    std::uint64_t mask;  // of the word; 0: the whole word
+    unsigned shift;
+    std::uint64_t width_mask;
+    bool conditional;  // shown under a condition (fieldApplies), not only when its PDO is there
+  };
+  static std::array<SignalRange, kWordCount> signalsOfWords();
+  static SignalBits signalBitsOf(const VcdSignal& signal);
+  static std::optional<std::uint64_t> fieldBits(const VcdSignal& signal, const SignalBits& bits,
+                                                const PdoValues& values);
   Status writeHeader(const Decoder& decoder);
   void advance(std::int64_t time_ns);
   void stamp();
@@ -98,10 +112,17 @@ class WaveformWriter {
   const std::string& findingsId(const AxisSlot& slot) const;
   void showFinding(AxisSlot& slot, std::string_view rule);
   void clearFindings(AxisSlot& slot);
+  // The text to write: value lines go straight into it (room), the rest through put().
+  char* room(std::size_t size);
+  void put(std::string_view text);
+  void putString(std::string_view text);
   void flush();
 
   std::FILE* out_;
   std::vector<std::string> wanted_;
+  const std::vector<VcdSignal>& signals_;                    // vcdSignals()
+  const std::array<SignalRange, kWordCount> signal_ranges_;  // each word's, in signals_
+  std::vector<SignalBits> signal_bits_;                      // by signals_ index
   bool header_written_ = false;
   std::vector<Scope> scopes_;
   AxisSlot bus_;
@@ -120,7 +141,8 @@ class WaveformWriter {
   static constexpr std::size_t kMaxEarlyFindings = 4096;
   std::vector<EarlyFinding> early_findings_;
   std::size_t early_findings_dropped_ = 0;
-  std::string buffer_;
+  std::vector<char> buffer_;
+  std::size_t used_ = 0;
 };
 
 // A GTKWave save file for `vcd_path`, to be written at `save_path` (GTKWave looks for the VCD

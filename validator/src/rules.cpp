@@ -569,22 +569,30 @@ Result<const RuleDef*> findRule(std::string_view code) {
       fmt::format("unknown rule ID '{}' (see `ncservo rules`){}", code, didYouMean(code, codes)));
 }
 
-std::string describeReads(const Reads& reads) {
-  std::string out;
-  auto add = [&out](std::string_view filter, const char* suffix) {
-    out += fmt::format("{}{}{}", out.empty() ? "" : ", ", filter.substr(8), suffix);
-  };
+std::vector<FieldRead> fieldsRead(const Reads& reads) {
+  std::vector<FieldRead> out;
   for (const FieldDef& f : kFields) {
     const std::size_t w = static_cast<std::size_t>(f.word);
     const std::uint64_t bits = reads.bits[w];
     const bool whole = bits == wordMask(f.word);
     if (f.kind == FieldKind::Word) {
-      if (whole) add(f.filter, "");
-      if (reads.classes[w] != nullptr) add(f.filter, " (its class)");
+      if (whole) out.push_back({&f, false});
+      if (reads.classes[w] != nullptr) out.push_back({&f, true});
     } else if ((f.kind == FieldKind::Flag || f.kind == FieldKind::BitRange) && !whole &&
                (bits & f.mask) == f.mask) {
-      add(f.filter, "");
+      out.push_back({&f, false});
     }
+  }
+  return out;
+}
+
+std::string describeReads(const Reads& reads) {
+  std::string out;
+  auto add = [&out](std::string_view filter, const char* suffix) {
+    out += fmt::format("{}{}{}", out.empty() ? "" : ", ", filter.substr(8), suffix);
+  };
+  for (const FieldRead& read : fieldsRead(reads)) {
+    add(read.field->filter, read.through_class ? " (its class)" : "");
   }
   if (reads.al_state) add("ncservo.al_state", "");
   return out.empty() ? "-" : out;

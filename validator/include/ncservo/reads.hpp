@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "ncservo/fields.hpp"
 
@@ -56,6 +57,14 @@ constexpr Reads readsOf(std::initializer_list<std::string_view> filters, bool al
   out.al_state = al_state;
   return out;
 }
+// A field-table row a declaration covers: a word's row when the whole word or its class is read,
+// else each bit field whose bits are all read.
+struct FieldRead {
+  const FieldDef* field;
+  bool through_class;  // the word is read only through its class
+};
+// The rows a declaration covers, in field-table order (the AL state is no row: Reads::al_state).
+std::vector<FieldRead> fieldsRead(const Reads& reads);
 // "scw.se, ssw.servo_en, msg_code (its class)": the field-table rows a declaration covers, for
 // the rule reference; "-" for none.
 std::string describeReads(const Reads& reads);

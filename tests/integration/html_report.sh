@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# html_report.sh SRC BUILD: the HTML report of the faults capture in a real browser (issue 16):
+# loaded in headless Chromium from file:// with the network off, no console error, one table row
+# per finding of the JSON report, each finding timeline drawing the rows its rule reads (as
+# `ncservo rules --explain` lists them). Skipped (77) outside CI without Chromium and Selenium.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+# Debian's python3, where python3-selenium is (another python3 may come first on the PATH).
+debian_python=/usr/bin/python3
+if ! [ -x /usr/bin/chromium ] || ! [ -x /usr/bin/chromedriver ] ||
+  ! "$debian_python" -c "import selenium" 2>/dev/null; then
+  [ -z "${CI:-}" ] || fail "chromium, chromium-driver or python3-selenium missing (.ci/setup installs them)"
+  echo "SKIPPED: chromium, chromium-driver or python3-selenium missing"
+  exit 77
+fi
+
+capture="$SRC/captures/faults-4axis.pcap"
+"$NCSERVO" validate --format html -o "$WORK/faults.html" --report json:"$WORK/faults.json" \
+  "$capture" >/dev/null 2>&1 || [ $? = 1 ] || fail "validate exited $?"
+[ -s "$WORK/faults.html" ] || fail "no HTML report"
+grep -q '<script src=\|<link [^>]*href=\|https\?://[^"]*\.js' "$WORK/faults.html" &&
+  fail "the report refers to something outside itself"
+
+# Each rule's read rows, from the rule reference (`reads: scw.se, ssw.servo_en`).
+"$NCSERVO" rules | awk '{print $1}' >"$WORK/rules.txt"
+python3 - "$NCSERVO" "$WORK/rules.txt" "$WORK/reads.json" <<'PY'
+import json, subprocess, sys
+ncservo, rules, out = sys.argv[1:4]
+reads = {}
+for rule in open(rules).read().split():
+    text = subprocess.run([ncservo, "rules", "--explain", rule], capture_output=True, text=True, check=True).stdout
+    line = next(l for l in text.splitlines() if l.strip().startswith("reads:"))
+    names = [n.strip() for n in line.split(":", 1)[1].split(",")]
+    reads[rule] = ["ncservo." + n.replace(" (its class)", "") for n in names if n not in ("-", "al_state")]
+json.dump(reads, open(out, "w"))
+PY
+"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/faults.html" "$WORK/faults.json" "$WORK/reads.json" ||
+  fail "the HTML report in Chromium"
+
+# A report of several captures, one of them unreadable, also loads without a console error.
+printf 'not a capture\n' >"$WORK/text.pcap"
+"$NCSERVO" validate --format html -o "$WORK/two.html" --report json:"$WORK/two.json" \
+  "$SRC/captures/commissioning-4axis.pcap" "$WORK/text.pcap" >/dev/null 2>&1 || true
+"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/two.html" "$WORK/two.json" "$WORK/reads.json" ||
+  fail "the HTML report of two captures in Chromium"
+echo "html_report: ok"
