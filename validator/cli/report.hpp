@@ -16,6 +16,7 @@
 #include "ncservo/error.hpp"
 #include "ncservo/finding.hpp"
 #include "ncservo/frame_clock.hpp"
+#include "ncservo/timing.hpp"
 #include "ncservo/validator.hpp"
 
 namespace ncservo::cli {
@@ -83,6 +84,7 @@ struct CaptureReport {
   Truncation truncation;
   std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
   std::uint64_t segment_count = 0;
+  TimingSummary timing;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);
@@ -91,6 +93,9 @@ struct CaptureReport {
   // Whether any finding is at or above `level`.
   bool reaches(Severity level) const;
 };
+
+// The resolution of the timestamps that timed the capture: the probe's 1 ns, or the capture's.
+std::int64_t timestampResolutionNs(const CaptureReport& report);
 
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);
