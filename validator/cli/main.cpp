@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "axis_selection.hpp"
@@ -884,6 +885,8 @@ struct SimulateArgs {
   std::string format;    // empty: from the file name
   std::string compress;  // empty: from the file name
   std::vector<std::string> faults;
+  std::vector<std::string> late_cycles;
+  std::vector<std::string> lost_cycles;
   std::string layout_config;
   std::string eni;
   bool no_startup = false;
@@ -926,6 +929,18 @@ int runSimulate(SimulateArgs& args) {
       return kExitUsage;
     }
     o.faults.push_back(std::move(*fault));
+  }
+  for (auto [option, texts, into] :
+       {std::tuple{"--late-cycle", &args.late_cycles, &o.late_cycles},
+        std::tuple{"--lost-cycles", &args.lost_cycles, &o.lost_cycles}}) {
+    for (const std::string& text : *texts) {
+      Result<sim::CycleDisturbance> parsed = sim::parseCycleDisturbance(option, text);
+      if (!parsed) {
+        fmt::print(stderr, "ncservo simulate: {}\n", parsed.error().text());
+        return kExitUsage;
+      }
+      into->push_back(std::move(*parsed));
+    }
   }
   if (Status resolved = sim::resolveOptions(o); !resolved) {
     fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
@@ -1132,6 +1147,15 @@ Handler simulateCommand(CLI::App& command) {
                      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
   command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");
   command.add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
+  command.add_option("--latency-us", sa.options.latency_us,
+                     "returned copies this long after their master copy, microseconds (default: "
+                     "the ring's own few microseconds)");
+  command.add_option(
+      "--late-cycle", sa.late_cycles,
+      "SECONDS:US: the first cycle at or after SECONDS is sent US late (repeatable)");
+  command.add_option("--lost-cycles", sa.lost_cycles,
+                     "SECONDS:N: N cycles from the first at or after SECONDS are not sent "
+                     "(repeatable)");
   command.add_option("--loss", sa.options.loss,
                      "probability that a returned frame is lost (COM-004 findings)");
   command.add_option("--layout-config", sa.layout_config,
