@@ -74,4 +74,12 @@ for path, timestamps in ((sys.argv[2], "capture"), (sys.argv[3], "probe")):
     assert (l["min"], l["median"], l["max"]) == (40.0, 40.0, 40.0), (path, l)
     assert sum(b["count"] for b in c["histogram"]) + c["under"] + c["over"] == c["count"], path
 PY
+# decode --timing prints the text report's timing block on standard error.
+for capture in "$WORK/late.pcap" "$WORK/jitter-esl.pcap"; do
+  "$NCSERVO" validate --fail-on never "$capture" | sed -n '/^timing (/,/^  worst cycle/p' >"$WORK/validate.txt"
+  "$NCSERVO" decode --timing "$capture" 2>&1 >/dev/null | sed -n '/timing (/,/^  worst cycle/p' |
+    sed "s|^ncservo: $capture: ||" >"$WORK/decode.txt"
+  [ -s "$WORK/validate.txt" ] || fail "$capture: no timing block in the text report"
+  diff "$WORK/validate.txt" "$WORK/decode.txt" || fail "$capture: decode --timing differs from validate"
+done
 echo "timing_truth: late, lost, latency and jitter as injected, through capture and probe timestamps"

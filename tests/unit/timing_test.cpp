@@ -131,6 +131,20 @@ TEST(TimingSeries, BeyondTheExactLimitQuantilesStayWithinHalfABin) {
   EXPECT_EQ(binned, all.size());
 }
 
+// A sample more than 2.1 s from the first cannot be kept as an offset: the histogram takes over,
+// min and max stay exact.
+TEST(TimingSeries, ASampleFarFromTheFirstEndsTheExactQuantiles) {
+  TimingSeries series;
+  for (int i = 0; i < 10; ++i) series.add(1'000 * kUs);
+  series.add(3'000'000 * kUs);
+  const SeriesSummary s = *series.summary();
+  EXPECT_FALSE(s.exact);
+  EXPECT_EQ(s.reference_ns, 1'000 * kUs);
+  EXPECT_EQ(s.max_ns, 3'000'000 * kUs);
+  EXPECT_EQ(s.median_ns, 1'000 * kUs + kUs / 2);  // the middle of the bin [0, 1 µs)
+  EXPECT_EQ(s.over, 1u);
+}
+
 TEST(WorstList, KeepsTheTenLargestWorstFirstEarlierFirstOnTies) {
   struct Row {
     std::string name;

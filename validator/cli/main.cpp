@@ -35,6 +35,7 @@
 #include "ncservo/session.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "ncservo/text.hpp"
+#include "ncservo/timing_text.hpp"
 #include "ncservo/validator.hpp"
 #include "report.hpp"
 #include "waveform.hpp"
@@ -268,6 +269,7 @@ struct DecodeArgs {
   bool layout_only = false;
   std::string timestamps = "auto";
   WindowArgs window;
+  bool timing = false;  // the timing block on standard error at the end
 };
 
 // What every decode format reads and writes.
@@ -309,18 +311,25 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     }
     rows.clear();
   };
+  // --timing: the validator's bus model times the cycles as `validate` does (docs/timing.md).
+  std::optional<Validator> timing;
   const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                           const ByteReader& bytes) {
+    if (timing) timing->onFrame(number, time_ns, walked, bytes);
     const FrameView& view = session->onFrame(walked, bytes);
     if (args.layout_only) return;
     for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(number, view.axes[i].placement);
     cycles.onFrame(number, time_ns, view, rows);
     write();
   };
-  const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
+  const auto start = [&](const DecoderOptions& layout) {
+    session.emplace(layout);
+    if (args.timing && !args.layout_only) timing.emplace(layout, RuleSettings{});
+  };
   const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
                                const ByteReader& bytes) {
     session->onLayoutOnlyFrame(walked, bytes);
+    if (timing) timing->onLayoutOnlyFrame(walked, bytes);
   };
   const Status status =
       streamCapture(*reader, clock, window, {start, decode, input.window, layout_only}, run);
@@ -339,6 +348,11 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   }
   if (args.layout_only) printLayout(session->decoder(), window.inference());
   noteDecoded(*reader, clock, session->decoder());
+  if (timing) {
+    fmt::print(stderr, "ncservo: {}: {}", reader->path(),
+               timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
+                          cli::timestampResolutionNs(clock.source(), reader->timestampDigits())));
+  }
   if (Status selected = cli::checkAxisSelection(args.axes, session->decoder().axes()); !selected) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());
     return kExitUsage;
@@ -1009,6 +1023,9 @@ Handler decodeCommand(CLI::App& command) {
                    "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout");
+  command.add_flag("--timing", args->timing,
+                   "at the end, the timing statistics of validate's text report on standard "
+                   "error (docs/timing.md)");
   command.add_flag("--layout", args->layout_only,
                    "print the layout found (as a configuration file) and the slaves the start-up "
                    "configured, instead of the process data");

@@ -187,7 +187,7 @@ Json worstJson(const std::vector<TimedFrames>& worst, const char* since_key,
 Json timingJson(const CaptureReport& r) {
   Json timing{
       {"timestamps", timestampSourceName(r.timestamps)},
-      {"resolution_ns", timestampResolutionNs(r)},
+      {"resolution_ns", timestampResolutionNs(r.timestamps, r.timestamp_digits)},
       {"cycle_us", seriesJson(r.timing.cycle)},
       {"latency_us", seriesJson(r.timing.latency)},
       {"worst_cycles", worstJson(r.timing.worst_cycles, "since_frame", "interval_us")},
@@ -511,9 +511,10 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     }
   }
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
-  std::fputs(
-      timingText(r.timing, timestampSourceName(r.timestamps), timestampResolutionNs(r)).c_str(),
-      out);
+  std::fputs(timingText(r.timing, timestampSourceName(r.timestamps),
+                        timestampResolutionNs(r.timestamps, r.timestamp_digits))
+                 .c_str(),
+             out);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);
@@ -677,10 +678,10 @@ bool CaptureReport::reaches(Severity level) const {
   return false;
 }
 
-std::int64_t timestampResolutionNs(const CaptureReport& report) {
-  if (report.timestamps == TimestampSource::Probe) return 1;
+std::int64_t timestampResolutionNs(TimestampSource source, int digits) {
+  if (source == TimestampSource::Probe) return 1;
   std::int64_t ns = 1;
-  for (int digits = report.timestamp_digits; digits < 9; ++digits) ns *= 10;
+  for (int d = digits; d < 9; ++d) ns *= 10;
   return ns;
 }
 

@@ -94,8 +94,9 @@ struct CaptureReport {
   bool reaches(Severity level) const;
 };
 
-// The resolution of the timestamps that timed the capture: the probe's 1 ns, or the capture's.
-std::int64_t timestampResolutionNs(const CaptureReport& report);
+// The resolution of the timestamps that timed a capture: the probe's 1 ns, or the capture's own
+// (`digits` of a second).
+std::int64_t timestampResolutionNs(TimestampSource source, int digits);
 
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);

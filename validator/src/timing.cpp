@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ncservo {
 
@@ -58,7 +59,7 @@ std::ptrdiff_t TimingSeries::binOf(std::int64_t deviation_ns) {
 
 void TimingSeries::add(std::int64_t ns) {
   if (count_ == 0) {
-    min_ = max_ = ns;
+    min_ = max_ = first_ = ns;
   } else {
     min_ = std::min(min_, ns);
     max_ = std::max(max_, ns);
@@ -68,8 +69,10 @@ void TimingSeries::add(std::int64_t ns) {
   mean_ += delta / static_cast<double>(count_);
   m2_ += delta * (static_cast<double>(ns) - mean_);
   if (!reference_ns_) {
-    if (samples_.size() < kExactSamples) {
-      samples_.push_back(ns);
+    const std::int64_t offset = ns - first_;
+    if (samples_.size() < kExactSamples && offset >= std::numeric_limits<std::int32_t>::min() &&
+        offset <= std::numeric_limits<std::int32_t>::max()) {
+      samples_.push_back(static_cast<std::int32_t>(offset));
       return;
     }
     fixReference();
@@ -90,9 +93,9 @@ void TimingSeries::fixReference() {
   const auto middle =
       samples_.begin() + static_cast<std::ptrdiff_t>(rankOf(0.5, samples_.size()) - 1);
   std::nth_element(samples_.begin(), middle, samples_.end());
-  reference_ns_ = *middle;
-  for (std::int64_t s : samples_) {
-    const std::ptrdiff_t bin = binOf(s - *reference_ns_);
+  reference_ns_ = first_ + *middle;
+  for (std::int32_t s : samples_) {
+    const std::ptrdiff_t bin = binOf(first_ + s - *reference_ns_);
     if (bin < 0) {
       ++under_;
     } else if (bin >= static_cast<std::ptrdiff_t>(kBinCount)) {
@@ -117,7 +120,8 @@ std::optional<SeriesSummary> TimingSeries::summary() const {
   std::uint64_t under = under_, over = over_;
   std::int64_t reference = 0;
   if (!reference_ns_) {
-    std::vector<std::int64_t> sorted = samples_;
+    std::vector<std::int64_t> sorted(samples_.begin(), samples_.end());
+    for (std::int64_t& v : sorted) v += first_;
     std::sort(sorted.begin(), sorted.end());
     s.median_ns = exactQuantile(sorted, 0.5);
     s.p1_ns = exactQuantile(sorted, 0.01);

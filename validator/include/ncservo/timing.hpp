@@ -26,8 +26,8 @@ struct SeriesSummary {
   std::int64_t median_ns = 0, p1_ns = 0, p99_ns = 0, p999_ns = 0;
   double mean_ns = 0, stddev_ns = 0;  // the population standard deviation
   bool exact = true;                  // quantiles from every sample, not from the histogram
-  // The histogram's zero: the median, or where the series outgrew kExactSamples the median of
-  // its first kExactSamples samples.
+  // The histogram's zero: the median, or where the series outgrew kExactSamples (or a sample lay
+  // more than 2.1 s from the first) the median of the samples kept until then.
   std::int64_t reference_ns = 0;
   std::vector<HistogramBin> histogram;  // the bins that hold samples, in ascending order
   std::uint64_t under = 0, over = 0;    // samples beyond the histogram's range
@@ -37,7 +37,8 @@ struct SeriesSummary {
 // deviation from the median (the nominal cycle, for cycle times).
 class TimingSeries {
  public:
-  static constexpr std::size_t kExactSamples = std::size_t{1} << 17;
+  // Samples kept for exact quantiles, as 32-bit offsets from the first (256 KiB at most).
+  static constexpr std::size_t kExactSamples = std::size_t{1} << 16;
   // Histogram ranges, ascending: [from_us, to_us) in bins of width_us. 1 µs bins near nominal,
   // coarser further out; beyond ±5 ms a sample is under or over.
   struct BinRange {
@@ -59,8 +60,9 @@ class TimingSeries {
 
   std::uint64_t count_ = 0;
   std::int64_t min_ = 0, max_ = 0;
-  double mean_ = 0, m2_ = 0;           // Welford's running mean and sum of squared deviations
-  std::vector<std::int64_t> samples_;  // while count_ <= kExactSamples
+  double mean_ = 0, m2_ = 0;  // Welford's running mean and sum of squared deviations
+  std::int64_t first_ = 0;
+  std::vector<std::int32_t> samples_;         // minus first_, while count_ <= kExactSamples
   std::optional<std::int64_t> reference_ns_;  // the histogram's zero once samples_ overflowed
   std::array<std::uint64_t, kBinCount> bins_{};
   std::uint64_t under_ = 0, over_ = 0;
