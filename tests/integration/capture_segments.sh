@@ -86,8 +86,8 @@ grep -q '^segments: 2' "$WORK/paused.txt" || fail "the text report lists no segm
 [ "$(grep -c '^  frames ' "$WORK/paused.txt")" = 2 ] || fail "the text report: one line per segment"
 # capture_pause longer than the pause: one segment, and the pause is a gap.
 "$NCSERVO" validate --format jsonl --timeout capture_pause=3600000 --fail-on never \
-  "$WORK/paused.pcap" | grep -q '"COM-002"' || fail "capture_pause=3600000: the pause is no gap"
+  "$WORK/paused.pcap" | grep '"COM-002"' >/dev/null || fail "capture_pause=3600000: the pause is no gap"
 printf '[timeouts]\ncapture_pause = 3600000\n' >"$WORK/pause.toml"
 "$NCSERVO" validate --format jsonl --config "$WORK/pause.toml" --fail-on never \
-  "$WORK/paused.pcap" | grep -q '"COM-002"' || fail "[timeouts] capture_pause: not taken"
+  "$WORK/paused.pcap" | grep '"COM-002"' >/dev/null || fail "[timeouts] capture_pause: not taken"
 echo "capture_segments: appended and paused captures judged per segment"

@@ -17,7 +17,7 @@ while read -r rule from to; do
 import json, sys
 whole = [json.loads(l) for l in open(sys.argv[1])]
 got = [json.loads(l) for l in open(sys.argv[2])]
-want = [(f["rule"], f["axis"], f["frame"], f["time"]) for f in whole if f["rule"] == sys.argv[3]]
+want = [(f["rule"], f["axis"], f["frame"], f["time"]) for f in whole if f.get("rule") == sys.argv[3]]
 have = [(f["rule"], f["axis"], f["frame"], f["time"]) for f in got if "rule" in f]
 assert have == want, f"{have} != {want}"
 PY

@@ -75,7 +75,7 @@ grep -q "(2 captures, fail on error)" "$WORK/out" || fail "two captures: $(tail 
 
 # Standard input, and --output.
 "$NCSERVO" validate --format jsonl - <"$WORK/faults.pcap" >"$WORK/stdin.jsonl" && fail "stdin: expected exit 1"
-[ "$(wc -l <"$WORK/stdin.jsonl")" = 2 ] || fail "stdin jsonl: $(cat "$WORK/stdin.jsonl")"
+[ "$(grep -c '"rule"' "$WORK/stdin.jsonl")" = 2 ] || fail "stdin jsonl: $(cat "$WORK/stdin.jsonl")"
 run 1 --format json --output "$WORK/report.json" "$WORK/faults.pcap"
 [ ! -s "$WORK/out" ] || fail "--output: stdout not empty"
 
@@ -107,7 +107,7 @@ for f in c["findings"]:
 for a in c["axes"]:
     assert {"index", "name", "state", "state_timeline", "error_history", "telegram_failures"} <= set(a)
     assert any(s["transition"] == "ENABLE OPERATION" for s in a["state_timeline"]), a["state_timeline"][:4]
-lines = [json.loads(l) for l in open(f"{w}/report.jsonl")]
+lines = [l for l in map(json.loads, open(f"{w}/report.jsonl")) if "rule" in l]
 assert sorted((l["rule"], l["axis"], l["frame"]) for l in lines) == want, lines
 sarif = json.load(open(f"{w}/report.sarif"))
 assert sarif["version"] == "2.1.0"

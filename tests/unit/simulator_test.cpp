@@ -85,6 +85,38 @@ SimOptions options(Scenario scenario, int axes, double duration_s) {
   return o;
 }
 
+// --- parseCycleDisturbance ---
+
+TEST(ParseCycleDisturbance, Rows) {
+  struct Row {
+    const char* option;
+    const char* text;
+    std::optional<std::pair<double, int>> parsed;  // none: an error
+    const char* error;
+  };
+  const Row rows[] = {
+      {"--late-cycle", "1.5:400", std::pair{1.5, 400}, ""},
+      {"--lost-cycles", "0:3", std::pair{0.0, 3}, ""},
+      {"--late-cycle", "1.5", std::nullopt, "--late-cycle 1.5: expected SECONDS:US, e.g. 1.5:400"},
+      {"--lost-cycles", "1:0", std::nullopt, "--lost-cycles 1:0: expected SECONDS:N, e.g. 1.5:3"},
+      {"--lost-cycles", "-1:2", std::nullopt, "--lost-cycles -1:2: expected SECONDS:N, e.g. 1.5:3"},
+      {"--late-cycle", "1:4x", std::nullopt,
+       "--late-cycle 1:4x: expected SECONDS:US, e.g. 1.5:400"},
+  };
+  for (const Row& row : rows) {
+    SCOPED_TRACE(row.text);
+    const Result<CycleDisturbance> d = parseCycleDisturbance(row.option, row.text);
+    if (!row.parsed) {
+      ASSERT_FALSE(d.has_value());
+      EXPECT_EQ(d.error().text(), row.error);
+      continue;
+    }
+    ASSERT_TRUE(d.has_value()) << d.error().text();
+    EXPECT_EQ(d->at_s, row.parsed->first);
+    EXPECT_EQ(d->amount, row.parsed->second);
+  }
+}
+
 // --- parseFault ---
 
 struct ParseRow {
@@ -196,6 +228,21 @@ INSTANTIATE_TEST_SUITE_P(
         ResolveRow{"jitter_fifth", [](SimOptions& o) { o.jitter_us = 200; }, ""},
         ResolveRow{"jitter_too_big", [](SimOptions& o) { o.jitter_us = 201; },
                    "--jitter-us 201: from 0 to a fifth of the cycle (200)"},
+        ResolveRow{"latency_half", [](SimOptions& o) { o.latency_us = 500; }, ""},
+        ResolveRow{"latency_too_big", [](SimOptions& o) { o.latency_us = 501; },
+                   "--latency-us 501: from 0 to half the cycle (500)"},
+        ResolveRow{"late_cycle_latest",
+                   [](SimOptions& o) {
+                     o.jitter_us = 100;
+                     o.late_cycles.push_back({1.0, 799, "1:799"});
+                   },
+                   ""},
+        ResolveRow{"late_cycle_too_late",
+                   [](SimOptions& o) {
+                     o.jitter_us = 100;
+                     o.late_cycles.push_back({1.0, 800, "1:800"});
+                   },
+                   "--late-cycle 1:800: at most 799 us late"},
         ResolveRow{"faults_3_axes",
                    [](SimOptions& o) {
                      o.scenario = Scenario::Faults;

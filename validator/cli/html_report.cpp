@@ -93,9 +93,15 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
                     {"states_omitted", a.timeline_omitted},
                     {"errors", std::move(errors)}});
   }
-  Json histogram = Json::array();
-  for (const HistogramBin& bin : r.cycle_histogram)
-    histogram.push_back({bin.from, bin.to, bin.count});
+  // The timing statistics' deviation histograms (docs/timing.md), in µs from the nominal.
+  const auto histogram = [](const std::optional<SeriesSummary>& series) {
+    Json bins = Json::array();
+    if (!series) return bins;
+    for (const HistogramBin& bin : series->histogram)
+      bins.push_back({static_cast<double>(bin.from_ns) / 1e3, static_cast<double>(bin.to_ns) / 1e3,
+                      bin.count});
+    return bins;
+  };
   auto number = [](const std::optional<double>& v) { return v ? Json(*v) : Json(nullptr); };
   return {{"path", r.path},
           {"verdict", verdictName(verdict)},
@@ -117,7 +123,8 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
           {"timelines", std::move(timelines)},
           {"timelines_omitted", r.timelines.omitted},
           {"axes", std::move(axes)},
-          {"cycle_histogram", std::move(histogram)}};
+          {"cycle_histogram", histogram(r.timing.cycle)},
+          {"latency_histogram", histogram(r.timing.latency)}};
 }
 
 // The page's data, safe inside a <script> element: no "<" at all ("</script>" cannot end it).
@@ -227,12 +234,12 @@ function drawStates(canvas, axis, end) {
     }
   });
 }
-function drawHistogram(canvas, bins) {
+function drawHistogram(canvas, bins, what, counted) {
   new Chart(canvas, {
     type: 'bar',
-    data: {labels: bins.map(b => `${b[0]}-${b[1]}`), datasets: [{label: 'cycles', data: bins.map(b => b[2]), backgroundColor: '#1565c0'}]},
+    data: {labels: bins.map(b => `${b[0]}…${b[1]}`), datasets: [{label: counted, data: bins.map(b => b[2]), backgroundColor: '#1565c0'}]},
     options: {animation: false, responsive: false, plugins: {legend: {display: false}},
-              scales: {x: {title: {display: true, text: 'cycle time (µs)'}}, y: {title: {display: true, text: 'cycles'}}}}
+              scales: {x: {title: {display: true, text: what}}, y: {title: {display: true, text: counted}}}}
   });
 }
 function findingsTable(capture, section, index) {
@@ -349,7 +356,14 @@ function captureSection(capture, index) {
   if (capture.cycle_histogram.length) {
     const canvas = el('canvas', {width: 700, height: 260, id: `histogram-${index}`});
     section.appendChild(canvas);
-    drawHistogram(canvas, capture.cycle_histogram);
+    drawHistogram(canvas, capture.cycle_histogram, 'deviation from the median cycle (µs)', 'cycles');
+  }
+  if (capture.latency_histogram.length) {
+    section.appendChild(el('h3', {}, 'Return latency'));
+    section.appendChild(el('p', {class: 'note'}, 'From a master copy to its returned copy, as seen at the capture point (docs/timing.md).'));
+    const canvas = el('canvas', {width: 700, height: 260, id: `latency-${index}`});
+    section.appendChild(canvas);
+    drawHistogram(canvas, capture.latency_histogram, 'deviation from the median latency (µs)', 'frames');
   }
   document.getElementById('captures').appendChild(section);
 }

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "axis_selection.hpp"
@@ -34,6 +35,7 @@
 #include "ncservo/session.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "ncservo/text.hpp"
+#include "ncservo/timing_text.hpp"
 #include "ncservo/validator.hpp"
 #include "report.hpp"
 #include "waveform.hpp"
@@ -267,6 +269,7 @@ struct DecodeArgs {
   bool layout_only = false;
   std::string timestamps = "auto";
   WindowArgs window;
+  bool timing = false;  // the timing block on standard error at the end
 };
 
 // What every decode format reads and writes.
@@ -308,18 +311,25 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     }
     rows.clear();
   };
+  // --timing: the validator's bus model times the cycles as `validate` does (docs/timing.md).
+  std::optional<Validator> timing;
   const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                           const ByteReader& bytes) {
+    if (timing) timing->onFrame(number, time_ns, walked, bytes);
     const FrameView& view = session->onFrame(walked, bytes);
     if (args.layout_only) return;
     for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(number, view.axes[i].placement);
     cycles.onFrame(number, time_ns, view, rows);
     write();
   };
-  const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
+  const auto start = [&](const DecoderOptions& layout) {
+    session.emplace(layout);
+    if (args.timing && !args.layout_only) timing.emplace(layout, RuleSettings{});
+  };
   const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
                                const ByteReader& bytes) {
     session->onLayoutOnlyFrame(walked, bytes);
+    if (timing) timing->onLayoutOnlyFrame(walked, bytes);
   };
   const Status status =
       streamCapture(*reader, clock, window, {start, decode, input.window, layout_only}, run);
@@ -338,6 +348,11 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   }
   if (args.layout_only) printLayout(session->decoder(), window.inference());
   noteDecoded(*reader, clock, session->decoder());
+  if (timing) {
+    fmt::print(stderr, "ncservo: {}: {}", reader->path(),
+               timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
+                          cli::timestampResolutionNs(clock.source(), reader->timestampDigits())));
+  }
   if (Status selected = cli::checkAxisSelection(args.axes, session->decoder().axes()); !selected) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());
     return kExitUsage;
@@ -894,6 +909,8 @@ struct SimulateArgs {
   std::string format;    // empty: from the file name
   std::string compress;  // empty: from the file name
   std::vector<std::string> faults;
+  std::vector<std::string> late_cycles;
+  std::vector<std::string> lost_cycles;
   std::string layout_config;
   std::string eni;
   bool no_startup = false;
@@ -936,6 +953,18 @@ int runSimulate(SimulateArgs& args) {
       return kExitUsage;
     }
     o.faults.push_back(std::move(*fault));
+  }
+  for (auto [option, texts, into] :
+       {std::tuple{"--late-cycle", &args.late_cycles, &o.late_cycles},
+        std::tuple{"--lost-cycles", &args.lost_cycles, &o.lost_cycles}}) {
+    for (const std::string& text : *texts) {
+      Result<sim::CycleDisturbance> parsed = sim::parseCycleDisturbance(option, text);
+      if (!parsed) {
+        fmt::print(stderr, "ncservo simulate: {}\n", parsed.error().text());
+        return kExitUsage;
+      }
+      into->push_back(std::move(*parsed));
+    }
   }
   if (Status resolved = sim::resolveOptions(o); !resolved) {
     fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
@@ -1004,6 +1033,9 @@ Handler decodeCommand(CLI::App& command) {
                    "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,
                      "ENI file (EtherCATConfig.xml) giving the layout");
+  command.add_flag("--timing", args->timing,
+                   "at the end, the timing statistics of validate's text report on standard "
+                   "error (docs/timing.md)");
   command.add_flag("--layout", args->layout_only,
                    "print the layout found (as a configuration file) and the slaves the start-up "
                    "configured, instead of the process data");
@@ -1142,6 +1174,15 @@ Handler simulateCommand(CLI::App& command) {
                      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
   command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");
   command.add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
+  command.add_option("--latency-us", sa.options.latency_us,
+                     "returned copies this long after their master copy, microseconds (default: "
+                     "the ring's own few microseconds)");
+  command.add_option(
+      "--late-cycle", sa.late_cycles,
+      "SECONDS:US: the first cycle at or after SECONDS is sent US late (repeatable)");
+  command.add_option("--lost-cycles", sa.lost_cycles,
+                     "SECONDS:N: N cycles from the first at or after SECONDS are not sent "
+                     "(repeatable)");
   command.add_option("--loss", sa.options.loss,
                      "probability that a returned frame is lost (COM-004 findings)");
   command.add_option("--layout-config", sa.layout_config,

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <ctime>
@@ -15,6 +16,8 @@
 #include <nlohmann/json.hpp>
 #include <pugixml.hpp>
 #include <sstream>
+
+#include "ncservo/timing_text.hpp"
 
 namespace ncservo::cli {
 
@@ -142,6 +145,61 @@ Json segmentsJson(const CaptureReport& r) {
   return segments;
 }
 
+// Microseconds, to the nanosecond.
+double microseconds(double ns) {
+  return std::round(ns) / 1000.0;
+}
+
+Json seriesJson(const std::optional<SeriesSummary>& series) {
+  if (!series) return nullptr;
+  const SeriesSummary& s = *series;
+  Json histogram = Json::array();
+  for (const HistogramBin& bin : s.histogram) {
+    histogram.push_back({{"from_us", microseconds(static_cast<double>(bin.from_ns))},
+                         {"to_us", microseconds(static_cast<double>(bin.to_ns))},
+                         {"count", bin.count}});
+  }
+  auto us = [](std::int64_t ns) { return microseconds(static_cast<double>(ns)); };
+  return {{"count", s.count},
+          {"min", us(s.min_ns)},
+          {"median", us(s.median_ns)},
+          {"mean", microseconds(s.mean_ns)},
+          {"stddev", microseconds(s.stddev_ns)},
+          {"p1", us(s.p1_ns)},
+          {"p99", us(s.p99_ns)},
+          {"p999", us(s.p999_ns)},
+          {"max", us(s.max_ns)},
+          {"histogram", std::move(histogram)},
+          {"under", s.under},
+          {"over", s.over}};
+}
+
+Json worstJson(const std::vector<TimedFrames>& worst, const char* since_key,
+               const char* value_key) {
+  Json list = Json::array();
+  for (const TimedFrames& w : worst) {
+    list.push_back({{"frame", w.frame},
+                    {since_key, w.since_frame},
+                    {value_key, microseconds(static_cast<double>(w.ns))}});
+  }
+  return list;
+}
+
+// INTERFACES.md `timing`.
+Json timingJson(const CaptureReport& r) {
+  Json timing{
+      {"timestamps", timestampSourceName(r.timestamps)},
+      {"resolution_ns", timestampResolutionNs(r.timestamps, r.timestamp_digits)},
+      {"cycle_us", seriesJson(r.timing.cycle)},
+      {"latency_us", seriesJson(r.timing.latency)},
+      {"worst_cycles", worstJson(r.timing.worst_cycles, "since_frame", "interval_us")},
+      {"worst_latencies", worstJson(r.timing.worst_latencies, "master_frame", "latency_us")},
+      {"segments", segmentsJson(r)}};
+  if (r.segment_count > r.segments.size())
+    timing["segments_omitted"] = r.segment_count - r.segments.size();
+  return timing;
+}
+
 Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json c;
   c["path"] = r.path;
@@ -161,9 +219,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
     layout_axes.push_back(std::move(a));
   }
-  c["timing"] = {{"timestamps", timestampSourceName(r.timestamps)}, {"segments", segmentsJson(r)}};
-  if (r.segment_count > r.segments.size())
-    c["timing"]["segments_omitted"] = r.segment_count - r.segments.size();
+  c["timing"] = timingJson(r);
   if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
   if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
   if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
@@ -461,6 +517,10 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     }
   }
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
+  std::fputs(timingText(r.timing, timestampSourceName(r.timestamps),
+                        timestampResolutionNs(r.timestamps, r.timestamp_digits))
+                 .c_str(),
+             out);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);
@@ -557,9 +617,11 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-// JSON Lines: a capture where not every axis was checked closes with a line that says so.
-// So does one with several segments.
+// JSON Lines: each capture closes with its timing line; one where not every axis was checked
+// with a line that says so, and so does one with several segments.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
+  std::fputs((Json{{"capture", r.path}, {"timing", timingJson(r)}}.dump() + "\n").c_str(),
+             sink.out);
   if (r.coverage.complete() && r.segment_count <= 1 && r.coverage.not_judged.empty() &&
       !r.truncation.any()) {
     return;
@@ -652,7 +714,15 @@ bool CaptureReport::reaches(Severity level) const {
   return false;
 }
 
+std::int64_t timestampResolutionNs(TimestampSource source, int digits) {
+  if (source == TimestampSource::Probe) return 1;
+  std::int64_t ns = 1;
+  for (int d = digits; d < 9; ++d) ns *= 10;
+  return ns;
+}
+
 void summarise(const Validator& validator, CaptureReport& report) {
+  report.timing = validator.bus().timing().summary();
   report.cycles = validator.cycles();
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();

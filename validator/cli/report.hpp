@@ -16,6 +16,7 @@
 #include "ncservo/error.hpp"
 #include "ncservo/finding.hpp"
 #include "ncservo/frame_clock.hpp"
+#include "ncservo/timing.hpp"
 #include "ncservo/validator.hpp"
 #include "report_charts.hpp"
 
@@ -88,10 +89,9 @@ struct CaptureReport {
   std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
   std::uint64_t segment_count = 0;
   std::int64_t last_time_ns = 0;  // the last frame's
-  // What the HTML report draws: the bits around findings (when a format draws them) and the
-  // cycle-time histogram (empty until the timing statistics give its bins).
+  // What the HTML report draws around findings (when a format draws them).
   FindingTimelines timelines;
-  std::vector<HistogramBin> cycle_histogram;
+  TimingSummary timing;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);
@@ -105,6 +105,9 @@ struct CaptureReport {
 const char* verdictName(Verdict verdict);
 // An axis's configured name ("axis3" when it has none), "bus" for none.
 std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
+// The resolution of the timestamps that timed a capture: the probe's 1 ns, or the capture's own
+// (`digits` of a second).
+std::int64_t timestampResolutionNs(TimestampSource source, int digits);
 
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);

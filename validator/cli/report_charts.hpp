@@ -18,13 +18,6 @@
 
 namespace ncservo::cli {
 
-// One bin of a histogram: [from, to) and how many values fell in it.
-struct HistogramBin {
-  double from = 0;
-  double to = 0;
-  std::uint64_t count = 0;
-};
-
 // One field-table row a finding's rule reads, over the finding's window: its value at the
 // window's start, then each change (time in ns relative to the finding's frame).
 struct BitTrace {

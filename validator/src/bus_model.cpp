@@ -94,6 +94,11 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     return false;
   }
   if (!master_copies_seen_) tick(cyclic, decode);
+  // A timestamp that went backwards gives no latency (RULES.md "Time").
+  if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
+    timing_.onLatency(now_.frame, cyclic.last_master.frame,
+                      now_.time_ns - cyclic.last_master.time_ns);
+  }
   cyclic.awaiting_return = false;
   cyclic.not_returned_episode = false;
   return checkWorkingCounters(frame, decode);
@@ -127,6 +132,7 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
     }
   }
   intervals_.add(interval);
+  timing_.onCycle(now_.frame, cyclic.last_tick->frame, interval);
   cyclic.last_tick = now_;
 }
 

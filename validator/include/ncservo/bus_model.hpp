@@ -13,6 +13,7 @@
 #include "ncservo/decoder.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/interval_stats.hpp"
+#include "ncservo/timing.hpp"
 
 namespace ncservo {
 
@@ -44,6 +45,8 @@ class BusModel {
   std::optional<std::int64_t> nominalCycleNs() const;
   // The intervals of every segment, for reports.
   IntervalStats captureIntervals() const;
+  // Cycle intervals and return latencies of every segment (docs/timing.md).
+  const TimingStats& timing() const { return timing_; }
   // Returned datagrams carrying servo PDOs whose WKC was not captured (COM-001 not judged).
   std::uint64_t uncapturedWkcs() const { return uncaptured_wkcs_; }
   std::uint64_t firstUncapturedWkcFrame() const { return first_uncaptured_wkc_frame_; }
@@ -103,6 +106,7 @@ class BusModel {
   WkcPlan uncached_plan_;            // for a frame whose shape is not cached
   IntervalStats intervals_;          // this segment's
   IntervalStats earlier_intervals_;  // the segments' before it
+  TimingStats timing_;
   std::uint64_t cycles_ = 0;
   std::uint64_t uncaptured_wkcs_ = 0;
   std::uint64_t first_uncaptured_wkc_frame_ = 0;

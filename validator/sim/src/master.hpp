@@ -31,6 +31,8 @@ struct AlWalk {
 class Master {
  public:
   explicit Master(Segment& segment);
+  // The returned copy this long after its master copy, instead of the ring's own delay.
+  void setReturnDelayNs(std::int64_t ns) { return_delay_ns_ = ns; }
 
   // The start-up from time `t` in steps of `step_ns`; `t` ends after it. `op_request_slave`: the
   // slave whose first SAFE-OP request asks for OP (ESM-001). False if the sink stopped.

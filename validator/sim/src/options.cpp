@@ -111,6 +111,27 @@ Result<FaultRequest> parseFault(std::string_view text) {
   return fault;
 }
 
+Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::string_view text) {
+  const std::size_t colon = text.find(':');
+  CycleDisturbance d;
+  d.text = std::string(text);
+  try {
+    if (colon == std::string_view::npos) throw std::invalid_argument("colon");
+    std::size_t used = 0;
+    const std::string at(text.substr(0, colon));
+    const std::string amount(text.substr(colon + 1));
+    d.at_s = std::stod(at, &used);
+    if (used != at.size() || !(d.at_s >= 0)) throw std::invalid_argument("time");
+    d.amount = std::stoi(amount, &used);
+    if (used != amount.size() || d.amount < 1) throw std::invalid_argument("amount");
+  } catch (const std::exception&) {
+    return fail(fmt::format("{} {}: expected SECONDS:{}, e.g. 1.5:{}", option, text,
+                            option == "--late-cycle" ? "US" : "N",
+                            option == "--late-cycle" ? "400" : "3"));
+  }
+  return d;
+}
+
 Status resolveOptions(SimOptions& o) {
   if (o.axes < 1 || o.axes > 32) return fail(fmt::format("--axes {}: from 1 to 32", o.axes));
   if (!o.io_slaves) o.io_slaves = defaultIoSlaves(o.image);
@@ -129,6 +150,20 @@ Status resolveOptions(SimOptions& o) {
                             o.cycle_us / 5));
   }
   if (!(o.loss >= 0 && o.loss <= 0.5)) return fail(fmt::format("--loss {}: from 0 to 0.5", o.loss));
+  // The returned copy comes back before the next cycle's master copy, jitter and all.
+  if (o.latency_us < 0 || o.latency_us > o.cycle_us / 2) {
+    return fail(fmt::format("--latency-us {}: from 0 to half the cycle ({})", o.latency_us,
+                            o.cycle_us / 2));
+  }
+  // Late, not lost: sent before the next cycle's earliest send, whatever the jitter.
+  const int latest = o.cycle_us - 2 * o.jitter_us - 1;
+  for (const CycleDisturbance& late : o.late_cycles) {
+    if (late.amount > latest) {
+      return fail(fmt::format("--late-cycle {}: at most {} us late (the cycle less twice the "
+                              "jitter, less 1)",
+                              late.text, latest));
+    }
+  }
   if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);
   const double duration = *o.duration_s;
   const double start = o.startup ? kStartupSeconds : 0.0;

@@ -49,6 +49,7 @@ struct Simulator::Impl {
         axis_layout(segment.axisLayout()),
         faults(segment, drives, ncs),
         master(segment) {
+    if (o.latency_us > 0) master.setReturnDelayNs(o.latency_us * kUs);
     for (int a = 0; a < o.axes; ++a) {
       DriveSetup setup;
       setup.axis = a;
@@ -143,6 +144,20 @@ struct Simulator::Impl {
     }
   }
 
+  // The cycle slot at or after a capture time; SimFrame times count from the capture's start.
+  std::int64_t firstSlotAt(double at_s) const {
+    const auto at = static_cast<std::int64_t>(std::llround(at_s * 1e9));
+    return (at + cycle_ns - 1) / cycle_ns * cycle_ns;
+  }
+  // How late (µs) the cycle of this slot is sent (--late-cycle).
+  std::int64_t disturbance(const std::vector<CycleDisturbance>& late, std::int64_t slot) const {
+    std::int64_t us = 0;
+    for (const CycleDisturbance& d : late) {
+      if (slot == firstSlotAt(d.at_s)) us += d.amount;
+    }
+    return us;
+  }
+
   std::optional<std::uint64_t> run(const FrameSink& captured) {
     const FrameSink sink = o.probe == Probe::Esl ? eslProbeSink(captured, o.seed) : captured;
     std::int64_t t = 0;
@@ -171,6 +186,11 @@ struct Simulator::Impl {
       faults.startBusFaults(slot);
       std::int64_t send = slot;
       if (o.jitter_us > 0) send += rng.between(-o.jitter_us, o.jitter_us) * kUs;
+      send += disturbance(o.late_cycles, slot) * kUs;
+      const bool lost = std::any_of(o.lost_cycles.begin(), o.lost_cycles.end(), [&](const auto& d) {
+        const std::int64_t from = firstSlotAt(d.at_s);
+        return slot >= from && slot < from + d.amount * cycle_ns;
+      });
       for (int a = 0; a < o.axes; ++a) {
         const auto& in = latest_inputs[static_cast<std::size_t>(a)];
         outputs[static_cast<std::size_t>(a)] =
@@ -178,7 +198,7 @@ struct Simulator::Impl {
       }
       for (Esc& esc : segment.escs) esc.outputs_taken = false;
       std::fill(latest_inputs.begin(), latest_inputs.end(), std::nullopt);
-      if (!faults.takeSkippedCycle()) {
+      if (!faults.takeSkippedCycle() && !lost) {
         const bool lost_before = faults.takeLossBeforeSlaves();
         const bool lost_after =
             faults.takeLossAfterSlaves() || (o.loss > 0 && rng.uniform() < o.loss);

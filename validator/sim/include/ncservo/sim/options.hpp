@@ -60,6 +60,15 @@ struct FaultRequest {
 // The fault, or an error saying what is wrong with the text.
 Result<FaultRequest> parseFault(std::string_view text);
 
+// --late-cycle SECONDS:US (the first cycle at or after SECONDS sent US late) and
+// --lost-cycles SECONDS:N (N cycles from the first at or after SECONDS not sent).
+struct CycleDisturbance {
+  double at_s = 0;
+  int amount = 0;
+  std::string text;  // as given, for messages
+};
+Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::string_view text);
+
 struct SimOptions {
   Scenario scenario = Scenario::Commissioning;
   int axes = 4;                      // servos, 1..32
@@ -73,6 +82,9 @@ struct SimOptions {
   int ready_mode = 0;  // the drives' Servo_Ready_Mode
   int jitter_us = 0;   // master send jitter, at most a quarter cycle
   double loss = 0;     // probability that a returned frame is lost after the slaves
+  int latency_us = 0;  // returned copy this long after its master copy (0: the ring's own delay)
+  std::vector<CycleDisturbance> late_cycles;
+  std::vector<CycleDisturbance> lost_cycles;
   std::vector<FaultRequest> faults;
 };
 

@@ -1,0 +1,17 @@
+// The timing block of the text report (docs/timing.md), shared by `validate`, `decode --timing`
+// and the plugin's `tshark -z ncservo,timing`, so that all three print the same numbers.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "ncservo/timing.hpp"
+
+namespace ncservo {
+
+// Lines ending in '\n': the cycle statistics, the return latency and the worst of each.
+// `timestamps` names what timed the frames ("capture", "probe").
+std::string timingText(const TimingSummary& timing, const char* timestamps,
+                       std::int64_t resolution_ns);
+
+}  // namespace ncservo
