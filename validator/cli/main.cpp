@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "axis_selection.hpp"
+#include "commands.hpp"
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/capture_stream.hpp"
 #include "ncservo/capture_writer.hpp"
@@ -41,14 +42,19 @@
 namespace {
 
 using namespace ncservo;
+using cli::addTimestampsOption;
+using cli::buildSettings;
+using cli::decoderOptions;
+using cli::LayoutArgs;
+using cli::LayoutFiles;
+using cli::loadLayoutFiles;
+using cli::refuseInputAsOutput;
 
-enum ExitCode {
-  kExitOk = 0,
-  kExitFindings = 1,
-  kExitUsage = 2,
-  kExitCapture = 3,
-  kExitNoServo = 4
-};
+using cli::kExitCapture;
+using cli::kExitFindings;
+using cli::kExitNoServo;
+using cli::kExitOk;
+using cli::kExitUsage;
 
 // ---- Format tables and the --format option derived from them ----
 
@@ -81,15 +87,6 @@ std::string choiceList(const std::vector<std::string>& names) {
 void addFormatOption(CLI::App& command, std::string& format, const std::vector<std::string>& names,
                      const std::string& note = "") {
   command.add_option("--format", format, choiceList(names) + note)->check(CLI::IsMember(names));
-}
-
-// --timestamps (PROTOCOL.md §8: a probe's clock or the capturing PC's).
-void addTimestampsOption(CLI::App& command, std::string& timestamps) {
-  command
-      .add_option("--timestamps", timestamps,
-                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
-                  "has one)")
-      ->check(CLI::IsMember({"capture", "probe", "auto"}));
 }
 
 // ---- decode ----
@@ -201,42 +198,6 @@ void warnIfTruncated(const std::string& capture, const cli::Truncation& truncati
 std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
   if (!window.limited() || run.in_window > 0) return "";
   return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
-}
-
-// The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
-struct LayoutArgs {
-  std::string config_path;
-  std::string eni_path;
-  bool no_default_layout = false;
-};
-struct LayoutFiles {
-  std::optional<Config> config;
-  std::optional<EniLayout> eni;
-};
-
-Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args) {
-  LayoutFiles files;
-  if (!args.config_path.empty()) {
-    Result<Config> loaded = loadConfig(args.config_path);
-    if (!loaded) return fail(loaded.error().text());
-    files.config = std::move(*loaded);
-  }
-  if (!args.eni_path.empty()) {
-    Result<EniLayout> eni = loadEni(args.eni_path);
-    if (!eni) return fail(eni.error().text());
-    if (eni->axes.empty()) {
-      return fail(fmt::format(
-          "{}: no servo of this protocol (10-byte outputs, 40-byte inputs) among its {} slaves",
-          args.eni_path, eni->slaves));
-    }
-    files.eni = std::move(*eni);
-  }
-  return files;
-}
-
-DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args) {
-  return layoutOptions(files.config ? &*files.config : nullptr,
-                       files.eni ? &files.eni->axes : nullptr, !args.no_default_layout);
 }
 
 // `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
@@ -411,20 +372,6 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   return kExitOk;
 }
 
-// INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
-// checked before anything is opened for writing.
-Status refuseInputAsOutput(const std::string& option, const std::string& output,
-                           const std::vector<std::string>& captures) {
-  for (const std::string& capture : captures) {
-    std::error_code ec;
-    if (capture != "-" && std::filesystem::equivalent(output, capture, ec)) {
-      return fail(fmt::format("{} {} is the capture {}: refusing to write over an input", option,
-                              output, capture));
-    }
-  }
-  return {};
-}
-
 // `-o FILE`, or standard output for none or "-".
 Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::string>& captures) {
   if (output.empty() || output == "-") return stdout;
@@ -470,59 +417,18 @@ int runDecode(const DecodeArgs& args) {
 
 // ---- validate ----
 
-struct ValidateArgs {
+struct ValidateArgs : cli::RuleArgs {
   std::vector<std::string> captures;
   LayoutArgs layout;
   std::string format = cli::reportFormatNames().front();
   std::string output;
   std::string fail_on = "error";
-  std::vector<std::string> disable;
-  std::vector<std::string> severities;
-  std::vector<std::string> timeouts;
-  std::optional<int> servo_ready_mode;
   std::string timestamps = "auto";
   bool allow_empty = false;
   bool verbose = false;
   std::vector<std::string> reports;  // FORMAT:FILE
   WindowArgs window;
 };
-
-// The settings from the rules' defaults, the config file, then the command line.
-Status buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
-                     RuleSettings& settings) {
-  // An error of an option names the option.
-  auto option = [](const char* name, const Status& status) {
-    return fail(fmt::format("{}: {}", name, status.error().message));
-  };
-  if (config) {
-    if (Status s = applyConfig(*config, settings); !s) return s;
-  }
-  for (const std::string& id : o.disable) {
-    if (Status s = settings.disable(id); !s) return option("--disable", s);
-  }
-  for (const std::string& pair : o.severities) {
-    const auto eq = pair.find('=');
-    if (eq == std::string::npos) return fail("--severity " + pair + ": expected ID=LEVEL");
-    if (Status s = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)); !s)
-      return option("--severity", s);
-  }
-  for (const std::string& pair : o.timeouts) {
-    const auto eq = pair.find('=');
-    if (eq == std::string::npos) return fail("--timeout " + pair + ": expected NAME=MS");
-    std::int64_t ms = -1;
-    try {
-      std::size_t used = 0;
-      ms = std::stoll(pair.substr(eq + 1), &used);
-      if (used != pair.size() - eq - 1) ms = -1;
-    } catch (const std::exception&) {
-      ms = -1;
-    }
-    if (ms < 0) return fail("--timeout " + pair + ": expected a number of milliseconds");
-    if (Status s = settings.setTimeout(pair.substr(0, eq), ms); !s) return option("--timeout", s);
-  }
-  if (o.servo_ready_mode) settings.servo_ready_mode = o.servo_ready_mode;
-  return {};
-}
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
@@ -974,8 +880,7 @@ int runSimulate(SimulateArgs& args) {
 
 // ---- The subcommands ----
 
-// What runs a subcommand once its options are parsed.
-using Handler = std::function<int()>;
+using cli::Handler;
 
 Handler decodeCommand(CLI::App& command) {
   auto args = std::make_shared<DecodeArgs>();
@@ -1020,22 +925,7 @@ Handler validateCommand(CLI::App& command) {
       .add_option("--fail-on", args->fail_on,
                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
-  command.add_option("--disable", args->disable, "rule IDs to skip, comma-separated (repeatable)")
-      ->delimiter(',')
-      ->allow_extra_args(false);
-  command
-      .add_option("--severity", args->severities, "ID=LEVEL: change a rule's severity (repeatable)")
-      ->delimiter(',')
-      ->allow_extra_args(false);
-  command
-      .add_option("--timeout", args->timeouts,
-                  "NAME=MS: change a timeout (docs/rules.md; repeatable)")
-      ->delimiter(',')
-      ->allow_extra_args(false);
-  command
-      .add_option("--servo-ready-mode", args->servo_ready_mode,
-                  "Servo_Ready_Mode of the drives (0 or 1)")
-      ->check(CLI::Range(0, 1));
+  cli::addRuleOptions(command, *args);
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
                    "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,
@@ -1155,6 +1045,8 @@ const Subcommand kSubcommands[] = {
     {"rules", "list the rules: ID, slug, severity, party, summary", rulesCommand},
     {"fields", "list every decoded field (generated from the field table)", fieldsCommand},
     {"simulate", "write a capture of simulated NC and drives (scenarios, faults)", simulateCommand},
+    {"annotate", "copy a capture with each finding as a packet comment on its frame",
+     cli::annotateCommand},
 };
 
 }  // namespace
