@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "axis_selection.hpp"
@@ -36,6 +38,7 @@
 #include "ncservo/sim/simulator.hpp"
 #include "ncservo/text.hpp"
 #include "ncservo/validator.hpp"
+#include "ordered_jobs.hpp"
 #include "report.hpp"
 #include "waveform.hpp"
 
@@ -188,9 +191,10 @@ void addWindowOptions(CLI::App& command, WindowArgs& window) {
 }
 
 // What a snap length cut, on one line (never one per frame).
-void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation) {
+void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation,
+                     std::FILE* messages = stderr) {
   if (truncation.any()) {
-    fmt::print(stderr, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
+    fmt::print(messages, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
   }
 }
 
@@ -426,22 +430,31 @@ struct ValidateArgs : cli::RuleArgs {
   std::string timestamps = "auto";
   bool allow_empty = false;
   bool verbose = false;
+  std::optional<unsigned> jobs;      // default: the cores
   std::vector<std::string> reports;  // FORMAT:FILE
   WindowArgs window;
+};
+
+// Where one capture's report goes while it is made: to the writer as it comes (one capture at
+// a time), or, with `live` null, kept whole with its messages for the writer (captures in
+// parallel, written in argument order by presentCapture).
+struct CaptureOutput {
+  cli::ReportWriter* live;
+  std::FILE* messages;  // standard error, or the capture's own buffer
 };
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
                     const RuleSettings& settings, TimestampMode timestamps,
-                    const TimeWindow& time_window, cli::ReportWriter& writer,
-                    cli::CaptureReport& report) {
+                    const TimeWindow& time_window, const cli::ReportWriter& writer,
+                    const CaptureOutput& output, cli::CaptureReport& report) {
   report.path = path;
-  writer.beginCapture(report);
+  if (output.live != nullptr) output.live->beginCapture(report);
   auto opened = CaptureReader::open(path);
   if (!opened) {
     report.error = opened.error().text();
-    fmt::print(stderr, "ncservo: {}\n", *report.error);
-    writer.endCapture(report);
+    fmt::print(output.messages, "ncservo: {}\n", *report.error);
+    if (output.live != nullptr) output.live->endCapture(report);
     return kExitCapture;
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
@@ -456,8 +469,8 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     validator->onFrame(number, time_ns, walked, bytes);
     for (const Finding& f : validator->findings()) {
       report.tally(f);
-      if (writer.keepsFindings()) report.findings.push_back(f);
-      writer.finding(report, f);
+      if (output.live == nullptr || writer.keepsFindings()) report.findings.push_back(f);
+      if (output.live != nullptr) output.live->finding(report, f);
     }
   };
   const auto start = [&](const DecoderOptions& layout) {
@@ -479,21 +492,21 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   }
   report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
                                         validator->decoder().axes());
-  warnIfTruncated(reader->path(), report.truncation);
+  warnIfTruncated(reader->path(), report.truncation, output.messages);
   report.timestamps = clock.source();
   report.probe = clock.counts();
   report.probe_note = clock.note();
   if (!status) {
     report.error = status.error().text() + " (the frames before it were analysed)";
-    fmt::print(stderr, "ncservo: {}\n", *report.error);
+    fmt::print(output.messages, "ncservo: {}\n", *report.error);
   }
   if (writer.locatesFrames()) {
     if (Status located = cli::locateFindings(report); !located) {
-      fmt::print(stderr, "ncservo: {}: frames not located in the file: {}\n", path,
+      fmt::print(output.messages, "ncservo: {}: frames not located in the file: {}\n", path,
                  located.error().text());
     }
   }
-  writer.endCapture(report);
+  if (output.live != nullptr) output.live->endCapture(report);
   switch (writer.verdict(report)) {
     case cli::Verdict::Unreadable:
       return kExitCapture;
@@ -505,6 +518,17 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
       break;
   }
   return kExitOk;
+}
+
+// A capture validated apart (CaptureOutput without `live`) given to the writer as if it had
+// been written as it came: its messages, its findings one by one, its end.
+void presentCapture(cli::ReportWriter& writer, const std::string& messages,
+                    cli::CaptureReport& report) {
+  std::fputs(messages.c_str(), stderr);
+  writer.beginCapture(report);
+  for (const Finding& f : report.findings) writer.finding(report, f);
+  writer.endCapture(report);
+  if (!writer.keepsFindings()) std::vector<Finding>().swap(report.findings);
 }
 
 // INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
@@ -599,12 +623,37 @@ int runValidate(const ValidateArgs& o) {
     return kExitUsage;
   }
   const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
-  std::vector<cli::CaptureReport> reports;
+  const DecoderOptions layout = decoderOptions(*files, o.layout);
+  std::vector<cli::CaptureReport> reports(o.captures.size());
   int rc = kExitOk;
-  for (const std::string& path : o.captures) {
-    reports.emplace_back();
-    rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, timestamps,
-                                     *time_window, **writer, reports.back()));
+  const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
+  if (jobs <= 1 || o.captures.size() <= 1) {
+    for (std::size_t i = 0; i < o.captures.size(); ++i) {
+      rc = combine(rc, validateCapture(o.captures[i], layout, settings, timestamps, *time_window,
+                                       **writer, {writer->get(), stderr}, reports[i]));
+    }
+  } else {
+    struct Validated {
+      int rc;
+      std::string messages;
+    };
+    const std::function<Validated(std::size_t)> validate = [&](std::size_t i) {
+      char* buffer = nullptr;
+      std::size_t size = 0;
+      std::FILE* messages = open_memstream(&buffer, &size);
+      const int status = validateCapture(o.captures[i], layout, settings, timestamps, *time_window,
+                                         **writer, {nullptr, messages}, reports[i]);
+      std::fclose(messages);
+      Validated validated{status, std::string(buffer, size)};
+      std::free(buffer);
+      return validated;
+    };
+    const std::function<void(std::size_t, Validated&)> present = [&](std::size_t i,
+                                                                     Validated& validated) {
+      presentCapture(**writer, validated.messages, reports[i]);
+      rc = combine(rc, validated.rc);
+    };
+    cli::runInOrder(o.captures.size(), jobs, validate, present);
   }
   if (Status written = (*writer)->finish(reports); !written) {
     fmt::print(stderr, "ncservo: {}\n", written.error().text());
@@ -934,6 +983,11 @@ Handler validateCommand(CLI::App& command) {
   addWindowOptions(command, args->window);
   command.add_flag("--allow-empty", args->allow_empty,
                    "exit 0, not 4, where no servo (or not every configured axis) was decoded");
+  command
+      .add_option("-j,--jobs", args->jobs,
+                  "validate this many captures at once (default: the cores); the output is "
+                  "in argument order, as with 1")
+      ->check(CLI::Range(1u, 1024u));
   return [args] { return runValidate(*args); };
 }
 
