@@ -31,23 +31,6 @@ struct AnnotateArgs : RuleArgs {
   std::optional<double> snippets_s;
 };
 
-// "SE-001 illegal-enable-edge axis X: what was seen", and where the condition began when that
-// is an earlier frame.
-std::string commentOf(const Finding& finding, const std::vector<AxisInfo>& axes) {
-  std::string where = "bus";
-  if (finding.axis) {
-    where = fmt::format("axis axis{}", *finding.axis);
-    for (const AxisInfo& axis : axes) {
-      if (axis.index == *finding.axis) where = "axis " + axis.name;
-    }
-  }
-  const RuleDef& rule = ruleDef(finding.rule);
-  return fmt::format("{} {} {}: {}{}", rule.code, rule.slug, where, finding.message,
-                     finding.since.frame != finding.at.frame && finding.since.frame != 0
-                         ? fmt::format(" (since frame {})", finding.since.frame)
-                         : "");
-}
-
 struct Judged {
   FrameComments comments;
   std::vector<std::int64_t> finding_times_ns;  // of each finding's frame, in capture order
@@ -68,7 +51,7 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
                             const ByteReader& bytes) {
     validator->onFrame(number, time_ns, walked, bytes);
     for (const Finding& f : validator->findings()) {
-      judged.comments[f.at.frame].push_back(commentOf(f, validator->decoder().axes()));
+      judged.comments[f.at.frame].push_back(findingComment(f, validator->decoder().axes()));
       judged.finding_times_ns.push_back(f.at.time_ns);
       ++judged.findings;
     }

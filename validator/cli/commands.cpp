@@ -114,4 +114,21 @@ Status refuseInputAsOutput(const std::string& option, const std::string& output,
   return {};
 }
 
+// "SE-001 illegal-enable-edge axis X: what was seen", and where the condition began when that
+// is an earlier frame.
+std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes) {
+  std::string where = "bus";
+  if (finding.axis) {
+    where = fmt::format("axis axis{}", *finding.axis);
+    for (const AxisInfo& axis : axes) {
+      if (axis.index == *finding.axis) where = "axis " + axis.name;
+    }
+  }
+  const RuleDef& rule = ruleDef(finding.rule);
+  return fmt::format("{} {} {}: {}{}", rule.code, rule.slug, where, finding.message,
+                     finding.since.frame != finding.at.frame && finding.since.frame != 0
+                         ? fmt::format(" (since frame {})", finding.since.frame)
+                         : "");
+}
+
 }  // namespace ncservo::cli

@@ -13,6 +13,7 @@
 #include "ncservo/decoder.hpp"
 #include "ncservo/eni.hpp"
 #include "ncservo/error.hpp"
+#include "ncservo/finding.hpp"
 #include "ncservo/rules.hpp"
 
 namespace ncservo::cli {
@@ -64,6 +65,10 @@ Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
 // checked before anything is opened for writing.
 Status refuseInputAsOutput(const std::string& option, const std::string& output,
                            const std::vector<std::string>& captures);
+
+// A finding as a packet comment (annotate, the flight recorder): "SE-001 illegal-enable-edge
+// axis X: what was seen", and where the condition began when that is an earlier frame.
+std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes);
 
 Handler annotateCommand(CLI::App& command);
 Handler monitorCommand(CLI::App& command);

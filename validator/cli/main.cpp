@@ -1101,6 +1101,8 @@ const Subcommand kSubcommands[] = {
     {"simulate", "write a capture of simulated NC and drives (scenarios, faults)", simulateCommand},
     {"annotate", "copy a capture with each finding as a packet comment on its frame",
      cli::annotateCommand},
+    {"monitor", "capture live, report findings as they happen, keep a flight record",
+     cli::monitorCommand},
 };
 
 }  // namespace
