@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -16,10 +17,12 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
 #include "axis_selection.hpp"
+#include "commands.hpp"
 #include "ncservo/capture_reader.hpp"
 #include "ncservo/capture_stream.hpp"
 #include "ncservo/capture_writer.hpp"
@@ -37,20 +40,26 @@
 #include "ncservo/text.hpp"
 #include "ncservo/timing_text.hpp"
 #include "ncservo/validator.hpp"
+#include "ordered_jobs.hpp"
 #include "report.hpp"
 #include "waveform.hpp"
 
 namespace {
 
 using namespace ncservo;
+using cli::addTimestampsOption;
+using cli::buildSettings;
+using cli::decoderOptions;
+using cli::LayoutArgs;
+using cli::LayoutFiles;
+using cli::loadLayoutFiles;
+using cli::refuseInputAsOutput;
 
-enum ExitCode {
-  kExitOk = 0,
-  kExitFindings = 1,
-  kExitUsage = 2,
-  kExitCapture = 3,
-  kExitNoServo = 4
-};
+using cli::kExitCapture;
+using cli::kExitFindings;
+using cli::kExitNoServo;
+using cli::kExitOk;
+using cli::kExitUsage;
 
 // ---- Format tables and the --format option derived from them ----
 
@@ -83,15 +92,6 @@ std::string choiceList(const std::vector<std::string>& names) {
 void addFormatOption(CLI::App& command, std::string& format, const std::vector<std::string>& names,
                      const std::string& note = "") {
   command.add_option("--format", format, choiceList(names) + note)->check(CLI::IsMember(names));
-}
-
-// --timestamps (PROTOCOL.md §8: a probe's clock or the capturing PC's).
-void addTimestampsOption(CLI::App& command, std::string& timestamps) {
-  command
-      .add_option("--timestamps", timestamps,
-                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
-                  "has one)")
-      ->check(CLI::IsMember({"capture", "probe", "auto"}));
 }
 
 // ---- decode ----
@@ -193,9 +193,10 @@ void addWindowOptions(CLI::App& command, WindowArgs& window) {
 }
 
 // What a snap length cut, on one line (never one per frame).
-void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation) {
+void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation,
+                     std::FILE* messages = stderr) {
   if (truncation.any()) {
-    fmt::print(stderr, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
+    fmt::print(messages, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
   }
 }
 
@@ -203,42 +204,6 @@ void warnIfTruncated(const std::string& capture, const cli::Truncation& truncati
 std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
   if (!window.limited() || run.in_window > 0) return "";
   return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
-}
-
-// The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
-struct LayoutArgs {
-  std::string config_path;
-  std::string eni_path;
-  bool no_default_layout = false;
-};
-struct LayoutFiles {
-  std::optional<Config> config;
-  std::optional<EniLayout> eni;
-};
-
-Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args) {
-  LayoutFiles files;
-  if (!args.config_path.empty()) {
-    Result<Config> loaded = loadConfig(args.config_path);
-    if (!loaded) return fail(loaded.error().text());
-    files.config = std::move(*loaded);
-  }
-  if (!args.eni_path.empty()) {
-    Result<EniLayout> eni = loadEni(args.eni_path);
-    if (!eni) return fail(eni.error().text());
-    if (eni->axes.empty()) {
-      return fail(fmt::format(
-          "{}: no servo of this protocol (10-byte outputs, 40-byte inputs) among its {} slaves",
-          args.eni_path, eni->slaves));
-    }
-    files.eni = std::move(*eni);
-  }
-  return files;
-}
-
-DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args) {
-  return layoutOptions(files.config ? &*files.config : nullptr,
-                       files.eni ? &files.eni->axes : nullptr, !args.no_default_layout);
 }
 
 // `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
@@ -426,20 +391,6 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   return kExitOk;
 }
 
-// INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
-// checked before anything is opened for writing.
-Status refuseInputAsOutput(const std::string& option, const std::string& output,
-                           const std::vector<std::string>& captures) {
-  for (const std::string& capture : captures) {
-    std::error_code ec;
-    if (capture != "-" && std::filesystem::equivalent(output, capture, ec)) {
-      return fail(fmt::format("{} {} is the capture {}: refusing to write over an input", option,
-                              output, capture));
-    }
-  }
-  return {};
-}
-
 // `-o FILE`, or standard output for none or "-".
 Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::string>& captures) {
   if (output.empty() || output == "-") return stdout;
@@ -485,72 +436,40 @@ int runDecode(const DecodeArgs& args) {
 
 // ---- validate ----
 
-struct ValidateArgs {
+struct ValidateArgs : cli::RuleArgs {
   std::vector<std::string> captures;
   LayoutArgs layout;
   std::string format = cli::reportFormatNames().front();
   std::string output;
   std::string fail_on = "error";
-  std::vector<std::string> disable;
-  std::vector<std::string> severities;
-  std::vector<std::string> timeouts;
-  std::optional<int> servo_ready_mode;
   std::string timestamps = "auto";
   bool allow_empty = false;
   bool verbose = false;
+  std::optional<unsigned> jobs;      // default: the cores
   std::vector<std::string> reports;  // FORMAT:FILE
   WindowArgs window;
 };
 
-// The settings from the rules' defaults, the config file, then the command line.
-Status buildSettings(const ValidateArgs& o, const std::optional<Config>& config,
-                     RuleSettings& settings) {
-  // An error of an option names the option.
-  auto option = [](const char* name, const Status& status) {
-    return fail(fmt::format("{}: {}", name, status.error().message));
-  };
-  if (config) {
-    if (Status s = applyConfig(*config, settings); !s) return s;
-  }
-  for (const std::string& id : o.disable) {
-    if (Status s = settings.disable(id); !s) return option("--disable", s);
-  }
-  for (const std::string& pair : o.severities) {
-    const auto eq = pair.find('=');
-    if (eq == std::string::npos) return fail("--severity " + pair + ": expected ID=LEVEL");
-    if (Status s = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)); !s)
-      return option("--severity", s);
-  }
-  for (const std::string& pair : o.timeouts) {
-    const auto eq = pair.find('=');
-    if (eq == std::string::npos) return fail("--timeout " + pair + ": expected NAME=MS");
-    std::int64_t ms = -1;
-    try {
-      std::size_t used = 0;
-      ms = std::stoll(pair.substr(eq + 1), &used);
-      if (used != pair.size() - eq - 1) ms = -1;
-    } catch (const std::exception&) {
-      ms = -1;
-    }
-    if (ms < 0) return fail("--timeout " + pair + ": expected a number of milliseconds");
-    if (Status s = settings.setTimeout(pair.substr(0, eq), ms); !s) return option("--timeout", s);
-  }
-  if (o.servo_ready_mode) settings.servo_ready_mode = o.servo_ready_mode;
-  return {};
-}
+// Where one capture's report goes while it is made: to the writer as it comes (one capture at
+// a time), or, with `live` null, kept whole with its messages for the writer (captures in
+// parallel, written in argument order by presentCapture).
+struct CaptureOutput {
+  cli::ReportWriter* live;
+  std::FILE* messages;  // standard error, or the capture's own buffer
+};
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
                     const RuleSettings& settings, TimestampMode timestamps,
-                    const TimeWindow& time_window, cli::ReportWriter& writer,
-                    cli::CaptureReport& report) {
+                    const TimeWindow& time_window, const cli::ReportWriter& writer,
+                    const CaptureOutput& output, cli::CaptureReport& report) {
   report.path = path;
-  writer.beginCapture(report);
+  if (output.live != nullptr) output.live->beginCapture(report);
   auto opened = CaptureReader::open(path);
   if (!opened) {
     report.error = opened.error().text();
-    fmt::print(stderr, "ncservo: {}\n", *report.error);
-    writer.endCapture(report);
+    fmt::print(output.messages, "ncservo: {}\n", *report.error);
+    if (output.live != nullptr) output.live->endCapture(report);
     return kExitCapture;
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
@@ -569,9 +488,9 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
     if (timelines) timelines->frame(number, time_ns - report.first_time_ns, frame, bytes);
     for (const Finding& f : validator->findings()) {
       report.tally(f);
-      if (writer.keepsFindings()) report.findings.push_back(f);
+      if (output.live == nullptr || writer.keepsFindings()) report.findings.push_back(f);
       if (timelines) timelines->finding(f);
-      writer.finding(report, f);
+      if (output.live != nullptr) output.live->finding(report, f);
     }
   };
   const auto start = [&](const DecoderOptions& layout) {
@@ -594,9 +513,9 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   }
   report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
                                         validator->decoder().axes());
-  warnIfTruncated(reader->path(), report.truncation);
+  warnIfTruncated(reader->path(), report.truncation, output.messages);
   if (report.startup_frames_cut > 0) {
-    fmt::print(stderr, "ncservo: {}: layout {}\n", reader->path(),
+    fmt::print(output.messages, "ncservo: {}: layout {}\n", reader->path(),
                cli::describeStartupCut(report.startup_frames_cut));
   }
   report.timestamps = clock.source();
@@ -604,15 +523,15 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   report.probe_note = clock.note();
   if (!status) {
     report.error = status.error().text() + " (the frames before it were analysed)";
-    fmt::print(stderr, "ncservo: {}\n", *report.error);
+    fmt::print(output.messages, "ncservo: {}\n", *report.error);
   }
   if (writer.locatesFrames()) {
     if (Status located = cli::locateFindings(report); !located) {
-      fmt::print(stderr, "ncservo: {}: frames not located in the file: {}\n", path,
+      fmt::print(output.messages, "ncservo: {}: frames not located in the file: {}\n", path,
                  located.error().text());
     }
   }
-  writer.endCapture(report);
+  if (output.live != nullptr) output.live->endCapture(report);
   switch (writer.verdict(report)) {
     case cli::Verdict::Unreadable:
       return kExitCapture;
@@ -624,6 +543,17 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
       break;
   }
   return kExitOk;
+}
+
+// A capture validated apart (CaptureOutput without `live`) given to the writer as if it had
+// been written as it came: its messages, its findings one by one, its end.
+void presentCapture(cli::ReportWriter& writer, const std::string& messages,
+                    cli::CaptureReport& report) {
+  std::fputs(messages.c_str(), stderr);
+  writer.beginCapture(report);
+  for (const Finding& f : report.findings) writer.finding(report, f);
+  writer.endCapture(report);
+  if (!writer.keepsFindings()) std::vector<Finding>().swap(report.findings);
 }
 
 // INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
@@ -718,12 +648,37 @@ int runValidate(const ValidateArgs& o) {
     return kExitUsage;
   }
   const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
-  std::vector<cli::CaptureReport> reports;
+  const DecoderOptions layout = decoderOptions(*files, o.layout);
+  std::vector<cli::CaptureReport> reports(o.captures.size());
   int rc = kExitOk;
-  for (const std::string& path : o.captures) {
-    reports.emplace_back();
-    rc = combine(rc, validateCapture(path, decoderOptions(*files, o.layout), settings, timestamps,
-                                     *time_window, **writer, reports.back()));
+  const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
+  if (jobs <= 1 || o.captures.size() <= 1) {
+    for (std::size_t i = 0; i < o.captures.size(); ++i) {
+      rc = combine(rc, validateCapture(o.captures[i], layout, settings, timestamps, *time_window,
+                                       **writer, {writer->get(), stderr}, reports[i]));
+    }
+  } else {
+    struct Validated {
+      int rc;
+      std::string messages;
+    };
+    const std::function<Validated(std::size_t)> validate = [&](std::size_t i) {
+      char* buffer = nullptr;
+      std::size_t size = 0;
+      std::FILE* messages = open_memstream(&buffer, &size);
+      const int status = validateCapture(o.captures[i], layout, settings, timestamps, *time_window,
+                                         **writer, {nullptr, messages}, reports[i]);
+      std::fclose(messages);
+      Validated validated{status, std::string(buffer, size)};
+      std::free(buffer);
+      return validated;
+    };
+    const std::function<void(std::size_t, Validated&)> present = [&](std::size_t i,
+                                                                     Validated& validated) {
+      presentCapture(**writer, validated.messages, reports[i]);
+      rc = combine(rc, validated.rc);
+    };
+    cli::runInOrder(o.captures.size(), jobs, validate, present);
   }
   if (Status written = (*writer)->finish(reports); !written) {
     fmt::print(stderr, "ncservo: {}\n", written.error().text());
@@ -1013,8 +968,7 @@ int runSimulate(SimulateArgs& args) {
 
 // ---- The subcommands ----
 
-// What runs a subcommand once its options are parsed.
-using Handler = std::function<int()>;
+using cli::Handler;
 
 Handler decodeCommand(CLI::App& command) {
   auto args = std::make_shared<DecodeArgs>();
@@ -1062,22 +1016,7 @@ Handler validateCommand(CLI::App& command) {
       .add_option("--fail-on", args->fail_on,
                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
-  command.add_option("--disable", args->disable, "rule IDs to skip, comma-separated (repeatable)")
-      ->delimiter(',')
-      ->allow_extra_args(false);
-  command
-      .add_option("--severity", args->severities, "ID=LEVEL: change a rule's severity (repeatable)")
-      ->delimiter(',')
-      ->allow_extra_args(false);
-  command
-      .add_option("--timeout", args->timeouts,
-                  "NAME=MS: change a timeout (docs/rules.md; repeatable)")
-      ->delimiter(',')
-      ->allow_extra_args(false);
-  command
-      .add_option("--servo-ready-mode", args->servo_ready_mode,
-                  "Servo_Ready_Mode of the drives (0 or 1)")
-      ->check(CLI::Range(0, 1));
+  cli::addRuleOptions(command, *args);
   command.add_flag("--no-default-layout", args->layout.no_default_layout,
                    "never infer the layout from the cyclic traffic (docs/layout.md)");
   command.add_option("--eni", args->layout.eni_path,
@@ -1086,6 +1025,11 @@ Handler validateCommand(CLI::App& command) {
   addWindowOptions(command, args->window);
   command.add_flag("--allow-empty", args->allow_empty,
                    "exit 0, not 4, where no servo (or not every configured axis) was decoded");
+  command
+      .add_option("-j,--jobs", args->jobs,
+                  "validate this many captures at once (default: the cores); the output is "
+                  "in argument order, as with 1")
+      ->check(CLI::Range(1u, 1024u));
   return [args] { return runValidate(*args); };
 }
 
@@ -1206,6 +1150,10 @@ const Subcommand kSubcommands[] = {
     {"rules", "list the rules: ID, slug, severity, party, summary", rulesCommand},
     {"fields", "list every decoded field (generated from the field table)", fieldsCommand},
     {"simulate", "write a capture of simulated NC and drives (scenarios, faults)", simulateCommand},
+    {"annotate", "copy a capture with each finding as a packet comment on its frame",
+     cli::annotateCommand},
+    {"monitor", "capture live, report findings as they happen, keep a flight record",
+     cli::monitorCommand},
 };
 
 }  // namespace

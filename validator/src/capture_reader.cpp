@@ -323,11 +323,15 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
     reader->timestamp_digits_ =
         ncservo::timestampDigits(reinterpret_cast<const std::uint8_t*>(ahead.data()), ahead.size());
     reader->pcapng_ = false;  // records are not located in a stream
+    reader->pcapng_format_ =
+        ahead.size() >= 4 &&
+        load32(reinterpret_cast<const std::uint8_t*>(ahead.data()), false) == kSectionHeaderBlock;
     pcap_file = reader->stream_->file();
     if (pcap_file == nullptr) return cannot(std::strerror(errno));
   } else {
     reader->timestamp_digits_ = ncservo::timestampDigits(head, head_size);
     reader->pcapng_ = head_size >= 4 && load32(head, false) == kSectionHeaderBlock;
+    reader->pcapng_format_ = reader->pcapng_;
     reader->source_ = nullptr;  // libpcap closes it with its handle
   }
   char errbuf[PCAP_ERRBUF_SIZE] = {};

@@ -35,42 +35,54 @@ std::string describeTimeWindow(const TimeWindow& window) {
   return out;
 }
 
-Status streamCapture(CaptureReader& reader, FrameClock& clock, LayoutWindow& window,
-                     const CaptureStream& stream, CaptureRun& run) {
-  auto decided = [&] {
-    stream.start(window.options());
-    window.replay(stream.frame, stream.layout_only);
-  };
-  if (!window.learning()) stream.start(window.options());
-  EcatFrame frame;
-  CaptureRecord record;
-  Result<bool> status;
-  while ((status = reader.next(record)) && *status) {
-    if (!run.first_time_ns) run.first_time_ns = record.time_ns;
-    run.records = record.frame;
-    if (record.captured < record.original && run.snapped++ == 0) run.first_snapped = record.frame;
-    const ByteReader bytes(record.data, record.captured);
-    walkPacket(reader.link(), bytes, frame);
-    if (frame.status == WalkStatus::NotEtherCat) continue;
-    const std::int64_t time_ns = clock.time(record.frame, record.time_ns, frame.probe);
-    const bool judged = stream.window.contains(time_ns - *run.first_time_ns);
-    run.in_window += judged ? 1 : 0;
-    if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) continue;
-    if (window.learning()) {
-      window.hold(record.frame, time_ns, reader.link(), bytes, frame, judged);
-      if (!window.learning()) decided();
-      continue;
-    }
-    if (judged) {
-      stream.frame(record.frame, time_ns, frame, bytes);
-    } else if (stream.layout_only) {
-      stream.layout_only(record.frame, time_ns, frame, bytes);
-    }
+RecordStream::RecordStream(FrameClock& clock, LayoutWindow& window, const CaptureStream& stream,
+                           CaptureRun& run)
+    : clock_(clock), window_(window), stream_(stream), run_(run) {
+  if (!window_.learning()) stream_.start(window_.options());
+}
+
+void RecordStream::decided() {
+  stream_.start(window_.options());
+  window_.replay(stream_.frame, stream_.layout_only);
+}
+
+void RecordStream::onRecord(LinkType link, const CaptureRecord& record) {
+  if (!run_.first_time_ns) run_.first_time_ns = record.time_ns;
+  run_.records = record.frame;
+  if (record.captured < record.original && run_.snapped++ == 0) run_.first_snapped = record.frame;
+  const ByteReader bytes(record.data, record.captured);
+  walkPacket(link, bytes, frame_);
+  if (frame_.status == WalkStatus::NotEtherCat) return;
+  const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame_.probe);
+  const bool judged = stream_.window.contains(time_ns - *run_.first_time_ns);
+  run_.in_window += judged ? 1 : 0;
+  if (frame_.status == WalkStatus::NotDatagrams || frame_.status == WalkStatus::BusFault) return;
+  if (window_.learning()) {
+    window_.hold(record.frame, time_ns, link, bytes, frame_, judged);
+    if (!window_.learning()) decided();
+    return;
   }
-  if (window.learning()) {
-    window.finish();
+  if (judged) {
+    stream_.frame(record.frame, time_ns, frame_, bytes);
+  } else if (stream_.layout_only) {
+    stream_.layout_only(record.frame, time_ns, frame_, bytes);
+  }
+}
+
+void RecordStream::finish() {
+  if (window_.learning()) {
+    window_.finish();
     decided();
   }
+}
+
+Status streamCapture(CaptureReader& reader, FrameClock& clock, LayoutWindow& window,
+                     const CaptureStream& stream, CaptureRun& run) {
+  RecordStream records(clock, window, stream, run);
+  CaptureRecord record;
+  Result<bool> status;
+  while ((status = reader.next(record)) && *status) records.onRecord(reader.link(), record);
+  records.finish();
   if (!status) return fail(status.error());
   return {};
 }

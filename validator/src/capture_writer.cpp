@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <pcap/pcap.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <vector>
@@ -15,6 +16,8 @@ namespace {
 
 constexpr int kSnapLength = 65535;
 constexpr std::size_t kWriteBuffer = 1 << 20;
+constexpr std::uint16_t kOptionComment = 1;  // opt_comment (pcapng §3.5)
+constexpr std::size_t kMaxOptionLength = 0xFFFF;
 
 Error writeError(const std::string& path, std::string message) {
   return Error{path, 0, 0, {}, std::move(message)};
@@ -41,6 +44,16 @@ class PcapWriter final : public CaptureWriter {
     header.ts.tv_usec = static_cast<suseconds_t>(time_ns % 1'000'000'000 / 1000);
     header.caplen = header.len = static_cast<bpf_u_int32>(size);
     pcap_dump(reinterpret_cast<u_char*>(dumper_), &header, data);
+    return std::ferror(file_) == 0;
+  }
+  bool write(const PacketRecord& record) override {
+    if (dumper_ == nullptr) return false;
+    pcap_pkthdr header{};
+    header.ts.tv_sec = static_cast<time_t>(record.time_ns / 1'000'000'000);
+    header.ts.tv_usec = static_cast<suseconds_t>(record.time_ns % 1'000'000'000 / 1000);
+    header.caplen = static_cast<bpf_u_int32>(record.captured);
+    header.len = static_cast<bpf_u_int32>(record.original);
+    pcap_dump(reinterpret_cast<u_char*>(dumper_), &header, record.data);
     return std::ferror(file_) == 0;
   }
   Status close() override {
@@ -74,11 +87,13 @@ class PcapWriter final : public CaptureWriter {
   Error error_;
 };
 
-// pcapng: a Section Header Block, one Interface Description Block with if_tsresol = 9
-// (nanoseconds), then one Enhanced Packet Block per frame (pcapng specification, §4).
+// pcapng: a Section Header Block, one Interface Description Block with if_tsresol (10^-6 or
+// 10^-9 s), then one Enhanced Packet Block per frame (pcapng specification, §4).
 class PcapngWriter final : public CaptureWriter {
  public:
-  PcapngWriter(std::string path, std::FILE* file) : path_(std::move(path)), file_(file) {
+  PcapngWriter(std::string path, std::FILE* file, const PcapngInterface& interface)
+      : path_(std::move(path)), file_(file) {
+    for (int i = 0; i < interface.timestamp_digits; ++i) ticks_per_second_ *= 10;
     block_.reserve(2048);
     begin(0x0A0D0D0A);  // SHB
     put32(0x1A2B3C4D);  // byte-order magic
@@ -88,12 +103,12 @@ class PcapngWriter final : public CaptureWriter {
     put32(0xFFFFFFFF);
     finish();
     begin(0x00000001);  // IDB
-    put16(ecat::kDltEthernet);
+    put16(static_cast<std::uint16_t>(interface.dlt));
     put16(0);
     put32(kSnapLength);
     put16(9);  // if_tsresol
     put16(1);
-    block_.push_back(9);  // 10^-9 s
+    block_.push_back(static_cast<std::uint8_t>(interface.timestamp_digits));  // 10^-digits s
     block_.resize(block_.size() + 3, 0);
     put16(0);  // opt_endofopt
     put16(0);
@@ -101,16 +116,30 @@ class PcapngWriter final : public CaptureWriter {
   }
   ~PcapngWriter() override { (void)close(); }
   bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
+    return write(PacketRecord{time_ns, data, size, size, nullptr});
+  }
+  bool write(const PacketRecord& record) override {
     if (file_ == nullptr) return false;
-    const auto ts = static_cast<std::uint64_t>(time_ns);
+    const auto ts = static_cast<std::uint64_t>(record.time_ns) /
+                    (std::uint64_t{1'000'000'000} / ticks_per_second_);
     begin(0x00000006);  // EPB
     put32(0);           // interface 0
     put32(static_cast<std::uint32_t>(ts >> 32));
     put32(static_cast<std::uint32_t>(ts));
-    put32(static_cast<std::uint32_t>(size));
-    put32(static_cast<std::uint32_t>(size));
-    block_.insert(block_.end(), data, data + size);
-    block_.resize((block_.size() + 3) & ~std::size_t{3}, 0);
+    put32(static_cast<std::uint32_t>(record.captured));
+    put32(static_cast<std::uint32_t>(record.original));
+    block_.insert(block_.end(), record.data, record.data + record.captured);
+    pad();
+    if (record.comments != nullptr && !record.comments->empty()) {
+      for (const std::string& comment : *record.comments) {
+        const std::size_t length = std::min<std::size_t>(comment.size(), kMaxOptionLength);
+        put16(kOptionComment);
+        put16(static_cast<std::uint16_t>(length));
+        block_.insert(block_.end(), comment.begin(), comment.begin() + length);
+        pad();
+      }
+      put32(0);  // opt_endofopt
+    }
     finish();
     return !failed_;
   }
@@ -132,6 +161,7 @@ class PcapngWriter final : public CaptureWriter {
     put16(static_cast<std::uint16_t>(v));
     put16(static_cast<std::uint16_t>(v >> 16));
   }
+  void pad() { block_.resize((block_.size() + 3) & ~std::size_t{3}, 0); }
   void begin(std::uint32_t type) {
     block_.clear();
     put32(type);
@@ -152,6 +182,7 @@ class PcapngWriter final : public CaptureWriter {
   std::string path_;
   std::FILE* file_;
   std::vector<std::uint8_t> block_;
+  std::uint64_t ticks_per_second_ = 1;
   bool failed_ = false;
   Error error_;
 };
@@ -175,7 +206,9 @@ Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& pa
     file = *compressed;
   }
   std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
-  if (format == CaptureFormat::Pcapng) return std::make_unique<PcapngWriter>(path, file);
+  if (format == CaptureFormat::Pcapng) {
+    return std::make_unique<PcapngWriter>(path, file, PcapngInterface{});
+  }
   pcap_t* dead =
       pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kSnapLength, PCAP_TSTAMP_PRECISION_MICRO);
   pcap_dumper_t* dumper = dead != nullptr ? pcap_dump_fopen(dead, file) : nullptr;
@@ -188,6 +221,14 @@ Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& pa
     return fail(std::move(error));
   }
   return std::make_unique<PcapWriter>(path, file, dead, dumper);
+}
+
+Result<std::unique_ptr<CaptureWriter>> CaptureWriter::openPcapng(const std::string& path,
+                                                                 const PcapngInterface& interface) {
+  const Result<std::FILE*> opened = openFile(path);
+  if (!opened) return fail(opened.error());
+  std::setvbuf(*opened, nullptr, _IOFBF, kWriteBuffer);
+  return std::make_unique<PcapngWriter>(path, *opened, interface);
 }
 
 }  // namespace ncservo

@@ -61,6 +61,8 @@ class CaptureReader {
   Compression compression() const { return compression_; }
   const std::string& path() const { return path_; }
   int timestampDigits() const { return timestamp_digits_; }
+  // A pcapng (of any compression), not a pcap.
+  bool pcapng() const { return pcapng_format_; }
 
  private:
   CaptureReader() = default;
@@ -78,7 +80,8 @@ class CaptureReader {
   Compression compression_ = Compression::None;
   std::uint64_t frames_ = 0;
   int timestamp_digits_ = 6;
-  bool pcapng_ = false;
+  bool pcapng_ = false;           // a plain pcapng file, whose records are located
+  bool pcapng_format_ = false;    // a pcapng, plain or not
   std::uint64_t record_end_ = 0;  // in the file, of the last record read
 };
 

@@ -51,6 +51,27 @@ struct CaptureRun {
   std::uint64_t first_snapped = 0;            // the first of them (0: none)
 };
 
+// Records given one at a time, as a live capture delivers them: each walked, timed, held in the
+// learning window or delivered. `streamCapture` feeds it a capture file.
+class RecordStream {
+ public:
+  // `start` is called here already when the window is not learning.
+  RecordStream(FrameClock& clock, LayoutWindow& window, const CaptureStream& stream,
+               CaptureRun& run);
+  void onRecord(LinkType link, const CaptureRecord& record);
+  // The capture ended: a window still learning decides and delivers what it held; `start` is
+  // called even for a capture with no frame.
+  void finish();
+
+ private:
+  void decided();
+  FrameClock& clock_;
+  LayoutWindow& window_;
+  const CaptureStream& stream_;
+  CaptureRun& run_;
+  EcatFrame frame_;
+};
+
 // Reads to the end, or to the reader's error (everything before it is delivered); `start` is
 // called even for a capture with no frame.
 Status streamCapture(CaptureReader& reader, FrameClock& clock, LayoutWindow& window,

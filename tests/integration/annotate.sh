@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# annotate.sh SRC BUILD: `ncservo annotate` (issue 18) on the bundled, simulated and real
+# captures. Stock tshark, without the plugin, shows exactly one comment per finding on its frame,
+# each starting with the rule ID; the frames, their timestamps and lengths are the input's; a
+# pcapng's existing comments and other blocks are kept; --snippets keeps only frames near a
+# finding; standard input and writing over the input are refused.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+
+"$NCSERVO" simulate --scenario commissioning --axes 3 --fault SE-003@1.2:1 -o "$WORK/sim.pcapng" 2>/dev/null
+"$NCSERVO" simulate --scenario faults --probe esl -o "$WORK/sim-esl.pcap.zst" 2>/dev/null
+inputs=("$SRC/captures/faults-4axis.pcap" "$SRC/captures/commissioning-4axis.pcap"
+        "$SRC/captures/sim-faults-4axis.pcap" "$SRC/captures/sim-io-interleaved.pcapng"
+        "$WORK/sim.pcapng" "$WORK/sim-esl.pcap.zst")
+real="$SRC/../shared/captures/real"
+for capture in "$real"/*.pcapng "$real"/*.cap; do
+  [ -f "$capture" ] && inputs+=("$capture")
+done
+
+# frames CAPTURE OUT: number, epoch time, lengths and interface (a pcap's is 0) of every frame;
+# comments CAPTURE OUT: the frames with comments as tshark's JSON. Stock tshark, no plugin.
+frames() {
+  "$TSHARK" none -r "$1" -T fields -e frame.number -e frame.time_epoch -e frame.len \
+    -e frame.cap_len -e frame.interface_id 2>/dev/null |
+    awk -F'\t' 'BEGIN { OFS = "\t" } { if ($5 == "") $5 = 0; print }' >"$2" || fail "tshark on $1"
+}
+comments() {
+  "$TSHARK" none -r "$1" -T json -e frame.number -e frame.comment -Y frame.comment \
+    >"$2" 2>/dev/null || fail "tshark comments of $1"
+}
+
+# check_comments COMMENTS.json FINDINGS.jsonl TIMES: each finding's frame has its comment, TIMES
+# times over (a capture annotated twice), and no frame has another.
+check_comments() {
+  python3 - "$@" <<'PY'
+import collections, json, sys
+shown = collections.defaultdict(list)
+for packet in json.load(open(sys.argv[1])):
+    layers = packet["_source"]["layers"]
+    shown[int(layers["frame.number"][0])] += layers["frame.comment"]
+expected = collections.defaultdict(list)
+for line in open(sys.argv[2]):
+    f = json.loads(line)
+    if "rule" in f:
+        expected[f["frame"]].append(f["rule"])
+times = int(sys.argv[3])
+assert set(shown) == set(expected), f"frames with comments {sorted(shown)[:9]} != findings' {sorted(expected)[:9]}"
+for frame, rules in expected.items():
+    got = sorted(c.split(" ")[0] for c in shown[frame])
+    assert got == sorted(rules * times), f"frame {frame}: comments {shown[frame]} for findings {rules}"
+print(sum(len(v) for v in expected.values()), "findings,", len(expected), "frames")
+PY
+}
+
+for input in "${inputs[@]}"; do
+  name=$(basename "$input")
+  "$NCSERVO" validate --format jsonl --fail-on never "$input" >"$WORK/findings.jsonl" 2>/dev/null ||
+    [ $? = 4 ] || fail "$name: validate"
+  "$NCSERVO" annotate "$input" "$WORK/out.pcapng" 2>"$WORK/err" || fail "$name: exit $?: $(cat "$WORK/err")"
+  comments "$WORK/out.pcapng" "$WORK/comments.json"
+  check_comments "$WORK/comments.json" "$WORK/findings.jsonl" 1 || fail "$name: comments"
+  frames "$input" "$WORK/in.frames"
+  frames "$WORK/out.pcapng" "$WORK/out.frames"
+  cmp -s "$WORK/in.frames" "$WORK/out.frames" || fail "$name: frames differ: $(diff "$WORK/in.frames" "$WORK/out.frames" | head -4)"
+  # Annotated again: the first comments are kept, the new ones added.
+  "$NCSERVO" annotate "$WORK/out.pcapng" "$WORK/twice.pcapng" 2>/dev/null || fail "$name: twice"
+  comments "$WORK/twice.pcapng" "$WORK/twice.json"
+  check_comments "$WORK/twice.json" "$WORK/findings.jsonl" 2 || fail "$name: comments kept"
+  echo "ok $name"
+done
+
+# A pcapng's other blocks are copied as stored: its interfaces and their options.
+multi="$real/twincat-cyclic-multi-idb.pcapng"
+if [ -f "$multi" ]; then
+  "$NCSERVO" annotate "$multi" "$WORK/multi.pcapng" 2>/dev/null || fail "multi-idb"
+  capinfos -I "$multi" | tail -n +2 >"$WORK/in.idb" 2>/dev/null || true
+  capinfos -I "$WORK/multi.pcapng" | tail -n +2 >"$WORK/out.idb" 2>/dev/null || true
+  cmp -s "$WORK/in.idb" "$WORK/out.idb" || fail "multi-idb: interfaces differ"
+fi
+
+# --snippets: only frames within S seconds of a finding, the findings' frames among them.
+"$NCSERVO" annotate --snippets 0.05 "$SRC/captures/faults-4axis.pcap" "$WORK/snip.pcapng" 2>/dev/null ||
+  fail "snippets: exit $?"
+"$NCSERVO" validate --format jsonl --fail-on never "$SRC/captures/faults-4axis.pcap" >"$WORK/f.jsonl"
+"$TSHARK" none -r "$WORK/snip.pcapng" -T fields -e frame.time_relative -e frame.comment \
+  >"$WORK/snip.txt" 2>/dev/null
+"$TSHARK" none -r "$SRC/captures/faults-4axis.pcap" -T fields -e frame.time_epoch >"$WORK/all.txt" 2>/dev/null
+python3 - "$WORK/f.jsonl" "$WORK/snip.pcapng" "$WORK/all.txt" "$WORK/snip.txt" <<'PY' || fail "snippets"
+import json, sys, subprocess
+findings = [json.loads(l) for l in open(sys.argv[1])]
+findings = [f for f in findings if "rule" in f]
+epochs = [float(l) for l in open(sys.argv[3])]
+first = epochs[0]
+near = [t for t in epochs if any(abs(t - first - f["time"]) <= 0.05 + 1e-6 for f in findings)]
+kept = open(sys.argv[4]).read().splitlines()
+assert len(kept) == len(near), f"{len(kept)} frames kept, {len(near)} within 0.05 s of a finding"
+assert sum(1 for l in kept if "\t" in l and l.split("\t")[1]) == len({f["frame"] for f in findings})
+PY
+echo "ok --snippets"
+
+# Refused: standard input (two passes), and the input as output.
+rc=0; "$NCSERVO" annotate - "$WORK/x.pcapng" <"$SRC/captures/faults-4axis.pcap" 2>"$WORK/err" || rc=$?
+[ "$rc" = 2 ] && grep -q "read twice" "$WORK/err" || fail "stdin: exit $rc: $(cat "$WORK/err")"
+cp "$SRC/captures/faults-4axis.pcap" "$WORK/same.pcap"
+rc=0; "$NCSERVO" annotate "$WORK/same.pcap" "$WORK/./same.pcap" 2>"$WORK/err" || rc=$?
+[ "$rc" = 2 ] && grep -q "refusing to write over an input" "$WORK/err" || fail "input as output: exit $rc"
+cmp -s "$WORK/same.pcap" "$SRC/captures/faults-4axis.pcap" || fail "the input was written"
+echo PASS

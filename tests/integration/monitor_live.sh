@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# monitor_live.sh SRC BUILD: `ncservo monitor` (issue 18) on one end of a veth pair while Debian's
+# tcpreplay replays a simulated capture with faults into the other end, in a network namespace of
+# its own. The live findings are the file's (same rule and axis); Ctrl-C ends with the report and
+# the exit status; the flight recorder's pcapngs hold a comment for each recorded finding and, with
+# a window that spans the run, validate to the same findings. Needs root (veth, namespaces) and
+# tcpreplay: otherwise exit 77 with the reason. A replay that stalled (the machine too busy for
+# tcpreplay to keep the capture's timing: gaps the capture does not have) makes the timing rules
+# see what was not there; the run is then repeated, and skipped (77, saying so) if it keeps
+# stalling.
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+
+[ "$(id -u)" = 0 ] || { echo "SKIPPED: needs root (veth pair, network namespace)"; exit 77; }
+command -v tcpreplay >/dev/null || { echo "SKIPPED: tcpreplay not installed (.ci/setup)"; exit 77; }
+command -v ip >/dev/null || { echo "SKIPPED: iproute2 not installed (.ci/setup)"; exit 77; }
+
+ns=ncservo-test-$$
+host=ncsm$$a peer=ncsm$$b
+cleanup() { ip netns del "$ns" 2>/dev/null || true; ip link del "$host" 2>/dev/null || true; rm -rf "$WORK"; }
+trap cleanup EXIT
+ip netns add "$ns"
+ip link add "$host" type veth peer name "$peer" netns "$ns"
+ip link set "$host" up
+ip -n "$ns" link set "$peer" up
+
+cd "$WORK"
+# 4 ms cycles: a replay a few milliseconds late is not a lost cycle.
+"$NCSERVO" simulate --scenario faults --cycle-us 4000 -o faults.pcap 2>/dev/null
+"$NCSERVO" validate --format jsonl --fail-on never faults.pcap >file.jsonl
+
+# pairs FINDINGS.jsonl: the (rule, axis) pairs, one a line.
+pairs() {
+  python3 -c 'import json, sys
+print("\n".join(sorted({"%s %s" % (j["rule"], j["axis"]) for j in map(json.loads, open(sys.argv[1])) if "rule" in j})))' "$1"
+}
+pairs file.jsonl >file.pairs
+
+# max_gap CAPTURE: the longest gap between two frames, in ms.
+max_gap() {
+  tshark -r "$1" -T fields -e frame.time_delta 2>/dev/null | sort -g | tail -1 |
+    awk '{ printf "%d", $1 * 1000 }'
+}
+file_gap=$(max_gap faults.pcap)
+
+# replay WINDOW: monitor with the recorder (window WINDOW s), the capture replayed, then Ctrl-C.
+replay() {
+  rm -rf rec && mkdir rec
+  "$NCSERVO" monitor -i "$host" --format jsonl --record rec --record-window "$1" \
+    >live.jsonl 2>live.err &
+  local pid=$!
+  sleep 1
+  ip netns exec "$ns" chrt -f 50 tcpreplay -q --preload-pcap -i "$peer" faults.pcap >/dev/null 2>&1 ||
+    ip netns exec "$ns" tcpreplay -q -i "$peer" faults.pcap >/dev/null
+  sleep 0.5
+  kill -INT "$pid"
+  rc=0
+  wait "$pid" || rc=$?
+}
+
+stalled=""
+for attempt in 1 2 3; do
+  replay 10
+  [ "$rc" = 1 ] || fail "monitor: exit $rc (findings of errors: 1): $(cat live.err)"
+  grep -q "frames captured; dropped: 0 by the kernel" live.err || fail "no drop count: $(cat live.err)"
+  recordings=(rec/*.pcapng)
+  [ "${#recordings[@]}" = 1 ] || fail "a 10 s window over a 4 s run: ${#recordings[@]} recordings"
+  gap=$(max_gap "${recordings[0]}")
+  pairs live.jsonl >live.pairs
+  if cmp -s file.pairs live.pairs; then stalled=""; break; fi
+  if [ "$gap" -le $((file_gap + 8)) ]; then
+    fail "live findings differ from the file's with no stall (gap $gap ms): $(diff file.pairs live.pairs)"
+  fi
+  stalled="tcpreplay stalled $gap ms (the capture's longest gap is $file_gap ms)"
+  echo "attempt $attempt: $stalled; findings differ: $(diff file.pairs live.pairs | tr '\n' ' ')"
+done
+[ -z "$stalled" ] || { echo "SKIPPED: the machine is too busy to replay in time: $stalled"; exit 77; }
+echo "ok live findings = the file's ($(wc -l <file.pairs) rule/axis pairs)"
+
+# The recording spans the run: it validates to the same findings.
+"$NCSERVO" validate --format jsonl --fail-on never "${recordings[0]}" >rec.jsonl
+pairs rec.jsonl >rec.pairs
+cmp -s file.pairs rec.pairs || fail "the recording's findings differ: $(diff file.pairs rec.pairs)"
+echo "ok the recording validates to the same findings"
+
+# Short windows: a recording per group of findings, each recorded finding a comment on its frame.
+replay 0.3
+[ "$rc" = 1 ] || fail "monitor (short windows): exit $rc"
+python3 - live.jsonl rec <<'PY' || fail "short windows"
+import glob, json, subprocess, sys
+severity = {"info": 0, "warning": 1, "error": 2}
+live = [j for j in map(json.loads, open(sys.argv[1])) if "rule" in j and severity[j["severity"]] >= 1]
+comments = []
+files = sorted(glob.glob(sys.argv[2] + "/*.pcapng"))
+assert len(files) > 1, f"{len(files)} recordings"
+for f in files:
+    out = subprocess.run(["tshark", "-r", f, "-T", "fields", "-e", "frame.comment", "-Y", "frame.comment",
+                          "-E", "aggregator=\x1f"], capture_output=True, text=True).stdout
+    comments += [c.split(" ")[0] for line in out.splitlines() for c in line.split("\x1f")]
+assert sorted(comments) == sorted(j["rule"] for j in live), f"{len(comments)} comments, {len(live)} findings"
+print(f"ok {len(files)} recordings hold the {len(live)} findings' comments")
+PY
+
+# Permission and interface errors name what is missing.
+rc=0; "$NCSERVO" monitor -i no-such-if0 2>err || rc=$?
+[ "$rc" = 3 ] && grep -q "no such interface" err || fail "bad interface: exit $rc: $(cat err)"
+rc=0; setpriv --reuid=65534 --regid=65534 --clear-groups "$NCSERVO" monitor -i "$host" 2>err || rc=$?
+[ "$rc" = 3 ] && grep -q CAP_NET_RAW err || fail "no permission: exit $rc: $(cat err)"
+echo PASS

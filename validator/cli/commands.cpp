@@ -1,0 +1,134 @@
+#include "commands.hpp"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+
+namespace ncservo::cli {
+
+void addTimestampsOption(CLI::App& command, std::string& timestamps) {
+  command
+      .add_option("--timestamps", timestamps,
+                  "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
+                  "has one)")
+      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+}
+
+void addLayoutOptions(CLI::App& command, LayoutArgs& layout) {
+  command.add_option("--config", layout.config_path, "TOML configuration file");
+  command.add_flag("--no-default-layout", layout.no_default_layout,
+                   "never infer the layout from the cyclic traffic (docs/layout.md)");
+  command.add_option("--eni", layout.eni_path,
+                     "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
+}
+
+Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args) {
+  LayoutFiles files;
+  if (!args.config_path.empty()) {
+    Result<Config> loaded = loadConfig(args.config_path);
+    if (!loaded) return fail(loaded.error().text());
+    files.config = std::move(*loaded);
+  }
+  if (!args.eni_path.empty()) {
+    Result<EniLayout> eni = loadEni(args.eni_path);
+    if (!eni) return fail(eni.error().text());
+    if (eni->axes.empty()) {
+      return fail(fmt::format(
+          "{}: no servo of this protocol (10-byte outputs, 40-byte inputs) among its {} slaves",
+          args.eni_path, eni->slaves));
+    }
+    files.eni = std::move(*eni);
+  }
+  return files;
+}
+
+DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args) {
+  return layoutOptions(files.config ? &*files.config : nullptr,
+                       files.eni ? &files.eni->axes : nullptr, !args.no_default_layout);
+}
+
+void addRuleOptions(CLI::App& command, RuleArgs& rules) {
+  command.add_option("--disable", rules.disable, "rule IDs to skip, comma-separated (repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
+      .add_option("--severity", rules.severities, "ID=LEVEL: change a rule's severity (repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
+      .add_option("--timeout", rules.timeouts,
+                  "NAME=MS: change a timeout (docs/rules.md; repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
+      .add_option("--servo-ready-mode", rules.servo_ready_mode,
+                  "Servo_Ready_Mode of the drives (0 or 1)")
+      ->check(CLI::Range(0, 1));
+}
+
+Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
+                     RuleSettings& settings) {
+  // An error of an option names the option.
+  auto option = [](const char* name, const Status& status) {
+    return fail(fmt::format("{}: {}", name, status.error().message));
+  };
+  if (config) {
+    if (Status s = applyConfig(*config, settings); !s) return s;
+  }
+  for (const std::string& id : o.disable) {
+    if (Status s = settings.disable(id); !s) return option("--disable", s);
+  }
+  for (const std::string& pair : o.severities) {
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos) return fail("--severity " + pair + ": expected ID=LEVEL");
+    if (Status s = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)); !s)
+      return option("--severity", s);
+  }
+  for (const std::string& pair : o.timeouts) {
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos) return fail("--timeout " + pair + ": expected NAME=MS");
+    std::int64_t ms = -1;
+    try {
+      std::size_t used = 0;
+      ms = std::stoll(pair.substr(eq + 1), &used);
+      if (used != pair.size() - eq - 1) ms = -1;
+    } catch (const std::exception&) {
+      ms = -1;
+    }
+    if (ms < 0) return fail("--timeout " + pair + ": expected a number of milliseconds");
+    if (Status s = settings.setTimeout(pair.substr(0, eq), ms); !s) return option("--timeout", s);
+  }
+  if (o.servo_ready_mode) settings.servo_ready_mode = o.servo_ready_mode;
+  return {};
+}
+
+Status refuseInputAsOutput(const std::string& option, const std::string& output,
+                           const std::vector<std::string>& captures) {
+  for (const std::string& capture : captures) {
+    std::error_code ec;
+    if (capture != "-" && std::filesystem::equivalent(output, capture, ec)) {
+      return fail(fmt::format("{} {} is the capture {}: refusing to write over an input", option,
+                              output, capture));
+    }
+  }
+  return {};
+}
+
+// "SE-001 illegal-enable-edge axis X: what was seen", and where the condition began when that
+// is an earlier frame.
+std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes) {
+  std::string where = "bus";
+  if (finding.axis) {
+    where = fmt::format("axis axis{}", *finding.axis);
+    for (const AxisInfo& axis : axes) {
+      if (axis.index == *finding.axis) where = "axis " + axis.name;
+    }
+  }
+  const RuleDef& rule = ruleDef(finding.rule);
+  return fmt::format("{} {} {}: {}{}", rule.code, rule.slug, where, finding.message,
+                     finding.since.frame != finding.at.frame && finding.since.frame != 0
+                         ? fmt::format(" (since frame {})", finding.since.frame)
+                         : "");
+}
+
+}  // namespace ncservo::cli

@@ -1,0 +1,76 @@
+// What the subcommands share beyond main.cpp: the layout files, the rule settings from the
+// command line, the input-as-output check, and the setups of the subcommands kept in files of
+// their own (annotate.cpp, monitor.cpp).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/config.hpp"
+#include "ncservo/decoder.hpp"
+#include "ncservo/eni.hpp"
+#include "ncservo/error.hpp"
+#include "ncservo/finding.hpp"
+#include "ncservo/rules.hpp"
+
+namespace ncservo::cli {
+
+// INTERFACES.md's exit statuses.
+enum ExitCode {
+  kExitOk = 0,
+  kExitFindings = 1,
+  kExitUsage = 2,
+  kExitCapture = 3,
+  kExitNoServo = 4
+};
+
+// What runs a subcommand once its options are parsed.
+using Handler = std::function<int()>;
+
+// --timestamps (PROTOCOL.md §8: a probe's clock or the capturing PC's).
+void addTimestampsOption(CLI::App& command, std::string& timestamps);
+
+// The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
+struct LayoutArgs {
+  std::string config_path;
+  std::string eni_path;
+  bool no_default_layout = false;
+};
+struct LayoutFiles {
+  std::optional<Config> config;
+  std::optional<EniLayout> eni;
+};
+// --config, --eni and --no-default-layout.
+void addLayoutOptions(CLI::App& command, LayoutArgs& layout);
+Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args);
+DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args);
+
+// The rule settings of the command line (INTERFACES.md `validate`).
+struct RuleArgs {
+  std::vector<std::string> disable;
+  std::vector<std::string> severities;
+  std::vector<std::string> timeouts;
+  std::optional<int> servo_ready_mode;
+};
+// --disable, --severity, --timeout and --servo-ready-mode.
+void addRuleOptions(CLI::App& command, RuleArgs& rules);
+// The settings from the rules' defaults, the config file, then the command line.
+Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
+                     RuleSettings& settings);
+
+// INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
+// checked before anything is opened for writing.
+Status refuseInputAsOutput(const std::string& option, const std::string& output,
+                           const std::vector<std::string>& captures);
+
+// A finding as a packet comment (annotate, the flight recorder): "SE-001 illegal-enable-edge
+// axis X: what was seen", and where the condition began when that is an earlier frame.
+std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes);
+
+Handler annotateCommand(CLI::App& command);
+Handler monitorCommand(CLI::App& command);
+
+}  // namespace ncservo::cli

@@ -1,0 +1,505 @@
+// `ncservo monitor -i IFACE` (INTERFACES.md): a live capture through libpcap, validated as the
+// frames arrive; findings printed as they happen, a status line per axis on a terminal, the
+// usual report and exit status at the end (--duration, Ctrl-C), and a flight recorder that
+// writes an annotated pcapng of the seconds around each finding.
+#include <fmt/format.h>
+#include <pcap/pcap.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <ctime>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "ncservo/capture_annotation.hpp"
+#include "ncservo/capture_reader.hpp"
+#include "ncservo/capture_stream.hpp"
+#include "ncservo/capture_writer.hpp"
+#include "ncservo/coverage.hpp"
+#include "ncservo/drive_state.hpp"
+#include "ncservo/ethercat.hpp"
+#include "ncservo/frame_clock.hpp"
+#include "ncservo/layout_window.hpp"
+#include "ncservo/validator.hpp"
+#include "report.hpp"
+
+namespace ncservo::cli {
+namespace {
+
+// PROTOCOL.md §8: EtherCAT in Ethernet (EtherType 0x88A4) or in UDP to port 34980, also behind
+// VLAN tags.
+constexpr const char* kCaptureFilter =
+    "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";
+constexpr int kSnapLength = 262144;
+constexpr int kKernelBuffer = 64 << 20;  // bytes: seconds of a busy bus while we are descheduled
+constexpr int kReadTimeoutMs = 100;      // so the status, --duration and Ctrl-C are seen
+constexpr auto kStatusPeriod = std::chrono::milliseconds(250);
+constexpr std::size_t kRecorderMemory = 256u << 20;  // bytes of frames the recorder keeps at most
+
+struct MonitorArgs : RuleArgs {
+  std::string interface;
+  LayoutArgs layout;
+  std::string format = "text";
+  std::string fail_on = "error";
+  std::string timestamps = "auto";
+  std::optional<double> duration_s;
+  std::string record_dir;
+  double record_window_s = 5;
+  std::string record_severity = "warning";
+  double record_limit_mb = 1024;
+};
+
+// ---- The live capture ----
+
+struct PcapCloser {
+  void operator()(pcap_t* handle) const { pcap_close(handle); }
+};
+using LiveHandle = std::unique_ptr<pcap_t, PcapCloser>;
+
+// The interface opened for EtherCAT (immediate mode, a large buffer, the capture filter); an
+// error says what to do.
+Result<LiveHandle> openLive(const std::string& interface) {
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  LiveHandle handle(pcap_create(interface.c_str(), errbuf));
+  if (!handle) return fail(fmt::format("{}: cannot capture: {}", interface, errbuf));
+  pcap_set_snaplen(handle.get(), kSnapLength);
+  pcap_set_promisc(handle.get(), 1);
+  pcap_set_immediate_mode(handle.get(), 1);
+  pcap_set_buffer_size(handle.get(), kKernelBuffer);
+  pcap_set_timeout(handle.get(), kReadTimeoutMs);
+  pcap_set_tstamp_precision(handle.get(), PCAP_TSTAMP_PRECISION_NANO);
+  const int activated = pcap_activate(handle.get());
+  if (activated == PCAP_ERROR_PERM_DENIED || activated == PCAP_ERROR_PROMISC_PERM_DENIED) {
+    return fail(fmt::format(
+        "{}: no permission to capture: it needs CAP_NET_RAW (run as root, or give the program "
+        "the capability: sudo setcap cap_net_raw,cap_net_admin=eip $(command -v ncservo))",
+        interface));
+  }
+  if (activated == PCAP_ERROR_NO_SUCH_DEVICE) {
+    return fail(fmt::format("{}: no such interface (ip link lists them)", interface));
+  }
+  if (activated < 0) {
+    return fail(fmt::format("{}: cannot capture: {}", interface, pcap_geterr(handle.get())));
+  }
+  if (activated > 0) {
+    fmt::print(stderr, "ncservo monitor: {}: {}\n", interface, pcap_statustostr(activated));
+  }
+  if (linkTypeFromDlt(pcap_datalink(handle.get())) == LinkType::Unsupported) {
+    return fail(fmt::format("{}: link type {} is neither Ethernet nor Linux cooked", interface,
+                            pcap_datalink(handle.get())));
+  }
+  bpf_program program{};
+  if (pcap_compile(handle.get(), &program, kCaptureFilter, 1, PCAP_NETMASK_UNKNOWN) != 0 ||
+      pcap_setfilter(handle.get(), &program) != 0) {
+    fmt::print(stderr, "ncservo monitor: {}: capture filter not set ({}): every frame is read\n",
+               interface, pcap_geterr(handle.get()));
+  }
+  pcap_freecode(&program);
+  return handle;
+}
+
+// Ctrl-C and SIGTERM end the capture; the report is then written as usual.
+std::atomic<pcap_t*> g_live{nullptr};
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void stopMonitor(int) {
+  g_stop = 1;
+  if (pcap_t* live = g_live.load()) pcap_breakloop(live);
+}
+
+// ---- The flight recorder ----
+
+// UTC as a file name part: 20240501T120000.123456Z.
+std::string fileTime(std::int64_t time_ns) {
+  const std::time_t seconds = static_cast<std::time_t>(time_ns / 1'000'000'000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y%m%dT%H%M%S", &utc);
+  return fmt::format("{}.{:06}Z", text, time_ns % 1'000'000'000 / 1000);
+}
+
+// The last `window` of frames in memory (bounded by time and by kRecorderMemory) and, for each
+// finding it is given, an annotated pcapng of ±window around it; windows that overlap are one
+// recording, named by the time and rule of its first finding. --record-limit bounds the bytes
+// of recordings on disk: the oldest of this run are removed first.
+class FlightRecorder {
+ public:
+  FlightRecorder(std::string dir, std::int64_t window_ns, std::uint64_t limit_bytes, int dlt,
+                 std::function<void(const std::string&)> say)
+      : dir_(std::move(dir)),
+        window_ns_(window_ns),
+        limit_bytes_(limit_bytes),
+        dlt_(dlt),
+        say_(std::move(say)) {}
+
+  // Every captured record, in order. `settled`: the layout is known, so no finding can still
+  // come for a frame older than the window (the learning window delivers frames late).
+  void onRecord(const CaptureRecord& record, bool settled) {
+    frames_.push_back({record.frame, record.time_ns, record.original,
+                       std::vector<std::uint8_t>(record.data, record.data + record.captured)});
+    bytes_ += record.captured;
+    if (pending_ && record.time_ns > pending_->end_ns) flush();
+    if (pending_ && bytes_ > kRecorderMemory) flush();  // a finding storm: write what is kept
+    while (!frames_.empty() && (bytes_ > kRecorderMemory ||
+                                (settled && frames_.front().time_ns < record.time_ns - window_ns_ &&
+                                 (!pending_ || frames_.front().time_ns < pending_->start_ns)))) {
+      bytes_ -= frames_.front().data.size();
+      frames_.pop_front();
+    }
+  }
+
+  void onFinding(const Finding& finding, const std::string& comment) {
+    // The time of the finding's frame as captured (the validator's may be a probe's clock).
+    std::int64_t t = frames_.empty() ? finding.at.time_ns : frames_.back().time_ns;
+    const auto at =
+        std::lower_bound(frames_.begin(), frames_.end(), finding.at.frame,
+                         [](const Kept& kept, std::uint64_t frame) { return kept.frame < frame; });
+    if (at != frames_.end() && at->frame == finding.at.frame) t = at->time_ns;
+    if (pending_ && t - window_ns_ > pending_->end_ns) flush();
+    if (!pending_) {
+      pending_ = Pending{t - window_ns_, t + window_ns_, t, ruleDef(finding.rule).code, {}};
+    }
+    pending_->end_ns = std::max(pending_->end_ns, t + window_ns_);
+    pending_->comments[finding.at.frame].push_back(comment);
+  }
+
+  // The capture ended: what is pending is written with the frames there are.
+  void finish() {
+    if (pending_) flush();
+  }
+
+ private:
+  struct Kept {
+    std::uint64_t frame;
+    std::int64_t time_ns;
+    std::size_t original;
+    std::vector<std::uint8_t> data;
+  };
+  struct Pending {
+    std::int64_t start_ns, end_ns;
+    std::int64_t first_ns;  // the first finding's
+    std::string rule;
+    FrameComments comments;
+  };
+
+  void flush() {
+    const Pending pending = std::move(*pending_);
+    pending_.reset();
+    std::string name = fmt::format("ncservo-{}-{}", fileTime(pending.first_ns), pending.rule);
+    std::filesystem::path path = std::filesystem::path(dir_) / (name + ".pcapng");
+    for (int n = 2; std::filesystem::exists(path); ++n) {
+      path = std::filesystem::path(dir_) / fmt::format("{}-{}.pcapng", name, n);
+    }
+    const std::filesystem::path partial =
+        path.parent_path() / ("." + path.filename().string() + ".partial");
+    auto writer = CaptureWriter::openPcapng(partial.string(), {dlt_, 9});
+    if (!writer) {
+      say_(fmt::format("--record: {}", writer.error().text()));
+      return;
+    }
+    std::size_t written = 0;
+    for (const Kept& kept : frames_) {
+      if (kept.time_ns < pending.start_ns || kept.time_ns > pending.end_ns) continue;
+      const auto found = pending.comments.find(kept.frame);
+      (*writer)->write(PacketRecord{kept.time_ns, kept.data.data(), kept.data.size(), kept.original,
+                                    found == pending.comments.end() ? nullptr : &found->second});
+      ++written;
+    }
+    if (Status closed = (*writer)->close(); !closed) {
+      say_(fmt::format("--record: {}", closed.error().text()));
+      std::filesystem::remove(partial);
+      return;
+    }
+    std::error_code ec;
+    std::filesystem::rename(partial, path, ec);
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    recordings_.push_back({path, size});
+    on_disk_ += size;
+    say_(fmt::format("recorded {} ({} frames, {} finding frame{})", path.string(), written,
+                     pending.comments.size(), pending.comments.size() == 1 ? "" : "s"));
+    while (on_disk_ > limit_bytes_ && !recordings_.empty()) {
+      const auto& [oldest, bytes] = recordings_.front();
+      std::filesystem::remove(oldest, ec);
+      on_disk_ -= bytes;
+      say_(fmt::format("--record-limit: removed {}", oldest.string()));
+      recordings_.pop_front();
+    }
+  }
+
+  std::string dir_;
+  std::int64_t window_ns_;
+  std::uint64_t limit_bytes_;
+  int dlt_;
+  std::function<void(const std::string&)> say_;
+  std::deque<Kept> frames_;
+  std::size_t bytes_ = 0;
+  std::optional<Pending> pending_;
+  std::deque<std::pair<std::filesystem::path, std::uint64_t>> recordings_;
+  std::uint64_t on_disk_ = 0;
+};
+
+// ---- The status lines ----
+
+// One line per axis on a terminal (standard error), redrawn in place; cleared before anything
+// else is printed so the findings scroll above it.
+class StatusBoard {
+ public:
+  explicit StatusBoard(bool on) : on_(on) {}
+  void clear() {
+    if (lines_ > 0) fmt::print(stderr, "\033[{}A\033[J", lines_);
+    lines_ = 0;
+  }
+  void draw(const Validator* validator, const std::map<std::uint16_t, std::string>& last,
+            std::uint64_t frames) {
+    if (!on_) return;
+    std::fflush(stdout);
+    clear();
+    std::vector<std::string> lines;
+    if (validator == nullptr || validator->decoder().axes().empty()) {
+      lines.push_back(fmt::format("{} frames, learning the layout", frames));
+    } else {
+      for (const AxisInfo& axis : validator->decoder().axes()) {
+        const AxisModel* model = validator->axis(axis.index);
+        const auto state = model != nullptr ? model->state() : std::nullopt;
+        const auto found = last.find(axis.index);
+        lines.push_back(fmt::format("{:<12} {:<28} failures {:<6} last: {}", axis.name,
+                                    state ? driveStateName(*state) : "-",
+                                    model != nullptr ? model->totalFailures() : 0,
+                                    found != last.end() ? found->second : "-"));
+      }
+    }
+    for (const std::string& line : lines) fmt::print(stderr, "{}\n", line);
+    lines_ = static_cast<int>(lines.size());
+  }
+
+ private:
+  bool on_;
+  int lines_ = 0;
+};
+
+// ---- monitor ----
+
+int runMonitor(const MonitorArgs& args) {
+  const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
+  RuleSettings settings;
+  Status built = files ? buildSettings(args, files->config, settings) : fail(files.error());
+  if (!built) {
+    fmt::print(stderr, "ncservo monitor: {}\n", built.error().text());
+    return kExitUsage;
+  }
+  if (!(args.record_window_s > 0) || !(args.record_limit_mb > 0) ||
+      (args.duration_s && !(*args.duration_s > 0))) {
+    fmt::print(stderr,
+               "ncservo monitor: --duration, --record-window and --record-limit take a number "
+               "above 0\n");
+    return kExitUsage;
+  }
+  if (!args.record_dir.empty() && !std::filesystem::is_directory(args.record_dir)) {
+    fmt::print(stderr, "ncservo monitor: --record {}: not a directory\n", args.record_dir);
+    return kExitUsage;
+  }
+  Result<LiveHandle> live = openLive(args.interface);
+  if (!live) {
+    fmt::print(stderr, "ncservo monitor: {}\n", live.error().text());
+    return kExitCapture;
+  }
+  pcap_t* handle = live->get();
+  const int digits = pcap_get_tstamp_precision(handle) == PCAP_TSTAMP_PRECISION_NANO ? 9 : 6;
+  const LinkType link = linkTypeFromDlt(pcap_datalink(handle));
+
+  ReportPolicy policy;
+  policy.never = args.fail_on == "never";
+  policy.fail_on = policy.never ? Severity::Error : *severityFromName(args.fail_on);
+  policy.verbose = true;  // text: every finding as it happens
+  policy.enabled = settings.enabled;
+  auto writer = ReportWriter::open({{findReportFormat(args.format), ""}}, policy);
+  if (!writer) {
+    fmt::print(stderr, "ncservo monitor: {}\n", writer.error().text());
+    return kExitUsage;
+  }
+  g_live = handle;
+  struct sigaction action {};
+  action.sa_handler = stopMonitor;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+
+  StatusBoard board(isatty(STDERR_FILENO) == 1);
+  const auto say = [&](const std::string& text) {
+    std::fflush(stdout);
+    board.clear();
+    fmt::print(stderr, "ncservo monitor: {}\n", text);
+  };
+  std::optional<FlightRecorder> recorder;
+  const auto record_at = severityFromName(args.record_severity);
+  if (!args.record_dir.empty()) {
+    recorder.emplace(args.record_dir, std::llround(args.record_window_s * 1e9),
+                     static_cast<std::uint64_t>(args.record_limit_mb * 1024 * 1024),
+                     pcap_datalink(handle), say);
+  }
+
+  CaptureReport report;
+  report.path = args.interface;
+  report.timestamp_digits = digits;
+  (*writer)->beginCapture(report);
+  FrameClock clock(*timestampModeFromName(args.timestamps));
+  LayoutWindow window(decoderOptions(*files, args.layout));
+  std::optional<Validator> validator;
+  std::map<std::uint16_t, std::string> last_finding;  // by axis, for the status lines
+  CaptureRun run;
+  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                            const ByteReader& bytes) {
+    report.first_time_ns = *run.first_time_ns;
+    validator->onFrame(number, time_ns, walked, bytes);
+    for (const Finding& f : validator->findings()) {
+      report.tally(f);
+      board.clear();
+      (*writer)->finding(report, f);
+      std::fflush(stdout);
+      if (f.axis) {
+        last_finding[*f.axis] = fmt::format("{} at {:.3f} s", ruleDef(f.rule).code,
+                                            (f.at.time_ns - *run.first_time_ns) / 1e9);
+      }
+      if (recorder && f.severity >= *record_at) {
+        recorder->onFinding(f, findingComment(f, validator->decoder().axes()));
+      }
+    }
+  };
+  const auto start = [&](const DecoderOptions& layout) {
+    validator.emplace(layout, settings);
+    report.layout = validator->decoder().axes();
+  };
+  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
+                               const ByteReader& bytes) {
+    validator->onLayoutOnlyFrame(walked, bytes);
+  };
+  const CaptureStream stream{start, validate, {}, layout_only};
+  RecordStream records(clock, window, stream, run);
+
+  using Clock = std::chrono::steady_clock;
+  const auto began = Clock::now();
+  auto next_status = began;
+  std::optional<std::string> capture_error;
+  std::uint64_t frames = 0;
+  while (g_stop == 0) {
+    if (args.duration_s &&
+        Clock::now() - began >= std::chrono::duration<double>(*args.duration_s)) {
+      break;
+    }
+    pcap_pkthdr* header = nullptr;
+    const u_char* data = nullptr;
+    const int got = pcap_next_ex(handle, &header, &data);
+    if (got == 1) {
+      CaptureRecord record;
+      record.frame = ++frames;
+      record.time_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1'000'000'000 +
+                       static_cast<std::int64_t>(header->ts.tv_usec) * (digits == 9 ? 1 : 1000);
+      record.data = data;
+      record.captured = header->caplen;
+      record.original = header->len;
+      records.onRecord(link, record);
+      if (recorder) recorder->onRecord(record, !window.learning());
+    } else if (got == PCAP_ERROR_BREAK) {
+      break;
+    } else if (got < 0) {
+      capture_error = pcap_geterr(handle);
+      break;
+    }
+    if (Clock::now() >= next_status) {
+      board.draw(validator ? &*validator : nullptr, last_finding, frames);
+      next_status = Clock::now() + kStatusPeriod;
+    }
+  }
+  std::fflush(stdout);
+  board.clear();
+  records.finish();
+  if (recorder) recorder->finish();
+  g_live = nullptr;
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+
+  pcap_stat stats{};
+  if (pcap_stats(handle, &stats) == 0) {
+    fmt::print(stderr,
+               "ncservo monitor: {}: {} frames captured; dropped: {} by the kernel, {} by the "
+               "interface{}\n",
+               args.interface, frames, stats.ps_drop, stats.ps_ifdrop,
+               stats.ps_drop + stats.ps_ifdrop > 0
+                   ? " (the capture lost them, not necessarily the bus: COM findings around "
+                     "them may be the capture's)"
+                   : "");
+  }
+  report.first_time_ns = run.first_time_ns.value_or(0);
+  report.frames = run.records;
+  summarise(*validator, report);
+  report.coverage = coverageOf(*validator);
+  report.truncation = truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
+                                   validator->decoder().axes());
+  report.timestamps = clock.source();
+  report.probe = clock.counts();
+  report.probe_note = clock.note();
+  if (capture_error) {
+    report.error = *capture_error + " (the frames before it were analysed)";
+    fmt::print(stderr, "ncservo monitor: {}: {}\n", args.interface, *report.error);
+  }
+  (*writer)->endCapture(report);
+  std::vector<CaptureReport> reports{report};
+  if (Status written = (*writer)->finish(reports); !written) {
+    fmt::print(stderr, "ncservo monitor: {}\n", written.error().text());
+    return kExitUsage;
+  }
+  switch ((*writer)->verdict(report)) {
+    case Verdict::Unreadable:
+      return kExitCapture;
+    case Verdict::Fail:
+      return kExitFindings;
+    case Verdict::NoServo:
+      return kExitNoServo;
+    case Verdict::Pass:
+      break;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Handler monitorCommand(CLI::App& command) {
+  auto args = std::make_shared<MonitorArgs>();
+  command.add_option("-i,--interface", args->interface, "the network interface to capture on")
+      ->required();
+  command.add_option("--format", args->format, "text or jsonl: findings as they happen")
+      ->check(CLI::IsMember({"text", "jsonl"}));
+  command.add_option("--duration", args->duration_s,
+                     "stop after SECONDS (default: at Ctrl-C), then report");
+  command
+      .add_option("--fail-on", args->fail_on,
+                  "exit 1 on findings at or above: error, warning, info, never")
+      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+  command.add_option("--record", args->record_dir,
+                     "flight recorder: write an annotated pcapng around each finding into DIR");
+  command.add_option("--record-window", args->record_window_s,
+                     "seconds kept before and after each finding (default 5)");
+  command
+      .add_option("--record-severity", args->record_severity,
+                  "record findings at or above: error, warning or info (default warning)")
+      ->check(CLI::IsMember({"error", "warning", "info"}));
+  command.add_option("--record-limit", args->record_limit_mb,
+                     "MiB of recordings kept on disk, the oldest removed first (default 1024)");
+  addLayoutOptions(command, args->layout);
+  addRuleOptions(command, *args);
+  addTimestampsOption(command, args->timestamps);
+  return [args] { return runMonitor(*args); };
+}
+
+}  // namespace ncservo::cli
