@@ -22,6 +22,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "item_texts.hpp"
@@ -417,9 +418,12 @@ LinkType linkTypeOf(const packet_info* pinfo) {
   }
 }
 
-// The Info column's text: the axes grouped by drive state, the most common state counted
-// ("control active ×30, error: axis3, axis17"), then the rule IDs fired. Frames in a row mostly
-// look the same, so the text of the previous frame is kept and reused when its inputs repeat.
+// The Info column's text: the axes grouped by drive state, the most common state counted, the
+// others named up to kNamedAxes axes and counted beyond ("control active ×26, error: axis3,
+// axis17, fault reaction active ×4"), then the rules fired, each once with its count
+// ("| COM-005 ×29"): short at 32 axes. Frames in a row mostly look the same, so the text of the
+// previous frame is kept and reused when its inputs repeat.
+constexpr guint kNamedAxes = 3;
 
 constexpr guint8 kNoState = 0xFF;
 const char* stateLabel(guint8 state) {
@@ -468,6 +472,10 @@ const char* infoText(const FrameRecord& record) {
   for (guint d = 0; d < distinct; ++d) {
     if (d == most && counts[most] > 2) continue;
     wmem_strbuf_append(text, wmem_strbuf_get_len(text) > 9 ? ", " : " ");
+    if (counts[d] > kNamedAxes) {
+      wmem_strbuf_append_printf(text, "%s \u00d7%u", stateLabel(states[d]), counts[d]);
+      continue;
+    }
     wmem_strbuf_append_printf(text, "%s:", stateLabel(states[d]));
     const char* separator = " ";
     for (guint i = 0; i < record.axis_count; ++i) {
@@ -476,9 +484,17 @@ const char* infoText(const FrameRecord& record) {
       separator = ", ";
     }
   }
+  // Each rule once, in the order of its first finding.
   for (guint i = 0; i < record.finding_count; ++i) {
+    const guint8 rule = record.findings[i].rule;
+    guint seen = 0;
+    while (seen < i && record.findings[seen].rule != rule) ++seen;
+    if (seen < i) continue;
+    guint count = 0;
+    for (guint j = i; j < record.finding_count; ++j) count += record.findings[j].rule == rule;
     wmem_strbuf_append_printf(text, "%s%s", i == 0 ? " | " : " ",
-                              ruleDef(static_cast<RuleId>(record.findings[i].rule)).code);
+                              ruleDef(static_cast<RuleId>(rule)).code);
+    if (count > 1) wmem_strbuf_append_printf(text, " \u00d7%u", count);
   }
   wmem_strbuf_append_c(text, ']');
   g_info_key = key;
@@ -631,18 +647,48 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
+// Value names that say a clear flag of the SCW or SSW is at rest; a clear flag named otherwise
+// ("EMGON: emergency", "Brake: internal braking", "Abs/Incr: absolute") stays in sight.
+constexpr std::string_view kAtRestNames[] = {"no", "normal", "no event", "clear"};
+
+// Whether a bit field of the SCW or SSW is at rest: a flag clear with a name from kAtRestNames,
+// or reserved bits (a bit range without value names) all zero.
+bool atRest(const FieldDef& f, std::uint32_t value) {
+  if ((value & f.mask) != 0) return false;
+  if (f.kind == FieldKind::BitRange) return f.value_count == 0;
+  const ValueName* clear = valueName(f, 0);
+  if (clear == nullptr) return false;
+  for (const std::string_view name : kAtRestNames) {
+    if (name == clear->name) return true;
+  }
+  return false;
+}
+
 // The word's bit fields one by one, for a shown tree: the parameter table by its number
-// (ExtPRMTBL·4 + PRMTBL + 1), and SEW cause bits that are clear hidden behind one line (hidden
-// items still serve filters and -T fields; -V and the details pane skip them).
+// (ExtPRMTBL·4 + PRMTBL + 1); SEW cause bits that are clear and SCW/SSW bits at rest hidden
+// behind one line, so that -V on many axes stays readable (hidden items still serve filters and
+// -T fields; -V and the details pane skip them).
 void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const WordItems& word,
                   std::uint32_t value) {
   guint clear_causes = 0;
+  guint at_rest = 0;
+  char at_rest_names[256] = "";
   for (std::size_t c = 0; word.children[c] != nullptr; ++c) {
     const int hf = *word.children[c];
     const FieldDef& f = kFields[word.child_rows[c]];
     if (f.word == Word::Sew && (f.mask & kSewCauseMask) != 0 && (value & f.mask) == 0) {
       ++clear_causes;
       proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
+      continue;
+    }
+    if ((f.word == Word::Scw || f.word == Word::Ssw) && atRest(f, value)) {
+      g_strlcat(at_rest_names, at_rest == 0 ? "" : ", ", sizeof at_rest_names);
+      g_strlcat(at_rest_names, f.label, sizeof at_rest_names);
+      ++at_rest;
+      proto_item_set_hidden(
+          f.kind == FieldKind::Flag
+              ? proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value)
+              : proto_tree_add_uint(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
     if ((f.word == Word::Scw || f.word == Word::Ssw) && f.mask == parameterTableBits(f.word).low) {
@@ -659,6 +705,10 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
   if (clear_causes > 0) {
     proto_tree_add_subtree_format(word_tree, tvb, offset, word.length, ett_clear_causes, nullptr,
                                   "%u cause bits clear", clear_causes);
+  }
+  if (at_rest > 0) {
+    proto_tree_add_subtree_format(word_tree, tvb, offset, word.length, ett_clear_causes, nullptr,
+                                  "At rest: %s", at_rest_names);
   }
 }
 
