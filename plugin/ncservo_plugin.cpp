@@ -123,17 +123,6 @@ LayoutWindow* g_window = nullptr;
 Validator* g_validator = nullptr;
 bool g_capture_open = false;
 
-// The Info column's last text and what it was made from (infoText).
-struct InfoKey {
-  guint16 axis_count = 0;
-  guint16 finding_count = 0;
-  std::array<guint32, kMaxAxesPerFrame> axes{};  // axis << 8 | state slot
-  std::array<guint8, 16> rules{};                // the first findings' rules
-};
-InfoKey g_info_key;
-const char* g_info_text = nullptr;  // for g_info_key, in file scope
-const void* g_info_axes = nullptr;  // the axis array g_info_text was made from
-
 // What the first pass found in a frame, kept in file scope for later passes.
 enum AxisFlags : guint8 {
   kHasRx = 1,
@@ -170,10 +159,16 @@ struct FrameRecord {
 // By frame number: frames are numbered from 1 without gaps, so an index finds a frame's record
 // for less than a hash map, whose growth and scattered inserts cost the packet list measurably.
 std::vector<FrameRecord> g_frames;
-// The last axis array kept: in cyclic traffic most frames carry the same axes in the same states
-// at the same offsets, and share it.
-const AxisRecord* g_last_axes = nullptr;
-std::size_t g_last_axis_count = 0;
+// The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
+// traffic most frames carry the same axes in the same states at the same offsets, alternating
+// between a few such arrays (the master copy and the returned one, frames of a split image).
+struct SharedAxes {
+  const AxisRecord* axes = nullptr;  // in file scope
+  std::size_t count = 0;
+  const char* info = nullptr;  // in file scope; null until a frame without findings needs it
+};
+std::array<SharedAxes, 8> g_shared_axes;
+std::size_t g_next_shared = 0;  // the slot replaced next
 
 ftenum wordType(WireType type) {
   switch (type) {
@@ -373,10 +368,8 @@ void startValidator() {
 
 void initCapture() {
   plugin::resetItemTexts();
-  g_info_text = nullptr;
   g_frames.clear();
-  g_last_axes = nullptr;
-  g_last_axis_count = 0;
+  g_shared_axes = {};
   g_capture_open = true;
   delete g_window;
   g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
@@ -391,7 +384,7 @@ void cleanupCapture() {
   delete g_window;
   g_window = nullptr;
   std::vector<FrameRecord>().swap(g_frames);
-  g_last_axes = nullptr;
+  g_shared_axes = {};
   g_capture_open = false;
 }
 
@@ -421,8 +414,7 @@ LinkType linkTypeOf(const packet_info* pinfo) {
 // The Info column's text: the axes grouped by drive state, the most common state counted, the
 // others named up to kNamedAxes axes and counted beyond ("control active ×26, error: axis3,
 // axis17, fault reaction active ×4"), then the rules fired, each once with its count
-// ("| COM-005 ×29"): short at 32 axes. Frames in a row mostly look the same, so the text of the
-// previous frame is kept and reused when its inputs repeat.
+// ("| COM-005 ×29"): short at 32 axes.
 constexpr guint kNamedAxes = 3;
 
 constexpr guint8 kNoState = 0xFF;
@@ -431,31 +423,16 @@ const char* stateLabel(guint8 state) {
 }
 
 const char* infoText(const FrameRecord& record) {
-  // The axis array is shared only by frames whose axes are alike.
-  if (g_info_text != nullptr && record.finding_count == 0 && g_info_key.finding_count == 0 &&
-      record.axes == g_info_axes) {
-    return g_info_text;
-  }
-  InfoKey key;
-  key.axis_count = record.axis_count;
-  key.finding_count = record.finding_count;
-  for (guint i = 0; i < record.axis_count; ++i) {
+  auto stateOf = [&record](guint i) {
     const AxisRecord& r = record.axes[i];
-    key.axes[i] = guint32{r.axis} << 8 | ((r.flags & kHasState) ? r.state : kNoState);
-  }
-  for (guint i = 0; i < record.finding_count && i < key.rules.size(); ++i) {
-    key.rules[i] = record.findings[i].rule;
-  }
-  if (g_info_text != nullptr && record.finding_count <= key.rules.size() &&
-      std::memcmp(&key, &g_info_key, sizeof key) == 0) {
-    return g_info_text;
-  }
+    return (r.flags & kHasState) ? r.state : kNoState;
+  };
   // Distinct states in order of first appearance, with their counts.
   guint8 states[kMaxAxesPerFrame];
   guint counts[kMaxAxesPerFrame] = {};
   guint distinct = 0;
   for (guint i = 0; i < record.axis_count; ++i) {
-    const guint8 state = static_cast<guint8>(key.axes[i] & 0xFF);
+    const guint8 state = stateOf(i);
     guint d = 0;
     while (d < distinct && states[d] != state) ++d;
     if (d == distinct) states[distinct++] = state;
@@ -479,7 +456,7 @@ const char* infoText(const FrameRecord& record) {
     wmem_strbuf_append_printf(text, "%s:", stateLabel(states[d]));
     const char* separator = " ";
     for (guint i = 0; i < record.axis_count; ++i) {
-      if (static_cast<guint8>(key.axes[i] & 0xFF) != states[d]) continue;
+      if (stateOf(i) != states[d]) continue;
       wmem_strbuf_append_printf(text, "%s%s", separator, axisName(record.axes[i].axis));
       separator = ", ";
     }
@@ -497,15 +474,11 @@ const char* infoText(const FrameRecord& record) {
     if (count > 1) wmem_strbuf_append_printf(text, " \u00d7%u", count);
   }
   wmem_strbuf_append_c(text, ']');
-  g_info_key = key;
-  g_info_axes = record.axes;
-  g_info_text = wmem_strbuf_finalize(text);
-  return g_info_text;
+  return wmem_strbuf_finalize(text);
 }
 
-// The frame's axes as the first pass found them, in a shared array when the previous frame's
-// were the same.
-const AxisRecord* keepAxes(std::uint64_t number, const ValidatedFrame& view) {
+// The frame's axes as the first pass found them, in an array shared with recent frames alike.
+SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
   const FrameDecode& decode = view.decode;
   static AxisRecord axes[kMaxAxesPerFrame];  // dissection is single-threaded
   // Zeroed whole, padding included, for the comparison below.
@@ -536,12 +509,18 @@ const AxisRecord* keepAxes(std::uint64_t number, const ValidatedFrame& view) {
     }
   }
   const std::size_t size = decode.axis_count * sizeof(AxisRecord);
-  if (g_last_axes == nullptr || g_last_axis_count != decode.axis_count ||
-      std::memcmp(g_last_axes, axes, size) != 0) {
-    g_last_axes = static_cast<const AxisRecord*>(wmem_memdup(wmem_file_scope(), axes, size));
-    g_last_axis_count = decode.axis_count;
+  for (SharedAxes& shared : g_shared_axes) {
+    if (shared.axes != nullptr && shared.count == decode.axis_count &&
+        std::memcmp(shared.axes, axes, size) == 0) {
+      return shared;
+    }
   }
-  return g_last_axes;
+  SharedAxes& slot = g_shared_axes[g_next_shared];
+  g_next_shared = (g_next_shared + 1) % g_shared_axes.size();
+  slot.axes = static_cast<const AxisRecord*>(wmem_memdup(wmem_file_scope(), axes, size));
+  slot.count = decode.axis_count;
+  slot.info = nullptr;
+  return slot;
 }
 
 // Runs the validator over one frame and keeps what it found, by frame number.
@@ -556,7 +535,8 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
   FrameRecord& record = g_frames[number];
   record.copy = static_cast<guint8>(decode.copy);
   record.axis_count = static_cast<guint16>(decode.axis_count);
-  record.axes = decode.axis_count > 0 ? keepAxes(number, view) : nullptr;
+  SharedAxes* shared = decode.axis_count > 0 ? &keepAxes(number, view) : nullptr;
+  record.axes = shared != nullptr ? shared->axes : nullptr;
   record.findings = nullptr;
   record.finding_count = 0;
   if (!findings.empty()) {
@@ -574,7 +554,12 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
     record.findings = out;
     record.finding_count = static_cast<guint16>(std::min<std::size_t>(findings.size(), 0xFFFF));
   }
-  record.info = infoText(record);
+  if (shared == nullptr || !findings.empty()) {
+    record.info = infoText(record);
+  } else {
+    if (shared->info == nullptr) shared->info = infoText(record);
+    record.info = shared->info;
+  }
 }
 
 // The window ended: validate its frames with the layout it found, then go on streaming.
