@@ -697,47 +697,63 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
   }
 }
 
-// In a tree that is not shown (filtering, -T fields) only the items a filter, column or tap
-// references, each from the word's value: no subtree, no bitmask call adding every bit.
-void addReferencedItems(proto_tree* tree, tvbuff_t* tvb, guint offset, const WordItems& word,
-                        const PdoValues& values) {
-  const std::uint64_t raw = values.raw[static_cast<std::size_t>(kFields[word.row].word)];
-  for (std::size_t i = word.row; i < word.row_end; ++i) {
+// The rows of kFields that a filter, column or tap references, by PDO: gathered once per frame
+// for a tree that is not shown, where only those items are built.
+struct ReferencedRows {
+  std::size_t count[2] = {};  // [Pdo::Rx], [Pdo::Tx]
+  std::uint16_t rows[2][kFieldCount];
+};
+static_assert(kFieldCount <= 0xFFFF);
+
+void gatherReferenced(ReferencedRows& referenced) {
+  referenced.count[0] = referenced.count[1] = 0;
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
     if (hfi_field[i]->ref_type == HF_REF_TYPE_NONE) continue;
-    const FieldDef& f = kFields[i];
-    switch (f.kind) {
-      case FieldKind::Word:
-        addValue(tree, hf_field[i], tvb, offset + word.offset, word.length, fieldValue(f, values));
-        break;
-      case FieldKind::Flag:
-        proto_tree_add_boolean(tree, hf_field[i], tvb, offset + word.offset, word.length,
-                               static_cast<guint32>(raw));
-        break;
-      case FieldKind::BitRange:
-        proto_tree_add_uint(tree, hf_field[i], tvb, offset + word.offset, word.length,
-                            static_cast<guint32>(raw));
-        break;
-      case FieldKind::Part:
-        if (fieldApplies(f, values)) {
-          const FieldSpan span = fieldSpan(f);
-          addValue(tree, hf_field[i], tvb, offset + static_cast<guint>(span.offset),
-                   static_cast<gint>(span.length), fieldValue(f, values));
-        }
-        break;
-    }
+    const auto pdo = static_cast<std::size_t>(wordDef(kFields[i].word).pdo);
+    referenced.rows[pdo][referenced.count[pdo]++] = static_cast<std::uint16_t>(i);
+  }
+}
+
+// One referenced item, from its word's value: no subtree, no bitmask call adding every bit.
+void addReferencedItem(proto_tree* tree, tvbuff_t* tvb, guint offset, std::size_t row,
+                       const PdoValues& values) {
+  const FieldDef& f = kFields[row];
+  const WordItems& word = word_items[static_cast<std::size_t>(f.word)];
+  const auto raw = static_cast<guint32>(values.raw[static_cast<std::size_t>(f.word)]);
+  switch (f.kind) {
+    case FieldKind::Word:
+      addValue(tree, hf_field[row], tvb, offset + word.offset, word.length, fieldValue(f, values));
+      break;
+    case FieldKind::Flag:
+      proto_tree_add_boolean(tree, hf_field[row], tvb, offset + word.offset, word.length, raw);
+      break;
+    case FieldKind::BitRange:
+      proto_tree_add_uint(tree, hf_field[row], tvb, offset + word.offset, word.length, raw);
+      break;
+    case FieldKind::Part:
+      if (fieldApplies(f, values)) {
+        const FieldSpan span = fieldSpan(f);
+        addValue(tree, hf_field[row], tvb, offset + static_cast<guint>(span.offset),
+                 static_cast<gint>(span.length), fieldValue(f, values));
+      }
+      break;
   }
 }
 
 // Adds the words of one PDO, each bit field under its word, as the field table defines them.
-void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
+// In a tree that is not shown, only the referenced items.
+void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values,
+            const ReferencedRows& referenced) {
+  if (!shown(tree)) {
+    const auto p = static_cast<std::size_t>(pdo);
+    for (std::size_t k = 0; k < referenced.count[p]; ++k) {
+      addReferencedItem(tree, tvb, offset, referenced.rows[p][k], values);
+    }
+    return;
+  }
   const std::size_t first = firstWordOf(pdo);
-  const bool tree_shown = shown(tree);
   for (std::size_t w = first; w < first + wordCountOf(pdo); ++w) {
     const WordItems& word = word_items[w];
-    if (!tree_shown) {
-      addReferencedItems(tree, tvb, offset, word, values);
-      continue;
-    }
     proto_item* item = nullptr;
     if (word.children[0] != nullptr) {
       const auto value = static_cast<std::uint32_t>(values.raw[w]);
@@ -784,8 +800,9 @@ void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint ancho
 // What the frame dissector hands each axis's layer.
 struct LayerData {
   const FrameRecord* record;
-  const AxisRecord* axis;  // null: a layer only for findings about the bus
-  bool first;              // the frame's first layer, which carries the bus's findings
+  const AxisRecord* axis;            // null: a layer only for findings about the bus
+  bool first;                        // the frame's first layer, which carries the bus's findings
+  const ReferencedRows* referenced;  // when the tree is not shown
 };
 
 // Findings about the bus, or about an axis this frame does not carry.
@@ -797,17 +814,9 @@ bool frameLevel(const FrameRecord& record, const FindingRecord& f) {
   return true;
 }
 
-// Whether any item of the axis's PDOs is needed.
-bool pdoWanted(proto_tree* tree) {
-  if (shown(tree)) return true;
-  for (std::size_t i = 0; i < kFieldCount; ++i) {
-    if (hfi_field[i]->ref_type != HF_REF_TYPE_NONE) return true;
-  }
-  return false;
-}
-
 void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, const AxisRecord& r,
-                  guint start, const char* name, const char* state) {
+                  guint start, const char* name, const char* state,
+                  const ReferencedRows& referenced) {
   if (wanted(tree, Derived::Copy)) {
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::Copy), tvb, start, 0,
@@ -821,13 +830,14 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
   }
   const bool message_wanted = (r.flags & kHasTx) && wanted(tree, Derived::Message);
   PdoValues values;
-  if (message_wanted || pdoWanted(tree)) {
+  const bool pdo_wanted = shown(tree) || referenced.count[0] + referenced.count[1] > 0;
+  if (message_wanted || pdo_wanted) {
     const guint length = tvb_captured_length(tvb);
     const ByteReader bytes(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length);
     if (r.flags & kHasRx) readPdo(Pdo::Rx, bytes, r.rx_offset, values);
     if (r.flags & kHasTx) readPdo(Pdo::Tx, bytes, r.tx_offset, values);
-    if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values);
-    if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values);
+    if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values, referenced);
+    if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values, referenced);
   }
   if (state != nullptr && wanted(tree, Derived::State)) {
     proto_item_set_generated(
@@ -884,7 +894,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
       root = proto_tree_add_protocol_format(tree, proto_ncservo, tvb, start, 0, "%s", texts.label);
       layer_tree = proto_item_add_subtree(root, ett_axis);
     }
-    addAxisItems(layer_tree, tvb, record, r, start, name, state);
+    addAxisItems(layer_tree, tvb, record, r, start, name, state, *layer.referenced);
     for (const bool rx : {true, false}) {
       if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
       expert_add_info_format(pinfo, root, &ei_region_malformed,
@@ -936,7 +946,9 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
     addExpertOnly(pinfo, *record);
     return static_cast<int>(tvb_captured_length(tvb));
   }
-  LayerData layer{record, nullptr, true};
+  static ReferencedRows referenced;  // dissection is single-threaded
+  if (!shown(tree)) gatherReferenced(referenced);
+  LayerData layer{record, nullptr, true, &referenced};
   if (record->axis_count == 0) {
     call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
   }
