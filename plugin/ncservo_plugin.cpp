@@ -370,6 +370,7 @@ void initCapture() {
   plugin::resetItemTexts();
   g_frames.clear();
   g_shared_axes = {};
+  g_next_shared = 0;
   g_capture_open = true;
   delete g_window;
   g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
