@@ -16,11 +16,13 @@
 #include <wiretap/wtap.h>
 #include <wsutil/report_message.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "item_texts.hpp"
@@ -54,6 +56,11 @@ constexpr std::size_t kMaxChildren = 33;  // at most 32 bit fields per word, NUL
 int proto_ncservo = -1;
 int hf_field[kFieldCount];
 int hf_derived[kDerivedCount];
+// The registrations of the fields, kept at hand-off: whether an item is needed is read from them
+// once per item instead of a call to proto_field_is_referenced.
+const header_field_info* hfi_field[kFieldCount];
+const header_field_info* hfi_derived[kDerivedCount];
+const header_field_info* hfi_protocol = nullptr;
 int ett_ncservo = -1;
 int ett_axis = -1;
 int ett_finding = -1;
@@ -114,17 +121,7 @@ DecoderOptions* g_options = nullptr;
 RuleSettings* g_settings = nullptr;
 LayoutWindow* g_window = nullptr;
 Validator* g_validator = nullptr;
-wmem_map_t* g_records = nullptr;
-
-// The Info column's last text and what it was made from (infoText).
-struct InfoKey {
-  guint16 axis_count = 0;
-  guint16 finding_count = 0;
-  std::array<guint32, kMaxAxesPerFrame> axes{};  // axis << 8 | state slot
-  std::array<guint8, 16> rules{};                // the first findings' rules
-};
-InfoKey g_info_key;
-const char* g_info_text = nullptr;  // for g_info_key, in file scope
+bool g_capture_open = false;
 
 // What the first pass found in a frame, kept in file scope for later passes.
 enum AxisFlags : guint8 {
@@ -152,13 +149,26 @@ struct FindingRecord {
   const char* text;  // "SE-001 illegal-enable-edge: axis0: ...", in file scope
 };
 struct FrameRecord {
-  guint8 copy;
+  const AxisRecord* axes;  // axis_count entries, in file scope; frames alike share one array
+  const FindingRecord* findings;
+  const char* info;  // the Info column's text, in file scope; null: nothing decoded in the frame
   guint16 axis_count;
   guint16 finding_count;
-  const FindingRecord* findings;
-  const char* info;    // the Info column's text, in file scope
-  AxisRecord axes[1];  // axis_count entries (at least one slot allocated)
+  guint8 copy;
 };
+// By frame number: frames are numbered from 1 without gaps, so an index finds a frame's record
+// for less than a hash map, whose growth and scattered inserts cost the packet list measurably.
+std::vector<FrameRecord> g_frames;
+// The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
+// traffic most frames carry the same axes in the same states at the same offsets, alternating
+// between a few such arrays (the master copy and the returned one, frames of a split image).
+struct SharedAxes {
+  const AxisRecord* axes = nullptr;  // in file scope
+  std::size_t count = 0;
+  const char* info = nullptr;  // in file scope; null until a frame without findings needs it
+};
+std::array<SharedAxes, 8> g_shared_axes;
+std::size_t g_next_shared = 0;  // the slot replaced next
 
 ftenum wordType(WireType type) {
   switch (type) {
@@ -358,8 +368,10 @@ void startValidator() {
 
 void initCapture() {
   plugin::resetItemTexts();
-  g_info_text = nullptr;
-  g_records = wmem_map_new(wmem_file_scope(), g_direct_hash, g_direct_equal);
+  g_frames.clear();
+  g_shared_axes = {};
+  g_next_shared = 0;
+  g_capture_open = true;
   delete g_window;
   g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
   delete g_validator;
@@ -372,7 +384,9 @@ void cleanupCapture() {
   g_validator = nullptr;
   delete g_window;
   g_window = nullptr;
-  g_records = nullptr;
+  std::vector<FrameRecord>().swap(g_frames);
+  g_shared_axes = {};
+  g_capture_open = false;
 }
 
 const char* axisName(guint16 axis) {
@@ -398,9 +412,11 @@ LinkType linkTypeOf(const packet_info* pinfo) {
   }
 }
 
-// The Info column's text: the axes grouped by drive state, the most common state counted
-// ("control active ×30, error: axis3, axis17"), then the rule IDs fired. Frames in a row mostly
-// look the same, so the text of the previous frame is kept and reused when its inputs repeat.
+// The Info column's text: the axes grouped by drive state, the most common state counted, the
+// others named up to kNamedAxes axes and counted beyond ("control active ×26, error: axis3,
+// axis17, fault reaction active ×4"), then the rules fired, each once with its count
+// ("| COM-005 ×29"): short at 32 axes.
+constexpr guint kNamedAxes = 3;
 
 constexpr guint8 kNoState = 0xFF;
 const char* stateLabel(guint8 state) {
@@ -408,26 +424,16 @@ const char* stateLabel(guint8 state) {
 }
 
 const char* infoText(const FrameRecord& record) {
-  InfoKey key;
-  key.axis_count = record.axis_count;
-  key.finding_count = record.finding_count;
-  for (guint i = 0; i < record.axis_count; ++i) {
+  auto stateOf = [&record](guint i) {
     const AxisRecord& r = record.axes[i];
-    key.axes[i] = guint32{r.axis} << 8 | ((r.flags & kHasState) ? r.state : kNoState);
-  }
-  for (guint i = 0; i < record.finding_count && i < key.rules.size(); ++i) {
-    key.rules[i] = record.findings[i].rule;
-  }
-  if (g_info_text != nullptr && record.finding_count <= key.rules.size() &&
-      std::memcmp(&key, &g_info_key, sizeof key) == 0) {
-    return g_info_text;
-  }
+    return (r.flags & kHasState) ? r.state : kNoState;
+  };
   // Distinct states in order of first appearance, with their counts.
   guint8 states[kMaxAxesPerFrame];
   guint counts[kMaxAxesPerFrame] = {};
   guint distinct = 0;
   for (guint i = 0; i < record.axis_count; ++i) {
-    const guint8 state = static_cast<guint8>(key.axes[i] & 0xFF);
+    const guint8 state = stateOf(i);
     guint d = 0;
     while (d < distinct && states[d] != state) ++d;
     if (d == distinct) states[distinct++] = state;
@@ -444,55 +450,44 @@ const char* infoText(const FrameRecord& record) {
   for (guint d = 0; d < distinct; ++d) {
     if (d == most && counts[most] > 2) continue;
     wmem_strbuf_append(text, wmem_strbuf_get_len(text) > 9 ? ", " : " ");
+    if (counts[d] > kNamedAxes) {
+      wmem_strbuf_append_printf(text, "%s \u00d7%u", stateLabel(states[d]), counts[d]);
+      continue;
+    }
     wmem_strbuf_append_printf(text, "%s:", stateLabel(states[d]));
     const char* separator = " ";
     for (guint i = 0; i < record.axis_count; ++i) {
-      if (static_cast<guint8>(key.axes[i] & 0xFF) != states[d]) continue;
+      if (stateOf(i) != states[d]) continue;
       wmem_strbuf_append_printf(text, "%s%s", separator, axisName(record.axes[i].axis));
       separator = ", ";
     }
   }
+  // Each rule once, in the order of its first finding.
   for (guint i = 0; i < record.finding_count; ++i) {
+    const guint8 rule = record.findings[i].rule;
+    guint seen = 0;
+    while (seen < i && record.findings[seen].rule != rule) ++seen;
+    if (seen < i) continue;
+    guint count = 0;
+    for (guint j = i; j < record.finding_count; ++j) count += record.findings[j].rule == rule;
     wmem_strbuf_append_printf(text, "%s%s", i == 0 ? " | " : " ",
-                              ruleDef(static_cast<RuleId>(record.findings[i].rule)).code);
+                              ruleDef(static_cast<RuleId>(rule)).code);
+    if (count > 1) wmem_strbuf_append_printf(text, " \u00d7%u", count);
   }
   wmem_strbuf_append_c(text, ']');
-  g_info_key = key;
-  g_info_text = wmem_strbuf_finalize(text);
-  return g_info_text;
+  return wmem_strbuf_finalize(text);
 }
 
-// Runs the validator over one frame and keeps what it found, by frame number.
-void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
-                   const ByteReader& bytes) {
-  const ValidatedFrame& view = g_validator->onFrame(number, time_ns, frame, bytes);
+// The frame's axes as the first pass found them, in an array shared with recent frames alike.
+SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
   const FrameDecode& decode = view.decode;
-  const std::vector<Finding>& findings = g_validator->findings();
-  if (decode.axis_count == 0 && findings.empty()) return;
-  const std::size_t slots = decode.axis_count > 0 ? decode.axis_count : 1;
-  const std::size_t size = sizeof(FrameRecord) + (slots - 1) * sizeof(AxisRecord);
-  auto* record = static_cast<FrameRecord*>(wmem_alloc0(wmem_file_scope(), size));
-  record->copy = static_cast<guint8>(decode.copy);
-  record->axis_count = static_cast<guint16>(decode.axis_count);
-  if (!findings.empty()) {
-    auto* out = static_cast<FindingRecord*>(
-        wmem_alloc0(wmem_file_scope(), findings.size() * sizeof(FindingRecord)));
-    for (std::size_t i = 0; i < findings.size(); ++i) {
-      const Finding& f = findings[i];
-      const RuleDef& rule = ruleDef(f.rule);
-      out[i].rule = static_cast<guint8>(f.rule);
-      out[i].axis = f.axis ? *f.axis : kBusAxis;
-      out[i].since = static_cast<guint32>(f.since.frame);
-      out[i].text = wmem_strdup_printf(wmem_file_scope(), "%s %s: %s: %s", rule.code, rule.slug,
-                                       f.axis ? axisName(*f.axis) : "bus", f.message.c_str());
-    }
-    record->findings = out;
-    record->finding_count = static_cast<guint16>(std::min<std::size_t>(findings.size(), 0xFFFF));
-  }
+  static AxisRecord axes[kMaxAxesPerFrame];  // dissection is single-threaded
+  // Zeroed whole, padding included, for the comparison below.
+  std::memset(axes, 0, decode.axis_count * sizeof(AxisRecord));
   for (std::size_t i = 0; i < decode.axis_count; ++i) {
     const AxisPlacement& placement = decode.axes[i];
     const std::optional<DriveState>& state = view.states[i];
-    AxisRecord& r = record->axes[i];
+    AxisRecord& r = axes[i];
     r.axis = placement.axis;
     r.flags =
         static_cast<guint8>((placement.has_rx ? kHasRx : 0) | (placement.has_tx ? kHasTx : 0) |
@@ -514,8 +509,58 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
           wmem_memdup(wmem_file_scope(), change, sizeof(StateChange)));
     }
   }
-  record->info = infoText(*record);
-  wmem_map_insert(g_records, GUINT_TO_POINTER(static_cast<guint>(number)), record);
+  const std::size_t size = decode.axis_count * sizeof(AxisRecord);
+  for (SharedAxes& shared : g_shared_axes) {
+    if (shared.axes != nullptr && shared.count == decode.axis_count &&
+        std::memcmp(shared.axes, axes, size) == 0) {
+      return shared;
+    }
+  }
+  SharedAxes& slot = g_shared_axes[g_next_shared];
+  g_next_shared = (g_next_shared + 1) % g_shared_axes.size();
+  slot.axes = static_cast<const AxisRecord*>(wmem_memdup(wmem_file_scope(), axes, size));
+  slot.count = decode.axis_count;
+  slot.info = nullptr;
+  return slot;
+}
+
+// Runs the validator over one frame and keeps what it found, by frame number.
+void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+                   const ByteReader& bytes) {
+  const ValidatedFrame& view = g_validator->onFrame(number, time_ns, frame, bytes);
+  const FrameDecode& decode = view.decode;
+  const std::vector<Finding>& findings = g_validator->findings();
+  if (decode.axis_count == 0 && findings.empty()) return;
+  if (number >= g_frames.size())
+    g_frames.resize(std::max<std::size_t>(number + 1, 2 * g_frames.size()));
+  FrameRecord& record = g_frames[number];
+  record.copy = static_cast<guint8>(decode.copy);
+  record.axis_count = static_cast<guint16>(decode.axis_count);
+  SharedAxes* shared = decode.axis_count > 0 ? &keepAxes(number, view) : nullptr;
+  record.axes = shared != nullptr ? shared->axes : nullptr;
+  record.findings = nullptr;
+  record.finding_count = 0;
+  if (!findings.empty()) {
+    auto* out = static_cast<FindingRecord*>(
+        wmem_alloc0(wmem_file_scope(), findings.size() * sizeof(FindingRecord)));
+    for (std::size_t i = 0; i < findings.size(); ++i) {
+      const Finding& f = findings[i];
+      const RuleDef& rule = ruleDef(f.rule);
+      out[i].rule = static_cast<guint8>(f.rule);
+      out[i].axis = f.axis ? *f.axis : kBusAxis;
+      out[i].since = static_cast<guint32>(f.since.frame);
+      out[i].text = wmem_strdup_printf(wmem_file_scope(), "%s %s: %s: %s", rule.code, rule.slug,
+                                       f.axis ? axisName(*f.axis) : "bus", f.message.c_str());
+    }
+    record.findings = out;
+    record.finding_count = static_cast<guint16>(std::min<std::size_t>(findings.size(), 0xFFFF));
+  }
+  if (shared == nullptr || !findings.empty()) {
+    record.info = infoText(record);
+  } else {
+    if (shared->info == nullptr) shared->info = infoText(record);
+    record.info = shared->info;
+  }
 }
 
 // The window ended: validate its frames with the layout it found, then go on streaming.
@@ -525,8 +570,8 @@ void windowDecided() {
 }
 
 const FrameRecord* recordOf(const packet_info* pinfo) {
-  return static_cast<const FrameRecord*>(
-      wmem_map_lookup(g_records, GUINT_TO_POINTER(static_cast<guint>(pinfo->num))));
+  if (pinfo->num >= g_frames.size() || g_frames[pinfo->num].info == nullptr) return nullptr;
+  return &g_frames[pinfo->num];
 }
 
 // First pass: run the library over the frame (or hold it in the learning window).
@@ -549,20 +594,25 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   validateFrame(pinfo->num, time_ns, frame, bytes);
 }
 
-// Whether an item is needed: the tree is shown, or a filter, column or tap asks for the field.
-bool wanted(proto_tree* tree, int hf) {
-  return proto_field_is_referenced(tree, hf);
+// Whether an item is needed: the tree is shown, or a filter, column or tap references the field
+// (as proto_field_is_referenced, read from the registration kept at hand-off).
+bool wanted(proto_tree* tree, const header_field_info* field) {
+  return tree != nullptr && (PTREE_DATA(tree)->visible || field->ref_type != HF_REF_TYPE_NONE);
+}
+bool wanted(proto_tree* tree, Derived id) {
+  return wanted(tree, hfi_derived[static_cast<std::size_t>(id)]);
 }
 // Whether the tree is shown (-V, -O, the GUI's details), where labels are read.
 bool shown(proto_tree* tree) {
   return tree != nullptr && PTREE_DATA(tree)->visible;
 }
-
-bool wordWanted(proto_tree* tree, const WordItems& word) {
-  for (std::size_t i = word.row; i < word.row_end; ++i) {
-    if (wanted(tree, hf_field[i])) return true;
-  }
-  return false;
+// Whether an axis gets its protocol item: in a shown tree, for a filter on `ncservo` itself, and
+// where Wireshark wants protocols (fake_protocols off: the protocol hierarchy). A reference to
+// one of its fields alone needs only that field's items; the axis stays a layer all the same,
+// as its layer is counted by the call to its dissector (`ncservo.state#3`).
+bool protocolWanted(proto_tree* tree) {
+  return tree != nullptr && (PTREE_DATA(tree)->visible || !PTREE_DATA(tree)->fake_protocols ||
+                             hfi_protocol->ref_type == HF_REF_TYPE_DIRECT);
 }
 
 // One word or part from the value the library already read: Wireshark adds an item from a value
@@ -583,18 +633,48 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
+// Value names that say a clear flag of the SCW or SSW is at rest; a clear flag named otherwise
+// ("EMGON: emergency", "Brake: internal braking", "Abs/Incr: absolute") stays in sight.
+constexpr std::string_view kAtRestNames[] = {"no", "normal", "no event", "clear"};
+
+// Whether a bit field of the SCW or SSW is at rest: a flag clear with a name from kAtRestNames,
+// or reserved bits (a bit range without value names) all zero.
+bool atRest(const FieldDef& f, std::uint32_t value) {
+  if ((value & f.mask) != 0) return false;
+  if (f.kind == FieldKind::BitRange) return f.value_count == 0;
+  const ValueName* clear = valueName(f, 0);
+  if (clear == nullptr) return false;
+  for (const std::string_view name : kAtRestNames) {
+    if (name == clear->name) return true;
+  }
+  return false;
+}
+
 // The word's bit fields one by one, for a shown tree: the parameter table by its number
-// (ExtPRMTBL·4 + PRMTBL + 1), and SEW cause bits that are clear hidden behind one line (hidden
-// items still serve filters and -T fields; -V and the details pane skip them).
+// (ExtPRMTBL·4 + PRMTBL + 1); SEW cause bits that are clear and SCW/SSW bits at rest hidden
+// behind one line, so that -V on many axes stays readable (hidden items still serve filters and
+// -T fields; -V and the details pane skip them).
 void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const WordItems& word,
                   std::uint32_t value) {
   guint clear_causes = 0;
+  guint at_rest = 0;
+  char at_rest_names[256] = "";
   for (std::size_t c = 0; word.children[c] != nullptr; ++c) {
     const int hf = *word.children[c];
     const FieldDef& f = kFields[word.child_rows[c]];
     if (f.word == Word::Sew && (f.mask & kSewCauseMask) != 0 && (value & f.mask) == 0) {
       ++clear_causes;
       proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
+      continue;
+    }
+    if ((f.word == Word::Scw || f.word == Word::Ssw) && atRest(f, value)) {
+      g_strlcat(at_rest_names, at_rest == 0 ? "" : ", ", sizeof at_rest_names);
+      g_strlcat(at_rest_names, f.label, sizeof at_rest_names);
+      ++at_rest;
+      proto_item_set_hidden(
+          f.kind == FieldKind::Flag
+              ? proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value)
+              : proto_tree_add_uint(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
     if ((f.word == Word::Scw || f.word == Word::Ssw) && f.mask == parameterTableBits(f.word).low) {
@@ -612,17 +692,71 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
     proto_tree_add_subtree_format(word_tree, tvb, offset, word.length, ett_clear_causes, nullptr,
                                   "%u cause bits clear", clear_causes);
   }
+  if (at_rest > 0) {
+    proto_tree_add_subtree_format(word_tree, tvb, offset, word.length, ett_clear_causes, nullptr,
+                                  "At rest: %s", at_rest_names);
+  }
+}
+
+// The rows of kFields that a filter, column or tap references, by PDO: gathered once per frame
+// for a tree that is not shown, where only those items are built.
+struct ReferencedRows {
+  std::size_t count[2] = {};  // [Pdo::Rx], [Pdo::Tx]
+  std::uint16_t rows[2][kFieldCount];
+};
+static_assert(kFieldCount <= 0xFFFF);
+
+void gatherReferenced(ReferencedRows& referenced) {
+  referenced.count[0] = referenced.count[1] = 0;
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    if (hfi_field[i]->ref_type == HF_REF_TYPE_NONE) continue;
+    const auto pdo = static_cast<std::size_t>(wordDef(kFields[i].word).pdo);
+    referenced.rows[pdo][referenced.count[pdo]++] = static_cast<std::uint16_t>(i);
+  }
+}
+
+// One referenced item, from its word's value: no subtree, no bitmask call adding every bit.
+void addReferencedItem(proto_tree* tree, tvbuff_t* tvb, guint offset, std::size_t row,
+                       const PdoValues& values) {
+  const FieldDef& f = kFields[row];
+  const WordItems& word = word_items[static_cast<std::size_t>(f.word)];
+  const auto raw = static_cast<guint32>(values.raw[static_cast<std::size_t>(f.word)]);
+  switch (f.kind) {
+    case FieldKind::Word:
+      addValue(tree, hf_field[row], tvb, offset + word.offset, word.length, fieldValue(f, values));
+      break;
+    case FieldKind::Flag:
+      proto_tree_add_boolean(tree, hf_field[row], tvb, offset + word.offset, word.length, raw);
+      break;
+    case FieldKind::BitRange:
+      proto_tree_add_uint(tree, hf_field[row], tvb, offset + word.offset, word.length, raw);
+      break;
+    case FieldKind::Part:
+      if (fieldApplies(f, values)) {
+        const FieldSpan span = fieldSpan(f);
+        addValue(tree, hf_field[row], tvb, offset + static_cast<guint>(span.offset),
+                 static_cast<gint>(span.length), fieldValue(f, values));
+      }
+      break;
+  }
 }
 
 // Adds the words of one PDO, each bit field under its word, as the field table defines them.
-void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values) {
+// In a tree that is not shown, only the referenced items.
+void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values,
+            const ReferencedRows& referenced) {
+  if (!shown(tree)) {
+    const auto p = static_cast<std::size_t>(pdo);
+    for (std::size_t k = 0; k < referenced.count[p]; ++k) {
+      addReferencedItem(tree, tvb, offset, referenced.rows[p][k], values);
+    }
+    return;
+  }
   const std::size_t first = firstWordOf(pdo);
-  const bool tree_shown = shown(tree);
   for (std::size_t w = first; w < first + wordCountOf(pdo); ++w) {
     const WordItems& word = word_items[w];
-    if (!wordWanted(tree, word)) continue;
     proto_item* item = nullptr;
-    if (word.children[0] != nullptr && tree_shown) {
+    if (word.children[0] != nullptr) {
       const auto value = static_cast<std::uint32_t>(values.raw[w]);
       item = proto_tree_add_uint(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
                                  value);
@@ -633,12 +767,6 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
       }
       addBitsShown(proto_item_add_subtree(item, ett_word[w]), tvb, offset + word.offset, word,
                    value);
-    } else if (word.children[0] != nullptr) {
-      // BMT_NO_APPEND: the bits are children; appending their names to the word's label
-      // would format every bit of every word on every frame.
-      item = proto_tree_add_bitmask_value_with_flags(tree, tvb, offset + word.offset,
-                                                     hf_field[word.row], ett_word[w], word.children,
-                                                     values.raw[w], BMT_NO_APPEND);
     } else {
       item = addValue(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
                       fieldValue(kFields[word.row], values));
@@ -662,7 +790,7 @@ void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint ancho
   proto_item* item =
       proto_tree_add_string(tree, derivedHf(Derived::Finding), tvb, anchor, 0, f.text);
   proto_item_set_generated(item);
-  if (f.since != 0 && wanted(tree, derivedHf(Derived::SinceFrame))) {
+  if (f.since != 0 && wanted(tree, Derived::SinceFrame)) {
     proto_tree* details = proto_item_add_subtree(item, ett_finding);
     proto_item_set_generated(
         proto_tree_add_uint(details, derivedHf(Derived::SinceFrame), tvb, anchor, 0, f.since));
@@ -673,8 +801,9 @@ void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint ancho
 // What the frame dissector hands each axis's layer.
 struct LayerData {
   const FrameRecord* record;
-  const AxisRecord* axis;  // null: a layer only for findings about the bus
-  bool first;              // the frame's first layer, which carries the bus's findings
+  const AxisRecord* axis;            // null: a layer only for findings about the bus
+  bool first;                        // the frame's first layer, which carries the bus's findings
+  const ReferencedRows* referenced;  // when the tree is not shown
 };
 
 // Findings about the bus, or about an axis this frame does not carry.
@@ -687,36 +816,47 @@ bool frameLevel(const FrameRecord& record, const FindingRecord& f) {
 }
 
 void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, const AxisRecord& r,
-                  guint start, const char* name, const char* state) {
-  proto_item_set_generated(proto_tree_add_string(tree, derivedHf(Derived::Copy), tvb, start, 0,
-                                                 copyKindName(static_cast<CopyKind>(record.copy))));
-  proto_tree_add_uint(tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
-  proto_tree_add_string(tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
-
-  const guint length = tvb_captured_length(tvb);
-  const ByteReader bytes(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length);
+                  guint start, const char* name, const char* state,
+                  const ReferencedRows& referenced) {
+  if (wanted(tree, Derived::Copy)) {
+    proto_item_set_generated(
+        proto_tree_add_string(tree, derivedHf(Derived::Copy), tvb, start, 0,
+                              copyKindName(static_cast<CopyKind>(record.copy))));
+  }
+  if (wanted(tree, Derived::Axis)) {
+    proto_tree_add_uint(tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
+  }
+  if (wanted(tree, Derived::AxisName)) {
+    proto_tree_add_string(tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
+  }
+  const bool message_wanted = (r.flags & kHasTx) && wanted(tree, Derived::Message);
   PdoValues values;
-  if (r.flags & kHasRx) readPdo(Pdo::Rx, bytes, r.rx_offset, values);
-  if (r.flags & kHasTx) readPdo(Pdo::Tx, bytes, r.tx_offset, values);
-  if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values);
-  if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values);
-  if (state != nullptr) {
+  const bool pdo_wanted = shown(tree) || referenced.count[0] + referenced.count[1] > 0;
+  if (message_wanted || pdo_wanted) {
+    const guint length = tvb_captured_length(tvb);
+    const ByteReader bytes(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length);
+    if (r.flags & kHasRx) readPdo(Pdo::Rx, bytes, r.rx_offset, values);
+    if (r.flags & kHasTx) readPdo(Pdo::Tx, bytes, r.tx_offset, values);
+    if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values, referenced);
+    if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values, referenced);
+  }
+  if (state != nullptr && wanted(tree, Derived::State)) {
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::State), tvb, start, 0, state));
   }
-  if (values.has_tx && wanted(tree, derivedHf(Derived::Message))) {
+  if (values.has_tx && message_wanted) {
     char message[128];
     plugin::messageText(values, message, sizeof message);
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::Message), tvb, r.tx_offset, 0, message));
   }
-  if (r.change != nullptr && wanted(tree, derivedHf(Derived::Transition))) {
+  if (r.change != nullptr && wanted(tree, Derived::Transition)) {
     char transition[96];
     plugin::transitionText(*r.change, transition, sizeof transition);
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::Transition), tvb, start, 0, transition));
   }
-  if (r.edge_count > 0 && wanted(tree, derivedHf(Derived::Edge))) {
+  if (r.edge_count > 0 && wanted(tree, Derived::Edge)) {
     for (guint e = 0; e < r.edge_count; ++e) {
       char edge[64];
       plugin::edgeText(r.edges[e], edge, sizeof edge);
@@ -731,20 +871,31 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
   const auto& layer = *static_cast<const LayerData*>(data);
   const FrameRecord& record = *layer.record;
+  // A malformed region's expert info needs an item to be found by its filter.
+  const bool protocol_item =
+      protocolWanted(tree) || (tree != nullptr && layer.axis != nullptr &&
+                               (layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0);
   proto_item* root = nullptr;
-  proto_tree* layer_tree = nullptr;
+  proto_tree* layer_tree = tree;
   guint start = 0;
   if (layer.axis != nullptr) {
     const AxisRecord& r = *layer.axis;
-    const std::optional<DriveState> known_state =
-        (r.flags & kHasState) ? std::optional(static_cast<DriveState>(r.state)) : std::nullopt;
-    const plugin::AxisTexts texts = plugin::axisTexts(r.axis, axisName(r.axis), known_state);
     // Anchor the axis at its first PDO that was captured; an item past the captured bytes
     // would raise an exception.
     start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
-    root = proto_tree_add_protocol_format(tree, proto_ncservo, tvb, start, 0, "%s", texts.label);
-    layer_tree = proto_item_add_subtree(root, ett_axis);
-    addAxisItems(layer_tree, tvb, record, r, start, texts.name, texts.state);
+    const char* name = axisName(r.axis);
+    const char* state =
+        (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
+    if (protocol_item) {
+      const std::optional<DriveState> known_state =
+          (r.flags & kHasState) ? std::optional(static_cast<DriveState>(r.state)) : std::nullopt;
+      const plugin::AxisTexts texts = plugin::axisTexts(r.axis, name, known_state);
+      name = texts.name;
+      state = texts.state;
+      root = proto_tree_add_protocol_format(tree, proto_ncservo, tvb, start, 0, "%s", texts.label);
+      layer_tree = proto_item_add_subtree(root, ett_axis);
+    }
+    addAxisItems(layer_tree, tvb, record, r, start, name, state, *layer.referenced);
     for (const bool rx : {true, false}) {
       if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
       expert_add_info_format(pinfo, root, &ei_region_malformed,
@@ -754,7 +905,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
                              static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
                              rx ? r.rx_offset : r.tx_offset);
     }
-  } else {
+  } else if (protocol_item) {
     root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
   }
@@ -777,7 +928,7 @@ void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
-  if (g_records == nullptr || !proto_is_protocol_enabled(find_protocol_by_id(proto_ncservo))) {
+  if (!g_capture_open || !proto_is_protocol_enabled(find_protocol_by_id(proto_ncservo))) {
     return 0;
   }
   if (!PINFO_FD_VISITED(pinfo)) {
@@ -796,7 +947,9 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
     addExpertOnly(pinfo, *record);
     return static_cast<int>(tvb_captured_length(tvb));
   }
-  LayerData layer{record, nullptr, true};
+  static ReferencedRows referenced;  // dissection is single-threaded
+  if (!shown(tree)) gatherReferenced(referenced);
+  LayerData layer{record, nullptr, true, &referenced};
   if (record->axis_count == 0) {
     call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
   }
@@ -861,7 +1014,16 @@ void registerProtocol() {
   register_cleanup_routine(cleanupCapture);
 }
 
+void keepRegistrations() {
+  for (std::size_t i = 0; i < kFieldCount; ++i) hfi_field[i] = proto_registrar_get_nth(hf_field[i]);
+  for (std::size_t i = 0; i < kDerivedCount; ++i) {
+    hfi_derived[i] = proto_registrar_get_nth(hf_derived[i]);
+  }
+  hfi_protocol = proto_registrar_get_nth(proto_ncservo);
+}
+
 void registerHandoff() {
+  keepRegistrations();
   layer_handle = create_dissector_handle(dissectLayer, proto_ncservo);
   // The postdissector belongs to no protocol, so that it adds no layer: the axes' layers are
   // numbered from 1.

@@ -7,7 +7,10 @@
 #   there; ncservo.edge on every such change after the first, and SE / ServoEn edges exactly where
 #   the decode rows change;
 # - ncservo.since_frame equals the CLI's since_frame on every finding;
-# - `tshark -z expert` shows one line per rule, counting its findings.
+# - `tshark -z expert` shows one line per rule, counting its findings;
+# - readable at many axes: on a simulated 32-axis capture every Info column stays short and names
+#   each rule once; -V hides SCW/SSW bits at rest behind one line per word, and filters and
+#   -T fields still find them.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 cap="$SRC/captures/faults-4axis.pcap"
@@ -34,6 +37,54 @@ run_tshark "$WORK/views.json" -Y "ncservo.edge || ncservo.transition" -T json --
 run_tshark "$WORK/findings.tsv" -Y ncservo.finding -T fields -E occurrence=a -E aggregator='|' \
   -e frame.number -e ncservo.finding -e ncservo.since_frame
 run_tshark "$WORK/expert.txt" -q -z expert
+
+many="$WORK/axes32.pcap"
+"$NCSERVO" simulate --scenario faults --axes 32 --seed 5 -o "$many" >/dev/null ||
+  fail "ncservo simulate --axes 32 exited $?"
+cap=$many run_tshark "$WORK/info32.txt"
+# frame 400: a returned copy of the frame with 29 of the axes
+rest_filter='frame.number == 400 && ncservo.scw.poslock == 0 && ncservo.ssw.zpulse_ack == 0'
+cap=$many run_tshark "$WORK/tree32.txt" -V -O ncservo -c 400 -Y 'frame.number == 400'
+cap=$many run_tshark "$WORK/rest32.txt" -c 400 -Y "$rest_filter" -T fields -E occurrence=a \
+  -e ncservo.scw.poslock -e ncservo.ssw.zpulse_ack
+python3 - "$WORK" <<'PY' || fail "the plugin's views are not readable at 32 axes"
+import re, sys
+work = sys.argv[1]
+ok = True
+infos = [m.group(0) for line in open(f"{work}/info32.txt") for m in [re.search(r"\[NCSERVO.*", line)] if m]
+if not infos:
+    sys.exit("no Info column with [NCSERVO")
+longest = max(infos, key=len)
+if len(longest) > 140:
+    ok = False
+    print(f"Info column of {len(longest)} characters at 32 axes: {longest}")
+for info in infos:
+    rules = re.findall(r"[A-Z]+-\d{3}", info)
+    if len(rules) != len(set(rules)):
+        ok = False
+        print(f"a rule named twice in the Info column: {info}")
+        break
+tree = open(f"{work}/tree32.txt").read()
+axes = tree.count("NC-Servo axis ")
+if axes != 29:
+    ok = False
+    print(f"-V on frame 400 shows {axes} axes, expected 29")
+if "= POSLOCK: normal" in tree or "= ZPulseAck: no" in tree:
+    ok = False
+    print("-V shows SCW/SSW bits at rest one by one")
+if tree.count("At rest: ") < axes:
+    ok = False
+    print(f"-V: {tree.count('At rest: ')} 'At rest' lines for {axes} axes")
+lines_per_axis = (len(tree.splitlines()) - 4) / max(axes, 1)
+if lines_per_axis > 40:
+    ok = False
+    print(f"-V: {lines_per_axis:.0f} lines per axis")
+rest = open(f"{work}/rest32.txt").read().split()
+if len(rest) != 2 or any(v != ",".join(["0"] * 29) for v in rest):
+    ok = False
+    print(f"the hidden bits at rest are not found by a filter and -T fields: {rest[:4]}")
+sys.exit(0 if ok else 1)
+PY
 
 python3 - "$WORK" <<'PY' || fail "the plugin's views differ from the CLI's"
 import bisect, collections, csv, json, re, sys
