@@ -8,6 +8,10 @@ SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
 [ "$(id -u)" = 0 ] || { echo "SKIPPED: needs root (chroot, apt-get in it)"; exit 77; }
+if grep -q '^NCSERVO_SANITIZE:BOOL=ON' "$BUILD/CMakeCache.txt"; then
+  echo "SKIPPED: a sanitizer build's package is not one to install (the plain build's run tests it)"
+  exit 77
+fi
 cached=${NCSERVO_BOOKWORM_ROOT:-$BUILD/bookworm-root}
 if [ ! -x "$cached/usr/bin/apt-get" ]; then
   if [ -z "${CI:-}" ]; then
