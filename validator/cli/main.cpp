@@ -339,7 +339,8 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   FrameClock clock(*timestampModeFromName(args.timestamps));
   LayoutWindow window(decoderOptions(input.files, args.layout));
   std::optional<Validator> validator;
-  cli::WaveformWriter waveforms(input.out, args.axes);
+  const bool to_stdout = input.out == stdout;
+  cli::WaveformWriter waveforms(input.out, to_stdout ? "standard output" : args.output, args.axes);
   CaptureRun run;
   Status written;
   std::int64_t end_ns = 0;
@@ -377,7 +378,7 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
     return kExitCapture;
   }
   noteDecoded(reader, clock, validator->decoder());
-  if (input.out != stdout) {
+  if (!to_stdout) {
     const std::string save = cli::gtkwPathFor(args.output);
     std::FILE* file = std::fopen(save.c_str(), "w");
     if (file == nullptr) {

@@ -18,7 +18,12 @@ namespace {
 constexpr char kFirstIdChar = '!';
 constexpr std::size_t kIdChars = '~' - '!' + 1;
 constexpr std::string_view kBusScope = "bus";
+// The text is written in pieces of about this size.
 constexpr std::size_t kFlushAt = 1u << 16;
+// The records handed to the text writer: a few large chunks in flight keep both threads busy
+// with little locking, and the memory bounded.
+constexpr std::size_t kChunkBytes = 1u << 20;
+constexpr std::size_t kChunksInFlight = 4;
 
 std::string_view shortName(const FieldDef& f) {
   return std::string_view(f.filter).substr(std::strlen("ncservo."));
@@ -105,13 +110,9 @@ namespace {
 // The longest value line: 'b', 64 digits, a space, an identifier code and the newline.
 constexpr std::size_t kMaxValueLine = 1 + 64 + 1 + 8 + 1;
 
-// A vector's or scalar's value at `out`; returns the end. The digits come eight at a time from
-// a table: the hot path of ActPos, which changes every cycle.
-char* writeVcdBits(char* out, std::uint64_t bits, unsigned width) {
-  if (width == 1) {
-    *out++ = (bits & 1) != 0 ? '1' : '0';
-    return out;
-  }
+// A vector's value at `out`; returns the end. The digits come eight at a time from a table: the
+// hot path of ActPos, which changes every cycle.
+char* writeVcdVector(char* out, std::uint64_t bits) {
   static const auto kDigits = [] {
     std::array<std::array<char, 8>, 256> table{};
     for (unsigned byte = 0; byte < 256; ++byte) {
@@ -133,10 +134,171 @@ char* writeVcdBits(char* out, std::uint64_t bits, unsigned width) {
   return out;
 }
 
+// A vector's or scalar's value at `out`; returns the end.
+char* writeVcdBits(char* out, std::uint64_t bits, unsigned width) {
+  if (width == 1) {
+    *out++ = (bits & 1) != 0 ? '1' : '0';
+    return out;
+  }
+  return writeVcdVector(out, bits);
+}
+
 // A real's value at `out` (at most 1 + 16 characters); returns the end.
 char* writeVcdReal(char* out, float value) {
   *out++ = 'r';
   return fmt::format_to(out, FMT_COMPILE("{}"), value);
+}
+
+// What the walking thread hands the text writer: a kind, then its fields, unaligned. A value
+// record names its variable by number (the identifier code's n).
+enum class Record : char {
+  Time,           // std::int64_t ns: "#TIME"
+  Vector,         // std::uint32_t variable, std::uint64_t bits
+  Scalar,         // std::uint32_t variable, std::uint64_t bits (the lowest)
+  Real,           // std::uint32_t variable, float
+  UnknownVector,  // std::uint32_t variable
+  UnknownScalar,  // std::uint32_t variable
+  Text,           // std::uint32_t size, the text
+};
+constexpr std::size_t kMaxValueRecord = 1 + 4 + 8;
+constexpr std::size_t kTextRecordHead = 1 + 4;
+
+template <class T>
+char* store(char* at, T value) {
+  std::memcpy(at, &value, sizeof value);
+  return at + sizeof value;
+}
+template <class T>
+const char* load(const char* at, T& value) {
+  std::memcpy(&value, at, sizeof value);
+  return at + sizeof value;
+}
+
+// The text writer's side: records into VCD text, written to the file.
+class VcdText {
+ public:
+  explicit VcdText(std::FILE* out, const std::string& out_name)
+      : out_(out), out_name_(out_name), text_(kFlushAt + kMaxValueLine) {}
+
+  Status write(const ChunkQueue::Chunk& chunk) {
+    const char* at = chunk.bytes.data();
+    const char* const end = at + chunk.used;
+    while (at < end) {
+      Record kind;
+      at = load(at, kind);
+      if (kind == Record::Text) {
+        std::uint32_t size;
+        at = load(at, size);
+        if (Status put = putText(std::string_view(at, size)); !put) return put;
+        at += size;
+        continue;
+      }
+      char* line = text_.data() + used_;
+      if (kind == Record::Time) {
+        std::int64_t time_ns;
+        at = load(at, time_ns);
+        const fmt::format_int digits(time_ns);
+        *line++ = '#';
+        line = std::copy_n(digits.data(), digits.size(), line);
+        *line++ = '\n';
+      } else {
+        std::uint32_t variable;
+        at = load(at, variable);
+        switch (kind) {
+          case Record::Vector:
+          case Record::Scalar: {
+            std::uint64_t bits;
+            at = load(at, bits);
+            line = writeVcdBits(line, bits, kind == Record::Scalar ? 1 : 64);
+            if (kind == Record::Vector) *line++ = ' ';
+            break;
+          }
+          case Record::Real: {
+            float value;
+            at = load(at, value);
+            line = writeVcdReal(line, value);
+            *line++ = ' ';
+            break;
+          }
+          case Record::UnknownVector:
+            line = std::copy_n("bx ", 3, line);
+            break;
+          default:
+            *line++ = 'x';
+            break;
+        }
+        for (char c : idOf(variable)) *line++ = c;
+        *line++ = '\n';
+      }
+      used_ = static_cast<std::size_t>(line - text_.data());
+      if (used_ >= kFlushAt) {
+        if (Status flushed = flush(); !flushed) return flushed;
+      }
+    }
+    return {};
+  }
+
+  // The rest of the text, and the file's buffer.
+  Status finish() {
+    if (Status flushed = flush(); !flushed) return flushed;
+    if (std::fflush(out_) != 0) return writeFailed();
+    return {};
+  }
+
+ private:
+  Status putText(std::string_view text) {
+    if (used_ + text.size() > text_.size()) {
+      if (Status flushed = flush(); !flushed) return flushed;
+    }
+    if (text.size() > text_.size()) return writeOut(text);
+    std::memcpy(text_.data() + used_, text.data(), text.size());
+    used_ += text.size();
+    return {};
+  }
+
+  Status flush() {
+    const Status written = writeOut(std::string_view(text_.data(), used_));
+    used_ = 0;
+    return written;
+  }
+
+  Status writeOut(std::string_view text) {
+    if (std::fwrite(text.data(), 1, text.size(), out_) != text.size()) return writeFailed();
+    return {};
+  }
+
+  Status writeFailed() const {
+    Error error{out_name_, 0, 0, {}, fmt::format("cannot write: {}", std::strerror(errno))};
+    return fail(std::move(error));
+  }
+
+  // Identifier codes by variable number, made as first needed.
+  const std::string& idOf(std::uint32_t variable) {
+    while (ids_.size() <= variable) ids_.push_back(vcdIdCode(ids_.size()));
+    return ids_[variable];
+  }
+
+  std::FILE* out_;
+  const std::string& out_name_;
+  std::vector<char> text_;
+  std::size_t used_ = 0;
+  std::vector<std::string> ids_;
+};
+
+// The text writer's thread: every chunk in order until the queue closes, or the first failure,
+// which stops the queue too.
+Status writeVcdText(ChunkQueue& queue, std::FILE* out, const std::string& out_name) {
+  VcdText text(out, out_name);
+  while (std::optional<ChunkQueue::Chunk> chunk = queue.pop()) {
+    if (Status written = text.write(*chunk); !written) {
+      queue.stop(written.error());
+      return written;
+    }
+    queue.recycle(std::move(*chunk));
+  }
+  Status finished = text.finish();
+  if (!finished) queue.stop(finished.error());
+  return finished;
 }
 }  // namespace
 
@@ -216,13 +378,22 @@ std::array<WaveformWriter::SignalRange, kWordCount> WaveformWriter::signalsOfWor
   return out;
 }
 
-WaveformWriter::WaveformWriter(std::FILE* out, std::vector<std::string> wanted)
+WaveformWriter::WaveformWriter(std::FILE* out, std::string out_name,
+                               std::vector<std::string> wanted)
     : out_(out),
+      out_name_(std::move(out_name)),
       wanted_(std::move(wanted)),
       signals_(vcdSignals()),
-      signal_ranges_(signalsOfWords()) {
+      signal_ranges_(signalsOfWords()),
+      queue_(kChunksInFlight, kChunkBytes),
+      records_(queue_.spare()) {
   for (const VcdSignal& s : signals_) signal_bits_.push_back(signalBitsOf(s));
-  buffer_.resize(kFlushAt + kMaxValueLine);
+  text_writer_ = std::thread([this] { text_written_ = writeVcdText(queue_, out_, out_name_); });
+}
+
+// Without finish() (a failed header), what was handed over is still written.
+WaveformWriter::~WaveformWriter() {
+  static_cast<void>(closeText());
 }
 
 Status WaveformWriter::writeHeader(const Decoder& decoder) {
@@ -308,10 +479,10 @@ Status WaveformWriter::writeHeader(const Decoder& decoder) {
 
 void WaveformWriter::stamp() {
   if (time_written_) return;
-  const fmt::format_int digits(time_ns_);
-  put("#");
-  put(std::string_view(digits.data(), digits.size()));
-  put("\n");
+  char* at = room(1 + sizeof time_ns_);
+  at = store(at, Record::Time);
+  at = store(at, time_ns_);
+  records_.used = static_cast<std::size_t>(at - records_.bytes.data());
   time_written_ = true;
 }
 
@@ -347,20 +518,23 @@ void WaveformWriter::writeSignal(AxisSlot& slot, std::size_t i, const PdoValues&
   Value& last = slot.values[i];
   if (bits ? last.known && last.bits == *bits : !last.known) return;
   stamp();
-  // Written straight into the buffer: the hot path.
-  char* end = room(kMaxValueLine);
+  // Written straight into the chunk: the hot path.
+  char* at = room(kMaxValueRecord);
+  const bool scalar = s.width == 1;
+  const auto variable = static_cast<std::uint32_t>(slot.first_id + i);
   if (!bits) {
-    end = s.width == 1 ? std::copy_n("x", 1, end) : std::copy_n("bx ", 3, end);
+    at = store(at, scalar ? Record::UnknownScalar : Record::UnknownVector);
+    at = store(at, variable);
   } else if (s.kind == VcdVarKind::Real) {
-    end = writeVcdReal(end, values.floatOf(s.field->word));
-    *end++ = ' ';
+    at = store(at, Record::Real);
+    at = store(at, variable);
+    at = store(at, values.floatOf(s.field->word));
   } else {
-    end = writeVcdBits(end, *bits, s.width);
-    if (s.width > 1) *end++ = ' ';
+    at = store(at, scalar ? Record::Scalar : Record::Vector);
+    at = store(at, variable);
+    at = store(at, *bits);
   }
-  for (char c : ids_[slot.first_id + i]) *end++ = c;
-  *end++ = '\n';
-  used_ = static_cast<std::size_t>(end - buffer_.data());
+  records_.used = static_cast<std::size_t>(at - records_.bytes.data());
   last = Value{bits.value_or(0), bits.has_value()};
 }
 
@@ -442,8 +616,7 @@ Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
   for (const Finding& f : findings) {
     if (AxisSlot* slot = findingSlot(f.axis)) showFinding(*slot, ruleDef(f.rule).code);
   }
-  if (used_ >= kFlushAt) flush();
-  return {};
+  return handed_over_;
 }
 
 Status WaveformWriter::finish(std::int64_t end_ns, const Decoder& decoder) {
@@ -451,23 +624,47 @@ Status WaveformWriter::finish(std::int64_t end_ns, const Decoder& decoder) {
   if (!header_written_) status = writeHeader(decoder);
   advance(end_ns);
   stamp();
-  flush();
-  return status;
+  handOver();
+  const Status written = closeText();
+  return !status ? status : written;
 }
 
 char* WaveformWriter::room(std::size_t size) {
-  if (used_ + size > buffer_.size()) flush();
-  return buffer_.data() + used_;
+  if (records_.used + size > records_.bytes.size()) handOver();
+  return records_.bytes.data() + records_.used;
+}
+
+// The chunk goes to the text writer; once it has stopped, records are dropped.
+void WaveformWriter::handOver() {
+  if (records_.used == 0) return;
+  if (!handed_over_) {
+    records_.used = 0;
+    return;
+  }
+  handed_over_ = queue_.push(std::move(records_));
+  records_ = queue_.spare();
+}
+
+// The text writer writes what was handed over and ends; its status, or the first failure to
+// hand records over (the same failure, seen earlier).
+Status WaveformWriter::closeText() {
+  if (text_writer_.joinable()) {
+    queue_.close();
+    text_writer_.join();
+  }
+  return !handed_over_ ? handed_over_ : text_written_;
 }
 
 void WaveformWriter::put(std::string_view text) {
-  if (used_ + text.size() > buffer_.size()) flush();
-  if (text.size() > buffer_.size()) {
-    std::fwrite(text.data(), 1, text.size(), out_);
-    return;
+  while (!text.empty()) {
+    const std::size_t piece = std::min(text.size(), kChunkBytes - kTextRecordHead);
+    char* at = room(kTextRecordHead + piece);
+    at = store(at, Record::Text);
+    at = store(at, static_cast<std::uint32_t>(piece));
+    std::memcpy(at, text.data(), piece);
+    records_.used = static_cast<std::size_t>(at + piece - records_.bytes.data());
+    text.remove_prefix(piece);
   }
-  std::memcpy(buffer_.data() + used_, text.data(), text.size());
-  used_ += text.size();
 }
 
 // A string variable's value and the space before its identifier code.
@@ -476,11 +673,6 @@ void WaveformWriter::putString(std::string_view text) {
   appendVcdString(value, text);
   value += ' ';
   put(value);
-}
-
-void WaveformWriter::flush() {
-  std::fwrite(buffer_.data(), 1, used_, out_);
-  used_ = 0;
 }
 
 std::string gtkwPathFor(const std::string& vcd_path) {

@@ -10,8 +10,10 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
+#include "chunk_queue.hpp"
 #include "ncservo/decoder.hpp"
 #include "ncservo/drive_state.hpp"
 #include "ncservo/error.hpp"
@@ -52,19 +54,27 @@ const std::vector<VcdSignal>& vcdSignals();
 std::vector<std::string> vcdScopeNames(const std::vector<AxisInfo>& axes);
 
 // Writes a capture's waveforms frame by frame. The header is written once the layout has placed
-// an axis (a start-up teaches the axes before the cyclic traffic begins).
+// an axis (a start-up teaches the axes before the cyclic traffic begins). The caller's thread
+// finds the value changes and hands them over as compact records; a thread of the writer's own
+// turns them into text and writes it (docs/benchmarks.md).
 class WaveformWriter {
  public:
   // `wanted`: the axes to write, by name or index (decode --axis); empty: every axis.
-  WaveformWriter(std::FILE* out, std::vector<std::string> wanted);
+  // `out_name` names `out` in a write error.
+  WaveformWriter(std::FILE* out, std::string out_name, std::vector<std::string> wanted);
+  ~WaveformWriter();
+  WaveformWriter(const WaveformWriter&) = delete;
+  WaveformWriter& operator=(const WaveformWriter&) = delete;
 
   // One frame as the validator judged it, with the findings reported on it; `time_ns` is since
   // the capture's first frame. A frame whose time goes back is written at the latest time.
   // Master copies give the outputs and returned copies the inputs, each at its own time; a
-  // returned copy gives the outputs too where no master copy of them was captured.
+  // returned copy gives the outputs too where no master copy of them was captured. Fails once a
+  // write has failed.
   Status frame(std::int64_t time_ns, const ValidatedFrame& frame, const ByteReader& bytes,
                const std::vector<Finding>& findings, const Decoder& decoder);
-  // The capture ended at `end_ns` (since its first frame).
+  // The capture ended at `end_ns` (since its first frame): the rest is written and the file
+  // flushed. Fails with the first failure, the header's or a write's.
   Status finish(std::int64_t end_ns, const Decoder& decoder);
 
   // The written scopes: "bus", then one per selected axis. Known after the header.
@@ -112,13 +122,16 @@ class WaveformWriter {
   const std::string& findingsId(const AxisSlot& slot) const;
   void showFinding(AxisSlot& slot, std::string_view rule);
   void clearFindings(AxisSlot& slot);
-  // The text to write: value lines go straight into it (room), the rest through put().
+  // The records for the text writer: value changes go straight into the chunk (room), text
+  // through put().
   char* room(std::size_t size);
   void put(std::string_view text);
   void putString(std::string_view text);
-  void flush();
+  void handOver();
+  Status closeText();
 
   std::FILE* out_;
+  std::string out_name_;
   std::vector<std::string> wanted_;
   const std::vector<VcdSignal>& signals_;                    // vcdSignals()
   const std::array<SignalRange, kWordCount> signal_ranges_;  // each word's, in signals_
@@ -141,8 +154,11 @@ class WaveformWriter {
   static constexpr std::size_t kMaxEarlyFindings = 4096;
   std::vector<EarlyFinding> early_findings_;
   std::size_t early_findings_dropped_ = 0;
-  std::vector<char> buffer_;
-  std::size_t used_ = 0;
+  ChunkQueue queue_;
+  ChunkQueue::Chunk records_;
+  Status handed_over_;   // the first failure to hand records over: the text writer stopped
+  Status text_written_;  // the text writer's, read once it has ended
+  std::thread text_writer_;
 };
 
 // A GTKWave save file for `vcd_path`, to be written at `save_path` (GTKWave looks for the VCD
