@@ -347,23 +347,16 @@ std::vector<std::string> vcdScopeNames(const std::vector<AxisInfo>& axes) {
   return names;
 }
 
-// The bits a field shows for these values (a float's own bits, an integer's two's complement
-// of its width: as fieldValue's value, masked to the width), or unknown where the field does not
-// apply.
 WaveformWriter::SignalBits WaveformWriter::signalBitsOf(const VcdSignal& s) {
+  const std::uint64_t mask = s.field->mask;
   const bool real = s.kind == VcdVarKind::Real;
-  return {real ? 0 : s.field->mask, real || s.field->mask == 0 ? 0u : lowestBit(s.field->mask),
-          real || s.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << s.width) - 1,
-          s.field->when != FieldWhen::Always};
-}
-
-std::optional<std::uint64_t> WaveformWriter::fieldBits(const VcdSignal& s, const SignalBits& b,
-                                                       const PdoValues& values) {
-  if (b.conditional ? !fieldApplies(*s.field, values) : !values.has(s.field->word)) {
-    return std::nullopt;
-  }
-  const std::uint64_t raw = values.word(s.field->word);
-  return (b.mask != 0 ? (raw & b.mask) >> b.shift : raw) & b.width_mask;
+  return {mask == 0 ? ~std::uint64_t{0} : mask,
+          mask == 0 ? 0u : lowestBit(mask),
+          s.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << s.width) - 1,
+          static_cast<std::size_t>(s.field->word),
+          s.field->when != FieldWhen::Always,
+          s.width == 1,
+          real};
 }
 
 // The signals of each word: the field table holds a word's rows together.
@@ -499,43 +492,45 @@ void WaveformWriter::advance(std::int64_t time_ns) {
 
 void WaveformWriter::writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo) {
   for (std::size_t w = firstWordOf(pdo); w < firstWordOf(pdo) + wordCountOf(pdo); ++w) {
-    // An unchanged word changes none of its fields but those shown under another word's
-    // condition.
+    // A field whose bits did not change keeps the value written (the word's PDO is here, so it
+    // applies), but for those shown under another word's condition.
     const std::uint64_t raw = values.raw[w];
-    const bool same = slot.word_known[w] && slot.words[w] == raw;
+    const std::uint64_t changed = slot.word_known[w] ? raw ^ slot.words[w] : ~std::uint64_t{0};
     slot.words[w] = raw;
     slot.word_known[w] = true;
     const SignalRange range = signal_ranges_[w];
     for (std::size_t i = range.begin; i < range.end; ++i) {
-      if (!same || signals_[i].field->when != FieldWhen::Always) writeSignal(slot, i, values);
+      const SignalBits& bits = signal_bits_[i];
+      if (bits.conditional || (changed & bits.mask) != 0) writeSignal(slot, i, values);
     }
   }
 }
 
+// Called for a PDO that is there: only a conditional field can be unknown.
 void WaveformWriter::writeSignal(AxisSlot& slot, std::size_t i, const PdoValues& values) {
-  const VcdSignal& s = signals_[i];
-  const std::optional<std::uint64_t> bits = fieldBits(s, signal_bits_[i], values);
+  const SignalBits& b = signal_bits_[i];
+  const bool known = !b.conditional || fieldApplies(*signals_[i].field, values);
+  const std::uint64_t bits = known ? ((values.raw[b.word] & b.mask) >> b.shift) & b.width_mask : 0;
   Value& last = slot.values[i];
-  if (bits ? last.known && last.bits == *bits : !last.known) return;
+  if (known == last.known && bits == last.bits) return;
+  last = Value{bits, known};
   stamp();
   // Written straight into the chunk: the hot path.
   char* at = room(kMaxValueRecord);
-  const bool scalar = s.width == 1;
   const auto variable = static_cast<std::uint32_t>(slot.first_id + i);
-  if (!bits) {
-    at = store(at, scalar ? Record::UnknownScalar : Record::UnknownVector);
+  if (!known) {
+    at = store(at, b.scalar ? Record::UnknownScalar : Record::UnknownVector);
     at = store(at, variable);
-  } else if (s.kind == VcdVarKind::Real) {
+  } else if (b.real) {
     at = store(at, Record::Real);
     at = store(at, variable);
-    at = store(at, values.floatOf(s.field->word));
+    at = store(at, values.floatOf(static_cast<Word>(b.word)));
   } else {
-    at = store(at, scalar ? Record::Scalar : Record::Vector);
+    at = store(at, b.scalar ? Record::Scalar : Record::Vector);
     at = store(at, variable);
-    at = store(at, *bits);
+    at = store(at, bits);
   }
   records_.used = static_cast<std::size_t>(at - records_.bytes.data());
-  last = Value{bits.value_or(0), bits.has_value()};
 }
 
 void WaveformWriter::writeState(AxisSlot& slot, std::optional<DriveState> state) {

@@ -101,17 +101,19 @@ class WaveformWriter {
   struct SignalRange {
     std::size_t begin = 0, end = 0;
   };
-  // How a signal's bits come out of its word, worked out once (the hot path).
+  // How a signal's bits come out of its word, worked out once (the hot path): a float's own
+  // bits, an integer's two's complement of its width (as fieldValue's value, masked to the width).
   struct SignalBits {
-    std::uint64_t mask;  // of the word; 0: the whole word
+    std::uint64_t mask;  // the word's bits it shows: a change in no other bit changes it
     unsigned shift;
     std::uint64_t width_mask;
+    std::size_t word;  // index in PdoValues::raw
     bool conditional;  // shown under a condition (fieldApplies), not only when its PDO is there
+    bool scalar;
+    bool real;
   };
   static std::array<SignalRange, kWordCount> signalsOfWords();
   static SignalBits signalBitsOf(const VcdSignal& signal);
-  static std::optional<std::uint64_t> fieldBits(const VcdSignal& signal, const SignalBits& bits,
-                                                const PdoValues& values);
   Status writeHeader(const Decoder& decoder);
   void advance(std::int64_t time_ns);
   void stamp();
