@@ -4,7 +4,8 @@
 # image styles, a probe, returned copies only, lost returns): every value change agrees with
 # `decode --format jsonl` and the findings with `validate --format jsonl` (check_vcd.py);
 # vcd2fst accepts every VCD and fst2vcd's reading of it agrees too; GTKWave (under Xvfb, when
-# installed) opens the save file with the signals it names; --axis chooses the scopes.
+# installed) opens the save file with the signals it names; --axis chooses the scopes; a failed
+# write is an error.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 CHECK_VCD="$SRC/tests/tools/check_vcd.py"
@@ -63,6 +64,17 @@ rc=$?
 set -e
 [ $rc = 2 ] || fail "--axis axis9: exit $rc, expected 2"
 grep -q "axis9: no such axis" "$WORK/err" || fail "--axis axis9: $(cat "$WORK/err")"
+
+# A failed write is an error, not a short VCD (the text is written on a thread of its own).
+if [ -w /dev/full ]; then
+  set +e
+  "$NCSERVO" decode --format vcd "$WORK/faults-8axis.pcap" >/dev/full 2>"$WORK/err"
+  rc=$?
+  set -e
+  [ $rc = 2 ] || fail "decode vcd to a full disk: exit $rc, expected 2"
+  grep -q "^ncservo: standard output: cannot write: No space left on device$" "$WORK/err" ||
+    fail "decode vcd to a full disk: $(cat "$WORK/err")"
+fi
 
 # GTKWave opens the save file alone, from elsewhere, and shows every signal it names.
 if command -v gtkwave >/dev/null && command -v xvfb-run >/dev/null; then

@@ -346,12 +346,11 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   std::int64_t end_ns = 0;
   const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                           const ByteReader& bytes) {
+    if (!written) return;  // a failed write ends the work: the rest is read, not judged
     const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
     end_ns = std::max(end_ns, time_ns - *run.first_time_ns);
-    if (written) {
-      written = waveforms.frame(time_ns - *run.first_time_ns, frame, bytes, validator->findings(),
-                                validator->decoder());
-    }
+    written = waveforms.frame(time_ns - *run.first_time_ns, frame, bytes, validator->findings(),
+                              validator->decoder());
   };
   const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
   const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
