@@ -367,6 +367,7 @@ std::array<WaveformWriter::SignalRange, kWordCount> WaveformWriter::signalsOfWor
     SignalRange& range = out[static_cast<std::size_t>(signals[i].field->word)];
     if (range.end == 0) range.end = i + 1;
     range.begin = i;
+    range.conditional = range.conditional || signals[i].field->when != FieldWhen::Always;
   }
   return out;
 }
@@ -499,6 +500,7 @@ void WaveformWriter::writeWords(AxisSlot& slot, const PdoValues& values, Pdo pdo
     slot.words[w] = raw;
     slot.word_known[w] = true;
     const SignalRange range = signal_ranges_[w];
+    if (changed == 0 && !range.conditional) continue;
     for (std::size_t i = range.begin; i < range.end; ++i) {
       const SignalBits& bits = signal_bits_[i];
       if (bits.conditional || (changed & bits.mask) != 0) writeSignal(slot, i, values);

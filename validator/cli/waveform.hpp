@@ -100,6 +100,7 @@ class WaveformWriter {
   };
   struct SignalRange {
     std::size_t begin = 0, end = 0;
+    bool conditional = false;  // one of them is (SignalBits::conditional)
   };
   // How a signal's bits come out of its word, worked out once (the hot path): a float's own
   // bits, an integer's two's complement of its width (as fieldValue's value, masked to the width).
