@@ -283,4 +283,24 @@ PY
 validate 1 --format sarif "$WORK/faults.pcap" "$WORK/nano.pcapng" "$WORK/nano.pcapng.gz"
 cmp -s "$WORK/out" "$WORK/located.sarif" || fail "SARIF differs between two runs"
 
+# A report to a pipe or a device is written into it, never renamed over it (as root, renaming
+# over /dev/null would replace the device); through a link, the file it names gets the report.
+mkfifo "$WORK/report-pipe"
+timeout 30 cat "$WORK/report-pipe" >"$WORK/from-pipe" &
+reader=$!
+"$NCSERVO" validate --format json -o "$WORK/report-pipe" --fail-on never "$SRC/captures/faults-4axis.pcap" ||
+  fail "report to a FIFO: exit $?"
+wait "$reader" || true
+[ -p "$WORK/report-pipe" ] || fail "the FIFO was replaced by the report"
+python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$WORK/from-pipe" || fail "no report through the FIFO"
+"$NCSERVO" validate --format json -o /dev/null --fail-on never "$SRC/captures/faults-4axis.pcap" ||
+  fail "report to /dev/null: exit $?"
+[ -c /dev/null ] || fail "/dev/null is no longer a device"
+: >"$WORK/real.json"
+ln -s real.json "$WORK/link.json"
+"$NCSERVO" validate --format json -o "$WORK/link.json" --fail-on never "$SRC/captures/faults-4axis.pcap" ||
+  fail "report through a link: exit $?"
+[ -L "$WORK/link.json" ] || fail "the link was replaced by the report"
+[ -s "$WORK/real.json" ] || fail "the file the link names did not get the report"
+
 echo "reports: verdict per capture, grouped findings, axis names, time_utc, --report, JUnit, SARIF"

@@ -827,8 +827,22 @@ Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<Repor
   std::unique_ptr<ReportWriter> writer(new ReportWriter(policy));
   for (const ReportTarget& target : targets) {
     Output output{target.format, stdout, {}, {}};
-    if (!target.path.empty() && target.path != "-") {
-      const std::filesystem::path path(target.path);
+    std::error_code ec;
+    const auto status = std::filesystem::status(target.path, ec);
+    if (!target.path.empty() && target.path != "-" && std::filesystem::exists(status) &&
+        !std::filesystem::is_regular_file(status)) {
+      // A device or a pipe (/dev/null, a FIFO) is written as it is: renaming a file over it
+      // would replace it.
+      std::FILE* out = std::fopen(target.path.c_str(), "w");
+      if (out == nullptr)
+        return fail(fmt::format("{}: cannot write: {}", target.path, std::strerror(errno)));
+      output = {target.format, out, target.path, {}};
+    } else if (!target.path.empty() && target.path != "-") {
+      // Through a link, the file it names is replaced, not the link.
+      const std::filesystem::path path =
+          std::filesystem::is_symlink(std::filesystem::symlink_status(target.path, ec))
+              ? std::filesystem::weakly_canonical(target.path, ec)
+              : std::filesystem::path(target.path);
       std::string temporary = (path.parent_path() / ("." + path.filename().string() + ".XXXXXX"))
                                   .lexically_normal()
                                   .string();
@@ -845,7 +859,7 @@ Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<Repor
         }
         return fail(fmt::format("{}: cannot write: {}", target.path, std::strerror(errno)));
       }
-      output = {target.format, out, target.path, std::move(temporary)};
+      output = {target.format, out, path.string(), std::move(temporary)};
     }
     writer->outputs_.push_back(std::move(output));
   }
@@ -912,7 +926,13 @@ Status ReportWriter::finish(const std::vector<CaptureReport>& reports) {
   for (Output& o : outputs_) {
     if (o.format->finish != nullptr) o.format->finish({o.out, policy_}, reports);
     if (o.temporary.empty()) {
-      std::fflush(o.out);
+      const bool written = std::fflush(o.out) == 0;
+      const bool closed = o.out == stdout || std::fclose(o.out) == 0;
+      if ((!written || !closed) && status)
+        status =
+            fail(fmt::format("{}: cannot write: {}", o.path.empty() ? "standard output" : o.path,
+                             std::strerror(errno)));
+      o.out = stdout;
       continue;
     }
     const bool written = std::fflush(o.out) == 0 && ::fsync(fileno(o.out)) == 0;
