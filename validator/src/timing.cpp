@@ -77,7 +77,11 @@ void TimingSeries::add(std::int64_t ns) {
     }
     fixReference();
   }
-  const std::ptrdiff_t bin = binOf(ns - *reference_ns_);
+  countDeviation(ns - *reference_ns_);
+}
+
+void TimingSeries::countDeviation(std::int64_t deviation_ns) {
+  const std::ptrdiff_t bin = binOf(deviation_ns);
   if (bin < 0) {
     ++under_;
   } else if (bin >= static_cast<std::ptrdiff_t>(kBinCount)) {
@@ -94,16 +98,7 @@ void TimingSeries::fixReference() {
       samples_.begin() + static_cast<std::ptrdiff_t>(rankOf(0.5, samples_.size()) - 1);
   std::nth_element(samples_.begin(), middle, samples_.end());
   reference_ns_ = first_ + *middle;
-  for (std::int32_t s : samples_) {
-    const std::ptrdiff_t bin = binOf(first_ + s - *reference_ns_);
-    if (bin < 0) {
-      ++under_;
-    } else if (bin >= static_cast<std::ptrdiff_t>(kBinCount)) {
-      ++over_;
-    } else {
-      ++bins_[static_cast<std::size_t>(bin)];
-    }
-  }
+  for (std::int32_t s : samples_) countDeviation(first_ + s - *reference_ns_);
   samples_.clear();
   samples_.shrink_to_fit();
 }

@@ -57,6 +57,8 @@ class TimingSeries {
   // The histogram bin of a deviation, or -1 (under) / kBinCount (over).
   static std::ptrdiff_t binOf(std::int64_t deviation_ns);
   void fixReference();
+  // Into its histogram bin, or under / over.
+  void countDeviation(std::int64_t deviation_ns);
 
   std::uint64_t count_ = 0;
   std::int64_t min_ = 0, max_ = 0;
