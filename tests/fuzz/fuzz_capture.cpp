@@ -36,10 +36,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size > 0 && std::fwrite(data, 1, size, file) != size) std::abort();
   std::fclose(file);
 
-  static std::FILE* sink = std::fopen("/dev/null", "w");
   static const std::vector<std::string> formats = cli::reportFormatNames();
-  const cli::ReportFormat& format = *cli::findReportFormat(formats[size % formats.size()]);
-  cli::ReportWriter writer(sink, format, Severity::Error, false);
+  const cli::ReportFormat* format = cli::findReportFormat(formats[size % formats.size()]);
+  cli::ReportPolicy policy;
+  policy.enabled = RuleSettings{}.enabled;
+  // A device is written as it is, never renamed over.
+  auto opened_writer = cli::ReportWriter::open({{format, "/dev/null"}}, policy);
+  if (!opened_writer) std::abort();
+  cli::ReportWriter& writer = **opened_writer;
   std::vector<cli::CaptureReport> reports(1);
   cli::CaptureReport& report = reports.back();
   report.path = path;
@@ -60,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       fuzz::feedFrame(validator, reader->link(), record.frame, record.time_ns, record.data,
                       record.captured, frame);
       for (const Finding& f : validator.findings()) {
-        ++report.counts[static_cast<std::size_t>(f.severity)];
+        report.tally(f);
         if (writer.keepsFindings()) report.findings.push_back(f);
         writer.finding(report, f);
       }
@@ -72,6 +76,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   }
   writer.endCapture(report);
-  writer.finish(reports);
+  if (!writer.finish(reports)) std::abort();
   return 0;
 }
