@@ -14,19 +14,11 @@
 # read from memory. The goals are reported PASS or MISS; the exit status is 0 whatever they are,
 # and 1 when a tool fails to run. Needs GNU time (/usr/bin/time), zstd and gzip.
 set -euo pipefail
-export LC_ALL=C
+source "$(dirname "$0")/lib.sh"
 
-if [ "${1:-}" = -h ] || [ "${1:-}" = --help ]; then
-  sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'
-  exit 0
-fi
-
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-$root/build}
 duration=${NCSERVO_BENCH_DURATION:-600}
 runs=${NCSERVO_BENCH_RUNS:-3}
 read -r -a ncservo_args <<<"${NCSERVO_BENCH_CMD:-validate --format json --output /dev/null}"
-ncservo=$build/validator/ncservo
 goal_zstd=0.8 goal_gzip=0.5 goal_rss_mib=32
 
 fail() { echo "compressed_ratio: $*" >&2; exit 1; }

@@ -12,16 +12,8 @@
 #                               highest RSS
 # The goals are reported PASS or MISS; the exit status is 0 whatever they are, 1 when a run fails.
 set -euo pipefail
-export LC_ALL=C
+source "$(dirname "$0")/lib.sh"
 
-if [ "${1:-}" = -h ] || [ "${1:-}" = --help ]; then
-  sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'
-  exit 0
-fi
-
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-$root/build}
-ncservo=$build/validator/ncservo
 seconds=${NCSERVO_BENCH_SECONDS:-1000}
 axes=${NCSERVO_BENCH_AXES:-8}
 runs=${NCSERVO_BENCH_RUNS:-3}

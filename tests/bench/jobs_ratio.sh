@@ -10,10 +10,8 @@
 #        NCSERVO_BENCH_DURATION  seconds of each simulated capture (default 60)
 #        NCSERVO_BENCH_RUNS      runs per measurement (default 3)
 set -euo pipefail
-export LC_ALL=C
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-$root/build}
-ncservo=$build/validator/ncservo
+source "$(dirname "$0")/lib.sh"
+
 jobs=${NCSERVO_BENCH_JOBS:-2}
 count=${NCSERVO_BENCH_CAPTURES:-20}
 duration=${NCSERVO_BENCH_DURATION:-60}

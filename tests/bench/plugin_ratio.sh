@@ -13,10 +13,8 @@
 #        NCSERVO_BENCH_GOALS   "OPEN FILTER FIELDS" highest ratios (default "1.15 1.30 1.10")
 # Exit 1 when a ratio is above its goal, 2 when a run fails.
 set -euo pipefail
-export LC_ALL=C  # decimal points in date, bc and printf
+source "$(dirname "$0")/lib.sh"
 
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-build}
 cycles=${NCSERVO_BENCH_CYCLES:-25000}
 runs=${NCSERVO_BENCH_RUNS:-3}
 read -r goal_open goal_filter goal_fields <<<"${NCSERVO_BENCH_GOALS:-1.15 1.30 1.10}"

@@ -25,15 +25,8 @@
 # machine may be busy. The goals are reported PASS or MISS; the exit status is 0 whatever they
 # are, and 1 when a tool fails to build or run.
 set -euo pipefail
-export LC_ALL=C  # decimal points in printf and awk
+source "$(dirname "$0")/lib.sh"
 
-if [ "${1:-}" = -h ] || [ "${1:-}" = --help ]; then
-  sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'
-  exit 0
-fi
-
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-$root/build}
 cycles=${NCSERVO_BENCH_CYCLES:-250000}
 large=${NCSERVO_BENCH_LARGE:-1}
 large_cycles=${NCSERVO_BENCH_LARGE_CYCLES:-1000000}
@@ -42,7 +35,6 @@ runs=${NCSERVO_BENCH_RUNS:-3}
 default_cmd="validate --format json --output /dev/null"
 read -r -a ncservo_args <<<"${NCSERVO_BENCH_CMD:-$default_cmd}"
 runner=$root/tests/tools/tshark-with-plugin.sh
-ncservo=$build/validator/ncservo
 goal_bare=0.5 goal_tshark=30 goal_rss_mib=32
 
 fail() { echo "validate_ratio: $*" >&2; exit 1; }

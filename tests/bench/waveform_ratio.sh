@@ -13,19 +13,11 @@
 #        NCSERVO_BENCH_RUNS     run pairs (default 3)
 # The exit status is 0 whatever the ratio; 1 when a command fails.
 set -euo pipefail
-export LC_ALL=C
+source "$(dirname "$0")/lib.sh"
 
-if [ "${1:-}" = -h ] || [ "${1:-}" = --help ]; then
-  sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'
-  exit 0
-fi
-
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-$root/build}
 seconds=${NCSERVO_BENCH_SECONDS:-60}
 axes=${NCSERVO_BENCH_AXES:-8}
 runs=${NCSERVO_BENCH_RUNS:-3}
-ncservo=$build/validator/ncservo
 [ -x "$ncservo" ] || { echo "waveform_ratio: no $ncservo" >&2; exit 1; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
