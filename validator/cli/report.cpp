@@ -51,8 +51,9 @@ const char* verdictName(Verdict v) {
 namespace {
 using Json = nlohmann::ordered_json;
 
-// The project's repository: SARIF's informationUri, and the base of each rule's helpUri.
-constexpr const char* kRepositoryUri = "https://github.com/ncservo/ncservo";
+// The project's homepage (CMakeLists.txt): SARIF's informationUri, and the base of each rule's
+// helpUri.
+constexpr const char* kRepositoryUri = NCSERVO_HOMEPAGE_URL;
 
 double seconds(const CaptureReport& r, const Stamp& at) {
   return static_cast<double>(at.time_ns - r.first_time_ns) / 1e9;
