@@ -23,10 +23,15 @@ fi
 chmod a+rx "$dir" "$dir/4.0" "$dir/4.0/epan"
 # A plugin built with ASan + UBSan (NCSERVO_SANITIZE) needs the sanitizer runtime preloaded into
 # the stock tshark; its build leaves the runtime's path beside it. Any report aborts tshark.
-# Leaks are not checked: tshark's own allocations at exit would drown ours.
+# Leaks are not checked: tshark's own allocations at exit would drown ours. The extcap helpers
+# tshark starts (e.g. for -G defaultprefs) would inherit the preload, and androiddump then
+# deadlocks at exit (libp11-kit's freelocale on the setlocale lock): they get an empty folder.
 sanitizer_env=()
 if [ "$plugin" != none ] && [ -f "$plugin.preload" ]; then
-  sanitizer_env=(LD_PRELOAD="$(cat "$plugin.preload")"
+  no_extcap=${NCSERVO_PLUGIN_STAGE:-/tmp}/ncservo-no-extcap
+  mkdir -p "$no_extcap"
+  chmod a+rx "$no_extcap"
+  sanitizer_env=(LD_PRELOAD="$(cat "$plugin.preload")" WIRESHARK_EXTCAP_DIR="$no_extcap"
     ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1:halt_on_error=1}"
     UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}")
 fi
