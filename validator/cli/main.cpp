@@ -697,8 +697,9 @@ int runValidate(const ValidateArgs& o) {
 // ---- rules and fields: the library's tables as text ----
 
 void printRuleText(const RuleDef& rule) {
-  fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug, severityName(rule.severity),
-             partyName(rule.party), rule.summary);
+  fmt::print("{:<8} {:<27} {:<8} {:<6} {}{}\n", rule.code, rule.slug, severityName(rule.severity),
+             partyName(rule.party), rule.summary,
+             rule.by_default == ByDefault::Off ? " (off by default)" : "");
 }
 
 const TimeoutDef& timeoutDef(Timeout timeout) {
