@@ -92,6 +92,22 @@ assert lost.startswith("3 cycles lost: 4.000 ms from frame ") and "then 1.000 ms
 PY
 done
 
+# COM-006 and COM-007 enabled with their default limits stay quiet on a clean jittered run
+# (±25 us of a 1 ms cycle, 40 us latency); with limits the run exceeds they fire, once each.
+for capture in jitter jitter-esl; do
+  "$NCSERVO" validate --enable COM-006,COM-007 --format json --fail-on never \
+    "$WORK/$capture.pcap" >"$WORK/$capture-enabled.json"
+  "$NCSERVO" validate --enable COM-006,COM-007 --limit cycle_jitter_percent=1,return_latency_us=30 \
+    --format json --fail-on never "$WORK/$capture.pcap" >"$WORK/$capture-tight.json"
+  python3 - "$WORK/$capture-enabled.json" "$WORK/$capture-tight.json" <<'PY' || fail "$capture: COM-006/COM-007"
+import json, sys
+rules = lambda p: [f["rule"] for f in json.load(open(p))["captures"][0]["findings"]]
+quiet, tight = rules(sys.argv[1]), rules(sys.argv[2])
+assert not {"COM-006", "COM-007"} & set(quiet), quiet
+assert tight.count("COM-007") == 1 and tight.count("COM-006") >= 1, tight
+PY
+done
+
 # decode --timing prints the text report's timing block on standard error.
 for capture in "$WORK/late.pcap" "$WORK/jitter-esl.pcap"; do
   "$NCSERVO" validate --fail-on never "$capture" | sed -n '/^timing (/,/^  worst cycle/p' >"$WORK/validate.txt"
