@@ -10,9 +10,10 @@ for doc in rules fields; do
   diff -u "$WORK/$doc.doc" "$WORK/$doc.md" >"$WORK/$doc.diff" ||
     fail "docs/$doc.md differs from \`ncservo $doc --format markdown\`: $(head -8 "$WORK/$doc.diff")"
 done
-# docs/configuration.md explains each timeout in words: every timeout of the table has its row.
+# docs/configuration.md explains each timeout and limit in words: every one of the tables has its
+# row (the limits' rows start the same way).
 for timeout in $(grep -o '^| `[a-z_]*` | [0-9]* |' "$WORK/rules.md" | cut -d'`' -f2); do
   grep -q "^| \`$timeout\` |" "$SRC/docs/configuration.md" ||
-    fail "docs/configuration.md [timeouts] has no row for the timeout $timeout"
+    fail "docs/configuration.md has no row for the timeout or limit $timeout"
 done
-echo "docs_generated: docs/rules.md and docs/fields.md match the tables; configuration.md names every timeout"
+echo "docs_generated: docs/rules.md and docs/fields.md match the tables; configuration.md names every timeout and limit"

@@ -209,14 +209,16 @@ for rule in ("MSG-001", "SE-002"):
     c = case(faults, rule)
     assert c.find("skipped") is not None and "disabled" in c.find("skipped").text, ET.tostring(c)
 assert case(faults, "SE-001").find("skipped") is None
-assert faults.get("skipped") == "2", faults.attrib
+for rule in ("COM-006", "COM-007"):  # off by default
+    assert "off by default" in case(faults, rule).find("skipped").text, ET.tostring(case(faults, rule))
+assert faults.get("skipped") == "4", faults.attrib
 rules = [c for c in text if c.get("name") != "capture readable"]
-assert len(rules) == 29 and all(c.find("skipped") is not None for c in rules), ET.tostring(text)[:300]
-assert all(c.find("skipped").text.startswith(("UNREADABLE", "disabled")) for c in rules)
-assert text.get("errors") == "1" and text.get("skipped") == "29", text.attrib
+assert len(rules) == 31 and all(c.find("skipped") is not None for c in rules), ET.tostring(text)[:300]
+assert all(c.find("skipped").text.startswith(("UNREADABLE", "disabled", "off by default")) for c in rules)
+assert text.get("errors") == "1" and text.get("skipped") == "31", text.attrib
 noservo = ET.parse(f"{w}/noservo.xml").getroot()[0]
-assert noservo.get("skipped") == "29", noservo.attrib
-assert all(c.find("skipped").text.startswith("NO SERVO") for c in noservo), ET.tostring(noservo)[:300]
+assert noservo.get("skipped") == "31", noservo.attrib
+assert all(c.find("skipped").text.startswith(("NO SERVO", "off by default")) for c in noservo), ET.tostring(noservo)[:300]
 PY
 
 # SARIF: notifications for an unreadable capture and for NO SERVO; results located by frame, with

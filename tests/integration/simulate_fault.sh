@@ -4,15 +4,24 @@
 # layout learned from the start-up), reports RULE plus only the companions captures/README.md
 # documents for it (nothing else at all), and the same with the layout file the simulator wrote;
 # tshark with the plugin, with no preference set, shows the finding on exactly the frames the
-# validator reports.
+# validator reports. A rule off by default (COM-006, COM-007) is enabled for all of them.
 SRC=$1 BUILD=$2 RULE=$3
 shift 3
 source "$SRC/tests/integration/lib.sh"
 "$NCSERVO" simulate --fault "$RULE" "$@" -o "$WORK/capture.pcap" --layout-config "$WORK/layout.toml" \
   2>"$WORK/sim.err" || fail "simulate exit $?: $(cat "$WORK/sim.err")"
 chmod a+r "$WORK/capture.pcap" "$WORK/layout.toml"
+# A rule off by default is enabled: on the command line, and for the plugin in a configuration.
+enable=() plugin_prefs=()
+if "$NCSERVO" rules --explain "$RULE" | grep -q '^  by default:  off'; then
+  enable=(--enable "$RULE")
+  printf '[rules]\nenable = ["%s"]\n' "$RULE" >"$WORK/enable.toml"
+  plugin_prefs=(-o "ncservo.config:$WORK/enable.toml")
+  printf '[rules]\nenable = ["%s"]\n' "$RULE" >>"$WORK/layout.toml"
+fi
 set +e
-"$NCSERVO" validate --format json "$WORK/capture.pcap" >"$WORK/report.json" 2>"$WORK/err.txt"
+"$NCSERVO" validate "${enable[@]}" --format json "$WORK/capture.pcap" >"$WORK/report.json" \
+  2>"$WORK/err.txt"
 rc=$?
 "$NCSERVO" validate --config "$WORK/layout.toml" --format json "$WORK/capture.pcap" \
   >"$WORK/configured.json" 2>>"$WORK/err.txt"
@@ -44,7 +53,7 @@ PY
 
 slug=$("$NCSERVO" rules | awk -v id="$RULE" '$1 == id { print $2 }')
 field="ncservo.rule.${slug//-/_}"
-"$TSHARK" "$PLUGIN" -2 -r "$WORK/capture.pcap" -Y "$field" \
+"$TSHARK" "$PLUGIN" "${plugin_prefs[@]}" -2 -r "$WORK/capture.pcap" -Y "$field" \
   -T fields -e frame.number >"$WORK/plugin.txt" 2>"$WORK/tshark.err" ||
   fail "tshark exit $?: $(cat "$WORK/tshark.err")"
 [ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"

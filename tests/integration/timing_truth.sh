@@ -3,7 +3,8 @@
 # The timing statistics (docs/timing.md) against what the simulator injected: with late and lost
 # cycles and a fixed return latency the truth is known exactly; with send jitter it is the sorted
 # intervals of the capture's own timestamps (stock tshark); the same numbers come out of an ESL
-# probe's capture of the same run, whose capture timestamps are noisy.
+# probe's capture of the same run, whose capture timestamps are noisy. COM-002 says "late" and
+# "lost" for what was injected as such.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
@@ -74,6 +75,39 @@ for path, timestamps in ((sys.argv[2], "capture"), (sys.argv[3], "probe")):
     assert (l["min"], l["median"], l["max"]) == (40.0, 40.0, 40.0), (path, l)
     assert sum(b["count"] for b in c["histogram"]) + c["under"] + c["over"] == c["count"], path
 PY
+# COM-002 tells late from lost: a cycle sent 700 us late (1.7 ms, then 0.3 ms) is late with
+# nothing missing, 3 cycles not sent are lost; the same through an ESL probe's timestamps.
+gap_opts=(simulate --no-startup --axes 2 --duration 2 --late-cycle 0.5:700 --lost-cycles 1.2:3)
+"$NCSERVO" "${gap_opts[@]}" -o "$WORK/gaps.pcap" 2>/dev/null
+"$NCSERVO" "${gap_opts[@]}" --probe esl -o "$WORK/gaps-esl.pcap" 2>/dev/null
+for capture in gaps gaps-esl; do
+  "$NCSERVO" validate --format json --fail-on never "$WORK/$capture.pcap" >"$WORK/$capture.json"
+  python3 - "$WORK/$capture.json" <<'PY' || fail "$capture: COM-002 late and lost: $(grep -o '"COM-002"[^}]*' "$WORK/$capture.json")"
+import json, sys
+findings = [f for f in json.load(open(sys.argv[1]))["captures"][0]["findings"] if f["rule"] == "COM-002"]
+assert len(findings) == 2, findings
+late, lost = (f["message"] for f in findings)
+assert late.startswith("late cycle: 1.700 ms from frame ") and "then 0.300 ms; nothing missing" in late, late
+assert lost.startswith("3 cycles lost: 4.000 ms from frame ") and "then 1.000 ms" in lost, lost
+PY
+done
+
+# COM-006 and COM-007 enabled with their default limits stay quiet on a clean jittered run
+# (±25 us of a 1 ms cycle, 40 us latency); with limits the run exceeds they fire, once each.
+for capture in jitter jitter-esl; do
+  "$NCSERVO" validate --enable COM-006,COM-007 --format json --fail-on never \
+    "$WORK/$capture.pcap" >"$WORK/$capture-enabled.json"
+  "$NCSERVO" validate --enable COM-006,COM-007 --limit cycle_jitter_percent=1,return_latency_us=30 \
+    --format json --fail-on never "$WORK/$capture.pcap" >"$WORK/$capture-tight.json"
+  python3 - "$WORK/$capture-enabled.json" "$WORK/$capture-tight.json" <<'PY' || fail "$capture: COM-006/COM-007"
+import json, sys
+rules = lambda p: [f["rule"] for f in json.load(open(p))["captures"][0]["findings"]]
+quiet, tight = rules(sys.argv[1]), rules(sys.argv[2])
+assert not {"COM-006", "COM-007"} & set(quiet), quiet
+assert tight.count("COM-007") == 1 and tight.count("COM-006") >= 1, tight
+PY
+done
+
 # decode --timing prints the text report's timing block on standard error.
 for capture in "$WORK/late.pcap" "$WORK/jitter-esl.pcap"; do
   "$NCSERVO" validate --fail-on never "$capture" | sed -n '/^timing (/,/^  worst cycle/p' >"$WORK/validate.txt"
@@ -82,4 +116,4 @@ for capture in "$WORK/late.pcap" "$WORK/jitter-esl.pcap"; do
   [ -s "$WORK/validate.txt" ] || fail "$capture: no timing block in the text report"
   diff "$WORK/validate.txt" "$WORK/decode.txt" || fail "$capture: decode --timing differs from validate"
 done
-echo "timing_truth: late, lost, latency and jitter as injected, through capture and probe timestamps"
+echo "timing_truth: late, lost, latency and jitter as injected, through capture and probe timestamps; COM-002 tells late from lost"

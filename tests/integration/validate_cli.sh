@@ -112,14 +112,14 @@ assert sorted((l["rule"], l["axis"], l["frame"]) for l in lines) == want, lines
 sarif = json.load(open(f"{w}/report.sarif"))
 assert sarif["version"] == "2.1.0"
 run = sarif["runs"][0]
-assert len(run["tool"]["driver"]["rules"]) == 29
+assert len(run["tool"]["driver"]["rules"]) == 31
 res = run["results"]
 assert sorted((r["ruleId"], r["properties"]["axis"], r["properties"]["frame"]) for r in res) == want
 assert all(r["locations"] and r["locations"][0]["physicalLocation"]["artifactLocation"]["uri"] for r in res)
 suites = ET.parse(f"{w}/report.junit").getroot()
 assert suites.tag == "testsuites" and len(suites) == 2
 s0 = suites[0]
-assert s0.get("tests") == "29" and s0.get("failures") == "1", s0.attrib  # MSG-001 is a warning
+assert s0.get("tests") == "31" and s0.get("failures") == "1", s0.attrib  # MSG-001 is a warning
 failed = [tc.get("name") for tc in s0 if tc.find("failure") is not None]
 assert failed == ["SE-001 illegal-enable-edge"], failed
 assert suites[1].get("failures") == "0"
@@ -129,7 +129,7 @@ PY
 
 # `rules` lists the whole catalogue.
 "$NCSERVO" rules >"$WORK/rules.txt"
-[ "$(wc -l <"$WORK/rules.txt")" = 29 ] || fail "rules: $(wc -l <"$WORK/rules.txt") lines"
+[ "$(wc -l <"$WORK/rules.txt")" = 31 ] || fail "rules: $(wc -l <"$WORK/rules.txt") lines"
 "$NCSERVO" validate --help | grep -q -- "--fail-on" || fail "validate --help"
 # An output that is one of the inputs, under any name, is a usage error and the capture is intact.
 cp "$SRC/captures/faults-4axis.pcap" "$WORK/input.pcap"

@@ -1034,7 +1034,8 @@ class Injector:
     def _com_002(self):
         k0 = self.k()
         yield from self._outage(DROP, 2)
-        self.expect(k0 + 2, MASTER)
+        # Told lost by the interval after the gap: on the next master frame (RULES.md COM-002).
+        self.expect(k0 + 3, MASTER)
 
     def _com_004(self):
         k0 = self.k()

@@ -148,6 +148,14 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.severity_overrides.at("SE-001"), "warning");
        EXPECT_EQ(c.severity_overrides.at("ZP-003"), "info");
      }},
+    {"timing rules enabled with their limits",
+     "cycle_jitter_percent = 25\nreturn_latency_us = 300\n[rules]\nenable = [\"com-006\", "
+     "\"COM-007\"]\n",
+     [](const Config& c) {
+       EXPECT_EQ(c.limits.at("cycle_jitter_percent"), 25u);
+       EXPECT_EQ(c.limits.at("return_latency_us"), 300u);
+       EXPECT_EQ(c.enabled_rules, (std::vector<std::string>{"COM-006", "COM-007"}));
+     }},
     {"rule IDs in any case, kept as the catalogue spells them",
      "[rules]\ndisable = [\"msg-001\", \"Com-002\"]\nseverity = { \"se-001\" = \"warning\" }\n",
      [](const Config& c) {
@@ -254,7 +262,16 @@ const BadCase kBadCases[] = {
     {"severity with a non-ID", "[rules]\nseverity = { \"EC2\" = \"error\" }\n", 2,
      "rules.severity.EC2", "not a rule ID"},
     {"severity not a table", "[rules]\nseverity = \"error\"\n", 2, "rules.severity", "table"},
-    {"unknown rules key", "[rules]\nenable = []\n", 2, "rules.enable", "unknown key"},
+    {"unknown rules key", "[rules]\nenabled = []\n", 2, "rules.enabled",
+     "unknown key; did you mean 'enable'?"},
+    {"rules.enable with a non-ID", "[rules]\nenable = [\"COM-6\"]\n", 2, "rules.enable",
+     "did you mean 'COM-006'?"},
+    {"cycle_jitter_percent 0", "cycle_jitter_percent = 0\n", 1, "cycle_jitter_percent",
+     "out of range [1, 100]"},
+    {"return_latency_us as a float", "return_latency_us = 2.5\n", 1, "return_latency_us",
+     "expected an integer"},
+    {"mistyped limit", "cycle_jitter_percnt = 10\n", 1, "cycle_jitter_percnt",
+     "did you mean 'cycle_jitter_percent'?"},
     {"rules not a table", "rules = 1\n", 1, "rules", "expected a table"},
     {"TOML syntax error", "default_layout = true\n\ntelegram_failure_limit = = 3\n", 3, "", ""},
     {"TOML unterminated string", "[[axis]]\nname = \"X\noutputs = 0\n", 2, "", ""},

@@ -36,9 +36,10 @@ struct SpecRow {
   const char* slug;
   Severity severity;
   Party party;
-  std::optional<Timeout> timeout;  // the timeout its text names
-  bool delayed;                    // "longer than T": reported once the condition outlasts T
-  RuleKind kind;                   // judged on an axis's model, the bus's events or a slave's
+  std::optional<Timeout> timeout;        // the timeout its text names
+  bool delayed;                          // "longer than T": reported once the condition outlasts T
+  RuleKind kind;                         // judged on an axis's model, the bus's events or a slave's
+  ByDefault by_default = ByDefault::On;  // "off by default" in its text: run only when enabled
 };
 
 // RULES.md, table by table.
@@ -69,6 +70,8 @@ const SpecRow kSpec[] = {
     {"COM-003", "timeout-not-reported", I, DRIVE, kDrive, true, AXIS},
     {"COM-004", "frame-not-returned", W, BUS, kNoTimeout, false, BUSK},
     {"COM-005", "telegram-failure-limit", E, BUS, kNoTimeout, false, AXIS},
+    {"COM-006", "cycle-jitter", W, BUS, kNoTimeout, false, BUSK, ByDefault::Off},
+    {"COM-007", "late-return", W, BUS, kNoTimeout, false, BUSK, ByDefault::Off},
     {"ESM-001", "invalid-al-transition", E, NC, kNoTimeout, false, SLAVE},
     {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, false, AXIS},
     {"ESM-003", "al-error", E, DRIVE, kNoTimeout, false, SLAVE},
@@ -92,6 +95,7 @@ TEST(RuleTable, MatchesRulesMdRowByRow) {
     EXPECT_EQ(rule.timeout, spec.timeout);
     EXPECT_EQ(rule.delayed, spec.delayed);
     EXPECT_EQ(rule.kind, spec.kind);
+    EXPECT_EQ(rule.by_default, spec.by_default);
     EXPECT_NE(rule.check, nullptr) << "every rule is a row with its check";
     EXPECT_NE(rule.describe, nullptr);
     EXPECT_NE(rule.clause, nullptr);
@@ -251,9 +255,10 @@ TEST(RuleTable, SeverityAndPartyNames) {
 TEST(RuleSettings, DefaultsAreRulesMd) {
   const RuleSettings s;
   for (const RuleDef& rule : kRules) {
-    EXPECT_TRUE(s.isEnabled(rule.id)) << rule.code;
+    EXPECT_EQ(s.isEnabled(rule.id), rule.by_default == ByDefault::On) << rule.code;
     EXPECT_EQ(s.severityOf(rule.id), rule.severity) << rule.code;
   }
+  for (const LimitDef& l : kLimits) EXPECT_EQ(s.limitOf(l.id), l.default_value) << l.name;
   for (const TimeoutDef& t : kTimeouts) {
     EXPECT_EQ(s.timeoutNs(t.id), std::int64_t{t.default_ms} * 1'000'000) << t.name;
   }
@@ -283,7 +288,9 @@ TEST(RuleSettings, Disable) {
     RuleSettings s;
     const std::optional<std::string> error = test::errorOf(s.disable(c.code));
     for (const RuleDef& rule : kRules) {
-      EXPECT_EQ(s.isEnabled(rule.id), !(c.disabled && rule.id == *c.disabled)) << rule.code;
+      EXPECT_EQ(s.isEnabled(rule.id),
+                rule.by_default == ByDefault::On && !(c.disabled && rule.id == *c.disabled))
+          << rule.code;
     }
     if (c.disabled) {
       EXPECT_FALSE(error.has_value()) << *error;
@@ -322,7 +329,7 @@ TEST(RuleSettings, SetSeverity) {
     for (const RuleDef& rule : kRules) {
       const bool changed = c.set && &rule == target;
       EXPECT_EQ(s.severityOf(rule.id), changed ? *c.set : rule.severity) << rule.code;
-      EXPECT_TRUE(s.isEnabled(rule.id));
+      EXPECT_EQ(s.isEnabled(rule.id), rule.by_default == ByDefault::On);
     }
     if (c.set) {
       EXPECT_FALSE(error.has_value()) << *error;
@@ -378,6 +385,8 @@ TEST(RuleSettings, ApplyAConfiguration) {
   config.telegram_failure_limit = 7;
   config.timeouts_ms = {{"drive_response", 30}, {"clear_response", 250}};
   config.disabled_rules = {"MSG-001", "COM-002"};
+  config.enabled_rules = {"COM-006"};
+  config.limits = {{"cycle_jitter_percent", 30}};
   config.severity_overrides = {{"EC-002", "error"}, {"COM-003", "warning"}};
   AxisConfig x, y;
   x.servo_ready_mode = 0;
@@ -394,6 +403,10 @@ TEST(RuleSettings, ApplyAConfiguration) {
   EXPECT_FALSE(s.isEnabled(RuleId::Msg001));
   EXPECT_FALSE(s.isEnabled(RuleId::Com002));
   EXPECT_TRUE(s.isEnabled(RuleId::Com001));
+  EXPECT_TRUE(s.isEnabled(RuleId::Com006));
+  EXPECT_FALSE(s.isEnabled(RuleId::Com007)) << "off by default, not enabled";
+  EXPECT_EQ(s.limitOf(Limit::CycleJitterPercent), 30u);
+  EXPECT_EQ(s.limitOf(Limit::ReturnLatencyUs), 500u) << "untouched";
   EXPECT_EQ(s.severityOf(RuleId::Ec002), E);
   EXPECT_EQ(s.severityOf(RuleId::Com003), W);
   EXPECT_EQ(s.severityOf(RuleId::Ec001), E);
@@ -411,7 +424,77 @@ TEST(RuleSettings, ApplyKeepsWhatTheConfigurationDoesNotSet) {
   EXPECT_EQ(s.timeoutNs(Timeout::NcRelease), 80'000'000);
   EXPECT_EQ(s.servo_ready_mode, 0);
   EXPECT_EQ(s.telegram_failure_limit, 3u);
-  for (const RuleDef& rule : kRules) EXPECT_TRUE(s.isEnabled(rule.id));
+  for (const RuleDef& rule : kRules)
+    EXPECT_EQ(s.isEnabled(rule.id), rule.by_default == ByDefault::On);
+}
+
+struct EnableCase {
+  const char* code;
+  std::optional<RuleId> enabled;  // none: rejected
+  const char* error;              // a text the error contains
+};
+const EnableCase kEnableCases[] = {
+    {"COM-006", RuleId::Com006, nullptr},
+    {"com-007", RuleId::Com007, nullptr},
+    {"MSG-001", RuleId::Msg001, nullptr},  // on already: stays on
+    {"COM-08", std::nullopt, "unknown rule ID 'COM-08'"},
+};
+
+TEST(RuleSettings, Enable) {
+  for (const EnableCase& c : kEnableCases) {
+    SCOPED_TRACE(c.code);
+    RuleSettings s;
+    const std::optional<std::string> error = test::errorOf(s.enable(c.code));
+    for (const RuleDef& rule : kRules) {
+      EXPECT_EQ(s.isEnabled(rule.id),
+                rule.by_default == ByDefault::On || (c.enabled && rule.id == *c.enabled))
+          << rule.code;
+    }
+    if (c.enabled) {
+      EXPECT_FALSE(error.has_value()) << *error;
+    } else {
+      ASSERT_TRUE(error.has_value());
+      EXPECT_NE(error->find(c.error), std::string::npos) << *error;
+    }
+  }
+}
+
+struct LimitCase {
+  const char* name;
+  std::int64_t value;
+  bool ok;
+  std::vector<const char*> error;
+};
+const LimitCase kLimitCases[] = {
+    {"cycle_jitter_percent", 25, true, {}},
+    {"cycle_jitter_percent", 1, true, {}},
+    {"cycle_jitter_percent", 0, false, {"cycle_jitter_percent = 0", "1 to 100"}},
+    {"cycle_jitter_percent", 101, false, {"101"}},
+    {"return_latency_us", 1'000'000, true, {}},
+    {"return_latency_us", 1'000'001, false, {"return_latency_us", "1000001"}},
+    {"return_latency",
+     5,
+     false,
+     {"unknown limit 'return_latency'", "did you mean 'return_latency_us'?"}},
+};
+
+TEST(RuleSettings, SetLimit) {
+  for (const LimitCase& c : kLimitCases) {
+    SCOPED_TRACE(std::string(c.name) + " = " + std::to_string(c.value));
+    RuleSettings s;
+    const std::optional<std::string> error = test::errorOf(s.setLimit(c.name, c.value));
+    for (const LimitDef& l : kLimits) {
+      const bool changed = c.ok && c.name == std::string(l.name);
+      EXPECT_EQ(s.limitOf(l.id), changed ? static_cast<std::uint32_t>(c.value) : l.default_value)
+          << l.name;
+    }
+    if (c.ok) {
+      EXPECT_FALSE(error.has_value()) << *error;
+    } else {
+      ASSERT_TRUE(error.has_value());
+      for (const char* text : c.error) EXPECT_NE(error->find(text), std::string::npos) << *error;
+    }
+  }
 }
 
 TEST(RuleSettings, ApplyRejectsUnknownNamesNamingThem) {

@@ -275,6 +275,14 @@ class ValidatorDriver {
         frames_.push_back({at, frame_});
       }
     }
+    finish();
+  }
+
+  // The capture ends; returns the findings reported on its last frame then.
+  const std::vector<Finding>& finish() {
+    validator_->finish();
+    all_.insert(all_.end(), validator_->findings().begin(), validator_->findings().end());
+    return validator_->findings();
   }
 
   // The frame number a script gave a cycle's copy (0 if it was not captured).

@@ -64,6 +64,13 @@ RuleSettings timeoutMs(const char* name, std::int64_t ms) {
   EXPECT_TRUE(s.setTimeout(name, ms));
   return s;
 }
+// An off-by-default timing rule enabled with its limit (RULES.md COM-006, COM-007).
+RuleSettings timingRule(const char* code, const char* limit, std::int64_t value) {
+  RuleSettings s;
+  EXPECT_TRUE(s.enable(code));
+  EXPECT_TRUE(s.setLimit(limit, value));
+  return s;
+}
 RuleSettings failureLimit(std::uint32_t limit) {
   RuleSettings s;
   s.telegram_failure_limit = limit;
@@ -119,7 +126,7 @@ std::vector<RuleCase> ruleCases() {
   const Id SSW1 = Id::Ssw001, SCW1 = Id::Scw001, RDY1 = Id::Rdy001, FLT1 = Id::Flt001;
   const Id PT1 = Id::Pt001, MSG1 = Id::Msg001;
   const Id COM1 = Id::Com001, COM2 = Id::Com002, COM3 = Id::Com003, COM4 = Id::Com004;
-  const Id COM5 = Id::Com005;
+  const Id COM5 = Id::Com005, COM6 = Id::Com006, COM7 = Id::Com007;
   const std::uint32_t incr = kSswRunning | kIncremental;  // enabled, incremental encoder
   return {
     // ---- SE-001: SE becomes 0x2 from anything but 0x1 (immediate) ----
@@ -376,14 +383,27 @@ std::vector<RuleCase> ruleCases() {
      {bus(COM1, R(10), R(10))}, "expected 6"},
     {"COM001 not for the expected WKC", {COM1}, Script().axes(2), {}},
 
-    // ---- COM-002: interval between master copies more than 1.5 x the median ----
-    {"COM002 two cycles missing", {COM2}, Script().missing(20, 22), {bus(COM2, M(22), M(19))},
-     "2 cycles missing"},
+    // ---- COM-002: interval between master copies more than 1.5 x the median, judged late or
+    // lost at the next master copy ----
+    {"COM002 two cycles lost", {COM2}, Script().missing(20, 22), {bus(COM2, M(23), M(19))},
+     "2 cycles lost: 3.000 ms from frame 39 to frame 41, then 1.000 ms (1.000 ms nominal)"},
     {"COM002 one outage, one finding; a second outage, another", {COM2},
      Script().missing(20, 21).missing(40, 43),
-     {bus(COM2, M(21), M(19)), bus(COM2, M(43), M(39))}},
+     {bus(COM2, M(22), M(19)), bus(COM2, M(44), M(39))}},
     {"COM002 the 9th interval is judged", {COM2}, Script().missing(9, 10),
-     {bus(COM2, M(10), M(8))}, "1 cycle missing"},
+     {bus(COM2, M(11), M(8))}, "1 cycle lost"},
+    {"COM002 late: a long interval, then a short one", {COM2},
+     Script().time(M(20), kEpochNs + 20 * kMs + 600 * kUs)
+         .time(R(20), kEpochNs + 20 * kMs + 610 * kUs),
+     {bus(COM2, M(21), M(19))},
+     "late cycle: 1.600 ms from frame 39 to frame 41, then 0.400 ms; nothing missing"},
+    {"COM002 at the capture's end: late or lost cannot be told", {COM2},
+     Script(30).missing(27, 29), {bus(COM2, R(29), M(26))},
+     "2 cycles lost: 3.000 ms from frame 53 to frame 55 (1.000 ms nominal); the capture ends "
+     "before the next cycle: late or lost cannot be told"},
+    {"COM002 before a new segment: late or lost cannot be told", {COM2},
+     Script().missing(20, 22).shift(23, 5000 * kMs), {bus(COM2, M(23), M(19))},
+     "a capture segment starts before the next cycle: late or lost cannot be told"},
     {"COM002 not before 8 intervals", {COM2}, Script().missing(8, 9), {}},
     {"COM002 not for exactly 1.5 cycles", {COM2},
      Script().time(M(20), kEpochNs + 20 * kMs + 500 * kUs)
@@ -391,10 +411,49 @@ std::vector<RuleCase> ruleCases() {
     {"COM002 just over 1.5 cycles", {COM2},
      Script().time(M(20), kEpochNs + 20 * kMs + 500 * kUs + 1)
          .time(R(20), kEpochNs + 20 * kMs + 500 * kUs + 1),
-     {bus(COM2, M(20), M(19))}, "1 cycle missing"},
+     {bus(COM2, M(21), M(19))}, "late cycle"},
     {"COM002 on returned copies when no master copy is captured", {COM2},
-     Script().noMaster(0, kEnd).missing(20, 23), {bus(COM2, R(23), R(19))}, "3 cycles missing"},
+     Script().noMaster(0, kEnd).missing(20, 23), {bus(COM2, R(24), R(19))}, "3 cycles lost"},
     {"COM002 not for returned copies missing", {COM2}, Script().noReturned(20, 23), {}},
+
+    // ---- COM-006: a master copy's interval deviates more than cycle_jitter_percent ----
+    {"COM006 one finding per run of deviating cycles", {COM6},
+     Script()
+         .time(M(20), kEpochNs + 20 * kMs + 200 * kUs)
+         .time(R(20), kEpochNs + 20 * kMs + 210 * kUs)
+         .time(M(40), kEpochNs + 40 * kMs - 300 * kUs)
+         .time(R(40), kEpochNs + 40 * kMs - 290 * kUs)
+         .settings(timingRule("COM-006", "cycle_jitter_percent", 10)),
+     {bus(COM6, M(20), M(19)), bus(COM6, M(40), M(39))}, "more than cycle_jitter_percent = 10"},
+    {"COM006 off by default", {COM6},
+     Script().time(M(20), kEpochNs + 20 * kMs + 200 * kUs)
+         .time(R(20), kEpochNs + 20 * kMs + 210 * kUs), {}},
+    {"COM006 not for exactly the limit", {COM6},
+     Script()
+         .time(M(20), kEpochNs + 20 * kMs + 100 * kUs)
+         .time(R(20), kEpochNs + 20 * kMs + 110 * kUs)
+         .settings(timingRule("COM-006", "cycle_jitter_percent", 10)), {}},
+    {"COM006 a gap is COM-002's", {COM6},
+     Script().missing(20, 22).settings(timingRule("COM-006", "cycle_jitter_percent", 10)), {}},
+    {"COM006 a late cycle is COM-002's, its short interval too", {COM6},
+     Script()
+         .time(M(20), kEpochNs + 20 * kMs + 600 * kUs)
+         .time(R(20), kEpochNs + 20 * kMs + 610 * kUs)
+         .settings(timingRule("COM-006", "cycle_jitter_percent", 10)), {}},
+
+    // ---- COM-007: a returned copy later than return_latency_us after its master copy ----
+    {"COM007 one finding per run of late returns", {COM7},
+     Script()
+         .time(R(20), kEpochNs + 20 * kMs + 600 * kUs)
+         .time(R(21), kEpochNs + 21 * kMs + 700 * kUs)
+         .time(R(30), kEpochNs + 30 * kMs + 501 * kUs)
+         .settings(timingRule("COM-007", "return_latency_us", 500)),
+     {bus(COM7, R(20), M(20)), bus(COM7, R(30), M(30))}, "more than return_latency_us = 500"},
+    {"COM007 off by default", {COM7},
+     Script().time(R(20), kEpochNs + 20 * kMs + 600 * kUs), {}},
+    {"COM007 not for exactly the limit", {COM7},
+     Script().time(R(20), kEpochNs + 20 * kMs + 500 * kUs)
+         .settings(timingRule("COM-007", "return_latency_us", 500)), {}},
 
     // ---- COM-003: 3 or more lost cycles and ECatTErr not raised within drive_response ----
     {"COM003 three returned with WKC 0", {COM3}, Script().wkc(10, 13, 0), {on(COM3, M(34), R(13))},
@@ -463,7 +522,7 @@ std::vector<RuleCase> ruleCases() {
     {"a pause longer than capture_pause: no gap, no lost cycles", {COM2, COM3, COM4, COM5},
      Script().shift(20, 3'600'000 * kMs), {}},
     {"a pause of capture_pause exactly is a gap", {COM2},
-     Script().shift(20, 999 * kMs), {bus(COM2, M(20), M(19))}},
+     Script().shift(20, 999 * kMs), {bus(COM2, M(21), M(19))}},
     {"capture_pause 100 ms: a pause of 500 ms starts a segment", {COM2, COM3, COM5},
      Script().shift(20, 500 * kMs).settings(timeoutMs("capture_pause", 100)), {}},
   };
@@ -666,6 +725,30 @@ TEST(ValidatorTime, FindingsCarryTheirFramesOwnTimestamps) {
   EXPECT_EQ(f.since.time_ns, kEpochNs + 10 * kMs);
   EXPECT_EQ(f.since.frame, driver->frameOf(M(10)));
   EXPECT_NE(f.message.find("21.000 ms"), std::string::npos) << f.message;
+}
+
+// RULES.md COM-002: a late cycle loses nothing; lost cycles count as failures of every axis.
+TEST(ValidatorCom002, TheVerdictDecidesTheFailureCount) {
+  struct Row {
+    const char* name;
+    Script script;
+    std::uint32_t failures;
+  };
+  const std::vector<Row> rows = {
+      {"late",
+       Script()
+           .time(M(20), kEpochNs + 20 * kMs + 900 * kUs)
+           .time(R(20), kEpochNs + 20 * kMs + 910 * kUs),
+       0},
+      {"two lost", Script().missing(20, 22), 2},
+      {"two lost at the capture's end", Script(30).missing(27, 29), 2},
+  };
+  for (const Row& row : rows) {
+    const auto driver = runScript(row.script);
+    const AxisModel* axis = driver->validator().axis(0);
+    ASSERT_NE(axis, nullptr) << row.name;
+    EXPECT_EQ(axis->totalFailures(), row.failures) << row.name;
+  }
 }
 
 // ---- COM-002's statistics and COM-003 after mixed outages ----

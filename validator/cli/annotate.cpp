@@ -47,14 +47,17 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
   std::optional<Validator> validator;
   Judged judged;
   CaptureRun run;
-  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                            const ByteReader& bytes) {
-    validator->onFrame(number, time_ns, walked, bytes);
+  const auto keep = [&] {
     for (const Finding& f : validator->findings()) {
       judged.comments[f.at.frame].push_back(findingComment(f, validator->decoder().axes()));
       judged.finding_times_ns.push_back(f.at.time_ns);
       ++judged.findings;
     }
+  };
+  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                            const ByteReader& bytes) {
+    validator->onFrame(number, time_ns, walked, bytes);
+    keep();
   };
   const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
   const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
@@ -64,6 +67,10 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
   const Status status =
       streamCapture(**opened, clock, window, {start, validate, {}, layout_only}, run);
   if (!status) return fail(status.error());
+  if (validator) {
+    validator->finish();
+    keep();
+  }
   return judged;
 }
 

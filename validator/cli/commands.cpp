@@ -52,12 +52,23 @@ void addRuleOptions(CLI::App& command, RuleArgs& rules) {
       ->delimiter(',')
       ->allow_extra_args(false);
   command
+      .add_option("--enable", rules.enable,
+                  "rule IDs to run that are off by default, comma-separated (repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
       .add_option("--severity", rules.severities, "ID=LEVEL: change a rule's severity (repeatable)")
       ->delimiter(',')
       ->allow_extra_args(false);
   command
       .add_option("--timeout", rules.timeouts,
                   "NAME=MS: change a timeout (docs/rules.md; repeatable)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  command
+      .add_option("--limit", rules.limits,
+                  "NAME=VALUE: change a rule's limit, e.g. cycle_jitter_percent=20 (docs/rules.md; "
+                  "repeatable)")
       ->delimiter(',')
       ->allow_extra_args(false);
   command
@@ -84,19 +95,34 @@ Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
     if (Status s = settings.setSeverity(pair.substr(0, eq), pair.substr(eq + 1)); !s)
       return option("--severity", s);
   }
+  for (const std::string& id : o.enable) {
+    if (Status s = settings.enable(id); !s) return option("--enable", s);
+  }
+  // NAME=N with N a whole number, or -1.
+  auto number = [](const std::string& pair, std::size_t eq) {
+    std::int64_t n = -1;
+    try {
+      std::size_t used = 0;
+      n = std::stoll(pair.substr(eq + 1), &used);
+      if (used != pair.size() - eq - 1) n = -1;
+    } catch (const std::exception&) {
+      n = -1;
+    }
+    return n;
+  };
   for (const std::string& pair : o.timeouts) {
     const auto eq = pair.find('=');
     if (eq == std::string::npos) return fail("--timeout " + pair + ": expected NAME=MS");
-    std::int64_t ms = -1;
-    try {
-      std::size_t used = 0;
-      ms = std::stoll(pair.substr(eq + 1), &used);
-      if (used != pair.size() - eq - 1) ms = -1;
-    } catch (const std::exception&) {
-      ms = -1;
-    }
+    const std::int64_t ms = number(pair, eq);
     if (ms < 0) return fail("--timeout " + pair + ": expected a number of milliseconds");
     if (Status s = settings.setTimeout(pair.substr(0, eq), ms); !s) return option("--timeout", s);
+  }
+  for (const std::string& pair : o.limits) {
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos) return fail("--limit " + pair + ": expected NAME=VALUE");
+    const std::int64_t value = number(pair, eq);
+    if (value < 0) return fail("--limit " + pair + ": expected a whole number");
+    if (Status s = settings.setLimit(pair.substr(0, eq), value); !s) return option("--limit", s);
   }
   if (o.servo_ready_mode) settings.servo_ready_mode = o.servo_ready_mode;
   return {};

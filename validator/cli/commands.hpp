@@ -51,11 +51,13 @@ DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args);
 // The rule settings of the command line (INTERFACES.md `validate`).
 struct RuleArgs {
   std::vector<std::string> disable;
+  std::vector<std::string> enable;
   std::vector<std::string> severities;
+  std::vector<std::string> limits;
   std::vector<std::string> timeouts;
   std::optional<int> servo_ready_mode;
 };
-// --disable, --severity, --timeout and --servo-ready-mode.
+// --disable, --enable, --severity, --timeout, --limit and --servo-ready-mode.
 void addRuleOptions(CLI::App& command, RuleArgs& rules);
 // The settings from the rules' defaults, the config file, then the command line.
 Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,

@@ -480,18 +480,21 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   std::optional<cli::TimelineRecorder> timelines;
   if (writer.drawsTimelines()) timelines.emplace(settings);
   CaptureRun run;
-  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                            const ByteReader& bytes) {
-    report.first_time_ns = *run.first_time_ns;  // findings are written as they come
-    report.last_time_ns = time_ns;
-    const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
-    if (timelines) timelines->frame(number, time_ns - report.first_time_ns, frame, bytes);
+  const auto keepFindings = [&] {
     for (const Finding& f : validator->findings()) {
       report.tally(f);
       if (output.live == nullptr || writer.keepsFindings()) report.findings.push_back(f);
       if (timelines) timelines->finding(f);
       if (output.live != nullptr) output.live->finding(report, f);
     }
+  };
+  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                            const ByteReader& bytes) {
+    report.first_time_ns = *run.first_time_ns;  // findings are written as they come
+    report.last_time_ns = time_ns;
+    const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
+    if (timelines) timelines->frame(number, time_ns - report.first_time_ns, frame, bytes);
+    keepFindings();
   };
   const auto start = [&](const DecoderOptions& layout) {
     validator.emplace(layout, settings);
@@ -503,6 +506,10 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   };
   const Status status =
       streamCapture(*reader, clock, window, {start, validate, time_window, layout_only}, run);
+  if (validator) {
+    validator->finish();
+    keepFindings();
+  }
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
   if (timelines) report.timelines = timelines->finish();
@@ -690,8 +697,9 @@ int runValidate(const ValidateArgs& o) {
 // ---- rules and fields: the library's tables as text ----
 
 void printRuleText(const RuleDef& rule) {
-  fmt::print("{:<8} {:<27} {:<8} {:<6} {}\n", rule.code, rule.slug, severityName(rule.severity),
-             partyName(rule.party), rule.summary);
+  fmt::print("{:<8} {:<27} {:<8} {:<6} {}{}\n", rule.code, rule.slug, severityName(rule.severity),
+             partyName(rule.party), rule.summary,
+             rule.by_default == ByDefault::Off ? " (off by default)" : "");
 }
 
 const TimeoutDef& timeoutDef(Timeout timeout) {
@@ -705,12 +713,16 @@ std::string timeoutText(const RuleDef& rule) {
   return fmt::format("{} ({} ms)", t.name, t.default_ms);
 }
 
+const char* byDefaultName(ByDefault by_default) {
+  return by_default == ByDefault::On ? "on" : "off";
+}
+
 void printRuleMarkdown(const RuleDef& rule) {
   // An anchor per rule: SARIF's helpUri (report.cpp) links each rule here.
-  fmt::print("| <a id=\"{}\"></a>{} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n",
+  fmt::print("| <a id=\"{}\"></a>{} | `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n",
              cli::ruleAnchor(rule), rule.code, rule.slug, severityName(rule.severity),
-             partyName(rule.party), ruleKindName(rule.kind), describeReads(rule.reads),
-             timeoutText(rule), rule.clause, rule.summary);
+             byDefaultName(rule.by_default), partyName(rule.party), ruleKindName(rule.kind),
+             describeReads(rule.reads), timeoutText(rule), rule.clause, rule.summary);
 }
 
 // The timeouts with their defaults and the rules that use them.
@@ -729,6 +741,18 @@ void printTimeoutsMarkdown() {
   }
 }
 
+// The timeouts, then the limits of the rules that are off by default.
+void printRuleSettingsMarkdown() {
+  printTimeoutsMarkdown();
+  fmt::print(
+      "\n| limit | default | range | used by |\n"
+      "|---|---|---|---|\n");
+  for (const LimitDef& l : kLimits) {
+    fmt::print("| `{}` | {} | {} to {} ({}) | {} |\n", l.name, l.default_value, l.min, l.max,
+               l.unit, ruleDef(l.rule).code);
+  }
+}
+
 // `rules`'s formats: a header, then one line per rule, then an optional footer.
 struct RuleListFormat {
   const char* name;
@@ -739,9 +763,10 @@ struct RuleListFormat {
 const RuleListFormat kRuleListFormats[] = {
     {"text", "", printRuleText, nullptr},
     {"markdown",
-     "| ID | slug | severity | party | judged on | reads | timeout (default) | clause | summary |\n"
-     "|---|---|---|---|---|---|---|---|---|\n",
-     printRuleMarkdown, printTimeoutsMarkdown},
+     "| ID | slug | severity | by default | party | judged on | reads | timeout (default) | clause "
+     "| summary |\n"
+     "|---|---|---|---|---|---|---|---|---|---|\n",
+     printRuleMarkdown, printRuleSettingsMarkdown},
 };
 
 // `rules --explain ID`: one rule in full, from its row of the rule table.
@@ -750,6 +775,15 @@ void explainRule(const RuleDef& rule) {
   fmt::print("  fires when:  {}\n", rule.summary);
   fmt::print("  severity:    {} (change it with --severity {}=LEVEL)\n",
              severityName(rule.severity), rule.code);
+  if (rule.by_default == ByDefault::Off) {
+    fmt::print("  by default:  off (run it with --enable {} or [rules] enable)\n", rule.code);
+  }
+  for (const LimitDef& l : kLimits) {
+    if (l.rule != rule.id) continue;
+    fmt::print(
+        "  limit:       {}, default {} ({}) (--limit {}=VALUE, or {} in the configuration)\n",
+        l.name, l.default_value, l.unit, l.name, l.name);
+  }
   fmt::print("  party:       {}\n", partyName(rule.party));
   fmt::print("  judged on:   {}\n", ruleKindName(rule.kind));
   if (rule.timeout) {

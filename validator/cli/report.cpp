@@ -402,7 +402,9 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       // rule that did not fire) a capture where not every configured servo was decoded.
       std::string not_judged;
       if (!sink.policy.enabled[static_cast<std::size_t>(rule.id)]) {
-        not_judged = "disabled (--disable or the configuration's [rules])";
+        not_judged = rule.by_default == ByDefault::Off
+                         ? "off by default (--enable or the configuration's [rules] enable)"
+                         : "disabled (--disable or the configuration's [rules])";
       } else if (r.unopened()) {
         not_judged = "UNREADABLE: " + *r.error;
       } else if (fired.empty() && !r.coverage.complete()) {

@@ -14,6 +14,13 @@ constexpr std::int64_t kGapNumerator = 3, kGapDenominator = 2;
 constexpr std::size_t kMaxWkcRecords = 64;
 using Outcome = AxisAccount::Outcome;
 
+// round(interval ÷ nominal) − 1: the cycles an interval leaves out (RULES.md COM-002).
+std::uint32_t missingCycles(std::int64_t interval_ns, std::int64_t nominal_ns) {
+  const long long cycles =
+      std::llround(static_cast<double>(interval_ns) / static_cast<double>(nominal_ns));
+  return cycles > 1 ? static_cast<std::uint32_t>(cycles - 1) : 0;
+}
+
 // PROTOCOL.md §8: an LRW/FPRW adds 2 for a slave whose outputs it writes and 1 for one whose
 // inputs it reads; LRD/LWR/FPRD/FPWR add 1 per slave.
 std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
@@ -31,15 +38,28 @@ BusModel::CyclicFrame& BusModel::cyclicFrame(std::uint16_t first_axis) {
   return cyclic_.back();
 }
 
-void BusModel::startSegment() {
+void BusModel::startSegment(std::vector<BusEvent>& events) {
   earlier_intervals_.merge(intervals_);
   intervals_.clear();
   for (CyclicFrame& c : cyclic_) {
+    // The axes' failure counts restart with the segment: the untold gap counts no lost cycle.
+    if (c.pending_gap)
+      judgeGap(c, std::nullopt, CycleGapEvent::Verdict::SegmentEnds, events, nullptr);
     c.last_tick.reset();
     c.awaiting_return = false;
     c.not_returned_episode = false;
+    c.jitter_episode = false;
+    c.late_return_episode = false;
   }
   for (WkcRecord& r : wkc_) r.wrong_episode = false;
+}
+
+void BusModel::finish(std::vector<BusEvent>& events, std::vector<AxisAccount>& accounts) {
+  for (CyclicFrame& c : cyclic_) {
+    if (c.pending_gap) {
+      judgeGap(c, std::nullopt, CycleGapEvent::Verdict::CaptureEnds, events, &accounts);
+    }
+  }
 }
 
 std::optional<std::int64_t> BusModel::nominalCycleNs() const {
@@ -96,15 +116,16 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   if (!master_copies_seen_) tick(cyclic, decode);
   // A timestamp that went backwards gives no latency (RULES.md "Time").
   if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
-    timing_.onLatency(now_.frame, cyclic.last_master.frame,
-                      now_.time_ns - cyclic.last_master.time_ns);
+    const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
+    timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
+    judgeLatency(cyclic, latency, events);
   }
   cyclic.awaiting_return = false;
   cyclic.not_returned_episode = false;
   return checkWorkingCounters(frame, decode);
 }
 
-// One tick of a cyclic frame's clock: the interval statistics and COM-002.
+// One tick of a cyclic frame's clock: the interval statistics, COM-002 and COM-006.
 void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
   if (cyclic.first_axis == cyclic_.front().first_axis) ++cycles_;
   // RULES.md "Time": a timestamp that went backwards is not an error; the interval it would
@@ -118,22 +139,86 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
     return;
   }
   const std::int64_t interval = now_.time_ns - cyclic.last_tick->time_ns;
+  // RULES.md COM-002: a gap is told late or lost by the interval after it.
+  if (cyclic.pending_gap) {
+    judgeGap(cyclic, interval, CycleGapEvent::Verdict::Lost, *events_, accounts_);
+  }
   const std::optional<std::int64_t> median = intervals_.medianNs();
-  if (intervals_.count() >= kIntervalsBeforeGaps && median && *median > 0 &&
-      interval * kGapDenominator > *median * kGapNumerator) {
-    const auto missing = static_cast<std::uint32_t>(
-        std::llround(static_cast<double>(interval) / static_cast<double>(*median)) - 1);
-    events_->push_back(
-        {*cyclic.last_tick, CycleGapEvent{interval, *median, missing, cyclic.last_tick->frame}});
-    if (missing > 0) {
-      for (std::size_t i = 0; i < decode.axis_count; ++i) {
-        accounts_->push_back({decode.axes[i].axis, Outcome::Lost, missing});
+  if (intervals_.count() >= kIntervalsBeforeGaps && median && *median > 0) {
+    const bool gap = interval * kGapDenominator > *median * kGapNumerator;
+    if (gap) {
+      PendingGap pending{*cyclic.last_tick, interval, *median, now_.frame, {}};
+      for (std::size_t i = 0; i < decode.axis_count; ++i)
+        pending.axes.push_back(decode.axes[i].axis);
+      // From 2.5 cycles on no next interval makes it late: its cycles are lost now, so that
+      // COM-003 and COM-005 see them before the traffic that follows.
+      const std::uint32_t missing = missingCycles(interval, *median);
+      if (missing >= 2) {
+        for (std::uint16_t axis : pending.axes)
+          accounts_->push_back({axis, Outcome::Lost, missing});
+        pending.accounted = true;
       }
+      cyclic.pending_gap = std::move(pending);
     }
+    judgeJitter(cyclic, interval, *median, gap);
   }
   intervals_.add(interval);
   timing_.onCycle(now_.frame, cyclic.last_tick->frame, interval);
   cyclic.last_tick = now_;
+}
+
+// RULES.md COM-002: late when the gap and the interval after it make about two cycles (nothing
+// missing); otherwise round(gap ÷ nominal) − 1 cycles lost, as also when the next interval is
+// not known. The finding lands on the tick that tells, one cycle after the gap.
+void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
+                        CycleGapEvent::Verdict verdict, std::vector<BusEvent>& events,
+                        std::vector<AxisAccount>* accounts) {
+  const PendingGap& gap = *cyclic.pending_gap;
+  CycleGapEvent e;
+  e.verdict = verdict;
+  e.interval_ns = gap.interval_ns;
+  e.nominal_ns = gap.nominal_ns;
+  e.next_interval_ns = next;
+  e.previous_frame = gap.since.frame;
+  e.next_frame = gap.end_frame;
+  if (next && missingCycles(gap.interval_ns + *next, gap.nominal_ns) == 1) {
+    e.verdict = CycleGapEvent::Verdict::Late;
+  } else {
+    e.missing = missingCycles(gap.interval_ns, gap.nominal_ns);
+  }
+  if (accounts != nullptr && !gap.accounted && e.missing > 0) {
+    for (std::uint16_t axis : gap.axes) accounts->push_back({axis, Outcome::Lost, e.missing});
+  }
+  events.push_back({gap.since, e});
+  cyclic.pending_gap.reset();
+}
+
+// RULES.md COM-006: one finding per run of deviating cycles. A gap deviates too but is COM-002's:
+// it starts a run without a finding, so a late cycle's short interval after it is not reported.
+void BusModel::judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int64_t nominal,
+                           bool gap) {
+  if (!limits_.cycle_jitter_percent) return;
+  const std::int64_t deviation = interval > nominal ? interval - nominal : nominal - interval;
+  const bool deviates =
+      deviation * 100 > nominal * static_cast<std::int64_t>(*limits_.cycle_jitter_percent);
+  if (deviates && !gap && !cyclic.jitter_episode) {
+    events_->push_back(
+        {*cyclic.last_tick, CycleJitterEvent{interval, nominal, *limits_.cycle_jitter_percent,
+                                             cyclic.last_tick->frame}});
+  }
+  cyclic.jitter_episode = deviates;
+}
+
+// RULES.md COM-007: one finding per run of late returns.
+void BusModel::judgeLatency(CyclicFrame& cyclic, std::int64_t latency,
+                            std::vector<BusEvent>& events) {
+  if (!limits_.return_latency_ns) return;
+  const bool late = latency > *limits_.return_latency_ns;
+  if (late && !cyclic.late_return_episode) {
+    events.push_back({cyclic.last_master, LateReturnEvent{latency, *limits_.return_latency_ns,
+                                                          cyclic.last_master.frame}});
+  }
+  cyclic.late_return_episode = late;
 }
 
 std::int16_t BusModel::wkcRecord(const Datagram& dg) {

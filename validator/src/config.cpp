@@ -59,11 +59,15 @@ class Checker {
 };
 
 // The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
-const std::vector<std::string> kTopKeys{
-    "servo_ready_mode", "telegram_failure_limit", "default_layout", "timeouts", "axis", "rules"};
+std::vector<std::string> topKeys() {
+  std::vector<std::string> keys{
+      "servo_ready_mode", "telegram_failure_limit", "default_layout", "timeouts", "axis", "rules"};
+  for (const LimitDef& l : kLimits) keys.emplace_back(l.name);
+  return keys;
+}
 const std::vector<std::string> kAxisKeys{"name",       "outputs",   "inputs",          "station",
                                          "sm_outputs", "sm_inputs", "servo_ready_mode"};
-const std::vector<std::string> kRulesKeys{"disable", "severity"};
+const std::vector<std::string> kRulesKeys{"disable", "enable", "severity"};
 
 std::string unknownKey(std::string_view key, const std::vector<std::string>& known) {
   return "unknown key" + didYouMean(key, known);
@@ -141,7 +145,9 @@ void readAxis(Checker& check, const toml::table& table, std::size_t index, Confi
 void readRules(Checker& check, const toml::table& rules, Config& config) {
   for (const auto& [key_node, node] : rules) {
     const std::string key = "rules." + std::string(key_node.str());
-    if (key_node.str() == "disable") {
+    if (key_node.str() == "disable" || key_node.str() == "enable") {
+      std::vector<std::string>& listed =
+          key_node.str() == "disable" ? config.disabled_rules : config.enabled_rules;
       const toml::array* ids = node.as_array();
       if (ids == nullptr) {
         check.fail(node, key, "expected an array of rule IDs");
@@ -158,7 +164,7 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
           check.fail(id, key, "expected rule IDs of the catalogue: " + rule.error().message);
           return;
         }
-        config.disabled_rules.emplace_back((*rule)->code);
+        listed.emplace_back((*rule)->code);
       }
     } else if (key_node.str() == "severity") {
       const toml::table* table = node.as_table();
@@ -208,6 +214,10 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
       if (auto v = check.integer<std::uint32_t>(node, key, 1, 65535)) {
         config.telegram_failure_limit = *v;
       }
+    } else if (const LimitDef* limit = limitByName(key)) {
+      if (auto v = check.integer<std::uint32_t>(node, key, limit->min, limit->max)) {
+        config.limits[key] = *v;
+      }
     } else if (key == "default_layout") {
       if (!node.is_boolean()) {
         check.fail(node, key, "expected true or false");
@@ -248,7 +258,7 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
         check.fail(node, key, "expected a table");
       }
     } else {
-      check.fail(node, key, unknownKey(key, kTopKeys));
+      check.fail(node, key, unknownKey(key, topKeys()));
     }
     if (check.failed()) break;
   }
@@ -312,6 +322,12 @@ Status applyConfig(const Config& config, RuleSettings& settings) {
   settings.telegram_failure_limit = config.telegram_failure_limit;
   for (const auto& [name, value] : config.timeouts_ms) {
     if (Status s = settings.setTimeout(name, value); !s) return named(s.error());
+  }
+  for (const auto& [name, value] : config.limits) {
+    if (Status s = settings.setLimit(name, value); !s) return named(s.error());
+  }
+  for (const std::string& code : config.enabled_rules) {
+    if (Status s = settings.enable(code); !s) return named(s.error());
   }
   for (const std::string& code : config.disabled_rules) {
     if (Status s = settings.disable(code); !s) return named(s.error());

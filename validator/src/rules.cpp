@@ -3,6 +3,7 @@
 #include "ncservo/rules.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 
@@ -302,10 +303,50 @@ bool com002(const CycleGapEvent&, const RuleSettings&) {
   return true;  // the bus model reports an interval only when it is a gap
 }
 std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&) {
+  using Verdict = CycleGapEvent::Verdict;
+  const std::string gap =
+      fmt::format("{:.3f} ms from frame {} to frame {}", static_cast<double>(e.interval_ns) / 1e6,
+                  e.previous_frame, e.next_frame);
+  const std::string then =
+      e.next_interval_ns
+          ? fmt::format(", then {:.3f} ms", static_cast<double>(*e.next_interval_ns) / 1e6)
+          : std::string();
+  const std::string nominal =
+      fmt::format(" ({:.3f} ms nominal)", static_cast<double>(e.nominal_ns) / 1e6);
+  if (e.verdict == Verdict::Late) {
+    return fmt::format("late cycle: {}{}; nothing missing{}", gap, then, nominal);
+  }
+  const std::string untold = e.verdict == Verdict::CaptureEnds
+                                 ? "; the capture ends before the next cycle: late or lost cannot "
+                                   "be told"
+                             : e.verdict == Verdict::SegmentEnds
+                                 ? "; a capture segment starts before the next cycle: late or "
+                                   "lost cannot be told"
+                                 : "";
+  return fmt::format("{} cycle{} lost: {}{}{}{}", e.missing, e.missing == 1 ? "" : "s", gap, then,
+                     nominal, untold);
+}
+
+bool com006(const CycleJitterEvent&, const RuleSettings&) {
+  return true;  // the bus model reports a deviation only beyond the limit
+}
+std::string com006Text(const CycleJitterEvent& e, const Stamp&, const RuleSettings&) {
+  const double deviation = static_cast<double>(e.interval_ns - e.nominal_ns) / 1e3;
   return fmt::format(
-      "{:.3f} ms since the previous cycle (frame {}), {:.3f} ms nominal: {} cycle{} missing",
-      static_cast<double>(e.interval_ns) / 1e6, e.previous_frame,
-      static_cast<double>(e.nominal_ns) / 1e6, e.missing, e.missing == 1 ? "" : "s");
+      "cycle of {:.3f} ms since frame {} deviates {:+.1f} us from the {:.3f} ms nominal, more "
+      "than cycle_jitter_percent = {}",
+      static_cast<double>(e.interval_ns) / 1e6, e.previous_frame, deviation,
+      static_cast<double>(e.nominal_ns) / 1e6, e.limit_percent);
+}
+
+bool com007(const LateReturnEvent&, const RuleSettings&) {
+  return true;  // the bus model reports a return only beyond the limit
+}
+std::string com007Text(const LateReturnEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format(
+      "returned {:.1f} us after its master copy (frame {}), more than "
+      "return_latency_us = {}",
+      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, e.limit_ns / 1000);
 }
 
 bool com004(const NotReturnedEvent&, const RuleSettings&) {
@@ -396,6 +437,8 @@ constexpr auto BUS = Party::Bus;
 constexpr auto AXIS = RuleKind::Axis;
 constexpr auto BUSK = RuleKind::Bus;
 constexpr auto SLAVE = RuleKind::Slave;
+constexpr auto ON = ByDefault::On;
+constexpr auto OFF = ByDefault::Off;
 constexpr std::optional<Timeout> kNone{};
 constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
 constexpr Reads kNothing{};
@@ -405,92 +448,98 @@ constexpr Reads kNothing{};
 #define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
 // clang-format off
 const std::array<RuleDef, kRuleCount> kRules{{
-  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false,
+  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false, ON,
    readsOf({"ncservo.scw.se"}), NCSERVO_AXIS(se001),
    "SCW.SE becomes 0x2 from a value other than 0x1"},
-  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, false,
+  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, false, ON,
    readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se002),
    "SSW.ServoEn rises with no valid enable"},
-  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, true,
+  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, true, ON,
    readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se003),
    "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
-  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "docs/protocol.md §2 SE, §5", Timeout::EnableResponse, true,
+  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "docs/protocol.md §2 SE, §5", Timeout::EnableResponse, true, ON,
    readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake", "ncservo.ssw.servo_en",
             "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(se004),
    "a valid enable to a ready drive is not answered with ServoEn"},
-  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true,
+  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true, ON,
    readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp001),
    "ZPulseAck stays 1 after ZPulseRequest fell"},
-  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ZPulseAck", kDrive, false,
+  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ZPulseAck", kDrive, false, ON,
    readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp002),
    "ZPulseAck rises with no ZPulseRequest"},
-  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "docs/protocol.md §1, §2 ZPulseRequest", kNone, false,
+  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "docs/protocol.md §1, §2 ZPulseRequest", kNone, false, ON,
    readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.incremental", "ncservo.ssw.no_encoder"}), NCSERVO_AXIS(zp003),
    "ZPulseRequest on an axis with an absolute encoder or none"},
-  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, false,
+  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, false, ON,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec001),
    "ErrClearAck rises with no ErrorClear"},
-  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "docs/protocol.md §2 ErrorClear", Timeout::NcRelease, true,
+  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "docs/protocol.md §2 ErrorClear", Timeout::NcRelease, true, ON,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec002),
    "ErrorClear held after ErrClearAck rose"},
-  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, true,
+  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, true, ON,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec003),
    "ErrClearAck stays 1 after ErrorClear fell"},
-  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "docs/protocol.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true,
+  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "docs/protocol.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true, ON,
    readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}), NCSERVO_AXIS(ec004),
    "ErrorClear on a drive in error is not acknowledged"},
-  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "docs/protocol.md §4", kNone, false,
+  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "docs/protocol.md §4", kNone, false, ON,
    readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew001),
    "a SEW cause bit without the summary bit 0"},
-  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "docs/protocol.md §4", kDrive, true,
+  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "docs/protocol.md §4", kDrive, true, ON,
    readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew002),
    "SEW summary bit 0 with no cause bit"},
-  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "docs/protocol.md §4", kNone, false,
+  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "docs/protocol.md §4", kNone, false, ON,
    readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew003),
    "reserved SEW bits set"},
-  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "docs/protocol.md §3", kNone, false,
+  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "docs/protocol.md §3", kNone, false, ON,
    readsOf({"ncservo.ssw.reserved"}), NCSERVO_AXIS(ssw001),
    "reserved SSW bits set"},
-  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "docs/protocol.md §2", kNone, false,
+  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "docs/protocol.md §2", kNone, false, ON,
    readsOf({"ncservo.scw.reserved"}), NCSERVO_AXIS(scw001),
    "reserved SCW bits set"},
-  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "docs/protocol.md §5", kDrive, true,
+  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "docs/protocol.md §5", kDrive, true, ON,
    readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(rdy001),
    "ServoRDY differs from the Servo_Ready_Mode table"},
-  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "docs/protocol.md §4, §6", Timeout::FaultReaction, true,
+  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "docs/protocol.md §4, §6", Timeout::FaultReaction, true, ON,
    readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}), NCSERVO_AXIS(flt001),
    "the drive stays enabled while reporting an error"},
-  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "docs/protocol.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true,
+  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "docs/protocol.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true, ON,
    readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl", "ncservo.ssw.ext_prmtbl"}), NCSERVO_AXIS(pt001),
    "the active parameter table differs from the commanded one"},
-  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "docs/protocol.md §5", kNone, false,
+  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "docs/protocol.md §5", kNone, false, ON,
    readsThrough("ncservo.msg_code", definedMessageCode), NCSERVO_AXIS(msg001),
    "a message code outside 0-5"},
-  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "docs/protocol.md §8 WKC", kNone, false,
+  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "docs/protocol.md §8 WKC", kNone, false, ON,
    kNothing, NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),
    "a returned cyclic datagram with servo PDOs has an unexpected WKC"},
-  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "docs/protocol.md §8; docs/rules.md timeouts", kNone, false,
+  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "docs/protocol.md §8; docs/rules.md timeouts", kNone, false, ON,
    kNothing, NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
-   "cycles missing between two master frames"},
-  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "docs/protocol.md §4 ECatTErr", kDrive, true,
+   "cycles late or missing between two master frames"},
+  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "docs/protocol.md §4 ECatTErr", kDrive, true, ON,
    readsOf({"ncservo.sew.ecat_timeout"}), NCSERVO_AXIS(com003),
    "3 or more failed cycles without SEW.ECatTErr"},
-  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "docs/protocol.md §8", kNone, false,
+  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "docs/protocol.md §8", kNone, false, ON,
    kNothing, NCSERVO_EVENT(NotReturnedEvent, com004, com004Text),
    "a master frame with servo outputs was not returned"},
-  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "docs/protocol.md §8", kNone, false,
+  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "docs/protocol.md §8", kNone, false, ON,
    kNothing, NCSERVO_AXIS(com005),
    "consecutive failed cycles of an axis exceed the limit"},
-  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "docs/protocol.md §8 AL control", kNone, false,
+  {RuleId::Com006, "COM-006", "cycle-jitter", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
+   kNothing, NCSERVO_EVENT(CycleJitterEvent, com006, com006Text),
+   "a master copy's interval deviates from the nominal cycle by more than cycle_jitter_percent"},
+  {RuleId::Com007, "COM-007", "late-return", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
+   kNothing, NCSERVO_EVENT(LateReturnEvent, com007, com007Text),
+   "a returned copy arrives more than return_latency_us after its master copy"},
+  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "docs/protocol.md §8 AL control", kNone, false, ON,
    kNothing, NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
    "an AL control write requests a transition the state machine does not allow"},
-  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "docs/protocol.md §8 AL states", kNone, false,
+  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "docs/protocol.md §8 AL states", kNone, false, ON,
    readsOf({"ncservo.scw.se"}, true), NCSERVO_AXIS(esm002),
    "process data exchanged with an axis outside OP/SAFE-OP"},
-  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false,
+  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false, ON,
    kNothing, NCSERVO_EVENT(AlErrorEvent, esm003, alErrorText),
    "AL status shows the error indicator above INIT"},
-  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false,
+  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false, ON,
    kNothing, NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
    "AL status shows the error indicator at INIT"},
 }};
@@ -631,12 +680,20 @@ std::string ruleFilterName(const RuleDef& rule) {
 
 RuleSettings::RuleSettings() {
   for (const RuleDef& rule : kRules) {
-    enabled[static_cast<std::size_t>(rule.id)] = true;
+    enabled[static_cast<std::size_t>(rule.id)] = rule.by_default == ByDefault::On;
     severity[static_cast<std::size_t>(rule.id)] = rule.severity;
   }
   for (const TimeoutDef& t : kTimeouts) {
     timeout_ns[static_cast<std::size_t>(t.id)] = std::int64_t{t.default_ms} * 1'000'000;
   }
+  for (const LimitDef& l : kLimits) limit[static_cast<std::size_t>(l.id)] = l.default_value;
+}
+
+const LimitDef* limitByName(std::string_view name) {
+  for (const LimitDef& l : kLimits) {
+    if (name == l.name) return &l;
+  }
+  return nullptr;
 }
 
 std::optional<int> RuleSettings::readyModeFor(std::size_t axis) const {
@@ -648,6 +705,29 @@ Status RuleSettings::disable(std::string_view code) {
   const Result<const RuleDef*> rule = findRule(code);
   if (!rule) return fail(rule.error());
   enabled[static_cast<std::size_t>((*rule)->id)] = false;
+  return {};
+}
+
+Status RuleSettings::enable(std::string_view code) {
+  const Result<const RuleDef*> rule = findRule(code);
+  if (!rule) return fail(rule.error());
+  enabled[static_cast<std::size_t>((*rule)->id)] = true;
+  return {};
+}
+
+Status RuleSettings::setLimit(std::string_view name, std::int64_t value) {
+  const LimitDef* l = limitByName(name);
+  if (l == nullptr) {
+    std::vector<std::string> names;
+    for (const LimitDef& known : kLimits) names.emplace_back(known.name);
+    return fail(fmt::format("unknown limit '{}' (known: {}){}", name, fmt::join(names, ", "),
+                            didYouMean(name, names)));
+  }
+  if (value < l->min || value > l->max) {
+    return fail(
+        fmt::format("{} = {}: expected {} to {} ({})", name, value, l->min, l->max, l->unit));
+  }
+  limit[static_cast<std::size_t>(l->id)] = static_cast<std::uint32_t>(value);
   return {};
 }
 

@@ -9,7 +9,20 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
       settings_(std::move(settings)),
       judged_(judgedBits(settings_, fast_path)),
       fast_path_(fast_path == FastPath::On),
+      bus_(timingLimits(settings_)),
       segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
+
+// The limits of the enabled timing rules (RULES.md COM-006, COM-007).
+TimingLimits Validator::timingLimits(const RuleSettings& settings) {
+  TimingLimits limits;
+  if (settings.isEnabled(RuleId::Com006)) {
+    limits.cycle_jitter_percent = settings.limitOf(Limit::CycleJitterPercent);
+  }
+  if (settings.isEnabled(RuleId::Com007)) {
+    limits.return_latency_ns = std::int64_t{settings.limitOf(Limit::ReturnLatencyUs)} * 1000;
+  }
+  return limits;
+}
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules
 // declare they read (STYLE.md "A rule declares what it reads").
@@ -98,9 +111,10 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   findings_.clear();
   // RULES.md "Time": timestamps that go back a little do not move timers back; a discontinuity
   // starts a segment with timers of its own.
-  if (segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs())) startSegment();
+  const bool new_segment = segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs());
   now_ = Stamp{frame_number, segments_.now()};
   frame_time_ns_ = time_ns;
+  if (new_segment) startSegment();
 
   FrameDecode& decode = view_.decode;
   decoder_.placeAxes(frame, bytes, decode);
@@ -128,14 +142,7 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   accounts_.clear();
   const bool all_good = bus_.onCyclicFrame(frame, decode, now_, frame_time_ns_, events_, accounts_);
   reportEvents();
-  for (const AxisAccount& account : accounts_) {
-    AxisModel& model = *slot(account.axis).model;
-    if (account.outcome == AxisAccount::Outcome::Good) {
-      model.cycleOk(now_);
-    } else {
-      model.cycleFailed(account.outcome == AxisAccount::Outcome::Lost, account.cycles, now_);
-    }
-  }
+  applyAccounts();
   // slot() may have grown the slots for an axis of an earlier master copy.
   if (!accounts_.empty()) {
     for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i] = &axes_[decode.axes[i].axis];
@@ -163,8 +170,31 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   return view_;
 }
 
+void Validator::applyAccounts() {
+  for (const AxisAccount& account : accounts_) {
+    AxisModel& model = *slot(account.axis).model;
+    if (account.outcome == AxisAccount::Outcome::Good) {
+      model.cycleOk(now_);
+    } else {
+      model.cycleFailed(account.outcome == AxisAccount::Outcome::Lost, account.cycles, now_);
+    }
+  }
+}
+
+void Validator::finish() {
+  findings_.clear();
+  events_.clear();
+  accounts_.clear();
+  bus_.finish(events_, accounts_);
+  reportEvents();
+  applyAccounts();
+  for (const AxisAccount& account : accounts_) evaluateAxis(slot(account.axis));
+}
+
 void Validator::startSegment() {
-  bus_.startSegment();
+  events_.clear();
+  bus_.startSegment(events_);
+  reportEvents();
   al_.startSegment();
   ++al_epoch_;  // the AL states are taken again
   for (AxisSlot& s : axes_) {

@@ -23,12 +23,35 @@ struct WorkingCounterEvent {
 };
 
 // An interval between two ticks of a cyclic frame's clock longer than 1.5 × the nominal cycle
-// (RULES.md COM-002).
+// (RULES.md COM-002), judged at the tick after it: a late cycle when that next interval makes
+// the two about two cycles, else lost cycles. A segment start or the capture's end before the
+// next tick leaves it untold, counted as lost.
 struct CycleGapEvent {
+  enum class Verdict : std::uint8_t { Late, Lost, SegmentEnds, CaptureEnds };
+  Verdict verdict = Verdict::Lost;
   std::int64_t interval_ns = 0;
   std::int64_t nominal_ns = 0;
-  std::uint32_t missing = 0;  // round(interval ÷ nominal) − 1
+  std::optional<std::int64_t> next_interval_ns;  // Late and Lost only
+  std::uint32_t missing = 0;         // 0 when late; else round(interval ÷ nominal) − 1
+  std::uint64_t previous_frame = 0;  // the tick before the gap
+  std::uint64_t next_frame = 0;      // the tick that ended it
+};
+
+// A master copy whose interval deviates from the nominal cycle by more than the configured share,
+// at the start of such a run of cycles (RULES.md COM-006).
+struct CycleJitterEvent {
+  std::int64_t interval_ns = 0;
+  std::int64_t nominal_ns = 0;
+  std::uint32_t limit_percent = 0;
   std::uint64_t previous_frame = 0;
+};
+
+// A returned copy later than the configured latency after its master copy, at the start of such
+// a run of cycles (RULES.md COM-007).
+struct LateReturnEvent {
+  std::int64_t latency_ns = 0;
+  std::int64_t limit_ns = 0;
+  std::uint64_t master_frame = 0;
 };
 
 // A master frame with servo outputs that was not returned before the next cycle's master frame,
@@ -64,8 +87,8 @@ struct AlErrorEvent {
   std::uint64_t status_code_frame = 0;  // where the status code was read
 };
 
-using BusEventData = std::variant<WorkingCounterEvent, CycleGapEvent, NotReturnedEvent,
-                                  AlControlEvent, AlErrorEvent>;
+using BusEventData = std::variant<WorkingCounterEvent, CycleGapEvent, CycleJitterEvent,
+                                  LateReturnEvent, NotReturnedEvent, AlControlEvent, AlErrorEvent>;
 
 struct BusEvent {
   Stamp since;  // where the condition began

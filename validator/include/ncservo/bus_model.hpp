@@ -25,8 +25,17 @@ struct AxisAccount {
   std::uint32_t cycles = 1;
 };
 
+// The limits of the timing rules that are off by default, each set only while its rule is
+// enabled (RULES.md COM-006, COM-007).
+struct TimingLimits {
+  std::optional<std::uint32_t> cycle_jitter_percent;
+  std::optional<std::int64_t> return_latency_ns;
+};
+
 class BusModel {
  public:
+  explicit BusModel(TimingLimits limits = {}) : limits_(limits) {}
+
   // One frame that carries servo PDOs, at `now` on the timers' monotonic clock; `frame_time_ns`
   // is its own timestamp. Appends the events the bus rules judge and the axes' accounting, in the
   // order they happened. True when the frame is a returned copy whose every axis had a good cycle
@@ -37,8 +46,12 @@ class BusModel {
 
   // A capture segment starts (capture_segments.hpp): the interval statistics, the cycle-gap
   // clocks, the frames awaiting their return and the working-counter episodes start again; what
-  // the capture showed of the bus (copies, usual working counters) carries on.
-  void startSegment();
+  // the capture showed of the bus (copies, usual working counters) carries on. A gap still
+  // waiting for its next interval is judged without it (COM-002).
+  void startSegment(std::vector<BusEvent>& events);
+  // The capture ended: a gap still waiting for its next interval is judged without it, its
+  // missing cycles counted as lost (COM-002).
+  void finish(std::vector<BusEvent>& events, std::vector<AxisAccount>& accounts);
 
   std::uint64_t cycles() const { return cycles_; }
   // The segment's nominal cycle, once enough intervals give it (RULES.md "Time", COM-002).
@@ -67,6 +80,15 @@ class BusModel {
     std::uint64_t shape_id = 0;
     std::vector<WkcCheck> checks;
   };
+  // An interval longer than 1.5 cycles, judged late or lost at the next tick (COM-002).
+  struct PendingGap {
+    Stamp since;  // the tick before it
+    std::int64_t interval_ns = 0;
+    std::int64_t nominal_ns = 0;
+    std::uint64_t end_frame = 0;
+    std::vector<std::uint16_t> axes;  // the axes its missing cycles would have carried
+    bool accounted = false;           // its lost cycles already counted (certainly lost)
+  };
   // The cyclic frame that carries a group of axes, named by its lowest axis index.
   struct CyclicFrame {
     std::uint16_t first_axis = 0;
@@ -76,6 +98,9 @@ class BusModel {
     Stamp last_master;
     std::vector<std::uint16_t> axes;  // axes of the last master copy
     std::uint64_t axes_shape_id = 0;  // the shape they were taken from (0: none cached)
+    std::optional<PendingGap> pending_gap;
+    bool jitter_episode = false;       // COM-006
+    bool late_return_episode = false;  // COM-007
   };
   // A cyclic datagram carrying servo PDOs: its WKC history (COM-001).
   struct WkcRecord {
@@ -91,6 +116,12 @@ class BusModel {
   std::int16_t wkcRecord(const Datagram& dg);
   WkcPlan& wkcPlan(const EcatFrame& frame, const FrameDecode& decode);
   void tick(CyclicFrame& cyclic, const FrameDecode& decode);
+  // Judges the pending gap with the interval after it, or untold (`next` empty) as `verdict`.
+  void judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
+                CycleGapEvent::Verdict verdict, std::vector<BusEvent>& events,
+                std::vector<AxisAccount>* accounts);
+  void judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int64_t nominal, bool gap);
+  void judgeLatency(CyclicFrame& cyclic, std::int64_t latency, std::vector<BusEvent>& events);
   bool checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode);
 
   // This frame's.
@@ -99,6 +130,7 @@ class BusModel {
   std::vector<BusEvent>* events_ = nullptr;
   std::vector<AxisAccount>* accounts_ = nullptr;
 
+  TimingLimits limits_;
   std::vector<CyclicFrame> cyclic_;
   std::vector<WkcRecord> wkc_;
   std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn

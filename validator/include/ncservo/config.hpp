@@ -35,8 +35,10 @@ struct Config {
   std::uint32_t telegram_failure_limit = 3;
   bool default_layout = true;
   std::map<std::string, std::uint32_t> timeouts_ms;  // only the ones the file sets
+  std::map<std::string, std::uint32_t> limits;       // of kLimits, only the ones the file sets
   std::vector<AxisConfig> axes;
   std::vector<std::string> disabled_rules;
+  std::vector<std::string> enabled_rules;
   std::map<std::string, std::string> severity_overrides;
 };
 

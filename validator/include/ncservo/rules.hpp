@@ -85,12 +85,33 @@ enum class RuleId : std::uint8_t {
   Com003,
   Com004,
   Com005,
+  Com006,
+  Com007,
   Esm001,
   Esm002,
   Esm003,
   Esm004,
 };
-inline constexpr std::size_t kRuleCount = 29;
+inline constexpr std::size_t kRuleCount = 31;
+
+// RULES.md COM-006, COM-007: the limits of the rules whose right value depends on the machine.
+enum class Limit : std::uint8_t { CycleJitterPercent, ReturnLatencyUs };
+struct LimitDef {
+  Limit id;
+  const char* name;  // the configuration key and --limit NAME
+  std::uint32_t default_value;
+  std::uint32_t min, max;
+  const char* unit;
+  RuleId rule;
+  const char* bounds;  // what it bounds, for docs and errors
+};
+inline constexpr std::array<LimitDef, 2> kLimits{{
+    {Limit::CycleJitterPercent, "cycle_jitter_percent", 10, 1, 100, "% of the nominal cycle",
+     RuleId::Com006, "how far a master copy's interval may deviate from the nominal cycle"},
+    {Limit::ReturnLatencyUs, "return_latency_us", 500, 1, 1'000'000, "µs", RuleId::Com007,
+     "how long after its master copy a returned copy may arrive"},
+}};
+const LimitDef* limitByName(std::string_view name);
 
 class AxisModel;
 struct RuleSettings;
@@ -98,6 +119,9 @@ struct RuleSettings;
 // Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
 // cycles) or on what a slave's state machine did (AL control and status).
 enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
+// Whether a rule runs unless disabled, or only when enabled (`--enable`, `[rules] enable`):
+// off where the right limit depends on the machine.
+enum class ByDefault : std::uint8_t { On, Off };
 const char* ruleKindName(RuleKind kind);
 
 // What a check looks at: the axis's model (axis rules) or one event of the bus and slave models.
@@ -123,7 +147,8 @@ struct RuleDef {
   const char* clause;              // where the protocol says so
   std::optional<Timeout> timeout;  // the timeout the rule uses (RULES.md "Time")
   bool delayed;                    // reported when the condition outlasts the timeout
-  Reads reads;                     // axis rules: what check and describe read of the axis
+  ByDefault by_default;
+  Reads reads;  // axis rules: what check and describe read of the axis
   RuleCheck check;
   RuleDescribe describe;
   const char* summary;  // one line, for `ncservo rules` and the expert item
@@ -158,15 +183,19 @@ struct RuleSettings {
   std::optional<int> servo_ready_mode;              // global; per axis in axis_ready_mode
   std::vector<std::optional<int>> axis_ready_mode;  // by axis index (configured axes)
   std::uint32_t telegram_failure_limit = 3;
+  std::array<std::uint32_t, kLimits.size()> limit{};
 
   RuleSettings();
   bool isEnabled(RuleId id) const { return enabled[static_cast<std::size_t>(id)]; }
   Severity severityOf(RuleId id) const { return severity[static_cast<std::size_t>(id)]; }
   std::int64_t timeoutNs(Timeout t) const { return timeout_ns[static_cast<std::size_t>(t)]; }
   std::optional<int> readyModeFor(std::size_t axis) const;
+  std::uint32_t limitOf(Limit l) const { return limit[static_cast<std::size_t>(l)]; }
 
   // Each fails with a message naming what was wrong.
   Status disable(std::string_view code);
+  Status enable(std::string_view code);
+  Status setLimit(std::string_view name, std::int64_t value);
   Status setSeverity(std::string_view code, std::string_view level);
   Status setTimeout(std::string_view name, std::int64_t ms);
 };

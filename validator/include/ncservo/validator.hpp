@@ -43,6 +43,9 @@ class Validator {
   const ValidatedFrame& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                 const EcatFrame& frame, const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
+  // The capture ended: what could be judged only with the frames that did not come (a gap's
+  // next interval, RULES.md COM-002), reported on the last frame; findings() then holds it.
+  void finish();
   // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
   void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
     decoder_.placeAxes(frame, bytes, view_.decode);
@@ -94,6 +97,8 @@ class Validator {
     bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
+  static TimingLimits timingLimits(const RuleSettings& settings);
+  void applyAccounts();
   bool unchanged(const AxisPlacement& placement, const ByteReader& bytes,
                  const AxisModel& model) const;
 

@@ -15,8 +15,11 @@ void FaultPlan::inject(RuleId rule, double at_s, int axis) {
 }
 
 void FaultPlan::injectScenario() {
+  // A rule off by default would not be reported by a plain `validate` of the scenario.
   for (const FaultRecipe& recipe : faultRecipes()) {
-    if (recipe.injectable()) inject(recipe.rule, recipe.scenario.at_s, recipe.scenario.axis);
+    if (recipe.injectable() && ruleDef(recipe.rule).by_default == ByDefault::On) {
+      inject(recipe.rule, recipe.scenario.at_s, recipe.scenario.axis);
+    }
   }
 }
 
@@ -85,6 +88,12 @@ void FaultPlan::startBusFaults(std::int64_t now_ns) {
       case BusFault::Kind::LoseAfterSlaves:
         lose_after_slaves_ = true;
         break;
+      case BusFault::Kind::JitterCycles:
+        jitter_cycles_ = f.fault.cycles;
+        break;
+      case BusFault::Kind::LateReturn:
+        late_return_ = true;
+        break;
     }
   }
 }
@@ -101,6 +110,15 @@ bool FaultPlan::takeLossBeforeSlaves() {
 }
 bool FaultPlan::takeLossAfterSlaves() {
   return std::exchange(lose_after_slaves_, false);
+}
+// Intervals of 1.25 and 0.75 cycles: a quarter off nominal, under COM-002's 1.5.
+double FaultPlan::takeSendDelayCycles() {
+  if (jitter_cycles_ == 0) return 0;
+  return (jitter_cycles_--) % 2 == 0 ? 0.25 : 0.0;
+}
+// Back before the next cycle's master frame (no COM-004).
+double FaultPlan::takeReturnDelayCycles() {
+  return std::exchange(late_return_, false) ? 0.75 : 0.0;
 }
 
 }  // namespace ncservo::sim

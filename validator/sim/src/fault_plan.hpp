@@ -33,6 +33,10 @@ class FaultPlan final : public FaultActions {
   bool takeSkippedCycle();
   bool takeLossBeforeSlaves();
   bool takeLossAfterSlaves();
+  // How late this cycle is sent (COM-006), and how late its last frame comes back (COM-007),
+  // in cycles.
+  double takeSendDelayCycles();
+  double takeReturnDelayCycles();
 
   std::optional<std::size_t> opRequestSlave() const { return op_request_slave_; }
 
@@ -69,6 +73,8 @@ class FaultPlan final : public FaultActions {
   int skip_cycles_ = 0;                          // COM-002
   int lose_before_slaves_ = 0;                   // COM-003, COM-005
   bool lose_after_slaves_ = false;               // COM-004
+  int jitter_cycles_ = 0;                        // COM-006
+  bool late_return_ = false;                     // COM-007
   std::optional<std::size_t> op_request_slave_;  // ESM-001
 };
 

@@ -228,6 +228,22 @@ const std::vector<FaultRecipe>& faultRecipes() {
        [](FaultActions& f) {
          f.bus({Bus::LoseBeforeSlaves, 4});
        }},
+      {RuleId::Com006,
+       FaultPhase::Cycle,
+       AxisNeed::None,
+       {},
+       {3.60, -1},
+       "the master sends 6 cycles alternately a quarter cycle late and on time",
+       [](FaultActions& f) {
+         f.bus({Bus::JitterCycles, 6});
+       }},
+      {RuleId::Com007,
+       FaultPhase::Cycle,
+       AxisNeed::None,
+       {},
+       {3.70, -1},
+       "one cycle's frame comes back three quarters of a cycle late",
+       [](FaultActions& f) { f.bus({Bus::LateReturn}); }},
       {RuleId::Esm001,
        FaultPhase::Startup,
        AxisNeed::Any,

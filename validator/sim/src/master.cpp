@@ -95,7 +95,7 @@ bool Master::exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, s
   segment_.pass(frame, kEpochNs + t_ns);
   if (lost_after) return true;
   if (came_back != nullptr) *came_back = true;
-  return emit(sink, frame, true, t_ns + return_delay_ns_);
+  return emit(sink, frame, true, t_ns + return_delay_ns_ + return_late_ns_);
 }
 
 // --- the start-up ---
@@ -313,7 +313,10 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
     }
     const std::int64_t at_ns = t_ns + static_cast<std::int64_t>(g) * 2 * return_delay_ns_;
     bool came_back = false;
-    if (!exchange(sink, frame, at_ns, lost_before, lost_after, &came_back)) return false;
+    if (g + 1 == segment_.groups.size()) return_late_ns_ = std::exchange(next_return_late_ns_, 0);
+    const bool exchanged = exchange(sink, frame, at_ns, lost_before, lost_after, &came_back);
+    return_late_ns_ = 0;
+    if (!exchanged) return false;
     if (!came_back) continue;
     for (std::size_t d = 0; d < fg.datagrams.size(); ++d) {
       // the inputs the slaves wrote

@@ -33,6 +33,9 @@ class Master {
   explicit Master(Segment& segment);
   // The returned copy this long after its master copy, instead of the ring's own delay.
   void setReturnDelayNs(std::int64_t ns) { return_delay_ns_ = ns; }
+  // The next cycle's last frame comes back this much later than the ring's delay (COM-007); its
+  // returned copy is the cycle's last, so the capture stays in time order.
+  void delayNextReturnNs(std::int64_t ns) { next_return_late_ns_ = ns; }
 
   // The start-up from time `t` in steps of `step_ns`; `t` ends after it. `op_request_slave`: the
   // slave whose first SAFE-OP request asks for OP (ESM-001). False if the sink stopped.
@@ -61,7 +64,9 @@ class Master {
 
   Segment& segment_;
   std::int64_t return_delay_ns_;
-  Framing sent_;      // the master's copy
+  std::int64_t next_return_late_ns_ = 0;
+  std::int64_t return_late_ns_ = 0;  // this exchange's
+  Framing sent_;                     // the master's copy
   Framing returned_;  // the returned copy: the source MAC marked locally administered
   std::uint8_t datagram_index_ = 0;
   std::vector<std::uint8_t> bytes_;

@@ -187,6 +187,10 @@ struct Simulator::Impl {
       std::int64_t send = slot;
       if (o.jitter_us > 0) send += rng.between(-o.jitter_us, o.jitter_us) * kUs;
       send += disturbance(o.late_cycles, slot) * kUs;
+      send +=
+          static_cast<std::int64_t>(faults.takeSendDelayCycles() * static_cast<double>(cycle_ns));
+      master.delayNextReturnNs(static_cast<std::int64_t>(faults.takeReturnDelayCycles() *
+                                                         static_cast<double>(cycle_ns)));
       const bool lost = std::any_of(o.lost_cycles.begin(), o.lost_cycles.end(), [&](const auto& d) {
         const std::int64_t from = firstSlotAt(d.at_s);
         return slot >= from && slot < from + d.amount * cycle_ns;

@@ -24,6 +24,8 @@ struct BusFault {
     SkipCycles,        // the master sends nothing for `cycles` cycles
     LoseBeforeSlaves,  // `cycles` cycles' frames are lost before the slaves
     LoseAfterSlaves,   // one cycle's frame is lost after the slaves
+    JitterCycles,      // `cycles` cycles sent alternately a quarter cycle late and on time
+    LateReturn,        // one cycle's last frame comes back three quarters of a cycle late
   };
   Kind kind;
   int cycles = 1;
