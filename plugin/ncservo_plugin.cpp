@@ -633,21 +633,9 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
-// Value names that say a clear flag of the SCW or SSW is at rest; a clear flag named otherwise
-// ("EMGON: emergency", "Brake: internal braking", "Abs/Incr: absolute") stays in sight.
-constexpr std::string_view kAtRestNames[] = {"no", "normal", "no event", "clear"};
-
-// Whether a bit field of the SCW or SSW is at rest: a flag clear with a name from kAtRestNames,
-// or reserved bits (a bit range without value names) all zero.
+// Whether a bit field holds the value the field table calls at rest.
 bool atRest(const FieldDef& f, std::uint32_t value) {
-  if ((value & f.mask) != 0) return false;
-  if (f.kind == FieldKind::BitRange) return f.value_count == 0;
-  const ValueName* clear = valueName(f, 0);
-  if (clear == nullptr) return false;
-  for (const std::string_view name : kAtRestNames) {
-    if (name == clear->name) return true;
-  }
-  return false;
+  return f.at_rest && ((value & f.mask) >> lowestBit(f.mask)) == *f.at_rest;
 }
 
 // The word's bit fields one by one, for a shown tree: the parameter table by its number
@@ -667,7 +655,7 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
       proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
-    if ((f.word == Word::Scw || f.word == Word::Ssw) && atRest(f, value)) {
+    if (atRest(f, value)) {
       g_strlcat(at_rest_names, at_rest == 0 ? "" : ", ", sizeof at_rest_names);
       g_strlcat(at_rest_names, f.label, sizeof at_rest_names);
       ++at_rest;
