@@ -156,7 +156,8 @@ TEST(FieldTable, DerivedFieldsIncludeTheInterfaceNames) {
   std::set<std::string> actual;
   for (const DerivedFieldDef& f : kDerivedFields) actual.insert(f.filter);
   for (const char* name :
-       {"ncservo.axis", "ncservo.axis_name", "ncservo.state", "ncservo.message"}) {
+       {"ncservo.axis", "ncservo.axis_name", "ncservo.state", "ncservo.message",
+        "ncservo.cycle.interval", "ncservo.cycle.deviation", "ncservo.latency"}) {
     EXPECT_EQ(actual.count(name), 1u) << "missing " << name;
   }
   for (const FieldDef& f : kFields) EXPECT_EQ(actual.count(f.filter), 0u) << f.filter;

@@ -354,15 +354,27 @@ enum class Derived : std::uint8_t {
   Transition,
   Finding,
   SinceFrame,
+  CycleInterval,
+  CycleDeviation,
+  Latency,
+};
+// What a derived field holds, which gives its type in a registration.
+enum class DerivedKind : std::uint8_t {
+  Text,
+  Index,
+  FrameNumber,
+  Microseconds,  // a duration, fractional
 };
 struct DerivedFieldDef {
   Derived id;
   const char* label;
   const char* filter;
   const char* blurb;
+  DerivedKind kind = DerivedKind::Text;
 };
 inline constexpr DerivedFieldDef kDerivedFields[] = {
-    {Derived::Axis, "Axis", "ncservo.axis", "Index of the axis in the layout (0-based)"},
+    {Derived::Axis, "Axis", "ncservo.axis", "Index of the axis in the layout (0-based)",
+     DerivedKind::Index},
     {Derived::AxisName, "Axis name", "ncservo.axis_name", "Name of the axis in the layout"},
     {Derived::Copy, "Copy", "ncservo.copy",
      "master = the master's frame (outputs), returned = the copy back from the ring (inputs)"},
@@ -377,7 +389,26 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
     {Derived::Finding, "Finding", "ncservo.finding",
      "A rule's finding with its details (docs/rules.md)"},
     {Derived::SinceFrame, "Since frame", "ncservo.since_frame",
-     "Frame where the finding's condition began"},
+     "Frame where the finding's condition began", DerivedKind::FrameNumber},
+    {Derived::CycleInterval, "Cycle interval", "ncservo.cycle.interval",
+     "Time since the previous master copy of this cyclic frame, in us (docs/timing.md)",
+     DerivedKind::Microseconds},
+    {Derived::CycleDeviation, "Cycle deviation", "ncservo.cycle.deviation",
+     "The cycle interval minus the nominal cycle (the segment's median so far), in us "
+     "(docs/timing.md)",
+     DerivedKind::Microseconds},
+    {Derived::Latency, "Return latency", "ncservo.latency",
+     "Time from the master copy to this returned copy at the capture point, in us "
+     "(docs/timing.md)",
+     DerivedKind::Microseconds},
 };
+static_assert(
+    [] {
+      for (std::size_t i = 0; i < std::size(kDerivedFields); ++i) {
+        if (static_cast<std::size_t>(kDerivedFields[i].id) != i) return false;
+      }
+      return true;
+    }(),
+    "derived fields in the order of Derived");
 
 }  // namespace ncservo
