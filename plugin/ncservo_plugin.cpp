@@ -11,6 +11,8 @@
 #include <epan/packet.h>
 #include <epan/prefs.h>
 #include <epan/proto_data.h>
+#include <epan/stat_tap_ui.h>
+#include <epan/tap.h>
 #include <fmt/format.h>
 #include <wireshark.h>
 #include <wiretap/wtap.h>
@@ -30,10 +32,12 @@
 #include "ncservo/eni.hpp"
 #include "ncservo/ethercat.hpp"
 #include "ncservo/fields.hpp"
+#include "ncservo/frame_clock.hpp"
 #include "ncservo/layout_window.hpp"
 #include "ncservo/pdo.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/text.hpp"
+#include "ncservo/timing_text.hpp"
 #include "ncservo/validator.hpp"
 
 extern "C" {
@@ -148,6 +152,12 @@ struct FindingRecord {
   guint32 since;     // frame where the condition began
   const char* text;  // "SE-001 illegal-enable-edge: axis0: ...", in file scope
 };
+// Which timing values a frame has (FrameTiming).
+enum TimingFlags : guint8 {
+  kHasInterval = 1,
+  kHasDeviation = 2,
+  kHasLatency = 4,
+};
 struct FrameRecord {
   const AxisRecord* axes;  // axis_count entries, in file scope; frames alike share one array
   const FindingRecord* findings;
@@ -155,6 +165,10 @@ struct FrameRecord {
   guint16 axis_count;
   guint16 finding_count;
   guint8 copy;
+  guint8 timing;  // TimingFlags
+  gint64 interval_ns;
+  gint64 deviation_ns;
+  gint64 latency_ns;
 };
 // By frame number: frames are numbered from 1 without gaps, so an index finds a frame's record
 // for less than a hash map, whose growth and scattered inserts cost the packet list measurably.
@@ -169,6 +183,9 @@ struct SharedAxes {
 };
 std::array<SharedAxes, 8> g_shared_axes;
 std::size_t g_next_shared = 0;  // the slot replaced next
+// The digits of a second the capture's timestamps hold (its first EtherCAT frame's), for the
+// timing statistics' resolution.
+std::optional<int> g_timestamp_digits;
 
 ftenum wordType(WireType type) {
   switch (type) {
@@ -257,13 +274,20 @@ hf_register_info* buildFieldRegistrations(std::size_t& count) {
     hf_derived[i] = -1;
     hf_register_info& r = hf[kFieldCount + i];
     r.p_id = &hf_derived[i];
-    if (d.id == Derived::Axis) {
-      fillHeader(r.hfinfo, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
-    } else if (d.id == Derived::SinceFrame) {
-      fillHeader(r.hfinfo, d.label, d.filter, FT_FRAMENUM, BASE_NONE,
-                 FRAMENUM_TYPE(FT_FRAMENUM_NONE), 0, d.blurb);
-    } else {
-      fillHeader(r.hfinfo, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
+    switch (d.kind) {
+      case DerivedKind::Index:
+        fillHeader(r.hfinfo, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
+        break;
+      case DerivedKind::FrameNumber:
+        fillHeader(r.hfinfo, d.label, d.filter, FT_FRAMENUM, BASE_NONE,
+                   FRAMENUM_TYPE(FT_FRAMENUM_NONE), 0, d.blurb);
+        break;
+      case DerivedKind::Microseconds:
+        fillHeader(r.hfinfo, d.label, d.filter, FT_DOUBLE, BASE_NONE, nullptr, 0, d.blurb);
+        break;
+      case DerivedKind::Text:
+        fillHeader(r.hfinfo, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
+        break;
     }
   }
   return hf;
@@ -371,6 +395,7 @@ void initCapture() {
   g_frames.clear();
   g_shared_axes = {};
   g_next_shared = 0;
+  g_timestamp_digits.reset();
   g_capture_open = true;
   delete g_window;
   g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
@@ -540,6 +565,13 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
   record.axes = shared != nullptr ? shared->axes : nullptr;
   record.findings = nullptr;
   record.finding_count = 0;
+  const FrameTiming& timing = g_validator->frameTiming();
+  record.timing = static_cast<guint8>((timing.interval_ns ? kHasInterval : 0) |
+                                      (timing.deviation_ns ? kHasDeviation : 0) |
+                                      (timing.latency_ns ? kHasLatency : 0));
+  record.interval_ns = timing.interval_ns.value_or(0);
+  record.deviation_ns = timing.deviation_ns.value_or(0);
+  record.latency_ns = timing.latency_ns.value_or(0);
   if (!findings.empty()) {
     auto* out = static_cast<FindingRecord*>(
         wmem_alloc0(wmem_file_scope(), findings.size() * sizeof(FindingRecord)));
@@ -584,6 +616,9 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   static EcatFrame frame;  // 8 KiB; dissection is single-threaded
   walkPacket(link, bytes, frame);
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  if (!g_timestamp_digits && pinfo->rec->tsprec >= 0 && pinfo->rec->tsprec <= 9) {
+    g_timestamp_digits = pinfo->rec->tsprec;
+  }
   const std::int64_t time_ns =
       static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
   if (g_window->learning()) {
@@ -633,21 +668,9 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
-// Value names that say a clear flag of the SCW or SSW is at rest; a clear flag named otherwise
-// ("EMGON: emergency", "Brake: internal braking", "Abs/Incr: absolute") stays in sight.
-constexpr std::string_view kAtRestNames[] = {"no", "normal", "no event", "clear"};
-
-// Whether a bit field of the SCW or SSW is at rest: a flag clear with a name from kAtRestNames,
-// or reserved bits (a bit range without value names) all zero.
+// Whether a bit field holds the value the field table calls at rest.
 bool atRest(const FieldDef& f, std::uint32_t value) {
-  if ((value & f.mask) != 0) return false;
-  if (f.kind == FieldKind::BitRange) return f.value_count == 0;
-  const ValueName* clear = valueName(f, 0);
-  if (clear == nullptr) return false;
-  for (const std::string_view name : kAtRestNames) {
-    if (name == clear->name) return true;
-  }
-  return false;
+  return f.at_rest && ((value & f.mask) >> lowestBit(f.mask)) == *f.at_rest;
 }
 
 // The word's bit fields one by one, for a shown tree: the parameter table by its number
@@ -667,7 +690,7 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
       proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
-    if ((f.word == Word::Scw || f.word == Word::Ssw) && atRest(f, value)) {
+    if (atRest(f, value)) {
       g_strlcat(at_rest_names, at_rest == 0 ? "" : ", ", sizeof at_rest_names);
       g_strlcat(at_rest_names, f.label, sizeof at_rest_names);
       ++at_rest;
@@ -866,6 +889,29 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
   }
 }
 
+// The frame's cycle interval, its deviation from nominal and its return latency, in µs; a shown
+// tree gives them their unit, with the decimals the timestamps resolve (as the CLI's text).
+void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, guint anchor) {
+  const int decimals =
+      timestampResolutionNs(TimestampSource::Capture, g_timestamp_digits.value_or(6)) >= 1000 ? 1
+                                                                                              : 3;
+  const struct {
+    Derived id;
+    guint8 flag;
+    gint64 ns;
+  } items[] = {{Derived::CycleInterval, kHasInterval, record.interval_ns},
+               {Derived::CycleDeviation, kHasDeviation, record.deviation_ns},
+               {Derived::Latency, kHasLatency, record.latency_ns}};
+  for (const auto& item : items) {
+    if ((record.timing & item.flag) == 0 || !wanted(tree, item.id)) continue;
+    const double us = static_cast<double>(item.ns) / 1000.0;
+    proto_item_set_generated(
+        shown(tree) ? proto_tree_add_double_format_value(tree, derivedHf(item.id), tvb, anchor, 0,
+                                                         us, "%.*f \u00b5s", decimals, us)
+                    : proto_tree_add_double(tree, derivedHf(item.id), tvb, anchor, 0, us));
+  }
+}
+
 // One layer of the protocol per axis, so that Wireshark's layer operator selects an axis:
 // `ncservo.state#3` is the third axis of the frame (INTERFACES.md).
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
@@ -896,6 +942,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
       layer_tree = proto_item_add_subtree(root, ett_axis);
     }
     addAxisItems(layer_tree, tvb, record, r, start, name, state, *layer.referenced);
+    if (layer.first && record.timing != 0) addTimingItems(layer_tree, tvb, record, start);
     for (const bool rx : {true, false}) {
       if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
       expert_add_info_format(pinfo, root, &ei_region_malformed,
@@ -961,6 +1008,50 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   return static_cast<int>(tvb_captured_length(tvb));
 }
 
+// `tshark -z ncservo,timing`: the timing block of the CLI's text report (docs/timing.md), from
+// the statistics of the validator the first pass ran, printed once the capture was read. Its
+// tap carries no packets: the listener only needs the end of the capture.
+constexpr const char* kTimingStat = "ncservo,timing";
+char timing_listener;  // the listener's identity for the tap system
+
+tap_packet_status takeNoPacket(void*, packet_info*, epan_dissect_t*, const void*, tap_flags_t) {
+  return TAP_PACKET_DONT_REDRAW;
+}
+
+void drawTiming(void*) {
+  // A single pass can end inside the learning window: its frames are validated now.
+  if (g_window != nullptr && g_window->learning()) {
+    g_window->finish();
+    windowDecided();
+  }
+  const std::string text =
+      timingText(g_validator != nullptr ? g_validator->bus().timing().summary() : TimingSummary{},
+                 timestampSourceName(TimestampSource::Capture),
+                 timestampResolutionNs(TimestampSource::Capture, g_timestamp_digits.value_or(6)));
+  std::printf("\n%s\nNCSERVO timing\n%s%s\n", std::string(67, '=').c_str(), text.c_str(),
+              std::string(67, '=').c_str());
+}
+
+void startTimingStat(const char* arguments, void*) {
+  if (std::strcmp(arguments, kTimingStat) != 0) {
+    report_failure("NCSERVO: -z %s: %s takes no filter or other arguments", arguments, kTimingStat);
+    return;
+  }
+  GString* error = register_tap_listener("ncservo", &timing_listener, nullptr, TL_REQUIRES_NOTHING,
+                                         nullptr, takeNoPacket, drawTiming, nullptr);
+  if (error != nullptr) {
+    report_failure("NCSERVO: -z %s: %s", arguments, error->str);
+    g_string_free(error, TRUE);
+  }
+}
+
+void registerTimingStat() {
+  register_tap("ncservo");
+  static stat_tap_ui timing_stat = {
+      REGISTER_STAT_GROUP_GENERIC, "NC-Servo timing", kTimingStat, startTimingStat, 0, nullptr};
+  register_stat_tap_ui(&timing_stat, nullptr);
+}
+
 void registerProtocol() {
   proto_ncservo = proto_register_protocol("NC-Servo EtherCAT process data", "NCSERVO", "ncservo");
   std::size_t count = 0;
@@ -1012,6 +1103,7 @@ void registerProtocol() {
 
   register_init_routine(initCapture);
   register_cleanup_routine(cleanupCapture);
+  registerTimingStat();
 }
 
 void keepRegistrations() {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -117,11 +118,46 @@ TEST(FieldTable, FilterNamesAreExactlyThoseOfTheSpec) {
   EXPECT_EQ(kFieldCount, std::size(kSpecFilterNames));
 }
 
+// The bits a view may gather as "at rest": a clear flag whose clear value means nothing happens,
+// reserved bits zero; a clear value that says something (emergency, internal braking, an
+// absolute encoder), a multi-valued selection and the SEW (whose clear causes are gathered on
+// their own) are not.
+TEST(FieldTable, AtRestValuesMarkOnlyQuietBitsOfTheControlAndStatusWords) {
+  struct Row {
+    std::string_view filter;
+    std::optional<std::uint32_t> at_rest;
+  };
+  const Row rows[] = {
+      {"ncservo.scw.poslock", 0},
+      {"ncservo.scw.error_clear", 0},
+      {"ncservo.scw.reserved", 0},
+      {"ncservo.scw.prgdwn", 0},
+      {"ncservo.ssw.servo_en", 0},
+      {"ncservo.ssw.zpulse_ack", 0},
+      {"ncservo.ssw.reserved", 0},
+      {"ncservo.ssw.temp_warning", 0},
+      {"ncservo.scw.emgon", std::nullopt},
+      {"ncservo.scw.brake", std::nullopt},
+      {"ncservo.scw.se", std::nullopt},
+      {"ncservo.scw.prmtbl", std::nullopt},
+      {"ncservo.scw.ext_prmtbl", std::nullopt},
+      {"ncservo.ssw.incremental", std::nullopt},
+      {"ncservo.sew.following", std::nullopt},
+      {"ncservo.sew.reserved", std::nullopt},
+      {"ncservo.scw", std::nullopt},
+  };
+  for (const Row& row : rows) EXPECT_EQ(field(row.filter).at_rest, row.at_rest) << row.filter;
+  for (const FieldDef& f : kFields) {
+    EXPECT_TRUE(!f.at_rest || f.word == Word::Scw || f.word == Word::Ssw) << f.filter;
+  }
+}
+
 TEST(FieldTable, DerivedFieldsIncludeTheInterfaceNames) {
   std::set<std::string> actual;
   for (const DerivedFieldDef& f : kDerivedFields) actual.insert(f.filter);
   for (const char* name :
-       {"ncservo.axis", "ncservo.axis_name", "ncservo.state", "ncservo.message"}) {
+       {"ncservo.axis", "ncservo.axis_name", "ncservo.state", "ncservo.message",
+        "ncservo.cycle.interval", "ncservo.cycle.deviation", "ncservo.latency"}) {
     EXPECT_EQ(actual.count(name), 1u) << "missing " << name;
   }
   for (const FieldDef& f : kFields) EXPECT_EQ(actual.count(f.filter), 0u) << f.filter;

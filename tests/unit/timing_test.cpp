@@ -1,6 +1,7 @@
 // The timing statistics (timing.hpp, docs/timing.md) against a sorted exact computation: moments,
 // nearest-rank quantiles, the deviation histogram and the worst lists; beyond kExactSamples the
-// quantiles stay within half a histogram bin.
+// quantiles stay within half a histogram bin. The validator's per-frame timing gives what the
+// statistics took from each frame.
 #include "ncservo/timing.hpp"
 
 #include <gtest/gtest.h>
@@ -9,11 +10,13 @@
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "row_name.hpp"
+#include "validator_driver.hpp"
 
 namespace ncservo {
 namespace {
@@ -165,6 +168,60 @@ TEST(WorstList, KeepsTheTenLargestWorstFirstEarlierFirstOnTies) {
     std::vector<std::uint64_t> frames;
     for (const TimedFrames& e : worst.entries()) frames.push_back(e.frame);
     EXPECT_EQ(frames, row.frames);
+  }
+}
+
+struct FrameTimingRow {
+  std::string name;
+  test::Script script;
+  test::At at;  // the script runs up to this frame
+  std::optional<std::int64_t> interval_ns, deviation_ns, latency_ns;
+};
+
+TEST(FrameTiming, GivesWhatTheStatisticsTookFromTheFrame) {
+  using test::M;
+  using test::R;
+  const std::int64_t ms = test::kMs;
+  const std::int64_t us = test::kUs;
+  const FrameTimingRow rows[] = {
+      {"the first master copy closes no interval",
+       test::Script(1).noReturned(0, 1),
+       M(0),
+       {},
+       {},
+       {}},
+      {"an interval before the nominal cycle is known",
+       test::Script(2).noReturned(1, 2),
+       M(1),
+       ms,
+       {},
+       {}},
+      {"an interval on the nominal cycle", test::Script(21).noReturned(20, 21), M(20), ms, 0, {}},
+      {"a late cycle",
+       test::Script(21).noReturned(20, 21).time(M(20), test::kEpochNs + 20 * ms + 50 * us),
+       M(20),
+       ms + 50 * us,
+       50 * us,
+       {}},
+      {"the short cycle after it",
+       test::Script(22).noReturned(21, 22).time(M(20), test::kEpochNs + 20 * ms + 50 * us),
+       M(21),
+       ms - 50 * us,
+       -50 * us,
+       {}},
+      {"a returned copy's latency", test::Script(6).delay(300 * us), R(5), {}, {}, 300 * us},
+      {"a returned copy without its master copy", test::Script(6).noMaster(5, 6), R(5), {}, {}, {}},
+  };
+  for (const FrameTimingRow& row : rows) {
+    SCOPED_TRACE(row.name);
+    test::ValidatorDriver driver;
+    driver.run(row.script);
+    const FrameTiming& timing = driver.validator().frameTiming();
+    EXPECT_EQ(timing.frame, driver.frameOf(row.at));
+    EXPECT_EQ(driver.frames(), driver.frameOf(row.at));
+    EXPECT_EQ(timing.interval_ns, row.interval_ns);
+    EXPECT_EQ(timing.deviation_ns, row.deviation_ns);
+    EXPECT_EQ(timing.latency_ns, row.latency_ns);
   }
 }
 

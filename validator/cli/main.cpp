@@ -316,7 +316,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   if (timing) {
     fmt::print(stderr, "ncservo: {}: {}", reader->path(),
                timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
-                          cli::timestampResolutionNs(clock.source(), reader->timestampDigits())));
+                          timestampResolutionNs(clock.source(), reader->timestampDigits())));
   }
   if (Status selected = cli::checkAxisSelection(args.axes, session->decoder().axes()); !selected) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());

@@ -717,13 +717,6 @@ bool CaptureReport::reaches(Severity level) const {
   return false;
 }
 
-std::int64_t timestampResolutionNs(TimestampSource source, int digits) {
-  if (source == TimestampSource::Probe) return 1;
-  std::int64_t ns = 1;
-  for (int d = digits; d < 9; ++d) ns *= 10;
-  return ns;
-}
-
 void summarise(const Validator& validator, CaptureReport& report) {
   report.timing = validator.bus().timing().summary();
   report.cycles = validator.cycles();

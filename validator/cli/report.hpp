@@ -105,9 +105,6 @@ struct CaptureReport {
 const char* verdictName(Verdict verdict);
 // An axis's configured name ("axis3" when it has none), "bus" for none.
 std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
-// The resolution of the timestamps that timed a capture: the probe's 1 ns, or the capture's own
-// (`digits` of a second).
-std::int64_t timestampResolutionNs(TimestampSource source, int digits);
 
 // Fills the end-of-capture parts of the report from the validator.
 void summarise(const Validator& validator, CaptureReport& report);

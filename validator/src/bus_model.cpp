@@ -80,6 +80,8 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
                              std::vector<AxisAccount>& accounts) {
   now_ = now;
   frame_time_ns_ = frame_time_ns;
+  frame_timing_ = FrameTiming{};
+  frame_timing_.frame = now.frame;
   events_ = &events;
   accounts_ = &accounts;
   CyclicFrame& cyclic = cyclicFrame(decode.axes[0].axis);
@@ -118,6 +120,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
     timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
+    frame_timing_.latency_ns = latency;
     judgeLatency(cyclic, latency, events);
   }
   cyclic.awaiting_return = false;
@@ -161,6 +164,10 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
       cyclic.pending_gap = std::move(pending);
     }
     judgeJitter(cyclic, interval, *median, gap);
+  }
+  frame_timing_.interval_ns = interval;
+  if (const std::optional<std::int64_t> nominal = nominalCycleNs()) {
+    frame_timing_.deviation_ns = interval - *nominal;
   }
   intervals_.add(interval);
   timing_.onCycle(now_.frame, cyclic.last_tick->frame, interval);

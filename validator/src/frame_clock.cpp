@@ -27,6 +27,13 @@ const char* timestampSourceName(TimestampSource source) {
   return source == TimestampSource::Probe ? "probe" : "capture";
 }
 
+std::int64_t timestampResolutionNs(TimestampSource source, int digits) {
+  if (source == TimestampSource::Probe) return 1;
+  std::int64_t ns = 1;
+  for (int d = digits; d < 9; ++d) ns *= 10;
+  return ns;
+}
+
 std::int64_t FrameClock::time(std::uint64_t frame_number, std::int64_t capture_ns,
                               const ProbeHeader& probe) {
   const bool stamped = probe.present && probe.timestampValid();

@@ -256,6 +256,11 @@ void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes) {
   reportEvents();
 }
 
+const FrameTiming& Validator::frameTiming() const {
+  static const FrameTiming kNone;
+  return bus_.frameTiming().frame == now_.frame ? bus_.frameTiming() : kNone;
+}
+
 // The bus and slave rules on this frame's events; a slave's finding names the axis whose
 // station it is.
 void Validator::reportEvents() {

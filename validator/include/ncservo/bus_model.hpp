@@ -60,6 +60,8 @@ class BusModel {
   IntervalStats captureIntervals() const;
   // Cycle intervals and return latencies of every segment (docs/timing.md).
   const TimingStats& timing() const { return timing_; }
+  // What the last frame given to onCyclicFrame added to timing().
+  const FrameTiming& frameTiming() const { return frame_timing_; }
   // Returned datagrams carrying servo PDOs whose WKC was not captured (COM-001 not judged).
   std::uint64_t uncapturedWkcs() const { return uncaptured_wkcs_; }
   std::uint64_t firstUncapturedWkcFrame() const { return first_uncaptured_wkc_frame_; }
@@ -139,6 +141,7 @@ class BusModel {
   IntervalStats intervals_;          // this segment's
   IntervalStats earlier_intervals_;  // the segments' before it
   TimingStats timing_;
+  FrameTiming frame_timing_;
   std::uint64_t cycles_ = 0;
   std::uint64_t uncaptured_wkcs_ = 0;
   std::uint64_t first_uncaptured_wkc_frame_ = 0;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 
 #include "ncservo/pdo_layout.hpp"
@@ -39,6 +40,9 @@ struct FieldDef {
   FieldWhen when;
   const char* blurb;
   const char* clause;  // where the spec defines it
+  // For a bit field of the SCW or SSW: its value (from the field's lowest bit) when it asks for
+  // nothing and reports nothing, so that a view can show such fields together and briefly.
+  std::optional<std::uint32_t> at_rest = std::nullopt;
 };
 
 namespace names {
@@ -84,25 +88,25 @@ inline constexpr FieldDef kFields[] = {
   {Word::Scw, FieldKind::Flag, 0x4, "EMGON", "ncservo.scw.emgon", NCSERVO_VALUES(kEmgon), FieldWhen::Always,
    "0 = emergency: braking ramp to the Emergency Feed speed", "docs/protocol.md §2"},
   {Word::Scw, FieldKind::Flag, 0x8, "POSLOCK", "ncservo.scw.poslock", NCSERVO_VALUES(kPoslock), FieldWhen::Always,
-   "Hold the axis at the position latched on the 0->1 edge", "docs/protocol.md §2"},
+   "Hold the axis at the position latched on the 0->1 edge", "docs/protocol.md §2", 0},
   {Word::Scw, FieldKind::BitRange, 0x30, "PRMTBL", "ncservo.scw.prmtbl", NCSERVO_VALUES(kTableLow), FieldWhen::Always,
    "Parameter table select, low bits (table = ExtPRMTBL*4 + PRMTBL + 1)", "docs/protocol.md §2"},
   {Word::Scw, FieldKind::BitRange, 0xC0, "ModeSel", "ncservo.scw.modesel", NCSERVO_VALUES(kModeSel), FieldWhen::Always,
    "Regulation mode select (documented as not used yet)", "docs/protocol.md §2"},
   {Word::Scw, FieldKind::Flag, 0x100, "SIntLock", "ncservo.scw.sintlock", NCSERVO_VALUES(kSIntLock), FieldWhen::Always,
-   "Freeze the speed-regulator integrator", "docs/protocol.md §2"},
+   "Freeze the speed-regulator integrator", "docs/protocol.md §2", 0},
   {Word::Scw, FieldKind::Flag, 0x200, "ErrorClear", "ncservo.scw.error_clear", NCSERVO_VALUES(kErrorClear), FieldWhen::Always,
-   "Clear drive errors (handshake with SSW.ErrClearAck)", "docs/protocol.md §2"},
+   "Clear drive errors (handshake with SSW.ErrClearAck)", "docs/protocol.md §2", 0},
   {Word::Scw, FieldKind::Flag, 0x400, "Brake", "ncservo.scw.brake", NCSERVO_VALUES(kBrake), FieldWhen::Always,
    "0 = internal braking (documented as not used yet)", "docs/protocol.md §2"},
   {Word::Scw, FieldKind::Flag, 0x800, "ZPulseRequest", "ncservo.scw.zpulse_request", NCSERVO_VALUES(kZPulseRequest), FieldWhen::Always,
-   "Search the encoder zero pulse (handshake with SSW.ZPulseAck)", "docs/protocol.md §2"},
+   "Search the encoder zero pulse (handshake with SSW.ZPulseAck)", "docs/protocol.md §2", 0},
   {Word::Scw, FieldKind::Flag, 0x1000, "ExtPRMTBL", "ncservo.scw.ext_prmtbl", NCSERVO_VALUES(kExtTable), FieldWhen::Always,
    "Parameter table select, high bit (tables 5-8)", "docs/protocol.md §2"},
   {Word::Scw, FieldKind::BitRange, 0x7FFFE000, "Reserved", "ncservo.scw.reserved", NCSERVO_NO_VALUES, FieldWhen::Always,
-   "Must be 0", "docs/protocol.md §2"},
+   "Must be 0", "docs/protocol.md §2", 0},
   {Word::Scw, FieldKind::Flag, 0x80000000, "PRGDWN", "ncservo.scw.prgdwn", NCSERVO_VALUES(kSetClear), FieldWhen::Always,
-   "Named in the bit map, not described (program download)", "docs/protocol.md §2"},
+   "Named in the bit map, not described (program download)", "docs/protocol.md §2", 0},
   {Word::ExtCode, FieldKind::Word, 0, "Extra data code word", "ncservo.ext_code", NCSERVO_NO_VALUES, FieldWhen::Always,
    "Selects the content of the extra data", "docs/protocol.md §1"},
 
@@ -117,31 +121,31 @@ inline constexpr FieldDef kFields[] = {
   {Word::Ssw, FieldKind::Word, 0, "Servo status word", "ncservo.ssw", NCSERVO_NO_VALUES, FieldWhen::Always,
    "SSW, servo -> NC", "docs/protocol.md §3"},
   {Word::Ssw, FieldKind::Flag, 0x1, "ServoEn", "ncservo.ssw.servo_en", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Drive enabled: regulation and power stage live", "docs/protocol.md §3"},
+   "Drive enabled: regulation and power stage live", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x2, "ServoRDY", "ncservo.ssw.servo_rdy", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Ready, per the Servo_Ready_Mode table", "docs/protocol.md §3, §5"},
+   "Ready, per the Servo_Ready_Mode table", "docs/protocol.md §3, §5", 0},
   {Word::Ssw, FieldKind::Flag, 0x4, "Abs/Incr", "ncservo.ssw.incremental", NCSERVO_VALUES(kEncoder), FieldWhen::Always,
    "Encoder kind", "docs/protocol.md §3"},
   {Word::Ssw, FieldKind::Flag, 0x8, "ZPulseAck", "ncservo.ssw.zpulse_ack", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Zero pulse found after ZPulseRequest", "docs/protocol.md §3"},
+   "Zero pulse found after ZPulseRequest", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x10, "ErrClearAck", "ncservo.ssw.err_clear_ack", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Errors were cleared after ErrorClear", "docs/protocol.md §3"},
+   "Errors were cleared after ErrorClear", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x20, "N=0", "ncservo.ssw.n_zero", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Motor speed below the standstill threshold", "docs/protocol.md §3"},
+   "Motor speed below the standstill threshold", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x40, "N=Ns", "ncservo.ssw.n_setpoint", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Motor speed within tolerance of the set point", "docs/protocol.md §3"},
+   "Motor speed within tolerance of the set point", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x80, "PulseEnabled", "ncservo.ssw.pulse_enabled", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Power stage (IGBT) switched on", "docs/protocol.md §3"},
+   "Power stage (IGBT) switched on", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::BitRange, 0x300, "PRMTBL", "ncservo.ssw.prmtbl", NCSERVO_VALUES(kTableLow), FieldWhen::Always,
    "Active parameter table, low bits", "docs/protocol.md §3"},
   {Word::Ssw, FieldKind::Flag, 0x400, "NoEncoder", "ncservo.ssw.no_encoder", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Axis has no encoder", "docs/protocol.md §3"},
+   "Axis has no encoder", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x800, "TempWarning", "ncservo.ssw.temp_warning", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
-   "Motor temperature over 80 °C", "docs/protocol.md §3"},
+   "Motor temperature over 80 °C", "docs/protocol.md §3", 0},
   {Word::Ssw, FieldKind::Flag, 0x1000, "ExtPRMTBL", "ncservo.ssw.ext_prmtbl", NCSERVO_VALUES(kExtTable), FieldWhen::Always,
    "Active parameter table, high bit", "docs/protocol.md §3"},
   {Word::Ssw, FieldKind::BitRange, 0xFFFFE000, "Reserved", "ncservo.ssw.reserved", NCSERVO_NO_VALUES, FieldWhen::Always,
-   "Must be 0", "docs/protocol.md §3"},
+   "Must be 0", "docs/protocol.md §3", 0},
   {Word::Sew, FieldKind::Word, 0, "Servo error word", "ncservo.sew", NCSERVO_NO_VALUES, FieldWhen::Always,
    "SEW, servo -> NC", "docs/protocol.md §4"},
   {Word::Sew, FieldKind::Flag, 0x1, "ServoErrors", "ncservo.sew.servo_errors", NCSERVO_VALUES(kYesNo), FieldWhen::Always,
@@ -252,6 +256,10 @@ constexpr bool fieldTableIsConsistent() {
     if ((f.mask & ~wordMask(f.word)) != 0) return false;
     if (f.kind == FieldKind::Flag && popcount64(f.mask) != 1) return false;
     if (f.kind == FieldKind::Part && popcount64(f.mask) != 32) return false;
+    if (f.at_rest && (f.kind == FieldKind::Word || f.kind == FieldKind::Part)) return false;
+    if (f.at_rest && ((std::uint64_t{*f.at_rest} << lowestBit(f.mask)) & ~f.mask) != 0) {
+      return false;
+    }
     if (i > 0 && kFields[i - 1].word > f.word) return false;
     if (f.kind == FieldKind::Word && (i > 0 && kFields[i - 1].word == f.word)) return false;
     for (std::size_t j = 0; j < i; ++j) {
@@ -346,15 +354,27 @@ enum class Derived : std::uint8_t {
   Transition,
   Finding,
   SinceFrame,
+  CycleInterval,
+  CycleDeviation,
+  Latency,
+};
+// What a derived field holds, which gives its type in a registration.
+enum class DerivedKind : std::uint8_t {
+  Text,
+  Index,
+  FrameNumber,
+  Microseconds,  // a duration, fractional
 };
 struct DerivedFieldDef {
   Derived id;
   const char* label;
   const char* filter;
   const char* blurb;
+  DerivedKind kind = DerivedKind::Text;
 };
 inline constexpr DerivedFieldDef kDerivedFields[] = {
-    {Derived::Axis, "Axis", "ncservo.axis", "Index of the axis in the layout (0-based)"},
+    {Derived::Axis, "Axis", "ncservo.axis", "Index of the axis in the layout (0-based)",
+     DerivedKind::Index},
     {Derived::AxisName, "Axis name", "ncservo.axis_name", "Name of the axis in the layout"},
     {Derived::Copy, "Copy", "ncservo.copy",
      "master = the master's frame (outputs), returned = the copy back from the ring (inputs)"},
@@ -369,7 +389,26 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
     {Derived::Finding, "Finding", "ncservo.finding",
      "A rule's finding with its details (docs/rules.md)"},
     {Derived::SinceFrame, "Since frame", "ncservo.since_frame",
-     "Frame where the finding's condition began"},
+     "Frame where the finding's condition began", DerivedKind::FrameNumber},
+    {Derived::CycleInterval, "Cycle interval", "ncservo.cycle.interval",
+     "Time since the previous master copy of this cyclic frame, in us (docs/timing.md)",
+     DerivedKind::Microseconds},
+    {Derived::CycleDeviation, "Cycle deviation", "ncservo.cycle.deviation",
+     "The cycle interval minus the nominal cycle (the segment's median so far), in us "
+     "(docs/timing.md)",
+     DerivedKind::Microseconds},
+    {Derived::Latency, "Return latency", "ncservo.latency",
+     "Time from the master copy to this returned copy at the capture point, in us "
+     "(docs/timing.md)",
+     DerivedKind::Microseconds},
 };
+static_assert(
+    [] {
+      for (std::size_t i = 0; i < std::size(kDerivedFields); ++i) {
+        if (static_cast<std::size_t>(kDerivedFields[i].id) != i) return false;
+      }
+      return true;
+    }(),
+    "derived fields in the order of Derived");
 
 }  // namespace ncservo

@@ -25,6 +25,9 @@ enum class TimestampSource : std::uint8_t { Capture, Probe };
 
 std::optional<TimestampMode> timestampModeFromName(std::string_view name);
 const char* timestampSourceName(TimestampSource source);  // "capture", "probe"
+// The resolution of the timestamps that timed a capture: the probe's 1 ns, or the capture's own
+// (`digits` of a second).
+std::int64_t timestampResolutionNs(TimestampSource source, int digits);
 
 // What the probe headers of a capture said.
 struct ProbeCounts {

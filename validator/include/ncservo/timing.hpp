@@ -88,6 +88,15 @@ class WorstList {
   std::vector<TimedFrames> entries_;
 };
 
+// What one frame gave the timing statistics, for presenting them frame by frame (the plugin's
+// ncservo.cycle.* and ncservo.latency).
+struct FrameTiming {
+  std::uint64_t frame = 0;                   // the frame these belong to
+  std::optional<std::int64_t> interval_ns;   // the cycle interval this frame closed
+  std::optional<std::int64_t> deviation_ns;  // that interval minus the segment's nominal cycle
+  std::optional<std::int64_t> latency_ns;    // a returned copy's, since its master copy
+};
+
 struct TimingSummary {
   std::optional<SeriesSummary> cycle, latency;
   std::vector<TimedFrames> worst_cycles, worst_latencies;

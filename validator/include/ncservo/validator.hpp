@@ -61,6 +61,9 @@ class Validator {
   // The capture's segments (RULES.md "Time"): the rules judge each on its own clock.
   const SegmentTracker& segments() const { return segments_; }
   const BusModel& bus() const { return bus_; }
+  // The cycle interval and return latency the last frame given to onFrame added to the timing
+  // statistics; all empty when it added none.
+  const FrameTiming& frameTiming() const;
   // The placed PDO regions the capture cut short (a snap length).
   const CutRegions& cutRegions() const { return cut_; }
 

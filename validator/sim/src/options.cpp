@@ -156,12 +156,12 @@ Status resolveOptions(SimOptions& o) {
                             o.cycle_us / 2));
   }
   // Late, not lost: sent before the next cycle's earliest send, whatever the jitter.
-  const int latest = o.cycle_us - 2 * o.jitter_us - 1;
+  const int most_late_us = o.cycle_us - 2 * o.jitter_us - 1;
   for (const CycleDisturbance& late : o.late_cycles) {
-    if (late.amount > latest) {
+    if (late.amount > most_late_us) {
       return fail(fmt::format("--late-cycle {}: at most {} us late (the cycle less twice the "
                               "jitter, less 1)",
-                              late.text, latest));
+                              late.text, most_late_us));
     }
   }
   if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);
