@@ -312,9 +312,16 @@ bool com004(const NotReturnedEvent&, const RuleSettings&) {
   return true;
 }
 std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettings&) {
+  const std::string carried =
+      e.axes ? fmt::format("axes {}-{}", e.axes->first, e.axes->last)
+             : fmt::format(
+                   "{} at 0x{:08X}, {} bytes{}", ecat::commandName(e.command), e.address, e.length,
+                   e.datagrams > 1 ? fmt::format(", and {} more datagram{}", e.datagrams - 1,
+                                                 e.datagrams > 2 ? "s" : "")
+                                   : std::string());
   return fmt::format(
-      "the master frame {} (axes {}-{}) was not returned before the next cycle's master frame",
-      e.master_frame, e.first_axis, e.last_axis);
+      "the master frame {} ({}) was not returned before the next cycle's master frame",
+      e.master_frame, carried);
 }
 
 // --- EtherCAT state machine, per slave (PROTOCOL.md §8) ---
