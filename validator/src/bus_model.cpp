@@ -53,12 +53,25 @@ std::size_t BusModel::processDatagrams(const EcatFrame& frame, const FrameDecode
 }
 
 BusModel::CyclicFrame* BusModel::cyclicFrame(const EcatFrame& frame, const FrameDecode& decode) {
+  if (decode.shape_id != 0) {
+    for (const ShapeCyclic& cached : shape_cyclic_) {
+      if (cached.shape_id == decode.shape_id) return &cyclic_[cached.index];
+    }
+  }
   const std::size_t n = processDatagrams(frame, decode, frame_keys_);
   const auto first = frame_keys_.begin();
   const auto last = first + static_cast<std::ptrdiff_t>(n);
-  for (CyclicFrame& c : cyclic_) {
-    if (std::equal(c.datagrams.begin(), c.datagrams.end(), first, last)) return &c;
+  const auto remember = [&](std::size_t index) {
+    if (decode.shape_id == 0) return &cyclic_[index];
+    shape_cyclic_[shape_cyclic_next_] = ShapeCyclic{decode.shape_id, index};
+    shape_cyclic_next_ = (shape_cyclic_next_ + 1) % shape_cyclic_.size();
+    return &cyclic_[index];
+  };
+  for (std::size_t i = 0; i < cyclic_.size(); ++i) {
+    const CyclicFrame& c = cyclic_[i];
+    if (std::equal(c.datagrams.begin(), c.datagrams.end(), first, last)) return remember(i);
   }
+  shape_cyclic_ = {};
   // Bounded memory: a frame seen in one cycle only (a start-up's) gives way to a new one.
   if (cyclic_.size() >= kMaxCyclicFrames) {
     const auto once = std::find_if(cyclic_.begin(), cyclic_.end(),
@@ -71,7 +84,7 @@ BusModel::CyclicFrame* BusModel::cyclicFrame(const EcatFrame& frame, const Frame
   }
   cyclic_.push_back(CyclicFrame{});
   cyclic_.back().datagrams.assign(first, last);
-  return &cyclic_.back();
+  return remember(cyclic_.size() - 1);
 }
 
 std::uint64_t BusModel::cycles() const {

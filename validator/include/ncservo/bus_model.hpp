@@ -139,6 +139,14 @@ class BusModel {
 
   std::vector<CyclicFrame> cyclic_;                            // in the order first seen
   std::array<DatagramKey, ecat::kMaxDatagrams> frame_keys_{};  // this frame's
+  // The cyclic frame of recent frame shapes (FrameDecode::shape_id), by index in cyclic_: a
+  // shape has the same process-data datagrams every cycle. Forgotten when cyclic_ changes.
+  struct ShapeCyclic {
+    std::uint64_t shape_id = 0;
+    std::size_t index = 0;
+  };
+  std::array<ShapeCyclic, 4> shape_cyclic_{};
+  std::size_t shape_cyclic_next_ = 0;
   std::vector<WkcRecord> wkc_;
   std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
   std::size_t wkc_plan_next_ = 0;
