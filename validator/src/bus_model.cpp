@@ -156,7 +156,8 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     if (cyclic.awaiting_return && returned_copies_seen_) {
       if (!cyclic.not_returned_episode) {
         cyclic.not_returned_episode = true;
-        NotReturnedEvent event{cyclic.last_master.frame};
+        NotReturnedEvent event;
+        event.master_frame = cyclic.last_master.frame;
         if (!cyclic.axes.empty()) {
           event.axes = NotReturnedEvent::Axes{cyclic.axes.front(), cyclic.axes.back()};
         }

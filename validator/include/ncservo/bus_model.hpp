@@ -67,7 +67,7 @@ class BusModel {
   // The process-data datagrams of the cyclic frames that repeated, in the order they were first
   // seen; one entry per command, address and length.
   std::vector<CyclicDatagram> cyclicDatagrams() const;
-  // Copies of frames not followed because kMaxCyclicFrames cyclic frames that repeated were.
+  // Copies of frames not followed: kMaxCyclicFrames cyclic frames that repeated were already.
   std::uint64_t unfollowedFrames() const { return unfollowed_frames_; }
 
   static constexpr std::size_t kMaxCyclicFrames = 16;
