@@ -186,6 +186,18 @@ Json worstJson(const std::vector<TimedFrames>& worst, const char* since_key,
   return list;
 }
 
+// The process-data datagrams whose cyclic frames the bus rules judged (docs/timing.md).
+Json cyclicDatagramsJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const CyclicDatagram& d : r.cyclic_datagrams) {
+    list.push_back({{"command", ecat::commandName(d.command)},
+                    {"address", hex32(d.address)},
+                    {"length", d.length},
+                    {"frames", d.frames}});
+  }
+  return list;
+}
+
 // INTERFACES.md `timing`.
 Json timingJson(const CaptureReport& r) {
   Json timing{
@@ -195,7 +207,9 @@ Json timingJson(const CaptureReport& r) {
       {"latency_us", seriesJson(r.timing.latency)},
       {"worst_cycles", worstJson(r.timing.worst_cycles, "since_frame", "interval_us")},
       {"worst_latencies", worstJson(r.timing.worst_latencies, "master_frame", "latency_us")},
-      {"segments", segmentsJson(r)}};
+      {"segments", segmentsJson(r)},
+      {"cyclic_datagrams", cyclicDatagramsJson(r)}};
+  if (r.unfollowed_frames > 0) timing["frames_not_followed"] = r.unfollowed_frames;
   if (r.segment_count > r.segments.size())
     timing["segments_omitted"] = r.segment_count - r.segments.size();
   return timing;
@@ -486,6 +500,22 @@ void writeTextGroups(const ReportSink& sink, const CaptureReport& r) {
   }
 }
 
+// One line: the datagrams whose cyclic frames the bus rules judged.
+std::string describeCyclicDatagrams(const CaptureReport& r) {
+  std::vector<std::string> items;
+  for (const CyclicDatagram& d : r.cyclic_datagrams) {
+    items.push_back(fmt::format("{} 0x{:08X} ({} byte{}, {} frames)", ecat::commandName(d.command),
+                                d.address, d.length, d.length == 1 ? "" : "s", d.frames));
+  }
+  std::string line =
+      fmt::format("cyclic datagrams judged: {}",
+                  items.empty() ? "none" : fmt::format("{}", fmt::join(items, ", ")));
+  if (r.unfollowed_frames > 0) {
+    line += fmt::format(" ({} frames of further cyclic frames not followed)", r.unfollowed_frames);
+  }
+  return line;
+}
+
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   std::FILE* out = sink.out;
   if (!sink.policy.verbose) writeTextGroups(sink, r);
@@ -524,6 +554,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
                         timestampResolutionNs(r.timestamps, r.timestamp_digits))
                  .c_str(),
              out);
+  fmt::print(out, "{}\n", describeCyclicDatagrams(r));
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);
@@ -719,6 +750,8 @@ bool CaptureReport::reaches(Severity level) const {
 
 void summarise(const Validator& validator, CaptureReport& report) {
   report.timing = validator.bus().timing().summary();
+  report.cyclic_datagrams = validator.bus().cyclicDatagrams();
+  report.unfollowed_frames = validator.bus().unfollowedFrames();
   report.cycles = validator.cycles();
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();

@@ -92,6 +92,8 @@ struct CaptureReport {
   // What the HTML report draws around findings (when a format draws them).
   FindingTimelines timelines;
   TimingSummary timing;
+  std::vector<CyclicDatagram> cyclic_datagrams;  // what the bus rules judged
+  std::uint64_t unfollowed_frames = 0;           // beyond BusModel::kMaxCyclicFrames
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);

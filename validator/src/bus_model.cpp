@@ -29,13 +29,91 @@ std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
 }
 }  // namespace
 
-BusModel::CyclicFrame& BusModel::cyclicFrame(std::uint16_t first_axis) {
-  for (CyclicFrame& c : cyclic_) {
-    if (c.first_axis == first_axis) return c;
+bool BusModel::exchangesProcessData(const EcatFrame& frame, const FrameDecode& decode) {
+  if (decode.axis_count > 0) return true;
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return false;
+  const std::size_t count = std::min(frame.count, frame.datagrams.size());
+  for (std::size_t d = 0; d < count; ++d) {
+    if (ecat::isLogical(frame.datagrams[d].command)) return true;
+  }
+  return false;
+}
+
+std::size_t BusModel::processDatagrams(const EcatFrame& frame, const FrameDecode& decode,
+                                       std::array<DatagramKey, ecat::kMaxDatagrams>& keys) {
+  const std::size_t count = std::min(frame.count, keys.size());
+  // Servo PDOs may also travel in FPRD/FPWR datagrams (PROTOCOL.md §9).
+  std::array<bool, ecat::kMaxDatagrams> carries_axes{};
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& p = decode.axes[i];
+    if (p.rx_placed && p.rx_datagram < count) carries_axes[p.rx_datagram] = true;
+    if (p.tx_placed && p.tx_datagram < count) carries_axes[p.tx_datagram] = true;
+  }
+  std::size_t n = 0;
+  for (std::size_t d = 0; d < count; ++d) {
+    const Datagram& dg = frame.datagrams[d];
+    if (ecat::isLogical(dg.command) || carries_axes[d]) {
+      keys[n++] = DatagramKey{dg.command, dg.address, dg.length};
+    }
+  }
+  return n;
+}
+
+BusModel::CyclicFrame* BusModel::cyclicFrame(const EcatFrame& frame, const FrameDecode& decode) {
+  if (decode.shape_id != 0) {
+    for (const ShapeCyclic& cached : shape_cyclic_) {
+      if (cached.shape_id == decode.shape_id) return &cyclic_[cached.index];
+    }
+  }
+  const std::size_t n = processDatagrams(frame, decode, frame_keys_);
+  const auto first = frame_keys_.begin();
+  const auto last = first + static_cast<std::ptrdiff_t>(n);
+  const auto remember = [&](std::size_t index) {
+    if (decode.shape_id == 0) return &cyclic_[index];
+    shape_cyclic_[shape_cyclic_next_] = ShapeCyclic{decode.shape_id, index};
+    shape_cyclic_next_ = (shape_cyclic_next_ + 1) % shape_cyclic_.size();
+    return &cyclic_[index];
+  };
+  for (std::size_t i = 0; i < cyclic_.size(); ++i) {
+    const CyclicFrame& c = cyclic_[i];
+    if (std::equal(c.datagrams.begin(), c.datagrams.end(), first, last)) return remember(i);
+  }
+  shape_cyclic_ = {};
+  // Bounded memory: a frame seen in one cycle only (a start-up's) gives way to a new one.
+  if (cyclic_.size() >= kMaxCyclicFrames) {
+    const auto once = std::find_if(cyclic_.begin(), cyclic_.end(),
+                                   [](const CyclicFrame& c) { return c.ticks <= 1; });
+    if (once == cyclic_.end()) {
+      ++unfollowed_frames_;
+      return nullptr;
+    }
+    cyclic_.erase(once);
   }
   cyclic_.push_back(CyclicFrame{});
-  cyclic_.back().first_axis = first_axis;
-  return cyclic_.back();
+  cyclic_.back().datagrams.assign(first, last);
+  return remember(cyclic_.size() - 1);
+}
+
+std::uint64_t BusModel::cycles() const {
+  std::uint64_t busiest = 0;
+  for (const CyclicFrame& c : cyclic_) busiest = std::max(busiest, c.ticks);
+  return busiest;
+}
+
+std::vector<CyclicDatagram> BusModel::cyclicDatagrams() const {
+  std::vector<CyclicDatagram> out;
+  for (const CyclicFrame& c : cyclic_) {
+    if (c.ticks < 2) continue;
+    for (const DatagramKey& key : c.datagrams) {
+      auto same = std::find_if(out.begin(), out.end(), [&](const CyclicDatagram& d) {
+        return d.command == key.command && d.address == key.address && d.length == key.length;
+      });
+      if (same == out.end())
+        same = out.insert(out.end(), {key.command, key.address, key.length, 0});
+      same->frames += c.copies;
+    }
+  }
+  return out;
 }
 
 void BusModel::startSegment(std::vector<BusEvent>& events) {
@@ -84,7 +162,10 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   frame_timing_.frame = now.frame;
   events_ = &events;
   accounts_ = &accounts;
-  CyclicFrame& cyclic = cyclicFrame(decode.axes[0].axis);
+  CyclicFrame* followed = cyclicFrame(frame, decode);
+  if (followed == nullptr) return false;
+  CyclicFrame& cyclic = *followed;
+  ++cyclic.copies;
   const bool master = decode.copy == CopyKind::Master;
   if (master && !master_copies_seen_) {
     master_copies_seen_ = true;
@@ -97,9 +178,19 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     if (cyclic.awaiting_return && returned_copies_seen_) {
       if (!cyclic.not_returned_episode) {
         cyclic.not_returned_episode = true;
-        events.push_back(
-            {cyclic.last_master,
-             NotReturnedEvent{cyclic.last_master.frame, cyclic.axes.front(), cyclic.axes.back()}});
+        NotReturnedEvent event;
+        event.master_frame = cyclic.last_master.frame;
+        if (!cyclic.axes.empty()) {
+          event.axes = NotReturnedEvent::Axes{cyclic.axes.front(), cyclic.axes.back()};
+        }
+        if (!cyclic.datagrams.empty()) {
+          const DatagramKey& named = cyclic.datagrams.front();
+          event.command = named.command;
+          event.address = named.address;
+          event.length = named.length;
+          event.datagrams = static_cast<std::uint16_t>(cyclic.datagrams.size());
+        }
+        events.push_back({cyclic.last_master, event});
       }
       for (std::uint16_t a : cyclic.axes) accounts.push_back({a, Outcome::Lost, 1});
     }
@@ -130,7 +221,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
 
 // One tick of a cyclic frame's clock: the interval statistics, COM-002 and COM-006.
 void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
-  if (cyclic.first_axis == cyclic_.front().first_axis) ++cycles_;
+  ++cyclic.ticks;
   // RULES.md "Time": a timestamp that went backwards is not an error; the interval it would
   // give is unknown, so the clock of this cyclic frame starts again at the next tick.
   if (frame_time_ns_ < now_.time_ns) {
@@ -240,7 +331,8 @@ std::int16_t BusModel::wkcRecord(const Datagram& dg) {
   return static_cast<std::int16_t>(wkc_.size() - 1);
 }
 
-// Which datagrams of this frame carry servo PDOs, and what the axes in each add to its WKC.
+// Which datagrams of this frame carry servo PDOs, and what the axes in each add to its WKC; the
+// logical datagrams of other slaves only, judged against their usual WKC.
 BusModel::WkcPlan& BusModel::wkcPlan(const EcatFrame& frame, const FrameDecode& decode) {
   if (decode.shape_id != 0) {
     for (WkcPlan& plan : wkc_plans_) {
@@ -277,16 +369,20 @@ BusModel::WkcPlan& BusModel::wkcPlan(const EcatFrame& frame, const FrameDecode& 
     if (p.tx_placed) add(p.tx_datagram, false, true);
   }
   for (std::size_t d = 0; d < count; ++d) {
-    if (!carried[d].carries) continue;
-    plan.checks.push_back(WkcCheck{static_cast<std::uint16_t>(d), carried[d].expected,
-                                   carried[d].covered != frame.datagrams[d].length,
-                                   kUnresolvedWkcRecord});
+    if (carried[d].carries) {
+      plan.checks.push_back(WkcCheck{static_cast<std::uint16_t>(d), carried[d].expected,
+                                     carried[d].covered != frame.datagrams[d].length,
+                                     kUnresolvedWkcRecord});
+    } else if (ecat::isLogical(frame.datagrams[d].command)) {
+      plan.checks.push_back(
+          WkcCheck{static_cast<std::uint16_t>(d), 0, true, kUnresolvedWkcRecord, false});
+    }
   }
   return plan;
 }
 
-// RULES.md COM-001 on each returned datagram that carries servo PDOs, and each axis's cycle:
-// lost (WKC 0), failed (another wrong WKC) or good.
+// RULES.md COM-001 on each returned process-data datagram, and each axis's cycle: lost (WKC 0),
+// failed (another wrong WKC) or good.
 bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode) {
   WkcPlan& plan = wkcPlan(frame, decode);
   bool all_good = true;
@@ -294,11 +390,12 @@ bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
     const Datagram& dg = frame.datagrams[check.datagram];
     check.outcome = Outcome::Good;
     if (!dg.has_wkc) {
-      if (uncaptured_wkcs_++ == 0) first_uncaptured_wkc_frame_ = now_.frame;
+      if (check.carries_axes && uncaptured_wkcs_++ == 0) first_uncaptured_wkc_frame_ = now_.frame;
       continue;
     }
     if (check.record == kUnresolvedWkcRecord) check.record = wkcRecord(dg);
     WkcRecord* record = check.record >= 0 ? &wkc_[static_cast<std::size_t>(check.record)] : nullptr;
+    if (!check.carries_axes && record == nullptr) continue;  // no usual WKC to judge it by
     std::uint16_t expected = check.expected;
     // Other slaves share the datagram: the expected value is the one seen most often so far.
     if (check.shared && record != nullptr) {
@@ -322,7 +419,7 @@ bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
     }
     if (dg.wkc != expected) {
       check.outcome = dg.wkc == 0 ? Outcome::Lost : Outcome::Failed;
-      all_good = false;
+      all_good = all_good && !check.carries_axes;
       if (record == nullptr || !record->wrong_episode) {
         if (record != nullptr) record->wrong_episode = true;
         events_->push_back(

@@ -353,9 +353,18 @@ bool com004(const NotReturnedEvent&, const RuleSettings&) {
   return true;
 }
 std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettings&) {
+  std::string carried;
+  if (e.axes) {
+    carried = fmt::format("axes {}-{}", e.axes->first, e.axes->last);
+  } else {
+    carried = fmt::format("{} at 0x{:08X}, {} byte{}", ecat::commandName(e.command), e.address,
+                          e.length, e.length == 1 ? "" : "s");
+    const int more = e.datagrams - 1;
+    if (more > 0) carried += fmt::format(", and {} more datagram{}", more, more == 1 ? "" : "s");
+  }
   return fmt::format(
-      "the master frame {} (axes {}-{}) was not returned before the next cycle's master frame",
-      e.master_frame, e.first_axis, e.last_axis);
+      "the master frame {} ({}) was not returned before the next cycle's master frame",
+      e.master_frame, carried);
 }
 
 // --- EtherCAT state machine, per slave (PROTOCOL.md §8) ---

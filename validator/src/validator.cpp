@@ -123,7 +123,16 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
   const std::size_t axis_count = decode.axis_count;
-  if (axis_count == 0) return view_;
+  if (axis_count == 0) {
+    // The bus rules judge cyclic traffic without servos too (docs/timing.md "Which frames").
+    if (BusModel::exchangesProcessData(frame, decode)) {
+      events_.clear();
+      accounts_.clear();
+      bus_.onCyclicFrame(frame, decode, now_, frame_time_ns_, events_, accounts_);
+      reportEvents();
+    }
+    return view_;
+  }
   // The placements are in axis order: the slots grow once (which moves them), then this frame's
   // are looked up once.
   const std::uint16_t last_axis = decode.axes[axis_count - 1].axis;

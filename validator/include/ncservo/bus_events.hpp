@@ -12,7 +12,7 @@
 
 namespace ncservo {
 
-// A returned cyclic datagram carrying servo PDOs whose WKC differs from the expected one
+// A returned cyclic process-data datagram whose WKC differs from the expected one
 // (PROTOCOL.md §8), at the start of such an episode for that datagram.
 struct WorkingCounterEvent {
   std::uint8_t command = 0;
@@ -54,12 +54,20 @@ struct LateReturnEvent {
   std::uint64_t master_frame = 0;
 };
 
-// A master frame with servo outputs that was not returned before the next cycle's master frame,
-// at the start of such an episode (RULES.md COM-004).
+// A cyclic master frame that was not returned before the next cycle's master frame, at the
+// start of such an episode (RULES.md COM-004).
 struct NotReturnedEvent {
+  struct Axes {
+    std::uint16_t first = 0;
+    std::uint16_t last = 0;
+  };
   std::uint64_t master_frame = 0;
-  std::uint16_t first_axis = 0;
-  std::uint16_t last_axis = 0;
+  std::optional<Axes> axes;  // the servo axes it carries, if any
+  // Its first process-data datagram, and how many it holds: what names a frame without axes.
+  std::uint8_t command = 0;
+  std::uint32_t address = 0;
+  std::uint16_t length = 0;
+  std::uint16_t datagrams = 0;
 };
 
 // One slave, as the capture names it: by station address, ring position, both or neither (a

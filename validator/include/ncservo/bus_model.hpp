@@ -1,7 +1,7 @@
 // The bus as the cyclic frames show it (PROTOCOL.md §8, RULES.md COM-*): each cyclic frame's
 // clock and interval statistics, whether master frames come back, and the working counter of
-// every returned datagram that carries servo PDOs. Gives the events the bus rules judge and each
-// axis's telegram accounting; never reports a finding itself.
+// every returned process-data datagram, servo or not (docs/timing.md "Which frames"). Gives the
+// events the bus rules judge and each axis's telegram accounting; never reports a finding itself.
 #pragma once
 
 #include <array>
@@ -32,14 +32,27 @@ struct TimingLimits {
   std::optional<std::int64_t> return_latency_ns;
 };
 
+// A process-data datagram of a cyclic frame, as the report names what was judged.
+struct CyclicDatagram {
+  std::uint8_t command = 0;
+  std::uint32_t address = 0;
+  std::uint16_t length = 0;
+  std::uint64_t frames = 0;  // copies (master and returned) of the cyclic frames holding it
+};
+
 class BusModel {
  public:
   explicit BusModel(TimingLimits limits = {}) : limits_(limits) {}
 
-  // One frame that carries servo PDOs, at `now` on the timers' monotonic clock; `frame_time_ns`
-  // is its own timestamp. Appends the events the bus rules judge and the axes' accounting, in the
-  // order they happened. True when the frame is a returned copy whose every axis had a good cycle
-  // (the usual case, left out of `accounts`).
+  // Whether a frame exchanges process data: a logical datagram (LRW, LRD, LWR) or servo PDOs.
+  // Only such a frame is a copy of a cyclic frame.
+  static bool exchangesProcessData(const EcatFrame& frame, const FrameDecode& decode);
+
+  // One frame that exchanges process data, at `now` on the timers' monotonic clock;
+  // `frame_time_ns` is its own timestamp. Its process-data datagrams name its cyclic frame.
+  // Appends the events the bus rules judge and the axes' accounting, in the order they happened.
+  // True when the frame is a returned copy whose every axis had a good cycle (the usual case,
+  // left out of `accounts`).
   bool onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
                      std::int64_t frame_time_ns, std::vector<BusEvent>& events,
                      std::vector<AxisAccount>& accounts);
@@ -53,7 +66,8 @@ class BusModel {
   // missing cycles counted as lost (COM-002).
   void finish(std::vector<BusEvent>& events, std::vector<AxisAccount>& accounts);
 
-  std::uint64_t cycles() const { return cycles_; }
+  // Master copies of the busiest cyclic frame.
+  std::uint64_t cycles() const;
   // The segment's nominal cycle, once enough intervals give it (RULES.md "Time", COM-002).
   std::optional<std::int64_t> nominalCycleNs() const;
   // The intervals of every segment, for reports.
@@ -65,15 +79,23 @@ class BusModel {
   // Returned datagrams carrying servo PDOs whose WKC was not captured (COM-001 not judged).
   std::uint64_t uncapturedWkcs() const { return uncaptured_wkcs_; }
   std::uint64_t firstUncapturedWkcFrame() const { return first_uncaptured_wkc_frame_; }
+  // The process-data datagrams of the cyclic frames that repeated, in the order they were first
+  // seen; one entry per command, address and length.
+  std::vector<CyclicDatagram> cyclicDatagrams() const;
+  // Copies of frames not followed: kMaxCyclicFrames cyclic frames that repeated were already.
+  std::uint64_t unfollowedFrames() const { return unfollowed_frames_; }
+
+  static constexpr std::size_t kMaxCyclicFrames = 16;
 
  private:
-  // What a frame shape's datagrams that carry servo PDOs should return (COM-001), worked out
-  // once per shape (FrameDecode::shape_id) instead of every cycle.
+  // What a frame shape's process-data datagrams should return (COM-001), worked out once per
+  // shape (FrameDecode::shape_id) instead of every cycle.
   struct WkcCheck {
     std::uint16_t datagram;
-    std::uint16_t expected;  // what the axes it carries add to its WKC (PROTOCOL.md §8)
-    bool shared;             // other slaves' bytes share it: judged against its usual WKC
-    std::int16_t record;     // index in wkc_; kNoWkcRecord, kUnresolvedWkcRecord
+    std::uint16_t expected;    // what the axes it carries add to its WKC (PROTOCOL.md §8)
+    bool shared;               // other slaves' bytes share it: judged against its usual WKC
+    std::int16_t record;       // index in wkc_; kNoWkcRecord, kUnresolvedWkcRecord
+    bool carries_axes = true;  // else a logical datagram of other slaves only (always shared)
     AxisAccount::Outcome outcome = AxisAccount::Outcome::Good;  // this frame's
   };
   static constexpr std::int16_t kNoWkcRecord = -1;  // too many datagrams are followed
@@ -91,20 +113,32 @@ class BusModel {
     std::vector<std::uint16_t> axes;  // the axes its missing cycles would have carried
     bool accounted = false;           // its lost cycles already counted (certainly lost)
   };
-  // The cyclic frame that carries a group of axes, named by its lowest axis index.
+  // What names a cyclic frame: one of its process-data datagrams, the same in the master's copy
+  // and the returned copy (PROTOCOL.md §8).
+  struct DatagramKey {
+    std::uint8_t command = 0;
+    std::uint32_t address = 0;
+    std::uint16_t length = 0;
+    bool operator==(const DatagramKey& other) const {
+      return command == other.command && address == other.address && length == other.length;
+    }
+  };
+  // A frame that repeats with the same process-data datagrams.
   struct CyclicFrame {
-    std::uint16_t first_axis = 0;
+    std::vector<DatagramKey> datagrams;
+    std::uint64_t copies = 0;  // master and returned
+    std::uint64_t ticks = 0;   // of its clock
     std::optional<Stamp> last_tick;
     bool awaiting_return = false;
     bool not_returned_episode = false;
     Stamp last_master;
-    std::vector<std::uint16_t> axes;  // axes of the last master copy
+    std::vector<std::uint16_t> axes;  // axes of the last master copy (none: no servo PDOs)
     std::uint64_t axes_shape_id = 0;  // the shape they were taken from (0: none cached)
     std::optional<PendingGap> pending_gap;
     bool jitter_episode = false;       // COM-006
     bool late_return_episode = false;  // COM-007
   };
-  // A cyclic datagram carrying servo PDOs: its WKC history (COM-001).
+  // A cyclic process-data datagram: its WKC history (COM-001).
   struct WkcRecord {
     std::uint8_t command;
     std::uint32_t address;
@@ -114,7 +148,11 @@ class BusModel {
     std::array<std::uint32_t, 8> counts{};
   };
 
-  CyclicFrame& cyclicFrame(std::uint16_t first_axis);
+  // The frame's process-data datagrams into `keys`; how many.
+  static std::size_t processDatagrams(const EcatFrame& frame, const FrameDecode& decode,
+                                      std::array<DatagramKey, ecat::kMaxDatagrams>& keys);
+  // The cyclic frame with these datagrams; null when it cannot be followed.
+  CyclicFrame* cyclicFrame(const EcatFrame& frame, const FrameDecode& decode);
   std::int16_t wkcRecord(const Datagram& dg);
   WkcPlan& wkcPlan(const EcatFrame& frame, const FrameDecode& decode);
   void tick(CyclicFrame& cyclic, const FrameDecode& decode);
@@ -133,7 +171,16 @@ class BusModel {
   std::vector<AxisAccount>* accounts_ = nullptr;
 
   TimingLimits limits_;
-  std::vector<CyclicFrame> cyclic_;
+  std::vector<CyclicFrame> cyclic_;                            // in the order first seen
+  std::array<DatagramKey, ecat::kMaxDatagrams> frame_keys_{};  // this frame's
+  // The cyclic frame of recent frame shapes (FrameDecode::shape_id), by index in cyclic_: a
+  // shape has the same process-data datagrams every cycle. Forgotten when cyclic_ changes.
+  struct ShapeCyclic {
+    std::uint64_t shape_id = 0;
+    std::size_t index = 0;
+  };
+  std::array<ShapeCyclic, 4> shape_cyclic_{};
+  std::size_t shape_cyclic_next_ = 0;
   std::vector<WkcRecord> wkc_;
   std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
   std::size_t wkc_plan_next_ = 0;
@@ -142,7 +189,7 @@ class BusModel {
   IntervalStats earlier_intervals_;  // the segments' before it
   TimingStats timing_;
   FrameTiming frame_timing_;
-  std::uint64_t cycles_ = 0;
+  std::uint64_t unfollowed_frames_ = 0;
   std::uint64_t uncaptured_wkcs_ = 0;
   std::uint64_t first_uncaptured_wkc_frame_ = 0;
   bool master_copies_seen_ = false;
