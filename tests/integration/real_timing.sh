@@ -13,7 +13,8 @@
 # - timing.latency_us: one return latency per master copy whose returned copy came;
 # - findings: no COM-001 or COM-004 (these captures return every frame with steady WKCs), and
 #   COM-002 on exactly the master copies that come more than 1.5 x the running median interval
-#   (at 1 us) after the previous one, once 8 intervals were seen in the segment (RULES.md COM-002).
+#   (at 1 us) after the previous one, once 8 intervals were seen in the segment (RULES.md COM-002),
+#   each reported at the next master copy, late or lost as the interval after it says.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 real="$SRC/../shared/captures/real"
@@ -130,8 +131,12 @@ for g in groups:
 latency = timing["latency_us"]
 assert (latency["count"] if latency else 0) == latencies, (latency, latencies)
 
-# COM-002 where the running median (1 us buckets, rounded) of the segment's intervals says so.
+# COM-002 where the running median (1 us buckets, rounded) of the segment's intervals says so,
+# judged at the cyclic frame's next master copy: late when the gap and the interval after it
+# round to two cycles, else lost (the capture's last frame when no next copy came).
 gaps, seen, current = [], [], None
+next_of = {since: (frame, ns) for frame, (ns, since) in intervals.items()}
+last_frame = max(time_of)
 for frame in sorted(intervals):
     ns, since = intervals[frame]
     if segment_of[frame] != current:
@@ -139,12 +144,18 @@ for frame in sorted(intervals):
     if len(seen) >= 8:
         median = sorted(seen)[(len(seen) - 1) // 2] * 1000
         if ns * 2 > median * 3:
-            gaps.append(frame)
+            if frame in next_of and segment_of[next_of[frame][0]] == segment_of[frame]:
+                told, after = next_of[frame]
+                late = round((ns + after) / median) == 2
+            else:
+                told, late = last_frame, False
+            gaps.append((told, "late" if late else "lost"))
     seen.append((ns + 500) // 1000)
 rules = [f["rule"] for f in capture["findings"]]
 assert "COM-001" not in rules and "COM-004" not in rules, capture["findings"]
-reported = sorted(f["frame"] for f in capture["findings"] if f["rule"] == "COM-002")
-assert reported == gaps, (reported, gaps)
+reported = sorted((f["frame"], "late" if f["message"].startswith("late") else "lost")
+                  for f in capture["findings"] if f["rule"] == "COM-002")
+assert reported == sorted(gaps), (reported, gaps)
 print(f"  {len(groups)} cyclic frames, {len(values)} intervals, {latencies} latencies, {len(gaps)} gaps")
 PY
   echo "ok $name"
