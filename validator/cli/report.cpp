@@ -185,6 +185,36 @@ Json worstJson(const std::vector<TimedFrames>& worst, const char* since_key,
   return list;
 }
 
+std::string hex16(std::uint16_t v) {
+  return fmt::format("0x{:04X}", v);
+}
+
+// INTERFACES.md `timing.dc`: one entry per slave whose distributed clock was read.
+Json dcJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const DcStation& s : r.dc) {
+    Json difference = nullptr;
+    if (s.last_difference_ns) {
+      difference = {{"last", *s.last_difference_ns},
+                    {"max_abs", s.max_abs_difference_ns},
+                    {"reads", s.difference_reads}};
+    }
+    auto ppm = [](const std::optional<double>& v) {
+      return v ? Json(std::round(*v * 1000.0) / 1000.0) : Json(nullptr);
+    };
+    list.push_back({{"station", s.slave.station ? Json(hex16(*s.slave.station)) : Json(nullptr)},
+                    {"ring_position", s.slave.position ? Json(*s.slave.position) : Json(nullptr)},
+                    {"reference", s.reference},
+                    {"samples", s.time_reads},
+                    {"drift_ppm", ppm(s.drift_ppm)},
+                    {"drift_first_half_ppm", ppm(s.first_half_ppm)},
+                    {"drift_second_half_ppm", ppm(s.second_half_ppm)},
+                    {"systime_diff_ns", std::move(difference)},
+                    {"settled_frame", s.settled_frame ? Json(*s.settled_frame) : Json(nullptr)}});
+  }
+  return list;
+}
+
 // INTERFACES.md `timing`.
 Json timingJson(const CaptureReport& r) {
   Json timing{
@@ -197,6 +227,7 @@ Json timingJson(const CaptureReport& r) {
       {"segments", segmentsJson(r)}};
   if (r.segment_count > r.segments.size())
     timing["segments_omitted"] = r.segment_count - r.segments.size();
+  timing["dc"] = dcJson(r);
   return timing;
 }
 
@@ -521,6 +552,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
                         timestampResolutionNs(r.timestamps, r.timestamp_digits))
                  .c_str(),
              out);
+  std::fputs(dcText(r.dc, r.dc_settled_ns).c_str(), out);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);
@@ -723,6 +755,8 @@ std::int64_t timestampResolutionNs(TimestampSource source, int digits) {
 
 void summarise(const Validator& validator, CaptureReport& report) {
   report.timing = validator.bus().timing().summary();
+  report.dc = validator.dc().stations();
+  report.dc_settled_ns = validator.dc().settledNs();
   report.cycles = validator.cycles();
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();

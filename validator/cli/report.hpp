@@ -92,6 +92,8 @@ struct CaptureReport {
   // What the HTML report draws around findings (when a format draws them).
   FindingTimelines timelines;
   TimingSummary timing;
+  std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
+  std::int64_t dc_settled_ns = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);

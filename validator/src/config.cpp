@@ -58,9 +58,17 @@ class Checker {
   std::optional<Error> error_;
 };
 
+// A second: a larger system time difference is no distributed clock's.
+constexpr std::uint32_t kMaxDcSettledNs = 1'000'000'000;
+
 // The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
-const std::vector<std::string> kTopKeys{
-    "servo_ready_mode", "telegram_failure_limit", "default_layout", "timeouts", "axis", "rules"};
+const std::vector<std::string> kTopKeys{"servo_ready_mode",
+                                        "telegram_failure_limit",
+                                        "dc_settled_ns",
+                                        "default_layout",
+                                        "timeouts",
+                                        "axis",
+                                        "rules"};
 const std::vector<std::string> kAxisKeys{"name",       "outputs",   "inputs",          "station",
                                          "sm_outputs", "sm_inputs", "servo_ready_mode"};
 const std::vector<std::string> kRulesKeys{"disable", "severity"};
@@ -208,6 +216,10 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
       if (auto v = check.integer<std::uint32_t>(node, key, 1, 65535)) {
         config.telegram_failure_limit = *v;
       }
+    } else if (key == "dc_settled_ns") {
+      if (auto v = check.integer<std::uint32_t>(node, key, 0, kMaxDcSettledNs)) {
+        config.dc_settled_ns = *v;
+      }
     } else if (key == "default_layout") {
       if (!node.is_boolean()) {
         check.fail(node, key, "expected true or false");
@@ -310,6 +322,7 @@ Status applyConfig(const Config& config, RuleSettings& settings) {
   };
   if (config.servo_ready_mode) settings.servo_ready_mode = config.servo_ready_mode;
   settings.telegram_failure_limit = config.telegram_failure_limit;
+  settings.dc_settled_ns = config.dc_settled_ns;
   for (const auto& [name, value] : config.timeouts_ms) {
     if (Status s = settings.setTimeout(name, value); !s) return named(s.error());
   }

@@ -9,6 +9,7 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
       settings_(std::move(settings)),
       judged_(judgedBits(settings_, fast_path)),
       fast_path_(fast_path == FastPath::On),
+      dc_(settings_.dc_settled_ns),
       segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules
@@ -106,6 +107,8 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   decoder_.placeAxes(frame, bytes, decode);
   if (decode.any_malformed) cut_.add(frame_number, decode);
   observeAl(frame, bytes);
+  dc_.onFrame(frame, bytes, decode.copy == CopyKind::Returned, decode.paired, frame_number,
+              time_ns);
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
   const std::size_t axis_count = decode.axis_count;
@@ -166,6 +169,7 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
 void Validator::startSegment() {
   bus_.startSegment();
   al_.startSegment();
+  dc_.startSegment();
   ++al_epoch_;  // the AL states are taken again
   for (AxisSlot& s : axes_) {
     if (!s.model) continue;

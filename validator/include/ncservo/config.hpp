@@ -33,6 +33,7 @@ struct Config {
   std::string path;  // where it came from, for messages
   std::optional<int> servo_ready_mode;
   std::uint32_t telegram_failure_limit = 3;
+  std::uint32_t dc_settled_ns = 100;  // docs/timing.md "Distributed clocks"
   bool default_layout = true;
   std::map<std::string, std::uint32_t> timeouts_ms;  // only the ones the file sets
   std::vector<AxisConfig> axes;

@@ -12,6 +12,7 @@
 #include "ncservo/axis_model.hpp"
 #include "ncservo/bus_model.hpp"
 #include "ncservo/capture_segments.hpp"
+#include "ncservo/dc_clock.hpp"
 #include "ncservo/finding.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/session.hpp"
@@ -58,6 +59,7 @@ class Validator {
   // The capture's segments (RULES.md "Time"): the rules judge each on its own clock.
   const SegmentTracker& segments() const { return segments_; }
   const BusModel& bus() const { return bus_; }
+  const DcClock& dc() const { return dc_; }
   // The placed PDO regions the capture cut short (a snap length).
   const CutRegions& cutRegions() const { return cut_; }
 
@@ -112,6 +114,7 @@ class Validator {
   Judged judged_;
   bool fast_path_;
   AlTracker al_;
+  DcClock dc_;
   BusModel bus_;
   SegmentTracker segments_;
   CutRegions cut_;
