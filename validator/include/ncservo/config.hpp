@@ -41,6 +41,9 @@ struct Config {
   std::map<std::string, std::string> severity_overrides;
 };
 
+// The keys of the file's top level, in the order docs/configuration.md lists them.
+const std::vector<std::string>& topLevelConfigKeys();
+
 // An error names the file, the line and the key: "FILE:LINE: key 'K': MESSAGE".
 Result<Config> parseConfig(std::string_view text, const std::string& path);
 // The axes (and a Servo_Ready_Mode) as a configuration file that parseConfig reads back,
