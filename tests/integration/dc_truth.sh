@@ -113,4 +113,21 @@ check ethercrab-outputs-to-op.pcapng "0x1000"
 # Only broadcast reads of 0x0910 there: they name no slave.
 check wiki-beckhoff-startup.cap ""
 check soem-akd-servo-pdo-mapping.pcapng ""
+
+# The simulator's master reads the first slave's system time with FRMW in every cycle, from the
+# clock that stamps the capture: one reference clock without drift, a sample per returned FRMW.
+"$NCSERVO" simulate --axes 2 --duration 1 -o "$WORK/sim.pcap" 2>/dev/null
+frmw=$(tshark -r "$WORK/sim.pcap" -Y 'ecat.cmd == 0x0e && ecat.ado == 0x0910 && ecat.cnt > 0' \
+  -T fields -e frame.number 2>/dev/null | wc -l)
+"$NCSERVO" validate --format json --fail-on never "$WORK/sim.pcap" >"$WORK/sim.json" ||
+  fail "simulated: validate exited $?"
+python3 - "$WORK/sim.json" "$frmw" <<'PY' || fail "simulated capture: timing.dc"
+import json, sys
+dc = json.load(open(sys.argv[1]))["captures"][0]["timing"]["dc"]
+assert len(dc) == 1 and int(sys.argv[2]) > 900, (dc, sys.argv[2])
+e = dc[0]
+assert (e["station"], e["reference"], e["samples"]) == ("0x03E9", True, int(sys.argv[2])), e
+assert e["drift_ppm"] == e["drift_first_half_ppm"] == e["drift_second_half_ppm"] == 0.0, e
+assert e["systime_diff_ns"] is None and e["settled_frame"] is None, e
+PY
 echo "dc_truth: timing.dc agrees with stock tshark's register fields"

@@ -200,7 +200,8 @@ Json dcJson(const CaptureReport& r) {
                     {"reads", s.difference_reads}};
     }
     auto ppm = [](const std::optional<double>& v) {
-      return v ? Json(std::round(*v * 1000.0) / 1000.0) : Json(nullptr);
+      // To the thousandth of a ppm; + 0.0 writes a negative zero as 0.0.
+      return v ? Json(std::round(*v * 1000.0) / 1000.0 + 0.0) : Json(nullptr);
     };
     list.push_back({{"station", s.slave.station ? Json(hex16(*s.slave.station)) : Json(nullptr)},
                     {"ring_position", s.slave.position ? Json(*s.slave.position) : Json(nullptr)},
