@@ -9,30 +9,17 @@ using ecat::kRegDcSystemTime;
 using ecat::kRegDcSystemTimeDifference;
 using ecat::kRegDcSystemTimeOffset;
 
-// Register access reaches slaves through the physical commands, not the logical ones.
-constexpr bool readsSlave(std::uint8_t cmd) {
-  return ecat::readsSlaves(cmd) && !ecat::isLogical(cmd);
-}
-constexpr bool writesSlave(std::uint8_t cmd) {
-  return ecat::writesSlaves(cmd) && !ecat::isLogical(cmd);
-}
 // The commands with which a master distributes the reference clock's time: the addressed slave's
 // is read, the others take it.
 constexpr bool distributesTime(std::uint8_t cmd) {
   return cmd == ecat::kFrmw || cmd == ecat::kArmw;
 }
 
-// Whether the datagram's captured data overlaps [from, to).
-bool reaches(const Datagram& dg, std::uint16_t from, std::uint16_t to) {
-  if (ecat::isLogical(dg.command)) return false;
-  const std::size_t ado = dg.ado();
-  return ado < to && ado + dg.data_captured > from;
-}
 // The station address (assigned to ring positions) and the DC registers this module reads.
 constexpr std::uint16_t kEndOfDcRegisters = kRegDcSystemTimeDifference + 4;
 bool reachesFollowedRegisters(const Datagram& dg) {
-  return reaches(dg, ecat::kRegStationAddress, ecat::kRegStationAddress + 2) ||
-         reaches(dg, kRegDcSystemTime, kEndOfDcRegisters);
+  return reachesRegisters(dg, ecat::kRegStationAddress, ecat::kRegStationAddress + 2) ||
+         reachesRegisters(dg, kRegDcSystemTime, kEndOfDcRegisters);
 }
 
 constexpr double kNsPerPpmSecond = 1000.0;  // 1 ppm of a second
@@ -170,7 +157,7 @@ void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool retu
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];
     const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
-    if (take_writes && writesSlave(dg.command)) {
+    if (take_writes && ecat::writesRegisters(dg.command)) {
       directory_.noteStationWrite(dg, bytes, address);
       // A new system time offset moves the slave's system time: its drift is fitted again.
       if (registerAt(dg, kRegDcSystemTimeOffset, 4)) {
@@ -186,7 +173,7 @@ void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool retu
         }
       }
     }
-    if (!returned || !readsSlave(dg.command) || !dg.has_wkc || dg.wkc == 0) continue;
+    if (!returned || !ecat::readsRegisters(dg.command) || !dg.has_wkc || dg.wkc == 0) continue;
     if (address.target != SlaveTarget::Station && address.target != SlaveTarget::Position) continue;
     const std::optional<std::size_t> time64 = registerAt(dg, kRegDcSystemTime, 8);
     const std::optional<std::size_t> time32 = time64 ? time64 : registerAt(dg, kRegDcSystemTime, 4);
