@@ -58,25 +58,17 @@ class Checker {
   std::optional<Error> error_;
 };
 
-}  // namespace
-
-const std::vector<std::string>& topLevelConfigKeys() {
-  static const std::vector<std::string> keys{"servo_ready_mode",
-                                             "telegram_failure_limit",
-                                             "dc_settled_ns",
-                                             "default_layout",
-                                             "timeouts",
-                                             "axis",
-                                             "rules"};
-  return keys;
-}
-
-namespace {
-
 // A second: a larger system time difference is no distributed clock's.
 constexpr std::uint32_t kMaxDcSettledNs = 1'000'000'000;
 
 // The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
+const std::vector<std::string> kTopKeys{"servo_ready_mode",
+                                        "telegram_failure_limit",
+                                        "dc_settled_ns",
+                                        "default_layout",
+                                        "timeouts",
+                                        "axis",
+                                        "rules"};
 const std::vector<std::string> kAxisKeys{"name",       "outputs",   "inputs",          "station",
                                          "sm_outputs", "sm_inputs", "servo_ready_mode"};
 const std::vector<std::string> kRulesKeys{"disable", "severity"};
@@ -206,6 +198,10 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
 
 }  // namespace
 
+const std::vector<std::string>& topLevelConfigKeys() {
+  return kTopKeys;
+}
+
 Result<Config> parseConfig(std::string_view text, const std::string& path) {
   toml::table root;
   try {
@@ -268,7 +264,7 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
         check.fail(node, key, "expected a table");
       }
     } else {
-      check.fail(node, key, unknownKey(key, topLevelConfigKeys()));
+      check.fail(node, key, unknownKey(key, kTopKeys));
     }
     if (check.failed()) break;
   }
