@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 #include <string_view>
@@ -113,6 +115,9 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.servo_ready_mode, 1);
        EXPECT_EQ(c.telegram_failure_limit, 10u);
      }},
+    {"dc_settled_ns 250", "dc_settled_ns = 250\n",
+     [](const Config& c) { EXPECT_EQ(c.dc_settled_ns, 250u); }},
+    {"dc_settled_ns default", "", [](const Config& c) { EXPECT_EQ(c.dc_settled_ns, 100u); }},
     {"unnamed axes get index names",
      "[[axis]]\noutputs = 0\ninputs = 20\n[[axis]]\noutputs = 10\ninputs = 60\n",
      [](const Config& c) {
@@ -250,6 +255,9 @@ const BadCase kBadCases[] = {
     {"timeouts not a table", "timeouts = 5\n", 1, "timeouts", "expected a table"},
     {"telegram_failure_limit 0", "telegram_failure_limit = 0\n", 1, "telegram_failure_limit",
      "out of range"},
+    {"dc_settled_ns negative", "dc_settled_ns = -1\n", 1, "dc_settled_ns", "out of range"},
+    {"dc_settled_ns as a string", "dc_settled_ns = \"100ns\"\n", 1, "dc_settled_ns",
+     "expected an integer"},
     {"default_layout not a boolean", "default_layout = \"yes\"\n", 1, "default_layout",
      "expected true or false"},
     {"rules.disable with a non-ID", "[rules]\ndisable = [\"MSG-001\", \"msg-1\"]\n", 2,
@@ -322,6 +330,20 @@ TEST(Config, LoadMissingFileNamesTheFile) {
   ASSERT_FALSE(result.has_value());
   EXPECT_EQ(result.error().path, path);
   EXPECT_NE(result.error().text().find(path), std::string::npos) << result.error().text();
+}
+
+// docs/configuration.md explains every key of the top level in its table.
+TEST(Config, EveryTopLevelKeyHasADocumentedRow) {
+  std::ifstream doc(NCSERVO_DOCS_DIR "/configuration.md");
+  ASSERT_TRUE(doc.good());
+  const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  for (const std::string& key : topLevelConfigKeys()) {
+    const bool table = key == "timeouts" || key == "rules";
+    const std::string wanted = key == "axis" ? "## `[[axis]]`"
+                               : table       ? "## `[" + key + "]`"
+                                             : "\n| `" + key + "` |";
+    EXPECT_NE(text.find(wanted), std::string::npos) << "no \"" << wanted << "\" for " << key;
+  }
 }
 
 TEST(Config, LoadFileFromDisk) {

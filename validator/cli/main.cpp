@@ -317,6 +317,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {}: {}", reader->path(),
                timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
                           timestampResolutionNs(clock.source(), reader->timestampDigits())));
+    std::fputs(dcText(timing->dc().stations(), timing->dc().settledNs()).c_str(), stderr);
   }
   if (Status selected = cli::checkAxisSelection(args.axes, session->decoder().axes()); !selected) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());

@@ -198,6 +198,37 @@ Json cyclicDatagramsJson(const CaptureReport& r) {
   return list;
 }
 
+std::string hex16(std::uint16_t v) {
+  return fmt::format("0x{:04X}", v);
+}
+
+// INTERFACES.md `timing.dc`: one entry per slave whose distributed clock was read.
+Json dcJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const DcStation& s : r.dc) {
+    Json difference = nullptr;
+    if (s.last_difference_ns) {
+      difference = {{"last", *s.last_difference_ns},
+                    {"max_abs", s.max_abs_difference_ns},
+                    {"reads", s.difference_reads}};
+    }
+    auto ppm = [](const std::optional<double>& v) {
+      // To the thousandth of a ppm; + 0.0 writes a negative zero as 0.0.
+      return v ? Json(std::round(*v * 1000.0) / 1000.0 + 0.0) : Json(nullptr);
+    };
+    list.push_back({{"station", s.slave.station ? Json(hex16(*s.slave.station)) : Json(nullptr)},
+                    {"ring_position", s.slave.position ? Json(*s.slave.position) : Json(nullptr)},
+                    {"reference", s.reference},
+                    {"samples", s.time_reads},
+                    {"drift_ppm", ppm(s.drift_ppm)},
+                    {"drift_first_half_ppm", ppm(s.first_half_ppm)},
+                    {"drift_second_half_ppm", ppm(s.second_half_ppm)},
+                    {"systime_diff_ns", std::move(difference)},
+                    {"settled_frame", s.settled_frame ? Json(*s.settled_frame) : Json(nullptr)}});
+  }
+  return list;
+}
+
 // INTERFACES.md `timing`.
 Json timingJson(const CaptureReport& r) {
   Json timing{
@@ -212,6 +243,7 @@ Json timingJson(const CaptureReport& r) {
   if (r.unfollowed_frames > 0) timing["frames_not_followed"] = r.unfollowed_frames;
   if (r.segment_count > r.segments.size())
     timing["segments_omitted"] = r.segment_count - r.segments.size();
+  timing["dc"] = dcJson(r);
   return timing;
 }
 
@@ -555,6 +587,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
                  .c_str(),
              out);
   fmt::print(out, "{}\n", describeCyclicDatagrams(r));
+  std::fputs(dcText(r.dc, r.dc_settled_ns).c_str(), out);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);
@@ -752,6 +785,8 @@ void summarise(const Validator& validator, CaptureReport& report) {
   report.timing = validator.bus().timing().summary();
   report.cyclic_datagrams = validator.bus().cyclicDatagrams();
   report.unfollowed_frames = validator.bus().unfollowedFrames();
+  report.dc = validator.dc().stations();
+  report.dc_settled_ns = validator.dc().settledNs();
   report.cycles = validator.cycles();
   report.cycle_time = validator.cycleTime();
   report.layout_source = validator.decoder().source();

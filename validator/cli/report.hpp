@@ -94,6 +94,8 @@ struct CaptureReport {
   TimingSummary timing;
   std::vector<CyclicDatagram> cyclic_datagrams;  // what the bus rules judged
   std::uint64_t unfollowed_frames = 0;           // beyond BusModel::kMaxCyclicFrames
+  std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
+  std::int64_t dc_settled_ns = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
   void tally(const Finding& finding);

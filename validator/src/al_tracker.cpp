@@ -45,26 +45,13 @@ constexpr bool isState(std::uint8_t state) {
   return false;
 }
 
-// Commands whose data the slaves write into (AL status is read by these) and commands whose data
-// the slaves take (AL control and the station address are written by these).
-// Register access reaches slaves through the physical commands, not the logical ones.
-constexpr bool readsSlave(std::uint8_t cmd) {
-  return ecat::readsSlaves(cmd) && !ecat::isLogical(cmd);
-}
-constexpr bool writesSlave(std::uint8_t cmd) {
-  return ecat::writesSlaves(cmd) && !ecat::isLogical(cmd);
-}
-
-// Whether any register read or written here lies in the datagram's captured data. Logical
-// commands do not address registers.
+// Whether any register read or written here lies in the datagram's captured data.
 constexpr std::uint16_t kFirstRegister = kRegStationAddress;
 constexpr std::uint16_t kEndOfRegisters = kRegAlStatusCode + 2;
 static_assert(kFirstRegister <= kRegAlControl && kRegAlControl < kEndOfRegisters &&
               kRegAlStatus < kEndOfRegisters);
 bool reachesAlRegisters(const Datagram& dg) {
-  if (ecat::isLogical(dg.command)) return false;
-  const std::size_t ado = dg.ado();
-  return ado < kEndOfRegisters && ado + dg.data_captured > kFirstRegister;
+  return reachesRegisters(dg, kFirstRegister, kEndOfRegisters);
 }
 
 // The low byte of a register holds the state bits; the high byte is shown when captured.
@@ -223,14 +210,14 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   // reads from a returned copy, of datagrams that some slave answered.
   const bool take_writes = !returned || !paired;
   auto takeRead = [returned](const Datagram& dg) {
-    return returned && readsSlave(dg.command) && dg.has_wkc && dg.wkc > 0;
+    return returned && ecat::readsRegisters(dg.command) && dg.has_wkc && dg.wkc > 0;
   };
 
   // First station addresses and AL status codes, so that the rest of the frame can use them.
   for (std::size_t i = 0; i < count; ++i) {
     const Datagram& dg = frame.datagrams[i];
     const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
-    if (take_writes && writesSlave(dg.command)) {
+    if (take_writes && ecat::writesRegisters(dg.command)) {
       directory_.noteStationWrite(dg, bytes, address, [this](AlData& data) { fresh(data); });
       directory_.noteAlias(dg, bytes, address);
     }
@@ -252,7 +239,7 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
     const Datagram& dg = frame.datagrams[i];
     const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
     if (address.target == SlaveTarget::None) continue;
-    if (take_writes && writesSlave(dg.command)) {
+    if (take_writes && ecat::writesRegisters(dg.command)) {
       if (auto raw = readStateRegister(dg, bytes, kRegAlControl)) {
         onControlWrite(address, *raw & ecat::kAlStateMask, *raw, now, out);
       }

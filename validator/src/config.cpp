@@ -58,10 +58,13 @@ class Checker {
   std::optional<Error> error_;
 };
 
+// A second: a larger system time difference is no distributed clock's.
+constexpr std::uint32_t kMaxDcSettledNs = 1'000'000'000;
+
 // The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
 std::vector<std::string> topKeys() {
   std::vector<std::string> keys{
-      "servo_ready_mode", "telegram_failure_limit", "default_layout", "timeouts", "axis", "rules"};
+      "servo_ready_mode", "telegram_failure_limit", "dc_settled_ns", "default_layout", "timeouts", "axis", "rules"};
   for (const LimitDef& l : kLimits) keys.emplace_back(l.name);
   return keys;
 }
@@ -196,6 +199,11 @@ void readRules(Checker& check, const toml::table& rules, Config& config) {
 
 }  // namespace
 
+const std::vector<std::string>& topLevelConfigKeys() {
+  static const std::vector<std::string> keys = topKeys();
+  return keys;
+}
+
 Result<Config> parseConfig(std::string_view text, const std::string& path) {
   toml::table root;
   try {
@@ -217,6 +225,10 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
     } else if (const LimitDef* limit = limitByName(key)) {
       if (auto v = check.integer<std::uint32_t>(node, key, limit->min, limit->max)) {
         config.limits[key] = *v;
+      }
+    } else if (key == "dc_settled_ns") {
+      if (auto v = check.integer<std::uint32_t>(node, key, 0, kMaxDcSettledNs)) {
+        config.dc_settled_ns = *v;
       }
     } else if (key == "default_layout") {
       if (!node.is_boolean()) {
@@ -258,7 +270,7 @@ Result<Config> parseConfig(std::string_view text, const std::string& path) {
         check.fail(node, key, "expected a table");
       }
     } else {
-      check.fail(node, key, unknownKey(key, topKeys()));
+      check.fail(node, key, unknownKey(key, topLevelConfigKeys()));
     }
     if (check.failed()) break;
   }
@@ -320,6 +332,7 @@ Status applyConfig(const Config& config, RuleSettings& settings) {
   };
   if (config.servo_ready_mode) settings.servo_ready_mode = config.servo_ready_mode;
   settings.telegram_failure_limit = config.telegram_failure_limit;
+  settings.dc_settled_ns = config.dc_settled_ns;
   for (const auto& [name, value] : config.timeouts_ms) {
     if (Status s = settings.setTimeout(name, value); !s) return named(s.error());
   }

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "ncservo/al_tracker.hpp"
+
 namespace ncservo {
 
 namespace {
@@ -38,6 +40,33 @@ std::string timingText(const TimingSummary& timing, const char* timestamps,
                        us(latency.ns, decimals), latency.frame, latency.since_frame);
   }
   return out + "\n";
+}
+
+std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_ns) {
+  if (stations.empty()) return {};
+  std::string out = "distributed clocks:\n";
+  for (const DcStation& s : stations) {
+    out += fmt::format("  {}{}:", slaveName(s.slave), s.reference ? ", the reference clock" : "");
+    if (s.time_reads > 0) {
+      out += s.drift_ppm ? fmt::format(" drift {:+.3f} ppm", *s.drift_ppm) : " drift unknown";
+      if (s.first_half_ppm && s.second_half_ppm) {
+        out += fmt::format(" (first half {:+.3f}, second half {:+.3f})", *s.first_half_ppm,
+                           *s.second_half_ppm);
+      }
+      out += fmt::format(" over {} system time read{}", s.time_reads, s.time_reads == 1 ? "" : "s");
+      if (s.last_difference_ns) out += ";";
+    }
+    if (s.last_difference_ns) {
+      out += fmt::format(" system time difference last {} ns, max |diff| {} ns over {} read{}, ",
+                         *s.last_difference_ns, s.max_abs_difference_ns, s.difference_reads,
+                         s.difference_reads == 1 ? "" : "s");
+      out += s.settled_frame
+                 ? fmt::format("within {} ns from frame {}", settled_ns, *s.settled_frame)
+                 : fmt::format("not settled within {} ns", settled_ns);
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 }  // namespace ncservo

@@ -9,6 +9,7 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
       settings_(std::move(settings)),
       judged_(judgedBits(settings_, fast_path)),
       fast_path_(fast_path == FastPath::On),
+      dc_(settings_.dc_settled_ns),
       bus_(timingLimits(settings_)),
       segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
 
@@ -120,6 +121,8 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   decoder_.placeAxes(frame, bytes, decode);
   if (decode.any_malformed) cut_.add(frame_number, decode);
   observeAl(frame, bytes);
+  dc_.onFrame(frame, bytes, decode.copy == CopyKind::Returned, decode.paired, frame_number,
+              time_ns);
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
   const std::size_t axis_count = decode.axis_count;
@@ -205,6 +208,7 @@ void Validator::startSegment() {
   bus_.startSegment(events_);
   reportEvents();
   al_.startSegment();
+  dc_.startSegment();
   ++al_epoch_;  // the AL states are taken again
   for (AxisSlot& s : axes_) {
     if (!s.model) continue;

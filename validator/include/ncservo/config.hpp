@@ -33,6 +33,7 @@ struct Config {
   std::string path;  // where it came from, for messages
   std::optional<int> servo_ready_mode;
   std::uint32_t telegram_failure_limit = 3;
+  std::uint32_t dc_settled_ns = 100;  // docs/timing.md "Distributed clocks"
   bool default_layout = true;
   std::map<std::string, std::uint32_t> timeouts_ms;  // only the ones the file sets
   std::map<std::string, std::uint32_t> limits;       // of kLimits, only the ones the file sets
@@ -41,6 +42,9 @@ struct Config {
   std::vector<std::string> enabled_rules;
   std::map<std::string, std::string> severity_overrides;
 };
+
+// The keys of the file's top level, in the order docs/configuration.md lists them.
+const std::vector<std::string>& topLevelConfigKeys();
 
 // An error names the file, the line and the key: "FILE:LINE: key 'K': MESSAGE".
 Result<Config> parseConfig(std::string_view text, const std::string& path);

@@ -115,7 +115,12 @@ inline constexpr std::size_t kFmmuCount = 16;
 inline constexpr std::uint16_t kRegSyncManager0 = 0x0800;
 inline constexpr std::uint16_t kSyncManagerStride = 8;
 inline constexpr std::size_t kSyncManagerCount = 16;
-inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;
+inline constexpr std::uint16_t kRegDcSystemTime = 0x0910;        // 64 bits (or 32), ns
+inline constexpr std::uint16_t kRegDcSystemTimeOffset = 0x0920;  // 64 bits: local to system time
+// 32 bits, sign and magnitude: bit 31 set when the local copy of the system time is smaller
+// than the system time received; bits 30..0 the difference in ns (ESC datasheet, DC registers).
+inline constexpr std::uint16_t kRegDcSystemTimeDifference = 0x092C;
+inline constexpr std::uint32_t kDcDifferenceSignBit = 0x80000000u;
 // Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
 inline constexpr std::uint16_t kProcessRam = 0x1000;
 static_assert(kRegFmmu0 + kFmmuCount * kFmmuStride <= kRegSyncManager0);

@@ -48,6 +48,13 @@ constexpr bool writesSlaves(std::uint8_t cmd) {
 constexpr bool readsSlaves(std::uint8_t cmd) {
   return commandFacts(cmd).reads;
 }
+// Register access reaches slaves through the physical commands, not the logical ones.
+constexpr bool readsRegisters(std::uint8_t cmd) {
+  return readsSlaves(cmd) && !isLogical(cmd);
+}
+constexpr bool writesRegisters(std::uint8_t cmd) {
+  return writesSlaves(cmd) && !isLogical(cmd);
+}
 }  // namespace ecat
 
 // The 16-byte header an ET2000 probe or an EtherCAT switch-link port puts before or after the

@@ -184,6 +184,9 @@ struct RuleSettings {
   std::vector<std::optional<int>> axis_ready_mode;  // by axis index (configured axes)
   std::uint32_t telegram_failure_limit = 3;
   std::array<std::uint32_t, kLimits.size()> limit{};
+  // docs/timing.md "Distributed clocks": a slave's DC settled once every later 0x092C read stayed
+  // within this many ns.
+  std::int64_t dc_settled_ns = 100;
 
   RuleSettings();
   bool isEnabled(RuleId id) const { return enabled[static_cast<std::size_t>(id)]; }

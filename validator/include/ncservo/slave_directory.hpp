@@ -33,6 +33,14 @@ inline std::optional<std::size_t> registerAt(const Datagram& dg, std::uint16_t r
   return dg.data_offset + relative;
 }
 
+// Whether the datagram's captured data overlaps the registers [from, to). Logical commands do not
+// address registers.
+inline bool reachesRegisters(const Datagram& dg, std::uint16_t from, std::uint16_t to) {
+  if (ecat::isLogical(dg.command)) return false;
+  const std::size_t ado = dg.ado();
+  return ado < to && ado + dg.data_captured > from;
+}
+
 template <typename T>
 class SlaveDirectory {
  public:

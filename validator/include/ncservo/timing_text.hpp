@@ -4,7 +4,9 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
+#include "ncservo/dc_clock.hpp"
 #include "ncservo/timing.hpp"
 
 namespace ncservo {
@@ -13,5 +15,9 @@ namespace ncservo {
 // `timestamps` names what timed the frames ("capture", "probe").
 std::string timingText(const TimingSummary& timing, const char* timestamps,
                        std::int64_t resolution_ns);
+
+// The distributed clocks block: a line per slave whose clock was read; nothing when none was.
+// `settled_ns` is the bound the settled frames were judged against.
+std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_ns);
 
 }  // namespace ncservo

@@ -12,6 +12,7 @@
 #include "ncservo/axis_model.hpp"
 #include "ncservo/bus_model.hpp"
 #include "ncservo/capture_segments.hpp"
+#include "ncservo/dc_clock.hpp"
 #include "ncservo/finding.hpp"
 #include "ncservo/rules.hpp"
 #include "ncservo/session.hpp"
@@ -64,6 +65,7 @@ class Validator {
   // The cycle interval and return latency the last frame given to onFrame added to the timing
   // statistics; all empty when it added none.
   const FrameTiming& frameTiming() const;
+  const DcClock& dc() const { return dc_; }
   // The placed PDO regions the capture cut short (a snap length).
   const CutRegions& cutRegions() const { return cut_; }
 
@@ -120,6 +122,7 @@ class Validator {
   Judged judged_;
   bool fast_path_;
   AlTracker al_;
+  DcClock dc_;
   BusModel bus_;
   SegmentTracker segments_;
   CutRegions cut_;
