@@ -358,10 +358,7 @@ int runMonitor(const MonitorArgs& args) {
   std::optional<Validator> validator;
   std::map<std::uint16_t, std::string> last_finding;  // by axis, for the status lines
   CaptureRun run;
-  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                            const ByteReader& bytes) {
-    report.first_time_ns = *run.first_time_ns;
-    validator->onFrame(number, time_ns, walked, bytes);
+  const auto report_findings = [&] {
     for (const Finding& f : validator->findings()) {
       report.tally(f);
       board.clear();
@@ -375,6 +372,12 @@ int runMonitor(const MonitorArgs& args) {
         recorder->onFinding(f, findingComment(f, validator->decoder().axes()));
       }
     }
+  };
+  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
+                            const ByteReader& bytes) {
+    report.first_time_ns = *run.first_time_ns;
+    validator->onFrame(number, time_ns, walked, bytes);
+    report_findings();
   };
   const auto start = [&](const DecoderOptions& layout) {
     validator.emplace(layout, settings);
@@ -424,6 +427,10 @@ int runMonitor(const MonitorArgs& args) {
   std::fflush(stdout);
   board.clear();
   records.finish();
+  if (validator) {
+    validator->finish();  // what only the frames that did not come could tell (COM-002)
+    report_findings();
+  }
   if (recorder) recorder->finish();
   g_live = nullptr;
   std::signal(SIGINT, SIG_DFL);
