@@ -63,8 +63,13 @@ constexpr std::uint32_t kMaxDcSettledNs = 1'000'000'000;
 
 // The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
 std::vector<std::string> topKeys() {
-  std::vector<std::string> keys{
-      "servo_ready_mode", "telegram_failure_limit", "dc_settled_ns", "default_layout", "timeouts", "axis", "rules"};
+  std::vector<std::string> keys{"servo_ready_mode",
+                                "telegram_failure_limit",
+                                "dc_settled_ns",
+                                "default_layout",
+                                "timeouts",
+                                "axis",
+                                "rules"};
   for (const LimitDef& l : kLimits) keys.emplace_back(l.name);
   return keys;
 }
