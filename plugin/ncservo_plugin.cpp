@@ -668,11 +668,6 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
-// Whether a bit field holds the value the field table calls at rest.
-bool atRest(const FieldDef& f, std::uint32_t value) {
-  return f.at_rest && ((value & f.mask) >> lowestBit(f.mask)) == *f.at_rest;
-}
-
 // The word's bit fields one by one, for a shown tree: the parameter table by its number
 // (ExtPRMTBL·4 + PRMTBL + 1); SEW cause bits that are clear and SCW/SSW bits at rest hidden
 // behind one line, so that -V on many axes stays readable (hidden items still serve filters and
@@ -690,7 +685,7 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
       proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
-    if (atRest(f, value)) {
+    if (isAtRest(f, value)) {
       g_strlcat(at_rest_names, at_rest == 0 ? "" : ", ", sizeof at_rest_names);
       g_strlcat(at_rest_names, f.label, sizeof at_rest_names);
       ++at_rest;

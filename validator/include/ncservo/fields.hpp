@@ -227,6 +227,10 @@ constexpr unsigned lowestBit(std::uint64_t mask) {
   while (bit < 64 && !((mask >> bit) & 1)) ++bit;
   return bit;
 }
+// Whether the word holds the field at the value the table calls at rest (FieldDef::at_rest).
+constexpr bool isAtRest(const FieldDef& f, std::uint64_t word) {
+  return f.at_rest && ((word & f.mask) >> lowestBit(f.mask)) == *f.at_rest;
+}
 constexpr std::uint64_t wordMask(Word w) {
   return wordDef(w).size >= 8 ? ~0ull : ((1ull << (8 * wordDef(w).size)) - 1);
 }
