@@ -63,6 +63,9 @@ std::string utcOf(const CaptureReport& r, const Stamp& at) {
   return isoUtc(at.time_ns, r.timestamp_digits);
 }
 
+std::string hex16(std::uint16_t v) {
+  return fmt::format("0x{:04X}", v);
+}
 std::string hex32(std::uint32_t v) {
   return fmt::format("0x{:08X}", v);
 }
@@ -198,10 +201,6 @@ Json cyclicDatagramsJson(const CaptureReport& r) {
   return list;
 }
 
-std::string hex16(std::uint16_t v) {
-  return fmt::format("0x{:04X}", v);
-}
-
 // INTERFACES.md `timing.dc`: one entry per slave whose distributed clock was read.
 Json dcJson(const CaptureReport& r) {
   Json list = Json::array();
@@ -261,7 +260,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json layout_axes = Json::array();
   for (const AxisInfo& info : r.layout) {
     Json a{{"index", info.index}, {"name", info.name}};
-    if (info.has_station) a["station"] = fmt::format("0x{:04X}", info.station);
+    if (info.has_station) a["station"] = hex16(info.station);
     a["outputs"] = hex32(info.logical ? info.outputs : info.sm_outputs);
     a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
     layout_axes.push_back(std::move(a));
@@ -288,7 +287,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     Json history = Json::array();
     for (const ErrorHistoryEntry& e : a.error_history) {
       history.push_back({{"code", e.cause->display},
-                         {"canopen", fmt::format("0x{:04X}", e.cause->canopen)},
+                         {"canopen", hex16(e.cause->canopen)},
                          {"frame", e.at.frame},
                          {"time", seconds(r, e.at)},
                          {"time_utc", utcOf(r, e.at)}});
