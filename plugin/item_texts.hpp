@@ -11,9 +11,9 @@
 #include <cstdint>
 #include <optional>
 
-#include "ncservo/axis_model.hpp"
-#include "ncservo/drive_state.hpp"
-#include "ncservo/pdo.hpp"
+#include "ncservo/model/axis_model.hpp"
+#include "ncservo/protocol/drive_state.hpp"
+#include "ncservo/protocol/pdo.hpp"
 
 namespace ncservo::plugin {
 

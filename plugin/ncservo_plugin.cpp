@@ -28,17 +28,17 @@
 #include <vector>
 
 #include "item_texts.hpp"
-#include "ncservo/config.hpp"
-#include "ncservo/eni.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/fields.hpp"
-#include "ncservo/frame_clock.hpp"
-#include "ncservo/layout_window.hpp"
-#include "ncservo/pdo.hpp"
-#include "ncservo/rules.hpp"
-#include "ncservo/text.hpp"
-#include "ncservo/timing_text.hpp"
-#include "ncservo/validator.hpp"
+#include "ncservo/base/text.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/layout/eni.hpp"
+#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/model/timing_text.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/pdo.hpp"
+#include "ncservo/rules/rules.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/ethercat.hpp"
+#include "ncservo/wire/frame_clock.hpp"
 
 extern "C" {
 WS_DLL_PUBLIC const char plugin_version[];

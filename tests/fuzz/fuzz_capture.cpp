@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "fuzz_common.hpp"
-#include "ncservo/capture_reader.hpp"
-#include "report.hpp"
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/report/report.hpp"
 
 namespace {
 

@@ -5,11 +5,11 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ncservo/config.hpp"
-#include "ncservo/decoder.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/rules.hpp"
-#include "ncservo/validator.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/layout/decoder.hpp"
+#include "ncservo/rules/rules.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::fuzz {
 

@@ -5,9 +5,9 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "ncservo/config.hpp"
-#include "ncservo/decoder.hpp"
-#include "ncservo/rules.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/layout/decoder.hpp"
+#include "ncservo/rules/rules.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace ncservo;

@@ -1,11 +1,30 @@
 #!/usr/bin/env python3
-"""Fails when modules of the project include each other in a cycle (issue 12: one home per
-concept). A module is a header and its source file of the same name (rules.hpp + rules.cpp);
-module A depends on B when A's header or source includes B's header.
+"""Fails when an include runs upward through the layers, or when modules include each other in a
+cycle. The layers are validator/'s folders (README "Layers"); a file may include headers of its
+own folder and of folders ranked below it, never above it nor beside it (two folders of one rank
+stay independent). A module is a header and its source file of the same name; module A depends on
+B when A's header or source includes B's header.
 Usage: include_cycles.py SOURCE_DIR"""
 import os
 import re
 import sys
+
+# folder (under the source directory) -> rank; lower ranks are the layers below
+RANKS = {
+    "validator/base": 0,
+    "validator/wire": 1,
+    "validator/protocol": 2,
+    "validator/layout": 3,
+    "validator/model": 4,
+    "validator/rules": 5,
+    "validator/config": 6,
+    "validator/pipeline": 7,
+    "validator/capture": 8,
+    "validator/report": 9,
+    "validator/sim": 9,
+    "validator/cli": 10,
+    "plugin": 10,
+}
 
 root = sys.argv[1]
 include = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
@@ -15,22 +34,50 @@ for top in ("validator", "plugin"):
         files += [os.path.join(dirpath, n) for n in names if n.endswith((".hpp", ".h", ".cpp"))]
 
 
+def folder(path):
+    rel = os.path.relpath(path, root)
+    for name in sorted(RANKS, key=len, reverse=True):
+        if rel.startswith(name + "/"):
+            return name
+    return None
+
+
 def module(path):
     return os.path.splitext(os.path.basename(path))[0]
 
 
-header_module = {}  # include spelling -> module
+unranked = sorted({os.path.relpath(p, root) for p in files if folder(p) is None})
+if unranked:
+    print("files in no ranked folder (add the folder to RANKS): " + ", ".join(unranked))
+    sys.exit(1)
+
+header = {}  # include spelling -> path
 for path in files:
     if path.endswith((".hpp", ".h")):
-        spelled = path.split("/include/", 1)[1] if "/include/" in path else os.path.basename(path)
-        header_module[spelled] = module(path)
-        header_module.setdefault(os.path.basename(path), module(path))
+        if "/include/" in path:
+            header[path.split("/include/", 1)[1]] = path
+        header.setdefault(os.path.basename(path), path)
 
-edges = {}
+edges, upward = {}, []
 for path in files:
     with open(path, encoding="utf-8") as f:
-        deps = {header_module[i] for i in include.findall(f.read()) if i in header_module}
+        spelled = include.findall(f.read())
+    here = folder(path)
+    deps = set()
+    for name in spelled:
+        target = header.get(name)
+        if target is None:
+            continue
+        there = folder(target)
+        if there != here and RANKS[there] >= RANKS[here]:
+            upward.append(f"{os.path.relpath(path, root)} includes {name}: {here} (rank "
+                          f"{RANKS[here]}) may not include {there} (rank {RANKS[there]})")
+        deps.add(module(target))
     edges.setdefault(module(path), set()).update(deps - {module(path)})
+
+if upward:
+    print("\n".join(upward))
+    sys.exit(1)
 
 state, stack = {}, []
 
@@ -51,4 +98,5 @@ def visit(node):
 for node in sorted(edges):
     if node not in state:
         visit(node)
-print(f"no include cycle among {len(edges)} modules")
+print(f"no upward include among {len(files)} files in {len(RANKS)} layers; "
+      f"no include cycle among {len(edges)} modules")

@@ -1,6 +1,6 @@
 // Each slave's EtherCAT state machine (al_tracker.hpp, PROTOCOL.md §8; RULES.md ESM-001, ESM-003,
 // ESM-004), on frames built byte by byte and walked over exact-size heap buffers.
-#include "ncservo/al_tracker.hpp"
+#include "ncservo/model/al_tracker.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/rules.hpp"
+#include "ncservo/rules/rules.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {

@@ -1,7 +1,7 @@
 // The model of one axis (axis_model.hpp): signal levels and edges, the valid enable of PROTOCOL.md
 // §2, the error history of §7 (newest first, at most eight), the state timeline of §6, the
 // Servo_Ready_Mode of §5, and the telegram-failure counters of RULES.md COM-*. One row per case.
-#include "ncservo/axis_model.hpp"
+#include "ncservo/model/axis_model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "ncservo/fields.hpp"
-#include "ncservo/pdo.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/pdo.hpp"
 #include "validator_driver.hpp"
 
 namespace ncservo {

@@ -1,7 +1,7 @@
 // The bus rules on cyclic traffic without servos (docs/timing.md "Which frames"): a TwinCAT-like
 // I/O frame (LRD 0x09000000, 1 byte; LRW 0x01000000, 20 bytes), a master copy and a returned copy
 // per 1 ms cycle, through the Validator with no layout at all.
-#include "ncservo/bus_model.hpp"
+#include "ncservo/model/bus_model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/validator.hpp"
+#include "ncservo/rules/validator.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {

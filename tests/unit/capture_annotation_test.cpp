@@ -1,6 +1,6 @@
 // Packet comments added to stored pcapng packet blocks (capture_annotation.hpp): the block's
 // options kept, its lengths right, in either byte order; blocks that hold no options refused.
-#include "ncservo/capture_annotation.hpp"
+#include "ncservo/capture/capture_annotation.hpp"
 
 #include <gtest/gtest.h>
 

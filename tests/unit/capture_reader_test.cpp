@@ -1,6 +1,6 @@
 // CaptureReader (capture_reader.hpp) over plain, gzip and zstd pcap and pcapng, from a file and
 // from a pipe on standard input; cut and corrupt compressed streams (PROTOCOL.md §8).
-#include "ncservo/capture_reader.hpp"
+#include "ncservo/capture/capture_reader.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "ncservo/capture_writer.hpp"
+#include "ncservo/capture/capture_writer.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {

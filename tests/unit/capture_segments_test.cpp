@@ -1,6 +1,6 @@
 // Capture discontinuities (RULES.md "Time", PROTOCOL.md §8): where segments start and what they
 // span.
-#include "ncservo/capture_segments.hpp"
+#include "ncservo/model/capture_segments.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The bounded queue between decode's walking thread and its VCD text writer (chunk_queue.hpp):
 // chunks arrive in the order pushed, the producer waits while the queue is full and reuses the
 // chunks written out (bounded memory), and a consumer's failure reaches the producer as its error.
-#include "chunk_queue.hpp"
+#include "ncservo/report/chunk_queue.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The CoE PDO assignment and mapping read from mailboxes (coe_pdo.hpp), one row per mailbox shape.
-#include "ncservo/coe_pdo.hpp"
+#include "ncservo/wire/coe_pdo.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/decoder.hpp"
+#include "ncservo/layout/decoder.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {

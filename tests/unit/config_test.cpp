@@ -1,5 +1,5 @@
 // The TOML configuration file (config.hpp, INTERFACES.md "Configuration file (TOML)").
-#include "ncservo/config.hpp"
+#include "ncservo/config/config.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-#include "ncservo/rules.hpp"
+#include "ncservo/rules/rules.hpp"
 
 namespace ncservo {
 namespace {

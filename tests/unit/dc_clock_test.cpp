@@ -1,7 +1,7 @@
 // Distributed clocks (dc_clock.hpp, docs/timing.md "Distributed clocks"): 0x092C's sign, the
 // settle logic, the drift fit on synthetic clocks, and which reads count, on frames built byte by
 // byte.
-#include "ncservo/dc_clock.hpp"
+#include "ncservo/model/dc_clock.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Where the decoder finds each axis's PDOs (decoder.hpp, PROTOCOL.md §8-9) and the session's
 // per-axis state (session.hpp), on frames built byte by byte.
-#include "ncservo/decoder.hpp"
+#include "ncservo/layout/decoder.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,8 @@
 
 #include "default_layout.hpp"
 #include "frame_builder.hpp"
-#include "ncservo/session.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/layout/session.hpp"
 
 namespace ncservo {
 namespace {

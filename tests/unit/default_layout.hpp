@@ -9,9 +9,9 @@
 #include <optional>
 #include <string>
 
-#include "ncservo/decoder.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/pdo_layout.hpp"
+#include "ncservo/layout/decoder.hpp"
+#include "ncservo/protocol/pdo_layout.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::test {
 

@@ -1,5 +1,5 @@
 // The drive state table (drive_state.hpp) against PROTOCOL.md §6.
-#include "ncservo/drive_state.hpp"
+#include "ncservo/protocol/drive_state.hpp"
 
 #include <gtest/gtest.h>
 

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "ncservo/capture_reader.hpp"
-#include "ncservo/layout_window.hpp"
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/rules/validator.hpp"
 #include "ncservo/sim/simulator.hpp"
-#include "ncservo/validator.hpp"
 #include "row_name.hpp"
 #include "status_text.hpp"
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <string_view>
 
-#include "ncservo/fields.hpp"
-#include "ncservo/pdo.hpp"
-#include "ncservo/pdo_layout.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/pdo.hpp"
+#include "ncservo/protocol/pdo_layout.hpp"
 
 namespace ncservo {
 namespace {

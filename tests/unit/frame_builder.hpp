@@ -11,9 +11,9 @@
 #include <utility>
 #include <vector>
 
-#include "ncservo/byte_reader.hpp"
-#include "ncservo/ethercat.hpp"
+#include "ncservo/base/byte_reader.hpp"
 #include "ncservo/sim/frame_encoder.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::test {
 

@@ -1,7 +1,7 @@
 // The running cycle-time statistics the rules' "nominal cycle" comes from (interval_stats.hpp,
 // RULES.md "Time", COM-002): the lower median after every interval, quantiles and the maximum for
 // the report, in bounded memory.
-#include "ncservo/interval_stats.hpp"
+#include "ncservo/model/interval_stats.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Learning the servos' layout from the capture's start-up (layout_learner.hpp, PROTOCOL.md §9.3):
 // the SM and FMMU register writes, byte by byte, then the simulator's start-ups as the truth.
-#include "ncservo/layout_learner.hpp"
+#include "ncservo/layout/layout_learner.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/ethercat.hpp"
 #include "ncservo/sim/simulator.hpp"
+#include "ncservo/wire/ethercat.hpp"
 #include "row_name.hpp"
 #include "simulated_setups.hpp"
 #include "status_text.hpp"

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "ncservo/eni.hpp"
+#include "ncservo/layout/eni.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "row_name.hpp"
 #include "simulated_setups.hpp"

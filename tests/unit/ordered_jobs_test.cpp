@@ -1,6 +1,6 @@
 // runInOrder (ordered_jobs.hpp): every task runs once, results come in task order, and no more
 // than 2 * jobs results wait, whatever the threads' timing.
-#include "ordered_jobs.hpp"
+#include "ncservo/base/ordered_jobs.hpp"
 
 #include <gtest/gtest.h>
 

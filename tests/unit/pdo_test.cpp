@@ -1,5 +1,5 @@
 // Reading PDOs from bytes and the values of the field table's rows (pdo.hpp, PROTOCOL.md §1-5).
-#include "ncservo/pdo.hpp"
+#include "ncservo/protocol/pdo.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/frame_clock.hpp"
+#include "ncservo/wire/ethercat.hpp"
+#include "ncservo/wire/frame_clock.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {

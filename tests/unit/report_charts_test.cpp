@@ -1,7 +1,7 @@
 // The HTML report's finding timelines (report_charts.hpp): each window draws the rows its rule
 // declares it reads, a few frames either side of the finding, with the timeout's window; the caps
 // per rule and axis hold.
-#include "report_charts.hpp"
+#include "ncservo/report/report_charts.hpp"
 
 #include <gtest/gtest.h>
 

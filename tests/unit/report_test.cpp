@@ -1,6 +1,6 @@
 // The pure parts of `validate`'s reports (report.hpp): absolute times in ISO 8601, the capture's
 // timestamp precision from its header, findings counted by rule and axis, the rules' anchors.
-#include "report.hpp"
+#include "ncservo/report/report.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The rule catalogue (rules.hpp) against RULES.md and the user's settings (RuleSettings).
-#include "ncservo/rules.hpp"
+#include "ncservo/rules/rules.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "ncservo/config.hpp"
+#include "ncservo/config/config.hpp"
 #include "status_text.hpp"
 
 namespace ncservo {

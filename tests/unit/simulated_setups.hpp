@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "ncservo/config.hpp"
+#include "ncservo/config/config.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "status_text.hpp"
 

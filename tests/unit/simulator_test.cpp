@@ -18,15 +18,15 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/capture_reader.hpp"
-#include "ncservo/capture_writer.hpp"
-#include "ncservo/config.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/layout_learner.hpp"
-#include "ncservo/layout_window.hpp"
-#include "ncservo/rules.hpp"
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/capture/capture_writer.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/layout/layout_learner.hpp"
+#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/rules/rules.hpp"
+#include "ncservo/rules/validator.hpp"
 #include "ncservo/sim/faults.hpp"
-#include "ncservo/validator.hpp"
+#include "ncservo/wire/ethercat.hpp"
 #include "status_text.hpp"
 
 namespace ncservo::sim {

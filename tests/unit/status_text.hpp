@@ -4,7 +4,7 @@
 #include <optional>
 #include <string>
 
-#include "ncservo/error.hpp"
+#include "ncservo/base/error.hpp"
 
 namespace ncservo::test {
 

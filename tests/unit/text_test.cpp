@@ -1,5 +1,5 @@
 // Matching typed names ("did you mean", IDs in any case) and quoting CSV fields (text.hpp).
-#include "ncservo/text.hpp"
+#include "ncservo/base/text.hpp"
 
 #include <gtest/gtest.h>
 

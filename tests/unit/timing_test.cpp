@@ -2,7 +2,7 @@
 // nearest-rank quantiles, the deviation histogram and the worst lists; beyond kExactSamples the
 // quantiles stay within half a histogram bin. The validator's per-frame timing gives what the
 // statistics took from each frame.
-#include "ncservo/timing.hpp"
+#include "ncservo/model/timing.hpp"
 
 #include <gtest/gtest.h>
 

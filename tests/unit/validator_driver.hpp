@@ -13,9 +13,9 @@
 
 #include "default_layout.hpp"
 #include "frame_builder.hpp"
-#include "ncservo/finding.hpp"
-#include "ncservo/rules.hpp"
-#include "ncservo/validator.hpp"
+#include "ncservo/rules/finding.hpp"
+#include "ncservo/rules/rules.hpp"
+#include "ncservo/rules/validator.hpp"
 
 namespace ncservo::test {
 

@@ -2,7 +2,7 @@
 // built byte by byte (validator_driver.hpp): per rule a row where it fires — rule, axis, the frame
 // it is reported on and the frame the condition began, exactly — a row where it must not, and for
 // every timed rule the two rows at its limit (held exactly T: nothing; one cycle more: reported).
-#include "ncservo/validator.hpp"
+#include "ncservo/rules/validator.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/axis_model.hpp"
-#include "ncservo/fields.hpp"
-#include "ncservo/session.hpp"
+#include "ncservo/layout/session.hpp"
+#include "ncservo/model/axis_model.hpp"
+#include "ncservo/protocol/fields.hpp"
 #include "row_name.hpp"
 #include "validator_driver.hpp"
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "frame_builder.hpp"
-#include "ncservo/ethercat.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo {
 namespace {

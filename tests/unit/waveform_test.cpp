@@ -1,6 +1,6 @@
 // decode's waveforms (waveform.hpp) and axis selection (axis_selection.hpp): identifier codes,
 // value texts, the signals derived from the field table, scope names and --axis.
-#include "waveform.hpp"
+#include "ncservo/report/waveform.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "axis_selection.hpp"
+#include "ncservo/report/axis_selection.hpp"
 #include "row_name.hpp"
 
 namespace ncservo::cli {

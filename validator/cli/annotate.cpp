@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "ncservo/capture_annotation.hpp"
-#include "ncservo/capture_reader.hpp"
-#include "ncservo/capture_stream.hpp"
-#include "ncservo/frame_clock.hpp"
-#include "ncservo/layout_window.hpp"
-#include "ncservo/validator.hpp"
+#include "ncservo/capture/capture_annotation.hpp"
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/capture/capture_stream.hpp"
+#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/frame_clock.hpp"
 
 namespace ncservo::cli {
 namespace {

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "ncservo/config.hpp"
-#include "ncservo/decoder.hpp"
-#include "ncservo/eni.hpp"
-#include "ncservo/error.hpp"
-#include "ncservo/finding.hpp"
-#include "ncservo/rules.hpp"
+#include "ncservo/base/error.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/layout/decoder.hpp"
+#include "ncservo/layout/eni.hpp"
+#include "ncservo/rules/finding.hpp"
+#include "ncservo/rules/rules.hpp"
 
 namespace ncservo::cli {
 

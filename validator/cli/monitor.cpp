@@ -22,17 +22,17 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "ncservo/capture_annotation.hpp"
-#include "ncservo/capture_reader.hpp"
-#include "ncservo/capture_stream.hpp"
-#include "ncservo/capture_writer.hpp"
-#include "ncservo/coverage.hpp"
-#include "ncservo/drive_state.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/frame_clock.hpp"
-#include "ncservo/layout_window.hpp"
-#include "ncservo/validator.hpp"
-#include "report.hpp"
+#include "ncservo/capture/capture_annotation.hpp"
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/capture/capture_stream.hpp"
+#include "ncservo/capture/capture_writer.hpp"
+#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/protocol/drive_state.hpp"
+#include "ncservo/report/report.hpp"
+#include "ncservo/rules/coverage.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/ethercat.hpp"
+#include "ncservo/wire/frame_clock.hpp"
 
 namespace ncservo::cli {
 namespace {

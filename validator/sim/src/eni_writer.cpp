@@ -6,7 +6,7 @@
 #include <pugixml.hpp>
 #include <sstream>
 
-#include "ncservo/ethercat.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::sim {
 

@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "le_bytes.hpp"
-#include "ncservo/ethercat.hpp"
 #include "ncservo/sim/models.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::sim {
 namespace {

@@ -3,8 +3,8 @@
 #include <algorithm>
 
 #include "le_bytes.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/pdo.hpp"
+#include "ncservo/protocol/pdo.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::sim {
 namespace {

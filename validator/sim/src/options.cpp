@@ -159,9 +159,10 @@ Status resolveOptions(SimOptions& o) {
   const int most_late_us = o.cycle_us - 2 * o.jitter_us - 1;
   for (const CycleDisturbance& late : o.late_cycles) {
     if (late.amount > most_late_us) {
-      return fail(fmt::format("--late-cycle {}: at most {} us late (the cycle less twice the "
-                              "jitter, less 1)",
-                              late.text, most_late_us));
+      return fail(
+          fmt::format("--late-cycle {}: at most {} us late (the cycle less twice the "
+                      "jitter, less 1)",
+                      late.text, most_late_us));
     }
   }
   if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);

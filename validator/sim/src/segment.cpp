@@ -7,8 +7,8 @@
 #include <iterator>
 
 #include "le_bytes.hpp"
-#include "ncservo/ethercat.hpp"
-#include "ncservo/pdo_layout.hpp"
+#include "ncservo/protocol/pdo_layout.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::sim {
 namespace {

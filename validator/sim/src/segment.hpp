@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "ncservo/al_tracker.hpp"
-#include "ncservo/config.hpp"
+#include "ncservo/config/config.hpp"
+#include "ncservo/model/al_tracker.hpp"
 #include "ncservo/sim/models.hpp"
 #include "ncservo/sim/options.hpp"
 

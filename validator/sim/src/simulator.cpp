@@ -12,7 +12,7 @@
 #include "esl_probe.hpp"
 #include "fault_plan.hpp"
 #include "master.hpp"
-#include "ncservo/config.hpp"
+#include "ncservo/config/config.hpp"
 #include "ncservo/sim/eni_writer.hpp"
 #include "ncservo/sim/models.hpp"
 #include "segment.hpp"

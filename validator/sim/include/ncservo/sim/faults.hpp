@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "ncservo/rules.hpp"
+#include "ncservo/rules/rules.hpp"
 #include "ncservo/sim/models.hpp"
 
 namespace ncservo::sim {

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "ncservo/ethercat.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo::sim {
 

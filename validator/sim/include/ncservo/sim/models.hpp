@@ -10,8 +10,8 @@
 #include <optional>
 #include <vector>
 
-#include "ncservo/fields.hpp"
-#include "ncservo/pdo.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/pdo.hpp"
 
 namespace ncservo::sim {
 

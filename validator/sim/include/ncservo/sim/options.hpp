@@ -9,8 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "ncservo/error.hpp"
-#include "ncservo/rules.hpp"
+#include "ncservo/base/error.hpp"
+#include "ncservo/rules/rules.hpp"
 #include "ncservo/sim/faults.hpp"
 
 namespace ncservo::sim {

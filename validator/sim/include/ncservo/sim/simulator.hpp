@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-#include "ncservo/config.hpp"
+#include "ncservo/config/config.hpp"
 #include "ncservo/sim/options.hpp"
 
 namespace ncservo::sim {

@@ -1,0 +1,36 @@
+// A copy of a capture with packet comments (pcapng opt_comment, §3.5) on chosen frames, so that
+// stock Wireshark shows them (frame.comment) without the plugin.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/base/error.hpp"
+
+namespace ncservo {
+
+// Packet comments by 1-based frame number (as Wireshark numbers frames).
+using FrameComments = std::map<std::uint64_t, std::vector<std::string>>;
+// Which frames a copy keeps, by number and capture time; null keeps every frame.
+using FrameFilter = std::function<bool(std::uint64_t frame, std::int64_t time_ns)>;
+
+// Copies the capture file `input` (read again from its start) to the pcapng `output`, with each
+// kept frame's comments added after the comments it has. A pcapng's blocks are copied as stored,
+// every block that is no packet (interfaces, statistics, name resolution, other sections) kept;
+// a pcap becomes a pcapng with the same frames, link type, timestamps and resolution. A
+// compressed pcapng cannot be copied block by block and is refused.
+Status annotateCapture(const std::string& input, const std::string& output,
+                       const FrameComments& comments, const FrameFilter& keep);
+
+// A stored pcapng packet block (Enhanced or obsolete Packet Block, either byte order) with
+// `comments` added after its options; nullopt for a block that cannot hold options (a Simple
+// Packet Block) or that is malformed.
+std::optional<std::vector<std::uint8_t>> withComments(const std::uint8_t* block, std::size_t size,
+                                                      const std::vector<std::string>& comments);
+
+}  // namespace ncservo

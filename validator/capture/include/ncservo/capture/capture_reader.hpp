@@ -1,0 +1,88 @@
+// Reads pcap and pcapng captures (libpcap) record by record, in constant memory; gzip- and
+// zstd-compressed ones too (PROTOCOL.md §8), recognised by their first bytes, not their names.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "ncservo/base/error.hpp"
+#include "ncservo/wire/ethercat.hpp"
+
+struct pcap;  // libpcap's handle, kept out of this header
+
+namespace ncservo {
+
+// Where a record is stored in the capture file: the pcap record (its 16-byte header and the
+// packet) or the pcapng block that holds the packet.
+struct RecordSpan {
+  std::uint64_t offset = 0;
+  std::uint64_t length = 0;
+};
+
+struct CaptureRecord {
+  std::uint64_t frame = 0;   // 1-based, as Wireshark numbers frames
+  std::int64_t time_ns = 0;  // absolute capture time in nanoseconds
+  const std::uint8_t* data = nullptr;
+  std::size_t captured = 0;
+  std::size_t original = 0;
+  std::optional<RecordSpan> stored;  // none when the capture is compressed or not a plain file
+};
+
+// The digits of a second the capture's timestamps hold (6: microseconds, 9: nanoseconds), from
+// its first bytes: the pcap magic, or if_tsresol of the first pcapng interface (6 when absent).
+int timestampDigits(const std::uint8_t* head, std::size_t size);
+
+// How the capture's bytes are stored.
+enum class Compression : std::uint8_t { None, Gzip, Zstd };
+const char* compressionName(Compression compression);
+
+class DecompressedStream;  // the decompressing source libpcap reads through (capture_reader.cpp)
+
+class CaptureReader {
+ public:
+  ~CaptureReader();
+  CaptureReader(const CaptureReader&) = delete;
+  CaptureReader& operator=(const CaptureReader&) = delete;
+
+  // Opens PATH ("-" = standard input). An error names the file ("standard input" for "-").
+  static Result<std::unique_ptr<CaptureReader>> open(const std::string& path);
+
+  // Fills `record` with the next record and returns true; false at the end of the capture.
+  // An error names the file and the frame that could not be read; the records before it
+  // were good.
+  Result<bool> next(CaptureRecord& record);
+
+  LinkType link() const { return link_; }
+  int dlt() const { return dlt_; }
+  Compression compression() const { return compression_; }
+  const std::string& path() const { return path_; }
+  int timestampDigits() const { return timestamp_digits_; }
+  // A pcapng (of any compression), not a pcap.
+  bool pcapng() const { return pcapng_format_; }
+
+ private:
+  CaptureReader() = default;
+  Error failure(std::uint64_t frame, const char* pcap_message) const;
+  std::optional<RecordSpan> storedSpan();
+
+  static constexpr std::size_t kReadBufferSize = 1 << 16;
+  std::unique_ptr<char[]> buffer_;              // the FILE's buffer: outlives the handle
+  std::unique_ptr<DecompressedStream> stream_;  // outlives the handle that reads it
+  std::FILE* source_ = nullptr;                 // the file opened here, closed here
+  ::pcap* handle_ = nullptr;
+  std::string path_;
+  LinkType link_ = LinkType::Unsupported;
+  int dlt_ = 0;
+  Compression compression_ = Compression::None;
+  std::uint64_t frames_ = 0;
+  int timestamp_digits_ = 6;
+  bool pcapng_ = false;           // a plain pcapng file, whose records are located
+  bool pcapng_format_ = false;    // a pcapng, plain or not
+  std::uint64_t record_end_ = 0;  // in the file, of the last record read
+};
+
+}  // namespace ncservo

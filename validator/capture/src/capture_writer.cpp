@@ -1,0 +1,234 @@
+#include "ncservo/capture/capture_writer.hpp"
+
+#include <fmt/format.h>
+#include <pcap/pcap.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+#include "ncservo/capture/compressed_output.hpp"
+#include "ncservo/wire/ecat_wire.hpp"
+
+namespace ncservo {
+namespace {
+
+constexpr int kSnapLength = 65535;
+constexpr std::size_t kWriteBuffer = 1 << 20;
+constexpr std::uint16_t kOptionComment = 1;  // opt_comment (pcapng §3.5)
+constexpr std::size_t kMaxOptionLength = 0xFFFF;
+
+Error writeError(const std::string& path, std::string message) {
+  return Error{path, 0, 0, {}, std::move(message)};
+}
+
+Result<std::FILE*> openFile(const std::string& path) {
+  if (path == "-") return stdout;
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) {
+    return fail(writeError(path, fmt::format("cannot write: {}", std::strerror(errno))));
+  }
+  return file;
+}
+
+class PcapWriter final : public CaptureWriter {
+ public:
+  PcapWriter(std::string path, std::FILE* file, pcap_t* dead, pcap_dumper_t* dumper)
+      : path_(std::move(path)), file_(file), dead_(dead), dumper_(dumper) {}
+  ~PcapWriter() override { (void)close(); }
+  bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
+    if (dumper_ == nullptr) return false;
+    pcap_pkthdr header{};
+    header.ts.tv_sec = static_cast<time_t>(time_ns / 1'000'000'000);
+    header.ts.tv_usec = static_cast<suseconds_t>(time_ns % 1'000'000'000 / 1000);
+    header.caplen = header.len = static_cast<bpf_u_int32>(size);
+    pcap_dump(reinterpret_cast<u_char*>(dumper_), &header, data);
+    return std::ferror(file_) == 0;
+  }
+  bool write(const PacketRecord& record) override {
+    if (dumper_ == nullptr) return false;
+    pcap_pkthdr header{};
+    header.ts.tv_sec = static_cast<time_t>(record.time_ns / 1'000'000'000);
+    header.ts.tv_usec = static_cast<suseconds_t>(record.time_ns % 1'000'000'000 / 1000);
+    header.caplen = static_cast<bpf_u_int32>(record.captured);
+    header.len = static_cast<bpf_u_int32>(record.original);
+    pcap_dump(reinterpret_cast<u_char*>(dumper_), &header, record.data);
+    return std::ferror(file_) == 0;
+  }
+  Status close() override {
+    if (dumper_ == nullptr) return closed();
+    const bool flushed = pcap_dump_flush(dumper_) == 0 && std::ferror(file_) == 0;
+    if (file_ == stdout) {
+      dumper_ = nullptr;  // standard output stays open for the process
+    } else {
+      pcap_dump_close(dumper_);  // closes the file
+      dumper_ = nullptr;
+    }
+    pcap_close(dead_);
+    if (!flushed) {
+      failed_ = true;
+      error_ = writeError(path_, fmt::format("write failed: {}", std::strerror(errno)));
+    }
+    return closed();
+  }
+
+ private:
+  Status closed() const {
+    if (failed_) return fail(error_);
+    return {};
+  }
+
+  std::string path_;
+  std::FILE* file_;
+  pcap_t* dead_;
+  pcap_dumper_t* dumper_;
+  bool failed_ = false;
+  Error error_;
+};
+
+// pcapng: a Section Header Block, one Interface Description Block with if_tsresol (10^-6 or
+// 10^-9 s), then one Enhanced Packet Block per frame (pcapng specification, §4).
+class PcapngWriter final : public CaptureWriter {
+ public:
+  PcapngWriter(std::string path, std::FILE* file, const PcapngInterface& interface)
+      : path_(std::move(path)), file_(file) {
+    for (int i = 0; i < interface.timestamp_digits; ++i) ticks_per_second_ *= 10;
+    block_.reserve(2048);
+    begin(0x0A0D0D0A);  // SHB
+    put32(0x1A2B3C4D);  // byte-order magic
+    put16(1);           // version 1.0
+    put16(0);
+    put32(0xFFFFFFFF);  // section length unknown
+    put32(0xFFFFFFFF);
+    finish();
+    begin(0x00000001);  // IDB
+    put16(static_cast<std::uint16_t>(interface.dlt));
+    put16(0);
+    put32(kSnapLength);
+    put16(9);  // if_tsresol
+    put16(1);
+    block_.push_back(static_cast<std::uint8_t>(interface.timestamp_digits));  // 10^-digits s
+    block_.resize(block_.size() + 3, 0);
+    put16(0);  // opt_endofopt
+    put16(0);
+    finish();
+  }
+  ~PcapngWriter() override { (void)close(); }
+  bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
+    return write(PacketRecord{time_ns, data, size, size, nullptr});
+  }
+  bool write(const PacketRecord& record) override {
+    if (file_ == nullptr) return false;
+    const auto ts = static_cast<std::uint64_t>(record.time_ns) /
+                    (std::uint64_t{1'000'000'000} / ticks_per_second_);
+    begin(0x00000006);  // EPB
+    put32(0);           // interface 0
+    put32(static_cast<std::uint32_t>(ts >> 32));
+    put32(static_cast<std::uint32_t>(ts));
+    put32(static_cast<std::uint32_t>(record.captured));
+    put32(static_cast<std::uint32_t>(record.original));
+    block_.insert(block_.end(), record.data, record.data + record.captured);
+    pad();
+    if (record.comments != nullptr && !record.comments->empty()) {
+      for (const std::string& comment : *record.comments) {
+        const std::size_t length = std::min<std::size_t>(comment.size(), kMaxOptionLength);
+        put16(kOptionComment);
+        put16(static_cast<std::uint16_t>(length));
+        block_.insert(block_.end(), comment.begin(), comment.begin() + length);
+        pad();
+      }
+      put32(0);  // opt_endofopt
+    }
+    finish();
+    return !failed_;
+  }
+  Status close() override {
+    if (file_ == nullptr) return closed();
+    if (std::fflush(file_) != 0 || std::ferror(file_) != 0) failed_ = true;
+    if (file_ != stdout && std::fclose(file_) != 0) failed_ = true;
+    file_ = nullptr;
+    if (failed_) error_ = writeError(path_, fmt::format("write failed: {}", std::strerror(errno)));
+    return closed();
+  }
+
+ private:
+  void put16(std::uint16_t v) {
+    block_.push_back(static_cast<std::uint8_t>(v));
+    block_.push_back(static_cast<std::uint8_t>(v >> 8));
+  }
+  void put32(std::uint32_t v) {
+    put16(static_cast<std::uint16_t>(v));
+    put16(static_cast<std::uint16_t>(v >> 16));
+  }
+  void pad() { block_.resize((block_.size() + 3) & ~std::size_t{3}, 0); }
+  void begin(std::uint32_t type) {
+    block_.clear();
+    put32(type);
+    put32(0);  // total length, set by finish()
+  }
+  void finish() {
+    const auto total = static_cast<std::uint32_t>(block_.size() + 4);
+    for (int i = 0; i < 4; ++i) block_[4 + i] = static_cast<std::uint8_t>(total >> (8 * i));
+    put32(total);
+    if (std::fwrite(block_.data(), 1, block_.size(), file_) != block_.size()) failed_ = true;
+  }
+
+  Status closed() const {
+    if (failed_) return fail(error_);
+    return {};
+  }
+
+  std::string path_;
+  std::FILE* file_;
+  std::vector<std::uint8_t> block_;
+  std::uint64_t ticks_per_second_ = 1;
+  bool failed_ = false;
+  Error error_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& path,
+                                                           CaptureFormat format,
+                                                           Compression compression) {
+  const Result<std::FILE*> opened = openFile(path);
+  if (!opened) return fail(opened.error());
+  std::FILE* file = *opened;
+  if (compression != Compression::None) {
+    Result<std::FILE*> compressed = openCompressedOutput(file, file != stdout, compression);
+    if (!compressed) {
+      if (file != stdout) std::fclose(file);
+      Error error = compressed.error();
+      error.path = path;
+      return fail(std::move(error));
+    }
+    file = *compressed;
+  }
+  std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
+  if (format == CaptureFormat::Pcapng) {
+    return std::make_unique<PcapngWriter>(path, file, PcapngInterface{});
+  }
+  pcap_t* dead =
+      pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kSnapLength, PCAP_TSTAMP_PRECISION_MICRO);
+  pcap_dumper_t* dumper = dead != nullptr ? pcap_dump_fopen(dead, file) : nullptr;
+  if (dumper == nullptr) {
+    Error error =
+        writeError(path, fmt::format("cannot write a pcap: {}",
+                                     dead != nullptr ? pcap_geterr(dead) : "libpcap failed"));
+    if (dead != nullptr) pcap_close(dead);
+    if (file != stdout) std::fclose(file);
+    return fail(std::move(error));
+  }
+  return std::make_unique<PcapWriter>(path, file, dead, dumper);
+}
+
+Result<std::unique_ptr<CaptureWriter>> CaptureWriter::openPcapng(const std::string& path,
+                                                                 const PcapngInterface& interface) {
+  const Result<std::FILE*> opened = openFile(path);
+  if (!opened) return fail(opened.error());
+  std::setvbuf(*opened, nullptr, _IOFBF, kWriteBuffer);
+  return std::make_unique<PcapngWriter>(path, *opened, interface);
+}
+
+}  // namespace ncservo

@@ -1,0 +1,27 @@
+// Reading the servos' layout from an ENI file (EtherCATConfig.xml, ETG.2100), the layout source
+// of PROTOCOL.md §9.2.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ncservo/base/error.hpp"
+#include "ncservo/layout/axis_config.hpp"
+
+namespace ncservo {
+
+// One axis per servo of this protocol (10-byte RxPDO, 40-byte TxPDO), in the file's slave order,
+// with its logical addresses and its station address.
+struct EniLayout {
+  std::vector<AxisConfig> axes;
+  std::size_t slaves = 0;  // slaves in the file, servos or not
+};
+
+// An error names the file and, when it is about one element, its line: "FILE:LINE: MESSAGE".
+Result<EniLayout> parseEni(std::string_view xml, const std::string& path);
+Result<EniLayout> loadEni(const std::string& path);
+
+}  // namespace ncservo

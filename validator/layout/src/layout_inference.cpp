@@ -1,0 +1,654 @@
+#include "ncservo/layout/layout_inference.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <bitset>
+#include <cstring>
+#include <limits>
+#include <optional>
+
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/pdo_layout.hpp"
+
+namespace ncservo {
+
+namespace {
+
+// The signature of PROTOCOL.md §1–5, from the field table.
+constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
+constexpr std::uint32_t kScwSe = mask32("ncservo.scw.se");
+constexpr std::uint32_t kSeEnabled = 0x2;  // §2
+constexpr std::uint32_t kScwErrorClear = mask32("ncservo.scw.error_clear");
+constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
+constexpr std::uint32_t kSswStatus = ~kSswReserved;
+constexpr std::uint32_t kSswServoEn = mask32("ncservo.ssw.servo_en");
+constexpr std::uint32_t kSswErrClearAck = mask32("ncservo.ssw.err_clear_ack");
+constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
+constexpr std::uint32_t kSewSummary = kSewSummaryMask;
+constexpr std::uint32_t kSewCauses = kSewCauseMask;
+constexpr std::int32_t kMaxMessageCode = 9;  // §5: codes 0..9 are listed
+// A position that moves by more than this many counts per cycle more than it did the cycle
+// before is not a position.
+constexpr std::int64_t kMaxPositionStep = std::int64_t{1} << 22;
+// A mismatch tolerated per this many observations (stale inputs, faults the rules report).
+constexpr std::uint32_t kToleranceDivisor = 32;
+// ServoEn may stay 1 this many cycles after SE left 0x2 (the drive's disable delay).
+constexpr std::uint32_t kDisableLag = 32;
+// Cycles of SE 0x2 with ServoEn 1 that make a pair.
+constexpr std::uint32_t kMinAgreement = 8;
+// A disagreement outweighs this many agreements.
+constexpr std::int64_t kDisagreementWeight = 8;
+// Below this confidence an axis is ambiguous.
+constexpr double kMinConfidence = 0.25;
+// Evidence in at least this many cycles before a candidate counts.
+constexpr std::uint32_t kMinObservations = 8;
+
+std::uint32_t le32(const std::uint8_t* p) {
+  return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
+         std::uint32_t{p[3]} << 24;
+}
+
+// A float32 a drive would send: finite and not denormal.
+bool plausibleFloat(std::uint32_t bits) {
+  const std::uint32_t exponent = (bits >> 23) & 0xFF;
+  const std::uint32_t mantissa = bits & 0x7FFFFF;
+  return exponent != 0xFF && (exponent != 0 || mantissa == 0);
+}
+
+// One bit per cycle, allocated on the first set bit.
+struct CycleBits {
+  std::vector<std::uint64_t> words;
+  void set(std::uint32_t cycle, std::size_t& bytes) {
+    const std::size_t word = cycle / 64;
+    if (word >= words.size()) {
+      bytes += (word + 1 - words.size()) * sizeof(std::uint64_t);
+      words.resize(word + 1, 0);
+    }
+    words[word] |= std::uint64_t{1} << (cycle % 64);
+  }
+  std::uint64_t word(std::size_t i) const { return i < words.size() ? words[i] : 0; }
+  bool any() const { return !words.empty(); }
+};
+
+std::uint32_t popcount(std::uint64_t v) {
+  return static_cast<std::uint32_t>(std::bitset<64>(v).count());
+}
+
+struct RxCandidate {
+  std::uint32_t seen = 0;
+  std::uint32_t violations = 0;
+  std::uint32_t active = 0;  // cycles with a non-zero SCW
+  CycleBits enabled;         // SE 0x2
+  CycleBits clear;           // ErrorClear
+};
+
+struct TxCandidate {
+  std::uint32_t seen = 0;
+  std::uint32_t violations = 0;
+  std::uint32_t moves = 0;
+  std::uint32_t status = 0;
+  std::uint32_t last_position = 0;
+  std::int64_t last_step = 0;
+  std::uint8_t position_history = 0;  // 0, 1 or 2 positions known
+  CycleBits enabled;                  // ServoEn
+  CycleBits ack;                      // ErrClearAck
+};
+
+bool dead(std::uint32_t seen, std::uint32_t violations) {
+  return violations > 2 + seen / kToleranceDivisor;
+}
+
+// A cyclic datagram: command, address and length identify it (PROTOCOL.md §8).
+struct Stream {
+  std::uint8_t command = 0;
+  std::uint32_t address = 0;
+  std::uint16_t length = 0;
+  std::uint32_t seen = 0;
+  std::vector<RxCandidate> rx;  // by offset, when the master writes its data
+  std::vector<TxCandidate> tx;  // by offset, when slaves write into it
+
+  bool logical() const { return ecat::isLogical(command); }
+  std::uint16_t station() const { return static_cast<std::uint16_t>(address & 0xFFFF); }
+  std::uint16_t ado() const { return static_cast<std::uint16_t>(address >> 16); }
+  // Where offset `o` sits in process-image order: the logical image first, then each station.
+  std::uint64_t imageAddress(std::size_t o) const {
+    return logical() ? std::uint64_t{address} + o
+                     : (std::uint64_t{1} << 40) | std::uint64_t{station()} << 16 | (ado() + o);
+  }
+  std::string describe() const {
+    return logical() ? fmt::format("{} 0x{:08X}+{}", commandName(command), address, length)
+                     : fmt::format("{} station 0x{:04X} 0x{:04X}+{}", commandName(command),
+                                   station(), ado(), length);
+  }
+  static const char* commandName(std::uint8_t command) {
+    switch (command) {
+      case ecat::kLrd:
+        return "LRD";
+      case ecat::kLwr:
+        return "LWR";
+      case ecat::kLrw:
+        return "LRW";
+      case ecat::kFprd:
+        return "FPRD";
+      case ecat::kFpwr:
+        return "FPWR";
+      case ecat::kFprw:
+        return "FPRW";
+    }
+    return "?";
+  }
+};
+
+bool carriesProcessData(std::uint8_t command) {
+  return ecat::isLogical(command) || command == ecat::kFprd || command == ecat::kFpwr ||
+         command == ecat::kFprw;
+}
+
+struct ChosenTx {
+  std::size_t stream;
+  std::size_t offset;
+  std::int64_t score;
+  double confidence;
+};
+
+struct RxChoice {
+  std::size_t stream;
+  std::size_t offset;
+};
+
+}  // namespace
+
+// The outputs-first hypothesis of §9.4 (an LRW of n × 50 bytes: n RxPDOs, then n TxPDOs), for a
+// capture that holds no data the slaves wrote: each 10-byte slot of the outputs.
+struct OutputsFirst {
+  std::uint32_t address = 0;
+  std::uint16_t length = 0;
+  std::uint32_t seen = 0;
+  std::vector<RxCandidate> slots;
+};
+
+struct LayoutInference::State {
+  InferenceLimits limits;
+  std::vector<Stream> streams;
+  std::vector<OutputsFirst> outputs_first;
+  bool master_seen = false;
+  std::uint32_t cycles = 0;  // sightings of the first stream
+  std::size_t bytes = 0;
+  bool settled = false;
+
+  Stream* streamFor(const Datagram& dg) {
+    for (Stream& s : streams) {
+      if (s.command == dg.command && s.address == dg.address && s.length == dg.length) return &s;
+    }
+    if (streams.size() >= limits.max_streams) return nullptr;
+    Stream s;
+    s.command = dg.command;
+    s.address = dg.address;
+    s.length = dg.length;
+    if (ecat::writesSlaves(dg.command) && dg.length >= kRxPdoSize) {
+      s.rx.resize(dg.length - kRxPdoSize + 1);
+    }
+    if (ecat::readsSlaves(dg.command) && dg.length >= kTxPdoSize) {
+      s.tx.resize(dg.length - kTxPdoSize + 1);
+    }
+    bytes += s.rx.size() * sizeof(RxCandidate) + s.tx.size() * sizeof(TxCandidate);
+    streams.push_back(std::move(s));
+    return &streams.back();
+  }
+
+  void observeRx(RxCandidate& c, const std::uint8_t* pdo, std::uint32_t cycle) {
+    ++c.seen;
+    const std::uint32_t scw = le32(pdo + wordOffset(Word::Scw));
+    if ((scw & kScwReserved) != 0) {
+      ++c.violations;
+      return;
+    }
+    if (scw != 0) ++c.active;
+    if ((scw & kScwSe) == kSeEnabled) c.enabled.set(cycle, bytes);
+    if ((scw & kScwErrorClear) != 0) c.clear.set(cycle, bytes);
+  }
+
+  void observeTx(TxCandidate& c, const std::uint8_t* pdo, std::uint32_t cycle) {
+    ++c.seen;
+    const std::uint32_t ssw = le32(pdo + wordOffset(Word::Ssw));
+    const std::uint32_t sew = le32(pdo + wordOffset(Word::Sew));
+    const auto code = static_cast<std::int32_t>(le32(pdo + wordOffset(Word::MsgCode)));
+    bool ok = (ssw & kSswReserved) == 0 && (sew & kSewReserved) == 0 &&
+              ((sew & kSewCauses) == 0 || (sew & kSewSummary) != 0) && code >= 0 &&
+              code <= kMaxMessageCode;
+    for (Word w : {Word::MsgData, Word::ExtData1, Word::ExtData2, Word::ExtData3, Word::ExtData4}) {
+      ok = ok && plausibleFloat(le32(pdo + wordOffset(w)));
+    }
+    // The low 32 bits of ActPos are the position of either encoder kind (§1).
+    const std::uint32_t position = le32(pdo + wordOffset(Word::ActPos));
+    const std::int64_t step = static_cast<std::int32_t>(position - c.last_position);
+    bool moved = false;
+    if (c.position_history == 2) {
+      const std::int64_t change = step - c.last_step;
+      ok = ok && change <= kMaxPositionStep && change >= -kMaxPositionStep;
+      moved = step != 0;
+    }
+    if (c.position_history < 2) ++c.position_history;
+    c.last_position = position;
+    c.last_step = step;
+    if (!ok) {
+      ++c.violations;
+      return;
+    }
+    if (moved) ++c.moves;
+    if ((ssw & kSswStatus) != 0) ++c.status;
+    if ((ssw & kSswServoEn) != 0) c.enabled.set(cycle, bytes);
+    if ((ssw & kSswErrClearAck) != 0) c.ack.set(cycle, bytes);
+  }
+
+  // Slots cut short by the snap length are not observed.
+  void observeOutputsFirst(const Datagram& dg, const ByteReader& frame) {
+    constexpr std::size_t kAxisBytes = kRxPdoSize + kTxPdoSize;
+    if (dg.command != ecat::kLrw || dg.length == 0 || dg.length % kAxisBytes != 0) return;
+    OutputsFirst* entry = nullptr;
+    for (OutputsFirst& o : outputs_first) {
+      if (o.address == dg.address && o.length == dg.length) entry = &o;
+    }
+    if (entry == nullptr) {
+      if (outputs_first.size() >= limits.max_streams) return;
+      outputs_first.push_back(OutputsFirst{dg.address, dg.length, 0, {}});
+      entry = &outputs_first.back();
+      entry->slots.resize(dg.length / kAxisBytes);
+      bytes += entry->slots.size() * sizeof(RxCandidate);
+    }
+    const std::uint32_t cycle = entry->seen++;
+    for (std::size_t k = 0; k < entry->slots.size(); ++k) {
+      const std::size_t at = dg.data_offset + k * kRxPdoSize;
+      if (frame.has(at, kRxPdoSize)) observeRx(entry->slots[k], frame.data() + at, cycle);
+    }
+  }
+
+  void observe(Stream& s, const std::uint8_t* data) {
+    if (&s == &streams.front()) ++cycles;
+    ++s.seen;
+    const std::uint32_t cycle = cycles == 0 ? 0 : cycles - 1;
+    for (std::size_t o = 0; o < s.rx.size(); ++o) {
+      RxCandidate& c = s.rx[o];
+      if (!dead(c.seen, c.violations)) observeRx(c, data + o, cycle);
+    }
+    for (std::size_t o = 0; o < s.tx.size(); ++o) {
+      TxCandidate& c = s.tx[o];
+      if (!dead(c.seen, c.violations)) observeTx(c, data + o, cycle);
+    }
+  }
+};
+
+LayoutInference::LayoutInference(InferenceLimits limits) : state_(std::make_unique<State>()) {
+  state_->limits = limits;
+}
+
+LayoutInference::~LayoutInference() = default;
+
+std::uint32_t LayoutInference::cycles() const {
+  return state_->cycles;
+}
+
+bool LayoutInference::settled() const {
+  return state_->settled;
+}
+
+void LayoutInference::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned) {
+  State& st = *state_;
+  if (st.settled) return;
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  // The outputs as the master sent them (its copy, or the returned one where it has none).
+  st.master_seen = st.master_seen || !returned;
+  if (!returned || !st.master_seen) {
+    for (std::size_t d = 0; d < frame.count; ++d) st.observeOutputsFirst(frame.datagrams[d], bytes);
+  }
+  if (!returned) return;
+  const std::uint32_t cycles_before = st.cycles;
+  for (std::size_t d = 0; d < frame.count; ++d) {
+    const Datagram& dg = frame.datagrams[d];
+    if (!carriesProcessData(dg.command) || !dg.complete() || dg.wkc == 0) continue;
+    if (dg.length < kRxPdoSize || !bytes.has(dg.data_offset, dg.length)) continue;
+    Stream* stream = st.streamFor(dg);
+    if (stream != nullptr) st.observe(*stream, bytes.data() + dg.data_offset);
+  }
+  if (st.cycles == cycles_before) return;
+  if (st.cycles >= st.limits.max_cycles || st.bytes >= st.limits.max_bytes) {
+    st.settled = true;
+    return;
+  }
+  // Early decision at doubling checkpoints: every servo-like TxPDO paired, every axis clear.
+  const std::uint32_t c = st.cycles;
+  if (c >= st.limits.min_cycles && (c & (c - 1)) == 0) {
+    const InferenceResult result = decide();
+    st.settled = !result.axes.empty() && result.refusal.empty() && result.unexplained == 0;
+  }
+}
+
+namespace {
+
+// Best non-overlapping choice of `size`-byte regions of one stream by score (weighted interval
+// scheduling); returns the chosen offsets.
+std::vector<std::size_t> tile(const std::vector<std::int64_t>& score, std::size_t size) {
+  const std::size_t n = score.size();
+  std::vector<std::int64_t> best(n + size + 1, 0);
+  for (std::size_t i = n; i-- > 0;) {
+    best[i] = std::max(best[i + 1], score[i] > 0 ? score[i] + best[i + size] : 0);
+  }
+  std::vector<std::size_t> chosen;
+  for (std::size_t i = 0; i < n;) {
+    if (score[i] > 0 && score[i] + best[i + size] >= best[i + 1]) {
+      chosen.push_back(i);
+      i += size;
+    } else {
+      ++i;
+    }
+  }
+  return chosen;
+}
+
+struct PairScore {
+  std::int64_t score = std::numeric_limits<std::int64_t>::min();
+  std::uint32_t agree = 0;
+  std::uint32_t disagree = 0;
+  std::uint32_t clear = 0;
+};
+
+// SE 0x2 now or in the kDisableLag cycles before (the drive's disable delay), per cycle.
+std::vector<std::uint64_t> recentlyEnabled(const CycleBits& se, std::uint32_t cycles) {
+  const std::size_t words = (cycles + 63) / 64;
+  std::vector<std::uint64_t> recent(words, 0);
+  std::uint64_t carry = 0;
+  for (std::size_t w = 0; w < words; ++w) {
+    const std::uint64_t now = se.word(w);
+    std::uint64_t r = now;
+    for (std::uint32_t lag = 1; lag <= kDisableLag; ++lag)
+      r |= (now << lag) | (carry >> (64 - lag));
+    carry = now;
+    recent[w] = r;
+  }
+  return recent;
+}
+
+// How well a candidate RxPDO's SE and ErrorClear explain a TxPDO's ServoEn and ErrClearAck.
+PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& recent,
+                    const TxCandidate& tx) {
+  PairScore p;
+  for (std::size_t w = 0; w < recent.size(); ++w) {
+    const std::uint64_t en = tx.enabled.word(w);
+    if (en == 0 && tx.ack.word(w) == 0) continue;
+    p.agree += popcount(rx.enabled.word(w) & en);
+    p.disagree += popcount(en & ~recent[w]);
+    p.clear += popcount(rx.clear.word(w) & tx.ack.word(w));
+  }
+  p.score = std::int64_t{p.agree} + p.clear - kDisagreementWeight * p.disagree;
+  return p;
+}
+
+std::int64_t txScore(const TxCandidate& c) {
+  if (c.seen < kMinObservations || dead(c.seen, c.violations)) return 0;
+  return std::int64_t{c.moves} + c.status;
+}
+
+bool overlaps(std::size_t a, std::size_t a_size, std::size_t b, std::size_t b_size) {
+  return a < b + b_size && b < a + a_size;
+}
+
+}  // namespace
+
+// Without any data the slaves wrote, the outputs alone can still show the outputs-first layout:
+// every slot of an LRW of n × 50 bytes holds a control word that keeps the reserved bits zero, and
+// some axis is enabled (SE 0x2). A weaker decision than a paired one, and the evidence says so.
+bool LayoutInference::outputsFirst(InferenceResult& result) const {
+  const State& st = *state_;
+  const OutputsFirst* best = nullptr;
+  for (const OutputsFirst& o : st.outputs_first) {
+    if (best == nullptr || o.seen > best->seen) best = &o;
+  }
+  if (best == nullptr || best->seen < kMinObservations) return false;
+  bool enabled = false;
+  for (const RxCandidate& slot : best->slots) {
+    if (dead(slot.seen, slot.violations)) return false;
+    enabled = enabled || slot.enabled.any();
+  }
+  if (!enabled) return false;
+  const std::size_t n = best->slots.size();
+  result.axes.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    InferredAxis axis;
+    axis.config.name = fmt::format("axis{}", k);
+    axis.config.outputs = static_cast<std::uint32_t>(best->address + k * kRxPdoSize);
+    axis.config.inputs =
+        static_cast<std::uint32_t>(best->address + n * kRxPdoSize + k * kTxPdoSize);
+    axis.evidence.cycles = best->seen;
+    axis.evidence.rx_violations = best->slots[k].violations;
+    axis.evidence.confidence = 0.5;
+    axis.evidence.outputs_only = true;
+    result.axes.push_back(std::move(axis));
+  }
+  return true;
+}
+
+InferenceResult LayoutInference::decide() const {
+  const State& st = *state_;
+  InferenceResult result;
+  result.cycles = st.cycles;
+  // 1. TxPDOs: the best tiling of each stream slaves write into, by the signature's evidence.
+  std::vector<ChosenTx> tx;
+  for (std::size_t s = 0; s < st.streams.size(); ++s) {
+    const Stream& stream = st.streams[s];
+    std::vector<std::int64_t> score(stream.tx.size());
+    for (std::size_t o = 0; o < stream.tx.size(); ++o) score[o] = txScore(stream.tx[o]);
+    for (std::size_t o : tile(score, kTxPdoSize)) {
+      std::int64_t rival = 0;  // the best overlapping candidate not chosen
+      for (std::size_t r = o >= kTxPdoSize ? o - kTxPdoSize + 1 : 0;
+           r < std::min(score.size(), o + kTxPdoSize); ++r) {
+        if (r != o) rival = std::max(rival, score[r]);
+      }
+      const double confidence = 1.0 - static_cast<double>(rival) / static_cast<double>(score[o]);
+      tx.push_back(ChosenTx{s, o, score[o], std::max(0.0, confidence)});
+    }
+  }
+  std::sort(tx.begin(), tx.end(), [&](const ChosenTx& a, const ChosenTx& b) {
+    return st.streams[a.stream].imageAddress(a.offset) <
+           st.streams[b.stream].imageAddress(b.offset);
+  });
+  // 2. RxPDOs: candidates in data the master writes, outside the chosen TxPDOs, whose SE was
+  // 0x2 at least once (no other can explain a ServoEn).
+  std::vector<RxChoice> rx;
+  for (std::size_t s = 0; s < st.streams.size(); ++s) {
+    const Stream& stream = st.streams[s];
+    for (std::size_t o = 0; o < stream.rx.size(); ++o) {
+      const RxCandidate& c = stream.rx[o];
+      if (c.seen < kMinObservations || dead(c.seen, c.violations) || !c.enabled.any()) continue;
+      const bool inside_tx = std::any_of(tx.begin(), tx.end(), [&](const ChosenTx& t) {
+        return t.stream == s && overlaps(o, kRxPdoSize, t.offset, kTxPdoSize);
+      });
+      if (!inside_tx) rx.push_back(RxChoice{s, o});
+    }
+  }
+  std::sort(rx.begin(), rx.end(), [&](const RxChoice& a, const RxChoice& b) {
+    return st.streams[a.stream].imageAddress(a.offset) <
+           st.streams[b.stream].imageAddress(b.offset);
+  });
+  // 3. Pair scores; a TxPDO no RxPDO explains is not a servo's (or its axis never enabled).
+  std::vector<std::vector<std::uint64_t>> recent;
+  recent.reserve(rx.size());
+  for (const RxChoice& r : rx) {
+    recent.push_back(recentlyEnabled(st.streams[r.stream].rx[r.offset].enabled, st.cycles));
+  }
+  std::vector<std::vector<PairScore>> pair(tx.size(), std::vector<PairScore>(rx.size()));
+  std::vector<ChosenTx> servo_tx;
+  std::vector<std::vector<PairScore>> servo_pair;
+  std::vector<std::string> unpaired;
+  for (std::size_t k = 0; k < tx.size(); ++k) {
+    const Stream& ts = st.streams[tx[k].stream];
+    const TxCandidate& t = ts.tx[tx[k].offset];
+    bool any = false;
+    for (std::size_t i = 0; i < rx.size(); ++i) {
+      const Stream& rs = st.streams[rx[i].stream];
+      if (rs.logical() != ts.logical() || (!ts.logical() && rs.station() != ts.station())) {
+        continue;
+      }
+      pair[k][i] = pairScore(rs.rx[rx[i].offset], recent[i], t);
+      any = any || (pair[k][i].agree >= kMinAgreement && pair[k][i].score > 0);
+    }
+    if (any) {
+      servo_tx.push_back(tx[k]);
+      servo_pair.push_back(std::move(pair[k]));
+    } else if (t.status * 2 >= t.seen) {
+      // A servo's status word that no control word explains yet: its axis may enable later.
+      ++result.unexplained;
+      if (t.enabled.any())
+        unpaired.push_back(fmt::format("{} offset {}", ts.describe(), tx[k].offset));
+    }
+  }
+  // 4. Pair RxPDO k with TxPDO k in process-image order, regions apart, best total.
+  const std::size_t n = servo_tx.size();
+  const std::size_t m = rx.size();
+  constexpr std::int64_t kNone = std::numeric_limits<std::int64_t>::min() / 4;
+  auto usable = [&](std::size_t k, std::size_t i) {
+    return servo_pair[k][i].agree >= kMinAgreement && servo_pair[k][i].score > 0;
+  };
+  std::vector<std::vector<std::int64_t>> best(n, std::vector<std::int64_t>(m, kNone));
+  std::vector<std::vector<std::size_t>> from(n, std::vector<std::size_t>(m, m));
+  for (std::size_t k = 0; k < n; ++k) {
+    std::int64_t prefix = kNone;  // best of row k-1 over candidates at least 10 bytes before i
+    std::size_t prefix_at = m;
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::uint64_t at = st.streams[rx[i].stream].imageAddress(rx[i].offset);
+      while (k > 0 && j < m &&
+             st.streams[rx[j].stream].imageAddress(rx[j].offset) + kRxPdoSize <= at) {
+        if (best[k - 1][j] > prefix) {
+          prefix = best[k - 1][j];
+          prefix_at = j;
+        }
+        ++j;
+      }
+      if (!usable(k, i)) continue;
+      if (k == 0) {
+        best[k][i] = servo_pair[k][i].score;
+      } else if (prefix > kNone) {
+        best[k][i] = prefix + servo_pair[k][i].score;
+        from[k][i] = prefix_at;
+      }
+    }
+  }
+  std::vector<std::size_t> choice(n, m);
+  if (n > 0) {
+    std::size_t at = m;
+    for (std::size_t i = 0; i < m; ++i) {
+      if (best[n - 1][i] > kNone && (at == m || best[n - 1][i] > best[n - 1][at])) at = i;
+    }
+    for (std::size_t k = n; k-- > 0 && at != m;) {
+      choice[k] = at;
+      at = from[k][at];
+    }
+  }
+  const bool assigned =
+      n > 0 && std::all_of(choice.begin(), choice.end(), [m](std::size_t c) { return c != m; });
+  // 5. Confidence: how far the best overlapping rival is behind, for both PDOs.
+  std::vector<std::string> ambiguous;
+  for (std::size_t k = 0; assigned && k < n; ++k) {
+    const RxChoice& r = rx[choice[k]];
+    const Stream& rs = st.streams[r.stream];
+    const Stream& ts = st.streams[servo_tx[k].stream];
+    const TxCandidate& t = ts.tx[servo_tx[k].offset];
+    const PairScore& p = servo_pair[k][choice[k]];
+    std::int64_t rival = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      if (i != choice[k] && rx[i].stream == r.stream &&
+          overlaps(rx[i].offset, kRxPdoSize, r.offset, kRxPdoSize)) {
+        rival = std::max(rival, servo_pair[k][i].score);
+      }
+    }
+    const double rx_confidence =
+        std::max(0.0, 1.0 - static_cast<double>(rival) / static_cast<double>(p.score));
+    InferredAxis axis;
+    axis.config.name = fmt::format("axis{}", k);
+    if (ts.logical()) {
+      axis.config.outputs = static_cast<std::uint32_t>(rs.address + r.offset);
+      axis.config.inputs = static_cast<std::uint32_t>(ts.address + servo_tx[k].offset);
+    } else {
+      axis.config.station = ts.station();
+      axis.config.sm_outputs = static_cast<std::uint16_t>(rs.ado() + r.offset);
+      axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + servo_tx[k].offset);
+    }
+    AxisEvidence& e = axis.evidence;
+    e.cycles = t.seen;
+    e.violations = t.violations;
+    e.rx_violations = rs.rx[r.offset].violations;
+    e.actpos_moves = t.moves;
+    e.status_cycles = t.status;
+    e.enabled_agree = p.agree;
+    e.enabled_disagree = p.disagree;
+    e.clear_agree = p.clear;
+    e.confidence = std::min(servo_tx[k].confidence, rx_confidence);
+    if (e.confidence < kMinConfidence) {
+      ambiguous.push_back(fmt::format(
+          "{} (RxPDO {} offset {}, TxPDO {} offset {}, confidence {:.0f} %)", axis.config.name,
+          rs.describe(), r.offset, ts.describe(), servo_tx[k].offset, 100 * e.confidence));
+    }
+    result.axes.push_back(std::move(axis));
+  }
+  if (assigned && ambiguous.empty() && unpaired.empty()) return result;
+  if (st.streams.empty() && outputsFirst(result)) return result;
+
+  // Refused: say why, list the candidates, show how to write the configuration.
+  std::string why;
+  if (!ambiguous.empty()) {
+    why = fmt::format("the layout is ambiguous: more than one placement fits {}",
+                      fmt::join(ambiguous, "; "));
+  } else if (!unpaired.empty()) {
+    why = fmt::format(
+        "the layout is ambiguous: status words at {} look like a servo's but no control word "
+        "explains their ServoEn",
+        fmt::join(unpaired, ", "));
+  } else if (n > 0) {
+    why =
+        "the layout is ambiguous: the control words cannot be paired with the status words in "
+        "process-image order";
+  } else if (st.streams.empty()) {
+    why =
+        "no cyclic process data was captured (no returned LRW, LRD, LWR, FPRD or FPWR of 10 "
+        "bytes or more)";
+  } else {
+    why = fmt::format(
+        "the layout is ambiguous or the evidence too weak: in {} cycles no status word's "
+        "SSW.ServoEn followed a control word's SCW.SE (all axes idle, or the data all zeros or "
+        "constant)",
+        st.cycles);
+  }
+  std::vector<std::string> listed;
+  for (const Stream& s : st.streams) listed.push_back(s.describe());
+  result.axes.clear();
+  result.refusal = fmt::format(
+      "{}; cyclic datagrams: {}; give the layout in a --config file, one [[axis]] per servo with "
+      "the logical addresses of its 10-byte RxPDO and 40-byte TxPDO, e.g.\n"
+      "[[axis]]\nname = \"X\"\noutputs = 0x00010000\ninputs = 0x00010028",
+      why, listed.empty() ? std::string("none") : fmt::format("{}", fmt::join(listed, ", ")));
+  return result;
+}
+
+std::string describeEvidence(const InferredAxis& axis) {
+  const AxisEvidence& e = axis.evidence;
+  auto mark = [](bool ok) { return ok ? "ok" : "weak"; };
+  if (e.outputs_only) {
+    return fmt::format(
+        "cycles {}; outputs only (no data the slaves wrote was captured): the outputs-first "
+        "layout's RxPDO slot, SCW reserved bits zero ({} mismatches), an axis enabled; the "
+        "TxPDO's place follows from the layout, unchecked; confidence {:.0f} %",
+        e.cycles, e.rx_violations, 100 * e.confidence);
+  }
+  return fmt::format(
+      "cycles {}; signature (reserved bits zero, SEW summary, message code 0..{}, finite floats, "
+      "smooth ActPos) {} ({} TxPDO and {} RxPDO mismatches); ActPos moved in {} cycles; SSW "
+      "status bits in {} cycles; SSW.ServoEn followed SCW.SE in {} cycles, against it in {} ({}); "
+      "ErrClearAck with ErrorClear in {} cycles; confidence {:.0f} %",
+      e.cycles, kMaxMessageCode, mark(e.violations == 0 && e.rx_violations == 0), e.violations,
+      e.rx_violations, e.actpos_moves, e.status_cycles, e.enabled_agree, e.enabled_disagree,
+      mark(e.enabled_agree >= kMinAgreement && e.enabled_disagree == 0), e.clear_agree,
+      100 * e.confidence);
+}
+
+}  // namespace ncservo

@@ -1,0 +1,106 @@
+// What the bus and slave models saw happen in one frame, for the bus and slave rules to judge
+// (RULES.md "Bus and EtherCAT state machine"). The models decide what happened (a datagram
+// returned with another WKC than its slaves add, an outage, an AL control write); the rules
+// decide whether that is a finding and say so.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <variant>
+
+#include "ncservo/base/stamp.hpp"
+
+namespace ncservo {
+
+// A returned cyclic process-data datagram whose WKC differs from the expected one
+// (PROTOCOL.md §8), at the start of such an episode for that datagram.
+struct WorkingCounterEvent {
+  std::uint8_t command = 0;
+  std::uint32_t address = 0;
+  std::uint16_t length = 0;
+  std::uint16_t wkc = 0;
+  std::uint16_t expected = 0;
+};
+
+// An interval between two ticks of a cyclic frame's clock longer than 1.5 × the nominal cycle
+// (RULES.md COM-002), judged at the tick after it: a late cycle when that next interval makes
+// the two about two cycles, else lost cycles. A segment start or the capture's end before the
+// next tick leaves it untold, counted as lost.
+struct CycleGapEvent {
+  enum class Verdict : std::uint8_t { Late, Lost, SegmentEnds, CaptureEnds };
+  Verdict verdict = Verdict::Lost;
+  std::int64_t interval_ns = 0;
+  std::int64_t nominal_ns = 0;
+  std::optional<std::int64_t> next_interval_ns;  // Late and Lost only
+  std::uint32_t missing = 0;         // 0 when late; else round(interval ÷ nominal) − 1
+  std::uint64_t previous_frame = 0;  // the tick before the gap
+  std::uint64_t next_frame = 0;      // the tick that ended it
+};
+
+// A master copy whose interval deviates from the nominal cycle by more than the configured share,
+// at the start of such a run of cycles (RULES.md COM-006).
+struct CycleJitterEvent {
+  std::int64_t interval_ns = 0;
+  std::int64_t nominal_ns = 0;
+  std::uint32_t limit_percent = 0;
+  std::uint64_t previous_frame = 0;
+};
+
+// A returned copy later than the configured latency after its master copy, at the start of such
+// a run of cycles (RULES.md COM-007).
+struct LateReturnEvent {
+  std::int64_t latency_ns = 0;
+  std::int64_t limit_ns = 0;
+  std::uint64_t master_frame = 0;
+};
+
+// A cyclic master frame that was not returned before the next cycle's master frame, at the
+// start of such an episode (RULES.md COM-004).
+struct NotReturnedEvent {
+  struct Axes {
+    std::uint16_t first = 0;
+    std::uint16_t last = 0;
+  };
+  std::uint64_t master_frame = 0;
+  std::optional<Axes> axes;  // the servo axes it carries, if any
+  // Its first process-data datagram, and how many it holds: what names a frame without axes.
+  std::uint8_t command = 0;
+  std::uint32_t address = 0;
+  std::uint16_t length = 0;
+  std::uint16_t datagrams = 0;
+};
+
+// One slave, as the capture names it: by station address, ring position, both or neither (a
+// broadcast).
+struct SlaveRef {
+  std::optional<std::uint16_t> station;
+  std::optional<std::uint16_t> position;
+};
+
+// An AL control write (0x0120) to a slave whose AL state is known (PROTOCOL.md §8).
+struct AlControlEvent {
+  SlaveRef slave;
+  std::uint16_t raw = 0;
+  std::uint8_t requested = 0;  // bits 3..0
+  std::uint8_t known_state = 0;
+};
+
+// An AL status read (0x0130) showing the error indicator, at the start of such an episode.
+struct AlErrorEvent {
+  SlaveRef slave;
+  std::uint16_t raw = 0;
+  std::optional<std::uint8_t> requested;  // last AL control request to it or to all
+  std::optional<std::uint8_t> previous;   // its known state before this read
+  std::optional<std::uint16_t> status_code;
+  std::uint64_t status_code_frame = 0;  // where the status code was read
+};
+
+using BusEventData = std::variant<WorkingCounterEvent, CycleGapEvent, CycleJitterEvent,
+                                  LateReturnEvent, NotReturnedEvent, AlControlEvent, AlErrorEvent>;
+
+struct BusEvent {
+  Stamp since;  // where the condition began
+  BusEventData data;
+};
+
+}  // namespace ncservo

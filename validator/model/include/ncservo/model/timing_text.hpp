@@ -1,0 +1,23 @@
+// The timing block of the text report (docs/timing.md), shared by `validate`, `decode --timing`
+// and the plugin's `tshark -z ncservo,timing`, so that all three print the same numbers.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ncservo/model/dc_clock.hpp"
+#include "ncservo/model/timing.hpp"
+
+namespace ncservo {
+
+// Lines ending in '\n': the cycle statistics, the return latency and the worst of each.
+// `timestamps` names what timed the frames ("capture", "probe").
+std::string timingText(const TimingSummary& timing, const char* timestamps,
+                       std::int64_t resolution_ns);
+
+// The distributed clocks block: a line per slave whose clock was read; nothing when none was.
+// `settled_ns` is the bound the settled frames were judged against.
+std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_ns);
+
+}  // namespace ncservo

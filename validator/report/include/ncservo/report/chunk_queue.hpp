@@ -1,0 +1,56 @@
+// Blocks of bytes handed from one producing thread to one consuming thread: `decode --format vcd`
+// judges frames on one core and writes their text on the other (docs/benchmarks.md). At most
+// `capacity` chunks wait; the producer waits while they do, so memory stays bounded (STYLE.md:
+// streaming with bounded memory).
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "ncservo/base/error.hpp"
+
+namespace ncservo::cli {
+
+class ChunkQueue {
+ public:
+  // `bytes` is allocated once and reused; `used` of them are filled.
+  struct Chunk {
+    std::vector<char> bytes;
+    std::size_t used = 0;
+  };
+
+  ChunkQueue(std::size_t capacity, std::size_t chunk_bytes);
+
+  // Producer: hands a chunk over, waiting while `capacity` chunks wait. Fails with the consumer's
+  // error once it has stopped (the chunk is dropped).
+  Status push(Chunk chunk);
+  // Producer: an empty chunk of `chunk_bytes` to fill, one the consumer is done with when there is.
+  Chunk spare();
+  // Producer: no more chunks. The consumer still gets those waiting.
+  void close();
+
+  // Consumer: the next chunk, in the order pushed, waiting for one; none once closed and drained,
+  // or stopped.
+  std::optional<Chunk> pop();
+  // Consumer: a chunk written out, for spare() to hand back.
+  void recycle(Chunk chunk);
+  // Consumer: it cannot go on (a failed write). Waiting chunks are dropped and push fails with
+  // `error` from now on.
+  void stop(Error error);
+
+ private:
+  const std::size_t capacity_;
+  const std::size_t chunk_bytes_;
+  std::mutex mutex_;
+  std::condition_variable not_full_, not_empty_;
+  std::deque<Chunk> waiting_;
+  std::vector<Chunk> spares_;
+  bool closed_ = false;
+  std::optional<Error> stopped_;
+};
+
+}  // namespace ncservo::cli

@@ -1,0 +1,210 @@
+// What `ncservo validate` reports about one capture, and the five ways it writes it
+// (INTERFACES.md: text, json, jsonl, junit, sarif), to one output or several. Presentation only.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ncservo/base/error.hpp"
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/model/timing.hpp"
+#include "ncservo/report/report_charts.hpp"
+#include "ncservo/rules/coverage.hpp"
+#include "ncservo/rules/finding.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/frame_clock.hpp"
+
+namespace ncservo::cli {
+
+// A capture's outcome, as its exit status has it (INTERFACES.md: 3, 1, 4, 0).
+enum class Verdict { Unreadable, Fail, NoServo, Pass };
+
+struct AxisReport {
+  std::uint16_t index = 0;
+  std::string name;
+  std::optional<DriveState> state;
+  std::vector<StateChange> timeline;
+  std::uint64_t timeline_omitted = 0;
+  std::vector<ErrorHistoryEntry> error_history;
+  std::uint32_t telegram_failures = 0;
+  std::optional<int> ready_mode;
+};
+
+// The findings of one rule on one axis (or the bus) in a capture: how many, the first and last.
+struct FindingGroup {
+  RuleId rule{};
+  Severity severity{};
+  std::optional<std::uint16_t> axis;
+  std::uint64_t count = 0;
+  Stamp first;
+  Stamp last;
+  std::string first_message;
+};
+
+// What a capture's snap length (or damage) cut off: the records cut short, and the frames where
+// placed PDO regions were cut short or lay outside their datagram, with those axes' names.
+struct Truncation {
+  std::uint64_t snapped = 0;
+  std::uint64_t first_snapped = 0;
+  std::uint64_t cut_frames = 0;
+  std::uint64_t first_cut = 0;
+  std::vector<std::string> axes;
+  bool any() const { return snapped > 0 || cut_frames > 0; }
+};
+// One line (stderr, the text report); empty when nothing was cut.
+std::string describeTruncation(const Truncation& truncation);
+// The layout learnt from a start-up the snap length cut: axes may be missing.
+std::string describeStartupCut(std::uint64_t frames);
+Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
+                        const std::vector<AxisInfo>& axes);
+
+struct CaptureReport {
+  std::string path;
+  std::uint64_t frames = 0;
+  std::uint64_t cycles = 0;
+  std::int64_t first_time_ns = 0;
+  int timestamp_digits = 6;  // of a second, as the capture stores its timestamps
+  CycleTimeSummary cycle_time;
+  LayoutSource layout_source = LayoutSource::None;
+  std::vector<AxisInfo> layout;
+  std::vector<Finding> findings;        // kept only for the formats written at the end
+  std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
+  std::vector<FindingGroup> groups;     // by (rule, axis), in the order of their first finding
+  // Where the frames of the kept findings are stored in the file (sorted by frame), where known.
+  std::vector<std::pair<std::uint64_t, RecordSpan>> frame_spans;
+  std::vector<AxisReport> axes;
+  std::optional<std::string> error;  // the capture could not be read to its end
+  Coverage coverage;                 // whether every axis was checked
+  TimestampSource timestamps = TimestampSource::Capture;
+  ProbeCounts probe;
+  std::string probe_note;  // FrameClock::note()
+  Truncation truncation;
+  std::uint64_t startup_frames_cut = 0;  // layout from a start-up cut by the snap length
+  std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
+  std::uint64_t segment_count = 0;
+  std::int64_t last_time_ns = 0;  // the last frame's
+  // What the HTML report draws around findings (when a format draws them).
+  FindingTimelines timelines;
+  TimingSummary timing;
+  std::vector<CyclicDatagram> cyclic_datagrams;  // what the bus rules judged
+  std::uint64_t unfollowed_frames = 0;           // beyond BusModel::kMaxCyclicFrames
+  std::vector<DcStation> dc;                     // distributed clocks (docs/timing.md)
+  std::int64_t dc_settled_ns = 0;
+  std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
+  // Counts a finding, by severity and in its group.
+  void tally(const Finding& finding);
+  // The capture could not be read at all: nothing in it was checked.
+  bool unopened() const { return error.has_value() && frames == 0; }
+  // Whether any finding is at or above `level`.
+  bool reaches(Severity level) const;
+};
+
+// "fail", "pass", "no servo", "unreadable": as the JSON report names a verdict.
+const char* verdictName(Verdict verdict);
+// An axis's configured name ("axis3" when it has none), "bus" for none.
+std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
+
+// Fills the end-of-capture parts of the report from the validator.
+void summarise(const Validator& validator, CaptureReport& report);
+
+// Reads the capture again for where the frames of its kept findings are stored (a plain file
+// only: the records of a compressed capture or of standard input have no place in a file).
+Status locateFindings(CaptureReport& report);
+
+// ISO 8601 in UTC of a capture time, with `digits` digits of the second
+// ("2024-05-01T12:00:00.123456Z").
+std::string isoUtc(std::int64_t time_ns, int digits);
+
+// The anchor of a rule in docs/rules.md ("se-001"), and the address SARIF's helpUri gives it.
+std::string ruleAnchor(const RuleDef& rule);
+std::string ruleHelpUri(const RuleDef& rule);
+
+// When a capture's findings fail it: at or above `fail_on`, unless `never`; a capture where not
+// every axis was checked is "no servo" unless `allow_empty`.
+struct ReportPolicy {
+  Severity fail_on = Severity::Error;
+  bool never = false;
+  bool allow_empty = false;
+  bool verbose = false;  // text: every finding, not one line per rule and axis
+  std::array<bool, kRuleCount> enabled{};
+};
+Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& report);
+
+// Where a report goes, and its policy.
+struct ReportSink {
+  std::FILE* out;
+  const ReportPolicy& policy;
+};
+
+// One output format of `validate` (INTERFACES.md): its name and its writers, called in the order
+// beginCapture, finding (each), endCapture per capture, then finish. A null writer writes nothing.
+struct ReportFormat {
+  const char* name;
+  // Streaming formats (text, JSON Lines) write each finding as it comes and keep none (constant
+  // memory); the others write everything at the end.
+  bool keeps_findings;
+  // The format names where each finding's frame is stored in the file (SARIF regions).
+  bool locates_frames;
+  // The format draws the bits around findings (CaptureReport::timelines, fed by the frames).
+  bool draws_timelines;
+  void (*begin_capture)(const ReportSink& sink, const CaptureReport& report);
+  void (*finding)(const ReportSink& sink, const CaptureReport& report, const Finding& finding);
+  void (*end_capture)(const ReportSink& sink, const CaptureReport& report);
+  void (*finish)(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+};
+
+// `validate --format html` (html_report.cpp): one self-contained page with the verdict and counts,
+// a findings table that sorts and filters, each drawn finding's bit timeline, each axis's state
+// timeline and error history, and the cycle-time histogram; Chart.js (Debian's libjs-chart.js) is
+// inlined at build time, so the page fetches nothing when it opens.
+void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+
+// The formats' names, in the order of the format table (for --format and its help).
+std::vector<std::string> reportFormatNames();
+// The format of that name; nullptr when there is none.
+const ReportFormat* findReportFormat(std::string_view name);
+
+// A report to write: its format and its file ("" or "-": standard output).
+struct ReportTarget {
+  const ReportFormat* format;
+  std::string path;
+};
+
+// Writes every report of a run. A file is written to a temporary file beside it and renamed over
+// it by finish(), so an interrupted run leaves no half report; one never finished is removed.
+class ReportWriter {
+ public:
+  static Result<std::unique_ptr<ReportWriter>> open(const std::vector<ReportTarget>& targets,
+                                                    const ReportPolicy& policy);
+  ~ReportWriter();
+  ReportWriter(const ReportWriter&) = delete;
+  ReportWriter& operator=(const ReportWriter&) = delete;
+
+  void beginCapture(const CaptureReport& report);
+  void finding(const CaptureReport& report, const Finding& finding);
+  void endCapture(const CaptureReport& report);
+  Status finish(const std::vector<CaptureReport>& reports);
+  bool keepsFindings() const;
+  bool locatesFrames() const;
+  bool drawsTimelines() const;
+  Verdict verdict(const CaptureReport& report) const { return verdictOf(policy_, report); }
+
+ private:
+  struct Output {
+    const ReportFormat* format;
+    std::FILE* out;
+    std::string path;       // the report's file; empty for standard output
+    std::string temporary;  // where it is written until finish()
+  };
+  explicit ReportWriter(const ReportPolicy& policy) : policy_(policy) {}
+  ReportPolicy policy_;
+  std::vector<Output> outputs_;
+};
+
+}  // namespace ncservo::cli

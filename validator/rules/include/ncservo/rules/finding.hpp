@@ -1,0 +1,22 @@
+// A finding: one violation of a rule (RULES.md), reported on one frame.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "ncservo/base/stamp.hpp"
+#include "ncservo/rules/rules.hpp"
+
+namespace ncservo {
+
+struct Finding {
+  RuleId rule{};
+  Severity severity{};
+  std::optional<std::uint16_t> axis;  // none for a finding about the bus
+  Stamp at;                           // the frame it is reported on
+  Stamp since;                        // where the condition began
+  std::string message;                // what was seen, and what was expected
+};
+
+}  // namespace ncservo

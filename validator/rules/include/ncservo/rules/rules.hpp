@@ -1,0 +1,206 @@
+// The rule catalogue of RULES.md as one table: ID, slug, severity, party, spec clause, timeout
+// and how the rule is checked. The validator, the CLI's `rules` listing, the plugin's expert
+// items and the report formats are all generated from it.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ncservo/base/error.hpp"
+#include "ncservo/model/bus_events.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/reads.hpp"
+
+namespace ncservo {
+
+enum class Severity : std::uint8_t { Info, Warning, Error };
+const char* severityName(Severity severity);
+std::optional<Severity> severityFromName(std::string_view name);
+
+enum class Party : std::uint8_t { Nc, Drive, Bus };
+const char* partyName(Party party);
+
+// RULES.md "Time": the configurable timeouts, in milliseconds. `capture_pause` is no rule's: a
+// forward jump of the capture's timestamps longer than it starts a new segment (PROTOCOL.md §8).
+enum class Timeout : std::uint8_t {
+  DriveResponse,
+  NcRelease,
+  EnableResponse,
+  ClearResponse,
+  FaultReaction,
+  ParamTable,
+  CapturePause,
+};
+struct TimeoutDef {
+  Timeout id;
+  const char* name;  // the [timeouts] key and --timeout NAME
+  std::uint32_t default_ms;
+};
+inline constexpr std::array<TimeoutDef, 7> kTimeouts{{
+    {Timeout::DriveResponse, "drive_response", 20},
+    {Timeout::NcRelease, "nc_release", 50},
+    {Timeout::EnableResponse, "enable_response", 100},
+    {Timeout::ClearResponse, "clear_response", 100},
+    {Timeout::FaultReaction, "fault_reaction", 100},
+    {Timeout::ParamTable, "param_table", 50},
+    {Timeout::CapturePause, "capture_pause", 1000},
+}};
+std::optional<Timeout> timeoutFromName(std::string_view name);
+// "drive_response, nc_release, ...": the names a configuration and --timeout accept.
+std::string timeoutNameList();
+// "unknown timeout 'X' (known: ...)", with the closest name.
+std::string unknownTimeoutMessage(std::string_view name);
+// The longest timeout a user may set, in milliseconds (an hour).
+inline constexpr std::uint32_t kMaxTimeoutMs = 3'600'000;
+
+enum class RuleId : std::uint8_t {
+  Se001,
+  Se002,
+  Se003,
+  Se004,
+  Zp001,
+  Zp002,
+  Zp003,
+  Ec001,
+  Ec002,
+  Ec003,
+  Ec004,
+  Sew001,
+  Sew002,
+  Sew003,
+  Ssw001,
+  Scw001,
+  Rdy001,
+  Flt001,
+  Pt001,
+  Msg001,
+  Com001,
+  Com002,
+  Com003,
+  Com004,
+  Com005,
+  Com006,
+  Com007,
+  Esm001,
+  Esm002,
+  Esm003,
+  Esm004,
+};
+inline constexpr std::size_t kRuleCount = 31;
+
+// RULES.md COM-006, COM-007: the limits of the rules whose right value depends on the machine.
+enum class Limit : std::uint8_t { CycleJitterPercent, ReturnLatencyUs };
+struct LimitDef {
+  Limit id;
+  const char* name;  // the configuration key and --limit NAME
+  std::uint32_t default_value;
+  std::uint32_t min, max;
+  const char* unit;
+  RuleId rule;
+  const char* bounds;  // what it bounds, for docs and errors
+};
+inline constexpr std::array<LimitDef, 2> kLimits{{
+    {Limit::CycleJitterPercent, "cycle_jitter_percent", 10, 1, 100, "% of the nominal cycle",
+     RuleId::Com006, "how far a master copy's interval may deviate from the nominal cycle"},
+    {Limit::ReturnLatencyUs, "return_latency_us", 500, 1, 1'000'000, "µs", RuleId::Com007,
+     "how long after its master copy a returned copy may arrive"},
+}};
+const LimitDef* limitByName(std::string_view name);
+
+class AxisModel;
+struct RuleSettings;
+
+// Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
+// cycles) or on what a slave's state machine did (AL control and status).
+enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
+// Whether a rule runs unless disabled, or only when enabled (`--enable`, `[rules] enable`):
+// off where the right limit depends on the machine.
+enum class ByDefault : std::uint8_t { On, Off };
+const char* ruleKindName(RuleKind kind);
+
+// What a check looks at: the axis's model (axis rules) or one event of the bus and slave models.
+struct RuleSubject {
+  const AxisModel* axis = nullptr;
+  const BusEvent* event = nullptr;
+};
+// Whether the rule's condition holds. An axis condition is evaluated on every frame that changes
+// what it reads; it is reported when it begins or, for a delayed rule, once it has held longer
+// than its timeout. An event condition is reported on the frame of the event.
+using RuleCheck = bool (*)(const RuleSubject& subject, const RuleSettings& settings);
+// What was seen and what was expected; `held_ns` is how long the condition has held.
+using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleSettings& settings,
+                                     std::int64_t held_ns);
+
+struct RuleDef {
+  RuleId id;
+  const char* code;  // stable ID, e.g. "SE-001"
+  const char* slug;  // e.g. "illegal-enable-edge"
+  Severity severity;
+  Party party;
+  RuleKind kind;
+  const char* clause;              // where the protocol says so
+  std::optional<Timeout> timeout;  // the timeout the rule uses (RULES.md "Time")
+  bool delayed;                    // reported when the condition outlasts the timeout
+  ByDefault by_default;
+  Reads reads;  // axis rules: what check and describe read of the axis
+  RuleCheck check;
+  RuleDescribe describe;
+  const char* summary;  // one line, for `ncservo rules` and the expert item
+};
+
+// Defined in rules.cpp, next to the checks the table names.
+extern const std::array<RuleDef, kRuleCount> kRules;
+
+const RuleDef& ruleDef(RuleId id);
+// The rule of an ID in any case ("se-001" is SE-001), or null.
+const RuleDef* ruleByCode(std::string_view code);
+// As ruleByCode; the error names the ID and the closest one ("did you mean").
+Result<const RuleDef*> findRule(std::string_view code);
+// "ncservo.rule.illegal_enable_edge"
+std::string ruleFilterName(const RuleDef& rule);
+
+// A bus or slave rule's finding on an event, before the user's severities are applied.
+struct EventFinding {
+  RuleId rule{};
+  SlaveRef slave;  // the slave it is about, for slave rules
+  std::string message;
+};
+// The enabled bus and slave rules that fire on the event, in table order.
+void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+                std::vector<EventFinding>& out);
+
+// What the user may change: RULES.md defaults, then the config file, then the command line.
+struct RuleSettings {
+  std::array<bool, kRuleCount> enabled{};
+  std::array<Severity, kRuleCount> severity{};
+  std::array<std::int64_t, kTimeouts.size()> timeout_ns{};
+  std::optional<int> servo_ready_mode;              // global; per axis in axis_ready_mode
+  std::vector<std::optional<int>> axis_ready_mode;  // by axis index (configured axes)
+  std::uint32_t telegram_failure_limit = 3;
+  std::array<std::uint32_t, kLimits.size()> limit{};
+  // docs/timing.md "Distributed clocks": a slave's DC settled once every later 0x092C read stayed
+  // within this many ns.
+  std::int64_t dc_settled_ns = 100;
+
+  RuleSettings();
+  bool isEnabled(RuleId id) const { return enabled[static_cast<std::size_t>(id)]; }
+  Severity severityOf(RuleId id) const { return severity[static_cast<std::size_t>(id)]; }
+  std::int64_t timeoutNs(Timeout t) const { return timeout_ns[static_cast<std::size_t>(t)]; }
+  std::optional<int> readyModeFor(std::size_t axis) const;
+  std::uint32_t limitOf(Limit l) const { return limit[static_cast<std::size_t>(l)]; }
+
+  // Each fails with a message naming what was wrong.
+  Status disable(std::string_view code);
+  Status enable(std::string_view code);
+  Status setLimit(std::string_view name, std::int64_t value);
+  Status setSeverity(std::string_view code, std::string_view level);
+  Status setTimeout(std::string_view name, std::int64_t ms);
+};
+
+}  // namespace ncservo

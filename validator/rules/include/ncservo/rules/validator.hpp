@@ -1,0 +1,140 @@
+// One capture through the model and the rules: frames in, findings out, one pass in capture
+// order (RULES.md "Time"). Shared by the CLI (`validate`) and the plugin (expert info).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/layout/session.hpp"
+#include "ncservo/model/al_tracker.hpp"
+#include "ncservo/model/axis_model.hpp"
+#include "ncservo/model/bus_model.hpp"
+#include "ncservo/model/capture_segments.hpp"
+#include "ncservo/model/dc_clock.hpp"
+#include "ncservo/rules/finding.hpp"
+#include "ncservo/rules/rules.hpp"
+
+namespace ncservo {
+
+// What the validator gives back for one frame: where each axis's PDOs sit, and each placed
+// axis's drive state after the frame. The values are read from the bytes at the placements
+// (readFrameValues) by whoever shows them.
+struct ValidatedFrame {
+  FrameDecode decode;  // copy, pairing and placements, in axis order
+  std::array<std::optional<DriveState>, kMaxAxesPerFrame> states{};  // by placement
+};
+
+struct CycleTimeSummary {
+  std::optional<double> median_us, p99_us, max_us;
+};
+
+// The validator's fast path: an axis whose read bits did not change (rules.hpp Reads) is not
+// observed again. Off only to prove it changes nothing (tests/unit/fast_path_test.cpp).
+enum class FastPath : std::uint8_t { On, Off };
+
+class Validator {
+ public:
+  Validator(DecoderOptions options, RuleSettings settings, FastPath fast_path = FastPath::On);
+
+  // One walked EtherCAT frame (any status) with its 1-based frame number and capture time.
+  // Returns the frame's placements and states; findings() then holds what was reported on it.
+  const ValidatedFrame& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
+                                const EcatFrame& frame, const ByteReader& bytes);
+  const std::vector<Finding>& findings() const { return findings_; }
+  // The capture ended: what could be judged only with the frames that did not come (a gap's
+  // next interval, RULES.md COM-002), reported on the last frame; findings() then holds it.
+  void finish();
+  // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
+  void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
+    decoder_.placeAxes(frame, bytes, view_.decode);
+  }
+
+  const Decoder& decoder() const { return decoder_; }
+  const RuleSettings& settings() const { return settings_; }
+  // Models of the axes seen so far, by axis index (null where an axis was never seen).
+  std::size_t axisCount() const { return axes_.size(); }
+  const AxisModel* axis(std::size_t index) const;
+  std::uint64_t cycles() const { return bus_.cycles(); }
+  CycleTimeSummary cycleTime() const;
+  // The capture's segments (RULES.md "Time"): the rules judge each on its own clock.
+  const SegmentTracker& segments() const { return segments_; }
+  const BusModel& bus() const { return bus_; }
+  // The cycle interval and return latency the last frame given to onFrame added to the timing
+  // statistics; all empty when it added none.
+  const FrameTiming& frameTiming() const;
+  const DcClock& dc() const { return dc_; }
+  // The placed PDO regions the capture cut short (a snap length).
+  const CutRegions& cutRegions() const { return cut_; }
+
+ private:
+  struct Episode {
+    bool active = false;
+    bool reported = false;
+    Stamp began;
+  };
+  struct AxisSlot {
+    std::optional<AxisModel> model;
+    std::array<Episode, kRuleCount> episodes{};
+    std::uint32_t pending = 0;  // delayed episodes running towards their timeout
+    std::optional<std::uint64_t> evaluated_revision;
+    std::uint64_t al_epoch = 0;  // al_epoch_ when the AL state was last taken (0: never)
+    std::optional<std::uint16_t> al_station;  // the station it was taken from
+    std::uint32_t op_entries = 0;             // the station's OP entries then
+  };
+  // The bits of each PDO word that the axis model or an enabled rule reads, as the fast path
+  // compares them.
+  struct JudgedWord {
+    std::uint8_t index;   // in kWords and PdoValues::raw
+    std::uint8_t offset;  // in its PDO
+    std::uint8_t size;
+    std::uint64_t bits;
+    WordClass word_class;  // or null
+  };
+  struct JudgedPdo {
+    std::array<JudgedWord, kWordCount> words{};
+    std::size_t count = 0;
+  };
+  struct Judged {
+    JudgedPdo rx, tx;
+    bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
+  };
+  static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
+  static TimingLimits timingLimits(const RuleSettings& settings);
+  void applyAccounts();
+  bool unchanged(const AxisPlacement& placement, const ByteReader& bytes,
+                 const AxisModel& model) const;
+
+  void report(RuleId rule, std::optional<std::uint16_t> axis, const Stamp& since,
+              std::string message);
+  AxisSlot& slot(std::uint16_t axis);
+  void evaluateAxis(AxisSlot& axis);
+  void observeAl(const EcatFrame& frame, const ByteReader& bytes);
+  void reportEvents();
+  void syncAlState(const AxisPlacement& placement, AxisSlot& slot);
+  void startSegment();
+
+  Decoder decoder_;
+  ValidatedFrame view_;  // this frame's placements and states
+  RuleSettings settings_;
+  Judged judged_;
+  bool fast_path_;
+  AlTracker al_;
+  DcClock dc_;
+  BusModel bus_;
+  SegmentTracker segments_;
+  CutRegions cut_;
+  std::vector<BusEvent> events_;  // this frame's, from the slave and bus models
+  std::vector<EventFinding> event_findings_;
+  std::vector<AxisAccount> accounts_;  // this frame's telegram accounting
+  std::vector<AxisSlot> axes_;
+  std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
+  std::uint64_t al_epoch_ = 1;      // frames so far that could move an AL state or a station
+  Stamp now_;                       // this frame, on its segment's clock (the timers')
+  std::int64_t frame_time_ns_ = 0;  // this frame's own timestamp
+  std::vector<Finding> findings_;
+};
+
+}  // namespace ncservo

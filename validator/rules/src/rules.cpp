@@ -1,0 +1,765 @@
+// The rule table of RULES.md and the conditions of the axis rules. Each check reads the axis
+// model's state only; the validator owns timing and the once-per-episode discipline.
+#include "ncservo/rules/rules.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+
+#include "ncservo/base/text.hpp"
+#include "ncservo/model/al_tracker.hpp"
+#include "ncservo/model/axis_model.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/wire/ethercat.hpp"
+
+namespace ncservo {
+
+namespace {
+constexpr std::uint32_t kServoErrors = mask32("ncservo.sew.servo_errors");
+constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
+constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
+constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
+constexpr std::uint32_t kIncremental = mask32("ncservo.ssw.incremental");
+constexpr std::uint32_t kNoEncoder = mask32("ncservo.ssw.no_encoder");
+
+std::int64_t ms(const RuleSettings& s, Timeout t) {
+  return s.timeoutNs(t) / 1'000'000;
+}
+double heldMs(std::int64_t held_ns) {
+  return static_cast<double>(held_ns) / 1e6;
+}
+bool longerThan(const AxisModel& a, const Stamp& since, std::int64_t ns) {
+  return a.now().time_ns - since.time_ns > ns;
+}
+
+std::uint32_t commandedTable(const AxisModel& a) {
+  return parameterTable(Word::Scw, a.latest().scw());
+}
+std::uint32_t activeTable(const AxisModel& a) {
+  return parameterTable(Word::Ssw, a.latest().ssw());
+}
+
+bool driveReady(const AxisModel& a) {
+  if (!a.readyMode()) return false;
+  return *a.readyMode() == 0 ? a.servoRdy().on() : a.servoErrors().off();
+}
+
+// --- Servo enable (PROTOCOL.md §2) ---
+bool se001(const AxisModel& a, const RuleSettings&) {
+  return a.illegalEnableEdge();
+}
+std::string se001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SCW.SE went 0x{:X} -> 0x2; an enable is legal only from 0x1", a.previousSe());
+}
+
+bool recentlyEnabled(const AxisModel& a, const RuleSettings& s) {
+  if (a.validEnable()) return true;
+  const auto& ended = a.validEnableEnded();
+  return ended && !longerThan(a, *ended, s.timeoutNs(Timeout::DriveResponse));
+}
+bool se002(const AxisModel& a, const RuleSettings& s) {
+  return a.servoEn().rose && !recentlyEnabled(a, s);
+}
+std::string se002Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+  return fmt::format(
+      "SSW.ServoEn rose with no valid enable within {} ms (SCW.SE is 0x{:X}); the drive may "
+      "enable only after SE goes 0x1 -> 0x2",
+      ms(s, Timeout::DriveResponse), a.se().value);
+}
+
+bool se003(const AxisModel& a, const RuleSettings&) {
+  return a.servoEn().on() && !a.validEnable();
+}
+std::string se003Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format("SSW.ServoEn still 1 {:.3f} ms {} (SCW.SE is 0x{:X}); expected 0 within {} ms",
+                     heldMs(held),
+                     a.validEnableEnded() ? "after the enable ended" : "with no valid enable",
+                     a.se().value, ms(s, Timeout::DriveResponse));
+}
+
+bool se004(const AxisModel& a, const RuleSettings&) {
+  return a.validEnable() && driveReady(a) && a.emgon().on() && a.brake().on() && a.servoEn().off();
+}
+std::string se004Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "valid enable held {:.3f} ms with the drive ready, EMGON 1 and Brake 1, but SSW.ServoEn "
+      "stays 0; expected it within {} ms",
+      heldMs(held), ms(s, Timeout::EnableResponse));
+}
+
+// --- Zero-pulse search ---
+bool zp001(const AxisModel& a, const RuleSettings&) {
+  return a.zpulseRequest().off() && a.zpulseAck().on();
+}
+std::string zp001Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SSW.ZPulseAck still 1 {:.3f} ms after SCW.ZPulseRequest fell; expected 0 within {} ms",
+      heldMs(held), ms(s, Timeout::DriveResponse));
+}
+
+bool zp002(const AxisModel& a, const RuleSettings& s) {
+  return a.zpulseAck().rose && a.zpulseRequest().off() &&
+         longerThan(a, a.zpulseRequest().since, s.timeoutNs(Timeout::DriveResponse));
+}
+std::string zp002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format(
+      "SSW.ZPulseAck rose while SCW.ZPulseRequest had been 0 for {:.3f} ms (since frame {}); "
+      "an acknowledge answers a request",
+      heldMs(a.now().time_ns - a.zpulseRequest().since.time_ns), a.zpulseRequest().since.frame);
+}
+
+bool zp003(const AxisModel& a, const RuleSettings&) {
+  if (!a.zpulseRequest().on() || !a.knowsInputs()) return false;
+  const std::uint32_t ssw = a.latest().ssw();
+  return !(ssw & kIncremental) || (ssw & kNoEncoder);
+}
+std::string zp003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format(
+      "SCW.ZPulseRequest is 1 but SSW says {}; a zero-pulse search needs an "
+      "incremental encoder",
+      (a.latest().ssw() & kNoEncoder) ? "no encoder" : "absolute encoder");
+}
+
+// --- Error clear ---
+bool ec001(const AxisModel& a, const RuleSettings& s) {
+  return a.errClearAck().rose && a.errorClear().off() &&
+         longerThan(a, a.errorClear().since, s.timeoutNs(Timeout::DriveResponse));
+}
+std::string ec001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format(
+      "SSW.ErrClearAck rose while SCW.ErrorClear had been 0 for {:.3f} ms (since frame {}); "
+      "an acknowledge answers a request",
+      heldMs(a.now().time_ns - a.errorClear().since.time_ns), a.errorClear().since.frame);
+}
+
+bool ec002(const AxisModel& a, const RuleSettings&) {
+  return a.errorClear().on() && a.clearAcknowledged();
+}
+std::string ec002Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SCW.ErrorClear still 1 {:.3f} ms after SSW.ErrClearAck rose; the NC must drop it within "
+      "{} ms",
+      heldMs(held), ms(s, Timeout::NcRelease));
+}
+
+bool ec003(const AxisModel& a, const RuleSettings&) {
+  return a.errClearAck().on() && a.errorClear().off();
+}
+std::string ec003Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SSW.ErrClearAck still 1 {:.3f} ms after SCW.ErrorClear fell; expected 0 within {} ms",
+      heldMs(held), ms(s, Timeout::DriveResponse));
+}
+
+bool ec004(const AxisModel& a, const RuleSettings&) {
+  return a.errorClear().on() && a.servoErrors().on() && !a.clearAcknowledged();
+}
+std::string ec004Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SCW.ErrorClear held {:.3f} ms with SEW 0x{:08X} and no SSW.ErrClearAck; expected the "
+      "acknowledge within {} ms",
+      heldMs(held), a.latest().sew(), ms(s, Timeout::ClearResponse));
+}
+
+// --- Status and error words ---
+bool sew001(const AxisModel& a, const RuleSettings&) {
+  const std::uint32_t sew = a.latest().sew();
+  return a.knowsInputs() && (sew & kSewCauseMask) && !(sew & kServoErrors);
+}
+std::string sew001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SEW 0x{:08X} has cause bits set but not the summary bit 0", a.latest().sew());
+}
+
+bool sew002(const AxisModel& a, const RuleSettings&) {
+  const std::uint32_t sew = a.latest().sew();
+  return a.knowsInputs() && (sew & kServoErrors) && !(sew & kSewCauseMask);
+}
+std::string sew002Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format("SEW 0x{:08X}: summary bit set with no cause bit for {:.3f} ms (limit {} ms)",
+                     a.latest().sew(), heldMs(held), ms(s, Timeout::DriveResponse));
+}
+
+bool sew003(const AxisModel& a, const RuleSettings&) {
+  return a.knowsInputs() && (a.latest().sew() & kSewReserved);
+}
+std::string sew003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SEW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().sew(),
+                     a.latest().sew() & kSewReserved);
+}
+
+bool ssw001(const AxisModel& a, const RuleSettings&) {
+  return a.knowsInputs() && (a.latest().ssw() & kSswReserved);
+}
+std::string ssw001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SSW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().ssw(),
+                     a.latest().ssw() & kSswReserved);
+}
+
+bool scw001(const AxisModel& a, const RuleSettings&) {
+  return a.knowsOutputs() && (a.latest().scw() & kScwReserved);
+}
+std::string scw001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("SCW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().scw(),
+                     a.latest().scw() & kScwReserved);
+}
+
+bool rdy001(const AxisModel& a, const RuleSettings&) {
+  const std::optional<bool> expected = a.expectedReady();
+  return expected && a.servoRdy().on() != *expected;
+}
+std::string rdy001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "SSW.ServoRDY is {} for {:.3f} ms with ServoEn {} and ServoErrors {}; Servo_Ready_Mode {} "
+      "({}) requires {} (limit {} ms)",
+      a.servoRdy().on() ? 1 : 0, heldMs(held), a.servoEn().on() ? 1 : 0,
+      a.servoErrors().on() ? 1 : 0, a.readyMode().value_or(-1),
+      a.readyModeConfigured() ? "configured" : "inferred",
+      a.expectedReady().value_or(false) ? 1 : 0, ms(s, Timeout::DriveResponse));
+}
+
+bool flt001(const AxisModel& a, const RuleSettings&) {
+  return a.servoEn().on() && a.servoErrors().on();
+}
+std::string flt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "drive still enabled {:.3f} ms after reporting an error (SEW 0x{:08X}); expected ServoEn 0 "
+      "within {} ms",
+      heldMs(held), a.latest().sew(), ms(s, Timeout::FaultReaction));
+}
+
+bool pt001(const AxisModel& a, const RuleSettings&) {
+  return a.knowsOutputs() && a.knowsInputs() && commandedTable(a) != activeTable(a);
+}
+std::string pt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+  return fmt::format(
+      "active parameter table {} differs from the commanded table {} for {:.3f} ms (limit {} ms)",
+      activeTable(a), commandedTable(a), heldMs(held), ms(s, Timeout::ParamTable));
+}
+
+bool definedMessageCode(std::uint64_t raw) {
+  return messageCodeDefined(static_cast<std::int32_t>(raw));
+}
+bool msg001(const AxisModel& a, const RuleSettings&) {
+  const std::int32_t code = a.latest().msgCode();
+  return a.knowsInputs() && !messageCodeDefined(code);
+}
+std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  return fmt::format("message code {} is undefined; defined codes are 0-{}", a.latest().msgCode(),
+                     kLastDefinedMessageCode);
+}
+
+// --- Bus, per axis ---
+// Judged only on inputs the capture gave: ECatTErr may have risen in inputs it cut off.
+bool com003(const AxisModel& a, const RuleSettings&) {
+  return a.awaitingTimeoutReport() && a.knowsInputs();
+}
+std::string com003Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+  return fmt::format(
+      "{} consecutive cycles failed, but SEW.ECatTErr did not rise within {} ms after traffic "
+      "resumed",
+      a.lastOutageCycles(), ms(s, Timeout::DriveResponse));
+}
+
+bool com005(const AxisModel& a, const RuleSettings& s) {
+  return a.consecutiveFailed() > s.telegram_failure_limit;
+}
+std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+  return fmt::format("{} consecutive telegram failures exceed the limit of {} (total {})",
+                     a.consecutiveFailed(), s.telegram_failure_limit, a.totalFailures());
+}
+
+// --- EtherCAT state machine, per axis (PROTOCOL.md §8) ---
+using ecat::kAlOp;
+using ecat::kAlSafeOp;
+bool esm002(const AxisModel& a, const RuleSettings&) {
+  if (!a.alState()) return false;
+  const std::uint8_t state = *a.alState();
+  const bool enabling = a.knowsOutputs() && a.se().value != 0 && state != kAlOp;
+  const bool inputs = a.inputsInAlState() && state != kAlOp && state != kAlSafeOp;
+  return enabling || inputs;
+}
+std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+  const std::uint8_t state = a.alState().value_or(0);
+  if (a.knowsOutputs() && a.se().value != 0 && state != kAlOp) {
+    return fmt::format("SCW.SE is 0x{:X} while the slave's AL state is {:#x}; enable only in OP",
+                       a.se().value, state);
+  }
+  return fmt::format("inputs exchanged while the slave's AL state is {:#x}; expected SAFE-OP or OP",
+                     state);
+}
+
+// --- Bus (PROTOCOL.md §8; RULES.md COM-001, COM-002, COM-004) ---
+bool com001(const WorkingCounterEvent& e, const RuleSettings&) {
+  return e.wkc != e.expected;
+}
+std::string com001Text(const WorkingCounterEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format("{} at 0x{:08X} ({} bytes) returned with WKC {}, expected {}{}",
+                     ecat::commandName(e.command), e.address, e.length, e.wkc, e.expected,
+                     e.wkc == 0 ? " (no slave processed it)" : "; inputs may be stale");
+}
+
+bool com002(const CycleGapEvent&, const RuleSettings&) {
+  return true;  // the bus model reports an interval only when it is a gap
+}
+std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&) {
+  using Verdict = CycleGapEvent::Verdict;
+  const std::string gap =
+      fmt::format("{:.3f} ms from frame {} to frame {}", static_cast<double>(e.interval_ns) / 1e6,
+                  e.previous_frame, e.next_frame);
+  const std::string then =
+      e.next_interval_ns
+          ? fmt::format(", then {:.3f} ms", static_cast<double>(*e.next_interval_ns) / 1e6)
+          : std::string();
+  const std::string nominal =
+      fmt::format(" ({:.3f} ms nominal)", static_cast<double>(e.nominal_ns) / 1e6);
+  if (e.verdict == Verdict::Late) {
+    return fmt::format("late cycle: {}{}; nothing missing{}", gap, then, nominal);
+  }
+  const std::string untold = e.verdict == Verdict::CaptureEnds
+                                 ? "; the capture ends before the next cycle: late or lost cannot "
+                                   "be told"
+                             : e.verdict == Verdict::SegmentEnds
+                                 ? "; a capture segment starts before the next cycle: late or "
+                                   "lost cannot be told"
+                                 : "";
+  return fmt::format("{} cycle{} lost: {}{}{}{}", e.missing, e.missing == 1 ? "" : "s", gap, then,
+                     nominal, untold);
+}
+
+bool com006(const CycleJitterEvent&, const RuleSettings&) {
+  return true;  // the bus model reports a deviation only beyond the limit
+}
+std::string com006Text(const CycleJitterEvent& e, const Stamp&, const RuleSettings&) {
+  const double deviation = static_cast<double>(e.interval_ns - e.nominal_ns) / 1e3;
+  return fmt::format(
+      "cycle of {:.3f} ms since frame {} deviates {:+.1f} us from the {:.3f} ms nominal, more "
+      "than cycle_jitter_percent = {}",
+      static_cast<double>(e.interval_ns) / 1e6, e.previous_frame, deviation,
+      static_cast<double>(e.nominal_ns) / 1e6, e.limit_percent);
+}
+
+bool com007(const LateReturnEvent&, const RuleSettings&) {
+  return true;  // the bus model reports a return only beyond the limit
+}
+std::string com007Text(const LateReturnEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format(
+      "returned {:.1f} us after its master copy (frame {}), more than "
+      "return_latency_us = {}",
+      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, e.limit_ns / 1000);
+}
+
+bool com004(const NotReturnedEvent&, const RuleSettings&) {
+  return true;
+}
+std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettings&) {
+  std::string carried;
+  if (e.axes) {
+    carried = fmt::format("axes {}-{}", e.axes->first, e.axes->last);
+  } else {
+    carried = fmt::format("{} at 0x{:08X}, {} byte{}", ecat::commandName(e.command), e.address,
+                          e.length, e.length == 1 ? "" : "s");
+    const int more = e.datagrams - 1;
+    if (more > 0) carried += fmt::format(", and {} more datagram{}", more, more == 1 ? "" : "s");
+  }
+  return fmt::format(
+      "the master frame {} ({}) was not returned before the next cycle's master frame",
+      e.master_frame, carried);
+}
+
+// --- EtherCAT state machine, per slave (PROTOCOL.md §8) ---
+std::string allowedFrom(std::uint8_t from) {
+  std::string out;
+  for (std::uint8_t to : ecat::kAlStates) {
+    if (!alTransitionAllowed(from, to)) continue;
+    if (!out.empty()) out += ", ";
+    out += alStateName(to);
+  }
+  return out;
+}
+
+bool esm001(const AlControlEvent& e, const RuleSettings&) {
+  return !alTransitionAllowed(e.known_state, e.requested);
+}
+std::string esm001Text(const AlControlEvent& e, const Stamp&, const RuleSettings&) {
+  return fmt::format("{}: AL control 0x{:04X} requests {} from known state {}; allowed: {}",
+                     slaveName(e.slave), e.raw, alStateName(e.requested),
+                     alStateName(e.known_state), allowedFrom(e.known_state));
+}
+
+// RULES.md ESM-003/004: judged against the requested state, or with none seen the previous one.
+bool errorAboveInit(const AlErrorEvent& e) {
+  const std::optional<std::uint8_t> reference = e.requested ? e.requested : e.previous;
+  return reference && alStateAboveInit(*reference);
+}
+bool esm003(const AlErrorEvent& e, const RuleSettings&) {
+  return errorAboveInit(e);
+}
+bool esm004(const AlErrorEvent& e, const RuleSettings&) {
+  return !errorAboveInit(e);
+}
+std::string alErrorText(const AlErrorEvent& e, const Stamp& at, const RuleSettings&) {
+  std::string context;
+  if (e.requested) {
+    context = fmt::format("while {} requested", alStateName(*e.requested));
+  } else if (e.previous) {
+    context = fmt::format("with no request seen, previous state {}", alStateName(*e.previous));
+  } else {
+    context = "with no request seen and no previous state";
+  }
+  std::string code = "; AL status code not read";
+  if (e.status_code) {
+    code = fmt::format("; AL status code 0x{:04X}", *e.status_code);
+    if (e.status_code_frame != at.frame) {
+      code += fmt::format(" (read in frame {})", e.status_code_frame);
+    }
+  }
+  return fmt::format("{}: AL status 0x{:04X} ({} + error) {}{}", slaveName(e.slave), e.raw,
+                     alStateName(e.raw & 0x0F), context, code);
+}
+
+// The table's uniform check signature over the axis model or one kind of event.
+template <bool (*F)(const AxisModel&, const RuleSettings&)>
+bool onAxis(const RuleSubject& s, const RuleSettings& settings) {
+  return F(*s.axis, settings);
+}
+template <std::string (*F)(const AxisModel&, const RuleSettings&, std::int64_t)>
+std::string describeAxis(const RuleSubject& s, const RuleSettings& settings, std::int64_t held) {
+  return F(*s.axis, settings, held);
+}
+template <class Event, bool (*F)(const Event&, const RuleSettings&)>
+bool onEvent(const RuleSubject& s, const RuleSettings& settings) {
+  const Event* e = std::get_if<Event>(&s.event->data);
+  return e != nullptr && F(*e, settings);
+}
+template <class Event, std::string (*F)(const Event&, const Stamp&, const RuleSettings&)>
+std::string describeEvent(const RuleSubject& s, const RuleSettings& settings, std::int64_t) {
+  return F(std::get<Event>(s.event->data), s.event->since, settings);
+}
+
+constexpr auto E = Severity::Error;
+constexpr auto W = Severity::Warning;
+constexpr auto I = Severity::Info;
+constexpr auto NC = Party::Nc;
+constexpr auto DRIVE = Party::Drive;
+constexpr auto BUS = Party::Bus;
+constexpr auto AXIS = RuleKind::Axis;
+constexpr auto BUSK = RuleKind::Bus;
+constexpr auto SLAVE = RuleKind::Slave;
+constexpr auto ON = ByDefault::On;
+constexpr auto OFF = ByDefault::Off;
+constexpr std::optional<Timeout> kNone{};
+constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
+constexpr Reads kNothing{};
+}  // namespace
+
+#define NCSERVO_AXIS(name) onAxis<name>, describeAxis<name##Text>
+#define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
+// clang-format off
+const std::array<RuleDef, kRuleCount> kRules{{
+  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false, ON,
+   readsOf({"ncservo.scw.se"}), NCSERVO_AXIS(se001),
+   "SCW.SE becomes 0x2 from a value other than 0x1"},
+  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, false, ON,
+   readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se002),
+   "SSW.ServoEn rises with no valid enable"},
+  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, true, ON,
+   readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se003),
+   "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
+  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "docs/protocol.md §2 SE, §5", Timeout::EnableResponse, true, ON,
+   readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake", "ncservo.ssw.servo_en",
+            "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(se004),
+   "a valid enable to a ready drive is not answered with ServoEn"},
+  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true, ON,
+   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp001),
+   "ZPulseAck stays 1 after ZPulseRequest fell"},
+  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ZPulseAck", kDrive, false, ON,
+   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp002),
+   "ZPulseAck rises with no ZPulseRequest"},
+  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "docs/protocol.md §1, §2 ZPulseRequest", kNone, false, ON,
+   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.incremental", "ncservo.ssw.no_encoder"}), NCSERVO_AXIS(zp003),
+   "ZPulseRequest on an axis with an absolute encoder or none"},
+  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, false, ON,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec001),
+   "ErrClearAck rises with no ErrorClear"},
+  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "docs/protocol.md §2 ErrorClear", Timeout::NcRelease, true, ON,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec002),
+   "ErrorClear held after ErrClearAck rose"},
+  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, true, ON,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec003),
+   "ErrClearAck stays 1 after ErrorClear fell"},
+  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "docs/protocol.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true, ON,
+   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}), NCSERVO_AXIS(ec004),
+   "ErrorClear on a drive in error is not acknowledged"},
+  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "docs/protocol.md §4", kNone, false, ON,
+   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew001),
+   "a SEW cause bit without the summary bit 0"},
+  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "docs/protocol.md §4", kDrive, true, ON,
+   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew002),
+   "SEW summary bit 0 with no cause bit"},
+  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "docs/protocol.md §4", kNone, false, ON,
+   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew003),
+   "reserved SEW bits set"},
+  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "docs/protocol.md §3", kNone, false, ON,
+   readsOf({"ncservo.ssw.reserved"}), NCSERVO_AXIS(ssw001),
+   "reserved SSW bits set"},
+  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "docs/protocol.md §2", kNone, false, ON,
+   readsOf({"ncservo.scw.reserved"}), NCSERVO_AXIS(scw001),
+   "reserved SCW bits set"},
+  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "docs/protocol.md §5", kDrive, true, ON,
+   readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(rdy001),
+   "ServoRDY differs from the Servo_Ready_Mode table"},
+  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "docs/protocol.md §4, §6", Timeout::FaultReaction, true, ON,
+   readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}), NCSERVO_AXIS(flt001),
+   "the drive stays enabled while reporting an error"},
+  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "docs/protocol.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true, ON,
+   readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl", "ncservo.ssw.ext_prmtbl"}), NCSERVO_AXIS(pt001),
+   "the active parameter table differs from the commanded one"},
+  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "docs/protocol.md §5", kNone, false, ON,
+   readsThrough("ncservo.msg_code", definedMessageCode), NCSERVO_AXIS(msg001),
+   "a message code outside 0-5"},
+  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "docs/protocol.md §8 WKC", kNone, false, ON,
+   kNothing, NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),
+   "a returned cyclic process-data datagram has an unexpected WKC"},
+  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "docs/protocol.md §8; docs/rules.md timeouts", kNone, false, ON,
+   kNothing, NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
+   "cycles late or missing between two master frames"},
+  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "docs/protocol.md §4 ECatTErr", kDrive, true, ON,
+   readsOf({"ncservo.sew.ecat_timeout"}), NCSERVO_AXIS(com003),
+   "3 or more failed cycles without SEW.ECatTErr"},
+  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "docs/protocol.md §8", kNone, false, ON,
+   kNothing, NCSERVO_EVENT(NotReturnedEvent, com004, com004Text),
+   "a cyclic master frame was not returned"},
+  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "docs/protocol.md §8", kNone, false, ON,
+   kNothing, NCSERVO_AXIS(com005),
+   "consecutive failed cycles of an axis exceed the limit"},
+  {RuleId::Com006, "COM-006", "cycle-jitter", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
+   kNothing, NCSERVO_EVENT(CycleJitterEvent, com006, com006Text),
+   "a master copy's interval deviates from the nominal cycle by more than cycle_jitter_percent"},
+  {RuleId::Com007, "COM-007", "late-return", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
+   kNothing, NCSERVO_EVENT(LateReturnEvent, com007, com007Text),
+   "a returned copy arrives more than return_latency_us after its master copy"},
+  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "docs/protocol.md §8 AL control", kNone, false, ON,
+   kNothing, NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
+   "an AL control write requests a transition the state machine does not allow"},
+  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "docs/protocol.md §8 AL states", kNone, false, ON,
+   readsOf({"ncservo.scw.se"}, true), NCSERVO_AXIS(esm002),
+   "process data exchanged with an axis outside OP/SAFE-OP"},
+  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false, ON,
+   kNothing, NCSERVO_EVENT(AlErrorEvent, esm003, alErrorText),
+   "AL status shows the error indicator above INIT"},
+  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false, ON,
+   kNothing, NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
+   "AL status shows the error indicator at INIT"},
+}};
+// clang-format on
+#undef NCSERVO_AXIS
+#undef NCSERVO_EVENT
+
+const char* severityName(Severity severity) {
+  switch (severity) {
+    case Severity::Info:
+      return "info";
+    case Severity::Warning:
+      return "warning";
+    case Severity::Error:
+      return "error";
+  }
+  return "error";
+}
+
+std::optional<Severity> severityFromName(std::string_view name) {
+  for (Severity s : {Severity::Info, Severity::Warning, Severity::Error}) {
+    if (name == severityName(s)) return s;
+  }
+  return std::nullopt;
+}
+
+const char* partyName(Party party) {
+  switch (party) {
+    case Party::Nc:
+      return "NC";
+    case Party::Drive:
+      return "drive";
+    case Party::Bus:
+      return "bus";
+  }
+  return "bus";
+}
+
+std::optional<Timeout> timeoutFromName(std::string_view name) {
+  for (const TimeoutDef& t : kTimeouts) {
+    if (name == t.name) return t.id;
+  }
+  return std::nullopt;
+}
+
+std::string unknownTimeoutMessage(std::string_view name) {
+  std::vector<std::string> names;
+  for (const TimeoutDef& t : kTimeouts) names.emplace_back(t.name);
+  return fmt::format("unknown timeout '{}' (known: {}){}", name, timeoutNameList(),
+                     didYouMean(name, names));
+}
+
+std::string timeoutNameList() {
+  std::string known;
+  for (const TimeoutDef& t : kTimeouts)
+    known += fmt::format("{}{}", known.empty() ? "" : ", ", t.name);
+  return known;
+}
+
+const RuleDef& ruleDef(RuleId id) {
+  return kRules[static_cast<std::size_t>(id)];
+}
+
+const RuleDef* ruleByCode(std::string_view code) {
+  for (const RuleDef& rule : kRules) {
+    if (equalsIgnoringCase(code, rule.code)) return &rule;
+  }
+  return nullptr;
+}
+
+Result<const RuleDef*> findRule(std::string_view code) {
+  if (const RuleDef* rule = ruleByCode(code)) return rule;
+  std::vector<std::string> codes;
+  for (const RuleDef& rule : kRules) codes.emplace_back(rule.code);
+  return fail(
+      fmt::format("unknown rule ID '{}' (see `ncservo rules`){}", code, didYouMean(code, codes)));
+}
+
+std::vector<FieldRead> fieldsRead(const Reads& reads) {
+  std::vector<FieldRead> out;
+  for (const FieldDef& f : kFields) {
+    const std::size_t w = static_cast<std::size_t>(f.word);
+    const std::uint64_t bits = reads.bits[w];
+    const bool whole = bits == wordMask(f.word);
+    if (f.kind == FieldKind::Word) {
+      if (whole) out.push_back({&f, false});
+      if (reads.classes[w] != nullptr) out.push_back({&f, true});
+    } else if ((f.kind == FieldKind::Flag || f.kind == FieldKind::BitRange) && !whole &&
+               (bits & f.mask) == f.mask) {
+      out.push_back({&f, false});
+    }
+  }
+  return out;
+}
+
+std::string describeReads(const Reads& reads) {
+  std::string out;
+  auto add = [&out](std::string_view filter, const char* suffix) {
+    out += fmt::format("{}{}{}", out.empty() ? "" : ", ", filter.substr(8), suffix);
+  };
+  for (const FieldRead& read : fieldsRead(reads)) {
+    add(read.field->filter, read.through_class ? " (its class)" : "");
+  }
+  if (reads.al_state) add("ncservo.al_state", "");
+  return out.empty() ? "-" : out;
+}
+
+const char* ruleKindName(RuleKind kind) {
+  switch (kind) {
+    case RuleKind::Axis:
+      return "axis";
+    case RuleKind::Bus:
+      return "bus";
+    case RuleKind::Slave:
+      return "slave";
+  }
+  return "axis";
+}
+
+void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+                std::vector<EventFinding>& out) {
+  const RuleSubject subject{nullptr, &event};
+  for (const RuleDef& rule : kRules) {
+    if (rule.kind == RuleKind::Axis || !settings.isEnabled(rule.id)) continue;
+    if (!rule.check(subject, settings)) continue;
+    SlaveRef slave;
+    if (const auto* control = std::get_if<AlControlEvent>(&event.data)) slave = control->slave;
+    if (const auto* error = std::get_if<AlErrorEvent>(&event.data)) slave = error->slave;
+    out.push_back(EventFinding{rule.id, slave, rule.describe(subject, settings, 0)});
+  }
+}
+
+std::string ruleFilterName(const RuleDef& rule) {
+  std::string slug = rule.slug;
+  std::replace(slug.begin(), slug.end(), '-', '_');
+  return "ncservo.rule." + slug;
+}
+
+RuleSettings::RuleSettings() {
+  for (const RuleDef& rule : kRules) {
+    enabled[static_cast<std::size_t>(rule.id)] = rule.by_default == ByDefault::On;
+    severity[static_cast<std::size_t>(rule.id)] = rule.severity;
+  }
+  for (const TimeoutDef& t : kTimeouts) {
+    timeout_ns[static_cast<std::size_t>(t.id)] = std::int64_t{t.default_ms} * 1'000'000;
+  }
+  for (const LimitDef& l : kLimits) limit[static_cast<std::size_t>(l.id)] = l.default_value;
+}
+
+const LimitDef* limitByName(std::string_view name) {
+  for (const LimitDef& l : kLimits) {
+    if (name == l.name) return &l;
+  }
+  return nullptr;
+}
+
+std::optional<int> RuleSettings::readyModeFor(std::size_t axis) const {
+  if (axis < axis_ready_mode.size() && axis_ready_mode[axis]) return axis_ready_mode[axis];
+  return servo_ready_mode;
+}
+
+Status RuleSettings::disable(std::string_view code) {
+  const Result<const RuleDef*> rule = findRule(code);
+  if (!rule) return fail(rule.error());
+  enabled[static_cast<std::size_t>((*rule)->id)] = false;
+  return {};
+}
+
+Status RuleSettings::enable(std::string_view code) {
+  const Result<const RuleDef*> rule = findRule(code);
+  if (!rule) return fail(rule.error());
+  enabled[static_cast<std::size_t>((*rule)->id)] = true;
+  return {};
+}
+
+Status RuleSettings::setLimit(std::string_view name, std::int64_t value) {
+  const LimitDef* l = limitByName(name);
+  if (l == nullptr) {
+    std::vector<std::string> names;
+    for (const LimitDef& known : kLimits) names.emplace_back(known.name);
+    return fail(fmt::format("unknown limit '{}' (known: {}){}", name, fmt::join(names, ", "),
+                            didYouMean(name, names)));
+  }
+  if (value < l->min || value > l->max) {
+    return fail(
+        fmt::format("{} = {}: expected {} to {} ({})", name, value, l->min, l->max, l->unit));
+  }
+  limit[static_cast<std::size_t>(l->id)] = static_cast<std::uint32_t>(value);
+  return {};
+}
+
+Status RuleSettings::setSeverity(std::string_view code, std::string_view level) {
+  const Result<const RuleDef*> rule = findRule(code);
+  if (!rule) return fail(rule.error());
+  const std::optional<Severity> s = severityFromName(level);
+  if (!s) {
+    return fail(
+        fmt::format("severity '{}' for {}: expected error, warning or info", level, (*rule)->code));
+  }
+  severity[static_cast<std::size_t>((*rule)->id)] = *s;
+  return {};
+}
+
+Status RuleSettings::setTimeout(std::string_view name, std::int64_t ms) {
+  const std::optional<Timeout> t = timeoutFromName(name);
+  if (!t) return fail(unknownTimeoutMessage(name));
+  if (ms < 0 || ms > kMaxTimeoutMs) {
+    return fail(fmt::format("timeout {} = {} ms: expected 0 to {}", name, ms, kMaxTimeoutMs));
+  }
+  timeout_ns[static_cast<std::size_t>(*t)] = ms * 1'000'000;
+  return {};
+}
+
+}  // namespace ncservo

@@ -1,0 +1,295 @@
+#include "ncservo/rules/validator.hpp"
+
+#include <algorithm>
+
+namespace ncservo {
+
+Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fast_path)
+    : decoder_(std::move(options)),
+      settings_(std::move(settings)),
+      judged_(judgedBits(settings_, fast_path)),
+      fast_path_(fast_path == FastPath::On),
+      dc_(settings_.dc_settled_ns),
+      bus_(timingLimits(settings_)),
+      segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
+
+// The limits of the enabled timing rules (RULES.md COM-006, COM-007).
+TimingLimits Validator::timingLimits(const RuleSettings& settings) {
+  TimingLimits limits;
+  if (settings.isEnabled(RuleId::Com006)) {
+    limits.cycle_jitter_percent = settings.limitOf(Limit::CycleJitterPercent);
+  }
+  if (settings.isEnabled(RuleId::Com007)) {
+    limits.return_latency_ns = std::int64_t{settings.limitOf(Limit::ReturnLatencyUs)} * 1000;
+  }
+  return limits;
+}
+
+// What the fast path compares, derived from what the axis model and the enabled axis rules
+// declare they read (STYLE.md "A rule declares what it reads").
+Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath fast_path) {
+  Reads reads = AxisModel::kReads;
+  for (const RuleDef& rule : kRules) {
+    if (rule.kind == RuleKind::Axis && settings.isEnabled(rule.id)) reads = reads | rule.reads;
+  }
+  Judged judged;
+  if (fast_path == FastPath::Off) return judged;
+  for (const WordDef& def : kWords) {
+    const std::uint64_t bits = reads.bits[static_cast<std::size_t>(def.word)];
+    const WordClass word_class = reads.classes[static_cast<std::size_t>(def.word)];
+    if (bits == 0 && word_class == nullptr) continue;
+    JudgedPdo& pdo = def.pdo == Pdo::Rx ? judged.rx : judged.tx;
+    pdo.words[pdo.count++] = JudgedWord{static_cast<std::uint8_t>(def.word),
+                                        static_cast<std::uint8_t>(wordOffset(def.word)),
+                                        static_cast<std::uint8_t>(def.size), bits, word_class};
+  }
+  judged.al_state = reads.al_state;
+  return judged;
+}
+
+// Whether this frame's PDOs at the placement hold the judged bits the model last took. A PDO the
+// frame does not carry (or that is cut short) changes nothing, as readFrameValues reads it absent.
+bool Validator::unchanged(const AxisPlacement& placement, const ByteReader& bytes,
+                          const AxisModel& model) const {
+  if (judged_.al_state && model.alState()) return false;  // which PDOs a frame carries counts
+  const PdoValues& latest = model.latest();
+  auto same = [&](const JudgedPdo& judged, bool has, std::size_t offset, std::size_t size,
+                  bool had) {
+    if (!has || !bytes.has(offset, size)) return true;
+    if (!had) return false;
+    const std::uint8_t* pdo = bytes.data() + offset;
+    for (std::size_t i = 0; i < judged.count; ++i) {
+      const JudgedWord& w = judged.words[i];
+      const std::uint8_t* at = pdo + w.offset;
+      const std::uint64_t now = w.size == 4   ? detail::loadLe<4>(at)
+                                : w.size == 2 ? detail::loadLe<2>(at)
+                                              : detail::loadLe<8>(at);
+      const std::uint64_t then = latest.raw[w.index];
+      if (((now ^ then) & w.bits) != 0) return false;
+      if (w.word_class != nullptr && w.word_class(now) != w.word_class(then)) return false;
+    }
+    return true;
+  };
+  return same(judged_.rx, placement.has_rx, placement.rx_offset, kRxPdoSize, latest.has_rx) &&
+         same(judged_.tx, placement.has_tx, placement.tx_offset, kTxPdoSize, latest.has_tx);
+}
+
+const AxisModel* Validator::axis(std::size_t index) const {
+  if (index >= axes_.size() || !axes_[index].model) return nullptr;
+  return &*axes_[index].model;
+}
+
+CycleTimeSummary Validator::cycleTime() const {
+  CycleTimeSummary summary;
+  auto us = [](std::optional<std::int64_t> ns) -> std::optional<double> {
+    if (!ns) return std::nullopt;
+    return static_cast<double>(*ns) / 1000.0;
+  };
+  const IntervalStats intervals = bus_.captureIntervals();
+  summary.median_us = us(intervals.medianNs());
+  summary.p99_us = us(intervals.quantileNs(0.99));
+  summary.max_us = us(intervals.maxNs());
+  return summary;
+}
+
+void Validator::report(RuleId rule, std::optional<std::uint16_t> axis, const Stamp& since,
+                       std::string message) {
+  if (!settings_.isEnabled(rule)) return;
+  findings_.push_back(Finding{rule, settings_.severityOf(rule), axis,
+                              Stamp{now_.frame, frame_time_ns_}, since, std::move(message)});
+}
+
+Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
+  if (axis < axes_.size() && axes_[axis].model) return axes_[axis];
+  if (axis >= axes_.size()) axes_.resize(axis + 1u);
+  AxisSlot& s = axes_[axis];
+  s.model.emplace(axis, settings_.readyModeFor(axis));
+  return s;
+}
+
+const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
+                                         const EcatFrame& frame, const ByteReader& bytes) {
+  findings_.clear();
+  // RULES.md "Time": timestamps that go back a little do not move timers back; a discontinuity
+  // starts a segment with timers of its own.
+  const bool new_segment = segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs());
+  now_ = Stamp{frame_number, segments_.now()};
+  frame_time_ns_ = time_ns;
+  if (new_segment) startSegment();
+
+  FrameDecode& decode = view_.decode;
+  decoder_.placeAxes(frame, bytes, decode);
+  if (decode.any_malformed) cut_.add(frame_number, decode);
+  observeAl(frame, bytes);
+  dc_.onFrame(frame, bytes, decode.copy == CopyKind::Returned, decode.paired, frame_number,
+              time_ns);
+  // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
+  if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
+  const std::size_t axis_count = decode.axis_count;
+  if (axis_count == 0) {
+    // The bus rules judge cyclic traffic without servos too (docs/timing.md "Which frames").
+    if (BusModel::exchangesProcessData(frame, decode)) {
+      events_.clear();
+      accounts_.clear();
+      bus_.onCyclicFrame(frame, decode, now_, frame_time_ns_, events_, accounts_);
+      reportEvents();
+    }
+    return view_;
+  }
+  // The placements are in axis order: the slots grow once (which moves them), then this frame's
+  // are looked up once.
+  const std::uint16_t last_axis = decode.axes[axis_count - 1].axis;
+  if (last_axis >= axes_.size()) axes_.resize(last_axis + 1u);
+  for (std::size_t i = 0; i < axis_count; ++i) {
+    const AxisPlacement& placement = decode.axes[i];
+    AxisSlot& s = axes_[placement.axis];
+    if (!s.model) s.model.emplace(placement.axis, settings_.readyModeFor(placement.axis));
+    if (s.al_epoch != al_epoch_) {
+      syncAlState(placement, s);
+      s.al_epoch = al_epoch_;
+    }
+    frame_slots_[i] = &s;
+  }
+  events_.clear();
+  accounts_.clear();
+  const bool all_good = bus_.onCyclicFrame(frame, decode, now_, frame_time_ns_, events_, accounts_);
+  reportEvents();
+  applyAccounts();
+  // slot() may have grown the slots for an axis of an earlier master copy.
+  if (!accounts_.empty()) {
+    for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i] = &axes_[decode.axes[i].axis];
+  }
+  if (all_good) {
+    for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i]->model->cycleOk(now_);
+  }
+  for (std::size_t i = 0; i < axis_count; ++i) {
+    const AxisPlacement& placement = decode.axes[i];
+    AxisSlot& s = *frame_slots_[i];
+    AxisModel& model = *s.model;
+    // Fast path: the bits the model and the rules read are unchanged and no timer runs, so no
+    // condition can have changed (RULES.md reports at beginnings and at timeouts only). Only
+    // those words are read; the whole PDOs are read when the model takes them.
+    if (!fast_path_ || s.pending != 0 || s.evaluated_revision != model.revision() ||
+        !unchanged(placement, bytes, model)) {
+      PdoValues values;
+      readFrameValues(placement, bytes, values);
+      model.observe(values, now_);
+      evaluateAxis(s);
+      s.evaluated_revision = model.revision();
+    }
+    view_.states[i] = model.state();
+  }
+  return view_;
+}
+
+void Validator::applyAccounts() {
+  for (const AxisAccount& account : accounts_) {
+    AxisModel& model = *slot(account.axis).model;
+    if (account.outcome == AxisAccount::Outcome::Good) {
+      model.cycleOk(now_);
+    } else {
+      model.cycleFailed(account.outcome == AxisAccount::Outcome::Lost, account.cycles, now_);
+    }
+  }
+}
+
+void Validator::finish() {
+  findings_.clear();
+  events_.clear();
+  accounts_.clear();
+  bus_.finish(events_, accounts_);
+  reportEvents();
+  applyAccounts();
+  for (const AxisAccount& account : accounts_) evaluateAxis(slot(account.axis));
+}
+
+void Validator::startSegment() {
+  events_.clear();
+  bus_.startSegment(events_);
+  reportEvents();
+  al_.startSegment();
+  dc_.startSegment();
+  ++al_epoch_;  // the AL states are taken again
+  for (AxisSlot& s : axes_) {
+    if (!s.model) continue;
+    s.model->startSegment();
+    s.episodes = {};
+    s.pending = 0;
+    s.evaluated_revision.reset();
+  }
+}
+
+// The AL state of the axis's slave, where its station is known (ESM-002), and its entries into
+// OP since the last look (seed 001: the total failure counter resets), whichever frames showed
+// them: an AL status poll need not share a frame with the axis's PDOs.
+void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
+  const std::vector<AxisInfo>& infos = decoder_.axes();
+  if (placement.axis >= infos.size() || !infos[placement.axis].has_station) return;
+  const std::uint16_t station = infos[placement.axis].station;
+  AxisModel& model = *slot.model;
+  model.setAlState(al_.stateOfStation(station));
+  const std::uint32_t entries = al_.opEntries(station);
+  if (slot.al_station == station && entries != slot.op_entries) model.enteredOp();
+  slot.al_station = station;
+  slot.op_entries = entries;
+}
+
+// RULES.md "Time": a condition is reported once per episode — when it begins, or for a delayed
+// rule on the first frame more than its timeout after it began — and again only after it ended.
+void Validator::evaluateAxis(AxisSlot& s) {
+  const AxisModel& model = *s.model;
+  const RuleSubject subject{&model, nullptr};
+  for (const RuleDef& rule : kRules) {
+    if (rule.kind != RuleKind::Axis || !settings_.isEnabled(rule.id)) continue;
+    Episode& episode = s.episodes[static_cast<std::size_t>(rule.id)];
+    const bool was_pending = episode.active && !episode.reported;
+    if (!rule.check(subject, settings_)) {
+      if (was_pending) --s.pending;
+      episode.active = false;
+      continue;
+    }
+    if (!episode.active) episode = Episode{true, false, now_};
+    if (episode.reported) continue;
+    const std::int64_t held = now_.time_ns - episode.began.time_ns;
+    if (rule.delayed && held <= settings_.timeoutNs(*rule.timeout)) {
+      if (!was_pending) ++s.pending;
+      continue;
+    }
+    if (was_pending) --s.pending;
+    episode.reported = true;
+    report(rule.id, model.index(), episode.began, rule.describe(subject, settings_, held));
+  }
+}
+
+void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes) {
+  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
+  events_.clear();
+  al_.onFrame(frame, bytes, view_.decode.copy == CopyKind::Returned, view_.decode.paired, now_,
+              events_);
+  reportEvents();
+}
+
+const FrameTiming& Validator::frameTiming() const {
+  static const FrameTiming kNone;
+  return bus_.frameTiming().frame == now_.frame ? bus_.frameTiming() : kNone;
+}
+
+// The bus and slave rules on this frame's events; a slave's finding names the axis whose
+// station it is.
+void Validator::reportEvents() {
+  for (const BusEvent& event : events_) {
+    event_findings_.clear();
+    judgeEvent(event, settings_, event_findings_);
+    for (EventFinding& f : event_findings_) {
+      std::optional<std::uint16_t> axis;
+      for (const AxisInfo& info : decoder().axes()) {
+        if (info.has_station && f.slave.station && info.station == *f.slave.station) {
+          axis = info.index;
+        }
+      }
+      report(f.rule, axis, event.since, std::move(f.message));
+    }
+  }
+}
+
+}  // namespace ncservo
