@@ -28,9 +28,9 @@ build=$(cd "${1:?usage: tshark_mutations.sh [-n N] [-r RATES] [-s SEED] [-k DIR]
 keep=${keep:-$build/tshark-mutations}
 plugin="$build/plugin/ncservo.so" ncservo="$build/validator/ncservo"
 run_tshark="$src/tests/tools/tshark-with-plugin.sh"
-work=$(mktemp -d)
-chmod 755 "$work"  # tshark runs as nobody when this runs as root
-trap 'rm -rf "$work"' EXIT
+SRC=$src BUILD=$build
+source "$src/tests/integration/lib.sh"  # skip, require_path, REAL_CAPTURES, and a WORK folder
+work=$WORK
 export WIRESHARK_ABORT_ON_DISSECTOR_BUG=1 WIRESHARK_ABORT_ON_TOO_MANY_ITEMS=1
 limit=120  # seconds per run
 
@@ -41,9 +41,11 @@ for capture in "$src"/captures/*.pcap; do
   editcap -r "$capture" "$base" 1-250 1650-1800 3400-3500 >/dev/null
   bases+=("$base")
 done
-for capture in "$src"/../shared/captures/real/*; do
-  case $capture in *.pcap | *.pcapng | *.cap) bases+=("$capture") ;; esac
-done
+if [ -e "$REAL_CAPTURES" ]; then
+  for capture in "$REAL_CAPTURES"/*; do
+    case $capture in *.pcap | *.pcapng | *.cap) bases+=("$capture") ;; esac
+  done
+fi
 
 count=0 failed=0
 # check NAME MUTANT CUT: runs tshark and validate on one mutant; CUT=1 allows "cut short".
@@ -110,3 +112,5 @@ for base in "${bases[@]}"; do
 done
 echo "tshark_mutations: $count mutants of ${#bases[@]} captures, $failed failed"
 [ $failed = 0 ]
+# Without the real captures the bundled ones' mutants have run, and the test says it skipped those.
+require_path "$REAL_CAPTURES" "real captures (the bundled captures' mutants passed)"

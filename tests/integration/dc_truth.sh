@@ -10,8 +10,8 @@
 # with `validate --format json`'s `timing.dc`. A capture without DC reads has an empty list.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
-real="$SRC/../shared/captures/real"
-[ -d "$real" ] || fail "no real captures at $real"
+require_path "$REAL_CAPTURES" "real captures"
+real=$REAL_CAPTURES
 
 check() {  # CAPTURE EXPECTED_STATIONS
   local capture=$real/$1 stations=$2 name=$1

@@ -7,7 +7,7 @@
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
-[ "$(id -u)" = 0 ] || { echo "SKIPPED: needs root (chroot, apt-get in it)"; exit 77; }
+[ "$(id -u)" = 0 ] || skip "needs root (chroot, apt-get in it)"
 if grep -q '^NCSERVO_SANITIZE:BOOL=ON' "$BUILD/CMakeCache.txt"; then
   echo "SKIPPED: a sanitizer build's package is not one to install (the plain build's run tests it)"
   exit 77
@@ -19,7 +19,7 @@ if [ ! -x "$cached/usr/bin/apt-get" ]; then
       "'debootstrap --variant=minbase bookworm $cached', or run under CI (CI=1) to make it here"
     exit 77
   fi
-  command -v debootstrap >/dev/null || fail "debootstrap not installed (.ci/setup)"
+  require_program debootstrap
   debootstrap --variant=minbase bookworm "$cached.partial" "${NCSERVO_DEBIAN_MIRROR:-http://deb.debian.org/debian}" >"$WORK/debootstrap.log" 2>&1 ||
     fail "debootstrap: $(tail -5 "$WORK/debootstrap.log")"
   mv "$cached.partial" "$cached"

@@ -18,6 +18,30 @@ fail() {
   exit 1
 }
 
+# skip REASON: what the test needs is not on this machine. Says why and exits 77 (ctest: Skipped);
+# under CI (CI set and not empty) nothing may be missing, so it fails instead.
+skip() {
+  [ -z "${CI:-}" ] || fail "$* (CI is set: a test may not skip)"
+  echo "SKIPPED: $*"
+  exit 77
+}
+
+# require_program PROGRAM...: each is on PATH, else skip naming the first one missing.
+require_program() {
+  local program
+  for program in "$@"; do
+    command -v "$program" >/dev/null || skip "$program not installed (.ci/setup installs it)"
+  done
+}
+
+# require_path PATH WHAT: PATH exists, else skip saying WHAT it is.
+require_path() {
+  [ -e "$1" ] || skip "no $2 at $1"
+}
+
+# The real captures from other people's hardware, beside the repository (never copied into it).
+REAL_CAPTURES="$SRC/../shared/captures/real"
+
 # tshark_fields CAPTURE OUT [tshark options...]: every PDO field, one column each.
 tshark_fields() {
   local capture=$1 out=$2

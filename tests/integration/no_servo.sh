@@ -6,12 +6,12 @@
 # 2, 3, 1, 4, 0.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
-real="$SRC/../shared/captures/real"
-empty="$real/wiki-beckhoff-startup.cap"              # no servo, no finding
-empty_findings="$real/soem-akd-servo-pdo-mapping.pcapng"  # no servo, a bus finding
+require_path "$REAL_CAPTURES" "real captures"
+empty="$REAL_CAPTURES/wiki-beckhoff-startup.cap"              # no servo, no finding
+empty_findings="$REAL_CAPTURES/soem-akd-servo-pdo-mapping.pcapng"  # no servo, a bus finding
 clean="$SRC/captures/commissioning-4axis.pcap"
 faults="$SRC/captures/faults-4axis.pcap"
-[ -f "$empty" ] && [ -f "$empty_findings" ] || fail "no real captures at $real"
+[ -f "$empty" ] && [ -f "$empty_findings" ] || fail "the real captures at $REAL_CAPTURES lack $empty or $empty_findings"
 
 # status EXPECTED ARGS...: runs validate, checks its exit status
 status() {

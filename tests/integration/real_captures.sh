@@ -6,8 +6,8 @@
 # ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis and says so.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
-real="$SRC/../shared/captures/real"
-[ -d "$real" ] || fail "no real captures at $real"
+require_path "$REAL_CAPTURES" "real captures"
+real=$REAL_CAPTURES
 count=0
 for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   [ -f "$capture" ] || continue

@@ -7,7 +7,8 @@
 # the drive refuses SAFE-OP (AL status code 0x001D) raises exactly that ESM-003.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
-real="$SRC/../shared/captures/real"
+require_path "$REAL_CAPTURES" "real captures"
+real=$REAL_CAPTURES
 # capture | ESM rules (warning or above) its start-up must raise
 cases=(
   "wiki-beckhoff-startup.cap|"

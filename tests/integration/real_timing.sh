@@ -17,9 +17,8 @@
 #   each reported at the next master copy, late or lost as the interval after it says.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
-real="$SRC/../shared/captures/real"
-[ -d "$real" ] || fail "no real captures at $real"
-command -v tshark >/dev/null || fail "no tshark"
+require_path "$REAL_CAPTURES" "real captures"
+real=$REAL_CAPTURES
 judged=0
 for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   [ -f "$capture" ] || continue

@@ -3,16 +3,13 @@
 # `ncservo decode --format vcd` (issue 16) on the bundled captures and on simulated ones (faults,
 # image styles, a probe, returned copies only, lost returns): every value change agrees with
 # `decode --format jsonl` and the findings with `validate --format jsonl` (check_vcd.py);
-# vcd2fst accepts every VCD and fst2vcd's reading of it agrees too; GTKWave (under Xvfb, when
-# installed) opens the save file with the signals it names; --axis chooses the scopes; a failed
-# write is an error.
+# vcd2fst accepts every VCD and fst2vcd's reading of it agrees too; GTKWave (under Xvfb) opens
+# the save file with the signals it names; --axis chooses the scopes; a failed write is an error.
+# A missing tool or /dev/full: exit 77 with the reason (under CI: fails).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 CHECK_VCD="$SRC/tests/tools/check_vcd.py"
-if ! command -v vcd2fst >/dev/null || ! command -v fst2vcd >/dev/null; then
-  echo "SKIPPED: vcd2fst and fst2vcd (Debian gtkwave, .ci/setup) not found"
-  exit 77
-fi
+require_program vcd2fst fst2vcd
 
 captures=("$SRC"/captures/*.pcap "$SRC"/captures/*.pcapng)
 sim() {
@@ -66,31 +63,28 @@ set -e
 grep -q "axis9: no such axis" "$WORK/err" || fail "--axis axis9: $(cat "$WORK/err")"
 
 # A failed write is an error, not a short VCD (the text is written on a thread of its own).
-if [ -w /dev/full ]; then
-  set +e
-  "$NCSERVO" decode --format vcd "$WORK/faults-8axis.pcap" >/dev/full 2>"$WORK/err"
-  rc=$?
-  set -e
-  [ $rc = 2 ] || fail "decode vcd to a full disk: exit $rc, expected 2"
-  grep -q "^ncservo: standard output: cannot write: No space left on device$" "$WORK/err" ||
-    fail "decode vcd to a full disk: $(cat "$WORK/err")"
-fi
+[ -w /dev/full ] || skip "/dev/full is not writable (the full-disk case)"
+set +e
+"$NCSERVO" decode --format vcd "$WORK/faults-8axis.pcap" >/dev/full 2>"$WORK/err"
+rc=$?
+set -e
+[ $rc = 2 ] || fail "decode vcd to a full disk: exit $rc, expected 2"
+grep -q "^ncservo: standard output: cannot write: No space left on device$" "$WORK/err" ||
+  fail "decode vcd to a full disk: $(cat "$WORK/err")"
 
-# GTKWave opens the save file alone, from elsewhere, and shows every signal it names.
-if command -v gtkwave >/dev/null && command -v xvfb-run >/dev/null; then
-  cat >"$WORK/shown.tcl" <<'TCL'
+# GTKWave opens the save file alone, from elsewhere, and shows every signal it names (last: the
+# cases above have run when GTKWave or Xvfb is missing, and the test says it skipped this one).
+require_program gtkwave xvfb-run
+cat >"$WORK/shown.tcl" <<'TCL'
 puts "SHOWN [llength [gtkwave::getDisplayedSignals]]"
 gtkwave::/File/Quit
 TCL
-  mkdir "$WORK/moved"
-  cp "$WORK/faults-4axis.pcap.vcd" "$WORK/faults-4axis.pcap.gtkw" "$WORK/moved/"
-  rm "$WORK/faults-4axis.pcap.vcd"
-  named=$(grep -c -v -E '^(\[|@|-)' "$WORK/moved/faults-4axis.pcap.gtkw")
-  shown=$(cd / && timeout 120 xvfb-run -a gtkwave "$WORK/moved/faults-4axis.pcap.gtkw" \
-    -S "$WORK/shown.tcl" 2>&1 | sed -n 's/^SHOWN //p')
-  [ "$shown" = "$named" ] || fail "GTKWave shows ${shown:-no} signals of the $named the save file names"
-  [ "$named" = 53 ] || fail "the save file names $named signals, expected 1 + 4 axes x 13"
-else
-  echo "note: gtkwave or xvfb-run not installed, the save file was not opened"
-fi
+mkdir "$WORK/moved"
+cp "$WORK/faults-4axis.pcap.vcd" "$WORK/faults-4axis.pcap.gtkw" "$WORK/moved/"
+rm "$WORK/faults-4axis.pcap.vcd"
+named=$(grep -c -v -E '^(\[|@|-)' "$WORK/moved/faults-4axis.pcap.gtkw")
+shown=$(cd / && timeout 120 xvfb-run -a gtkwave "$WORK/moved/faults-4axis.pcap.gtkw" \
+  -S "$WORK/shown.tcl" 2>&1 | sed -n 's/^SHOWN //p')
+[ "$shown" = "$named" ] || fail "GTKWave shows ${shown:-no} signals of the $named the save file names"
+[ "$named" = 53 ] || fail "the save file names $named signals, expected 1 + 4 axes x 13"
 echo "waveforms: ${#captures[@]} captures agree with decode and validate; vcd2fst reads them all"
