@@ -20,8 +20,10 @@ trap 'rm -rf "$work"' EXIT
 capture=${3:-}
 if [ -z "$capture" ]; then
   capture=$work/bench.pcap
-  python3 "$root/tests/tools/gen_capture.py" --axes 8 --seed 3 \
-    --cycles "${NCSERVO_BENCH_CYCLES:-250000}" -o "$capture" >/dev/null
+  cycles=${NCSERVO_BENCH_CYCLES:-250000}
+  # every axis enabled within the learning window, so that validate infers the layout
+  python3 "$root/tests/tools/gen_capture.py" --axes 8 --seed 3 --cycles "$cycles" \
+    --enable-by $((cycles / 10 < 2048 ? cycles / 10 : 2048)) -o "$capture" >/dev/null
 fi
 seconds() {  # BINARY: wall seconds of one run
   local start end

@@ -190,9 +190,11 @@ def wrap32(value):
 class Plan:
     """When each phase of one axis's session starts, scaled to the run length."""
 
-    def __init__(self, axis, n_axes, cycles, rng):
+    def __init__(self, axis, n_axes, cycles, rng, enable_by=None):
         stagger = axis * max(1, cycles // (20 * n_axes))
         self.enable = max(3, cycles // 50) + stagger
+        if enable_by is not None:  # the same staggered enables, squeezed into [B/4, 3B/4)
+            self.enable = max(3, enable_by // 4) + axis * max(1, enable_by // (2 * n_axes))
         self.table_change = int(cycles * 0.35) + stagger
         self.reverse = int(cycles * 0.45) + stagger
         fault_axis = 1 if n_axes > 1 else 0
@@ -1280,7 +1282,8 @@ class Session:
     def __init__(self, args, injections=(), expect=None, self_check=False):
         self.ncs, self.drives = [], []
         for axis in range(args.axes):
-            plan = Plan(axis, args.axes, args.cycles, random.Random(f"{args.seed}/plan/{axis}"))
+            plan = Plan(axis, args.axes, args.cycles, random.Random(f"{args.seed}/plan/{axis}"),
+                        args.enable_by)
             self.ncs.append(Nc(axis, plan, random.Random(f"{args.seed}/nc/{axis}")))
             self.drives.append(Drive(axis, plan, args.cycle_us,
                                      random.Random(f"{args.seed}/drive/{axis}"), args.ready_mode))
@@ -1398,6 +1401,9 @@ def parse_args(argv):
     p.add_argument("--return-delay-us", type=int, default=20,
                    help="returned copy after the master copy, us (default 20)")
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--enable-by", type=int, metavar="CYCLE",
+                   help="every axis enabled before CYCLE, whatever the run length (default: "
+                        "axis 0 at 2%% of the cycles, the others staggered after it)")
     p.add_argument("--encap", choices=("eth", "vlan", "qinq", "udp"), default="eth")
     p.add_argument("--format", choices=("pcap", "pcapng"), default="pcap")
     p.add_argument("--nanosecond", action="store_true", help="pcap with nanosecond timestamps")
@@ -1426,6 +1432,8 @@ def parse_args(argv):
         p.error("--axes must be 1..29 (one LRW of at most 1486 bytes)")
     if args.cycles < 200:
         p.error("--cycles must be at least 200 for the session to fit")
+    if args.enable_by is not None and not 8 <= args.enable_by <= args.cycles // 10:
+        p.error("--enable-by must be 8..cycles/10, so the enables end before the rest of the session")
     if not 0 < args.return_delay_us < args.cycle_us:
         p.error("--return-delay-us must be positive and below --cycle-us")
     if not 0 <= args.loss < 1:
