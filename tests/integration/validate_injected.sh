@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # validate_injected.sh SRC BUILD RULE [generator options...]
 # A violation of RULE injected by the independent generator is reported by `ncservo validate` with
-# the right rule, axis and a frame inside the violation's window, nothing else at warning or above
+# the right rule, axis and a frame inside the violation's window, nothing else of any severity
 # but the companions the generator names; and tshark with the plugin shows the finding
 # (ncservo.rule.<slug>) on exactly the frames the validator reports for that rule.
 SRC=$1 BUILD=$2 RULE=$3
