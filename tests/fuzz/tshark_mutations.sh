@@ -113,4 +113,4 @@ done
 echo "tshark_mutations: $count mutants of ${#bases[@]} captures, $failed failed"
 [ $failed = 0 ]
 # Without the real captures the bundled ones' mutants have run, and the test says it skipped those.
-require_path "$REAL_CAPTURES" "real captures (the bundled captures' mutants passed)"
+require_path "$REAL_CAPTURES" "real captures" "the bundled captures' mutants passed"

@@ -100,7 +100,7 @@ rc=0; "$NCSERVO" annotate "$WORK/same.pcap" "$WORK/./same.pcap" 2>"$WORK/err" ||
 cmp -s "$WORK/same.pcap" "$SRC/captures/faults-4axis.pcap" || fail "the input was written"
 
 # The real captures last: without them the cases above have run, and the test says it skipped these.
-require_path "$REAL_CAPTURES" "real captures (the bundled and simulated ones passed)"
+require_path "$REAL_CAPTURES" "real captures" "the bundled and simulated ones passed"
 for input in "$REAL_CAPTURES"/*.pcapng "$REAL_CAPTURES"/*.cap; do
   annotated "$input"
 done

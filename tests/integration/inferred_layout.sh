@@ -49,7 +49,7 @@ grep -q "ambiguous" "$WORK/idle.txt" || fail "idle capture: no 'ambiguous' messa
 echo "inferred_layout: the inferred layout reports what the exact configuration reports"
 
 # The real captures last: without them the cases above have run, and the test says it skipped these.
-require_path "$REAL_CAPTURES" "real captures (the simulated cases passed)"
+require_path "$REAL_CAPTURES" "real captures" "the simulated cases passed"
 for capture in "$REAL_CAPTURES"/*.pcap* "$REAL_CAPTURES"/*.cap; do
   set +e
   "$NCSERVO" validate --format json "$capture" >"$WORK/real.json" 2>/dev/null

@@ -34,13 +34,13 @@ require_program() {
   done
 }
 
-# require_path PATH WHAT: PATH exists, else skip saying WHAT it is.
+# require_path PATH WHAT [DONE]: PATH exists, else skip saying WHAT it is (and DONE: what ran).
 require_path() {
-  [ -e "$1" ] || skip "no $2 at $1"
+  [ -e "$1" ] || skip "no $2 at $1${3:+; $3}"
 }
 
 # The real captures from other people's hardware, beside the repository (never copied into it).
-REAL_CAPTURES="$SRC/../shared/captures/real"
+REAL_CAPTURES="$(cd "$SRC/.." && pwd)/shared/captures/real"
 
 # tshark_fields CAPTURE OUT [tshark options...]: every PDO field, one column each.
 tshark_fields() {
