@@ -1,4 +1,4 @@
-// Each slave's EtherCAT state machine (al_tracker.hpp, PROTOCOL.md §8; RULES.md ESM-001, ESM-003,
+// Each slave's EtherCAT state machine (al_tracker.hpp, docs/protocol.md §8; docs/rules.md#esm-001, ESM-003,
 // ESM-004), on frames built byte by byte and walked over exact-size heap buffers.
 #include "ncservo/model/al_tracker.hpp"
 
@@ -131,7 +131,7 @@ struct Harness {
     for (const AlFinding& f : findings) n += f.rule == rule ? 1 : 0;
     return n;
   }
-  bool anyEsm() const {  // RULES.md: ESM-004 is information, not an "ESM finding"
+  bool anyEsm() const {  // ESM-004 is information, not an "ESM finding"
     return count(RuleId::Esm001) + count(RuleId::Esm002) + count(RuleId::Esm003) > 0;
   }
 };

@@ -1,4 +1,4 @@
-// Learning the servos' layout from the capture's start-up (layout_learner.hpp, PROTOCOL.md §9.3):
+// Learning the servos' layout from the capture's start-up (layout_learner.hpp, docs/protocol.md §9.3):
 // the SM and FMMU register writes, byte by byte, then the simulator's start-ups as the truth.
 #include "ncservo/layout/layout_learner.hpp"
 
