@@ -193,7 +193,7 @@ TEST(RuleTable, DelayedRulesHaveATimeoutAxisRulesCheckAndDescribe) {
   }
 }
 
-// docs/timing.md#rule-time: the "used by" column of the timeout table (COM-003's text names
+// docs/rules.md: the "used by" column of the timeout table (COM-003's text names
 // drive_response too).
 TEST(RuleTable, TimeoutsAndTheRulesThatUseThem) {
   struct Row {

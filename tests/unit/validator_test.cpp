@@ -699,10 +699,10 @@ TEST(ValidatorNominal, AReportedFaultGoesIntoTheHistoryAndTheTimeline) {
   EXPECT_EQ(axis->totalFailures(), 0u);
 }
 
-// ---- "Time": timestamps going backwards are not an error ----
+// ---- Rule time: timestamps going backwards are not an error ----
 
-// docs/timing.md#rule-time: "Timestamps that go backwards do not move timers back (a timer uses the latest
-// time seen) and are not an error." Here every cycle is captured and one master copy carries a
+// docs/timing.md#rule-time: a timestamp that goes back is no error and moves no timer back (the
+// timers keep the latest time). Here every cycle is captured and one master copy carries a
 // timestamp 8 ms in the past. The validator puts that master copy at the latest time seen (R(14),
 // 14 ms) for its cycle clock, so the next master copy (16 ms) is 2 ms after it: COM-002 reports
 // "1 cycle missing" on M(16) and counts a lost cycle for the axis, though no cycle is missing.
@@ -762,8 +762,8 @@ TEST(ValidatorCycleTime, MedianP99AndMaxOfTheMasterIntervals) {
   EXPECT_EQ(driver->validator().cycles(), 99u);
 }
 
-// docs/rules.md#com-003 counts "at least 3 consecutive cycles failed (missing from the capture, not
-// returned, or returned with WKC 0)". Below, two lost cycles, then one returned with WKC 2 (a
+// docs/rules.md#com-003 counts 3 or more failed cycles in a row: missing from the capture, not
+// returned, or returned with WKC 0. Below, two lost cycles, then one returned with WKC 2 (a
 // wrong WKC, but the drive took its outputs: traffic went through, docs/protocol.md §8), then one lost
 // cycle: no 3 consecutive lost cycles, so the drive had no reason to raise ECatTErr.
 // BUG (axis_model.cpp, AxisModel::cycleFailed): a failed-but-not-lost cycle does not end the run
@@ -886,9 +886,8 @@ TEST(ValidatorEsm, Esm002PdoOutsideOp) {
   }
 }
 
-// docs/rules.md#esm-002: "its inputs are exchanged before SAFE-OP". An axis in PRE-OP whose inputs are
-// exchanged every cycle is one lasting condition, reported once ("A condition that lasts is
-// reported once"). The check (rules.cpp, esm002) looks at whether *this frame* carries inputs,
+// docs/rules.md#esm-002: inputs exchanged with an axis before SAFE-OP. An axis in PRE-OP whose inputs are
+// exchanged every cycle is one lasting condition, reported once (docs/timing.md#rule-time). The check (rules.cpp, esm002) looks at whether *this frame* carries inputs,
 // so the condition is false on every master copy and true again on every returned copy: the
 // episode ends and restarts each cycle and ESM-002 is reported on every returned copy (40 times
 // in 40 cycles here), where COM-001's WKC episodes, for instance, last across master copies.

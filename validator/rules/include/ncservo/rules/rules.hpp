@@ -26,7 +26,7 @@ std::optional<Severity> severityFromName(std::string_view name);
 enum class Party : std::uint8_t { Nc, Drive, Bus };
 const char* partyName(Party party);
 
-// docs/timing.md#rule-time: the configurable timeouts, in milliseconds. `capture_pause` is no rule's: a
+// The configurable timeouts (docs/configuration.md#timeouts), in milliseconds. `capture_pause` is no rule's: a
 // forward jump of the capture's timestamps longer than it starts a new segment (docs/protocol.md §8).
 enum class Timeout : std::uint8_t {
   DriveResponse,
@@ -145,7 +145,7 @@ struct RuleDef {
   Party party;
   RuleKind kind;
   const char* clause;              // where the protocol says so
-  std::optional<Timeout> timeout;  // the timeout the rule uses (docs/timing.md#rule-time)
+  std::optional<Timeout> timeout;  // the timeout the rule uses (docs/rules.md)
   bool delayed;                    // reported when the condition outlasts the timeout
   ByDefault by_default;
   Reads reads;  // axis rules: what check and describe read of the axis
