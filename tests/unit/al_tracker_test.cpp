@@ -1,5 +1,5 @@
-// Each slave's EtherCAT state machine (al_tracker.hpp, docs/protocol.md §8; docs/rules.md#esm-001, ESM-003,
-// ESM-004), on frames built byte by byte and walked over exact-size heap buffers.
+// Each slave's EtherCAT state machine (al_tracker.hpp, docs/protocol.md §8; ESM-001, ESM-003 and
+// ESM-004 of docs/rules.md), on frames built byte by byte and walked over exact-size heap buffers.
 #include "ncservo/model/al_tracker.hpp"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // The model of one axis (axis_model.hpp): signal levels and edges, the valid enable of
-// docs/protocol.md §2, the error history of §7 (newest first, at most eight), the state timeline of §6, the
-// Servo_Ready_Mode of §5, and the telegram-failure counters of docs/rules.md COM-*. One row per case.
+// docs/protocol.md §2, the error history of §7 (newest first, at most eight), the state timeline
+// of §6, the Servo_Ready_Mode of §5, and the telegram-failure counters (COM-*). One row per case.
 #include "ncservo/model/axis_model.hpp"
 
 #include <gtest/gtest.h>
@@ -411,8 +411,8 @@ TEST(AxisModelSignals, EdgesAndSince) {
   }
 }
 
-// docs/protocol.md §2: a valid enable is SE 0x1 -> 0x2 (or 0x2 when first seen), held since; any other
-// way to 0x2 is the illegal edge of SE-001, for the frame it happens in.
+// docs/protocol.md §2: a valid enable is SE 0x1 -> 0x2 (or 0x2 when first seen), held since; any
+// other way to 0x2 is the illegal edge of SE-001, for the frame it happens in.
 struct EnableCase {
   const char* name;
   std::vector<std::uint32_t> se;  // SCW.SE per frame, from frame 1

@@ -240,7 +240,7 @@ TEST(DefaultLayout, TwoCyclicDatagramsNumberTheirAxesInOrderOfFirstSight) {
   EXPECT_EQ(decoder.axes()[2].outputs, 0x20000u);
 }
 
-// ---- Start-up (docs/protocol.md §9.3, §9.4: no default layout when the start-up shows no servo) ----
+// ---- Start-up (docs/protocol.md §9.3, §9.4: no default layout when it shows no servo) ----
 
 struct StartupCase {
   const char* name;
@@ -675,7 +675,7 @@ TEST(CycleRows, PairsMasterOutputsWithReturnedInputs) {
   }
 }
 
-// ---- Layout learned from the start-up, and the precedence of the sources (docs/protocol.md §9) ----
+// ---- Layout from the start-up, and the precedence of the sources (docs/protocol.md §9) ----
 
 // A servo's start-up at `adp` (a station or an alias): SM2/SM3 of 10/40 bytes and, when
 // `logical` is given, FMMUs mapping them there (outputs, then inputs).
@@ -784,7 +784,7 @@ TEST(LayoutPrecedence, ConfigurationThenEniThenStartupThenDefault) {
   }
 }
 
-// docs/protocol.md §9.4: the default layout applies unless the user (--no-default-layout, the plugin's
+// docs/protocol.md §9.4: the default layout applies unless the user (--no-default-layout, a plugin
 // preference) or the configuration (default_layout = false) rules it out; §9.1-9.2: a
 // configuration's axes come before an ENI's, and a configuration without axes gives none.
 struct LayoutOptionsCase {

@@ -63,8 +63,8 @@ void addRuleOptions(CLI::App& command, RuleArgs& rules);
 Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
                      RuleSettings& settings);
 
-// docs/cli.md#exit-status: an output path that is one of the inputs, however named, is a usage error,
-// checked before anything is opened for writing.
+// docs/cli.md#exit-status: an output path that is one of the inputs, however named, is a usage
+// error, checked before anything is opened for writing.
 Status refuseInputAsOutput(const std::string& option, const std::string& output,
                            const std::vector<std::string>& captures);
 

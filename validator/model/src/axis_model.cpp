@@ -10,7 +10,7 @@ namespace ncservo {
 
 namespace {
 constexpr std::uint32_t kSe = mask32("ncservo.scw.se");
-constexpr std::uint32_t kSeArmed = 0x1;  // docs/protocol.md §2: 0x2 enables only when reached from 0x1
+constexpr std::uint32_t kSeArmed = 0x1;  // docs/protocol.md §2: 0x2 enables only from 0x1
 constexpr std::uint32_t kSeEnable = 0x2;
 constexpr std::uint32_t kEmgon = mask32("ncservo.scw.emgon");
 constexpr std::uint32_t kBrake = mask32("ncservo.scw.brake");
@@ -253,7 +253,7 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
   latest_.has_tx = true;
   saw_inputs_ = true;
 
-  // docs/rules.md#rdy-001: the mode is inferred from the first observation with ServoEn 0 and no error.
+  // docs/rules.md#rdy-001: the mode is inferred from the first sight of ServoEn 0 and no error.
   if (!ready_mode_ && servo_en_.off() && servo_errors_.off()) {
     ready_mode_ = servo_rdy_.on() ? 0 : 1;
   }

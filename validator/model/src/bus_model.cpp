@@ -151,7 +151,7 @@ IntervalStats BusModel::captureIntervals() const {
   return all;
 }
 
-// Telegram accounting (docs/rules.md#com-002, COM-004; failures for COM-003 and COM-005). The clock is
+// Telegram accounting (docs/rules.md#com-002, COM-004; failures for COM-003, COM-005). The clock is
 // the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
 bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
                              std::int64_t frame_time_ns, std::vector<BusEvent>& events,
@@ -222,7 +222,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
 // One tick of a cyclic frame's clock: the interval statistics, COM-002 and COM-006.
 void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
   ++cyclic.ticks;
-  // docs/timing.md#rule-time: a timestamp that went backwards is not an error; the interval it would
+  // docs/timing.md#rule-time: a timestamp that went back is not an error; the interval it would
   // give is unknown, so the clock of this cyclic frame starts again at the next tick.
   if (frame_time_ns_ < now_.time_ns) {
     cyclic.last_tick.reset();
@@ -291,7 +291,7 @@ void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
   cyclic.pending_gap.reset();
 }
 
-// docs/rules.md#com-006: one finding per run of deviating cycles. A gap deviates too but is COM-002's:
+// docs/rules.md#com-006: one finding per run of deviating cycles. A gap deviates but is COM-002's:
 // it starts a run without a finding, so a late cycle's short interval after it is not reported.
 void BusModel::judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int64_t nominal,
                            bool gap) {
@@ -381,7 +381,7 @@ BusModel::WkcPlan& BusModel::wkcPlan(const EcatFrame& frame, const FrameDecode& 
   return plan;
 }
 
-// docs/rules.md#com-001 on each returned process-data datagram, and each axis's cycle: lost (WKC 0),
+// docs/rules.md#com-001 on each returned process-data datagram; each axis's cycle: lost (WKC 0),
 // failed (another wrong WKC) or good.
 bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode) {
   WkcPlan& plan = wkcPlan(frame, decode);

@@ -701,8 +701,8 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-// The formats of `validate` (docs/cli.md#reports): name, keeps findings, locates frames, draws timelines,
-// begin capture, finding, end capture, finish.
+// The formats of `validate` (docs/cli.md#reports): name, keeps findings, locates frames, draws
+// timelines, begin capture, finding, end capture, finish.
 const ReportFormat kReportFormats[] = {
     {"text", false, false, false, writeTextHeading, writeTextFinding, writeTextSummary,
      writeTextVerdict},

@@ -387,7 +387,7 @@ std::string esm001Text(const AlControlEvent& e, const Stamp&, const RuleSettings
                      alStateName(e.known_state), allowedFrom(e.known_state));
 }
 
-// docs/rules.md#esm-003, #esm-004: judged against the requested state, or with none seen the previous one.
+// docs/rules.md#esm-003, #esm-004: judged on the requested state, or with none the previous one.
 bool errorAboveInit(const AlErrorEvent& e) {
   const std::optional<std::uint8_t> reference = e.requested ? e.requested : e.previous;
   return reference && alStateAboveInit(*reference);

@@ -110,8 +110,8 @@ Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
 const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                          const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
-  // docs/timing.md#rule-time: timestamps that go back a little do not move timers back; a discontinuity
-  // starts a segment with timers of its own.
+  // docs/timing.md#rule-time: timestamps that go back a little do not move timers back; a
+  // discontinuity starts a segment with timers of its own.
   const bool new_segment = segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs());
   now_ = Stamp{frame_number, segments_.now()};
   frame_time_ns_ = time_ns;
@@ -234,8 +234,8 @@ void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
   slot.op_entries = entries;
 }
 
-// docs/timing.md#rule-time: a condition is reported once per episode — when it begins, or for a delayed
-// rule on the first frame more than its timeout after it began — and again only after it ended.
+// docs/timing.md#rule-time: a condition is reported once per episode — when it begins, or for a
+// delayed rule on the first frame past its timeout after it began — and again only after it ended.
 void Validator::evaluateAxis(AxisSlot& s) {
   const AxisModel& model = *s.model;
   const RuleSubject subject{&model, nullptr};

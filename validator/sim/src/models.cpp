@@ -52,7 +52,7 @@ constexpr std::uint32_t kReservedErrorBit = 1U << 25;
 constexpr std::uint32_t kReservedStatusBit = 1U << 13;
 constexpr std::uint32_t kReservedControlBit = 1U << 20;
 constexpr std::int32_t kUndefinedMessageCode = 7;
-constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: no data for 3 cycles (docs/protocol.md §4)
+constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: 3 cycles, no data (docs/protocol.md §4)
 
 }  // namespace
 

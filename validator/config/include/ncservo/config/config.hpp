@@ -1,4 +1,4 @@
-// The TOML configuration file (docs/configuration.md). Errors are values that name file, line and key.
+// The TOML configuration file (docs/configuration.md). Errors are values naming file, line and key.
 #pragma once
 
 #include <cstdint>

@@ -91,7 +91,7 @@ struct DecoderOptions {
   // Explicit layout (a configuration, an ENI, or inferred by a LayoutWindow); empty = none.
   std::vector<AxisConfig> axes;
   LayoutSource explicit_source = LayoutSource::Config;  // where `axes` came from
-  // The layout may be inferred from the cyclic traffic (docs/protocol.md §9.4; a LayoutWindow does).
+  // The layout may be inferred from the cyclic traffic (docs/protocol.md §9.4, by a LayoutWindow).
   bool default_layout = true;
   // Why the inference refused to decide (for noServoReason); empty when it did not run.
   std::string inference_refusal;

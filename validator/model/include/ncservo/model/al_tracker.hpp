@@ -1,6 +1,6 @@
-// Each slave's EtherCAT state machine as the capture shows it (docs/protocol.md §8): station addresses
-// assigned by the start-up, AL control writes (0x0120), AL status reads (0x0130) and AL status
-// codes (0x0134). Gives the events rules ESM-001, ESM-003 and ESM-004 judge. Bounded memory.
+// Each slave's EtherCAT state machine as a capture shows it (docs/protocol.md §8): station
+// addresses assigned by the start-up, AL control writes (0x0120), AL status reads (0x0130) and AL
+// status codes (0x0134). Gives the events rules ESM-001, ESM-003 and ESM-004 judge. Bounded memory.
 //
 // A slave is known by its station address (FP commands), its ring position (AP commands, from the
 // master's copy's ADP) or both, once an APWR/APRW of 0x0010 has assigned the one to the other.

@@ -113,8 +113,8 @@ class AxisModel {
   // This frame's values of the axis (outputs and/or inputs), at `now`.
   void observe(const PdoValues& values, const Stamp& now);
   // A capture segment starts (capture_segments.hpp): the next observation is a first one, as in
-  // a capture that began mid-operation (docs/timing.md#rule-time), and the telegram-failure run restarts;
-  // the drive state, its timeline, the error history and Servo_Ready_Mode carry on.
+  // a capture begun mid-operation (docs/timing.md#rule-time), and the telegram-failure run
+  // restarts; the drive state, its timeline, the error history and Servo_Ready_Mode carry on.
   void startSegment();
 
   // --- state, for rules and reports ---

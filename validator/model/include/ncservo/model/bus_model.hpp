@@ -1,4 +1,4 @@
-// The bus as the cyclic frames show it (docs/protocol.md §8, COM-* of docs/rules.md): each cyclic frame's
+// The bus as the cyclic frames show it (docs/protocol.md §8, docs/rules.md COM-*): each frame's
 // clock and interval statistics, whether master frames come back, and the working counter of
 // every returned process-data datagram, servo or not (docs/timing.md "Which frames"). Gives the
 // events the bus rules judge and each axis's telegram accounting; never reports a finding itself.

@@ -39,7 +39,7 @@ struct StateRow {
   DriveState state;
 };
 
-// Rows of docs/protocol.md §6, written so that exactly one matches every input (proven by a unit test).
+// Rows of docs/protocol.md §6, written so that exactly one matches any input (a unit test checks).
 inline constexpr std::array<StateRow, 9> kStateRows{{
     {kInError | kInEnabled, kInError, DriveState::Error},
     {kInError | kInEnabled, kInError | kInEnabled, DriveState::FaultReactionActive},

@@ -315,8 +315,8 @@ inline constexpr std::uint32_t kLastDefinedMessageCode = [] {
   return last;
 }();
 
-// docs/protocol.md §2–3: parameter table = ExtPRMTBL·4 + PRMTBL + 1, commanded in the SCW, active in
-// the SSW.
+// docs/protocol.md §2–3: parameter table = ExtPRMTBL·4 + PRMTBL + 1, commanded in the SCW,
+// active in the SSW.
 struct ParameterTableBits {
   std::uint32_t low;   // PRMTBL
   std::uint32_t high;  // ExtPRMTBL

@@ -26,8 +26,8 @@ std::optional<Severity> severityFromName(std::string_view name);
 enum class Party : std::uint8_t { Nc, Drive, Bus };
 const char* partyName(Party party);
 
-// The configurable timeouts (docs/configuration.md#timeouts), in milliseconds. `capture_pause` is no rule's: a
-// forward jump of the capture's timestamps longer than it starts a new segment (docs/protocol.md §8).
+// The timeouts, in milliseconds (docs/configuration.md#timeouts). `capture_pause` is no rule's: a
+// forward jump of the timestamps longer than it starts a new segment (docs/protocol.md §8).
 enum class Timeout : std::uint8_t {
   DriveResponse,
   NcRelease,

@@ -1,4 +1,4 @@
-// Writing EtherCAT frames (docs/protocol.md §8): the link framing walkPacket reads (Ethernet II with
+// Writing EtherCAT frames (docs/protocol.md §8): the framing walkPacket reads (Ethernet II with
 // 802.1Q/802.1ad tags, Linux cooked captures, IPv4/UDP to port 34980), the EtherCAT frame header
 // and the datagram chain. The simulator writes its frames with it; the unit tests build theirs,
 // well-formed or not, through the overrides.

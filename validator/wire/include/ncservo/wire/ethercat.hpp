@@ -1,4 +1,4 @@
-// The bounds-checked EtherCAT frame walker and what it asks of the wire facts (docs/protocol.md §8).
+// The bounds-checked EtherCAT frame walker and what it needs of the wire (docs/protocol.md §8).
 // The walker turns captured bytes into datagram views; it never reads past the captured bytes
 // and never allocates.
 #pragma once
