@@ -24,7 +24,7 @@ std::string inputsText(unsigned in) {
   return text.empty() ? "none" : text;
 }
 
-// docs/protocol.md §6 written as the spec reads: rows tried in order, the first that matches wins.
+// docs/protocol.md §6 written as it reads: rows tried in order, the first that matches wins.
 DriveState specState(unsigned in) {
   const bool error = in & kInError, enabled = in & kInEnabled, emgon = in & kInEmgon,
              brake = in & kInBrake, pulse = in & kInPulse, ready = in & kInReady;

@@ -18,7 +18,7 @@ bool isBitField(const FieldDef& f) {
   return f.kind == FieldKind::Flag || f.kind == FieldKind::BitRange;
 }
 
-// Every filter name docs/protocol.md §1-4 gives, in the order the spec lists them.
+// Every filter name of docs/fields.md, written out by hand in the order of docs/protocol.md §1-4.
 const char* const kSpecFilterNames[] = {
     // §1 RxPDO and TxPDO words
     "ncservo.ssp", "ncservo.scw", "ncservo.ext_code", "ncservo.actpos", "ncservo.ssw",

@@ -39,7 +39,7 @@ struct FieldDef {
   std::uint8_t value_count;
   FieldWhen when;
   const char* blurb;
-  const char* clause;  // where the spec defines it
+  const char* clause;  // where docs/protocol.md defines it
   // For a bit field of the SCW or SSW: its value (from the field's lowest bit) when it asks for
   // nothing and reports nothing, so that a view can show such fields together and briefly.
   std::optional<std::uint32_t> at_rest = std::nullopt;
