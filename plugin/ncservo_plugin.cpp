@@ -1,7 +1,7 @@
 // Wireshark 4.0 plugin: a thin presenter over the ncservo library. The field registration is
 // generated from the library's field table; layout, copy detection and drive state come from the
 // library's Validator — as are the rules' findings, shown as expert info — computed on the first
-// pass and kept per frame (PROTOCOL.md §10).
+// pass and kept per frame, as Wireshark's later passes do not visit frames in order.
 //
 // Wireshark raises exceptions with longjmp: no object with a destructor may be alive in a frame
 // of this file across a tvb_* or proto_tree_add_* call. The dissector therefore works on plain
@@ -119,7 +119,7 @@ Result<std::optional<int>> readyModeOf(const char* text) {
 }
 
 // Options from the preferences, and the state of the capture being dissected: the learning
-// window (PROTOCOL.md §9.4), then the validator once the layout is known, and what it found in
+// window (docs/protocol.md §9.4), then the validator once the layout is known, and what it found in
 // each frame by frame number (the window's frames are validated when it ends, not in their turn).
 DecoderOptions* g_options = nullptr;
 RuleSettings* g_settings = nullptr;
@@ -363,7 +363,7 @@ void applyPreferences() {
     Result<Config> loaded = loadConfig(pref_config_path);
     if (loaded) {
       config = std::move(*loaded);
-      // Severity overrides are left to Wireshark's own expert-severity table (PROTOCOL.md §10).
+      // Severity overrides are left to Wireshark's own expert-severity table (docs/plugin.md).
       if (Status applied = applyConfig(*config, *settings); !applied) {
         report_failure("NCSERVO: %s", applied.error().text().c_str());
       }
@@ -908,7 +908,7 @@ void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, 
 }
 
 // One layer of the protocol per axis, so that Wireshark's layer operator selects an axis:
-// `ncservo.state#3` is the third axis of the frame (INTERFACES.md).
+// `ncservo.state#3` is the third axis of the frame (docs/plugin.md).
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
   const auto& layer = *static_cast<const LayerData*>(data);
   const FrameRecord& record = *layer.record;

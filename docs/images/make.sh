@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Makes the README's pictures from captures/faults-4axis.pcap, so they can be made again when the
-# output changes (issue 16):
+# output changes:
 #   docs/images/html-report.png  the HTML report (validate --format html) in headless Chromium
 #   docs/images/gtkwave.png      GTKWave under Xvfb with decode --format vcd's save file, zoomed
 #                                onto the first illegal-enable finding (SE-001)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# What inferring the layout costs (PROTOCOL.md §9.4): `ncservo validate` on a simulated
+# What inferring the layout costs (docs/protocol.md §9.4): `ncservo validate` on a simulated
 # 2,000,000-frame capture without a start-up, with no configuration (the learning window holds the
 # first frames, infers the layout and replays them) against the same with --config (the
 # simulator's exact layout file), and the peak RSS of both.

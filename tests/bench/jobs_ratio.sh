@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `validate --jobs` (issue 18): 20 simulated captures validated with --jobs 1 and with --jobs N;
+# `validate --jobs`: 20 simulated captures validated with --jobs 1 and with --jobs N;
 # prints both wall times and their ratio, and checks that the two outputs are byte-identical.
 # Goal: faster with --jobs 2 on two cores (ratio above 1). The machine may be busy: the load
 # average is printed, and the best of the runs is kept.

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # What the ncservo plugin costs where Wireshark users feel it, in CPU time, on one simulated
-# 8-axis capture, every side in turn run by run (issue 17):
+# 8-axis capture, every side in turn run by run:
 #   opening    `tshark -r` (the packet list, tree not built)     with / without the plugin
 #   filtering  `-Y 'ncservo.scw.se == 2'` with the plugin         / `-Y 'ecat.cmd == 12'` without
 #   fields     `-T fields -e ncservo.…` with the plugin           / the same with the item floor

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # How long `ncservo decode --format vcd` and `ncservo validate --format html` take against
-# `ncservo validate` on the same capture, and how large the VCD and the page are (issue 16: each
+# `ncservo validate` on the same capture, and how large the VCD and the page are (goal: each
 # in less than twice validate's time): a simulated 8-axis capture (default 60 s at 1 ms, faults
 # scenario), the three commands taking turns run by run; prints each run's wall and CPU
 # (user + system) times, the medians of the runs' ratios, the sizes, and the VCD's size after

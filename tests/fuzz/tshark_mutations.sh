@@ -8,7 +8,7 @@
 # Fails on a crash, an abort, a sanitizer report, a dissector bug, an exception thrown in the
 # plugin (a "Malformed Packet: NCSERVO" item), a plugin warning or any other
 # output on tshark's standard error (a cut file may only say that it was cut short), a run over
-# the time limit, and a validate exit status other than 0, 3 or 4 (INTERFACES.md, with
+# the time limit, and a validate exit status other than 0, 3 or 4 (docs/cli.md, with
 # --fail-on never). Failing mutants are kept in KEEP_DIR (default BUILD_DIR/tshark-mutations).
 # MUTANTS (default 2) is per capture and rate; -n 100 makes several thousand.
 set -euo pipefail

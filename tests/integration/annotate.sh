@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# annotate.sh SRC BUILD: `ncservo annotate` (issue 18) on the bundled, simulated and real
+# annotate.sh SRC BUILD: `ncservo annotate` on the bundled, simulated and real
 # captures. Stock tshark, without the plugin, shows exactly one comment per finding on its frame,
 # each starting with the rule ID; the frames, their timestamps and lengths are the input's; a
 # pcapng's existing comments and other blocks are kept; --snippets keeps only frames near a

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # capture_kinds.sh SRC BUILD
-# The same simulated session as it may come (PROTOCOL.md §8): behind ESL probe headers (before and
-# after the frame, capture timestamps with a PC's noise), as Linux cooked captures v1 and v2,
+# The same simulated session as it may come (docs/protocol.md §8): behind ESL probe headers (before
+# and after the frame, capture timestamps with a PC's noise), as Linux cooked captures v1 and v2,
 # gzip- and zstd-compressed (from a file and from standard input). Each gives the findings, axes
 # and decoded rows of the plain capture; ESL captures are timed by the probe (auto), or by the PC
 # with --timestamps capture; frames without a probe timestamp and CRC errors are reported; the

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # capture_segments.sh SRC BUILD: captures appended (`mergecap -a`: the timestamps jump back) or
-# paused (an hour between two parts) are segments (RULES.md "Time", PROTOCOL.md §8): every
+# paused (an hour between two parts) are segments (docs/cli.md, docs/protocol.md §8): every
 # finding of the faulty part is reported on the same frames, offset by the part before it, with
 # the same rule and axis, as when it is validated alone; an hour's pause gives no finding.
 SRC=$1 BUILD=$2

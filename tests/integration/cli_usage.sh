@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# cli_usage.sh SRC BUILD: the command line and the configuration as a user types them (issue 14,
-# item 9): rule IDs in any case, "did you mean" for mistyped commands, options, keys and IDs,
+# cli_usage.sh SRC BUILD: the command line and the configuration as a user types them:
+# rule IDs in any case, "did you mean" for mistyped commands, options, keys and IDs,
 # standard input given twice, --version of a subcommand, an [[axis]] missing an address, names
 # that need CSV quoting, and `rules --explain`.
 SRC=$1 BUILD=$2

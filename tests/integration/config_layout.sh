@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # config_layout.sh SRC BUILD
-# The explicit layout of a configuration file (PROTOCOL.md §9.1) decodes a capture with the
+# The explicit layout of a configuration file (docs/protocol.md §9.1) decodes a capture with the
 # default layout switched off, in the CLI and in the plugin (preference ncservo.config).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"

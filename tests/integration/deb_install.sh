@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# deb_install.sh SRC BUILD: the Debian package (issue 18) installs into a fresh Debian bookworm
+# deb_install.sh SRC BUILD: the Debian package installs into a fresh Debian bookworm
 # root with `apt-get install ./ncservo_*.deb`; then `tshark -G plugins` lists ncservo for a
 # non-root user and `ncservo --version` works. The root is a copy of a cached minimal bookworm
 # (NCSERVO_BOOKWORM_ROOT, default BUILD/bookworm-root); without one it is made with debootstrap

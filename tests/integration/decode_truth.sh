@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # decode_truth.sh SRC BUILD GENERATOR-OPTIONS...
-# Generates a capture with known truth (an independent generator, PROTOCOL.md §9.4) and checks
+# Generates a capture with known truth (an independent generator, docs/protocol.md §9.4) and checks
 # that tshark with the plugin and `ncservo decode` both give the exact value of every axis in
 # every frame, TxPDO fields only in returned copies.
 SRC=$1 BUILD=$2

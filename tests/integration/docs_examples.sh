@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # docs_examples.sh SRC BUILD: every shell example of README.md and docs/*.md runs and exits as the
-# text says, so that no example can rot (issue 14, item 8).
+# text says, so that no example can rot.
 #
 # The convention, for whoever writes an example:
 # - A block fenced ```sh is a shell example and is run; other fences (```toml, ```text, plain

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# html_report.sh SRC BUILD: the HTML report of the faults capture in a real browser (issue 16):
+# html_report.sh SRC BUILD: the HTML report of the faults capture in a real browser:
 # loaded in headless Chromium from file:// with the network off, no console error, one table row
 # per finding of the JSON report, each finding timeline drawing the rows its rule reads (as
 # `ncservo rules --explain` lists them). Skipped (77) without Chromium and Selenium; under CI: fails.

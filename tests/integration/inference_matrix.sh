@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# inference_matrix.sh SRC BUILD [EVERY]: issue 13's table. For every process-image style x
+# inference_matrix.sh SRC BUILD [EVERY]: the whole matrix. For every process-image style x
 # {start-up captured, cut away} x {plain pcap, ESL probe pcapng, gzip, zstd}, with 1-8 axes and
 # injected faults, `validate` with no configuration reports exactly what it reports with the
 # simulator's exact layout file, frame for frame (JSON Lines, byte for byte); the layout comes

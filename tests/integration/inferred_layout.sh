@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# inferred_layout.sh SRC BUILD: the layout inferred from the cyclic traffic (PROTOCOL.md §9.4).
+# inferred_layout.sh SRC BUILD: the layout inferred from the cyclic traffic (docs/protocol.md §9.4).
 # On simulated captures without a start-up, `validate` with no configuration reports exactly the
 # findings it reports with the simulator's layout file, frame for frame, and so does tshark -2
 # with the plugin (every PDO field and every expert item of every frame); on every real capture

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # layout_sources.sh SRC BUILD
-# The layout sources of PROTOCOL.md §9 and their precedence, through the real CLI and tshark: for
-# a simulated set-up with start-up and I/O terminals sharing the LRW (interleaved), the layout
+# The layout sources (docs/protocol.md §9) and their precedence, through the real CLI and tshark:
+# for a simulated set-up with start-up and I/O terminals sharing the LRW (interleaved), the layout
 # learned from the start-up, the ENI the simulator writes, the configuration it writes and the one
 # `decode --layout` prints all give the same axes; a configuration beats an ENI, an ENI beats the
 # start-up, the start-up beats the default layout; a bad ENI is a usage error naming its line.

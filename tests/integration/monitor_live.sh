@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# monitor_live.sh SRC BUILD: `ncservo monitor` (issue 18) on one end of a veth pair while Debian's
+# monitor_live.sh SRC BUILD: `ncservo monitor` on one end of a veth pair while Debian's
 # tcpreplay replays a simulated capture with faults into the other end, in a network namespace of
 # its own. The live findings are the file's (same rule and axis); Ctrl-C ends with the report and
 # the exit status; the flight recorder's pcapngs hold a comment for each recorded finding and, with

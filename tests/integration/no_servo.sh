@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # no_servo.sh SRC BUILD
-# Nothing checked is not a pass (INTERFACES.md, exit status 4): a capture with no servo of this
+# Nothing checked is not a pass (docs/cli.md, exit status 4): a capture with no servo of this
 # protocol, or a configured axis that never appears, ends "NO SERVO" with exit 4 in every format,
 # 0 with --allow-empty; with several captures the most serious status wins, in the order
 # 2, 3, 1, 4, 0.

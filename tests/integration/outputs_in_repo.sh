@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# outputs_in_repo.sh SRC BUILD: nothing ncservo prints points outside the repository (issue 14,
-# item 5): the --help of every command, the listings, every rule's explanation, the reports in
+# outputs_in_repo.sh SRC BUILD: nothing ncservo prints points outside the repository:
+# the --help of every command, the listings, every rule's explanation, the reports in
 # every format and the error messages name docs/*.md, never the design documents the repository
 # does not hold.
 SRC=$1 BUILD=$2

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# plugin_prefs.sh SRC BUILD: the plugin's preferences (issue 14 item 9): a Servo_Ready_Mode that is
+# plugin_prefs.sh SRC BUILD: the plugin's preferences: a Servo_Ready_Mode that is
 # not auto, 0 or 1 is reported, not taken silently; rule IDs in the configuration file in any
 # case; `tshark -G defaultprefs` describes every preference, pointing only into the repository.
 SRC=$1 BUILD=$2

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # plugin_timing.sh SRC BUILD
-# Timing in Wireshark (issue 15, item 5) against `ncservo validate` on the same capture, timed by
+# Timing in Wireshark against `ncservo validate` on the same capture, timed by
 # the capture's own timestamps as the plugin times it:
 # - `tshark -q -z ncservo,timing`, in one pass and in two, prints exactly validate's text block;
 # - the per-frame fields ncservo.cycle.interval and ncservo.latency hold every sample of the

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # plugin_views.sh SRC BUILD
-# The plugin's views against the CLI on the bundled faults capture (issue 17):
+# The plugin's views against the CLI on the bundled faults capture:
 # - each axis is its own ncservo layer: `ncservo.state#N == "S"` selects exactly the frames whose
 #   N-th `ncservo decode` row has state S (of those where decode gives one);
 # - ncservo.transition appears on exactly the (frame, axis) of the CLI's state timeline, named as

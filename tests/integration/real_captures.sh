@@ -28,7 +28,7 @@ for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   "$NCSERVO" validate --format json --fail-on never --allow-empty "$WORK/capture" >/dev/null
   allowed=$?
   set -e
-  # no servo: nothing of this protocol was checked (exit 4, INTERFACES.md)
+  # no servo: nothing of this protocol was checked (exit 4, docs/cli.md)
   [ $rc = 4 ] || fail "$(basename "$capture"): validate exit $rc, expected 4 (no servo)"
   [ $allowed = 0 ] || fail "$(basename "$capture"): validate --allow-empty exit $allowed"
   python3 - "$WORK/report.json" "$WORK/plugin.txt" <<'PY' || fail "$(basename "$capture"): plugin and validator disagree"

@@ -9,11 +9,11 @@
 # - cycles: the master copies of the busiest cyclic frame;
 # - timing.cycle_us: its count and its median are those of frame.time_delta_displayed when tshark
 #   shows only one cyclic frame's master copies, over every cyclic frame, within each segment (a
-#   jump back by more than 1 ms or forward by more than 1 s starts one, RULES.md "Time");
+#   jump back by more than 1 ms or forward by more than 1 s starts one, docs/timing.md#rule-time);
 # - timing.latency_us: one return latency per master copy whose returned copy came;
 # - findings: no COM-001 or COM-004 (these captures return every frame with steady WKCs), and
 #   COM-002 on exactly the master copies that come more than 1.5 x the running median interval
-#   (at 1 us) after the previous one, once 8 intervals were seen in the segment (RULES.md COM-002),
+#   (at 1 us) after the previous one, once 8 intervals were seen in the segment (COM-002),
 #   each reported at the next master copy, late or lost as the interval after it says.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# reports.sh SRC BUILD (issue 14 items 6, 7): the text report's verdict per capture and one line per
+# reports.sh SRC BUILD: the text report's verdict per capture and one line per
 # rule and axis (--verbose: every finding); configured axis names in every format; time_utc beside
 # each time; several reports in one run (--report FORMAT:FILE), written through a temporary file,
 # never over an input or over each other; JUnit skipped cases; SARIF notifications and locations

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # simulate_images.sh SRC BUILD
-# Every process-image style of `ncservo simulate --image` (PROTOCOL.md §9.4), with and without the
-# start-up, plain, behind an ESL probe (PROTOCOL.md §8) and compressed by the output's name:
+# Every process-image style of `ncservo simulate --image` (docs/protocol.md §9), with and without
+# the start-up, plain, behind an ESL probe (docs/protocol.md §8), compressed by the output's name:
 # `ncservo validate --config` with the layout file simulate wrote passes with every axis, and so
 # do the ENI file and (with a start-up) the layout learned from it; the stock dissector reads the
 # uncompressed capture without complaint.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# time_window.sh SRC BUILD: `--from/--to` (INTERFACES.md) on validate and decode: a window around
+# time_window.sh SRC BUILD: `--from/--to` (docs/cli.md) on validate and decode: a window around
 # one finding of the faults capture gives that finding and no other; a window with no frame in it
 # is NO SERVO (exit 4) and says why; --to before --from is a usage error.
 SRC=$1 BUILD=$2

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # validate_cli.sh SRC BUILD
-# `ncservo validate`: every exit code of INTERFACES.md, the five formats parse and agree, several
+# `ncservo validate`: every exit code of docs/cli.md, the five formats parse and agree, several
 # captures and standard input, overrides from the command line and the config file, and a damaged
 # capture still reports what came before the damage.
 SRC=$1 BUILD=$2

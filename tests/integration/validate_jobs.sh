@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# validate_jobs.sh SRC BUILD: `validate --jobs N` (issue 18) writes, for every report format (as
+# validate_jobs.sh SRC BUILD: `validate --jobs N` writes, for every report format (as
 # `validate --help` lists them), with and without --verbose, to standard output and to --report
 # files, the same bytes, the same messages on standard error and the same exit status as
 # --jobs 1; over clean, faulty, cut, unreadable, no-servo captures and standard input.

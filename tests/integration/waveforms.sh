@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # waveforms.sh SRC BUILD
-# `ncservo decode --format vcd` (issue 16) on the bundled captures and on simulated ones (faults,
+# `ncservo decode --format vcd` on the bundled captures and on simulated ones (faults,
 # image styles, a probe, returned copies only, lost returns): every value change agrees with
 # `decode --format jsonl` and the findings with `validate --format jsonl` (check_vcd.py);
 # vcd2fst accepts every VCD and fst2vcd's reading of it agrees too; GTKWave (under Xvfb) opens

@@ -4,7 +4,7 @@
     check_findings.py [--capture N|PATH] [--verbose] REPORT.json EXPECTED.json
 
 REPORT is the validator's JSON document ({"captures": [{"findings": [{"rule", "axis", "frame",
-"severity", ...}]}]}, INTERFACES.md), or its jsonl output (one finding per line).  EXPECTED is
+"severity", ...}]}]}, docs/cli.md), or its jsonl output (one finding per line).  EXPECTED is
 written by `gen_capture.py --findings`: {"expected": [{"rule", "axis", "first_frame",
 "last_frame"}], "companions": {"RULE": ["RULE", ...]}}.
 

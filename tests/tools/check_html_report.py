@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Checks an HTML report of `ncservo validate` in headless Chromium (issue 16, "Done when").
+"""Checks an HTML report of `ncservo validate` in headless Chromium.
 
 check_html_report.py REPORT.html REPORT.json RULES.json
 

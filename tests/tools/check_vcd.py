@@ -2,7 +2,7 @@
 """check_vcd.py WAVES.vcd DECODE.jsonl FINDINGS.jsonl
 
 Checks `ncservo decode --format vcd` against `decode --format jsonl` and `validate --format
-jsonl` of the same capture (issue 16):
+jsonl` of the same capture:
 - every jsonl row: at its time, each field of its axis and its drive state in the VCD equal it;
 - every value change of a field in the VCD equals the first jsonl row of that axis at or after
   its time (a master copy's outputs are written at their own time, the row at its returned copy's);

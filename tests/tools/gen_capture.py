@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Generate an NC <-> servo EtherCAT capture with a known truth.
 
-An independent oracle for the decoders: written from PROTOCOL.md (sections 1-5, 8 and the
-default layout of 9.4) alone, it imports nothing from the project.
+An independent oracle for the decoders: written from the protocol's definition (docs/protocol.md
+§1-5, §8 and the outputs-first layout of §9.4) alone, it imports nothing from the project.
 
 Every cycle the master sends one frame -- an LRW of n*10 output bytes followed by n*40 input
 bytes at logical 0x00010000, then an FRMW reading the DC system time (0x0910) -- and the ring
@@ -13,16 +13,16 @@ emergency stop near the end.  The output is a pure function of the options.
 
     gen_capture.py --axes 4 --cycles 2000 -o out.pcap --truth out.jsonl
 
-The clean session conforms to every rule of RULES.md with its default timeouts at any cycle
+The clean session conforms to every rule of docs/rules.md with its default timeouts at any cycle
 time from 125 us to 10 ms: the drive answers every handshake within 10 ms of capture time
 (half the shortest timeout), whatever the cycle time, and the one drive fault is reported and
 handled correctly (cause and summary bits together, disabled in time, ErrorClear/ErrClearAck,
-re-enable by SE 0x1 -> 0x2), which RULES.md says is not a finding.
+re-enable by SE 0x1 -> 0x2), which is not a finding (docs/protocol.md §4).
 
 It is also the oracle for the rule engine (`ncservo validate`):
 
 --ready-mode 0|1
-    the drives' Servo_Ready_Mode (PROTOCOL.md section 5; default 0).
+    the drives' Servo_Ready_Mode (docs/protocol.md §5; default 0).
 --inject RULE[@SECONDS][:AXIS]   (repeatable)
     inject one violation of RULE at SECONDS after the capture's first frame on AXIS.  Without
     @SECONDS the rule's default place in the session (a fraction of its length) is used, without
@@ -75,7 +75,7 @@ It is also the oracle for the rule engine (`ncservo validate`):
     outputs, the returned copy for drive inputs and WKC, the first master frame after a gap or
     after a frame that was not returned); a timed one from the frame where the condition began
     to two cycles after due_frame, the first frame more than the timeout after that begin
-    (RULES.md's reporting discipline).  COM-005: from the master frame of the fourth failed cycle
+    (docs/timing.md#rule-time).  COM-005: from the master frame of the fourth failed cycle
     to the returned copy of the next.  COM-003: from the first master frame after the outage
     to two cycles after the first frame more than drive_response after its returned copy.
     companions lists, per injected rule, other rules it necessarily causes as well (see
@@ -101,7 +101,7 @@ import random
 import struct
 import sys
 
-# --- SCW bits (PROTOCOL.md section 2) ---
+# --- SCW bits (docs/protocol.md §2) ---
 SCW_SE = 0x3
 SCW_EMGON = 1 << 2
 SCW_PRMTBL_SHIFT = 4
@@ -137,7 +137,7 @@ SEW_OVERLOAD = 1 << 20
 SEW_CAUSES = 0x01FFFFEE  # bits 1..3, 5..24
 SEW_RESERVED = 0xFE000010  # bit 4, bits 25..31
 
-# --- RULES.md timeouts (defaults, milliseconds) ---
+# --- rule timeouts (defaults, milliseconds; docs/rules.md) ---
 TIMEOUT_MS = {"drive_response": 20, "nc_release": 50, "enable_response": 100,
               "clear_response": 100, "fault_reaction": 100, "param_table": 50}
 # A conforming drive answers a handshake within this much capture time, whatever the cycle time:
@@ -1036,7 +1036,7 @@ class Injector:
     def _com_002(self):
         k0 = self.k()
         yield from self._outage(DROP, 2)
-        # Told lost by the interval after the gap: on the next master frame (RULES.md COM-002).
+        # Told lost by the interval after the gap: on the next master frame (docs/rules.md#com-002).
         self.expect(k0 + 3, MASTER)
 
     def _com_004(self):
@@ -1064,7 +1064,7 @@ class Injector:
 class Monitor:
     """--self-check: every axis not under an injection conforms, cycle by cycle.
 
-    Static checks on each cycle's values, and every "longer than T" condition of RULES.md
+    Static checks on each cycle's values, and every "longer than T" condition of docs/rules.md
     measured on the cycle's time (the NC's outputs and the inputs it gets back).
     """
 

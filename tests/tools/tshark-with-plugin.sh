@@ -3,7 +3,7 @@
 # Usage: tshark-with-plugin.sh PLUGIN_SO|none [tshark args...]
 #   PLUGIN_SO = none runs the same tshark with only the stock plugins (a baseline).
 # Wireshark ignores personal plugin folders and WIRESHARK_PLUGIN_DIR when run as root
-# (PROTOCOL.md §10), so as root tshark runs as the unprivileged user nobody.
+# (docs/plugin.md), so as root tshark runs as the unprivileged user nobody.
 set -euo pipefail
 plugin=$1
 shift

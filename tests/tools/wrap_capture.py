@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Rewrites an Ethernet pcap frame by frame, for tests of the ways captures come (PROTOCOL.md §8):
+"""Rewrites an Ethernet pcap frame by frame, for tests of how captures come (docs/protocol.md §8):
 
   --esl before|after   each frame behind or followed by a 16-byte ESL probe header whose timestamp
                        is the frame's original time (exact, ns), while the capture's own timestamps

@@ -1,5 +1,5 @@
-// Each slave's EtherCAT state machine (al_tracker.hpp, PROTOCOL.md §8; RULES.md ESM-001, ESM-003,
-// ESM-004), on frames built byte by byte and walked over exact-size heap buffers.
+// Each slave's EtherCAT state machine (al_tracker.hpp, docs/protocol.md §8; ESM-001, ESM-003 and
+// ESM-004 of docs/rules.md), on frames built byte by byte and walked over exact-size heap buffers.
 #include "ncservo/model/al_tracker.hpp"
 
 #include <gtest/gtest.h>
@@ -131,7 +131,7 @@ struct Harness {
     for (const AlFinding& f : findings) n += f.rule == rule ? 1 : 0;
     return n;
   }
-  bool anyEsm() const {  // RULES.md: ESM-004 is information, not an "ESM finding"
+  bool anyEsm() const {  // ESM-004 is information, not an "ESM finding"
     return count(RuleId::Esm001) + count(RuleId::Esm002) + count(RuleId::Esm003) > 0;
   }
 };

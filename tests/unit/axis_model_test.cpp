@@ -1,6 +1,6 @@
-// The model of one axis (axis_model.hpp): signal levels and edges, the valid enable of PROTOCOL.md
-// §2, the error history of §7 (newest first, at most eight), the state timeline of §6, the
-// Servo_Ready_Mode of §5, and the telegram-failure counters of RULES.md COM-*. One row per case.
+// The model of one axis (axis_model.hpp): signal levels and edges, the valid enable of
+// docs/protocol.md §2, the error history of §7 (newest first, at most eight), the state timeline
+// of §6, the Servo_Ready_Mode of §5, and the telegram-failure counters (COM-*). One row per case.
 #include "ncservo/model/axis_model.hpp"
 
 #include <gtest/gtest.h>
@@ -53,7 +53,7 @@ Stamp stamp(std::uint64_t frame) {
   return Stamp{frame, kEpochNs + static_cast<std::int64_t>(frame) * kMs};
 }
 
-// PROTOCOL.md §4 and §7: each SEW cause bit, its display code and its CANopen-style code.
+// docs/protocol.md §4 and §7: each SEW cause bit, its display code and its CANopen-style code.
 struct CauseRow {
   const char* field;
   unsigned bit;
@@ -142,7 +142,7 @@ TEST(AxisModelErrorHistory, SummaryAndReservedBitsMakeNoEntry) {
   EXPECT_TRUE(axis.errorHistory().empty());
 }
 
-// PROTOCOL.md §6: the drive's states and seed 003's transition names.
+// docs/protocol.md §6: the drive's states and transition names.
 struct TimelineStep {
   const char* name;
   std::uint32_t scw;
@@ -207,7 +207,7 @@ TEST(AxisModelTimeline, OutputsAloneGiveNoState) {
   EXPECT_TRUE(axis.timeline().empty());
 }
 
-// RULES.md RDY-001: configured, or inferred from the first observation with ServoEn 0 and no
+// docs/rules.md#rdy-001: configured, or inferred from the first observation with ServoEn 0 and no
 // error (RDY 1 -> mode 0, RDY 0 -> mode 1).
 struct ReadyModeCase {
   const char* name;
@@ -254,7 +254,7 @@ TEST(AxisModelReadyMode, ExpectedReadyFollowsTheTable) {
     std::uint32_t sew;
     bool ready;
   };
-  // PROTOCOL.md §5.
+  // docs/protocol.md §5.
   const Row rows[] = {
       {0, 0x0, 0, true},  {0, 0x1, 0, true},    {0, 0x0, 0x3, false}, {0, 0x1, 0x3, false},
       {1, 0x0, 0, false}, {1, 0x0, 0x3, false}, {1, 0x1, 0, true},    {1, 0x1, 0x3, false},
@@ -411,8 +411,8 @@ TEST(AxisModelSignals, EdgesAndSince) {
   }
 }
 
-// PROTOCOL.md §2: a valid enable is SE 0x1 -> 0x2 (or 0x2 when first seen), held since; any other
-// way to 0x2 is the illegal edge of SE-001, for the frame it happens in.
+// docs/protocol.md §2: a valid enable is SE 0x1 -> 0x2 (or 0x2 when first seen), held since; any
+// other way to 0x2 is the illegal edge of SE-001, for the frame it happens in.
 struct EnableCase {
   const char* name;
   std::vector<std::uint32_t> se;  // SCW.SE per frame, from frame 1
@@ -506,7 +506,7 @@ TEST(AxisModelEdges, ChangedReadFieldsOfTheObservation) {
   }
 }
 
-// ncservo.transition: seed 003's name where the change has one, else the two states.
+// ncservo.transition: the name (docs/protocol.md §6) where the change has one, else the two states.
 struct TransitionTextCase {
   const char* name;
   StateChange change;

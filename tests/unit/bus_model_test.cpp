@@ -99,7 +99,7 @@ TEST_P(ServolessBus, JudgesCyclicDatagrams) {
     findings.insert(findings.end(), validator.findings().begin(), validator.findings().end());
   };
   // The master numbers its datagrams anew each cycle, so that a master copy that follows an
-  // unreturned one is not taken for its returned copy (PROTOCOL.md §8).
+  // unreturned one is not taken for its returned copy (docs/protocol.md §8).
   auto cyclic = [](int cycle, bool returned, std::uint16_t lrw_wkc) {
     const auto index = static_cast<std::uint8_t>(2 * cycle);
     return FrameBuilder()

@@ -1,5 +1,5 @@
 // CaptureReader (capture_reader.hpp) over plain, gzip and zstd pcap and pcapng, from a file and
-// from a pipe on standard input; cut and corrupt compressed streams (PROTOCOL.md §8).
+// from a pipe on standard input; cut and corrupt compressed streams (docs/protocol.md §8).
 #include "ncservo/capture/capture_reader.hpp"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Capture discontinuities (RULES.md "Time", PROTOCOL.md §8): where segments start and what they
+// Capture discontinuities (docs/cli.md, docs/protocol.md §8): where segments start and what they
 // span.
 #include "ncservo/model/capture_segments.hpp"
 

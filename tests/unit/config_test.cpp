@@ -1,4 +1,4 @@
-// The TOML configuration file (config.hpp, INTERFACES.md "Configuration file (TOML)").
+// The TOML configuration file (config.hpp, docs/configuration.md).
 #include "ncservo/config/config.hpp"
 
 #include <gtest/gtest.h>
@@ -16,16 +16,16 @@
 namespace ncservo {
 namespace {
 
-// The example of INTERFACES.md, verbatim.
+// A full example, with a comment after the values as users write them.
 constexpr const char* kInterfacesExample =
     R"(servo_ready_mode = 0          # optional; inferred when absent
 telegram_failure_limit = 3    # COM-005
-default_layout = true         # PROTOCOL.md §9.4
+default_layout = true         # docs/protocol.md §9.4
 
-[timeouts]                    # milliseconds, RULES.md defaults when absent
+[timeouts]                    # milliseconds, defaults when absent
 drive_response = 20
 
-[[axis]]                      # optional; without axes the layout comes from PROTOCOL.md §9
+[[axis]]                      # optional; without axes the layout comes from docs/protocol.md §9
 name = "X"
 outputs = 0x00010000          # logical address of the 10-byte RxPDO
 inputs  = 0x00010028          # logical address of the 40-byte TxPDO

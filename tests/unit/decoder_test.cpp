@@ -1,4 +1,4 @@
-// Where the decoder finds each axis's PDOs (decoder.hpp, PROTOCOL.md §8-9) and the session's
+// Where the decoder finds each axis's PDOs (decoder.hpp, docs/protocol.md §8-9) and the session's
 // per-axis state (session.hpp), on frames built byte by byte.
 #include "ncservo/layout/decoder.hpp"
 
@@ -114,7 +114,7 @@ void expectDefaultLrw(const Decoded& got, std::size_t d, std::size_t n, bool inp
   }
 }
 
-// ---- Default layout (PROTOCOL.md §9.4) ----
+// ---- Default layout (docs/protocol.md §9.4) ----
 
 TEST(DefaultLayout, LrwMasterCopyThenReturnedCopy) {
   for (std::size_t n : {1u, 2u, 5u, 29u}) {
@@ -214,7 +214,7 @@ TEST(DefaultLayout, FirstSightFrameCutBeforeTheWkcIsTaken) {
   }
 }
 
-// PROTOCOL.md §9.4: the default layout applies to datagrams that repeat with the same command,
+// docs/protocol.md §9.4: the default layout applies to datagrams that repeat with the same command,
 // address and length in consecutive cycles; decoder.cpp's comment on placeDefault says "A
 // datagram is taken once it repeats". A capture holding only returned copies whose WKC is
 // persistently not 3n (e.g. 2: one slave took its outputs, none wrote inputs, §8) repeats the
@@ -240,7 +240,7 @@ TEST(DefaultLayout, TwoCyclicDatagramsNumberTheirAxesInOrderOfFirstSight) {
   EXPECT_EQ(decoder.axes()[2].outputs, 0x20000u);
 }
 
-// ---- Start-up (PROTOCOL.md §9.3, §9.4: no default layout when the start-up shows no servo) ----
+// ---- Start-up (docs/protocol.md §9.3, §9.4: no default layout when it shows no servo) ----
 
 struct StartupCase {
   const char* name;
@@ -300,7 +300,7 @@ TEST(StartupLayout, SyncManagerWriteCutShortCountsOnlyTheCapturedLengths) {
   EXPECT_TRUE(decoder.startupShowsNoServo());  // SM2 = 6 was seen and is not a servo's
 }
 
-// ---- Explicit configuration (PROTOCOL.md §9.1) ----
+// ---- Explicit configuration (docs/protocol.md §9.1) ----
 
 AxisConfig logicalAxis(const char* name, std::uint32_t outputs, std::uint32_t inputs) {
   AxisConfig axis;
@@ -606,7 +606,7 @@ TEST(Session, StateOfAMasterCopyComesFromTheLatestReturnedInputs) {
   }
 }
 
-// ---- CycleRows: one row per axis and cycle (PROTOCOL.md §8) ----
+// ---- CycleRows: one row per axis and cycle (docs/protocol.md §8) ----
 
 // A frame for CycleRows: its copy, and per axis whether outputs and inputs are present.
 struct RowFrame {
@@ -675,7 +675,7 @@ TEST(CycleRows, PairsMasterOutputsWithReturnedInputs) {
   }
 }
 
-// ---- Layout learned from the start-up, and the precedence of the sources (PROTOCOL.md §9) ----
+// ---- Layout from the start-up, and the precedence of the sources (docs/protocol.md §9) ----
 
 // A servo's start-up at `adp` (a station or an alias): SM2/SM3 of 10/40 bytes and, when
 // `logical` is given, FMMUs mapping them there (outputs, then inputs).
@@ -784,7 +784,7 @@ TEST(LayoutPrecedence, ConfigurationThenEniThenStartupThenDefault) {
   }
 }
 
-// PROTOCOL.md §9.4: the default layout applies unless the user (--no-default-layout, the plugin's
+// docs/protocol.md §9.4: the default layout applies unless the user (--no-default-layout, a plugin
 // preference) or the configuration (default_layout = false) rules it out; §9.1-9.2: a
 // configuration's axes come before an ENI's, and a configuration without axes gives none.
 struct LayoutOptionsCase {

@@ -1,4 +1,4 @@
-// Test helper: the outputs-first layout of PROTOCOL.md §9.4 (an LRW of n×10 output bytes then
+// Test helper: the outputs-first layout of docs/protocol.md §9.4 (an LRW of n×10 output bytes then
 // n×40 input bytes, or an LWR of n×10 and an LRD of n×40), as the LayoutWindow hands it to the
 // decoder once the inference has decided it. Tests that drive a Decoder or Validator directly
 // with such frames give it explicitly.

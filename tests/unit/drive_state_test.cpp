@@ -1,4 +1,4 @@
-// The drive state table (drive_state.hpp) against PROTOCOL.md §6.
+// The drive state table (drive_state.hpp) against docs/protocol.md §6.
 #include "ncservo/protocol/drive_state.hpp"
 
 #include <gtest/gtest.h>
@@ -24,7 +24,7 @@ std::string inputsText(unsigned in) {
   return text.empty() ? "none" : text;
 }
 
-// PROTOCOL.md §6 written as the spec reads: rows tried in order, the first that matches wins.
+// docs/protocol.md §6 written as it reads: rows tried in order, the first that matches wins.
 DriveState specState(unsigned in) {
   const bool error = in & kInError, enabled = in & kInEnabled, emgon = in & kInEmgon,
              brake = in & kInBrake, pulse = in & kInPulse, ready = in & kInReady;
@@ -59,7 +59,7 @@ TEST(DriveStateTable, AgreesWithTheSpecOrderForEveryInput) {
   }
 }
 
-// One row per line of PROTOCOL.md §6, with inputs that single it out.
+// One row per line of docs/protocol.md §6, with inputs that single it out.
 struct StateCase {
   const char* name;
   unsigned inputs;

@@ -1,4 +1,4 @@
-// The field table (fields.hpp) and the PDO layout (pdo_layout.hpp) against PROTOCOL.md §1-4.
+// The field table (fields.hpp) and the PDO layout (pdo_layout.hpp) against docs/protocol.md §1-4.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -18,7 +18,7 @@ bool isBitField(const FieldDef& f) {
   return f.kind == FieldKind::Flag || f.kind == FieldKind::BitRange;
 }
 
-// Every filter name PROTOCOL.md §1-4 gives, in the order the spec lists them.
+// Every filter name of docs/fields.md, written out by hand in the order of docs/protocol.md §1-4.
 const char* const kSpecFilterNames[] = {
     // §1 RxPDO and TxPDO words
     "ncservo.ssp", "ncservo.scw", "ncservo.ext_code", "ncservo.actpos", "ncservo.ssw",
@@ -163,7 +163,7 @@ TEST(FieldTable, DerivedFieldsIncludeTheInterfaceNames) {
   for (const FieldDef& f : kFields) EXPECT_EQ(actual.count(f.filter), 0u) << f.filter;
 }
 
-// PROTOCOL.md §1: offset, size and type of every word.
+// docs/protocol.md §1: offset, size and type of every word.
 struct WordRow {
   Word word;
   Pdo pdo;
@@ -207,7 +207,7 @@ TEST(PdoLayout, WordOffsetsSizesAndTypesFollowTheSpec) {
   }
 }
 
-// PROTOCOL.md §1-4: kind and mask of every row that is not a whole word.
+// docs/protocol.md §1-4: kind and mask of every row that is not a whole word.
 struct MaskRow {
   const char* filter;
   FieldKind kind;
@@ -280,7 +280,7 @@ TEST(FieldTable, KindsAndMasksFollowTheSpec) {
   }
 }
 
-// PROTOCOL.md §3, §1: the whole-word rows name the word they sit on.
+// docs/protocol.md §3, §1: the whole-word rows name the word they sit on.
 struct WordOfRow {
   const char* filter;
   Word word;

@@ -1,4 +1,4 @@
-// Test helper: builds captured frames (PROTOCOL.md §8) through the simulator's frame encoder, and
+// Test helper: builds captured frames (docs/protocol.md §8) with the simulator's frame encoder, and
 // PDO images (§1) byte by byte. Only for tests: no checks, the caller decides what is well-formed.
 #pragma once
 

@@ -1,5 +1,5 @@
 // The running cycle-time statistics the rules' "nominal cycle" comes from (interval_stats.hpp,
-// RULES.md "Time", COM-002): the lower median after every interval, quantiles and the maximum for
+// docs/timing.md#rule-time): the lower median after every interval, quantiles and the maximum for
 // the report, in bounded memory.
 #include "ncservo/model/interval_stats.hpp"
 

@@ -1,6 +1,6 @@
-// The layout inferred from the cyclic traffic (layout_inference.hpp, PROTOCOL.md §9.4): for each
-// process-image style and axis count, frames built byte by byte from a small model of NC and drives
-// give back exactly the layout they were built with; idle or empty data is refused.
+// The layout inferred from the cyclic traffic (layout_inference.hpp, docs/protocol.md §9.4): for
+// each process-image style and axis count, frames built byte by byte from a small model of NC and
+// drives give back exactly the layout they were built with; idle or empty data is refused.
 #include "ncservo/layout/layout_inference.hpp"
 
 #include <gtest/gtest.h>

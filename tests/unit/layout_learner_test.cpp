@@ -1,5 +1,5 @@
-// Learning the servos' layout from the capture's start-up (layout_learner.hpp, PROTOCOL.md §9.3):
-// the SM and FMMU register writes, byte by byte, then the simulator's start-ups as the truth.
+// The servos' layout learnt from a start-up (layout_learner.hpp, docs/protocol.md §9.3): the SM
+// and FMMU register writes, byte by byte, then the simulator's start-ups as the truth.
 #include "ncservo/layout/layout_learner.hpp"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// The ENI file as a layout source (eni.hpp, PROTOCOL.md §9.2): the simulator's set-ups are the
+// The ENI file as a layout source (eni.hpp, docs/protocol.md §9.2): the simulator's set-ups are the
 // truth, and a broken file is named with its line.
 #include <gtest/gtest.h>
 

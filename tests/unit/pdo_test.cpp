@@ -1,4 +1,4 @@
-// Reading PDOs from bytes and the values of the field table's rows (pdo.hpp, PROTOCOL.md §1-5).
+// PDOs read from bytes and the values of the field table's rows (pdo.hpp, docs/protocol.md §1-5).
 #include "ncservo/protocol/pdo.hpp"
 
 #include <gtest/gtest.h>

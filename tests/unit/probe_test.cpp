@@ -1,5 +1,5 @@
-// ESL probe frames (PROTOCOL.md §8): the walker finds the header before or after the Ethernet
-// frame, and FrameClock times frames by the probe or the capture (INTERFACES.md --timestamps).
+// ESL probe frames (docs/protocol.md §8): the walker finds the header before or after the Ethernet
+// frame, and FrameClock times frames by the probe or the capture (docs/cli.md, --timestamps).
 #include <gtest/gtest.h>
 
 #include <cstdint>

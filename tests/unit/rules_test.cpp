@@ -1,4 +1,5 @@
-// The rule catalogue (rules.hpp) against RULES.md and the user's settings (RuleSettings).
+// The rule catalogue (rules.hpp) against a copy written by hand, and the user's settings
+// (RuleSettings).
 #include "ncservo/rules/rules.hpp"
 
 #include <gtest/gtest.h>
@@ -17,7 +18,7 @@
 namespace ncservo {
 namespace {
 
-// ---- The rule table against RULES.md ----
+// ---- The rule table against a copy written by hand ----
 
 constexpr auto E = Severity::Error;
 constexpr auto W = Severity::Warning;
@@ -42,7 +43,7 @@ struct SpecRow {
   ByDefault by_default = ByDefault::On;  // "off by default" in its text: run only when enabled
 };
 
-// RULES.md, table by table.
+// The catalogue written by hand, table by table.
 // clang-format off
 const SpecRow kSpec[] = {
     {"SE-001", "illegal-enable-edge", E, NC, kNoTimeout, false, AXIS},
@@ -192,7 +193,7 @@ TEST(RuleTable, DelayedRulesHaveATimeoutAxisRulesCheckAndDescribe) {
   }
 }
 
-// RULES.md "Time": the "used by" column of the timeout table (COM-003's text names
+// docs/rules.md: the "used by" column of the timeout table (COM-003's text names
 // drive_response too).
 TEST(RuleTable, TimeoutsAndTheRulesThatUseThem) {
   struct Row {

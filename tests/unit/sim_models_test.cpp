@@ -1,5 +1,5 @@
 // The simulator's drive and NC models (sim_models.hpp), stepped cycle by cycle (1 ms) with
-// hand-made process data, against PROTOCOL.md §1–5 and the timeouts of RULES.md.
+// hand-made process data, against docs/protocol.md §1–5 and the timeouts of docs/rules.md.
 #include <gtest/gtest.h>
 
 #include <cctype>
@@ -19,7 +19,7 @@ namespace {
 using test::rowName;
 
 constexpr std::int64_t kMs = 1'000'000;
-// RULES.md default timeouts, in milliseconds.
+// The default timeouts (docs/rules.md), in milliseconds.
 constexpr int kDriveResponseMs = 20;
 constexpr int kEnableResponseMs = 100;
 constexpr int kClearResponseMs = 100;
@@ -136,7 +136,7 @@ DriveSetup incrementalAxis(std::uint64_t seed = 1) {
   return s;
 }
 
-// --- enable (PROTOCOL.md §2) ---
+// --- enable (docs/protocol.md §2) ---
 
 struct EnableRow {
   const char* name;
@@ -201,7 +201,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, DriveDisable,
                          ::testing::Values(DisableRow{0x2, false}, DisableRow{0x1, true},
                                            DisableRow{0x0, true}, DisableRow{0x3, true}));
 
-// --- ServoRDY (PROTOCOL.md §5, the Servo_Ready_Mode table) ---
+// --- ServoRDY (docs/protocol.md §5, the Servo_Ready_Mode table) ---
 
 struct ReadyRow {
   int mode;
@@ -236,7 +236,7 @@ INSTANTIATE_TEST_SUITE_P(
                       ReadyRow{1, false, false, false}, ReadyRow{1, false, true, false},
                       ReadyRow{1, true, false, true}, ReadyRow{1, true, true, false}));
 
-// --- zero-pulse handshake (PROTOCOL.md §1, §3) ---
+// --- zero-pulse handshake (docs/protocol.md §1, §3) ---
 
 struct ZeroPulseRow {
   const char* name;
@@ -284,7 +284,7 @@ TEST_P(DriveZeroPulse, AckAfterAZeroPulseWhileMoving) {
                 released, [](const TxPdo& in) { return !zpAck(in); }, 100),
             kDriveResponseMs);
   EXPECT_EQ(b.hold(50, released, zpAck), 0) << "the ack stays down";
-  // Later zero pulses update words 2-3 (PROTOCOL.md §1).
+  // Later zero pulses update words 2-3 (docs/protocol.md §1).
   b.hold(400, released);
   EXPECT_NE(highWords(b.drive.inputs()), latched);
   EXPECT_EQ(highWords(b.drive.inputs()) % DriveModel::kIncrementalCountsPerRev, 0);
@@ -360,7 +360,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, DriveTable,
                          ::testing::Values(TableRow{1}, TableRow{2}, TableRow{4}, TableRow{5},
                                            TableRow{8}));
 
-// --- ECatTErr: no data for 3 cycles (PROTOCOL.md §4) ---
+// --- ECatTErr: no data for 3 cycles (docs/protocol.md §4) ---
 
 struct TimeoutRow {
   const char* pattern;  // per cycle: 'L' lost (step(nullptr)), '.' outputs arrive
@@ -424,7 +424,7 @@ TEST_P(DriveFaultReaction, DisablesWithinFaultReaction) {
 INSTANTIATE_TEST_SUITE_P(Rows, DriveFaultReaction,
                          ::testing::Values(FaultRow{true, true}, FaultRow{false, false}));
 
-// --- message codes (PROTOCOL.md §5) ---
+// --- message codes (docs/protocol.md §5) ---
 
 TEST(DriveMessages, CodesStayInZeroToFiveAndAllAppear) {
   for (const DriveSetup& setup : {absoluteAxis(), incrementalAxis()}) {
@@ -565,7 +565,7 @@ const std::vector<QuirkRow>& quirkRows() {
        }},
       {"ReadyInverted", DriveQuirk::ReadyInverted, false, kDriveResponseMs,
        [](Bench& b) {
-         // Servo_Ready_Mode 0, no error: ServoRDY 1 (PROTOCOL.md §5)
+         // Servo_Ready_Mode 0, no error: ServoRDY 1 (docs/protocol.md §5)
          return idleCount(b, 150, [](const TxPdo& in) { return !servoRdy(in); });
        }},
       {"SlowFaultReaction", DriveQuirk::SlowFaultReaction, false, kFaultReactionMs,
@@ -840,7 +840,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, NcReservedBit,
                          ::testing::Values(ReservedRow{std::nullopt, 0}, ReservedRow{5.0, 5},
                                            ReservedRow{1.0, 1}));
 
-// --- PDO encoding (PROTOCOL.md §1) ---
+// --- PDO encoding (docs/protocol.md §1) ---
 
 struct RxRow {
   RxPdo pdo;
@@ -891,7 +891,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 struct TableBitsRow {
   int table;
-  std::uint32_t scw;  // PRMTBL bits 5..4, ExtPRMTBL bit 12 (PROTOCOL.md §2)
+  std::uint32_t scw;  // PRMTBL bits 5..4, ExtPRMTBL bit 12 (docs/protocol.md §2)
   std::uint32_t ssw;  // PRMTBL bits 9..8, ExtPRMTBL bit 12 (§3)
 };
 class TableBits : public ::testing::TestWithParam<TableBitsRow> {};

@@ -1,5 +1,5 @@
-// The simulator's set-ups as the truth for the layout sources (PROTOCOL.md §9): what it configured
-// is what learning from its start-up and the ENI it writes must give.
+// The simulator's set-ups as the truth for the layout sources (docs/protocol.md §9): what it
+// configured is what learning from its start-up and the ENI it writes must give.
 #pragma once
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // `ncservo simulate`'s library (simulator.hpp, capture_writer.hpp): options and faults, the
-// frame stream (PROTOCOL.md §8, §9.4), its layout, and the stream through the validator.
+// frame stream (docs/protocol.md §8, §9.4), its layout, and the stream through the validator.
 #include "ncservo/sim/simulator.hpp"
 
 #include <fmt/format.h>
@@ -727,7 +727,7 @@ std::string findingsText(const std::vector<Finding>& findings) {
   return text;
 }
 
-// --- process-image styles (PROTOCOL.md §9.4) ---
+// --- process-image styles (docs/protocol.md §9.4) ---
 
 struct StyleRow {
   const char* name;
@@ -809,7 +809,7 @@ std::vector<SlaveLayout> startUpSlaves(SimOptions o) {
   return learner.slaves();
 }
 
-// PROTOCOL.md §8: each returned logical datagram's WKC is what the FMMUs of the start-up add:
+// docs/protocol.md §8: each returned logical datagram's WKC is what the FMMUs of the start-up add:
 // LRW 2 per slave written and 1 per slave read, LRD and LWR 1 per slave; a capture without the
 // start-up has the same set-up.
 TEST_P(ImageStyleRun, WorkingCountersFromTheStartUpsFmmus) {
@@ -876,7 +876,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, ImageStyleRun, ::testing::ValuesIn(styleRows()),
                            return std::string(row.param.name);
                          });
 
-// --- the ESL probe (PROTOCOL.md §8) ---
+// --- the ESL probe (docs/protocol.md §8) ---
 
 TEST(EslProbe, EachFrameBehindAHeaderWithTheExactTime) {
   SimOptions plain = options(Scenario::Commissioning, 2, 1.0);

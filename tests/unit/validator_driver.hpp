@@ -1,4 +1,4 @@
-// Test helper: drives a Validator with default-layout cycles (PROTOCOL.md §9.4) built byte by
+// Test helper: drives a Validator with default-layout cycles (docs/protocol.md §9.4) built byte by
 // byte — per cycle a master copy (outputs, WKC 0) and a returned copy (outputs and inputs, WKC
 // 3n) at exact integer-nanosecond timestamps — and names every frame by its cycle and copy, so
 // that tests state where a finding must be reported as "the master copy of cycle 31".
@@ -32,7 +32,7 @@ inline constexpr std::uint32_t kLrwAddress = 0x00010000;
 inline constexpr std::uint32_t kScwRunning = 0x406;
 inline constexpr std::uint32_t kSswRunning = 0x83;
 
-// SCW values (PROTOCOL.md §2). EMGON and Brake are 1 unless a name says otherwise.
+// SCW values (docs/protocol.md §2). EMGON and Brake are 1 unless a name says otherwise.
 inline constexpr std::uint32_t kScwOff = 0x404;    // SE 0x0
 inline constexpr std::uint32_t kScwArmed = 0x405;  // SE 0x1
 inline constexpr std::uint32_t kScwSe3 = 0x407;    // SE 0x3
@@ -123,7 +123,7 @@ class Script {
     return *this;
   }
   // Frames of cycle `from` on are timed `ns` later (earlier when negative): a capture
-  // discontinuity (RULES.md "Time").
+  // discontinuity (docs/timing.md#rule-time).
   Script& shift(std::int64_t from, std::int64_t ns) {
     shift_from_ = from;
     shift_ns_ = ns;

@@ -1,4 +1,4 @@
-// The rules of RULES.md as the Validator reports them (validator.hpp), on default-layout cycles
+// The rules (docs/rules.md) as the Validator reports them (validator.hpp), on default-layout cycles
 // built byte by byte (validator_driver.hpp): per rule a row where it fires — rule, axis, the frame
 // it is reported on and the frame the condition began, exactly — a row where it must not, and for
 // every timed rule the two rows at its limit (held exactly T: nothing; one cycle more: reported).
@@ -64,7 +64,7 @@ RuleSettings timeoutMs(const char* name, std::int64_t ms) {
   EXPECT_TRUE(s.setTimeout(name, ms));
   return s;
 }
-// An off-by-default timing rule enabled with its limit (RULES.md COM-006, COM-007).
+// An off-by-default timing rule enabled with its limit (docs/rules.md#com-006, COM-007).
 RuleSettings timingRule(const char* code, const char* limit, std::int64_t value) {
   RuleSettings s;
   EXPECT_TRUE(s.enable(code));
@@ -619,8 +619,8 @@ TEST(ValidatorRuleCoverage, EveryAxisAndBusRuleHasAPositiveAndANegativeRow) {
 
 // ---- Conforming captures raise nothing ----
 
-// RULES.md "Not findings": a drive fault reported correctly — cause and summary set, drive
-// disabled in 2 ms, errors cleared by the ErrorClear/ErrClearAck handshake — then a legal enable.
+// Not a finding (docs/protocol.md §4): a drive fault reported correctly — cause and summary set,
+// drive off in 2 ms, errors cleared by the ErrorClear/ErrClearAck handshake — then a legal enable.
 Script faultAndRecovery() {
   return Script(200)
       .sew(50, 100, kSummary | kEncoderErr)
@@ -699,10 +699,10 @@ TEST(ValidatorNominal, AReportedFaultGoesIntoTheHistoryAndTheTimeline) {
   EXPECT_EQ(axis->totalFailures(), 0u);
 }
 
-// ---- "Time": timestamps going backwards are not an error ----
+// ---- Rule time: timestamps going backwards are not an error ----
 
-// RULES.md "Time": "Timestamps that go backwards do not move timers back (a timer uses the latest
-// time seen) and are not an error." Here every cycle is captured and one master copy carries a
+// docs/timing.md#rule-time: a timestamp that goes back is no error and moves no timer back (the
+// timers keep the latest time). Here every cycle is captured and one master copy carries a
 // timestamp 8 ms in the past. The validator puts that master copy at the latest time seen (R(14),
 // 14 ms) for its cycle clock, so the next master copy (16 ms) is 2 ms after it: COM-002 reports
 // "1 cycle missing" on M(16) and counts a lost cycle for the axis, though no cycle is missing.
@@ -727,7 +727,7 @@ TEST(ValidatorTime, FindingsCarryTheirFramesOwnTimestamps) {
   EXPECT_NE(f.message.find("21.000 ms"), std::string::npos) << f.message;
 }
 
-// RULES.md COM-002: a late cycle loses nothing; lost cycles count as failures of every axis.
+// docs/rules.md#com-002: a late cycle loses nothing; lost cycles count as failures of every axis.
 TEST(ValidatorCom002, TheVerdictDecidesTheFailureCount) {
   struct Row {
     const char* name;
@@ -762,10 +762,10 @@ TEST(ValidatorCycleTime, MedianP99AndMaxOfTheMasterIntervals) {
   EXPECT_EQ(driver->validator().cycles(), 99u);
 }
 
-// RULES.md COM-003 counts "at least 3 consecutive cycles failed (missing from the capture, not
-// returned, or returned with WKC 0)". Below, two lost cycles, then one returned with WKC 2 (a
-// wrong WKC, but the drive took its outputs: traffic went through, PROTOCOL.md §8), then one lost
-// cycle: no 3 consecutive lost cycles, so the drive had no reason to raise ECatTErr.
+// docs/rules.md#com-003 counts 3 or more failed cycles in a row: missing from the capture, not
+// returned, or returned with WKC 0. Below, two lost cycles, then one returned with WKC 2 (a
+// wrong WKC, but the drive took its outputs: traffic went through, docs/protocol.md §8), then one
+// lost cycle: no 3 consecutive lost cycles, so the drive had no reason to raise ECatTErr.
 // BUG (axis_model.cpp, AxisModel::cycleFailed): a failed-but-not-lost cycle does not end the run
 // of lost cycles (consecutive_lost_ is only reset by cycleOk), so 2 + 1 lost cycles separated by
 // a WKC-2 cycle count as 3 consecutive and COM-003 is reported at M(35).
@@ -886,10 +886,10 @@ TEST(ValidatorEsm, Esm002PdoOutsideOp) {
   }
 }
 
-// RULES.md ESM-002: "its inputs are exchanged before SAFE-OP". An axis in PRE-OP whose inputs are
-// exchanged every cycle is one lasting condition, reported once ("A condition that lasts is
-// reported once"). The check (rules.cpp, esm002) looks at whether *this frame* carries inputs,
-// so the condition is false on every master copy and true again on every returned copy: the
+// docs/rules.md#esm-002: inputs exchanged with an axis before SAFE-OP. An axis in PRE-OP whose
+// inputs are exchanged every cycle is one lasting condition, reported once
+// (docs/timing.md#rule-time). The check (rules.cpp, esm002) looks at whether *this frame* carries
+// inputs, so the condition is false on every master copy and true again on every returned copy: the
 // episode ends and restarts each cycle and ESM-002 is reported on every returned copy (40 times
 // in 40 cycles here), where COM-001's WKC episodes, for instance, last across master copies.
 // BUG (rules.cpp esm002 with validator.cpp evaluateAxis): reported once per cycle, not once.
@@ -924,7 +924,7 @@ TEST(ValidatorEsm, AlErrorIsAttributedToTheAxisOfItsStation) {
   EXPECT_EQ(actual, std::vector<std::string>{test::describe(RuleId::Esm003, 0, 6, 6)});
 }
 
-// RULES.md COM-005 / seed 001: an axis's total failure counter resets when its slave enters OP,
+// docs/cli.md `telegram_failures`: an axis's total failure counter resets when its slave enters OP,
 // whether the AL status read that shows OP shares the cyclic frame or has a frame of its own
 // (a master polls AL status in frames of their own, as the simulator's does).
 struct OpEntryRow {
@@ -953,8 +953,8 @@ TEST(ValidatorEsm, TotalFailuresResetWhenTheSlaveEntersOp) {
     ValidatorDriver driver(RuleSettings{}, stationAxis());
     std::int64_t t = kEpochNs;
     // SAFE-OP, outputs off; three cycles not returned (a master copy with no returned copy;
-    // PROTOCOL.md §8 takes a master copy after one with the same datagrams as its returned copy
-    // with WKC 0, so this counts fewer than three failures, but some).
+    // docs/protocol.md §8 takes a master copy after one with the same datagrams as its returned
+    // copy with WKC 0, so this counts fewer than three failures, but some).
     for (std::int64_t k = 0; k < 10; ++k, t += kMs) {
       driver.feed(stationFrame(kScwOff, kSswReady, 4, false), t);
       if (k < 3 || k > 5) driver.feed(stationFrame(kScwOff, kSswReady, 4, true), t + 20 * kUs);

@@ -1,4 +1,4 @@
-// The EtherCAT frame walker (ethercat.hpp, PROTOCOL.md §8) on frames built byte by byte.
+// The EtherCAT frame walker (ethercat.hpp, docs/protocol.md §8) on frames built byte by byte.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -353,7 +353,7 @@ TEST(Walker, FrameCutAtEveryByteOffsetBehindVlanAndUdp) {
   }
 }
 
-// Pairing a master's frame with its returned copy (PROTOCOL.md §8): one row per difference.
+// Pairing a master's frame with its returned copy (docs/protocol.md §8): one row per difference.
 struct SameCase {
   const char* name;
   std::vector<Dg> a;
@@ -511,7 +511,7 @@ TEST(Walker, CommandNames) {
   EXPECT_STREQ(ecat::commandName(255), "unknown");
 }
 
-// PROTOCOL.md §8: how each command addresses slaves and whether it reads or writes them.
+// docs/protocol.md §8: how each command addresses slaves and whether it reads or writes them.
 struct CommandCase {
   std::uint8_t command;
   const char* name;

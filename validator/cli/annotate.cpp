@@ -1,6 +1,6 @@
-// `ncservo annotate IN OUT.pcapng` (INTERFACES.md): the capture copied to pcapng with each
+// `ncservo annotate IN OUT.pcapng` (docs/field.md): the capture copied to pcapng with each
 // finding as a packet comment on its frame. Two passes over the file: the first judges it (a
-// finding is known only once its frame is judged, and the learning window of PROTOCOL.md §9.4
+// finding is known only once its frame is judged, and the learning window of docs/protocol.md §9.4
 // delivers its frames late), the second copies it with the comments. So the input must be a
 // file that can be read again, not standard input.
 #include <fmt/format.h>

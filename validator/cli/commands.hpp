@@ -18,7 +18,7 @@
 
 namespace ncservo::cli {
 
-// INTERFACES.md's exit statuses.
+// The exit statuses (docs/cli.md#exit-status).
 enum ExitCode {
   kExitOk = 0,
   kExitFindings = 1,
@@ -30,10 +30,10 @@ enum ExitCode {
 // What runs a subcommand once its options are parsed.
 using Handler = std::function<int()>;
 
-// --timestamps (PROTOCOL.md §8: a probe's clock or the capturing PC's).
+// --timestamps (docs/protocol.md §8: a probe's clock or the capturing PC's).
 void addTimestampsOption(CLI::App& command, std::string& timestamps);
 
-// The layout files of decode and validate (PROTOCOL.md §9.1, §9.2).
+// The layout files of decode and validate (docs/protocol.md §9.1, §9.2).
 struct LayoutArgs {
   std::string config_path;
   std::string eni_path;
@@ -48,7 +48,7 @@ void addLayoutOptions(CLI::App& command, LayoutArgs& layout);
 Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args);
 DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args);
 
-// The rule settings of the command line (INTERFACES.md `validate`).
+// The rule settings of the command line (docs/cli.md, `validate`).
 struct RuleArgs {
   std::vector<std::string> disable;
   std::vector<std::string> enable;
@@ -63,8 +63,8 @@ void addRuleOptions(CLI::App& command, RuleArgs& rules);
 Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
                      RuleSettings& settings);
 
-// INTERFACES.md: an output path that is one of the inputs, however named, is a usage error,
-// checked before anything is opened for writing.
+// docs/cli.md#exit-status: an output path that is one of the inputs, however named, is a usage
+// error, checked before anything is opened for writing.
 Status refuseInputAsOutput(const std::string& option, const std::string& output,
                            const std::vector<std::string>& captures);
 

@@ -167,7 +167,7 @@ struct DecodeInput;
 int decodeRows(const DecodeArgs& args, DecodeInput& input);
 int decodeWaveforms(const DecodeArgs& args, DecodeInput& input);
 
-// `decode`'s formats (INTERFACES.md): one line per axis and cycle after an optional header, or
+// `decode`'s formats (docs/cli.md): one line per axis and cycle after an optional header, or
 // the waveforms of every copy with the findings (waveform.hpp).
 struct DecodeFormat {
   const char* name;
@@ -181,7 +181,7 @@ const DecodeFormat kDecodeFormats[] = {
     {"vcd", decodeWaveforms, nullptr, nullptr},
 };
 
-// --from/--to (INTERFACES.md), seconds since the capture's first frame.
+// --from/--to (docs/cli.md), seconds since the capture's first frame.
 struct WindowArgs {
   std::optional<double> from_s, to_s;
 };
@@ -564,7 +564,7 @@ void presentCapture(cli::ReportWriter& writer, const std::string& messages,
   if (!writer.keepsFindings()) std::vector<Finding>().swap(report.findings);
 }
 
-// INTERFACES.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
+// docs/cli.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
 int combine(int a, int b) {
   constexpr int kOrder[] = {kExitUsage, kExitCapture, kExitFindings, kExitNoServo, kExitOk};
   auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
@@ -582,7 +582,7 @@ bool sameFile(const std::string& a, const std::string& b) {
 }
 
 // The reports of a run: --format to --output (standard output by default), then each
-// --report FORMAT:FILE. INTERFACES.md: a report file that is one of the inputs, however named,
+// --report FORMAT:FILE. docs/cli.md: a report file that is one of the inputs, however named,
 // is a usage error, and so are two reports to one file; checked before anything is written.
 Result<std::vector<cli::ReportTarget>> reportTargets(const ValidateArgs& o) {
   std::vector<cli::ReportTarget> targets{{cli::findReportFormat(o.format), o.output}};

@@ -1,4 +1,4 @@
-// `ncservo monitor -i IFACE` (INTERFACES.md): a live capture through libpcap, validated as the
+// `ncservo monitor -i IFACE` (docs/field.md): a live capture through libpcap, validated as the
 // frames arrive; findings printed as they happen, a status line per axis on a terminal, the
 // usual report and exit status at the end (--duration, Ctrl-C), and a flight recorder that
 // writes an annotated pcapng of the seconds around each finding.
@@ -37,7 +37,7 @@
 namespace ncservo::cli {
 namespace {
 
-// PROTOCOL.md §8: EtherCAT in Ethernet (EtherType 0x88A4) or in UDP to port 34980, also behind
+// docs/protocol.md §8: EtherCAT in Ethernet (EtherType 0x88A4) or in UDP to port 34980, also behind
 // VLAN tags.
 constexpr const char* kCaptureFilter =
     "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";

@@ -61,7 +61,7 @@ class Checker {
 // A second: a larger system time difference is no distributed clock's.
 constexpr std::uint32_t kMaxDcSettledNs = 1'000'000'000;
 
-// The keys each table of the file takes (INTERFACES.md "Configuration file"), for "did you mean".
+// The keys each table of the file takes (docs/configuration.md), for "did you mean".
 std::vector<std::string> topKeys() {
   std::vector<std::string> keys{"servo_ready_mode",
                                 "telegram_failure_limit",

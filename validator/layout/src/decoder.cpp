@@ -12,7 +12,7 @@ namespace {
 // What the decoder needs to know of a frame's datagram list, gathered in one pass.
 struct FrameShape {
   // Commands, indexes, lengths and the addresses that survive the ring: what pairs a master's
-  // copy with its returned copy (PROTOCOL.md §8).
+  // copy with its returned copy (docs/protocol.md §8).
   std::uint64_t signature = 0;
   // Framing, commands, surviving addresses, lengths and which WKCs are above zero: what the
   // placements depend on (not the index a master changes every cycle).
@@ -227,7 +227,7 @@ void Decoder::toCache(std::uint64_t key, FrameDecode& out) {
             c.axes.begin());
 }
 
-// PROTOCOL.md §8: a frame with any WKC above zero is a returned copy; otherwise the frame
+// docs/protocol.md §8: a frame with any WKC above zero is a returned copy; otherwise the frame
 // after a master's frame with the same datagram list is its returned copy.
 void Decoder::classifyCopy(const EcatFrame& frame, std::uint64_t signature, bool any_wkc,
                            FrameDecode& out) {

@@ -15,7 +15,7 @@ namespace ncservo {
 
 namespace {
 
-// The signature of PROTOCOL.md §1–5, from the field table.
+// The signature of docs/protocol.md §1–5, from the field table.
 constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
 constexpr std::uint32_t kScwSe = mask32("ncservo.scw.se");
 constexpr std::uint32_t kSeEnabled = 0x2;  // §2
@@ -99,7 +99,7 @@ bool dead(std::uint32_t seen, std::uint32_t violations) {
   return violations > 2 + seen / kToleranceDivisor;
 }
 
-// A cyclic datagram: command, address and length identify it (PROTOCOL.md §8).
+// A cyclic datagram: command, address and length identify it (docs/protocol.md §8).
 struct Stream {
   std::uint8_t command = 0;
   std::uint32_t address = 0;

@@ -20,7 +20,7 @@ void LayoutWindow::hold(std::uint64_t frame_number, std::int64_t time_ns, LinkTy
   held_.push_back(Held{frame_number, time_ns, link, bytes_.size(), bytes.size(), judged});
   bytes_.insert(bytes_.end(), bytes.data(), bytes.data() + bytes.size());
   probe_->placeAxes(frame, bytes, *decode_);
-  // PROTOCOL.md §9.3 before §9.4: a captured start-up gives the layout (or shows no servo).
+  // docs/protocol.md §9.3 before §9.4: a captured start-up gives the layout (or shows no servo).
   if (probe_->learner().sawConfiguration()) {
     learning_ = false;
     probe_.reset();

@@ -19,7 +19,7 @@ using ecat::kRegAlStatus;
 using ecat::kRegAlStatusCode;
 using ecat::kRegStationAddress;
 
-// PROTOCOL.md §8: the requested transitions a slave accepts, besides staying where it is.
+// docs/protocol.md §8: the requested transitions a slave accepts, besides staying where it is.
 struct Transition {
   std::uint8_t from;
   std::uint8_t to;
@@ -120,7 +120,7 @@ void AlTracker::onControlWrite(const SlaveAddress& address, std::uint8_t request
   auto write = [&](const std::optional<std::uint8_t>& known,
                    const std::optional<std::uint16_t>& station,
                    const std::optional<std::uint16_t>& position) {
-    if (!known) return;  // PROTOCOL.md §8: nothing that depends on an unknown state is checked
+    if (!known) return;  // docs/protocol.md §8: nothing that depends on an unknown state is checked
     out.push_back({now, AlControlEvent{SlaveRef{station, position}, raw, requested, *known}});
   };
   if (address.target == SlaveTarget::All) {

@@ -10,7 +10,7 @@ namespace ncservo {
 
 namespace {
 constexpr std::uint32_t kSe = mask32("ncservo.scw.se");
-constexpr std::uint32_t kSeArmed = 0x1;  // PROTOCOL.md §2: 0x2 enables only when reached from 0x1
+constexpr std::uint32_t kSeArmed = 0x1;  // docs/protocol.md §2: 0x2 enables only from 0x1
 constexpr std::uint32_t kSeEnable = 0x2;
 constexpr std::uint32_t kEmgon = mask32("ncservo.scw.emgon");
 constexpr std::uint32_t kBrake = mask32("ncservo.scw.brake");
@@ -119,7 +119,7 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
   total_failures_ = std::min(kFailureCounterMax, total_failures_ + cycles);
 }
 
-// RULES.md COM-003: after 3 or more lost cycles the drive must raise ECatTErr.
+// docs/rules.md#com-003: after 3 or more lost cycles the drive must raise ECatTErr.
 void AxisModel::endOutage() {
   if (consecutive_lost_ >= 3) {
     awaiting_timeout_report_ = true;
@@ -198,7 +198,7 @@ void AxisModel::observeOutputs(const PdoValues& values, const Stamp& now) {
   const std::uint32_t se = scw & kSe;
   const bool first = !se_.known;
   previous_se_ = se_.value;
-  // PROTOCOL.md §2; RULES.md: an axis first seen with SE 0x2 is taken as validly enabled.
+  // docs/timing.md#rule-time: an axis first seen with SE 0x2 is taken as validly enabled.
   if (se == kSeEnable) {
     if (first || previous_se_ == kSeArmed) {
       valid_enable_ = true;
@@ -236,7 +236,7 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
   if (err_clear_ack_.rose && error_clear_.on()) clear_acknowledged_ = true;
   if (ecat_timeout_.on()) awaiting_timeout_report_ = false;
 
-  // PROTOCOL.md §7: an entry per rising cause bit, newest first; errors present when the axis
+  // docs/protocol.md §7: an entry per rising cause bit, newest first; errors present when the axis
   // is first seen are entered too.
   const std::uint32_t rising = sew & ~previous_sew_ & kSewCauseMask;
   previous_sew_ = sew;
@@ -253,7 +253,7 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
   latest_.has_tx = true;
   saw_inputs_ = true;
 
-  // RULES.md RDY-001: the mode is inferred from the first observation with ServoEn 0 and no error.
+  // docs/rules.md#rdy-001: the mode is inferred from the first sight of ServoEn 0 and no error.
   if (!ready_mode_ && servo_en_.off() && servo_errors_.off()) {
     ready_mode_ = servo_rdy_.on() ? 0 : 1;
   }
@@ -261,7 +261,7 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
 
 std::optional<bool> AxisModel::expectedReady() const {
   if (!ready_mode_ || !latest_.has_tx) return std::nullopt;
-  // PROTOCOL.md §5, the Servo_Ready_Mode table.
+  // docs/protocol.md §5, the Servo_Ready_Mode table.
   if (servo_errors_.on()) return false;
   if (*ready_mode_ == 0) return true;
   return servo_en_.on();

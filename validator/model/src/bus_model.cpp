@@ -8,20 +8,20 @@
 namespace ncservo {
 
 namespace {
-// RULES.md COM-002: no gap is judged before 8 intervals; a gap is more than 1.5 × the median.
+// docs/rules.md#com-002: no gap is judged before 8 intervals; a gap is more than 1.5 × the median.
 constexpr std::uint64_t kIntervalsBeforeGaps = 8;
 constexpr std::int64_t kGapNumerator = 3, kGapDenominator = 2;
 constexpr std::size_t kMaxWkcRecords = 64;
 using Outcome = AxisAccount::Outcome;
 
-// round(interval ÷ nominal) − 1: the cycles an interval leaves out (RULES.md COM-002).
+// round(interval ÷ nominal) − 1: the cycles an interval leaves out (docs/rules.md#com-002).
 std::uint32_t missingCycles(std::int64_t interval_ns, std::int64_t nominal_ns) {
   const long long cycles =
       std::llround(static_cast<double>(interval_ns) / static_cast<double>(nominal_ns));
   return cycles > 1 ? static_cast<std::uint32_t>(cycles - 1) : 0;
 }
 
-// PROTOCOL.md §8: an LRW/FPRW adds 2 for a slave whose outputs it writes and 1 for one whose
+// docs/protocol.md §8: an LRW/FPRW adds 2 for a slave whose outputs it writes and 1 for one whose
 // inputs it reads; LRD/LWR/FPRD/FPWR add 1 per slave.
 std::uint16_t wkcShare(std::uint8_t cmd, bool outputs, bool inputs) {
   if (cmd == ecat::kLrw || cmd == ecat::kFprw) return (outputs ? 2 : 0) + (inputs ? 1 : 0);
@@ -42,7 +42,7 @@ bool BusModel::exchangesProcessData(const EcatFrame& frame, const FrameDecode& d
 std::size_t BusModel::processDatagrams(const EcatFrame& frame, const FrameDecode& decode,
                                        std::array<DatagramKey, ecat::kMaxDatagrams>& keys) {
   const std::size_t count = std::min(frame.count, keys.size());
-  // Servo PDOs may also travel in FPRD/FPWR datagrams (PROTOCOL.md §9).
+  // Servo PDOs may also travel in FPRD/FPWR datagrams (docs/protocol.md §9).
   std::array<bool, ecat::kMaxDatagrams> carries_axes{};
   for (std::size_t i = 0; i < decode.axis_count; ++i) {
     const AxisPlacement& p = decode.axes[i];
@@ -151,7 +151,7 @@ IntervalStats BusModel::captureIntervals() const {
   return all;
 }
 
-// Telegram accounting (RULES.md COM-002, COM-004; failures for COM-003 and COM-005). The clock is
+// Telegram accounting (docs/rules.md#com-002, COM-004; failures for COM-003, COM-005). The clock is
 // the master's copy of each cyclic frame, or the returned copy in a capture without master copies.
 bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, const Stamp& now,
                              std::int64_t frame_time_ns, std::vector<BusEvent>& events,
@@ -174,7 +174,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   returned_copies_seen_ = returned_copies_seen_ || !master;
 
   if (master) {
-    // RULES.md COM-004: judged on the next master frame, once returned copies exist at all.
+    // docs/rules.md#com-004: judged on the next master frame, once returned copies exist at all.
     if (cyclic.awaiting_return && returned_copies_seen_) {
       if (!cyclic.not_returned_episode) {
         cyclic.not_returned_episode = true;
@@ -207,7 +207,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     return false;
   }
   if (!master_copies_seen_) tick(cyclic, decode);
-  // A timestamp that went backwards gives no latency (RULES.md "Time").
+  // A timestamp that went backwards gives no latency (docs/timing.md#rule-time).
   if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
     timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
@@ -222,7 +222,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
 // One tick of a cyclic frame's clock: the interval statistics, COM-002 and COM-006.
 void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
   ++cyclic.ticks;
-  // RULES.md "Time": a timestamp that went backwards is not an error; the interval it would
+  // docs/timing.md#rule-time: a timestamp that went back is not an error; the interval it would
   // give is unknown, so the clock of this cyclic frame starts again at the next tick.
   if (frame_time_ns_ < now_.time_ns) {
     cyclic.last_tick.reset();
@@ -233,7 +233,7 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
     return;
   }
   const std::int64_t interval = now_.time_ns - cyclic.last_tick->time_ns;
-  // RULES.md COM-002: a gap is told late or lost by the interval after it.
+  // docs/rules.md#com-002: a gap is told late or lost by the interval after it.
   if (cyclic.pending_gap) {
     judgeGap(cyclic, interval, CycleGapEvent::Verdict::Lost, *events_, accounts_);
   }
@@ -265,7 +265,7 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
   cyclic.last_tick = now_;
 }
 
-// RULES.md COM-002: late when the gap and the interval after it make about two cycles (nothing
+// docs/rules.md#com-002: late when the gap and the interval after it make about two cycles (nothing
 // missing); otherwise round(gap ÷ nominal) − 1 cycles lost, as also when the next interval is
 // not known. The finding lands on the tick that tells, one cycle after the gap.
 void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
@@ -291,7 +291,7 @@ void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
   cyclic.pending_gap.reset();
 }
 
-// RULES.md COM-006: one finding per run of deviating cycles. A gap deviates too but is COM-002's:
+// docs/rules.md#com-006: one finding per run of deviating cycles. A gap deviates but is COM-002's:
 // it starts a run without a finding, so a late cycle's short interval after it is not reported.
 void BusModel::judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int64_t nominal,
                            bool gap) {
@@ -307,7 +307,7 @@ void BusModel::judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int6
   cyclic.jitter_episode = deviates;
 }
 
-// RULES.md COM-007: one finding per run of late returns.
+// docs/rules.md#com-007: one finding per run of late returns.
 void BusModel::judgeLatency(CyclicFrame& cyclic, std::int64_t latency,
                             std::vector<BusEvent>& events) {
   if (!limits_.return_latency_ns) return;
@@ -381,7 +381,7 @@ BusModel::WkcPlan& BusModel::wkcPlan(const EcatFrame& frame, const FrameDecode& 
   return plan;
 }
 
-// RULES.md COM-001 on each returned process-data datagram, and each axis's cycle: lost (WKC 0),
+// docs/rules.md#com-001 on each returned process-data datagram; each axis's cycle: lost (WKC 0),
 // failed (another wrong WKC) or good.
 bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode) {
   WkcPlan& plan = wkcPlan(frame, decode);

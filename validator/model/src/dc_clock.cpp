@@ -60,7 +60,7 @@ void DriftFit::add(std::int64_t frame_ns, std::uint64_t clock_ns) {
     first_clock_ns_ = clock_ns;
   }
   ++samples_;
-  // A timestamp a little before the first (RULES.md "Time": they may go back a little) counts in
+  // A timestamp a little before the first (docs/timing.md#rule-time: they may go back) counts in
   // the first block.
   const std::int64_t since_ns = std::max<std::int64_t>(frame_ns - first_frame_ns_, 0);
   std::size_t block = static_cast<std::size_t>(since_ns / block_ns_);

@@ -105,7 +105,7 @@ const char* verdictHeadline(Verdict v) {
   return "PASS";
 }
 
-// What the ESL probe headers said (PROTOCOL.md §8), when there were any.
+// What the ESL probe headers said (docs/protocol.md §8), when there were any.
 Json probeJson(const CaptureReport& r) {
   const ProbeCounts& p = r.probe;
   Json j{{"frames", p.probed},
@@ -137,7 +137,7 @@ Json truncationJson(const Truncation& t) {
           {"axes", t.axes}};
 }
 
-// The capture's segments (RULES.md "Time"), times in the capture's own seconds.
+// The capture's segments (docs/timing.md#rule-time), times in the capture's own seconds.
 Json segmentsJson(const CaptureReport& r) {
   Json segments = Json::array();
   for (const CaptureSegment& s : r.segments) {
@@ -201,7 +201,7 @@ Json cyclicDatagramsJson(const CaptureReport& r) {
   return list;
 }
 
-// INTERFACES.md `timing.dc`: one entry per slave whose distributed clock was read.
+// `timing.dc` (docs/timing.md): one entry per slave whose distributed clock was read.
 Json dcJson(const CaptureReport& r) {
   Json list = Json::array();
   for (const DcStation& s : r.dc) {
@@ -228,7 +228,7 @@ Json dcJson(const CaptureReport& r) {
   return list;
 }
 
-// INTERFACES.md `timing`.
+// `timing` (docs/timing.md, docs/cli.md).
 Json timingJson(const CaptureReport& r) {
   Json timing{
       {"timestamps", timestampSourceName(r.timestamps)},
@@ -701,8 +701,8 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-// INTERFACES.md's formats of `validate`: name, keeps findings, locates frames, draws timelines,
-// begin capture, finding, end capture, finish.
+// The formats of `validate` (docs/cli.md#reports): name, keeps findings, locates frames, draws
+// timelines, begin capture, finding, end capture, finish.
 const ReportFormat kReportFormats[] = {
     {"text", false, false, false, writeTextHeading, writeTextFinding, writeTextSummary,
      writeTextVerdict},

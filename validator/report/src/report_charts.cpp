@@ -35,7 +35,7 @@ void TimelineRecorder::frame(std::uint64_t number, std::int64_t time_ns,
     AxisRing& r = ring(placement.axis);
     PdoValues values;
     readFrameValues(placement, bytes, values);
-    // PROTOCOL.md §8: outputs from either copy, inputs from the returned copy.
+    // docs/protocol.md §8: outputs from either copy, inputs from the returned copy.
     for (std::size_t w = 0; w < kWordCount; ++w) {
       if (values.has(kWords[w].word)) r.current[w] = values.raw[w];
     }

@@ -1,4 +1,4 @@
-// The rule table of RULES.md and the conditions of the axis rules. Each check reads the axis
+// The rule table (docs/rules.md) and the conditions of the axis rules. Each check reads the axis
 // model's state only; the validator owns timing and the once-per-episode discipline.
 #include "ncservo/rules/rules.hpp"
 
@@ -45,7 +45,7 @@ bool driveReady(const AxisModel& a) {
   return *a.readyMode() == 0 ? a.servoRdy().on() : a.servoErrors().off();
 }
 
-// --- Servo enable (PROTOCOL.md §2) ---
+// --- Servo enable (docs/protocol.md §2) ---
 bool se001(const AxisModel& a, const RuleSettings&) {
   return a.illegalEnableEdge();
 }
@@ -269,7 +269,7 @@ std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) 
                      a.consecutiveFailed(), s.telegram_failure_limit, a.totalFailures());
 }
 
-// --- EtherCAT state machine, per axis (PROTOCOL.md §8) ---
+// --- EtherCAT state machine, per axis (docs/protocol.md §8) ---
 using ecat::kAlOp;
 using ecat::kAlSafeOp;
 bool esm002(const AxisModel& a, const RuleSettings&) {
@@ -289,7 +289,7 @@ std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
                      state);
 }
 
-// --- Bus (PROTOCOL.md §8; RULES.md COM-001, COM-002, COM-004) ---
+// --- Bus (docs/protocol.md §8; docs/rules.md#com-001, COM-002, COM-004) ---
 bool com001(const WorkingCounterEvent& e, const RuleSettings&) {
   return e.wkc != e.expected;
 }
@@ -367,7 +367,7 @@ std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettin
       e.master_frame, carried);
 }
 
-// --- EtherCAT state machine, per slave (PROTOCOL.md §8) ---
+// --- EtherCAT state machine, per slave (docs/protocol.md §8) ---
 std::string allowedFrom(std::uint8_t from) {
   std::string out;
   for (std::uint8_t to : ecat::kAlStates) {
@@ -387,7 +387,7 @@ std::string esm001Text(const AlControlEvent& e, const Stamp&, const RuleSettings
                      alStateName(e.known_state), allowedFrom(e.known_state));
 }
 
-// RULES.md ESM-003/004: judged against the requested state, or with none seen the previous one.
+// docs/rules.md#esm-003, #esm-004: judged on the requested state, or with none the previous one.
 bool errorAboveInit(const AlErrorEvent& e) {
   const std::optional<std::uint8_t> reference = e.requested ? e.requested : e.previous;
   return reference && alStateAboveInit(*reference);

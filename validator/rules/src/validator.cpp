@@ -13,7 +13,7 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
       bus_(timingLimits(settings_)),
       segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
 
-// The limits of the enabled timing rules (RULES.md COM-006, COM-007).
+// The limits of the enabled timing rules (docs/rules.md#com-006, COM-007).
 TimingLimits Validator::timingLimits(const RuleSettings& settings) {
   TimingLimits limits;
   if (settings.isEnabled(RuleId::Com006)) {
@@ -26,7 +26,7 @@ TimingLimits Validator::timingLimits(const RuleSettings& settings) {
 }
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules
-// declare they read (STYLE.md "A rule declares what it reads").
+// declare they read (the "reads" of docs/rules.md).
 Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath fast_path) {
   Reads reads = AxisModel::kReads;
   for (const RuleDef& rule : kRules) {
@@ -110,8 +110,8 @@ Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
 const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                          const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
-  // RULES.md "Time": timestamps that go back a little do not move timers back; a discontinuity
-  // starts a segment with timers of its own.
+  // docs/timing.md#rule-time: timestamps that go back a little do not move timers back; a
+  // discontinuity starts a segment with timers of its own.
   const bool new_segment = segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs());
   now_ = Stamp{frame_number, segments_.now()};
   frame_time_ns_ = time_ns;
@@ -167,7 +167,7 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
     AxisSlot& s = *frame_slots_[i];
     AxisModel& model = *s.model;
     // Fast path: the bits the model and the rules read are unchanged and no timer runs, so no
-    // condition can have changed (RULES.md reports at beginnings and at timeouts only). Only
+    // condition can have changed (rules report at beginnings and at timeouts only). Only
     // those words are read; the whole PDOs are read when the model takes them.
     if (!fast_path_ || s.pending != 0 || s.evaluated_revision != model.revision() ||
         !unchanged(placement, bytes, model)) {
@@ -220,7 +220,7 @@ void Validator::startSegment() {
 }
 
 // The AL state of the axis's slave, where its station is known (ESM-002), and its entries into
-// OP since the last look (seed 001: the total failure counter resets), whichever frames showed
+// OP since the last look (the total failure counter resets), whichever frames showed
 // them: an AL status poll need not share a frame with the axis's PDOs.
 void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
   const std::vector<AxisInfo>& infos = decoder_.axes();
@@ -234,8 +234,8 @@ void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
   slot.op_entries = entries;
 }
 
-// RULES.md "Time": a condition is reported once per episode — when it begins, or for a delayed
-// rule on the first frame more than its timeout after it began — and again only after it ended.
+// docs/timing.md#rule-time: a condition is reported once per episode — when it begins, or for a
+// delayed rule on the first frame past its timeout after it began — and again only after it ended.
 void Validator::evaluateAxis(AxisSlot& s) {
   const AxisModel& model = *s.model;
   const RuleSubject subject{&model, nullptr};

@@ -1,4 +1,4 @@
-// An ET2000 probe in the line between the master and the first slave (PROTOCOL.md §8): each frame
+// An ET2000 probe in the line from the master to the first slave (docs/protocol.md §8): each frame
 // reaches the capture behind a 16-byte ESL header stamped with the exact simulated time, while
 // the capture's own timestamp is the PC's, late by up to a few hundred microseconds.
 #pragma once

@@ -1,4 +1,4 @@
-// The simulated EtherCAT master (PROTOCOL.md §8): its start-up — counts the slaves, assigns
+// The simulated EtherCAT master (docs/protocol.md §8): its start-up — counts the slaves, assigns
 // station addresses, walks every slave INIT -> PRE-OP -> SAFE-OP -> OP with AL status polls,
 // configures the sync managers and FMMUs — and its cycle: the process data in the datagrams of
 // each frame group (segment.hpp), the first frame with a DC FRMW to 0x0910. Each frame is captured

@@ -1,6 +1,6 @@
-// The simulated drive and NC axis (models.hpp). The drive follows PROTOCOL.md §2–7 unless a
+// The simulated drive and NC axis (models.hpp). The drive follows docs/protocol.md §2–7 unless a
 // misbehaviour armed in it says otherwise; the NC commands what its plan asks and reacts to the
-// drive's status the way RULES.md expects of a well-behaved NC.
+// drive's status the way the rules (docs/rules.md) expect of a well-behaved NC.
 #include "ncservo/sim/models.hpp"
 
 #include <algorithm>
@@ -36,7 +36,7 @@ constexpr double kBusVoltage = 560;
 constexpr double kAmbientC = 35;
 constexpr double kPi = 3.14159265358979323846;
 
-// How long the misbehaviours last: each clearly past its rule's default timeout (RULES.md),
+// How long the misbehaviours last: each clearly past its rule's default timeout (docs/rules.md),
 // each momentary one well inside drive_response so no other rule follows.
 constexpr std::int64_t kPulseNs = 4 * kMs;
 constexpr std::int64_t kLateDisableNs = 60 * kMs;          // SE-003 (drive_response 20)
@@ -52,7 +52,7 @@ constexpr std::uint32_t kReservedErrorBit = 1U << 25;
 constexpr std::uint32_t kReservedStatusBit = 1U << 13;
 constexpr std::uint32_t kReservedControlBit = 1U << 20;
 constexpr std::int32_t kUndefinedMessageCode = 7;
-constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: no data for 3 cycles (PROTOCOL.md §4)
+constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: 3 cycles, no data (docs/protocol.md §4)
 
 }  // namespace
 
@@ -165,7 +165,7 @@ void DriveModel::step(const RxPdo* outputs, std::int64_t now_ns) {
   ++cycle_;
   static const RxPdo kNeutral{0, bits::kEmgon | bits::kBrake, 0};
   if (outputs == nullptr) {
-    // EtherCAT timeout: no data for 3 cycles (PROTOCOL.md §4, E15)
+    // EtherCAT timeout: no data for 3 cycles (docs/protocol.md §4, E15)
     if (operational_ && ++missed_cycles_ == kLostCyclesForTimeout &&
         !fire(DriveQuirk::SilentTimeout, now_ns, 0)) {
       pending_faults_ |= bits::kEcatTimeout;
@@ -188,7 +188,7 @@ void DriveModel::step(const RxPdo* outputs, std::int64_t now_ns) {
 
 void DriveModel::updateEnable(const RxPdo& rx, std::int64_t now_ns) {
   const std::uint32_t se = rx.scw & bits::kSe;
-  // PROTOCOL.md §2: only 0x2 reached directly from 0x1 enables, and only while it is held.
+  // docs/protocol.md §2: only 0x2 reached directly from 0x1 enables, and only while it is held.
   valid_enable_ = se == bits::kSeEnable && (valid_enable_ || last_se_ == bits::kSePrepare);
   last_se_ = se;
   if (valid_enable_) last_enable_end_ns_ = now_ns;
@@ -382,7 +382,7 @@ void DriveModel::buildInputs(const RxPdo& rx, std::int64_t now_ns) {
   if (fire(DriveQuirk::CauseWithoutSummary, now_ns, 0)) sew = bits::kOverload;
   if (fire(DriveQuirk::ReservedErrorBit, now_ns, 0)) sew |= kReservedErrorBit;
   const bool errors = (sew & bits::kServoErrors) != 0;
-  bool ready = !errors && (enabled_ || setup_.ready_mode == 0);  // PROTOCOL.md §5
+  bool ready = !errors && (enabled_ || setup_.ready_mode == 0);  // docs/protocol.md §5
   if (fire(DriveQuirk::ReadyInverted, now_ns, kReadyInvertedNs) ||
       within(DriveQuirk::ReadyInverted, now_ns)) {
     ready = !ready;
@@ -402,7 +402,7 @@ void DriveModel::buildInputs(const RxPdo& rx, std::int64_t now_ns) {
   in.ssw = ssw;
   in.sew = sew;
 
-  // Message codes 0..5 in turn (PROTOCOL.md §5), with plausible values.
+  // Message codes 0..5 in turn (docs/protocol.md §5), with plausible values.
   const double noise = rng_.uniform() - 0.5;
   const double rpm = speed_rpm_ + (speed_rpm_ != 0 ? noise * 0.2 : 0.0);
   const double current = current_a_ + (enabled_ ? noise * 0.05 : 0.0);

@@ -55,7 +55,7 @@ constexpr std::uint32_t kLogicalFrameStride = 0x1000;
 // TwinCAT-like: the outputs and the inputs in areas of their own, far apart.
 constexpr std::uint32_t kOutputArea = 0x01000000;
 constexpr std::uint32_t kInputArea = 0x01008000;
-constexpr std::size_t kMaxLrwData = 1450;  // 29 axes of 50 bytes (PROTOCOL.md §9.4)
+constexpr std::size_t kMaxLrwData = 1450;  // 29 axes of 50 bytes (docs/protocol.md §9.4)
 // Several datagrams' headers, the DC FRMW and the status BRD must fit too (1498 bytes in all).
 constexpr std::size_t kMaxSplitData = 1400;
 constexpr int kMaxServosPerFrame = 29;
@@ -175,7 +175,7 @@ void Esc::onAlControl(std::uint16_t value) {
     publishAlStatus();
     return;
   }
-  const bool allowed = alTransitionAllowed(state, requested);  // PROTOCOL.md §8
+  const bool allowed = alTransitionAllowed(state, requested);  // docs/protocol.md §8
   if (!allowed || (requested == kOp && refuse_next_op)) {
     if (requested == kOp && refuse_next_op && allowed) {
       refuse_next_op = false;

@@ -1,4 +1,4 @@
-// The simulated slaves (PROTOCOL.md §8): each an EtherCAT slave controller (ESC) with register
+// The simulated slaves (docs/protocol.md §8): each an EtherCAT slave controller (ESC) with register
 // memory, FMMUs and the AL state machine, driven only by what the master writes, so that the
 // capture is consistent by construction; in ring order, with where their process data lies.
 #pragma once
@@ -22,7 +22,7 @@ inline constexpr std::int64_t kEpochNs = 1'767'225'600 * kSecond;  // 2026-01-01
 
 // What a slave's process data is, for what the master writes and the slave answers.
 enum class SlaveRole : std::uint8_t {
-  Servo,    // this protocol (PROTOCOL.md §1-5)
+  Servo,    // this protocol (docs/protocol.md §1-5)
   Digital,  // a walking output bit; inputs count up
   Analog,   // 16-bit channels: ramps out, triangles in
   Drive,    // another protocol's drive (CiA 402-like control and status words)
@@ -31,7 +31,7 @@ enum class SlaveRole : std::uint8_t {
 
 // A kind of slave: its process data's sizes, and where its sync managers put it in its RAM.
 // Terminals without a mailbox carry theirs in SM0 (as EL2008/EL1008); the others by convention
-// outputs in SM2 and inputs in SM3 (PROTOCOL.md §8).
+// outputs in SM2 and inputs in SM3 (docs/protocol.md §8).
 struct SlaveModel {
   const char* name;
   SlaveRole role;
@@ -106,7 +106,7 @@ class Esc {
 // The master's outputs for a slave other than a servo, this cycle.
 void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uint8_t* out);
 
-// One logical datagram of the process image (PROTOCOL.md §8): LRW, LWR or LRD.
+// One logical datagram of the process image (docs/protocol.md §8): LRW, LWR or LRD.
 struct ImageDatagram {
   std::uint8_t command = 0;
   std::uint32_t logical = 0;
@@ -125,7 +125,7 @@ struct FrameGroup {  // the slaves whose process data one cyclic frame carries
   std::optional<ImagePlace> place(std::uint32_t logical) const;
 };
 
-// The slaves in ring order, where their process data lies (PROTOCOL.md §9.4's styles) and the
+// The slaves in ring order, where their process data lies (docs/protocol.md §9.4's styles) and the
 // cyclic datagrams that carry it. SOEM and EtherLab: servo 0, terminal 0, servo 1, terminal 1,
 // ..., then the rest, the terminals 8-bit digital outputs and inputs in turn; mixed and TwinCAT:
 // terminals of every model in kTerminalModels, drawn with the positions from the seed.
@@ -138,7 +138,7 @@ struct Segment {
   bool status_poll = false;   // the cycle's first frame also reads the AL status (BRD 0x0130)
 
   Segment(const SimOptions& options, Rng& rng);
-  // PROTOCOL.md §8: what the slaves' FMMUs add to the WKC of a logical datagram.
+  // docs/protocol.md §8: what the slaves' FMMUs add to the WKC of a logical datagram.
   std::uint16_t expectedWkc(const ImageDatagram& dg) const;
   // How the slaves are laid out, for the layout file's header.
   std::string describe() const;

@@ -53,7 +53,7 @@ void walkFromTypeField(const ByteReader& bytes, std::size_t type_offset, std::si
   walkPayload(bytes, *type, payload, out);
 }
 
-// The ESL header at `offset`, if its 6 fixed bytes are there (PROTOCOL.md §8).
+// The ESL header at `offset`, if its 6 fixed bytes are there (docs/protocol.md §8).
 std::optional<ProbeHeader> eslHeaderAt(const ByteReader& bytes, std::size_t offset) {
   const std::optional<ByteRecord<esl::kHeaderSize>> header = bytes.record<esl::kHeaderSize>(offset);
   if (!header) return std::nullopt;

@@ -1,4 +1,4 @@
-// Bounds-checked little-endian reads over untrusted capture bytes (STYLE.md: "Untrusted bytes").
+// Bounds-checked little-endian reads over untrusted capture bytes (docs/hostile-input.md).
 // Every read returns std::nullopt instead of reading past the end; nothing here throws.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The one error convention (STYLE.md): whatever can fail returns Result<T> — the value, or an
+// The one error convention: whatever can fail returns Result<T> — the value, or an
 // Error saying where (file, line, key or frame) and what, in words a user can act on.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Reads pcap and pcapng captures (libpcap) record by record, in constant memory; gzip- and
-// zstd-compressed ones too (PROTOCOL.md §8), recognised by their first bytes, not their names.
+// zstd-compressed ones too (docs/protocol.md §8), recognised by their first bytes, not their names.
 #pragma once
 
 #include <cstddef>

@@ -1,4 +1,4 @@
-// A capture read frame by frame as `validate` and `decode` need it: walked (PROTOCOL.md §8),
+// A capture read frame by frame as `validate` and `decode` need it: walked (docs/protocol.md §8),
 // timed by the frame clock (the probe's or the PC's), held in the learning window until the layout
 // is known (§9.4), then delivered in capture order — the window's frames first. Frames that are
 // not EtherCAT, carry no datagrams or are a probe's bus faults are timed but not delivered.
@@ -17,7 +17,7 @@
 
 namespace ncservo {
 
-// INTERFACES.md `--from SECONDS --to SECONDS`: the frames whose time, in the capture's own
+// docs/cli.md `--from SECONDS --to SECONDS`: the frames whose time, in the capture's own
 // seconds (since its first record, as Wireshark's frame.time_relative), lies in [from, to]. The
 // frames outside are neither decoded for their values nor judged: the capture seen starts
 // mid-operation at `from`. They still show the layout (a start-up before the window, the

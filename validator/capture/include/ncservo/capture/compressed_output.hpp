@@ -1,6 +1,6 @@
 // Compressing what a writer of FILE*s writes (gzip through zlib, zstd through libzstd), streamed:
 // the capture writers write into the returned FILE* as into any file, so the compressed capture is
-// never held in memory (PROTOCOL.md §8: Wireshark opens both).
+// never held in memory (docs/protocol.md §8: Wireshark opens both).
 #pragma once
 
 #include <cstdio>

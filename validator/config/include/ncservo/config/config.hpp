@@ -1,4 +1,4 @@
-// The TOML configuration file of INTERFACES.md. Errors are values that name file, line and key.
+// The TOML configuration file (docs/configuration.md). Errors are values naming file, line and key.
 #pragma once
 
 #include <cstdint>
@@ -38,7 +38,7 @@ Result<Config> parseConfig(std::string_view text, const std::string& path);
 // addresses in hexadecimal.
 std::string writeConfig(const std::vector<AxisConfig>& axes, std::optional<int> servo_ready_mode);
 Result<Config> loadConfig(const std::string& path);
-// The file's settings over RULES.md's defaults (the parser checked all but the rule IDs); an error
+// The file's settings over the defaults (the parser checked all but the rule IDs); an error
 // names the file.
 Status applyConfig(const Config& config, RuleSettings& settings);
 

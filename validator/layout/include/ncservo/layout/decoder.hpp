@@ -1,5 +1,5 @@
-// Where each axis's PDOs sit in a frame (PROTOCOL.md §9), and which copy of the frame it is
-// (PROTOCOL.md §8). One decoder follows one capture in order; its memory is bounded.
+// Where each axis's PDOs sit in a frame (docs/protocol.md §9), and which copy of the frame it is
+// (docs/protocol.md §8). One decoder follows one capture in order; its memory is bounded.
 #pragma once
 
 #include <array>
@@ -91,7 +91,7 @@ struct DecoderOptions {
   // Explicit layout (a configuration, an ENI, or inferred by a LayoutWindow); empty = none.
   std::vector<AxisConfig> axes;
   LayoutSource explicit_source = LayoutSource::Config;  // where `axes` came from
-  // The layout may be inferred from the cyclic traffic (PROTOCOL.md §9.4; a LayoutWindow does).
+  // The layout may be inferred from the cyclic traffic (docs/protocol.md §9.4, by a LayoutWindow).
   bool default_layout = true;
   // Why the inference refused to decide (for noServoReason); empty when it did not run.
   std::string inference_refusal;
@@ -133,7 +133,7 @@ class Decoder {
   std::vector<AxisInfo> axes_;
   std::uint64_t previous_signature_ = 0;
   bool previous_was_master_ = false;
-  // The start-up's SM/FMMU configuration (PROTOCOL.md §9.3), and the axes it gave so far.
+  // The start-up's SM/FMMU configuration (docs/protocol.md §9.3), and the axes it gave so far.
   LayoutLearner learner_;
   std::uint32_t learned_generation_ = 0;
   std::vector<AxisConfig> learned_axes_;

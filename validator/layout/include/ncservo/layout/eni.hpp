@@ -1,5 +1,5 @@
 // Reading the servos' layout from an ENI file (EtherCATConfig.xml, ETG.2100), the layout source
-// of PROTOCOL.md §9.2.
+// of docs/protocol.md §9.2.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
-// The layout inferred from the cyclic traffic itself (PROTOCOL.md §9.4): every 10-byte window of
-// the data a master writes and every 40-byte window of the data slaves return, in every cyclic
+// The layout inferred from the cyclic traffic itself (docs/protocol.md §9.4): every 10-byte window
+// of the data a master writes and every 40-byte window of the data slaves return, in every cyclic
 // logical or FPRD/FPWR datagram, is a candidate RxPDO or TxPDO. The signature of §1–5 rules
 // candidates out (reserved bits, SEW summary, message code range, finite floats, a smooth ActPos);
 // behaviour pairs them (SSW.ServoEn follows SCW.SE, SSW.ErrClearAck follows SCW.ErrorClear).

@@ -1,4 +1,4 @@
-// Learning where each servo's PDOs are from the capture's own start-up (PROTOCOL.md §9.3): the
+// Learning where each servo's PDOs are from the capture's own start-up (docs/protocol.md §9.3): the
 // sync manager (0x0800 + 8n) and FMMU (0x0600 + 16n) registers the master writes, per slave. A
 // slave whose SM2 is 10 bytes and SM3 40 bytes is a servo of this protocol; its FMMUs give the
 // logical addresses of its RxPDO and TxPDO, or, with no FMMU over them, it is exchanged with

@@ -1,4 +1,4 @@
-// The learning window of PROTOCOL.md §9.4: with no configuration or ENI, the first frames of a
+// The learning window of docs/protocol.md §9.4: with no configuration or ENI, the first frames of a
 // capture are held back (their bytes copied, bounded) while the layout is inferred from them; once
 // it is decided — or the start-up shows the layout, or the window ends — the held frames are
 // replayed to whoever validates or decodes, so no finding in the window is lost, and the capture

@@ -39,7 +39,7 @@ struct FrameView {
 };
 
 // One axis in one cycle, as `decode` lists it: the outputs of the master's copy and the inputs of
-// its returned copy (PROTOCOL.md §8), at the frame that completed it.
+// its returned copy (docs/protocol.md §8), at the frame that completed it.
 struct CycleRow {
   std::uint64_t frame = 0;
   std::int64_t time_ns = 0;

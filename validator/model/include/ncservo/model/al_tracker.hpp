@@ -1,6 +1,6 @@
-// Each slave's EtherCAT state machine as the capture shows it (PROTOCOL.md §8): station addresses
-// assigned by the start-up, AL control writes (0x0120), AL status reads (0x0130) and AL status
-// codes (0x0134). Gives the events rules ESM-001, ESM-003 and ESM-004 judge. Bounded memory.
+// Each slave's EtherCAT state machine as a capture shows it (docs/protocol.md §8): station
+// addresses assigned by the start-up, AL control writes (0x0120), AL status reads (0x0130) and AL
+// status codes (0x0134). Gives the events rules ESM-001, ESM-003 and ESM-004 judge. Bounded memory.
 //
 // A slave is known by its station address (FP commands), its ring position (AP commands, from the
 // master's copy's ADP) or both, once an APWR/APRW of 0x0010 has assigned the one to the other.
@@ -23,7 +23,7 @@
 
 namespace ncservo {
 
-// AL states (ecat::AlState, PROTOCOL.md §8) by name, and the transitions a slave accepts.
+// AL states (ecat::AlState, docs/protocol.md §8) by name, and the transitions a slave accepts.
 const char* alStateName(std::uint8_t state);  // "INIT", ..., or "0x5" for a non-state
 bool alTransitionAllowed(std::uint8_t from, std::uint8_t to);
 bool alStateAboveInit(std::uint8_t state);  // a state, and not INIT

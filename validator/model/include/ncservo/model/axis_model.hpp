@@ -1,6 +1,6 @@
 // The model of one axis: the stream of its observations turned into state — signal levels and
-// edges, the valid-enable of PROTOCOL.md §2, the handshakes, the drive state and its named
-// transitions (§6), the error history (§7) and the telegram-failure counters (RULES.md COM-*).
+// edges, the valid-enable of docs/protocol.md §2, the handshakes, the drive state and its named
+// transitions (§6), the error history (§7) and the telegram-failure counters (docs/rules.md COM-*).
 // Rules read this state; they never see bytes.
 #pragma once
 
@@ -31,7 +31,7 @@ struct Signal {
   bool off() const { return known && value == 0; }
 };
 
-// PROTOCOL.md §7: SEW cause bit -> display code and CANopen-style code.
+// docs/protocol.md §7: SEW cause bit -> display code and CANopen-style code.
 struct SewCause {
   std::uint32_t mask;
   const char* display;  // E-number, or the bit's name where the definition gives none
@@ -46,7 +46,7 @@ struct ErrorHistoryEntry {
 
 struct StateChange {
   DriveState state{};
-  const char* transition = nullptr;  // seed 003's name, where it has one
+  const char* transition = nullptr;  // docs/protocol.md §6's name, where it has one
   Stamp at;
   std::optional<DriveState> from;  // none when the state first became known
 };
@@ -58,7 +58,7 @@ struct FieldEdge {
 };
 // "SE 0x1→0x2" for a multi-bit field, "ServoEn ↑" / "ServoEn ↓" for a flag.
 std::string edgeText(const FieldEdge& edge);
-// The change's seed 003 transition name, else "switched on → control active", else
+// The change's transition name (docs/protocol.md §6), else "switched on → control active", else
 // "→ ready to switch on" when the state first became known.
 std::string transitionText(const StateChange& change);
 
@@ -90,12 +90,12 @@ class AxisModel {
     endOutage();
     consecutive_failed_ = 0;
   }
-  // The slave entered OP: the total counter resets (seed 001).
+  // The slave entered OP: the total counter resets (docs/cli.md, `telegram_failures`).
   void enteredOp() {
     total_failures_ = 0;
     ++revision_;
   }
-  // The AL state of the axis's slave, where the capture shows it (PROTOCOL.md §8; ESM-002).
+  // The AL state of the axis's slave, where the capture shows it (docs/protocol.md §8; ESM-002).
   void setAlState(std::optional<std::uint8_t> state) {
     if (state != al_state_) {
       ++revision_;
@@ -113,8 +113,8 @@ class AxisModel {
   // This frame's values of the axis (outputs and/or inputs), at `now`.
   void observe(const PdoValues& values, const Stamp& now);
   // A capture segment starts (capture_segments.hpp): the next observation is a first one, as in
-  // a capture that began mid-operation (RULES.md "Time"), and the telegram-failure run restarts;
-  // the drive state, its timeline, the error history and Servo_Ready_Mode carry on.
+  // a capture begun mid-operation (docs/timing.md#rule-time), and the telegram-failure run
+  // restarts; the drive state, its timeline, the error history and Servo_Ready_Mode carry on.
   void startSegment();
 
   // --- state, for rules and reports ---
@@ -150,7 +150,7 @@ class AxisModel {
   // ErrClearAck rose while ErrorClear was 1, since ErrorClear last rose (EC-002, EC-004).
   bool clearAcknowledged() const { return clear_acknowledged_; }
 
-  // Servo_Ready_Mode (PROTOCOL.md §5): configured, or inferred (RULES.md RDY-001).
+  // Servo_Ready_Mode (docs/protocol.md §5): configured, or inferred (docs/rules.md#rdy-001).
   std::optional<int> readyMode() const { return ready_mode_; }
   bool readyModeConfigured() const { return ready_mode_configured_; }
   // ServoRDY as the §5 table requires it for the latest inputs.

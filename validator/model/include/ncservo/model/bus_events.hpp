@@ -1,5 +1,5 @@
 // What the bus and slave models saw happen in one frame, for the bus and slave rules to judge
-// (RULES.md "Bus and EtherCAT state machine"). The models decide what happened (a datagram
+// (docs/rules.md, COM-* and ESM-*). The models decide what happened (a datagram
 // returned with another WKC than its slaves add, an outage, an AL control write); the rules
 // decide whether that is a finding and say so.
 #pragma once
@@ -13,7 +13,7 @@
 namespace ncservo {
 
 // A returned cyclic process-data datagram whose WKC differs from the expected one
-// (PROTOCOL.md §8), at the start of such an episode for that datagram.
+// (docs/protocol.md §8), at the start of such an episode for that datagram.
 struct WorkingCounterEvent {
   std::uint8_t command = 0;
   std::uint32_t address = 0;
@@ -23,7 +23,7 @@ struct WorkingCounterEvent {
 };
 
 // An interval between two ticks of a cyclic frame's clock longer than 1.5 × the nominal cycle
-// (RULES.md COM-002), judged at the tick after it: a late cycle when that next interval makes
+// (docs/rules.md#com-002), judged at the tick after it: a late cycle when that next interval makes
 // the two about two cycles, else lost cycles. A segment start or the capture's end before the
 // next tick leaves it untold, counted as lost.
 struct CycleGapEvent {
@@ -38,7 +38,7 @@ struct CycleGapEvent {
 };
 
 // A master copy whose interval deviates from the nominal cycle by more than the configured share,
-// at the start of such a run of cycles (RULES.md COM-006).
+// at the start of such a run of cycles (docs/rules.md#com-006).
 struct CycleJitterEvent {
   std::int64_t interval_ns = 0;
   std::int64_t nominal_ns = 0;
@@ -47,7 +47,7 @@ struct CycleJitterEvent {
 };
 
 // A returned copy later than the configured latency after its master copy, at the start of such
-// a run of cycles (RULES.md COM-007).
+// a run of cycles (docs/rules.md#com-007).
 struct LateReturnEvent {
   std::int64_t latency_ns = 0;
   std::int64_t limit_ns = 0;
@@ -55,7 +55,7 @@ struct LateReturnEvent {
 };
 
 // A cyclic master frame that was not returned before the next cycle's master frame, at the
-// start of such an episode (RULES.md COM-004).
+// start of such an episode (docs/rules.md#com-004).
 struct NotReturnedEvent {
   struct Axes {
     std::uint16_t first = 0;
@@ -77,7 +77,7 @@ struct SlaveRef {
   std::optional<std::uint16_t> position;
 };
 
-// An AL control write (0x0120) to a slave whose AL state is known (PROTOCOL.md §8).
+// An AL control write (0x0120) to a slave whose AL state is known (docs/protocol.md §8).
 struct AlControlEvent {
   SlaveRef slave;
   std::uint16_t raw = 0;

@@ -1,4 +1,4 @@
-// The bus as the cyclic frames show it (PROTOCOL.md §8, RULES.md COM-*): each cyclic frame's
+// The bus as the cyclic frames show it (docs/protocol.md §8, docs/rules.md COM-*): each frame's
 // clock and interval statistics, whether master frames come back, and the working counter of
 // every returned process-data datagram, servo or not (docs/timing.md "Which frames"). Gives the
 // events the bus rules judge and each axis's telegram accounting; never reports a finding itself.
@@ -17,7 +17,7 @@
 
 namespace ncservo {
 
-// What one frame means for one axis's telegram-failure counters (RULES.md COM-003, COM-005).
+// What one frame means for one axis's telegram-failure counters (docs/rules.md#com-003, COM-005).
 struct AxisAccount {
   enum class Outcome : std::uint8_t { Good, Failed, Lost };
   std::uint16_t axis = 0;
@@ -26,7 +26,7 @@ struct AxisAccount {
 };
 
 // The limits of the timing rules that are off by default, each set only while its rule is
-// enabled (RULES.md COM-006, COM-007).
+// enabled (docs/rules.md#com-006, COM-007).
 struct TimingLimits {
   std::optional<std::uint32_t> cycle_jitter_percent;
   std::optional<std::int64_t> return_latency_ns;
@@ -68,7 +68,7 @@ class BusModel {
 
   // Master copies of the busiest cyclic frame.
   std::uint64_t cycles() const;
-  // The segment's nominal cycle, once enough intervals give it (RULES.md "Time", COM-002).
+  // The segment's nominal cycle, once enough intervals give it (docs/timing.md#rule-time, COM-002).
   std::optional<std::int64_t> nominalCycleNs() const;
   // The intervals of every segment, for reports.
   IntervalStats captureIntervals() const;
@@ -92,7 +92,7 @@ class BusModel {
   // shape (FrameDecode::shape_id) instead of every cycle.
   struct WkcCheck {
     std::uint16_t datagram;
-    std::uint16_t expected;    // what the axes it carries add to its WKC (PROTOCOL.md §8)
+    std::uint16_t expected;    // what the axes it carries add to its WKC (docs/protocol.md §8)
     bool shared;               // other slaves' bytes share it: judged against its usual WKC
     std::int16_t record;       // index in wkc_; kNoWkcRecord, kUnresolvedWkcRecord
     bool carries_axes = true;  // else a logical datagram of other slaves only (always shared)
@@ -114,7 +114,7 @@ class BusModel {
     bool accounted = false;           // its lost cycles already counted (certainly lost)
   };
   // What names a cyclic frame: one of its process-data datagrams, the same in the master's copy
-  // and the returned copy (PROTOCOL.md §8).
+  // and the returned copy (docs/protocol.md §8).
   struct DatagramKey {
     std::uint8_t command = 0;
     std::uint32_t address = 0;

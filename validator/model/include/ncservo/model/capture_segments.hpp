@@ -1,4 +1,4 @@
-// Discontinuities of a capture (PROTOCOL.md §8, RULES.md "Time"): two recordings appended (the
+// Discontinuities of a capture (docs/protocol.md §8, docs/cli.md): two recordings appended (the
 // timestamps jump back) or a paused one (they jump forward by seconds or hours). Each part is a
 // segment; nothing measured across a boundary means anything, so the timers restart there.
 #pragma once

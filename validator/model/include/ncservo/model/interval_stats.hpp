@@ -1,4 +1,4 @@
-// Running statistics of the cycle intervals (RULES.md "Time", COM-002): the median of all
+// Running statistics of the cycle intervals (docs/timing.md#rule-time, COM-002): the median of all
 // intervals so far after every one, plus p99 and max for the report — in bounded memory.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The drive state named from the process data (PROTOCOL.md §6), as a first-match table.
+// The drive state named from the process data (docs/protocol.md §6), as a first-match table.
 #pragma once
 
 #include <array>
@@ -10,11 +10,11 @@
 namespace ncservo {
 
 enum class DriveState : std::uint8_t {
-  Error,                 // seed 003 state 8
+  Error,                 // the drive's state 8
   FaultReactionActive,   // 7
   DriveStop,             // 5b
   ControlActive,         // 5
-  EnabledPowerStageOff,  // not a seed 003 state
+  EnabledPowerStageOff,  // not one of the drive's numbered states
   SwitchedOn,            // 4
   ReadyToSwitchOn,       // 3
   NotReadyToSwitchOn,    // 1
@@ -39,7 +39,7 @@ struct StateRow {
   DriveState state;
 };
 
-// Rows of PROTOCOL.md §6, written so that exactly one matches every input (proven by a unit test).
+// Rows of docs/protocol.md §6, written so that exactly one matches any input (a unit test checks).
 inline constexpr std::array<StateRow, 9> kStateRows{{
     {kInError | kInEnabled, kInError, DriveState::Error},
     {kInError | kInEnabled, kInError | kInEnabled, DriveState::FaultReactionActive},

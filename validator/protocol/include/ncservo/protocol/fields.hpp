@@ -1,4 +1,4 @@
-// The field table: every PDO word and bit of PROTOCOL.md §1–4 is one row. The Wireshark
+// The field table: every PDO word and bit of docs/protocol.md §1–4 is one row. The Wireshark
 // registration, the CLI's decoder and the field documentation are all generated from it.
 #pragma once
 
@@ -34,12 +34,12 @@ struct FieldDef {
   FieldKind kind;
   std::uint64_t mask;  // bits of the word this field covers (0 for a whole word)
   const char* label;
-  const char* filter;  // display-filter name, public API (INTERFACES.md)
+  const char* filter;  // display-filter name, public API (docs/fields.md)
   const ValueName* values;
   std::uint8_t value_count;
   FieldWhen when;
   const char* blurb;
-  const char* clause;  // where the spec defines it
+  const char* clause;  // where docs/protocol.md defines it
   // For a bit field of the SCW or SSW: its value (from the field's lowest bit) when it asks for
   // nothing and reports nothing, so that a view can show such fields together and briefly.
   std::optional<std::uint32_t> at_rest = std::nullopt;
@@ -67,7 +67,7 @@ inline constexpr ValueName kYesNo[] = {{0, "no"}, {1, "yes"}};
 inline constexpr ValueName kSetClear[] = {{0, "clear"}, {1, "set"}};
 inline constexpr ValueName kEncoder[] = {{0, "absolute (64-bit position)"},
                                          {1, "incremental (32-bit position)"}};
-// PROTOCOL.md §5: what the message data means for each defined message code.
+// docs/protocol.md §5: what the message data means for each defined message code.
 inline constexpr ValueName kMsgCode[] = {
     {0, "motor speed", "rpm"}, {1, "motor current", "A"},      {2, "relative current I/In", "%"},
     {3, "bus voltage", "V"},   {4, "motor temperature", "°C"}, {5, "motor power", "kW"}};
@@ -78,7 +78,7 @@ inline constexpr ValueName kMsgCode[] = {
 
 // clang-format off
 inline constexpr FieldDef kFields[] = {
-  // RxPDO (PROTOCOL.md §1, §2)
+  // RxPDO (docs/protocol.md §1, §2)
   {Word::Ssp, FieldKind::Word, 0, "Speed set point", "ncservo.ssp", NCSERVO_NO_VALUES, FieldWhen::Always,
    "SSP, speed reference (a 16-bit NC uses the low word only)", "docs/protocol.md §1"},
   {Word::Scw, FieldKind::Word, 0, "Servo control word", "ncservo.scw", NCSERVO_NO_VALUES, FieldWhen::Always,
@@ -110,7 +110,7 @@ inline constexpr FieldDef kFields[] = {
   {Word::ExtCode, FieldKind::Word, 0, "Extra data code word", "ncservo.ext_code", NCSERVO_NO_VALUES, FieldWhen::Always,
    "Selects the content of the extra data", "docs/protocol.md §1"},
 
-  // TxPDO (PROTOCOL.md §1, §3, §4)
+  // TxPDO (docs/protocol.md §1, §3, §4)
   {Word::ActPos, FieldKind::Word, 0, "Actual position", "ncservo.actpos", NCSERVO_NO_VALUES, FieldWhen::Always,
    "ActPos, raw int64 of all four words", "docs/protocol.md §1"},
   {Word::ActPos, FieldKind::Part, 0xFFFFFFFFull, "Incremental position", "ncservo.actpos.incremental", NCSERVO_NO_VALUES,
@@ -282,7 +282,7 @@ static_assert(detail::fieldTableIsConsistent(), "field table rows violate the ta
 
 // --- Protocol facts derived from the table ---
 
-// PROTOCOL.md §4: bit 0 summarises the cause bits, which are every other SEW flag.
+// docs/protocol.md §4: bit 0 summarises the cause bits, which are every other SEW flag.
 inline constexpr std::uint32_t kSewSummaryMask = mask32("ncservo.sew.servo_errors");
 inline constexpr std::uint32_t kSewCauseMask = [] {
   std::uint32_t all = 0;
@@ -293,7 +293,7 @@ inline constexpr std::uint32_t kSewCauseMask = [] {
 }();
 static_assert(kSewCauseMask == 0x01FFFFEE, "docs/protocol.md §4: cause bits 1-3 and 5-24");
 
-// PROTOCOL.md §5: the message codes with a meaning are the value names of ncservo.msg_code.
+// docs/protocol.md §5: the message codes with a meaning are the value names of ncservo.msg_code.
 inline constexpr const FieldDef& kMessageCodeField = field("ncservo.msg_code");
 inline constexpr std::uint64_t kDefinedMessageCodes = [] {  // bit n: code n has a meaning
   std::uint64_t codes = 0;
@@ -315,8 +315,8 @@ inline constexpr std::uint32_t kLastDefinedMessageCode = [] {
   return last;
 }();
 
-// PROTOCOL.md §2–3: parameter table = ExtPRMTBL·4 + PRMTBL + 1, commanded in the SCW, active in
-// the SSW.
+// docs/protocol.md §2–3: parameter table = ExtPRMTBL·4 + PRMTBL + 1, commanded in the SCW,
+// active in the SSW.
 struct ParameterTableBits {
   std::uint32_t low;   // PRMTBL
   std::uint32_t high;  // ExtPRMTBL
@@ -347,7 +347,7 @@ static_assert(parameterTable(Word::Scw, parameterTableSelection(Word::Scw, 7)) =
 
 namespace ncservo {
 
-// Fields the decoder derives rather than reads from one word (INTERFACES.md, "Wireshark plugin").
+// Fields the decoder derives rather than reads from one word (docs/fields.md, docs/plugin.md).
 enum class Derived : std::uint8_t {
   Axis,
   AxisName,

@@ -168,7 +168,7 @@ FieldSpan fieldSpan(const FieldDef& field);
 // The value's name from the row's value names, or nullptr.
 const ValueName* valueName(const FieldDef& field, std::uint64_t value);
 
-// "motor speed 1500.0 rpm" (PROTOCOL.md §5) into buf; never allocates, always terminates.
+// "motor speed 1500.0 rpm" (docs/protocol.md §5) into buf; never allocates, always terminates.
 void formatMessage(char* buf, std::size_t size, std::int32_t code, float data);
 
 }  // namespace ncservo

@@ -1,4 +1,4 @@
-// The two process-data objects of one axis, word by word (PROTOCOL.md §1).
+// The two process-data objects of one axis, word by word (docs/protocol.md §1).
 // Offsets are derived from the sizes in declaration order, and proven to give 10 and 40 bytes.
 #pragma once
 
@@ -100,8 +100,8 @@ static_assert(detail::wordsInEnumOrder(), "kWords must list Word values in order
 static_assert(kWords[firstWordOf(Pdo::Rx) + wordCountOf(Pdo::Rx) - 1].pdo == Pdo::Rx &&
                   kWords[firstWordOf(Pdo::Tx)].pdo == Pdo::Tx,
               "firstWordOf/wordCountOf match the word table");
-static_assert(kRxPdoSize == 10, "RxPDO is 10 bytes (PROTOCOL.md §1)");
-static_assert(kTxPdoSize == 40, "TxPDO is 40 bytes (PROTOCOL.md §1)");
+static_assert(kRxPdoSize == 10, "RxPDO is 10 bytes (docs/protocol.md §1)");
+static_assert(kTxPdoSize == 40, "TxPDO is 40 bytes (docs/protocol.md §1)");
 static_assert(wordOffset(Word::Scw) == 4 && wordOffset(Word::ExtCode) == 8);
 static_assert(wordOffset(Word::Ssw) == 8 && wordOffset(Word::MsgData) == 20 &&
               wordOffset(Word::ExtData4) == 36);

@@ -1,5 +1,5 @@
-// What a check or a model reads of an axis's PDOs, declared as field-table rows (STYLE.md "A rule
-// declares what it reads"). The validator's fast path compares exactly the declared bits.
+// What a check or a model reads of an axis's PDOs, declared as field-table rows (docs/rules.md,
+// "reads"). The validator's fast path compares exactly the declared bits.
 #pragma once
 
 #include <array>

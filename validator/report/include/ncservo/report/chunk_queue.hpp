@@ -1,7 +1,6 @@
 // Blocks of bytes handed from one producing thread to one consuming thread: `decode --format vcd`
 // judges frames on one core and writes their text on the other (docs/benchmarks.md). At most
-// `capacity` chunks wait; the producer waits while they do, so memory stays bounded (STYLE.md:
-// streaming with bounded memory).
+// `capacity` chunks wait; the producer waits while they do, so memory stays bounded.
 #pragma once
 
 #include <condition_variable>

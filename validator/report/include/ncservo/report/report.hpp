@@ -1,5 +1,5 @@
 // What `ncservo validate` reports about one capture, and the five ways it writes it
-// (INTERFACES.md: text, json, jsonl, junit, sarif), to one output or several. Presentation only.
+// (docs/cli.md: text, json, jsonl, junit, sarif), to one output or several. Presentation only.
 #pragma once
 
 #include <array>
@@ -22,7 +22,7 @@
 
 namespace ncservo::cli {
 
-// A capture's outcome, as its exit status has it (INTERFACES.md: 3, 1, 4, 0).
+// A capture's outcome, as its exit status has it (docs/cli.md#exit-status: 3, 1, 4, 0).
 enum class Verdict { Unreadable, Fail, NoServo, Pass };
 
 struct AxisReport {
@@ -142,7 +142,7 @@ struct ReportSink {
   const ReportPolicy& policy;
 };
 
-// One output format of `validate` (INTERFACES.md): its name and its writers, called in the order
+// One output format of `validate` (docs/cli.md): its name and its writers, called in the order
 // beginCapture, finding (each), endCapture per capture, then finish. A null writer writes nothing.
 struct ReportFormat {
   const char* name;

@@ -1,6 +1,6 @@
 // `decode --format vcd`: the process data as an IEEE 1364 value change dump for GTKWave
-// (INTERFACES.md), and a GTKWave save file that opens each axis's handshake signals. The signals
-// are the field table's rows; only value changes are written, so memory stays constant.
+// (docs/waveforms.md), and a GTKWave save file that opens each axis's handshake signals. The
+// signals are the field table's rows; only value changes are written, so memory stays constant.
 #pragma once
 
 #include <array>

@@ -1,5 +1,5 @@
 // Whether a capture's validation checked anything of this protocol: "nothing checked is not a
-// pass" (INTERFACES.md, exit status 4).
+// pass" (docs/cli.md, exit status 4).
 #pragma once
 
 #include <cstdint>

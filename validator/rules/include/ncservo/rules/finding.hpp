@@ -1,4 +1,4 @@
-// A finding: one violation of a rule (RULES.md), reported on one frame.
+// A finding: one violation of a rule (docs/rules.md), reported on one frame.
 #pragma once
 
 #include <cstdint>

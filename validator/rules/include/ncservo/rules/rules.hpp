@@ -1,4 +1,4 @@
-// The rule catalogue of RULES.md as one table: ID, slug, severity, party, spec clause, timeout
+// The rule catalogue (docs/rules.md) as one table: ID, slug, severity, party, clause, timeout
 // and how the rule is checked. The validator, the CLI's `rules` listing, the plugin's expert
 // items and the report formats are all generated from it.
 #pragma once
@@ -26,8 +26,8 @@ std::optional<Severity> severityFromName(std::string_view name);
 enum class Party : std::uint8_t { Nc, Drive, Bus };
 const char* partyName(Party party);
 
-// RULES.md "Time": the configurable timeouts, in milliseconds. `capture_pause` is no rule's: a
-// forward jump of the capture's timestamps longer than it starts a new segment (PROTOCOL.md §8).
+// The timeouts, in milliseconds (docs/configuration.md#timeouts). `capture_pause` is no rule's: a
+// forward jump of the timestamps longer than it starts a new segment (docs/protocol.md §8).
 enum class Timeout : std::uint8_t {
   DriveResponse,
   NcRelease,
@@ -94,7 +94,7 @@ enum class RuleId : std::uint8_t {
 };
 inline constexpr std::size_t kRuleCount = 31;
 
-// RULES.md COM-006, COM-007: the limits of the rules whose right value depends on the machine.
+// docs/rules.md#com-006, COM-007: the limits of the rules whose right value depends on the machine.
 enum class Limit : std::uint8_t { CycleJitterPercent, ReturnLatencyUs };
 struct LimitDef {
   Limit id;
@@ -145,7 +145,7 @@ struct RuleDef {
   Party party;
   RuleKind kind;
   const char* clause;              // where the protocol says so
-  std::optional<Timeout> timeout;  // the timeout the rule uses (RULES.md "Time")
+  std::optional<Timeout> timeout;  // the timeout the rule uses (docs/rules.md)
   bool delayed;                    // reported when the condition outlasts the timeout
   ByDefault by_default;
   Reads reads;  // axis rules: what check and describe read of the axis
@@ -175,7 +175,7 @@ struct EventFinding {
 void judgeEvent(const BusEvent& event, const RuleSettings& settings,
                 std::vector<EventFinding>& out);
 
-// What the user may change: RULES.md defaults, then the config file, then the command line.
+// What the user may change: the defaults, then the config file, then the command line.
 struct RuleSettings {
   std::array<bool, kRuleCount> enabled{};
   std::array<Severity, kRuleCount> severity{};

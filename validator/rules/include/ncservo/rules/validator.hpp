@@ -1,5 +1,5 @@
 // One capture through the model and the rules: frames in, findings out, one pass in capture
-// order (RULES.md "Time"). Shared by the CLI (`validate`) and the plugin (expert info).
+// order (docs/timing.md#rule-time). Shared by the CLI (`validate`) and the plugin (expert info).
 #pragma once
 
 #include <array>
@@ -45,7 +45,7 @@ class Validator {
                                 const EcatFrame& frame, const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
   // The capture ended: what could be judged only with the frames that did not come (a gap's
-  // next interval, RULES.md COM-002), reported on the last frame; findings() then holds it.
+  // next interval, docs/rules.md#com-002), reported on the last frame; findings() then holds it.
   void finish();
   // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
   void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
@@ -59,7 +59,7 @@ class Validator {
   const AxisModel* axis(std::size_t index) const;
   std::uint64_t cycles() const { return bus_.cycles(); }
   CycleTimeSummary cycleTime() const;
-  // The capture's segments (RULES.md "Time"): the rules judge each on its own clock.
+  // The capture's segments (docs/timing.md#rule-time): the rules judge each on its own clock.
   const SegmentTracker& segments() const { return segments_; }
   const BusModel& bus() const { return bus_; }
   // The cycle interval and return latency the last frame given to onFrame added to the timing

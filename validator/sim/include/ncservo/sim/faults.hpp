@@ -1,4 +1,4 @@
-// The simulator's fault recipes: for each rule of RULES.md, what the simulator does to make it
+// The simulator's fault recipes: for each rule of docs/rules.md, what the simulator does to make it
 // fire (`ncservo simulate --fault`, --list-faults) and where the `faults` scenario does it. One
 // row per rule of kRules (a unit test checks), or a row that says why the rule is not injectable.
 #pragma once

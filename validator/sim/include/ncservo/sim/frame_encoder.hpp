@@ -1,4 +1,4 @@
-// Writing EtherCAT frames (PROTOCOL.md §8): the link framing walkPacket reads (Ethernet II with
+// Writing EtherCAT frames (docs/protocol.md §8): the framing walkPacket reads (Ethernet II with
 // 802.1Q/802.1ad tags, Linux cooked captures, IPv4/UDP to port 34980), the EtherCAT frame header
 // and the datagram chain. The simulator writes its frames with it; the unit tests build theirs,
 // well-formed or not, through the overrides.
@@ -21,7 +21,7 @@ struct VlanTag {
   std::uint16_t tci = 1;
 };
 
-// IPv4/UDP carrying the EtherCAT frame (PROTOCOL.md §8).
+// IPv4/UDP carrying the EtherCAT frame (docs/protocol.md §8).
 struct UdpFraming {
   std::uint16_t port = ecat::kUdpPort;  // destination port
   std::uint16_t fragment = 0;           // IPv4 flags (0x2000: more fragments) and offset

@@ -1,5 +1,5 @@
 // The two ends of the simulated link, stepped once per cycle: a drive that answers as
-// PROTOCOL.md §1–7 say, and an NC axis that commands a commissioning session. Both are pure
+// docs/protocol.md §1–7 say, and an NC axis that commands a commissioning session. Both are pure
 // functions of their inputs, their seed and the misbehaviours armed in them (the simulator's
 // faults), so tests can drive them step by step. No EtherCAT here: the bus is simulator.hpp.
 #pragma once
@@ -40,7 +40,7 @@ class Rng {
   std::uint64_t state_;
 };
 
-// The PDO values of PROTOCOL.md §1.
+// The PDO values of docs/protocol.md §1.
 struct RxPdo {
   std::int32_t ssp = 0;
   std::uint32_t scw = 0;
@@ -92,7 +92,7 @@ inline constexpr std::uint32_t kOverload = mask32("ncservo.sew.overload");
 // Every cause bit: all of the SEW but the summary and the reserved bits.
 inline constexpr std::uint32_t kSewCauses = ~(kServoErrors | kSewReserved);
 
-inline constexpr std::uint32_t kSeEnable = 0x2;  // reached from 0x1 only (PROTOCOL.md §2)
+inline constexpr std::uint32_t kSeEnable = 0x2;  // reached from 0x1 only (docs/protocol.md §2)
 inline constexpr std::uint32_t kSePrepare = 0x1;
 
 // Parameter table number 1..8 <-> the SCW/SSW bits (table = ExtPRMTBL·4 + PRMTBL + 1).
@@ -103,7 +103,7 @@ int tableOfScw(std::uint32_t scw);
 
 inline constexpr double kSspPerRpm = 100.0;  // SSP unit: 0.01 rpm (this simulator's choice)
 
-// How a simulated drive breaks the protocol (each one makes one rule of RULES.md fire).
+// How a simulated drive breaks the protocol (each one makes one rule of docs/rules.md fire).
 // A misbehaviour is armed from a time on and applies to the first occasion after it.
 enum class DriveQuirk : std::uint8_t {
   SpuriousEnable,       // SE-002: ServoEn rises for a moment without a valid enable
@@ -128,7 +128,7 @@ enum class DriveQuirk : std::uint8_t {
 struct DriveSetup {
   int axis = 0;
   bool incremental = false;  // incremental encoder (zero-pulse search), else absolute
-  int ready_mode = 0;        // Servo_Ready_Mode (PROTOCOL.md §5)
+  int ready_mode = 0;        // Servo_Ready_Mode (docs/protocol.md §5)
   std::uint64_t seed = 1;
 };
 
@@ -174,7 +174,7 @@ class DriveModel {
   std::int64_t last_ns_ = -1;
   RxPdo last_rx_{0, bits::kEmgon | bits::kBrake, 0};  // outputs last taken
   std::uint64_t cycle_ = 0;
-  // enable (PROTOCOL.md §2)
+  // enable (docs/protocol.md §2)
   std::uint32_t last_se_ = 0;
   bool valid_enable_ = false;
   bool enabled_ = false;
@@ -188,7 +188,7 @@ class DriveModel {
   std::int64_t enable_delay_ns_;
   std::int64_t disable_delay_ns_;
   std::int64_t fault_reaction_ns_;
-  // errors (PROTOCOL.md §4, §7)
+  // errors (docs/protocol.md §4, §7)
   std::uint32_t causes_ = 0;          // latched cause bits
   std::uint32_t pending_faults_ = 0;  // raised, latched at the next step
   std::int64_t fault_since_ns_ = -1;
@@ -230,7 +230,7 @@ enum class NcAction : std::uint8_t {
   ZeroPulse,  // zero-pulse search (incremental encoder)
   Table,      // parameter table (value: 1..8)
   Emergency,  // EMGON 0 for value milliseconds, speed to zero
-  // misbehaviours of the NC (each makes one rule of RULES.md fire)
+  // misbehaviours of the NC (each makes one rule of docs/rules.md fire)
   IllegalEnable,      // SE-001: SE 0x0 -> 0x2
   ZeroPulseAbsolute,  // ZP-003: ZPulseRequest on an absolute axis (value: ms)
   HoldErrorClear,     // EC-002: the next ErrorClear is held value ms after ErrClearAck

@@ -16,7 +16,7 @@
 namespace ncservo::sim {
 
 enum class Scenario : std::uint8_t { Commissioning, Faults, Soak };
-// How the master lays out the process image (PROTOCOL.md §9.4).
+// How the master lays out the process image (docs/protocol.md §9.4).
 enum class ImageStyle : std::uint8_t {
   Soem,      // one LRW per frame: all outputs, then all inputs, in ring order
   EtherLab,  // one LRW per frame: per slave in ring order, its outputs, then its inputs

@@ -1,7 +1,7 @@
 // `ncservo simulate`: an EtherCAT master, its slaves and the NC/drive models (models.hpp)
 // producing a capture whose truth is known. The output is a pure function of the options.
 //
-// The master does what real masters do (PROTOCOL.md §8): counts the slaves, assigns station
+// The master does what real masters do (docs/protocol.md §8): counts the slaves, assigns station
 // addresses, walks every slave INIT -> PRE-OP -> SAFE-OP -> OP with AL status polls, configures
 // SM2/SM3 and FMMUs, then exchanges process data once per cycle in the datagrams of its image
 // style (ImageStyle) with a DC FRMW to 0x0910. Each frame is captured twice: the master's copy and

@@ -1,4 +1,4 @@
-// EtherCAT wire facts (PROTOCOL.md §8, ETG.1000.4, ETG.1000.6): frame and datagram layout,
+// EtherCAT wire facts (docs/protocol.md §8, ETG.1000.4, ETG.1000.6): frame and datagram layout,
 // commands, ESC registers and their fields, AL states, the CoE mailbox and the PDO objects, and
 // the carriers an EtherCAT frame travels in. Facts only; what reads them lives elsewhere
 // (ethercat.hpp walks frames).
@@ -136,7 +136,7 @@ inline constexpr std::size_t kSmPdiControlAt = 7;
 static_assert(kSmPdiControlAt + 1 == kSyncManagerStride);
 inline constexpr std::uint8_t kSmModeMask = 0x03;  // in the control byte
 inline constexpr std::uint8_t kSmModeMailbox = 0x02;
-// Sync managers by convention (ETG.1000.4, PROTOCOL.md §8).
+// Sync managers by convention (ETG.1000.4, docs/protocol.md §8).
 inline constexpr std::size_t kMailboxOutSm = 0;  // master to slave
 inline constexpr std::size_t kMailboxInSm = 1;   // slave to master
 inline constexpr std::size_t kOutputsSm = 2;     // RxPDO

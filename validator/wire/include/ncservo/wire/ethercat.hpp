@@ -1,4 +1,4 @@
-// The bounds-checked EtherCAT frame walker and what it asks of the wire facts (PROTOCOL.md §8).
+// The bounds-checked EtherCAT frame walker and what it needs of the wire (docs/protocol.md §8).
 // The walker turns captured bytes into datagram views; it never reads past the captured bytes
 // and never allocates.
 #pragma once
@@ -37,11 +37,11 @@ constexpr bool isBroadcast(std::uint8_t cmd) {
   return commandFacts(cmd).addressing == Addressing::Broadcast;
 }
 // Slaves increment the ADP of auto-increment and broadcast commands on the way round the ring;
-// other commands come back with the address they were sent with (PROTOCOL.md §8).
+// other commands come back with the address they were sent with (docs/protocol.md §8).
 constexpr bool addressSurvivesRing(std::uint8_t cmd) {
   return isLogical(cmd) || isConfiguredAddress(cmd);
 }
-// Whether the addressed slaves' memory is written, and read, by a command (PROTOCOL.md §8).
+// Whether the addressed slaves' memory is written, and read, by a command (docs/protocol.md §8).
 constexpr bool writesSlaves(std::uint8_t cmd) {
   return commandFacts(cmd).writes;
 }
@@ -58,7 +58,7 @@ constexpr bool writesRegisters(std::uint8_t cmd) {
 }  // namespace ecat
 
 // The 16-byte header an ET2000 probe or an EtherCAT switch-link port puts before or after the
-// Ethernet frame (PROTOCOL.md §8; Wireshark's `esl` dissector).
+// Ethernet frame (docs/protocol.md §8; Wireshark's `esl` dissector).
 namespace esl {
 inline constexpr std::size_t kHeaderSize = 16;
 // The header's first 6 bytes; the fourth is 0x10 or 0x11.
@@ -135,7 +135,7 @@ struct EcatFrame {
   std::array<Datagram, ecat::kMaxDatagrams> datagrams{};
   ProbeHeader probe;  // present when the frame came through an ESL probe (Ethernet link only)
 
-  // Same datagram list: what pairs a master's frame with its returned copy (PROTOCOL.md §8).
+  // Same datagram list: what pairs a master's frame with its returned copy (docs/protocol.md §8).
   bool sameDatagramList(const EcatFrame& other) const;
   bool anyWkcAboveZero() const;
 };

@@ -1,5 +1,5 @@
-// Which clock times the frames (INTERFACES.md `--timestamps`): the capturing PC's, or an ESL
-// probe's (PROTOCOL.md §8), decided in one pass.
+// Which clock times the frames (docs/cli.md, `--timestamps`): the capturing PC's, or an ESL
+// probe's (docs/protocol.md §8), decided in one pass.
 //
 // A single pass cannot know in advance whether every EtherCAT frame carries a probe timestamp.
 // `auto` decides on the first EtherCAT frame: with a probe timestamp, the probe times the capture;
@@ -35,7 +35,7 @@ struct ProbeCounts {
   std::uint64_t stamped = 0;          // ... whose timestamp is valid
   std::uint64_t unstamped = 0;        // frames timed by the PC while the probe timed the capture
   std::uint64_t first_unstamped = 0;  // its first frame number (0: none)
-  std::uint64_t crc_errors = 0;       // bus faults (PROTOCOL.md §8)
+  std::uint64_t crc_errors = 0;       // bus faults (docs/protocol.md §8)
   std::uint64_t first_crc_error = 0;
   std::uint64_t alignment_errors = 0;
 };

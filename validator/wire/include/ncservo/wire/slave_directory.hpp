@@ -1,4 +1,4 @@
-// Which slave a register datagram addresses (PROTOCOL.md §8), for the trackers that follow the
+// Which slave a register datagram addresses (docs/protocol.md §8), for the trackers that follow the
 // slaves through a capture: the AL state tracker and the layout learner. A slave is known by its
 // configured station address, its ring position, or both once an APWR/APRW of 0x0010 assigned the
 // one to the other. Bounded: at most kMaxSlaves records, each with the tracker's own data T
