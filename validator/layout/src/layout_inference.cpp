@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 
@@ -45,8 +46,7 @@ constexpr double kMinConfidence = 0.25;
 constexpr std::uint32_t kMinObservations = 8;
 
 std::uint32_t le32(const std::uint8_t* p) {
-  return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
-         std::uint32_t{p[3]} << 24;
+  return static_cast<std::uint32_t>(loadLe<4>(p));
 }
 
 // A float32 a drive would send: finite and not denormal.

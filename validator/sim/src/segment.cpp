@@ -6,7 +6,7 @@
 #include <cstring>
 #include <iterator>
 
-#include "le_bytes.hpp"
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
@@ -74,15 +74,15 @@ void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uin
     case SlaveRole::Servo:
       break;
     case SlaveRole::Digital:
-      putLe(out, std::uint64_t{1} << (cycle / kOutputPatternCycles % (8 * size)), size);
+      storeLe(out, std::uint64_t{1} << (cycle / kOutputPatternCycles % (8 * size)), size);
       break;
     case SlaveRole::Analog:
-      for (std::size_t c = 0; c + 2 <= size; c += 2) putLe(out + c, cycle * (c + 1) * 37, 2);
+      for (std::size_t c = 0; c + 2 <= size; c += 2) storeLe(out + c, cycle * (c + 1) * 37, 2);
       break;
     case SlaveRole::Drive:  // control word "enable operation", target position, velocity, mode
-      putLe(out, 0x000F, 2);
-      putLe(out + 2, cycle * 100, 4);
-      putLe(out + 6, 1000, 4);
+      storeLe(out, 0x000F, 2);
+      storeLe(out + 2, cycle * 100, 4);
+      storeLe(out + 6, 1000, 4);
       out[10] = 8;  // cyclic synchronous position
       out[11] = 0;
       break;
@@ -104,20 +104,20 @@ void Esc::updateTerminalInputs(std::int64_t now_ns) {
     case SlaveRole::Servo:
       break;
     case SlaveRole::Digital:
-      putLe(in, step, size);
+      storeLe(in, step, size);
       break;
     case SlaveRole::Analog:  // triangles of 16-bit values, one channel after the other
       for (std::size_t c = 0; c + 2 <= size; c += 2) {
         const std::uint64_t phase = (step + 7 * c) % 64;
-        putLe(in + c, (phase < 32 ? phase : 64 - phase) * 1000, 2);
+        storeLe(in + c, (phase < 32 ? phase : 64 - phase) * 1000, 2);
       }
       break;
     case SlaveRole::Drive:  // status word, actual position and velocity, torque, the rest zero
       std::fill(in, in + size, 0);
-      putLe(in, 0x1237, 2);
-      putLe(in + 2, us / 10, 4);
-      putLe(in + 6, 1000, 4);
-      putLe(in + 10, step % 200, 2);
+      storeLe(in, 0x1237, 2);
+      storeLe(in + 2, us / 10, 4);
+      storeLe(in + 6, 1000, 4);
+      storeLe(in + 10, step % 200, 2);
       break;
     case SlaveRole::Bridge:
       for (std::size_t i = 0; i < size; ++i) in[i] = static_cast<std::uint8_t>(step + 3 * i);
@@ -126,15 +126,15 @@ void Esc::updateTerminalInputs(std::int64_t now_ns) {
 }
 
 std::uint16_t Esc::station() const {
-  return static_cast<std::uint16_t>(getLe(&mem[ecat::kRegStationAddress], 2));
+  return static_cast<std::uint16_t>(loadLe(&mem[ecat::kRegStationAddress], 2));
 }
 bool Esc::processData() const {
   return state == kSafeOp || state == kOp;
 }
 void Esc::publishAlStatus() {
-  putLe(&mem[ecat::kRegAlStatus],
-        static_cast<std::uint16_t>(state | (error_ ? ecat::kAlErrorBit : 0)), 2);
-  putLe(&mem[ecat::kRegAlStatusCode], code_, 2);
+  storeLe(&mem[ecat::kRegAlStatus],
+          static_cast<std::uint16_t>(state | (error_ ? ecat::kAlErrorBit : 0)), 2);
+  storeLe(&mem[ecat::kRegAlStatusCode], code_, 2);
 }
 void Esc::powerUpError() {
   error_ = true;
@@ -145,15 +145,15 @@ void Esc::powerUpError() {
 void Esc::startInOp(std::uint16_t station_address) {
   state = kOp;
   publishAlStatus();
-  putLe(&mem[ecat::kRegStationAddress], station_address, 2);
+  storeLe(&mem[ecat::kRegStationAddress], station_address, 2);
   std::size_t f = 0;
   auto fmmu = [&](std::uint32_t logical, std::size_t length, std::uint16_t phys,
                   std::uint8_t type) {
     std::uint8_t* p = &mem[ecat::kRegFmmu0 + ecat::kFmmuStride * f++];
-    putLe(p + ecat::kFmmuLogicalAt, logical, 4);
-    putLe(p + ecat::kFmmuLengthAt, length, 2);
+    storeLe(p + ecat::kFmmuLogicalAt, logical, 4);
+    storeLe(p + ecat::kFmmuLengthAt, length, 2);
     p[ecat::kFmmuStopBitAt] = 7;
-    putLe(p + ecat::kFmmuPhysicalAt, phys, 2);
+    storeLe(p + ecat::kFmmuPhysicalAt, phys, 2);
     p[ecat::kFmmuTypeAt] = type;
     p[ecat::kFmmuActivateAt] = 1;
   };
@@ -216,7 +216,7 @@ void Esc::writeRegisters(const RingDatagram& dg) {
     mem[reg] = dg.data[i];
   }
   if (dg.ado <= ecat::kRegAlControl && dg.ado + dg.data.size() >= ecat::kRegAlControl + 2u) {
-    onAlControl(static_cast<std::uint16_t>(getLe(&mem[ecat::kRegAlControl], 2)));
+    onAlControl(static_cast<std::uint16_t>(loadLe(&mem[ecat::kRegAlControl], 2)));
   }
 }
 
@@ -228,11 +228,11 @@ std::uint16_t Esc::logicalAccess(RingDatagram& dg) {
   for (std::size_t f = 0; f < kActiveFmmus; ++f) {
     const std::uint8_t* fmmu = &mem[ecat::kRegFmmu0 + ecat::kFmmuStride * f];
     if ((fmmu[ecat::kFmmuActivateAt] & 1) == 0) continue;
-    const std::uint64_t lstart = getLe(fmmu + ecat::kFmmuLogicalAt, 4);
-    const std::uint64_t lend = lstart + getLe(fmmu + ecat::kFmmuLengthAt, 2);
+    const std::uint64_t lstart = loadLe(fmmu + ecat::kFmmuLogicalAt, 4);
+    const std::uint64_t lend = lstart + loadLe(fmmu + ecat::kFmmuLengthAt, 2);
     const std::uint64_t from = std::max(start, lstart), to = std::min(end, lend);
     if (from >= to) continue;
-    const std::size_t phys = getLe(fmmu + ecat::kFmmuPhysicalAt, 2) + (from - lstart);
+    const std::size_t phys = loadLe(fmmu + ecat::kFmmuPhysicalAt, 2) + (from - lstart);
     const std::size_t offset = from - start;
     const std::size_t count = to - from;
     if (phys + count > kEscMemory) continue;
@@ -490,7 +490,7 @@ std::vector<AxisConfig> Segment::axisLayout() const {
 
 void Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns) {
   for (Esc& esc : escs) {
-    putLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(now_ns - kEpochNs), 8);
+    storeLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(now_ns - kEpochNs), 8);
     for (RingDatagram& dg : frame) esc.process(dg);
     esc.endOfFrame();
   }
