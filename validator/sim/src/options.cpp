@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <stdexcept>
 #include <string>
 
+#include "ncservo/base/number.hpp"
 #include "ncservo/sim/faults.hpp"
 
 namespace ncservo::sim {
@@ -92,21 +92,18 @@ Result<FaultRequest> parseFault(std::string_view text) {
   fault.rule = rule->id;
   const bool has_time = text.find('@') != std::string_view::npos;
   const bool has_axis = text.find(':') != std::string_view::npos;
-  try {
-    std::size_t used = 0;
-    if ((has_time && time_text.empty()) || (has_axis && axis_text.empty())) {
-      throw std::invalid_argument("empty");
-    }
-    if (!time_text.empty()) {
-      fault.at_s = std::stod(std::string(time_text), &used);
-      if (used != time_text.size() || !(*fault.at_s >= 0)) throw std::invalid_argument("time");
-    }
-    if (!axis_text.empty()) {
-      fault.axis = std::stoi(std::string(axis_text), &used);
-      if (used != axis_text.size() || *fault.axis < 0) throw std::invalid_argument("axis");
-    }
-  } catch (const std::exception&) {
+  auto malformed = [&] {
     return fail(fmt::format("--fault {}: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0", text));
+  };
+  if (has_time) {
+    const Result<double> at_s = parseNumber<double>(time_text);
+    if (!at_s || !(*at_s >= 0)) return malformed();
+    fault.at_s = *at_s;
+  }
+  if (has_axis) {
+    const Result<int> axis = parseNumber<int>(axis_text);
+    if (!axis || *axis < 0) return malformed();
+    fault.axis = *axis;
   }
   return fault;
 }
@@ -115,20 +112,18 @@ Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::str
   const std::size_t colon = text.find(':');
   CycleDisturbance d;
   d.text = std::string(text);
-  try {
-    if (colon == std::string_view::npos) throw std::invalid_argument("colon");
-    std::size_t used = 0;
-    const std::string at(text.substr(0, colon));
-    const std::string amount(text.substr(colon + 1));
-    d.at_s = std::stod(at, &used);
-    if (used != at.size() || !(d.at_s >= 0)) throw std::invalid_argument("time");
-    d.amount = std::stoi(amount, &used);
-    if (used != amount.size() || d.amount < 1) throw std::invalid_argument("amount");
-  } catch (const std::exception&) {
+  const bool late = option == "--late-cycle";
+  auto malformed = [&] {
     return fail(fmt::format("{} {}: expected SECONDS:{}, e.g. 1.5:{}", option, text,
-                            option == "--late-cycle" ? "US" : "N",
-                            option == "--late-cycle" ? "400" : "3"));
-  }
+                            late ? "US" : "N", late ? "400" : "3"));
+  };
+  if (colon == std::string_view::npos) return malformed();
+  const Result<double> at_s = parseNumber<double>(text.substr(0, colon));
+  if (!at_s || !(*at_s >= 0)) return malformed();
+  d.at_s = *at_s;
+  const Result<int> amount = parseNumber<int>(text.substr(colon + 1));
+  if (!amount || *amount < 1) return malformed();
+  d.amount = *amount;
   return d;
 }
 
