@@ -47,6 +47,7 @@
 namespace {
 
 using namespace ncservo;
+using cli::addLayoutOptions;
 using cli::addTimestampsOption;
 using cli::buildSettings;
 using cli::decoderOptions;
@@ -1009,7 +1010,7 @@ Handler decodeCommand(CLI::App& command) {
   auto args = std::make_shared<DecodeArgs>();
   command.add_option("CAPTURE", args->capture, "pcap or pcapng capture, - for standard input")
       ->required();
-  command.add_option("--config", args->layout.config_path, "TOML configuration file (layout)");
+  addLayoutOptions(command, args->layout);
   addFormatOption(command, args->format, namesOf(kDecodeFormats),
                   " (vcd: waveforms for GTKWave, and beside -o OUT.vcd the save file OUT.gtkw)");
   command.add_option("-o,--output", args->output, "write here (default: standard output)");
@@ -1018,10 +1019,6 @@ Handler decodeCommand(CLI::App& command) {
                   "only these axes, by name or index (comma-separated, repeatable)")
       ->delimiter(',')
       ->allow_extra_args(false);
-  command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never infer the layout from the cyclic traffic (docs/layout.md)");
-  command.add_option("--eni", args->layout.eni_path,
-                     "ENI file (EtherCATConfig.xml) giving the layout");
   command.add_flag("--timing", args->timing,
                    "at the end, the timing statistics of validate's text report on standard "
                    "error (docs/timing.md)");
@@ -1037,7 +1034,7 @@ Handler validateCommand(CLI::App& command) {
   auto args = std::make_shared<ValidateArgs>();
   command.add_option("CAPTURE", args->captures, "pcap or pcapng captures, - for standard input")
       ->required();
-  command.add_option("--config", args->layout.config_path, "TOML configuration file");
+  addLayoutOptions(command, args->layout);
   addFormatOption(command, args->format, cli::reportFormatNames());
   command.add_option("-o,--output", args->output,
                      "write the report here (default: standard output)");
@@ -1052,10 +1049,6 @@ Handler validateCommand(CLI::App& command) {
                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
   cli::addRuleOptions(command, *args);
-  command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never infer the layout from the cyclic traffic (docs/layout.md)");
-  command.add_option("--eni", args->layout.eni_path,
-                     "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
   addTimestampsOption(command, args->timestamps);
   addWindowOptions(command, args->window);
   command.add_flag("--allow-empty", args->allow_empty,
