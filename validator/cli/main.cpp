@@ -177,9 +177,9 @@ struct DecodeFormat {
   void (*row)(std::FILE* out, const CycleRow& row, const std::string& name, double time);
 };
 const DecodeFormat kDecodeFormats[] = {
-    {"csv", decodeRows, writeCsvHeader, writeCsvRow},
-    {"jsonl", decodeRows, nullptr, writeJsonRow},
-    {"vcd", decodeWaveforms, nullptr, nullptr},
+    {.name = "csv", .decode = decodeRows, .header = writeCsvHeader, .row = writeCsvRow},
+    {.name = "jsonl", .decode = decodeRows, .header = nullptr, .row = writeJsonRow},
+    {.name = "vcd", .decode = decodeWaveforms, .header = nullptr, .row = nullptr},
 };
 
 // --from/--to (INTERFACES.md), seconds since the capture's first frame.
@@ -763,12 +763,14 @@ struct RuleListFormat {
   void (*footer)();
 };
 const RuleListFormat kRuleListFormats[] = {
-    {"text", "", printRuleText, nullptr},
-    {"markdown",
-     "| ID | slug | severity | by default | party | judged on | reads | timeout (default) | clause "
-     "| summary |\n"
-     "|---|---|---|---|---|---|---|---|---|---|\n",
-     printRuleMarkdown, printRuleSettingsMarkdown},
+    {.name = "text", .header = "", .rule = printRuleText, .footer = nullptr},
+    {.name = "markdown",
+     .header =
+         "| ID | slug | severity | by default | party | judged on | reads | timeout (default) "
+         "| clause | summary |\n"
+         "|---|---|---|---|---|---|---|---|---|---|\n",
+     .rule = printRuleMarkdown,
+     .footer = printRuleSettingsMarkdown},
 };
 
 // `rules --explain ID`: one rule in full, from its row of the rule table.
@@ -836,11 +838,12 @@ struct FieldListFormat {
   void (*derived)(const DerivedFieldDef& f);
 };
 const FieldListFormat kFieldListFormats[] = {
-    {"tsv", "", printFieldTsv, printDerivedTsv},
-    {"markdown",
-     "| filter name | label | word | bits | values | meaning | spec |\n"
-     "|---|---|---|---|---|---|---|\n",
-     printFieldMarkdown, printDerivedMarkdown},
+    {.name = "tsv", .header = "", .field = printFieldTsv, .derived = printDerivedTsv},
+    {.name = "markdown",
+     .header = "| filter name | label | word | bits | values | meaning | spec |\n"
+               "|---|---|---|---|---|---|---|\n",
+     .field = printFieldMarkdown,
+     .derived = printDerivedMarkdown},
 };
 
 // ---- simulate ----
