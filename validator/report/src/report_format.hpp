@@ -33,19 +33,19 @@ Json segmentsJson(const CaptureReport& r);
 Json timingJson(const CaptureReport& r);
 Json captureJson(const CaptureReport& r, Verdict verdict);
 
-// text
+// The writers of the format table, by file: report_text.cpp
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r);
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r);
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports);
-// json
+// report_json.cpp
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports);
-// jsonl
+// report_jsonl.cpp
 void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r);
-// junit
+// report_junit.cpp
 void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& reports);
-// sarif
+// report_sarif.cpp
 void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 
 }  // namespace ncservo::cli::detail
