@@ -105,4 +105,16 @@ expect 2 rules --explain SE-03
 says err "did you mean 'SE-003'?"
 expect 2 rules --explain XX-999
 says err "unknown rule ID 'XX-999'"
-echo "cli_usage: IDs in any case, did-you-mean, stdin once, --version, axis addresses, CSV, --explain"
+
+# Every command that reads a capture takes the layout options from one declaration: the same
+# help lines everywhere (docs/cli.md).
+layout_help() {  # layout_help COMMAND: its help's lines for --config, --no-default-layout, --eni
+  "$NCSERVO" "$1" --help | grep -E -- '^ +--(config|no-default-layout|eni)\b'
+}
+layout_help decode >"$WORK/layout-decode.txt"
+[ "$(wc -l <"$WORK/layout-decode.txt")" -eq 3 ] || fail "decode --help: $(cat "$WORK/layout-decode.txt")"
+for command in validate annotate monitor; do
+  layout_help "$command" | diff "$WORK/layout-decode.txt" - >/dev/null ||
+    fail "$command --help: the layout options differ from decode's"
+done
+echo "cli_usage: IDs in any case, did-you-mean, stdin once, --version, axis addresses, CSV, --explain, layout options"

@@ -1031,7 +1031,6 @@ TEST(ValidatorView, SameAsSessionFrameByFrame) {
   test::appendDefaultAxes(layout, 3, 0x00020000, 0x00030000);
   Validator validator(layout, RuleSettings{});
   Session session(layout);
-  session.trackStates(false);
   std::uint64_t frame = 0;
   std::size_t axes_seen = 0;
   for (const ViewRow& row : viewRows()) {

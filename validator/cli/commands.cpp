@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <string_view>
+
+#include "ncservo/base/number.hpp"
 
 namespace ncservo::cli {
 
@@ -100,15 +103,7 @@ Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
   }
   // NAME=N with N a whole number, or -1.
   auto number = [](const std::string& pair, std::size_t eq) {
-    std::int64_t n = -1;
-    try {
-      std::size_t used = 0;
-      n = std::stoll(pair.substr(eq + 1), &used);
-      if (used != pair.size() - eq - 1) n = -1;
-    } catch (const std::exception&) {
-      n = -1;
-    }
-    return n;
+    return parseNumber<std::int64_t>(std::string_view(pair).substr(eq + 1)).value_or(-1);
   };
   for (const std::string& pair : o.timeouts) {
     const auto eq = pair.find('=');

@@ -33,7 +33,7 @@ using Handler = std::function<int()>;
 // --timestamps (docs/protocol.md §8: a probe's clock or the capturing PC's).
 void addTimestampsOption(CLI::App& command, std::string& timestamps);
 
-// The layout files of decode and validate (docs/protocol.md §9.1, §9.2).
+// The layout files of every command that reads a capture (docs/protocol.md §9.1, §9.2).
 struct LayoutArgs {
   std::string config_path;
   std::string eni_path;
@@ -43,7 +43,7 @@ struct LayoutFiles {
   std::optional<Config> config;
   std::optional<EniLayout> eni;
 };
-// --config, --eni and --no-default-layout.
+// --config, --no-default-layout and --eni: one declaration, so every command's help says the same.
 void addLayoutOptions(CLI::App& command, LayoutArgs& layout);
 Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args);
 DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args);

@@ -47,6 +47,7 @@
 namespace {
 
 using namespace ncservo;
+using cli::addLayoutOptions;
 using cli::addTimestampsOption;
 using cli::buildSettings;
 using cli::decoderOptions;
@@ -176,9 +177,9 @@ struct DecodeFormat {
   void (*row)(std::FILE* out, const CycleRow& row, const std::string& name, double time);
 };
 const DecodeFormat kDecodeFormats[] = {
-    {"csv", decodeRows, writeCsvHeader, writeCsvRow},
-    {"jsonl", decodeRows, nullptr, writeJsonRow},
-    {"vcd", decodeWaveforms, nullptr, nullptr},
+    {.name = "csv", .decode = decodeRows, .header = writeCsvHeader, .row = writeCsvRow},
+    {.name = "jsonl", .decode = decodeRows, .header = nullptr, .row = writeJsonRow},
+    {.name = "vcd", .decode = decodeWaveforms, .header = nullptr, .row = nullptr},
 };
 
 // --from/--to (docs/cli.md), seconds since the capture's first frame.
@@ -762,12 +763,14 @@ struct RuleListFormat {
   void (*footer)();
 };
 const RuleListFormat kRuleListFormats[] = {
-    {"text", "", printRuleText, nullptr},
-    {"markdown",
-     "| ID | slug | severity | by default | party | judged on | reads | timeout (default) | clause "
-     "| summary |\n"
-     "|---|---|---|---|---|---|---|---|---|---|\n",
-     printRuleMarkdown, printRuleSettingsMarkdown},
+    {.name = "text", .header = "", .rule = printRuleText, .footer = nullptr},
+    {.name = "markdown",
+     .header =
+         "| ID | slug | severity | by default | party | judged on | reads | timeout (default) "
+         "| clause | summary |\n"
+         "|---|---|---|---|---|---|---|---|---|---|\n",
+     .rule = printRuleMarkdown,
+     .footer = printRuleSettingsMarkdown},
 };
 
 // `rules --explain ID`: one rule in full, from its row of the rule table.
@@ -835,11 +838,12 @@ struct FieldListFormat {
   void (*derived)(const DerivedFieldDef& f);
 };
 const FieldListFormat kFieldListFormats[] = {
-    {"tsv", "", printFieldTsv, printDerivedTsv},
-    {"markdown",
-     "| filter name | label | word | bits | values | meaning | spec |\n"
-     "|---|---|---|---|---|---|---|\n",
-     printFieldMarkdown, printDerivedMarkdown},
+    {.name = "tsv", .header = "", .field = printFieldTsv, .derived = printDerivedTsv},
+    {.name = "markdown",
+     .header = "| filter name | label | word | bits | values | meaning | spec |\n"
+               "|---|---|---|---|---|---|---|\n",
+     .field = printFieldMarkdown,
+     .derived = printDerivedMarkdown},
 };
 
 // ---- simulate ----
@@ -1009,7 +1013,7 @@ Handler decodeCommand(CLI::App& command) {
   auto args = std::make_shared<DecodeArgs>();
   command.add_option("CAPTURE", args->capture, "pcap or pcapng capture, - for standard input")
       ->required();
-  command.add_option("--config", args->layout.config_path, "TOML configuration file (layout)");
+  addLayoutOptions(command, args->layout);
   addFormatOption(command, args->format, namesOf(kDecodeFormats),
                   " (vcd: waveforms for GTKWave, and beside -o OUT.vcd the save file OUT.gtkw)");
   command.add_option("-o,--output", args->output, "write here (default: standard output)");
@@ -1018,10 +1022,6 @@ Handler decodeCommand(CLI::App& command) {
                   "only these axes, by name or index (comma-separated, repeatable)")
       ->delimiter(',')
       ->allow_extra_args(false);
-  command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never infer the layout from the cyclic traffic (docs/layout.md)");
-  command.add_option("--eni", args->layout.eni_path,
-                     "ENI file (EtherCATConfig.xml) giving the layout");
   command.add_flag("--timing", args->timing,
                    "at the end, the timing statistics of validate's text report on standard "
                    "error (docs/timing.md)");
@@ -1037,7 +1037,7 @@ Handler validateCommand(CLI::App& command) {
   auto args = std::make_shared<ValidateArgs>();
   command.add_option("CAPTURE", args->captures, "pcap or pcapng captures, - for standard input")
       ->required();
-  command.add_option("--config", args->layout.config_path, "TOML configuration file");
+  addLayoutOptions(command, args->layout);
   addFormatOption(command, args->format, cli::reportFormatNames());
   command.add_option("-o,--output", args->output,
                      "write the report here (default: standard output)");
@@ -1052,10 +1052,6 @@ Handler validateCommand(CLI::App& command) {
                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(CLI::IsMember({"error", "warning", "info", "never"}));
   cli::addRuleOptions(command, *args);
-  command.add_flag("--no-default-layout", args->layout.no_default_layout,
-                   "never infer the layout from the cyclic traffic (docs/layout.md)");
-  command.add_option("--eni", args->layout.eni_path,
-                     "ENI file (EtherCATConfig.xml) giving the layout when no --config does");
   addTimestampsOption(command, args->timestamps);
   addWindowOptions(command, args->window);
   command.add_flag("--allow-empty", args->allow_empty,

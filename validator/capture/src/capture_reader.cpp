@@ -29,8 +29,11 @@ struct CompressionMagic {
 };
 // RFC 1952 §2.3.1 (ID1 ID2) and RFC 8878 §3.1.1 (zstd frame magic, little-endian 0xFD2FB528).
 constexpr CompressionMagic kMagics[] = {
-    {Compression::Gzip, "gzip", 2, {0x1F, 0x8B, 0, 0}},
-    {Compression::Zstd, "zstd", 4, {0x28, 0xB5, 0x2F, 0xFD}},
+    {.compression = Compression::Gzip, .name = "gzip", .size = 2, .bytes = {0x1F, 0x8B, 0, 0}},
+    {.compression = Compression::Zstd,
+     .name = "zstd",
+     .size = 4,
+     .bytes = {0x28, 0xB5, 0x2F, 0xFD}},
 };
 
 Compression sniff(const std::uint8_t* head, std::size_t size) {

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <vector>
 
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/capture/compressed_output.hpp"
 #include "ncservo/wire/ecat_wire.hpp"
 
@@ -153,14 +154,8 @@ class PcapngWriter final : public CaptureWriter {
   }
 
  private:
-  void put16(std::uint16_t v) {
-    block_.push_back(static_cast<std::uint8_t>(v));
-    block_.push_back(static_cast<std::uint8_t>(v >> 8));
-  }
-  void put32(std::uint32_t v) {
-    put16(static_cast<std::uint16_t>(v));
-    put16(static_cast<std::uint16_t>(v >> 16));
-  }
+  void put16(std::uint16_t v) { appendLe(block_, v, 2); }
+  void put32(std::uint32_t v) { appendLe(block_, v, 4); }
   void pad() { block_.resize((block_.size() + 3) & ~std::size_t{3}, 0); }
   void begin(std::uint32_t type) {
     block_.clear();
@@ -169,7 +164,7 @@ class PcapngWriter final : public CaptureWriter {
   }
   void finish() {
     const auto total = static_cast<std::uint32_t>(block_.size() + 4);
-    for (int i = 0; i < 4; ++i) block_[4 + i] = static_cast<std::uint8_t>(total >> (8 * i));
+    storeLe<4>(&block_[4], total);
     put32(total);
     if (std::fwrite(block_.data(), 1, block_.size(), file_) != block_.size()) failed_ = true;
   }

@@ -12,11 +12,11 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cstdlib>
 #include <fstream>
 #include <pugixml.hpp>
 #include <sstream>
 
+#include "ncservo/base/number.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
@@ -36,12 +36,9 @@ std::optional<std::int64_t> hexDec(std::string_view text) {
     base = 16;
     text.remove_prefix(2);
   }
-  if (text.empty()) return std::nullopt;
-  const std::string s(text);
-  char* end = nullptr;
-  const long long value = std::strtoll(s.c_str(), &end, base);
-  if (end != s.c_str() + s.size()) return std::nullopt;
-  return value;
+  const Result<std::int64_t> value = parseNumber<std::int64_t>(text, base);
+  if (!value) return std::nullopt;
+  return *value;
 }
 
 Error eniError(const std::string& path, std::uint64_t line, std::string message) {

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 
@@ -45,8 +46,7 @@ constexpr double kMinConfidence = 0.25;
 constexpr std::uint32_t kMinObservations = 8;
 
 std::uint32_t le32(const std::uint8_t* p) {
-  return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
-         std::uint32_t{p[3]} << 24;
+  return static_cast<std::uint32_t>(loadLe<4>(p));
 }
 
 // A float32 a drive would send: finite and not denormal.
@@ -428,14 +428,13 @@ bool LayoutInference::outputsFirst(InferenceResult& result) const {
   return true;
 }
 
-InferenceResult LayoutInference::decide() const {
-  const State& st = *state_;
-  InferenceResult result;
-  result.cycles = st.cycles;
-  // 1. TxPDOs: the best tiling of each stream slaves write into, by the signature's evidence.
+namespace {
+
+// 1. TxPDOs: the best tiling of each stream slaves write into, by the signature's evidence.
+std::vector<ChosenTx> chooseTx(const std::vector<Stream>& streams) {
   std::vector<ChosenTx> tx;
-  for (std::size_t s = 0; s < st.streams.size(); ++s) {
-    const Stream& stream = st.streams[s];
+  for (std::size_t s = 0; s < streams.size(); ++s) {
+    const Stream& stream = streams[s];
     std::vector<std::int64_t> score(stream.tx.size());
     for (std::size_t o = 0; o < stream.tx.size(); ++o) score[o] = txScore(stream.tx[o]);
     for (std::size_t o : tile(score, kTxPdoSize)) {
@@ -449,14 +448,18 @@ InferenceResult LayoutInference::decide() const {
     }
   }
   std::sort(tx.begin(), tx.end(), [&](const ChosenTx& a, const ChosenTx& b) {
-    return st.streams[a.stream].imageAddress(a.offset) <
-           st.streams[b.stream].imageAddress(b.offset);
+    return streams[a.stream].imageAddress(a.offset) < streams[b.stream].imageAddress(b.offset);
   });
-  // 2. RxPDOs: candidates in data the master writes, outside the chosen TxPDOs, whose SE was
-  // 0x2 at least once (no other can explain a ServoEn).
+  return tx;
+}
+
+// 2. RxPDOs: candidates in data the master writes, outside the chosen TxPDOs, whose SE was
+// 0x2 at least once (no other can explain a ServoEn).
+std::vector<RxChoice> chooseRx(const std::vector<Stream>& streams,
+                               const std::vector<ChosenTx>& tx) {
   std::vector<RxChoice> rx;
-  for (std::size_t s = 0; s < st.streams.size(); ++s) {
-    const Stream& stream = st.streams[s];
+  for (std::size_t s = 0; s < streams.size(); ++s) {
+    const Stream& stream = streams[s];
     for (std::size_t o = 0; o < stream.rx.size(); ++o) {
       const RxCandidate& c = stream.rx[o];
       if (c.seen < kMinObservations || dead(c.seen, c.violations) || !c.enabled.any()) continue;
@@ -467,25 +470,35 @@ InferenceResult LayoutInference::decide() const {
     }
   }
   std::sort(rx.begin(), rx.end(), [&](const RxChoice& a, const RxChoice& b) {
-    return st.streams[a.stream].imageAddress(a.offset) <
-           st.streams[b.stream].imageAddress(b.offset);
+    return streams[a.stream].imageAddress(a.offset) < streams[b.stream].imageAddress(b.offset);
   });
-  // 3. Pair scores; a TxPDO no RxPDO explains is not a servo's (or its axis never enabled).
+  return rx;
+}
+
+// The TxPDOs some RxPDO explains, each with its pair scores against every RxPDO candidate.
+struct ServoCandidates {
+  std::vector<ChosenTx> tx;
+  std::vector<std::vector<PairScore>> pair;
+  std::vector<std::string> unpaired;  // servo-like status words no control word explains
+};
+
+// 3. Pair scores; a TxPDO no RxPDO explains is not a servo's (or its axis never enabled).
+ServoCandidates servoCandidates(const std::vector<Stream>& streams, std::uint32_t cycles,
+                                const std::vector<ChosenTx>& tx, const std::vector<RxChoice>& rx,
+                                InferenceResult& result) {
+  ServoCandidates servos;
   std::vector<std::vector<std::uint64_t>> recent;
   recent.reserve(rx.size());
   for (const RxChoice& r : rx) {
-    recent.push_back(recentlyEnabled(st.streams[r.stream].rx[r.offset].enabled, st.cycles));
+    recent.push_back(recentlyEnabled(streams[r.stream].rx[r.offset].enabled, cycles));
   }
   std::vector<std::vector<PairScore>> pair(tx.size(), std::vector<PairScore>(rx.size()));
-  std::vector<ChosenTx> servo_tx;
-  std::vector<std::vector<PairScore>> servo_pair;
-  std::vector<std::string> unpaired;
   for (std::size_t k = 0; k < tx.size(); ++k) {
-    const Stream& ts = st.streams[tx[k].stream];
+    const Stream& ts = streams[tx[k].stream];
     const TxCandidate& t = ts.tx[tx[k].offset];
     bool any = false;
     for (std::size_t i = 0; i < rx.size(); ++i) {
-      const Stream& rs = st.streams[rx[i].stream];
+      const Stream& rs = streams[rx[i].stream];
       if (rs.logical() != ts.logical() || (!ts.logical() && rs.station() != ts.station())) {
         continue;
       }
@@ -493,17 +506,24 @@ InferenceResult LayoutInference::decide() const {
       any = any || (pair[k][i].agree >= kMinAgreement && pair[k][i].score > 0);
     }
     if (any) {
-      servo_tx.push_back(tx[k]);
-      servo_pair.push_back(std::move(pair[k]));
+      servos.tx.push_back(tx[k]);
+      servos.pair.push_back(std::move(pair[k]));
     } else if (t.status * 2 >= t.seen) {
       // A servo's status word that no control word explains yet: its axis may enable later.
       ++result.unexplained;
       if (t.enabled.any())
-        unpaired.push_back(fmt::format("{} offset {}", ts.describe(), tx[k].offset));
+        servos.unpaired.push_back(fmt::format("{} offset {}", ts.describe(), tx[k].offset));
     }
   }
-  // 4. Pair RxPDO k with TxPDO k in process-image order, regions apart, best total.
-  const std::size_t n = servo_tx.size();
+  return servos;
+}
+
+// 4. Pair RxPDO k with TxPDO k in process-image order, regions apart, best total.
+// Each servo TxPDO's RxPDO index in `rx`, or rx.size() where none fits.
+std::vector<std::size_t> assignPairs(const std::vector<Stream>& streams,
+                                     const std::vector<RxChoice>& rx,
+                                     const std::vector<std::vector<PairScore>>& servo_pair) {
+  const std::size_t n = servo_pair.size();
   const std::size_t m = rx.size();
   constexpr std::int64_t kNone = std::numeric_limits<std::int64_t>::min() / 4;
   auto usable = [&](std::size_t k, std::size_t i) {
@@ -516,9 +536,9 @@ InferenceResult LayoutInference::decide() const {
     std::size_t prefix_at = m;
     std::size_t j = 0;
     for (std::size_t i = 0; i < m; ++i) {
-      const std::uint64_t at = st.streams[rx[i].stream].imageAddress(rx[i].offset);
+      const std::uint64_t at = streams[rx[i].stream].imageAddress(rx[i].offset);
       while (k > 0 && j < m &&
-             st.streams[rx[j].stream].imageAddress(rx[j].offset) + kRxPdoSize <= at) {
+             streams[rx[j].stream].imageAddress(rx[j].offset) + kRxPdoSize <= at) {
         if (best[k - 1][j] > prefix) {
           prefix = best[k - 1][j];
           prefix_at = j;
@@ -545,21 +565,29 @@ InferenceResult LayoutInference::decide() const {
       at = from[k][at];
     }
   }
-  const bool assigned =
-      n > 0 && std::all_of(choice.begin(), choice.end(), [m](std::size_t c) { return c != m; });
-  // 5. Confidence: how far the best overlapping rival is behind, for both PDOs.
+  return choice;
+}
+
+// 5. Confidence: how far the best overlapping rival is behind, for both PDOs.
+// The axes go to `result`; the ones too close to a rival are returned, described.
+std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
+                                   const std::vector<RxChoice>& rx, const ServoCandidates& servos,
+                                   const std::vector<std::size_t>& choice,
+                                   InferenceResult& result) {
   std::vector<std::string> ambiguous;
-  for (std::size_t k = 0; assigned && k < n; ++k) {
+  const std::size_t n = servos.tx.size();
+  const std::size_t m = rx.size();
+  for (std::size_t k = 0; k < n; ++k) {
     const RxChoice& r = rx[choice[k]];
-    const Stream& rs = st.streams[r.stream];
-    const Stream& ts = st.streams[servo_tx[k].stream];
-    const TxCandidate& t = ts.tx[servo_tx[k].offset];
-    const PairScore& p = servo_pair[k][choice[k]];
+    const Stream& rs = streams[r.stream];
+    const Stream& ts = streams[servos.tx[k].stream];
+    const TxCandidate& t = ts.tx[servos.tx[k].offset];
+    const PairScore& p = servos.pair[k][choice[k]];
     std::int64_t rival = 0;
     for (std::size_t i = 0; i < m; ++i) {
       if (i != choice[k] && rx[i].stream == r.stream &&
           overlaps(rx[i].offset, kRxPdoSize, r.offset, kRxPdoSize)) {
-        rival = std::max(rival, servo_pair[k][i].score);
+        rival = std::max(rival, servos.pair[k][i].score);
       }
     }
     const double rx_confidence =
@@ -568,11 +596,11 @@ InferenceResult LayoutInference::decide() const {
     axis.config.name = fmt::format("axis{}", k);
     if (ts.logical()) {
       axis.config.outputs = static_cast<std::uint32_t>(rs.address + r.offset);
-      axis.config.inputs = static_cast<std::uint32_t>(ts.address + servo_tx[k].offset);
+      axis.config.inputs = static_cast<std::uint32_t>(ts.address + servos.tx[k].offset);
     } else {
       axis.config.station = ts.station();
       axis.config.sm_outputs = static_cast<std::uint16_t>(rs.ado() + r.offset);
-      axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + servo_tx[k].offset);
+      axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + servos.tx[k].offset);
     }
     AxisEvidence& e = axis.evidence;
     e.cycles = t.seen;
@@ -583,18 +611,21 @@ InferenceResult LayoutInference::decide() const {
     e.enabled_agree = p.agree;
     e.enabled_disagree = p.disagree;
     e.clear_agree = p.clear;
-    e.confidence = std::min(servo_tx[k].confidence, rx_confidence);
+    e.confidence = std::min(servos.tx[k].confidence, rx_confidence);
     if (e.confidence < kMinConfidence) {
       ambiguous.push_back(fmt::format(
           "{} (RxPDO {} offset {}, TxPDO {} offset {}, confidence {:.0f} %)", axis.config.name,
-          rs.describe(), r.offset, ts.describe(), servo_tx[k].offset, 100 * e.confidence));
+          rs.describe(), r.offset, ts.describe(), servos.tx[k].offset, 100 * e.confidence));
     }
     result.axes.push_back(std::move(axis));
   }
-  if (assigned && ambiguous.empty() && unpaired.empty()) return result;
-  if (st.streams.empty() && outputsFirst(result)) return result;
+  return ambiguous;
+}
 
-  // Refused: say why, list the candidates, show how to write the configuration.
+// Refused: say why, list the candidates, show how to write the configuration.
+std::string refusal(const std::vector<Stream>& streams, std::uint32_t cycles,
+                    const std::vector<std::string>& ambiguous,
+                    const std::vector<std::string>& unpaired, std::size_t n) {
   std::string why;
   if (!ambiguous.empty()) {
     why = fmt::format("the layout is ambiguous: more than one placement fits {}",
@@ -608,7 +639,7 @@ InferenceResult LayoutInference::decide() const {
     why =
         "the layout is ambiguous: the control words cannot be paired with the status words in "
         "process-image order";
-  } else if (st.streams.empty()) {
+  } else if (streams.empty()) {
     why =
         "no cyclic process data was captured (no returned LRW, LRD, LWR, FPRD or FPWR of 10 "
         "bytes or more)";
@@ -617,16 +648,37 @@ InferenceResult LayoutInference::decide() const {
         "the layout is ambiguous or the evidence too weak: in {} cycles no status word's "
         "SSW.ServoEn followed a control word's SCW.SE (all axes idle, or the data all zeros or "
         "constant)",
-        st.cycles);
+        cycles);
   }
   std::vector<std::string> listed;
-  for (const Stream& s : st.streams) listed.push_back(s.describe());
-  result.axes.clear();
-  result.refusal = fmt::format(
+  for (const Stream& s : streams) listed.push_back(s.describe());
+  return fmt::format(
       "{}; cyclic datagrams: {}; give the layout in a --config file, one [[axis]] per servo with "
       "the logical addresses of its 10-byte RxPDO and 40-byte TxPDO, e.g.\n"
       "[[axis]]\nname = \"X\"\noutputs = 0x00010000\ninputs = 0x00010028",
       why, listed.empty() ? std::string("none") : fmt::format("{}", fmt::join(listed, ", ")));
+}
+
+}  // namespace
+
+InferenceResult LayoutInference::decide() const {
+  const State& st = *state_;
+  InferenceResult result;
+  result.cycles = st.cycles;
+  const std::vector<ChosenTx> tx = chooseTx(st.streams);
+  const std::vector<RxChoice> rx = chooseRx(st.streams, tx);
+  const ServoCandidates servos = servoCandidates(st.streams, st.cycles, tx, rx, result);
+  const std::vector<std::size_t> choice = assignPairs(st.streams, rx, servos.pair);
+  const std::size_t n = servos.tx.size();
+  const std::size_t m = rx.size();
+  const bool assigned =
+      n > 0 && std::all_of(choice.begin(), choice.end(), [m](std::size_t c) { return c != m; });
+  std::vector<std::string> ambiguous;
+  if (assigned) ambiguous = placeAxes(st.streams, rx, servos, choice, result);
+  if (assigned && ambiguous.empty() && servos.unpaired.empty()) return result;
+  if (st.streams.empty() && outputsFirst(result)) return result;
+  result.axes.clear();
+  result.refusal = refusal(st.streams, st.cycles, ambiguous, servos.unpaired, n);
   return result;
 }
 

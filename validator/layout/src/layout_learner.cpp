@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <tuple>
 
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 
 namespace ncservo {
@@ -19,9 +20,7 @@ bool known(const std::bitset<N>& mask, std::size_t from, std::size_t count) {
 }
 template <std::size_t N>
 std::uint32_t le(const std::array<std::uint8_t, N>& bytes, std::size_t at, std::size_t count) {
-  std::uint32_t value = 0;
-  for (std::size_t i = 0; i < count; ++i) value |= std::uint32_t{bytes[at + i]} << (8 * i);
-  return value;
+  return static_cast<std::uint32_t>(loadLe(bytes.data() + at, count));
 }
 
 // Copies the part of [ado, ado + count) that falls in a register block into its shadow.

@@ -11,8 +11,6 @@ const FrameView& Session::onFrame(const EcatFrame& frame, const ByteReader& byte
     AxisFrameView& axis = view_.axes[i];
     axis.placement = decode_.axes[i];
     readFrameValues(axis.placement, bytes, axis.values);
-    axis.state.reset();
-    if (!track_states_) continue;
     const std::size_t index = axis.placement.axis;
     if (index >= latest_.size()) latest_.resize(index + 1);
     PdoValues& latest = latest_[index];

@@ -7,18 +7,16 @@
 #include "ncservo/protocol/drive_state.hpp"
 #include "ncservo/report/chartjs_source.hpp"
 #include "ncservo/report/report.hpp"
+#include "report_format.hpp"
 
 namespace ncservo::cli {
 
 namespace {
-using Json = nlohmann::ordered_json;
+using detail::Json;
+using detail::seconds;
 
 // The findings listed in the table, per capture; past it the page says how many were left out.
 constexpr std::size_t kHtmlMaxTableRows = 20000;
-
-double seconds(const CaptureReport& r, const Stamp& at) {
-  return static_cast<double>(at.time_ns - r.first_time_ns) / 1e9;
-}
 
 double milliseconds(std::int64_t ns) {
   return static_cast<double>(ns) / 1e6;

@@ -61,9 +61,9 @@ bool Validator::unchanged(const AxisPlacement& placement, const ByteReader& byte
     for (std::size_t i = 0; i < judged.count; ++i) {
       const JudgedWord& w = judged.words[i];
       const std::uint8_t* at = pdo + w.offset;
-      const std::uint64_t now = w.size == 4   ? detail::loadLe<4>(at)
-                                : w.size == 2 ? detail::loadLe<2>(at)
-                                              : detail::loadLe<8>(at);
+      const std::uint64_t now = w.size == 4   ? loadLe<4>(at)
+                                : w.size == 2 ? loadLe<2>(at)
+                                              : loadLe<8>(at);
       const std::uint64_t then = latest.raw[w.index];
       if (((now ^ then) & w.bits) != 0) return false;
       if (w.word_class != nullptr && w.word_class(now) != w.word_class(then)) return false;

@@ -4,7 +4,7 @@
 #include <memory>
 #include <vector>
 
-#include "le_bytes.hpp"
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/sim/models.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
@@ -28,8 +28,8 @@ struct EslProbe {
     bytes.resize(esl::kHeaderSize);
     const std::uint16_t flags =
         (frame.returned ? kReturnPort : kMasterPort) | esl::kFlagTimestampValid;
-    putLe(&bytes[esl::kFlagsOffset], flags, 2);
-    putLe(&bytes[esl::kTimestampOffset], static_cast<std::uint64_t>(frame.time_ns), 8);
+    storeLe(&bytes[esl::kFlagsOffset], flags, 2);
+    storeLe(&bytes[esl::kTimestampOffset], static_cast<std::uint64_t>(frame.time_ns), 8);
     bytes.insert(bytes.end(), frame.data, frame.data + frame.size);
     const std::int64_t late = noise.between(0, kPcStampNoiseNs);
     const std::int64_t capture_ns =

@@ -1,5 +1,7 @@
 #include "ncservo/sim/frame_encoder.hpp"
 
+#include "ncservo/base/little_endian.hpp"
+
 namespace ncservo::sim {
 namespace {
 
@@ -16,9 +18,6 @@ constexpr std::uint32_t kSll2InterfaceIndex = 1;
 void putBe16(std::vector<std::uint8_t>& out, std::uint16_t value) {
   out.push_back(static_cast<std::uint8_t>(value >> 8));
   out.push_back(static_cast<std::uint8_t>(value));
-}
-void putLe(std::vector<std::uint8_t>& out, std::uint64_t value, std::size_t size) {
-  for (std::size_t i = 0; i < size; ++i) out.push_back(static_cast<std::uint8_t>(value >> (8 * i)));
 }
 void setBe16(std::vector<std::uint8_t>& out, std::size_t at, std::uint16_t value) {
   out[at] = static_cast<std::uint8_t>(value >> 8);
@@ -91,13 +90,14 @@ void FrameEncoder::add(const DatagramFields& fields, const std::uint8_t* data, s
   last_length_field_.reset();
   out_.push_back(fields.command);
   out_.push_back(fields.index);
-  putLe(out_, fields.address, 4);
+  appendLe(out_, fields.address, 4);
   if (!fields.more) last_length_field_ = out_.size();
   const std::uint16_t length = fields.length.value_or(static_cast<std::uint16_t>(size));
-  putLe(out_, (length & ecat::kLengthMask) | (fields.more.value_or(false) ? ecat::kMoreBit : 0), 2);
-  putLe(out_, fields.irq, 2);
+  appendLe(out_, (length & ecat::kLengthMask) | (fields.more.value_or(false) ? ecat::kMoreBit : 0),
+           2);
+  appendLe(out_, fields.irq, 2);
   out_.insert(out_.end(), data, data + size);
-  putLe(out_, fields.wkc, ecat::kWkcSize);
+  appendLe(out_, fields.wkc, ecat::kWkcSize);
 }
 
 void FrameEncoder::finish() {
@@ -105,8 +105,7 @@ void FrameEncoder::finish() {
   const std::uint16_t length = framing_.header_length.value_or(static_cast<std::uint16_t>(chain));
   const auto header =
       static_cast<std::uint16_t>((length & ecat::kLengthMask) | (framing_.frame_type << 12));
-  out_[ecat_offset_] = static_cast<std::uint8_t>(header);
-  out_[ecat_offset_ + 1] = static_cast<std::uint8_t>(header >> 8);
+  storeLe<2>(&out_[ecat_offset_], header);
   if (framing_.udp) {
     const std::size_t udp_length = out_.size() - ip_offset_ - kIpv4HeaderSize;
     setBe16(out_, ip_offset_ + kIpv4TotalLength,

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "le_bytes.hpp"
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
@@ -112,7 +112,7 @@ bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
     if (acks) {
       if (!walk.need_ack[s]) continue;
       RingDatagram dg = registerDatagram(ecat::kFpwr, station, ecat::kRegAlControl, 2);
-      putLe(dg.data.data(), walk.ack_value[s], 2);
+      storeLe(dg.data.data(), walk.ack_value[s], 2);
       frame.push_back(std::move(dg));
       walk.need_ack[s] = false;
       walk.need_request[s] = true;
@@ -121,7 +121,7 @@ bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
       RingDatagram dg = registerDatagram(ecat::kFpwr, station, ecat::kRegAlControl, 2);
       const std::uint8_t value = walk.first_request[s] != 0 ? walk.first_request[s] : walk.target;
       walk.first_request[s] = 0;
-      putLe(dg.data.data(), value, 2);
+      storeLe(dg.data.data(), value, 2);
       frame.push_back(std::move(dg));
       walk.need_request[s] = false;
     } else if (!walk.done[s]) {
@@ -182,8 +182,8 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
           slots * ecat::kSyncManagerStride);
       for (std::size_t e = 0; e < entries.size(); ++e) {
         std::uint8_t* sm = &dg.data[(entries[e].sm - first) * ecat::kSyncManagerStride];
-        putLe(sm + ecat::kSmStartAt, entries[e].phys, 2);
-        putLe(sm + ecat::kSmLengthAt, entries[e].length, 2);
+        storeLe(sm + ecat::kSmStartAt, entries[e].phys, 2);
+        storeLe(sm + ecat::kSmLengthAt, entries[e].length, 2);
         sm[ecat::kSmControlAt] = entries[e].outputs ? kSmOutputs : kSmInputs;
         sm[ecat::kSmActivateAt] = 0x01;
       }
@@ -193,11 +193,11 @@ bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t
                                          entries.size() * ecat::kFmmuStride);
       for (std::size_t e = 0; e < entries.size(); ++e) {
         std::uint8_t* fmmu = &dg.data[e * ecat::kFmmuStride];
-        putLe(fmmu + ecat::kFmmuLogicalAt, entries[e].logical, 4);
-        putLe(fmmu + ecat::kFmmuLengthAt, entries[e].length, 2);
+        storeLe(fmmu + ecat::kFmmuLogicalAt, entries[e].logical, 4);
+        storeLe(fmmu + ecat::kFmmuLengthAt, entries[e].length, 2);
         fmmu[ecat::kFmmuStartBitAt] = 0;
         fmmu[ecat::kFmmuStopBitAt] = 7;
-        putLe(fmmu + ecat::kFmmuPhysicalAt, entries[e].phys, 2);
+        storeLe(fmmu + ecat::kFmmuPhysicalAt, entries[e].phys, 2);
         fmmu[ecat::kFmmuPhysicalStartBitAt] = 0;
         fmmu[ecat::kFmmuTypeAt] = entries[e].outputs ? ecat::kFmmuWrite : ecat::kFmmuRead;
         fmmu[ecat::kFmmuActivateAt] = 1;
@@ -221,7 +221,7 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   for (std::size_t s = 0; s < n; ++s) {
     RingDatagram dg = registerDatagram(
         ecat::kApwr, static_cast<std::uint16_t>(-static_cast<int>(s)), ecat::kRegStationAddress, 2);
-    putLe(dg.data.data(), kFirstStation + s, 2);
+    storeLe(dg.data.data(), kFirstStation + s, 2);
     frame.push_back(std::move(dg));
   }
   if (!exchange(sink, frame, t)) return false;
@@ -233,7 +233,7 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   next();
   frame.clear();
   RingDatagram reset = registerDatagram(ecat::kBwr, 0, ecat::kRegAlControl, 2);
-  putLe(reset.data.data(), kInit | ecat::kAlErrorBit, 2);
+  storeLe(reset.data.data(), kInit | ecat::kAlErrorBit, 2);
   frame.push_back(std::move(reset));
   if (!exchange(sink, frame, t)) return false;
   next();

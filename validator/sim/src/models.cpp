@@ -519,9 +519,9 @@ void NcAxis::runEvents(std::int64_t now_ns) {
 RxPdo NcAxis::step(const TxPdo* inputs, std::int64_t now_ns) {
   const double dt = last_ns_ < 0 ? 0.0 : static_cast<double>(now_ns - last_ns_) * 1e-9;
   last_ns_ = now_ns;
-  RxPdo out;
   if (!operational_) {
     // Outside OP the NC keeps its axes disabled (ESM-002), unless it misbehaves.
+    RxPdo out;
     out.scw = (enable_before_op_ ? bits::kSePrepare : 0U) | bits::kEmgon | bits::kBrake |
               bits::scwTable(table_);
     return out;
@@ -530,84 +530,90 @@ RxPdo NcAxis::step(const TxPdo* inputs, std::int64_t now_ns) {
   if (!emgon_ && now_ns >= emergency_until_ns_) emgon_ = true;
   ++phase_cycles_;
 
-  if (inputs != nullptr) {
-    const bool drive_on = (inputs->ssw & bits::kServoEn) != 0;
-    const bool errors = (inputs->sew & bits::kServoErrors) != 0;
-    const bool clear_ack = (inputs->ssw & bits::kErrClearAck) != 0;
-    if (errors && (phase_ == Phase::Prepare || phase_ == Phase::Enabling || phase_ == Phase::On ||
-                   phase_ == Phase::Disabling || phase_ == Phase::Off)) {
-      enter(Phase::FaultWait, now_ns);
-    }
-    switch (phase_) {
-      case Phase::Off:
-        se_ = 0;
-        break;
-      case Phase::Prepare:
-        se_ = bits::kSePrepare;
-        if (phase_cycles_ > kPrepareCycles && now_ns - phase_since_ns_ >= kPrepareNs) {
-          se_ = bits::kSeEnable;
-          enter(Phase::Enabling, now_ns);
-        }
-        break;
-      case Phase::Enabling:
-        if (drive_on) {
-          enter(Phase::On, now_ns);
-        } else if (now_ns - phase_since_ns_ > kEnableRetryNs) {
-          enter(Phase::Prepare, now_ns);  // the drive did not follow: a legal edge again
-          se_ = bits::kSePrepare;
-        }
-        break;
-      case Phase::On:
+  if (inputs != nullptr) followDrive(*inputs, now_ns);
+  return outputs(now_ns, dt);
+}
+
+// The enable handshake and the error clearing, one step on the drive's returned words.
+void NcAxis::followDrive(const TxPdo& inputs, std::int64_t now_ns) {
+  const bool drive_on = (inputs.ssw & bits::kServoEn) != 0;
+  const bool errors = (inputs.sew & bits::kServoErrors) != 0;
+  const bool clear_ack = (inputs.ssw & bits::kErrClearAck) != 0;
+  if (errors && (phase_ == Phase::Prepare || phase_ == Phase::Enabling || phase_ == Phase::On ||
+                 phase_ == Phase::Disabling || phase_ == Phase::Off)) {
+    enter(Phase::FaultWait, now_ns);
+  }
+  switch (phase_) {
+    case Phase::Off:
+      se_ = 0;
+      break;
+    case Phase::Prepare:
+      se_ = bits::kSePrepare;
+      if (phase_cycles_ > kPrepareCycles && now_ns - phase_since_ns_ >= kPrepareNs) {
         se_ = bits::kSeEnable;
-        break;
-      case Phase::FaultWait:
-        // The drive reacts to its own fault: the NC keeps SE until the drive is off, so a slow
-        // but legal fault reaction is not an enable the drive failed to drop (SE-003).
-        if (!errors) {
-          enter(drive_on ? Phase::On : (want_on_ ? Phase::Prepare : Phase::Off), now_ns);
-        } else if (!drive_on) {
-          se_ = bits::kSePrepare;
-          error_clear_ = true;
-          enter(Phase::Clearing, now_ns);
-        }
-        break;
-      case Phase::Clearing:
+        enter(Phase::Enabling, now_ns);
+      }
+      break;
+    case Phase::Enabling:
+      if (drive_on) {
+        enter(Phase::On, now_ns);
+      } else if (now_ns - phase_since_ns_ > kEnableRetryNs) {
+        enter(Phase::Prepare, now_ns);  // the drive did not follow: a legal edge again
+        se_ = bits::kSePrepare;
+      }
+      break;
+    case Phase::On:
+      se_ = bits::kSeEnable;
+      break;
+    case Phase::FaultWait:
+      // The drive reacts to its own fault: the NC keeps SE until the drive is off, so a slow
+      // but legal fault reaction is not an enable the drive failed to drop (SE-003).
+      if (!errors) {
+        enter(drive_on ? Phase::On : (want_on_ ? Phase::Prepare : Phase::Off), now_ns);
+      } else if (!drive_on) {
         se_ = bits::kSePrepare;
         error_clear_ = true;
-        if (clear_ack) {
-          if (ack_seen_ns_ < 0) ack_seen_ns_ = now_ns;
-          if (now_ns - ack_seen_ns_ >= hold_clear_ns_) {
-            error_clear_ = false;
-            hold_clear_ns_ = 0;
-            ack_seen_ns_ = -1;
-            enter(Phase::Releasing, now_ns);
-          }
+        enter(Phase::Clearing, now_ns);
+      }
+      break;
+    case Phase::Clearing:
+      se_ = bits::kSePrepare;
+      error_clear_ = true;
+      if (clear_ack) {
+        if (ack_seen_ns_ < 0) ack_seen_ns_ = now_ns;
+        if (now_ns - ack_seen_ns_ >= hold_clear_ns_) {
+          error_clear_ = false;
+          hold_clear_ns_ = 0;
+          ack_seen_ns_ = -1;
+          enter(Phase::Releasing, now_ns);
         }
-        break;
-      case Phase::Releasing:
-        error_clear_ = false;
-        if (!clear_ack) {
-          if (errors) {
-            enter(Phase::Clearing, now_ns);
-          } else {
-            enter(want_on_ ? Phase::Prepare : Phase::Disabling, now_ns);
-          }
+      }
+      break;
+    case Phase::Releasing:
+      error_clear_ = false;
+      if (!clear_ack) {
+        if (errors) {
+          enter(Phase::Clearing, now_ns);
+        } else {
+          enter(want_on_ ? Phase::Prepare : Phase::Disabling, now_ns);
         }
-        break;
-      case Phase::Disabling:
-        se_ = bits::kSePrepare;
-        if (phase_cycles_ > kPrepareCycles) {
-          se_ = 0;
-          enter(want_on_ ? Phase::Prepare : Phase::Off, now_ns);
-        }
-        break;
-    }
-    if (zp_request_ &&
-        ((inputs->ssw & bits::kZPulseAck) != 0 || now_ns - zp_since_ns_ > kZeroPulseGiveUpNs)) {
-      zp_request_ = false;
-    }
+      }
+      break;
+    case Phase::Disabling:
+      se_ = bits::kSePrepare;
+      if (phase_cycles_ > kPrepareCycles) {
+        se_ = 0;
+        enter(want_on_ ? Phase::Prepare : Phase::Off, now_ns);
+      }
+      break;
   }
+  if (zp_request_ &&
+      ((inputs.ssw & bits::kZPulseAck) != 0 || now_ns - zp_since_ns_ > kZeroPulseGiveUpNs)) {
+    zp_request_ = false;
+  }
+}
 
+RxPdo NcAxis::outputs(std::int64_t now_ns, double dt) {
   // Speed set point: the plan's target, a slow move while searching the zero pulse, zero
   // while not enabled or in an emergency; ramped as an interpolator would.
   double target = 0;
@@ -618,6 +624,7 @@ RxPdo NcAxis::step(const TxPdo* inputs, std::int64_t now_ns) {
   const double rate = emgon_ && phase_ == Phase::On ? kNcRampRpmPerS : kNcStopRpmPerS;
   ssp_rpm_ = approach(ssp_rpm_, target, rate * dt);
 
+  RxPdo out;
   out.ssp = static_cast<std::int32_t>(std::lround(ssp_rpm_ * kSspPerRpm));
   out.scw = se_ | (emgon_ ? bits::kEmgon : 0U) | bits::kBrake | bits::scwTable(table_) |
             (zp_request_ || now_ns < zp_abs_until_ns_ ? bits::kZPulseRequest : 0U) |

@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <stdexcept>
 #include <string>
 
+#include "ncservo/base/number.hpp"
 #include "ncservo/sim/faults.hpp"
 
 namespace ncservo::sim {
@@ -92,21 +92,18 @@ Result<FaultRequest> parseFault(std::string_view text) {
   fault.rule = rule->id;
   const bool has_time = text.find('@') != std::string_view::npos;
   const bool has_axis = text.find(':') != std::string_view::npos;
-  try {
-    std::size_t used = 0;
-    if ((has_time && time_text.empty()) || (has_axis && axis_text.empty())) {
-      throw std::invalid_argument("empty");
-    }
-    if (!time_text.empty()) {
-      fault.at_s = std::stod(std::string(time_text), &used);
-      if (used != time_text.size() || !(*fault.at_s >= 0)) throw std::invalid_argument("time");
-    }
-    if (!axis_text.empty()) {
-      fault.axis = std::stoi(std::string(axis_text), &used);
-      if (used != axis_text.size() || *fault.axis < 0) throw std::invalid_argument("axis");
-    }
-  } catch (const std::exception&) {
+  auto malformed = [&] {
     return fail(fmt::format("--fault {}: expected RULE[@SECONDS][:AXIS], e.g. SE-001@1.2:0", text));
+  };
+  if (has_time) {
+    const Result<double> at_s = parseNumber<double>(time_text);
+    if (!at_s || !(*at_s >= 0)) return malformed();
+    fault.at_s = *at_s;
+  }
+  if (has_axis) {
+    const Result<int> axis = parseNumber<int>(axis_text);
+    if (!axis || *axis < 0) return malformed();
+    fault.axis = *axis;
   }
   return fault;
 }
@@ -115,24 +112,25 @@ Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::str
   const std::size_t colon = text.find(':');
   CycleDisturbance d;
   d.text = std::string(text);
-  try {
-    if (colon == std::string_view::npos) throw std::invalid_argument("colon");
-    std::size_t used = 0;
-    const std::string at(text.substr(0, colon));
-    const std::string amount(text.substr(colon + 1));
-    d.at_s = std::stod(at, &used);
-    if (used != at.size() || !(d.at_s >= 0)) throw std::invalid_argument("time");
-    d.amount = std::stoi(amount, &used);
-    if (used != amount.size() || d.amount < 1) throw std::invalid_argument("amount");
-  } catch (const std::exception&) {
+  const bool late = option == "--late-cycle";
+  auto malformed = [&] {
     return fail(fmt::format("{} {}: expected SECONDS:{}, e.g. 1.5:{}", option, text,
-                            option == "--late-cycle" ? "US" : "N",
-                            option == "--late-cycle" ? "400" : "3"));
-  }
+                            late ? "US" : "N", late ? "400" : "3"));
+  };
+  if (colon == std::string_view::npos) return malformed();
+  const Result<double> at_s = parseNumber<double>(text.substr(0, colon));
+  if (!at_s || !(*at_s >= 0)) return malformed();
+  d.at_s = *at_s;
+  const Result<int> amount = parseNumber<int>(text.substr(colon + 1));
+  if (!amount || *amount < 1) return malformed();
+  d.amount = *amount;
   return d;
 }
 
-Status resolveOptions(SimOptions& o) {
+namespace {
+
+// The bus's numbers and its disturbances, each within its range.
+Status checkBusOptions(SimOptions& o) {
   if (o.axes < 1 || o.axes > 32) return fail(fmt::format("--axes {}: from 1 to 32", o.axes));
   if (!o.io_slaves) o.io_slaves = defaultIoSlaves(o.image);
   if (*o.io_slaves < 0 || *o.io_slaves > 32) {
@@ -165,9 +163,13 @@ Status resolveOptions(SimOptions& o) {
                       late.text, most_late_us));
     }
   }
+  return {};
+}
+
+// The run's length (the scenario's when not given), and what the faults scenario needs.
+Status checkDuration(SimOptions& o) {
   if (!o.duration_s) o.duration_s = defaultDuration(o.scenario);
   const double duration = *o.duration_s;
-  const double start = o.startup ? kStartupSeconds : 0.0;
   if (!(duration >= 1.0 && duration <= 24 * 3600.0)) {
     return fail(fmt::format("--duration {}: from 1 s to 24 h", duration));
   }
@@ -180,63 +182,78 @@ Status resolveOptions(SimOptions& o) {
                               defaultDuration(Scenario::Faults)));
     }
   }
+  return {};
+}
+
+// One --fault's time and axis, defaulted where not given, checked against the run and its recipe.
+Status placeFault(FaultRequest& f, const SimOptions& o) {
+  const double duration = *o.duration_s;
+  const double start = o.startup ? kStartupSeconds : 0.0;
+  const char* code = ruleDef(f.rule).code;
+  const FaultRecipe* recipe = faultRecipe(f.rule);
+  if (recipe == nullptr || !recipe->injectable()) {
+    return fail(fmt::format("--fault {}: {}", f.text, faultDescription(f.rule)));
+  }
+  const FaultRecipe& r = *recipe;
+  if (r.phase == FaultPhase::Startup) {
+    if (!o.startup)
+      return fail(fmt::format("--fault {}: {} happens in the start-up", f.text, code));
+    if (f.at_s) {
+      return fail(
+          fmt::format("--fault {}: {} happens in the start-up; give no @time", f.text, code));
+    }
+  } else {
+    // After the start-up and the enables; in a commissioning run before the emergency stop
+    // and the disables that end it (at 53 % and 85 % of the run), else before the end.
+    const double earliest = start + 0.45;
+    const double latest =
+        o.scenario == Scenario::Commissioning ? 0.53 * duration - 0.25 : duration - 0.4;
+    if (latest < earliest) {
+      return fail(fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
+                              f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5));
+    }
+    if (!f.at_s) f.at_s = std::clamp(0.43 * duration, earliest, latest);
+    if (*f.at_s < earliest || *f.at_s > latest) {
+      return fail(
+          fmt::format("--fault {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)",
+                      f.text, *f.at_s, earliest, latest));
+    }
+  }
+  if (r.need == AxisNeed::None) {
+    if (f.axis)
+      return fail(fmt::format("--fault {}: {} concerns the whole bus; no :axis", f.text, code));
+    return {};
+  }
+  if (!f.axis) {
+    int axis = 2 % o.axes;
+    if (r.need == AxisNeed::Incremental && !isIncrementalAxis(axis)) axis = o.axes > 1 ? 1 : -1;
+    if (r.need == AxisNeed::Absolute && isIncrementalAxis(axis)) axis = 0;
+    if (axis < 0) {
+      return fail(fmt::format("--fault {}: {} needs an incremental axis (odd index): use --axes 2",
+                              f.text, code));
+    }
+    f.axis = axis;
+  }
+  if (*f.axis >= o.axes) {
+    return fail(
+        fmt::format("--fault {}: axis {} does not exist (--axes {})", f.text, *f.axis, o.axes));
+  }
+  if (r.need == AxisNeed::Incremental && !isIncrementalAxis(*f.axis)) {
+    return fail(fmt::format("--fault {}: {} needs an incremental axis (odd index)", f.text, code));
+  }
+  if (r.need == AxisNeed::Absolute && isIncrementalAxis(*f.axis)) {
+    return fail(fmt::format("--fault {}: {} needs an absolute axis (even index)", f.text, code));
+  }
+  return {};
+}
+
+}  // namespace
+
+Status resolveOptions(SimOptions& o) {
+  if (Status bus = checkBusOptions(o); !bus) return bus;
+  if (Status duration = checkDuration(o); !duration) return duration;
   for (FaultRequest& f : o.faults) {
-    const char* code = ruleDef(f.rule).code;
-    const FaultRecipe* recipe = faultRecipe(f.rule);
-    if (recipe == nullptr || !recipe->injectable()) {
-      return fail(fmt::format("--fault {}: {}", f.text, faultDescription(f.rule)));
-    }
-    const FaultRecipe& r = *recipe;
-    if (r.phase == FaultPhase::Startup) {
-      if (!o.startup)
-        return fail(fmt::format("--fault {}: {} happens in the start-up", f.text, code));
-      if (f.at_s) {
-        return fail(
-            fmt::format("--fault {}: {} happens in the start-up; give no @time", f.text, code));
-      }
-    } else {
-      // After the start-up and the enables; in a commissioning run before the emergency stop
-      // and the disables that end it (at 53 % and 85 % of the run), else before the end.
-      const double earliest = start + 0.45;
-      const double latest =
-          o.scenario == Scenario::Commissioning ? 0.53 * duration - 0.25 : duration - 0.4;
-      if (latest < earliest) {
-        return fail(fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
-                                f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5));
-      }
-      if (!f.at_s) f.at_s = std::clamp(0.43 * duration, earliest, latest);
-      if (*f.at_s < earliest || *f.at_s > latest) {
-        return fail(
-            fmt::format("--fault {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)",
-                        f.text, *f.at_s, earliest, latest));
-      }
-    }
-    if (r.need == AxisNeed::None) {
-      if (f.axis)
-        return fail(fmt::format("--fault {}: {} concerns the whole bus; no :axis", f.text, code));
-      continue;
-    }
-    if (!f.axis) {
-      int axis = 2 % o.axes;
-      if (r.need == AxisNeed::Incremental && !isIncrementalAxis(axis)) axis = o.axes > 1 ? 1 : -1;
-      if (r.need == AxisNeed::Absolute && isIncrementalAxis(axis)) axis = 0;
-      if (axis < 0) {
-        return fail(fmt::format(
-            "--fault {}: {} needs an incremental axis (odd index): use --axes 2", f.text, code));
-      }
-      f.axis = axis;
-    }
-    if (*f.axis >= o.axes) {
-      return fail(
-          fmt::format("--fault {}: axis {} does not exist (--axes {})", f.text, *f.axis, o.axes));
-    }
-    if (r.need == AxisNeed::Incremental && !isIncrementalAxis(*f.axis)) {
-      return fail(
-          fmt::format("--fault {}: {} needs an incremental axis (odd index)", f.text, code));
-    }
-    if (r.need == AxisNeed::Absolute && isIncrementalAxis(*f.axis)) {
-      return fail(fmt::format("--fault {}: {} needs an absolute axis (even index)", f.text, code));
-    }
+    if (Status placed = placeFault(f, o); !placed) return placed;
   }
   return {};
 }

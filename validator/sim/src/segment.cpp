@@ -6,7 +6,7 @@
 #include <cstring>
 #include <iterator>
 
-#include "le_bytes.hpp"
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
@@ -28,24 +28,100 @@ constexpr std::uint16_t kRxPhys = 0x1100;
 constexpr std::uint16_t kTxPhys = 0x1180;
 constexpr std::uint16_t kOutTerminalPhys = 0x0F00;
 constexpr std::uint16_t kInTerminalPhys = 0x1000;
-constexpr SlaveModel kServo = {"servo", SlaveRole::Servo, kRxPdoSize, kTxPdoSize, 2,
-                               3,       kRxPhys,          kTxPhys};
+constexpr SlaveModel kServo = {.name = "servo",
+                               .role = SlaveRole::Servo,
+                               .output_bytes = kRxPdoSize,
+                               .input_bytes = kTxPdoSize,
+                               .output_sm = 2,
+                               .input_sm = 3,
+                               .output_phys = kRxPhys,
+                               .input_phys = kTxPhys};
 // The terminals of the SOEM and EtherLab set-ups, in turn.
-constexpr SlaveModel kDigitalOut = {"EL2008", SlaveRole::Digital, 1, 0, 0, 0, kOutTerminalPhys, 0};
-constexpr SlaveModel kDigitalIn = {"EL1008", SlaveRole::Digital, 0, 1, 0, 0, 0, kInTerminalPhys};
+constexpr SlaveModel kDigitalOut = {.name = "EL2008",
+                                    .role = SlaveRole::Digital,
+                                    .output_bytes = 1,
+                                    .input_bytes = 0,
+                                    .output_sm = 0,
+                                    .input_sm = 0,
+                                    .output_phys = kOutTerminalPhys,
+                                    .input_phys = 0};
+constexpr SlaveModel kDigitalIn = {.name = "EL1008",
+                                   .role = SlaveRole::Digital,
+                                   .output_bytes = 0,
+                                   .input_bytes = 1,
+                                   .output_sm = 0,
+                                   .input_sm = 0,
+                                   .output_phys = 0,
+                                   .input_phys = kInTerminalPhys};
 // The mixed and TwinCAT set-ups draw from all of these: sizes a servo's 10 and 40 bytes are not,
 // output-only, input-only, and a drive of another protocol.
 constexpr SlaveModel kTerminalModels[] = {
     kDigitalOut,
     kDigitalIn,
-    {"EL2809", SlaveRole::Digital, 2, 0, 0, 0, kOutTerminalPhys, 0},
-    {"EL1809", SlaveRole::Digital, 0, 2, 0, 0, 0, kInTerminalPhys},
-    {"EL4004", SlaveRole::Analog, 8, 0, 2, 0, kRxPhys, 0},
-    {"EL3064", SlaveRole::Analog, 0, 16, 0, 3, 0, kTxPhys},
-    {"EL3102", SlaveRole::Analog, 0, 4, 0, 3, 0, kTxPhys},
-    {"EL5101", SlaveRole::Analog, 4, 6, 2, 3, kRxPhys, kTxPhys},
-    {"CiA 402 drive", SlaveRole::Drive, 12, 28, 2, 3, kRxPhys, kTxPhys},
-    {"EL6692", SlaveRole::Bridge, 32, 32, 2, 3, kRxPhys, kTxPhys},
+    {.name = "EL2809",
+     .role = SlaveRole::Digital,
+     .output_bytes = 2,
+     .input_bytes = 0,
+     .output_sm = 0,
+     .input_sm = 0,
+     .output_phys = kOutTerminalPhys,
+     .input_phys = 0},
+    {.name = "EL1809",
+     .role = SlaveRole::Digital,
+     .output_bytes = 0,
+     .input_bytes = 2,
+     .output_sm = 0,
+     .input_sm = 0,
+     .output_phys = 0,
+     .input_phys = kInTerminalPhys},
+    {.name = "EL4004",
+     .role = SlaveRole::Analog,
+     .output_bytes = 8,
+     .input_bytes = 0,
+     .output_sm = 2,
+     .input_sm = 0,
+     .output_phys = kRxPhys,
+     .input_phys = 0},
+    {.name = "EL3064",
+     .role = SlaveRole::Analog,
+     .output_bytes = 0,
+     .input_bytes = 16,
+     .output_sm = 0,
+     .input_sm = 3,
+     .output_phys = 0,
+     .input_phys = kTxPhys},
+    {.name = "EL3102",
+     .role = SlaveRole::Analog,
+     .output_bytes = 0,
+     .input_bytes = 4,
+     .output_sm = 0,
+     .input_sm = 3,
+     .output_phys = 0,
+     .input_phys = kTxPhys},
+    {.name = "EL5101",
+     .role = SlaveRole::Analog,
+     .output_bytes = 4,
+     .input_bytes = 6,
+     .output_sm = 2,
+     .input_sm = 3,
+     .output_phys = kRxPhys,
+     .input_phys = kTxPhys},
+    {.name = "CiA 402 drive",
+     .role = SlaveRole::Drive,
+     .output_bytes = 12,
+     .input_bytes = 28,
+     .output_sm = 2,
+     .input_sm = 3,
+     .output_phys = kRxPhys,
+     .input_phys = kTxPhys},
+    {.name = "EL6692",
+     .role = SlaveRole::Bridge,
+     .output_bytes = 32,
+     .input_bytes = 32,
+     .output_sm = 2,
+     .input_sm = 3,
+     .output_phys = kRxPhys,
+     .input_phys = kTxPhys},
 };
 constexpr std::uint64_t kMixSeedSalt = 0x6D69786564ULL;  // the set-up's own random stream
 
@@ -74,15 +150,15 @@ void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uin
     case SlaveRole::Servo:
       break;
     case SlaveRole::Digital:
-      putLe(out, std::uint64_t{1} << (cycle / kOutputPatternCycles % (8 * size)), size);
+      storeLe(out, std::uint64_t{1} << (cycle / kOutputPatternCycles % (8 * size)), size);
       break;
     case SlaveRole::Analog:
-      for (std::size_t c = 0; c + 2 <= size; c += 2) putLe(out + c, cycle * (c + 1) * 37, 2);
+      for (std::size_t c = 0; c + 2 <= size; c += 2) storeLe(out + c, cycle * (c + 1) * 37, 2);
       break;
     case SlaveRole::Drive:  // control word "enable operation", target position, velocity, mode
-      putLe(out, 0x000F, 2);
-      putLe(out + 2, cycle * 100, 4);
-      putLe(out + 6, 1000, 4);
+      storeLe(out, 0x000F, 2);
+      storeLe(out + 2, cycle * 100, 4);
+      storeLe(out + 6, 1000, 4);
       out[10] = 8;  // cyclic synchronous position
       out[11] = 0;
       break;
@@ -104,20 +180,20 @@ void Esc::updateTerminalInputs(std::int64_t now_ns) {
     case SlaveRole::Servo:
       break;
     case SlaveRole::Digital:
-      putLe(in, step, size);
+      storeLe(in, step, size);
       break;
     case SlaveRole::Analog:  // triangles of 16-bit values, one channel after the other
       for (std::size_t c = 0; c + 2 <= size; c += 2) {
         const std::uint64_t phase = (step + 7 * c) % 64;
-        putLe(in + c, (phase < 32 ? phase : 64 - phase) * 1000, 2);
+        storeLe(in + c, (phase < 32 ? phase : 64 - phase) * 1000, 2);
       }
       break;
     case SlaveRole::Drive:  // status word, actual position and velocity, torque, the rest zero
       std::fill(in, in + size, 0);
-      putLe(in, 0x1237, 2);
-      putLe(in + 2, us / 10, 4);
-      putLe(in + 6, 1000, 4);
-      putLe(in + 10, step % 200, 2);
+      storeLe(in, 0x1237, 2);
+      storeLe(in + 2, us / 10, 4);
+      storeLe(in + 6, 1000, 4);
+      storeLe(in + 10, step % 200, 2);
       break;
     case SlaveRole::Bridge:
       for (std::size_t i = 0; i < size; ++i) in[i] = static_cast<std::uint8_t>(step + 3 * i);
@@ -126,15 +202,15 @@ void Esc::updateTerminalInputs(std::int64_t now_ns) {
 }
 
 std::uint16_t Esc::station() const {
-  return static_cast<std::uint16_t>(getLe(&mem[ecat::kRegStationAddress], 2));
+  return static_cast<std::uint16_t>(loadLe(&mem[ecat::kRegStationAddress], 2));
 }
 bool Esc::processData() const {
   return state == kSafeOp || state == kOp;
 }
 void Esc::publishAlStatus() {
-  putLe(&mem[ecat::kRegAlStatus],
-        static_cast<std::uint16_t>(state | (error_ ? ecat::kAlErrorBit : 0)), 2);
-  putLe(&mem[ecat::kRegAlStatusCode], code_, 2);
+  storeLe(&mem[ecat::kRegAlStatus],
+          static_cast<std::uint16_t>(state | (error_ ? ecat::kAlErrorBit : 0)), 2);
+  storeLe(&mem[ecat::kRegAlStatusCode], code_, 2);
 }
 void Esc::powerUpError() {
   error_ = true;
@@ -145,15 +221,15 @@ void Esc::powerUpError() {
 void Esc::startInOp(std::uint16_t station_address) {
   state = kOp;
   publishAlStatus();
-  putLe(&mem[ecat::kRegStationAddress], station_address, 2);
+  storeLe(&mem[ecat::kRegStationAddress], station_address, 2);
   std::size_t f = 0;
   auto fmmu = [&](std::uint32_t logical, std::size_t length, std::uint16_t phys,
                   std::uint8_t type) {
     std::uint8_t* p = &mem[ecat::kRegFmmu0 + ecat::kFmmuStride * f++];
-    putLe(p + ecat::kFmmuLogicalAt, logical, 4);
-    putLe(p + ecat::kFmmuLengthAt, length, 2);
+    storeLe(p + ecat::kFmmuLogicalAt, logical, 4);
+    storeLe(p + ecat::kFmmuLengthAt, length, 2);
     p[ecat::kFmmuStopBitAt] = 7;
-    putLe(p + ecat::kFmmuPhysicalAt, phys, 2);
+    storeLe(p + ecat::kFmmuPhysicalAt, phys, 2);
     p[ecat::kFmmuTypeAt] = type;
     p[ecat::kFmmuActivateAt] = 1;
   };
@@ -216,7 +292,7 @@ void Esc::writeRegisters(const RingDatagram& dg) {
     mem[reg] = dg.data[i];
   }
   if (dg.ado <= ecat::kRegAlControl && dg.ado + dg.data.size() >= ecat::kRegAlControl + 2u) {
-    onAlControl(static_cast<std::uint16_t>(getLe(&mem[ecat::kRegAlControl], 2)));
+    onAlControl(static_cast<std::uint16_t>(loadLe(&mem[ecat::kRegAlControl], 2)));
   }
 }
 
@@ -228,11 +304,11 @@ std::uint16_t Esc::logicalAccess(RingDatagram& dg) {
   for (std::size_t f = 0; f < kActiveFmmus; ++f) {
     const std::uint8_t* fmmu = &mem[ecat::kRegFmmu0 + ecat::kFmmuStride * f];
     if ((fmmu[ecat::kFmmuActivateAt] & 1) == 0) continue;
-    const std::uint64_t lstart = getLe(fmmu + ecat::kFmmuLogicalAt, 4);
-    const std::uint64_t lend = lstart + getLe(fmmu + ecat::kFmmuLengthAt, 2);
+    const std::uint64_t lstart = loadLe(fmmu + ecat::kFmmuLogicalAt, 4);
+    const std::uint64_t lend = lstart + loadLe(fmmu + ecat::kFmmuLengthAt, 2);
     const std::uint64_t from = std::max(start, lstart), to = std::min(end, lend);
     if (from >= to) continue;
-    const std::size_t phys = getLe(fmmu + ecat::kFmmuPhysicalAt, 2) + (from - lstart);
+    const std::size_t phys = loadLe(fmmu + ecat::kFmmuPhysicalAt, 2) + (from - lstart);
     const std::size_t offset = from - start;
     const std::size_t count = to - from;
     if (phys + count > kEscMemory) continue;
@@ -490,7 +566,7 @@ std::vector<AxisConfig> Segment::axisLayout() const {
 
 void Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns) {
   for (Esc& esc : escs) {
-    putLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(now_ns - kEpochNs), 8);
+    storeLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(now_ns - kEpochNs), 8);
     for (RingDatagram& dg : frame) esc.process(dg);
     esc.endOfFrame();
   }

@@ -78,17 +78,13 @@ void CoePdoObjects::onMailbox(const ByteReader& bytes, std::size_t offset, std::
                                                          ecat::kSdoUnusedBytesMask)
                                  : ecat::kSdoDataSize;
     if (data + size > end) return;
-    std::uint32_t value = 0;
-    for (std::size_t i = 0; i < size; ++i) {
-      auto b = bytes.u8(data + i);
-      if (!b) return;
-      value |= std::uint32_t{*b} << (8 * i);
-    }
+    const auto value = bytes.le(data, size);
+    if (!value) return;
     if (*command & ecat::kSdoCompleteAccess) {
       storeComplete(*index, *sub, ByteReader(bytes.data(), std::min(end, bytes.size())), data,
                     size);
     } else {
-      store(*index, *sub, value);
+      store(*index, *sub, static_cast<std::uint32_t>(*value));
     }
     return;
   }
@@ -102,13 +98,9 @@ void CoePdoObjects::onMailbox(const ByteReader& bytes, std::size_t offset, std::
   if (*command & ecat::kSdoCompleteAccess) {
     storeComplete(*index, *sub, bounded, first, here);
   } else if (here >= 1 && here <= 4) {
-    std::uint32_t value = 0;
-    for (std::size_t i = 0; i < here; ++i) {
-      auto b = bounded.u8(first + i);
-      if (!b) return;
-      value |= std::uint32_t{*b} << (8 * i);
-    }
-    store(*index, *sub, value);
+    const auto value = bounded.le(first, here);
+    if (!value) return;
+    store(*index, *sub, static_cast<std::uint32_t>(*value));
   }
 }
 

@@ -7,6 +7,8 @@
 #include <cstring>
 #include <optional>
 
+#include "ncservo/base/little_endian.hpp"
+
 namespace ncservo {
 
 // A fixed-size record of the captured bytes whose bounds were checked once (a datagram header):
@@ -39,15 +41,7 @@ class ByteRecord {
   template <std::size_t Offset, std::size_t Count>
   std::uint64_t le() const {
     static_assert(Offset + Count <= N, "field outside the record");
-    std::uint64_t value = 0;
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    std::memcpy(&value, bytes_ + Offset, Count);
-#else
-    for (std::size_t i = 0; i < Count; ++i) {
-      value |= static_cast<std::uint64_t>(bytes_[Offset + i]) << (8 * i);
-    }
-#endif
-    return value;
+    return loadLe<Count>(bytes_ + Offset);
   }
 
   const std::uint8_t* bytes_;
@@ -76,7 +70,7 @@ class ByteReader {
   }
   std::optional<std::uint16_t> le16(std::size_t offset) const {
     if (!has(offset, 2)) return std::nullopt;
-    return static_cast<std::uint16_t>(loadLe(offset, 2));
+    return static_cast<std::uint16_t>(loadLe<2>(data_ + offset));
   }
   std::optional<std::uint16_t> be16(std::size_t offset) const {
     if (!has(offset, 2)) return std::nullopt;
@@ -84,11 +78,16 @@ class ByteReader {
   }
   std::optional<std::uint32_t> le32(std::size_t offset) const {
     if (!has(offset, 4)) return std::nullopt;
-    return static_cast<std::uint32_t>(loadLe(offset, 4));
+    return static_cast<std::uint32_t>(loadLe<4>(data_ + offset));
   }
   std::optional<std::uint64_t> le64(std::size_t offset) const {
     if (!has(offset, 8)) return std::nullopt;
-    return loadLe(offset, 8);
+    return loadLe<8>(data_ + offset);
+  }
+  // The `count` (at most 8) bytes at `offset` as a little-endian number.
+  std::optional<std::uint64_t> le(std::size_t offset, std::size_t count) const {
+    if (count > 8 || !has(offset, count)) return std::nullopt;
+    return loadLe(data_ + offset, count);
   }
   std::optional<float> leFloat(std::size_t offset) const {
     auto bits = le32(offset);
@@ -99,19 +98,6 @@ class ByteReader {
   }
 
  private:
-  // Only after a bounds check. On a little-endian host one load (memcpy of a constant count).
-  std::uint64_t loadLe(std::size_t offset, std::size_t count) const {
-    std::uint64_t value = 0;
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    std::memcpy(&value, data_ + offset, count);
-#else
-    for (std::size_t i = 0; i < count; ++i) {
-      value |= static_cast<std::uint64_t>(data_[offset + i]) << (8 * i);
-    }
-#endif
-    return value;
-  }
-
   const std::uint8_t* data_;
   std::size_t size_;
 };

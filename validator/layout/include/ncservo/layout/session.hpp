@@ -1,5 +1,6 @@
-// One capture's process data, frame by frame: layout and copy (Decoder), the PDO values in each
-// frame, and each axis's latest values and drive state. Shared by the CLI and the plugin.
+// One capture's process data, frame by frame, for a caller that shows values rather than judges
+// them (`decode`): layout and copy (Decoder), the PDO values in each frame, and each axis's latest
+// values and drive state. The validator places and reads the frames itself (validator.hpp).
 #pragma once
 
 #include <array>
@@ -75,16 +76,12 @@ class Session {
     decoder_.placeAxes(frame, bytes, decode_);
   }
   const Decoder& decoder() const { return decoder_; }
-  // A caller with its own model of each axis (the validator) keeps the states itself.
-  void trackStates(bool on) { track_states_ = on; }
-  void setState(std::size_t i, std::optional<DriveState> state) { view_.axes[i].state = state; }
 
  private:
   Decoder decoder_;
   FrameDecode decode_;
   FrameView view_;
   std::vector<PdoValues> latest_;  // per axis index
-  bool track_states_ = true;
 };
 
 }  // namespace ncservo

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "ncservo/base/byte_reader.hpp"
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
 
@@ -56,20 +57,6 @@ inline constexpr std::array<std::uint8_t, kWordCount> kWordOffsets = [] {
   return offsets;
 }();
 
-// Little-endian load of N bytes from a place already bounds-checked.
-template <std::size_t N>
-std::uint64_t loadLe(const std::uint8_t* p) {
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  std::uint64_t value = 0;
-  std::memcpy(&value, p, N);
-  return value;
-#else
-  std::uint64_t value = 0;
-  for (std::size_t i = 0; i < N; ++i) value |= static_cast<std::uint64_t>(p[i]) << (8 * i);
-  return value;
-#endif
-}
-
 // Reads every word of one PDO, unrolled at compile time from kWords.
 template <Pdo P, std::size_t... I>
 void readWords(const std::uint8_t* base, PdoValues& out, std::index_sequence<I...>) {
@@ -95,12 +82,6 @@ inline bool readPdo(Pdo pdo, const ByteReader& bytes, std::size_t offset, PdoVal
 }
 
 namespace detail {
-// Little-endian store of N bytes to a place already bounds-checked.
-template <std::size_t N>
-void storeLe(std::uint8_t* p, std::uint64_t value) {
-  for (std::size_t i = 0; i < N; ++i) p[i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-
 // Writes every word of one PDO, unrolled at compile time from kWords (readWords' mirror).
 template <Pdo P, std::size_t... I>
 void writeWords(const PdoValues& values, std::uint8_t* base, std::index_sequence<I...>) {
@@ -125,11 +106,11 @@ inline std::uint64_t loadWordAt(const std::uint8_t* pdo, Word w) {
   const std::uint8_t* p = pdo + detail::kWordOffsets[i];
   switch (kWords[i].size) {
     case 2:
-      return detail::loadLe<2>(p);
+      return loadLe<2>(p);
     case 4:
-      return detail::loadLe<4>(p);
+      return loadLe<4>(p);
     default:
-      return detail::loadLe<8>(p);
+      return loadLe<8>(p);
   }
 }
 

@@ -38,18 +38,18 @@ struct WordDef {
 
 // In wire order within each PDO.
 inline constexpr std::array<WordDef, kWordCount> kWords{{
-    {Word::Ssp, Pdo::Rx, 4, WireType::I32, "SSP"},
-    {Word::Scw, Pdo::Rx, 4, WireType::U32, "SCW"},
-    {Word::ExtCode, Pdo::Rx, 2, WireType::I16, "ExtCode"},
-    {Word::ActPos, Pdo::Tx, 8, WireType::I64, "ActPos"},
-    {Word::Ssw, Pdo::Tx, 4, WireType::U32, "SSW"},
-    {Word::Sew, Pdo::Tx, 4, WireType::U32, "SEW"},
-    {Word::MsgCode, Pdo::Tx, 4, WireType::I32, "MsgCode"},
-    {Word::MsgData, Pdo::Tx, 4, WireType::F32, "MsgData"},
-    {Word::ExtData1, Pdo::Tx, 4, WireType::F32, "ExtData1"},
-    {Word::ExtData2, Pdo::Tx, 4, WireType::F32, "ExtData2"},
-    {Word::ExtData3, Pdo::Tx, 4, WireType::F32, "ExtData3"},
-    {Word::ExtData4, Pdo::Tx, 4, WireType::F32, "ExtData4"},
+    {.word = Word::Ssp, .pdo = Pdo::Rx, .size = 4, .type = WireType::I32, .name = "SSP"},
+    {.word = Word::Scw, .pdo = Pdo::Rx, .size = 4, .type = WireType::U32, .name = "SCW"},
+    {.word = Word::ExtCode, .pdo = Pdo::Rx, .size = 2, .type = WireType::I16, .name = "ExtCode"},
+    {.word = Word::ActPos, .pdo = Pdo::Tx, .size = 8, .type = WireType::I64, .name = "ActPos"},
+    {.word = Word::Ssw, .pdo = Pdo::Tx, .size = 4, .type = WireType::U32, .name = "SSW"},
+    {.word = Word::Sew, .pdo = Pdo::Tx, .size = 4, .type = WireType::U32, .name = "SEW"},
+    {.word = Word::MsgCode, .pdo = Pdo::Tx, .size = 4, .type = WireType::I32, .name = "MsgCode"},
+    {.word = Word::MsgData, .pdo = Pdo::Tx, .size = 4, .type = WireType::F32, .name = "MsgData"},
+    {.word = Word::ExtData1, .pdo = Pdo::Tx, .size = 4, .type = WireType::F32, .name = "ExtData1"},
+    {.word = Word::ExtData2, .pdo = Pdo::Tx, .size = 4, .type = WireType::F32, .name = "ExtData2"},
+    {.word = Word::ExtData3, .pdo = Pdo::Tx, .size = 4, .type = WireType::F32, .name = "ExtData3"},
+    {.word = Word::ExtData4, .pdo = Pdo::Tx, .size = 4, .type = WireType::F32, .name = "ExtData4"},
 }};
 
 constexpr const WordDef& wordDef(Word w) {

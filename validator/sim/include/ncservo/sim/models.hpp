@@ -268,6 +268,9 @@ class NcAxis {
   };
   void runEvents(std::int64_t now_ns);
   void enter(Phase phase, std::int64_t now_ns);
+  void followDrive(const TxPdo& inputs, std::int64_t now_ns);
+  // This cycle's set point and control word; `dt` seconds since the last cycle.
+  RxPdo outputs(std::int64_t now_ns, double dt);
 
   bool incremental_;
   std::vector<NcEvent> events_;  // sorted by time, newest last

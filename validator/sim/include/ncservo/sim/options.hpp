@@ -30,12 +30,23 @@ struct ImageStyleName {
   const char* summary;
 };
 inline constexpr ImageStyleName kImageStyles[] = {
-    {"soem", ImageStyle::Soem, "default", "one LRW, all outputs then all inputs"},
-    {"etherlab", ImageStyle::EtherLab, "interleaved", "one LRW, per slave its outputs then inputs"},
-    {"mixed", ImageStyle::Mixed, nullptr,
-     "one LRW among terminals and drives of other sizes, set-up and order drawn from the seed"},
-    {"twincat", ImageStyle::TwinCat, nullptr,
-     "LWRs of an output area, LRDs of an input area apart, a BRD of the AL status"},
+    {.name = "soem",
+     .style = ImageStyle::Soem,
+     .layout_alias = "default",
+     .summary = "one LRW, all outputs then all inputs"},
+    {.name = "etherlab",
+     .style = ImageStyle::EtherLab,
+     .layout_alias = "interleaved",
+     .summary = "one LRW, per slave its outputs then inputs"},
+    {.name = "mixed",
+     .style = ImageStyle::Mixed,
+     .layout_alias = nullptr,
+     .summary =
+         "one LRW among terminals and drives of other sizes, set-up and order drawn from the seed"},
+    {.name = "twincat",
+     .style = ImageStyle::TwinCat,
+     .layout_alias = nullptr,
+     .summary = "LWRs of an output area, LRDs of an input area apart, a BRD of the AL status"},
 };
 // By its name or its `--layout` alias.
 std::optional<ImageStyle> imageStyleFromName(std::string_view name);

@@ -84,21 +84,21 @@ struct CommandFacts {
   bool writes;
 };
 inline constexpr std::array<CommandFacts, 15> kCommands{{
-    {"NOP", Addressing::None, false, false},
-    {"APRD", Addressing::AutoIncrement, true, false},
-    {"APWR", Addressing::AutoIncrement, false, true},
-    {"APRW", Addressing::AutoIncrement, true, true},
-    {"FPRD", Addressing::Configured, true, false},
-    {"FPWR", Addressing::Configured, false, true},
-    {"FPRW", Addressing::Configured, true, true},
-    {"BRD", Addressing::Broadcast, true, false},
-    {"BWR", Addressing::Broadcast, false, true},
-    {"BRW", Addressing::Broadcast, true, true},
-    {"LRD", Addressing::Logical, true, false},
-    {"LWR", Addressing::Logical, false, true},
-    {"LRW", Addressing::Logical, true, true},
-    {"ARMW", Addressing::AutoIncrement, true, false},
-    {"FRMW", Addressing::Configured, true, false},
+    {.name = "NOP", .addressing = Addressing::None, .reads = false, .writes = false},
+    {.name = "APRD", .addressing = Addressing::AutoIncrement, .reads = true, .writes = false},
+    {.name = "APWR", .addressing = Addressing::AutoIncrement, .reads = false, .writes = true},
+    {.name = "APRW", .addressing = Addressing::AutoIncrement, .reads = true, .writes = true},
+    {.name = "FPRD", .addressing = Addressing::Configured, .reads = true, .writes = false},
+    {.name = "FPWR", .addressing = Addressing::Configured, .reads = false, .writes = true},
+    {.name = "FPRW", .addressing = Addressing::Configured, .reads = true, .writes = true},
+    {.name = "BRD", .addressing = Addressing::Broadcast, .reads = true, .writes = false},
+    {.name = "BWR", .addressing = Addressing::Broadcast, .reads = false, .writes = true},
+    {.name = "BRW", .addressing = Addressing::Broadcast, .reads = true, .writes = true},
+    {.name = "LRD", .addressing = Addressing::Logical, .reads = true, .writes = false},
+    {.name = "LWR", .addressing = Addressing::Logical, .reads = false, .writes = true},
+    {.name = "LRW", .addressing = Addressing::Logical, .reads = true, .writes = true},
+    {.name = "ARMW", .addressing = Addressing::AutoIncrement, .reads = true, .writes = false},
+    {.name = "FRMW", .addressing = Addressing::Configured, .reads = true, .writes = false},
 }};
 static_assert(kCommands.size() == kFrmw + 1, "one row per command, indexed by its code");
 

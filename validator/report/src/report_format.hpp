@@ -1,0 +1,51 @@
+// What the report formats share (report.cpp) and the writers of the format table, one file per
+// format: report_text.cpp, report_json.cpp (with the JSON that JSON Lines reuses),
+// report_jsonl.cpp, report_junit.cpp, report_sarif.cpp, and html_report.cpp (declared in
+// report.hpp).
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "ncservo/report/report.hpp"
+
+namespace ncservo::cli::detail {
+
+using Json = nlohmann::ordered_json;
+
+// The project's homepage (CMakeLists.txt): SARIF's informationUri, and the base of each rule's
+// helpUri.
+inline constexpr const char* kRepositoryUri = NCSERVO_HOMEPAGE_URL;
+
+// The axis's configured name, or "axisN".
+std::string axisName(const CaptureReport& r, std::uint16_t axis);
+// Seconds since the capture's first frame, and the time in UTC at the capture's precision.
+double seconds(const CaptureReport& r, const Stamp& at);
+std::string utcOf(const CaptureReport& r, const Stamp& at);
+
+// The JSON of one finding, one capture, and the parts JSON Lines repeats (report_json.cpp).
+Json findingJson(const CaptureReport& r, const Finding& f);
+Json notJudgedJson(const CaptureReport& r);
+Json truncationJson(const Truncation& t);
+Json segmentsJson(const CaptureReport& r);
+Json timingJson(const CaptureReport& r);
+Json captureJson(const CaptureReport& r, Verdict verdict);
+
+// The writers of the format table, by file: report_text.cpp
+void writeTextHeading(const ReportSink& sink, const CaptureReport& r);
+void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);
+void writeTextSummary(const ReportSink& sink, const CaptureReport& r);
+void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+// report_json.cpp
+void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+// report_jsonl.cpp
+void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);
+void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r);
+// report_junit.cpp
+void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+// report_sarif.cpp
+void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+
+}  // namespace ncservo::cli::detail

@@ -1,0 +1,257 @@
+// `validate --format json`: one document for all captures; its parts are JSON Lines' too.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <optional>
+
+#include "report_format.hpp"
+
+namespace ncservo::cli::detail {
+
+namespace {
+
+std::string hex16(std::uint16_t v) {
+  return fmt::format("0x{:04X}", v);
+}
+std::string hex32(std::uint32_t v) {
+  return fmt::format("0x{:08X}", v);
+}
+
+Json optionalNumber(const std::optional<double>& v) {
+  return v ? Json(*v) : Json(nullptr);
+}
+
+// What the ESL probe headers said (docs/protocol.md §8), when there were any.
+Json probeJson(const CaptureReport& r) {
+  const ProbeCounts& p = r.probe;
+  Json j{{"frames", p.probed},
+         {"timestamped", p.stamped},
+         {"unstamped", p.unstamped},
+         {"first_unstamped_frame", p.first_unstamped ? Json(p.first_unstamped) : Json(nullptr)},
+         {"crc_errors", p.crc_errors},
+         {"first_crc_error_frame", p.first_crc_error ? Json(p.first_crc_error) : Json(nullptr)},
+         {"alignment_errors", p.alignment_errors}};
+  if (!r.probe_note.empty()) j["note"] = r.probe_note;
+  return j;
+}
+
+// Microseconds, to the nanosecond.
+double microseconds(double ns) {
+  return std::round(ns) / 1000.0;
+}
+
+Json seriesJson(const std::optional<SeriesSummary>& series) {
+  if (!series) return nullptr;
+  const SeriesSummary& s = *series;
+  Json histogram = Json::array();
+  for (const HistogramBin& bin : s.histogram) {
+    histogram.push_back({{"from_us", microseconds(static_cast<double>(bin.from_ns))},
+                         {"to_us", microseconds(static_cast<double>(bin.to_ns))},
+                         {"count", bin.count}});
+  }
+  auto us = [](std::int64_t ns) { return microseconds(static_cast<double>(ns)); };
+  return {{"count", s.count},
+          {"min", us(s.min_ns)},
+          {"median", us(s.median_ns)},
+          {"mean", microseconds(s.mean_ns)},
+          {"stddev", microseconds(s.stddev_ns)},
+          {"p1", us(s.p1_ns)},
+          {"p99", us(s.p99_ns)},
+          {"p999", us(s.p999_ns)},
+          {"max", us(s.max_ns)},
+          {"histogram", std::move(histogram)},
+          {"under", s.under},
+          {"over", s.over}};
+}
+
+Json worstJson(const std::vector<TimedFrames>& worst, const char* since_key,
+               const char* value_key) {
+  Json list = Json::array();
+  for (const TimedFrames& w : worst) {
+    list.push_back({{"frame", w.frame},
+                    {since_key, w.since_frame},
+                    {value_key, microseconds(static_cast<double>(w.ns))}});
+  }
+  return list;
+}
+
+// The process-data datagrams whose cyclic frames the bus rules judged (docs/timing.md).
+Json cyclicDatagramsJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const CyclicDatagram& d : r.cyclic_datagrams) {
+    list.push_back({{"command", ecat::commandName(d.command)},
+                    {"address", hex32(d.address)},
+                    {"length", d.length},
+                    {"frames", d.frames}});
+  }
+  return list;
+}
+
+// `timing.dc` (docs/timing.md): one entry per slave whose distributed clock was read.
+Json dcJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const DcStation& s : r.dc) {
+    Json difference = nullptr;
+    if (s.last_difference_ns) {
+      difference = {{"last", *s.last_difference_ns},
+                    {"max_abs", s.max_abs_difference_ns},
+                    {"reads", s.difference_reads}};
+    }
+    auto ppm = [](const std::optional<double>& v) {
+      // To the thousandth of a ppm; + 0.0 writes a negative zero as 0.0.
+      return v ? Json(std::round(*v * 1000.0) / 1000.0 + 0.0) : Json(nullptr);
+    };
+    list.push_back({{"station", s.slave.station ? Json(hex16(*s.slave.station)) : Json(nullptr)},
+                    {"ring_position", s.slave.position ? Json(*s.slave.position) : Json(nullptr)},
+                    {"reference", s.reference},
+                    {"samples", s.time_reads},
+                    {"drift_ppm", ppm(s.drift_ppm)},
+                    {"drift_first_half_ppm", ppm(s.first_half_ppm)},
+                    {"drift_second_half_ppm", ppm(s.second_half_ppm)},
+                    {"systime_diff_ns", std::move(difference)},
+                    {"settled_frame", s.settled_frame ? Json(*s.settled_frame) : Json(nullptr)}});
+  }
+  return list;
+}
+
+}  // namespace
+
+Json findingJson(const CaptureReport& r, const Finding& f) {
+  const RuleDef& rule = ruleDef(f.rule);
+  Json j;
+  j["rule"] = rule.code;
+  j["slug"] = rule.slug;
+  j["severity"] = severityName(f.severity);
+  j["axis"] = f.axis ? Json(*f.axis) : Json(nullptr);
+  j["axis_name"] = f.axis ? Json(axisName(r, *f.axis)) : Json(nullptr);
+  j["frame"] = f.at.frame;
+  j["since_frame"] = f.since.frame;
+  j["time"] = seconds(r, f.at);
+  j["time_utc"] = utcOf(r, f.at);
+  j["message"] = f.message;
+  return j;
+}
+
+Json notJudgedJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const NotJudged& n : r.coverage.not_judged) {
+    list.push_back({{"rule", ruleDef(n.rule).code},
+                    {"axis", n.axis ? Json(*n.axis) : Json(nullptr)},
+                    {"reason", n.reason}});
+  }
+  return list;
+}
+
+Json truncationJson(const Truncation& t) {
+  return {{"frames", t.snapped},
+          {"first_frame", t.first_snapped ? Json(t.first_snapped) : Json(nullptr)},
+          {"cut_pdo_frames", t.cut_frames},
+          {"first_cut_pdo_frame", t.first_cut ? Json(t.first_cut) : Json(nullptr)},
+          {"axes", t.axes}};
+}
+
+// The capture's segments (docs/timing.md#rule-time), times in the capture's own seconds.
+Json segmentsJson(const CaptureReport& r) {
+  Json segments = Json::array();
+  for (const CaptureSegment& s : r.segments) {
+    segments.push_back({{"first_frame", s.first_frame},
+                        {"last_frame", s.last_frame},
+                        {"start", seconds(r, Stamp{s.first_frame, s.start_ns})},
+                        {"end", seconds(r, Stamp{s.last_frame, s.end_ns})}});
+  }
+  return segments;
+}
+
+// `timing` (docs/timing.md, docs/cli.md).
+Json timingJson(const CaptureReport& r) {
+  Json timing{
+      {"timestamps", timestampSourceName(r.timestamps)},
+      {"resolution_ns", timestampResolutionNs(r.timestamps, r.timestamp_digits)},
+      {"cycle_us", seriesJson(r.timing.cycle)},
+      {"latency_us", seriesJson(r.timing.latency)},
+      {"worst_cycles", worstJson(r.timing.worst_cycles, "since_frame", "interval_us")},
+      {"worst_latencies", worstJson(r.timing.worst_latencies, "master_frame", "latency_us")},
+      {"segments", segmentsJson(r)},
+      {"cyclic_datagrams", cyclicDatagramsJson(r)}};
+  if (r.unfollowed_frames > 0) timing["frames_not_followed"] = r.unfollowed_frames;
+  if (r.segment_count > r.segments.size())
+    timing["segments_omitted"] = r.segment_count - r.segments.size();
+  timing["dc"] = dcJson(r);
+  return timing;
+}
+
+Json captureJson(const CaptureReport& r, Verdict verdict) {
+  Json c;
+  c["path"] = r.path;
+  c["verdict"] = verdictName(verdict);
+  if (!r.coverage.complete()) c["reason"] = r.coverage.reason;
+  if (!r.coverage.missing.empty()) c["missing_axes"] = r.coverage.missing;
+  c["frames"] = r.frames;
+  c["cycles"] = r.cycles;
+  c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},
+                        {"p99", optionalNumber(r.cycle_time.p99_us)},
+                        {"max", optionalNumber(r.cycle_time.max_us)}};
+  Json layout_axes = Json::array();
+  for (const AxisInfo& info : r.layout) {
+    Json a{{"index", info.index}, {"name", info.name}};
+    if (info.has_station) a["station"] = hex16(info.station);
+    a["outputs"] = hex32(info.logical ? info.outputs : info.sm_outputs);
+    a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
+    layout_axes.push_back(std::move(a));
+  }
+  c["timing"] = timingJson(r);
+  if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
+  if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
+  if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
+  c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
+  if (r.startup_frames_cut > 0) c["layout"]["startup_frames_cut"] = r.startup_frames_cut;
+  Json findings = Json::array();
+  for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
+  c["findings"] = std::move(findings);
+  Json axes = Json::array();
+  for (const AxisReport& a : r.axes) {
+    Json timeline = Json::array();
+    for (const StateChange& s : a.timeline) {
+      timeline.push_back({{"state", driveStateName(s.state)},
+                          {"transition", s.transition ? Json(s.transition) : Json(nullptr)},
+                          {"frame", s.at.frame},
+                          {"time", seconds(r, s.at)},
+                          {"time_utc", utcOf(r, s.at)}});
+    }
+    Json history = Json::array();
+    for (const ErrorHistoryEntry& e : a.error_history) {
+      history.push_back({{"code", e.cause->display},
+                         {"canopen", hex16(e.cause->canopen)},
+                         {"frame", e.at.frame},
+                         {"time", seconds(r, e.at)},
+                         {"time_utc", utcOf(r, e.at)}});
+    }
+    Json axis{{"index", a.index},
+              {"name", a.name},
+              {"state", a.state ? Json(driveStateName(*a.state)) : Json(nullptr)},
+              {"state_timeline", std::move(timeline)}};
+    if (a.timeline_omitted > 0) axis["state_timeline_omitted"] = a.timeline_omitted;
+    axis["error_history"] = std::move(history);
+    axis["telegram_failures"] = a.telegram_failures;
+    axis["servo_ready_mode"] = a.ready_mode ? Json(*a.ready_mode) : Json(nullptr);
+    axes.push_back(std::move(axis));
+  }
+  c["axes"] = std::move(axes);
+  c["summary"] = {{"error", r.count(Severity::Error)},
+                  {"warning", r.count(Severity::Warning)},
+                  {"info", r.count(Severity::Info)}};
+  if (r.error) c["error"] = *r.error;
+  return c;
+}
+
+void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
+  Json j;
+  j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
+  Json captures = Json::array();
+  for (const CaptureReport& r : reports)
+    captures.push_back(captureJson(r, verdictOf(sink.policy, r)));
+  j["captures"] = std::move(captures);
+  std::fputs((j.dump(2) + "\n").c_str(), sink.out);
+}
+
+}  // namespace ncservo::cli::detail

@@ -1,0 +1,35 @@
+// `validate --format jsonl`: one line per finding as it comes, and each capture's closing lines.
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "report_format.hpp"
+
+namespace ncservo::cli::detail {
+
+void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+  Json j;
+  j["capture"] = r.path;
+  j.update(findingJson(r, f));
+  std::fputs((j.dump() + "\n").c_str(), sink.out);
+}
+
+// JSON Lines: each capture closes with its timing line; one where not every axis was checked
+// with a line that says so, and so does one with several segments.
+void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
+  std::fputs((Json{{"capture", r.path}, {"timing", timingJson(r)}}.dump() + "\n").c_str(),
+             sink.out);
+  if (r.coverage.complete() && r.segment_count <= 1 && r.coverage.not_judged.empty() &&
+      !r.truncation.any()) {
+    return;
+  }
+  Json j{{"capture", r.path}, {"verdict", verdictName(verdictOf(sink.policy, r))}};
+  if (!r.coverage.complete()) j["reason"] = r.coverage.reason;
+  if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
+  if (r.segment_count > 1) j["segments"] = segmentsJson(r);
+  if (r.truncation.any()) j["truncated"] = truncationJson(r.truncation);
+  if (!r.coverage.not_judged.empty()) j["not_judged"] = notJudgedJson(r);
+  std::fputs((j.dump() + "\n").c_str(), sink.out);
+}
+
+}  // namespace ncservo::cli::detail

@@ -1,0 +1,122 @@
+// `validate --format sarif`: SARIF 2.1.0, one run, a result per finding, a notification per
+// capture not read to its end or not fully checked.
+#include <fmt/format.h>
+
+#include "report_format.hpp"
+
+namespace ncservo::cli::detail {
+
+namespace {
+
+const char* sarifLevel(Severity s) {
+  switch (s) {
+    case Severity::Error:
+      return "error";
+    case Severity::Warning:
+      return "warning";
+    case Severity::Info:
+      return "note";
+  }
+  return "note";
+}
+
+// A capture is a notification, not a result (SARIF 2.1.0 §3.58), where it could not be read to its
+// end or not every axis was checked: nothing there was found, nor shown to be right.
+void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_t artifact,
+                      Json& notifications) {
+  const Json where = {
+      {{"physicalLocation", {{"artifactLocation", {{"uri", r.path}, {"index", artifact}}}}}}};
+  if (r.error) {
+    notifications.push_back({{"descriptor", {{"id", "UNREADABLE"}}},
+                             {"level", "error"},
+                             {"message", {{"text", fmt::format("{}: {}", r.path, *r.error)}}},
+                             {"locations", where}});
+  }
+  if (!r.coverage.complete()) {
+    notifications.push_back(
+        {{"descriptor", {{"id", "NO-SERVO"}}},
+         {"level", verdictOf(sink.policy, r) == Verdict::NoServo ? "error" : "note"},
+         {"message", {{"text", fmt::format("{}: NO SERVO: {}", r.path, r.coverage.reason)}}},
+         {"locations", where}});
+  }
+}
+
+// A finding's place: the capture, the region of the file that stores its frame where that is
+// known (a pcap has no lines), and the frame as a logical location (an element of the capture).
+Json sarifLocation(const CaptureReport& r, std::size_t artifact, const Finding& f) {
+  Json physical{{"artifactLocation", {{"uri", r.path}, {"index", artifact}}}};
+  const auto stored = std::lower_bound(r.frame_spans.begin(), r.frame_spans.end(), f.at.frame,
+                                       [](const std::pair<std::uint64_t, RecordSpan>& s,
+                                          std::uint64_t frame) { return s.first < frame; });
+  if (stored != r.frame_spans.end() && stored->first == f.at.frame) {
+    physical["region"] = {{"byteOffset", stored->second.offset},
+                          {"byteLength", stored->second.length}};
+  }
+  const std::string frame = fmt::format("frame {}", f.at.frame);
+  return {{"physicalLocation", std::move(physical)},
+          {"logicalLocations",
+           {{{"name", frame},
+             {"fullyQualifiedName", fmt::format("{}/{}", r.path, frame)},
+             {"kind", "element"}}}}};
+}
+
+}  // namespace
+
+void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
+  Json rules = Json::array();
+  for (const RuleDef& rule : kRules) {
+    rules.push_back({{"id", rule.code},
+                     {"name", rule.slug},
+                     {"shortDescription", {{"text", rule.summary}}},
+                     {"helpUri", ruleHelpUri(rule)},
+                     {"defaultConfiguration", {{"level", sarifLevel(rule.severity)}}},
+                     {"properties", {{"party", partyName(rule.party)}, {"clause", rule.clause}}}});
+  }
+  Json results = Json::array();
+  Json artifacts = Json::array();
+  Json notifications = Json::array();
+  bool all_read = true;
+  for (std::size_t c = 0; c < reports.size(); ++c) {
+    const CaptureReport& r = reports[c];
+    artifacts.push_back({{"location", {{"uri", r.path}}}});
+    addNotifications(sink, r, c, notifications);
+    all_read = all_read && !r.error;
+    for (const Finding& f : r.findings) {
+      const RuleDef& rule = ruleDef(f.rule);
+      const std::string axis = axisLabel(r, f.axis);
+      results.push_back(
+          {{"ruleId", rule.code},
+           {"ruleIndex", static_cast<std::size_t>(&rule - kRules.data())},
+           {"level", sarifLevel(f.severity)},
+           {"message", {{"text", fmt::format("{} frame {}: {}", axis, f.at.frame, f.message)}}},
+           {"locations", {sarifLocation(r, c, f)}},
+           {"partialFingerprints",
+            {{"ncservoFinding/v1", fmt::format("{}:{}:{}", rule.code, axis, f.since.frame)}}},
+           {"properties",
+            {{"frame", f.at.frame},
+             {"since_frame", f.since.frame},
+             {"time", seconds(r, f.at)},
+             {"time_utc", utcOf(r, f.at)},
+             {"axis", f.axis ? Json(*f.axis) : Json(nullptr)},
+             {"axis_name", f.axis ? Json(axis) : Json(nullptr)}}}});
+    }
+  }
+  // executionSuccessful (§3.20.14): false where a capture could not be read (exit status 3).
+  Json invocation{{"executionSuccessful", all_read}};
+  if (!notifications.empty()) invocation["toolExecutionNotifications"] = std::move(notifications);
+  Json sarif{{"$schema", "https://json.schemastore.org/sarif-2.1.0.json"},
+             {"version", "2.1.0"},
+             {"runs",
+              {{{"tool",
+                 {{"driver",
+                   {{"name", "ncservo"},
+                    {"version", NCSERVO_VERSION},
+                    {"informationUri", kRepositoryUri},
+                    {"rules", std::move(rules)}}}}},
+                {"invocations", {std::move(invocation)}},
+                {"artifacts", std::move(artifacts)},
+                {"results", std::move(results)}}}}};
+  std::fputs((sarif.dump(2) + "\n").c_str(), sink.out);
+}
+
+}  // namespace ncservo::cli::detail

@@ -1,0 +1,193 @@
+// `validate --format text`: findings grouped per rule and axis (each one with --verbose), each
+// capture's summary, and the verdict line.
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "ncservo/model/timing_text.hpp"
+#include "report_format.hpp"
+
+namespace ncservo::cli::detail {
+
+namespace {
+
+// The verdicts as text shouts them.
+const char* verdictHeadline(Verdict v) {
+  switch (v) {
+    case Verdict::Unreadable:
+      return "UNREADABLE";
+    case Verdict::Fail:
+      return "FAIL";
+    case Verdict::NoServo:
+      return "NO SERVO";
+    case Verdict::Pass:
+      break;
+  }
+  return "PASS";
+}
+
+// One line per rule and axis: how many findings, the first and last frame, the first message.
+void writeTextGroups(const ReportSink& sink, const CaptureReport& r) {
+  for (const FindingGroup& g : r.groups) {
+    const std::string first = fmt::format("{} ({:.6f} s)", g.first.frame, seconds(r, g.first));
+    fmt::print(sink.out, "{:<7} {:<7} {} {} finding{}, {}: {}\n", severityName(g.severity),
+               ruleDef(g.rule).code, axisLabel(r, g.axis), g.count, g.count == 1 ? "" : "s",
+               g.count == 1 ? "frame " + first
+                            : fmt::format("frames {} to {} ({:.6f} s), first", first, g.last.frame,
+                                          seconds(r, g.last)),
+               g.first_message);
+  }
+}
+
+// One line: the datagrams whose cyclic frames the bus rules judged.
+std::string describeCyclicDatagrams(const CaptureReport& r) {
+  std::vector<std::string> items;
+  for (const CyclicDatagram& d : r.cyclic_datagrams) {
+    items.push_back(fmt::format("{} 0x{:08X} ({} byte{}, {} frames)", ecat::commandName(d.command),
+                                d.address, d.length, d.length == 1 ? "" : "s", d.frames));
+  }
+  std::string line =
+      fmt::format("cyclic datagrams judged: {}",
+                  items.empty() ? "none" : fmt::format("{}", fmt::join(items, ", ")));
+  if (r.unfollowed_frames > 0) {
+    line += fmt::format(" ({} frames of further cyclic frames not followed)", r.unfollowed_frames);
+  }
+  return line;
+}
+
+}  // namespace
+
+void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
+  fmt::print(sink.out, "== {}\n", r.path);
+}
+
+void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+  if (!sink.policy.verbose) return;
+  fmt::print(sink.out, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}\n", severityName(f.severity),
+             ruleDef(f.rule).code, axisLabel(r, f.axis), f.at.frame, seconds(r, f.at),
+             f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
+             f.message);
+}
+
+void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
+  std::FILE* out = sink.out;
+  if (!sink.policy.verbose) writeTextGroups(sink, r);
+  fmt::print(out, "{}: {} frames, {} cycles", r.path, r.frames, r.cycles);
+  if (r.cycle_time.median_us) {
+    fmt::print(out, ", cycle {:.1f} us (p99 {:.1f}, max {:.1f})", *r.cycle_time.median_us,
+               r.cycle_time.p99_us.value_or(0), r.cycle_time.max_us.value_or(0));
+  }
+  fmt::print(out, "\nlayout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
+             r.layout.size() == 1 ? "is" : "es");
+  if (r.startup_frames_cut > 0) {
+    fmt::print(out, "  {}\n", describeStartupCut(r.startup_frames_cut));
+  }
+  // Where each axis was found: its station and its PDOs' logical (or SM) addresses.
+  for (const AxisInfo& info : r.layout) {
+    fmt::print(out, "  {}:", info.name);
+    if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
+    if (info.logical) {
+      fmt::print(out, " outputs 0x{:08X}, inputs 0x{:08X}\n", info.outputs, info.inputs);
+    } else {
+      fmt::print(out, " SM2 0x{:08X}, SM3 0x{:08X}\n", info.sm_outputs, info.sm_inputs);
+    }
+  }
+  for (const AxisReport& a : r.axes) {
+    fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
+               a.state ? driveStateName(*a.state) : "no inputs seen", a.telegram_failures);
+    if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);
+    fmt::print(out, "\n");
+    for (const ErrorHistoryEntry& e : a.error_history) {
+      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", e.cause->display,
+                 e.cause->canopen, e.at.frame, seconds(r, e.at));
+    }
+  }
+  fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
+  std::fputs(timingText(r.timing, timestampSourceName(r.timestamps),
+                        timestampResolutionNs(r.timestamps, r.timestamp_digits))
+                 .c_str(),
+             out);
+  fmt::print(out, "{}\n", describeCyclicDatagrams(r));
+  std::fputs(dcText(r.dc, r.dc_settled_ns).c_str(), out);
+  if (r.segment_count > 1) {
+    fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
+               r.segment_count);
+    for (const CaptureSegment& s : r.segments) {
+      fmt::print(out, "  frames {}-{}, {:.6f} s to {:.6f} s\n", s.first_frame, s.last_frame,
+                 seconds(r, Stamp{s.first_frame, s.start_ns}),
+                 seconds(r, Stamp{s.last_frame, s.end_ns}));
+    }
+  }
+  if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
+  if (r.truncation.any()) fmt::print(out, "truncated: {}\n", describeTruncation(r.truncation));
+  if (!r.coverage.not_judged.empty()) {
+    // One line: the rules of each axis (or the bus), axes with the same rules named together.
+    std::vector<std::pair<std::string, std::vector<std::string>>> groups;  // rules, axes
+    std::optional<std::uint16_t> current;
+    std::vector<std::string> codes;
+    const auto close = [&] {
+      if (codes.empty()) return;
+      const std::string rules = fmt::format("{}", fmt::join(codes, ", "));
+      const std::string who = current ? axisName(r, *current) : std::string("bus");
+      auto same = std::find_if(groups.begin(), groups.end(),
+                               [&](const auto& g) { return g.first == rules; });
+      if (same == groups.end()) {
+        groups.push_back({rules, {who}});
+      } else {
+        same->second.push_back(who);
+      }
+      codes.clear();
+    };
+    for (const NotJudged& n : r.coverage.not_judged) {
+      if (!codes.empty() && n.axis != current) close();
+      current = n.axis;
+      codes.emplace_back(ruleDef(n.rule).code);
+    }
+    close();
+    std::vector<std::string> items;
+    for (const auto& [rules, who] : groups) {
+      items.push_back(fmt::format("{}: {}", fmt::join(who, ", "), rules));
+    }
+    fmt::print(out, "not judged (what they read was never captured): {}\n", fmt::join(items, "; "));
+  }
+  if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
+  if (r.error) fmt::print(out, "error: {}\n", *r.error);
+  fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({})\n",
+             verdictHeadline(verdictOf(sink.policy, r)), r.count(Severity::Error),
+             r.count(Severity::Error) == 1 ? "" : "s", r.count(Severity::Warning),
+             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path);
+}
+
+void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
+  std::size_t counts[3] = {0, 0, 0};
+  std::size_t unread = 0;     // captures that could not be read to their end
+  std::size_t unchecked = 0;  // captures where not every axis was checked
+  bool failed = false;
+  bool no_servo = false;
+  for (const CaptureReport& r : reports) {
+    for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
+    unread += r.error.has_value() ? 1 : 0;
+    unchecked += r.coverage.complete() ? 0 : 1;
+    const Verdict v = verdictOf(sink.policy, r);
+    failed = failed || v == Verdict::Fail || v == Verdict::Unreadable;
+    no_servo = no_servo || v == Verdict::NoServo;
+  }
+  std::string notes;
+  if (unread > 0) notes += fmt::format(", {} not read to the end", unread);
+  if (unchecked > 0) {
+    notes += fmt::format(", {} with no servo checked{}", unchecked,
+                         sink.policy.allow_empty ? " (--allow-empty)" : "");
+  }
+  fmt::print(sink.out,
+             "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
+             failed     ? "FAIL"
+             : no_servo ? "NO SERVO"
+                        : "PASS",
+             counts[2], counts[2] == 1 ? "" : "s", counts[1], counts[1] == 1 ? "" : "s", counts[0],
+             reports.size(), reports.size() == 1 ? "" : "s", notes,
+             sink.policy.never ? "never" : severityName(sink.policy.fail_on));
+}
+
+}  // namespace ncservo::cli::detail
