@@ -399,8 +399,10 @@ void initCapture() {
   g_timestamp_digits.reset();
   g_capture_open = true;
   delete g_pipeline;
+  // Wireshark times the frames and shows them all: no frame clock, no time window.
   g_pipeline = new CapturePipeline({g_options != nullptr ? *g_options : DecoderOptions{},
-                                    g_settings != nullptr ? *g_settings : RuleSettings{}});
+                                    g_settings != nullptr ? *g_settings : RuleSettings{},
+                                    TimeWindow{}, TimestampMode::Capture});
   g_pipeline->setSinks({nullptr, validateFrame, nullptr, nullptr});
 }
 
