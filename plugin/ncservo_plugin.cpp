@@ -31,8 +31,8 @@
 #include "ncservo/base/text.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/eni.hpp"
-#include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/timing_text.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/rules/rules.hpp"
@@ -118,13 +118,13 @@ Result<std::optional<int>> readyModeOf(const char* text) {
       fmt::format("ncservo.servo_ready_mode: '{}' is not auto, 0 or 1; auto is used", value));
 }
 
-// Options from the preferences, and the state of the capture being dissected: the learning
-// window (docs/protocol.md §9.4), then the validator once the layout is known, and what it found in
-// each frame by frame number (the window's frames are validated when it ends, not in their turn).
+// Options from the preferences, and the state of the capture being dissected: the capture
+// pipeline (its learning window, docs/layout.md, then the validator once the layout is known),
+// and what it found in each frame by frame number (the window's frames are validated when it
+// ends, not in their turn).
 DecoderOptions* g_options = nullptr;
 RuleSettings* g_settings = nullptr;
-LayoutWindow* g_window = nullptr;
-Validator* g_validator = nullptr;
+CapturePipeline* g_pipeline = nullptr;
 bool g_capture_open = false;
 
 // What the first pass found in a frame, kept in file scope for later passes.
@@ -384,11 +384,12 @@ void applyPreferences() {
   g_settings = settings;
 }
 
-void startValidator() {
-  delete g_validator;
-  g_validator =
-      new Validator(g_window->options(), g_settings != nullptr ? *g_settings : RuleSettings{});
+// The validator of the capture's pipeline; null while its learning window holds the frames.
+const Validator* validator() {
+  return g_pipeline != nullptr ? g_pipeline->validator() : nullptr;
 }
+
+void validateFrame(const PipelineFrame& delivered);
 
 void initCapture() {
   plugin::resetItemTexts();
@@ -397,26 +398,25 @@ void initCapture() {
   g_next_shared = 0;
   g_timestamp_digits.reset();
   g_capture_open = true;
-  delete g_window;
-  g_window = new LayoutWindow(g_options != nullptr ? *g_options : DecoderOptions{});
-  delete g_validator;
-  g_validator = nullptr;
-  if (!g_window->learning()) startValidator();
+  delete g_pipeline;
+  // Wireshark times the frames and shows them all: no frame clock, no time window.
+  g_pipeline = new CapturePipeline({g_options != nullptr ? *g_options : DecoderOptions{},
+                                    g_settings != nullptr ? *g_settings : RuleSettings{},
+                                    TimeWindow{}, TimestampMode::Capture});
+  g_pipeline->setSinks({nullptr, validateFrame, nullptr, nullptr});
 }
 
 void cleanupCapture() {
-  delete g_validator;
-  g_validator = nullptr;
-  delete g_window;
-  g_window = nullptr;
+  delete g_pipeline;
+  g_pipeline = nullptr;
   std::vector<FrameRecord>().swap(g_frames);
   g_shared_axes = {};
   g_capture_open = false;
 }
 
 const char* axisName(guint16 axis) {
-  if (g_validator != nullptr && axis < g_validator->decoder().axes().size()) {
-    return g_validator->decoder().axes()[axis].name.c_str();
+  if (validator() != nullptr && axis < validator()->decoder().axes().size()) {
+    return validator()->decoder().axes()[axis].name.c_str();
   }
   return "?";
 }
@@ -521,7 +521,7 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
     r.state = state ? static_cast<guint8>(*state) : 0;
     r.rx_offset = static_cast<guint32>(placement.rx_offset);
     r.tx_offset = static_cast<guint32>(placement.tx_offset);
-    const AxisModel* model = g_validator->axis(placement.axis);
+    const AxisModel* model = validator()->axis(placement.axis);
     if (model == nullptr) continue;
     const std::vector<FieldEdge>& edges = model->edgesIn(number);
     if (!edges.empty()) {
@@ -549,12 +549,12 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
   return slot;
 }
 
-// Runs the validator over one frame and keeps what it found, by frame number.
-void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
-                   const ByteReader& bytes) {
-  const ValidatedFrame& view = g_validator->onFrame(number, time_ns, frame, bytes);
+// Keeps what the validator found in one frame, by frame number.
+void validateFrame(const PipelineFrame& delivered) {
+  const std::uint64_t number = delivered.number;
+  const ValidatedFrame& view = *delivered.judged;
   const FrameDecode& decode = view.decode;
-  const std::vector<Finding>& findings = g_validator->findings();
+  const std::vector<Finding>& findings = validator()->findings();
   if (decode.axis_count == 0 && findings.empty()) return;
   if (number >= g_frames.size())
     g_frames.resize(std::max<std::size_t>(number + 1, 2 * g_frames.size()));
@@ -565,7 +565,7 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
   record.axes = shared != nullptr ? shared->axes : nullptr;
   record.findings = nullptr;
   record.finding_count = 0;
-  const FrameTiming& timing = g_validator->frameTiming();
+  const FrameTiming& timing = validator()->frameTiming();
   record.timing = static_cast<guint8>((timing.interval_ns ? kHasInterval : 0) |
                                       (timing.deviation_ns ? kHasDeviation : 0) |
                                       (timing.latency_ns ? kHasLatency : 0));
@@ -595,21 +595,15 @@ void validateFrame(std::uint64_t number, std::int64_t time_ns, const EcatFrame& 
   }
 }
 
-// The window ended: validate its frames with the layout it found, then go on streaming.
-void windowDecided() {
-  startValidator();
-  g_window->replay(validateFrame);
-}
-
 const FrameRecord* recordOf(const packet_info* pinfo) {
   if (pinfo->num >= g_frames.size() || g_frames[pinfo->num].info == nullptr) return nullptr;
   return &g_frames[pinfo->num];
 }
 
-// First pass: run the library over the frame (or hold it in the learning window).
+// First pass: run the frame through the capture pipeline (or hold it in the learning window).
 void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   const LinkType link = linkTypeOf(pinfo);
-  if (link == LinkType::Unsupported || g_window == nullptr) return;
+  if (link == LinkType::Unsupported || g_pipeline == nullptr) return;
   const guint length = tvb_captured_length(tvb);
   const guint8* data = length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr;
   const ByteReader bytes(data, data != nullptr ? length : 0);
@@ -621,12 +615,7 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   }
   const std::int64_t time_ns =
       static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
-  if (g_window->learning()) {
-    g_window->hold(pinfo->num, time_ns, link, bytes, frame);
-    if (!g_window->learning()) windowDecided();
-    return;
-  }
-  validateFrame(pinfo->num, time_ns, frame, bytes);
+  g_pipeline->onWalkedFrame(pinfo->num, time_ns, link, bytes, frame);
 }
 
 // Whether an item is needed: the tree is shown, or a filter, column or tap references the field
@@ -975,10 +964,10 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   }
   if (!PINFO_FD_VISITED(pinfo)) {
     analyseFrame(tvb, pinfo);
-  } else if (g_window != nullptr && g_window->learning()) {
-    // The capture ended inside the learning window: decide with what the first pass held.
-    g_window->finish();
-    windowDecided();
+  } else if (g_pipeline != nullptr) {
+    // The capture may have ended inside the learning window: decide with what the first pass
+    // held. The plugin has no end of capture: a gap in the last cycle goes unjudged here.
+    g_pipeline->endLearning();
   }
   const FrameRecord* record = recordOf(pinfo);
   if (record == nullptr) return 0;
@@ -1015,12 +1004,9 @@ tap_packet_status takeNoPacket(void*, packet_info*, epan_dissect_t*, const void*
 
 void drawTiming(void*) {
   // A single pass can end inside the learning window: its frames are validated now.
-  if (g_window != nullptr && g_window->learning()) {
-    g_window->finish();
-    windowDecided();
-  }
+  if (g_pipeline != nullptr) g_pipeline->endLearning();
   const std::string text =
-      timingText(g_validator != nullptr ? g_validator->bus().timing().summary() : TimingSummary{},
+      timingText(validator() != nullptr ? validator()->bus().timing().summary() : TimingSummary{},
                  timestampSourceName(TimestampSource::Capture),
                  timestampResolutionNs(TimestampSource::Capture, g_timestamp_digits.value_or(6)));
   std::printf("\n%s\nNCSERVO timing\n%s%s\n", std::string(67, '=').c_str(), text.c_str(),

@@ -22,7 +22,7 @@
 #include "ncservo/capture/capture_writer.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/layout_learner.hpp"
-#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/sim/faults.hpp"
@@ -675,41 +675,22 @@ Validated validate(const SimOptions& resolved, bool with_config,
       EXPECT_TRUE(applyConfig(*parsed, settings));
     }
   }
-  // As the CLI does: the learning window's frames are validated once the layout is known.
-  LayoutWindow window(decoder);
-  std::optional<Validator> checked;
+  // Through the capture pipeline, as the CLI reads a capture.
+  CapturePipeline pipeline({decoder, settings, TimeWindow{}, TimestampMode::Capture});
   Validated out;
-  const auto validate_frame = [&](std::uint64_t n, std::int64_t t, const EcatFrame& walked,
-                                  const ByteReader& bytes) {
-    checked->onFrame(n, t, walked, bytes);
-    out.findings.insert(out.findings.end(), checked->findings().begin(), checked->findings().end());
-  };
-  const auto decided = [&] {
-    checked.emplace(window.options(), settings);
-    window.replay(validate_frame);
-  };
-  if (!window.learning()) checked.emplace(window.options(), settings);
+  pipeline.setSinks({nullptr, nullptr, nullptr, [&out](const std::vector<Finding>& found) {
+                       out.findings.insert(out.findings.end(), found.begin(), found.end());
+                     }});
   std::uint64_t number = 0;
   EcatFrame frame;
   for (const Frame& f : simulate(resolved)) {
     if (number == 0) out.first_ns = f.time_ns;
     const ByteReader bytes(f.bytes.data(), f.bytes.size());
     walkPacket(LinkType::Ethernet, bytes, frame);
-    ++number;
-    if (window.learning()) {
-      window.hold(number, f.time_ns, LinkType::Ethernet, bytes, frame);
-      if (!window.learning()) decided();
-      continue;
-    }
-    validate_frame(number, f.time_ns, frame, bytes);
+    pipeline.onWalkedFrame(++number, f.time_ns, LinkType::Ethernet, bytes, frame);
   }
-  if (window.learning()) {
-    window.finish();
-    decided();
-  }
-  checked->finish();
-  out.findings.insert(out.findings.end(), checked->findings().begin(), checked->findings().end());
-  const Validator& validator = *checked;
+  pipeline.finish();
+  const Validator& validator = *pipeline.validator();
   out.axes = validator.axisCount();
   for (std::size_t a = 0; a < validator.axisCount(); ++a) {
     out.history.push_back(validator.axis(a) ? validator.axis(a)->errorHistory().size() : 0);

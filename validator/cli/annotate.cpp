@@ -1,6 +1,6 @@
 // `ncservo annotate IN OUT.pcapng` (docs/field.md): the capture copied to pcapng with each
 // finding as a packet comment on its frame. Two passes over the file: the first judges it (a
-// finding is known only once its frame is judged, and the learning window of docs/protocol.md §9.4
+// finding is known only once its frame is judged, and the learning window (docs/layout.md)
 // delivers its frames late), the second copies it with the comments. So the input must be a
 // file that can be read again, not standard input.
 #include <fmt/format.h>
@@ -16,7 +16,7 @@
 #include "ncservo/capture/capture_annotation.hpp"
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/capture/capture_stream.hpp"
-#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/frame_clock.hpp"
 
@@ -42,35 +42,19 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
                      const RuleSettings& settings) {
   auto opened = CaptureReader::open(args.input);
   if (!opened) return fail(opened.error());
-  FrameClock clock(*timestampModeFromName(args.timestamps));
-  LayoutWindow window(decoderOptions(files, args.layout));
-  std::optional<Validator> validator;
+  CapturePipeline pipeline({decoderOptions(files, args.layout), settings, TimeWindow{},
+                            *timestampModeFromName(args.timestamps)});
   Judged judged;
-  CaptureRun run;
-  const auto keep = [&] {
-    for (const Finding& f : validator->findings()) {
-      judged.comments[f.at.frame].push_back(findingComment(f, validator->decoder().axes()));
+  const auto keep = [&](const std::vector<Finding>& findings) {
+    for (const Finding& f : findings) {
+      judged.comments[f.at.frame].push_back(
+          findingComment(f, pipeline.validator()->decoder().axes()));
       judged.finding_times_ns.push_back(f.at.time_ns);
       ++judged.findings;
     }
   };
-  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                            const ByteReader& bytes) {
-    validator->onFrame(number, time_ns, walked, bytes);
-    keep();
-  };
-  const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
-  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
-                               const ByteReader& bytes) {
-    validator->onLayoutOnlyFrame(walked, bytes);
-  };
-  const Status status =
-      streamCapture(**opened, clock, window, {start, validate, {}, layout_only}, run);
-  if (!status) return fail(status.error());
-  if (validator) {
-    validator->finish();
-    keep();
-  }
+  pipeline.setSinks({nullptr, nullptr, nullptr, keep});
+  if (Status status = streamCapture(**opened, pipeline); !status) return fail(status.error());
   return judged;
 }
 

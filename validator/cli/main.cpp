@@ -31,9 +31,9 @@
 #include "ncservo/capture/compressed_output.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/eni.hpp"
-#include "ncservo/layout/layout_window.hpp"
 #include "ncservo/layout/session.hpp"
 #include "ncservo/model/timing_text.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/report/axis_selection.hpp"
@@ -260,45 +260,41 @@ void noteDecoded(const CaptureReader& reader, const FrameClock& clock, const Dec
 int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   CaptureReader* reader = input.reader.get();
   std::FILE* out = input.out;
-  FrameClock clock(*timestampModeFromName(args.timestamps));
-  LayoutWindow window(decoderOptions(input.files, args.layout));
+  // --timing: the validator's bus model times the cycles as `validate` does (docs/timing.md).
+  PipelineOptions options{decoderOptions(input.files, args.layout), std::nullopt, input.window,
+                          *timestampModeFromName(args.timestamps)};
+  if (args.timing && !args.layout_only) options.rules = RuleSettings{};
+  CapturePipeline pipeline(std::move(options));
   std::optional<Session> session;
   const DecodeFormat& format = rowNamed(kDecodeFormats, args.format);
   if (!args.layout_only && format.header != nullptr) format.header(out);
   CycleRows cycles;
   std::vector<CycleRow> rows;
-  CaptureRun run;
   CutRegions cut;
   auto write = [&] {
     for (const CycleRow& row : rows) {
       const AxisInfo& axis = session->decoder().axes().at(row.axis);
       if (!cli::axisSelected(args.axes, axis)) continue;
-      format.row(out, row, axis.name, static_cast<double>(row.time_ns - *run.first_time_ns) / 1e9);
+      const std::int64_t since_first_ns = row.time_ns - *pipeline.run().first_time_ns;
+      format.row(out, row, axis.name, static_cast<double>(since_first_ns) / 1e9);
     }
     rows.clear();
   };
-  // --timing: the validator's bus model times the cycles as `validate` does (docs/timing.md).
-  std::optional<Validator> timing;
-  const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                          const ByteReader& bytes) {
-    if (timing) timing->onFrame(number, time_ns, walked, bytes);
-    const FrameView& view = session->onFrame(walked, bytes);
+  const auto decode = [&](const PipelineFrame& f) {
+    const FrameView& view = session->onFrame(f.frame, f.bytes);
     if (args.layout_only) return;
-    for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(number, view.axes[i].placement);
-    cycles.onFrame(number, time_ns, view, rows);
+    for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(f.number, view.axes[i].placement);
+    cycles.onFrame(f.number, f.time_ns, view, rows);
     write();
   };
-  const auto start = [&](const DecoderOptions& layout) {
-    session.emplace(layout);
-    if (args.timing && !args.layout_only) timing.emplace(layout, RuleSettings{});
+  const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
+  const auto layout_only = [&](const PipelineFrame& f) {
+    session->onLayoutOnlyFrame(f.frame, f.bytes);
   };
-  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
-                               const ByteReader& bytes) {
-    session->onLayoutOnlyFrame(walked, bytes);
-    if (timing) timing->onLayoutOnlyFrame(walked, bytes);
-  };
-  const Status status =
-      streamCapture(*reader, clock, window, {start, decode, input.window, layout_only}, run);
+  pipeline.setSinks({start, decode, layout_only, nullptr});
+  const Status status = streamCapture(*reader, pipeline);
+  const CaptureRun& run = pipeline.run();
+  const FrameClock& clock = pipeline.clock();
   cycles.finish(rows);
   write();
   std::fflush(out);
@@ -312,9 +308,9 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
-  if (args.layout_only) printLayout(session->decoder(), window.inference());
+  if (args.layout_only) printLayout(session->decoder(), pipeline.inference());
   noteDecoded(*reader, clock, session->decoder());
-  if (timing) {
+  if (const Validator* timing = pipeline.validator()) {
     fmt::print(stderr, "ncservo: {}: {}", reader->path(),
                timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
                           timestampResolutionNs(clock.source(), reader->timestampDigits())));
@@ -338,34 +334,31 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
       return kExitUsage;
     }
   }
-  FrameClock clock(*timestampModeFromName(args.timestamps));
-  LayoutWindow window(decoderOptions(input.files, args.layout));
-  std::optional<Validator> validator;
+  CapturePipeline pipeline({decoderOptions(input.files, args.layout), settings, input.window,
+                            *timestampModeFromName(args.timestamps)});
   const bool to_stdout = input.out == stdout;
   cli::WaveformWriter waveforms(input.out, to_stdout ? "standard output" : args.output, args.axes);
-  CaptureRun run;
   Status written;
   std::int64_t end_ns = 0;
-  const auto decode = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                          const ByteReader& bytes) {
-    if (!written) return;  // a failed write ends the work: the rest is read, not judged
-    const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
-    end_ns = std::max(end_ns, time_ns - *run.first_time_ns);
-    written = waveforms.frame(time_ns - *run.first_time_ns, frame, bytes, validator->findings(),
-                              validator->decoder());
+  std::int64_t frame_ns = 0;  // the last frame's, where its findings and the capture's last show
+  const auto decode = [&](const PipelineFrame& f) {
+    if (!written) return;  // a failed write ends the work: the rest is read, not written
+    frame_ns = f.time_ns - *pipeline.run().first_time_ns;
+    end_ns = std::max(end_ns, frame_ns);
+    written = waveforms.frame(frame_ns, *f.judged, f.bytes, pipeline.validator()->decoder());
   };
-  const auto start = [&](const DecoderOptions& layout) { validator.emplace(layout, settings); };
-  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
-                               const ByteReader& bytes) {
-    validator->onLayoutOnlyFrame(walked, bytes);
+  const auto findings = [&](const std::vector<Finding>& found) {
+    if (written) written = waveforms.findings(frame_ns, found);
   };
-  const Status status =
-      streamCapture(reader, clock, window, {start, decode, input.window, layout_only}, run);
-  if (written) written = waveforms.finish(end_ns, validator->decoder());
+  pipeline.setSinks({nullptr, decode, nullptr, findings});
+  const Status status = streamCapture(reader, pipeline);
+  const Validator& validator = *pipeline.validator();
+  const CaptureRun& run = pipeline.run();
+  if (written) written = waveforms.finish(end_ns, validator.decoder());
   std::fflush(input.out);
   warnIfTruncated(reader.path(),
-                  cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
-                                    validator->decoder().axes()));
+                  cli::truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
+                                    validator.decoder().axes()));
   if (const std::string empty = emptyWindowReason(input.window, run); !empty.empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), empty);
     return kExitNoServo;
@@ -378,7 +371,7 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
-  noteDecoded(reader, clock, validator->decoder());
+  noteDecoded(reader, pipeline.clock(), validator.decoder());
   if (!to_stdout) {
     const std::string save = cli::gtkwPathFor(args.output);
     std::FILE* file = std::fopen(save.c_str(), "w");
@@ -476,52 +469,40 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   report.timestamp_digits = reader->timestampDigits();
-  FrameClock clock(timestamps);
-  LayoutWindow window(decoder_options);
-  std::optional<Validator> validator;
+  CapturePipeline pipeline({decoder_options, settings, time_window, timestamps});
   std::optional<cli::TimelineRecorder> timelines;
   if (writer.drawsTimelines()) timelines.emplace(settings);
-  CaptureRun run;
-  const auto keepFindings = [&] {
-    for (const Finding& f : validator->findings()) {
+  const auto start = [&](const DecoderOptions&) {
+    report.layout = pipeline.validator()->decoder().axes();  // names for findings as they come
+  };
+  const auto validate = [&](const PipelineFrame& f) {
+    report.first_time_ns = *pipeline.run().first_time_ns;  // findings are written as they come
+    report.last_time_ns = f.time_ns;
+    if (timelines) timelines->frame(f.number, f.time_ns - report.first_time_ns, *f.judged, f.bytes);
+  };
+  const auto keepFindings = [&](const std::vector<Finding>& findings) {
+    for (const Finding& f : findings) {
       report.tally(f);
       if (output.live == nullptr || writer.keepsFindings()) report.findings.push_back(f);
       if (timelines) timelines->finding(f);
       if (output.live != nullptr) output.live->finding(report, f);
     }
   };
-  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                            const ByteReader& bytes) {
-    report.first_time_ns = *run.first_time_ns;  // findings are written as they come
-    report.last_time_ns = time_ns;
-    const ValidatedFrame& frame = validator->onFrame(number, time_ns, walked, bytes);
-    if (timelines) timelines->frame(number, time_ns - report.first_time_ns, frame, bytes);
-    keepFindings();
-  };
-  const auto start = [&](const DecoderOptions& layout) {
-    validator.emplace(layout, settings);
-    report.layout = validator->decoder().axes();  // the axes' names, for findings as they come
-  };
-  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
-                               const ByteReader& bytes) {
-    validator->onLayoutOnlyFrame(walked, bytes);
-  };
-  const Status status =
-      streamCapture(*reader, clock, window, {start, validate, time_window, layout_only}, run);
-  if (validator) {
-    validator->finish();
-    keepFindings();
-  }
+  pipeline.setSinks({start, validate, nullptr, keepFindings});
+  const Status status = streamCapture(*reader, pipeline);
+  const Validator& validator = *pipeline.validator();
+  const CaptureRun& run = pipeline.run();
+  const FrameClock& clock = pipeline.clock();
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
   if (timelines) report.timelines = timelines->finish();
-  cli::summarise(*validator, report);
-  report.coverage = coverageOf(*validator);
+  cli::summarise(validator, report);
+  report.coverage = coverageOf(validator);
   if (const std::string empty = emptyWindowReason(time_window, run); !empty.empty()) {
     report.coverage.reason = empty;
   }
-  report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
-                                        validator->decoder().axes());
+  report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
+                                        validator.decoder().axes());
   warnIfTruncated(reader->path(), report.truncation, output.messages);
   if (report.startup_frames_cut > 0) {
     fmt::print(output.messages, "ncservo: {}: layout {}\n", reader->path(),

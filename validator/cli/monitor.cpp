@@ -24,9 +24,8 @@
 #include "commands.hpp"
 #include "ncservo/capture/capture_annotation.hpp"
 #include "ncservo/capture/capture_reader.hpp"
-#include "ncservo/capture/capture_stream.hpp"
 #include "ncservo/capture/capture_writer.hpp"
-#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/protocol/drive_state.hpp"
 #include "ncservo/report/report.hpp"
 #include "ncservo/rules/coverage.hpp"
@@ -290,111 +289,91 @@ class StatusBoard {
 
 // ---- monitor ----
 
-int runMonitor(const MonitorArgs& args) {
-  const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
-  RuleSettings settings;
-  Status built = files ? buildSettings(args, files->config, settings) : fail(files.error());
-  if (!built) {
-    fmt::print(stderr, "ncservo monitor: {}\n", built.error().text());
-    return kExitUsage;
-  }
+// The numbers and the directory the options give, checked before capturing.
+Status checkMonitorArgs(const MonitorArgs& args) {
   if (!(args.record_window_s > 0) || !(args.record_limit_mb > 0) ||
       (args.duration_s && !(*args.duration_s > 0))) {
-    fmt::print(stderr,
-               "ncservo monitor: --duration, --record-window and --record-limit take a number "
-               "above 0\n");
-    return kExitUsage;
+    return fail("--duration, --record-window and --record-limit take a number above 0");
   }
   if (!args.record_dir.empty() && !std::filesystem::is_directory(args.record_dir)) {
-    fmt::print(stderr, "ncservo monitor: --record {}: not a directory\n", args.record_dir);
-    return kExitUsage;
+    return fail(fmt::format("--record {}: not a directory", args.record_dir));
   }
-  Result<LiveHandle> live = openLive(args.interface);
-  if (!live) {
-    fmt::print(stderr, "ncservo monitor: {}\n", live.error().text());
-    return kExitCapture;
-  }
-  pcap_t* handle = live->get();
-  const int digits = pcap_get_tstamp_precision(handle) == PCAP_TSTAMP_PRECISION_NANO ? 9 : 6;
-  const LinkType link = linkTypeFromDlt(pcap_datalink(handle));
+  return {};
+}
 
+// The text report of findings as they happen, or jsonl.
+Result<std::unique_ptr<ReportWriter>> openMonitorReport(const MonitorArgs& args,
+                                                        const RuleSettings& settings) {
   ReportPolicy policy;
   policy.never = args.fail_on == "never";
   policy.fail_on = policy.never ? Severity::Error : *severityFromName(args.fail_on);
   policy.verbose = true;  // text: every finding as it happens
   policy.enabled = settings.enabled;
-  auto writer = ReportWriter::open({{findReportFormat(args.format), ""}}, policy);
-  if (!writer) {
-    fmt::print(stderr, "ncservo monitor: {}\n", writer.error().text());
-    return kExitUsage;
-  }
+  return ReportWriter::open({{findReportFormat(args.format), ""}}, policy);
+}
+
+// Ctrl-C and SIGTERM end the capture of `handle` (null: as before).
+void stopOnSignals(pcap_t* handle) {
   g_live = handle;
+  if (handle == nullptr) {
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    return;
+  }
   struct sigaction action {};
   action.sa_handler = stopMonitor;
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+}
 
-  StatusBoard board(isatty(STDERR_FILENO) == 1);
-  const auto say = [&](const std::string& text) {
+// What the monitor shows besides the report: the status lines, the messages above them, the
+// flight recorder, each axis's last finding.
+struct MonitorOutput {
+  StatusBoard board{isatty(STDERR_FILENO) == 1};
+  std::optional<FlightRecorder> recorder;
+  std::optional<Severity> record_at;
+  std::map<std::uint16_t, std::string> last_finding;  // by axis, for the status lines
+  void say(const std::string& text) {
     std::fflush(stdout);
     board.clear();
     fmt::print(stderr, "ncservo monitor: {}\n", text);
-  };
-  std::optional<FlightRecorder> recorder;
-  const auto record_at = severityFromName(args.record_severity);
-  if (!args.record_dir.empty()) {
-    recorder.emplace(args.record_dir, std::llround(args.record_window_s * 1e9),
-                     static_cast<std::uint64_t>(args.record_limit_mb * 1024 * 1024),
-                     pcap_datalink(handle), say);
   }
+};
 
-  CaptureReport report;
-  report.path = args.interface;
-  report.timestamp_digits = digits;
-  (*writer)->beginCapture(report);
-  FrameClock clock(*timestampModeFromName(args.timestamps));
-  LayoutWindow window(decoderOptions(*files, args.layout));
-  std::optional<Validator> validator;
-  std::map<std::uint16_t, std::string> last_finding;  // by axis, for the status lines
-  CaptureRun run;
-  const auto report_findings = [&] {
-    for (const Finding& f : validator->findings()) {
-      report.tally(f);
-      board.clear();
-      (*writer)->finding(report, f);
-      std::fflush(stdout);
-      if (f.axis) {
-        last_finding[*f.axis] = fmt::format("{} at {:.3f} s", ruleDef(f.rule).code,
-                                            (f.at.time_ns - *run.first_time_ns) / 1e9);
-      }
-      if (recorder && f.severity >= *record_at) {
-        recorder->onFinding(f, findingComment(f, validator->decoder().axes()));
-      }
+// Each finding to the report as it happens, to the status lines and to the flight recorder.
+void reportFindings(const std::vector<Finding>& findings, const CapturePipeline& pipeline,
+                    ReportWriter& writer, CaptureReport& report, MonitorOutput& output) {
+  for (const Finding& f : findings) {
+    report.tally(f);
+    output.board.clear();
+    writer.finding(report, f);
+    std::fflush(stdout);
+    if (f.axis) {
+      output.last_finding[*f.axis] =
+          fmt::format("{} at {:.3f} s", ruleDef(f.rule).code,
+                      (f.at.time_ns - *pipeline.run().first_time_ns) / 1e9);
     }
-  };
-  const auto validate = [&](std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
-                            const ByteReader& bytes) {
-    report.first_time_ns = *run.first_time_ns;
-    validator->onFrame(number, time_ns, walked, bytes);
-    report_findings();
-  };
-  const auto start = [&](const DecoderOptions& layout) {
-    validator.emplace(layout, settings);
-    report.layout = validator->decoder().axes();
-  };
-  const auto layout_only = [&](std::uint64_t, std::int64_t, const EcatFrame& walked,
-                               const ByteReader& bytes) {
-    validator->onLayoutOnlyFrame(walked, bytes);
-  };
-  const CaptureStream stream{start, validate, {}, layout_only};
-  RecordStream records(clock, window, stream, run);
+    if (output.recorder && f.severity >= *output.record_at) {
+      output.recorder->onFinding(f, findingComment(f, pipeline.validator()->decoder().axes()));
+    }
+  }
+}
 
+struct LiveCapture {
+  std::uint64_t frames = 0;
+  std::optional<std::string> error;
+};
+
+// Reads the interface into the pipeline until --duration, Ctrl-C or a capture error.
+LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline& pipeline,
+                        MonitorOutput& output) {
+  const int digits = pcap_get_tstamp_precision(handle) == PCAP_TSTAMP_PRECISION_NANO ? 9 : 6;
+  const LinkType link = linkTypeFromDlt(pcap_datalink(handle));
   using Clock = std::chrono::steady_clock;
   const auto began = Clock::now();
   auto next_status = began;
-  std::optional<std::string> capture_error;
-  std::uint64_t frames = 0;
+  LiveCapture live;
   while (g_stop == 0) {
     if (args.duration_s &&
         Clock::now() - began >= std::chrono::duration<double>(*args.duration_s)) {
@@ -405,68 +384,67 @@ int runMonitor(const MonitorArgs& args) {
     const int got = pcap_next_ex(handle, &header, &data);
     if (got == 1) {
       CaptureRecord record;
-      record.frame = ++frames;
+      record.frame = ++live.frames;
       record.time_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1'000'000'000 +
                        static_cast<std::int64_t>(header->ts.tv_usec) * (digits == 9 ? 1 : 1000);
       record.data = data;
       record.captured = header->caplen;
       record.original = header->len;
-      records.onRecord(link, record);
-      if (recorder) recorder->onRecord(record, !window.learning());
+      pipeline.onRecord(link, record);
+      if (output.recorder) output.recorder->onRecord(record, !pipeline.learning());
     } else if (got == PCAP_ERROR_BREAK) {
       break;
     } else if (got < 0) {
-      capture_error = pcap_geterr(handle);
+      live.error = pcap_geterr(handle);
       break;
     }
     if (Clock::now() >= next_status) {
-      board.draw(validator ? &*validator : nullptr, last_finding, frames);
+      output.board.draw(pipeline.validator(), output.last_finding, live.frames);
       next_status = Clock::now() + kStatusPeriod;
     }
   }
-  std::fflush(stdout);
-  board.clear();
-  records.finish();
-  if (validator) {
-    validator->finish();  // what only the frames that did not come could tell (COM-002)
-    report_findings();
-  }
-  if (recorder) recorder->finish();
-  g_live = nullptr;
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  return live;
+}
 
+// What the kernel and the interface dropped: the capture's losses, not the bus's.
+void printDrops(const std::string& interface, pcap_t* handle, std::uint64_t frames) {
   pcap_stat stats{};
-  if (pcap_stats(handle, &stats) == 0) {
-    fmt::print(stderr,
-               "ncservo monitor: {}: {} frames captured; dropped: {} by the kernel, {} by the "
-               "interface{}\n",
-               args.interface, frames, stats.ps_drop, stats.ps_ifdrop,
-               stats.ps_drop + stats.ps_ifdrop > 0
-                   ? " (the capture lost them, not necessarily the bus: COM findings around "
-                     "them may be the capture's)"
-                   : "");
-  }
+  if (pcap_stats(handle, &stats) != 0) return;
+  fmt::print(stderr,
+             "ncservo monitor: {}: {} frames captured; dropped: {} by the kernel, {} by the "
+             "interface{}\n",
+             interface, frames, stats.ps_drop, stats.ps_ifdrop,
+             stats.ps_drop + stats.ps_ifdrop > 0
+                 ? " (the capture lost them, not necessarily the bus: COM findings around "
+                   "them may be the capture's)"
+                 : "");
+}
+
+// The report's end, as `validate` writes it, and the exit status.
+int endReport(const std::string& interface, const CapturePipeline& pipeline,
+              const LiveCapture& live, ReportWriter& writer, CaptureReport& report) {
+  const Validator& validator = *pipeline.validator();
+  const CaptureRun& run = pipeline.run();
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
-  summarise(*validator, report);
-  report.coverage = coverageOf(*validator);
-  report.truncation = truncationOf(run.snapped, run.first_snapped, validator->cutRegions(),
-                                   validator->decoder().axes());
-  report.timestamps = clock.source();
-  report.probe = clock.counts();
-  report.probe_note = clock.note();
-  if (capture_error) {
-    report.error = *capture_error + " (the frames before it were analysed)";
-    fmt::print(stderr, "ncservo monitor: {}: {}\n", args.interface, *report.error);
+  summarise(validator, report);
+  report.coverage = coverageOf(validator);
+  report.truncation = truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
+                                   validator.decoder().axes());
+  report.timestamps = pipeline.clock().source();
+  report.probe = pipeline.clock().counts();
+  report.probe_note = pipeline.clock().note();
+  if (live.error) {
+    report.error = *live.error + " (the frames before it were analysed)";
+    fmt::print(stderr, "ncservo monitor: {}: {}\n", interface, *report.error);
   }
-  (*writer)->endCapture(report);
+  writer.endCapture(report);
   std::vector<CaptureReport> reports{report};
-  if (Status written = (*writer)->finish(reports); !written) {
+  if (Status written = writer.finish(reports); !written) {
     fmt::print(stderr, "ncservo monitor: {}\n", written.error().text());
     return kExitUsage;
   }
-  switch ((*writer)->verdict(report)) {
+  switch (writer.verdict(report)) {
     case Verdict::Unreadable:
       return kExitCapture;
     case Verdict::Fail:
@@ -477,6 +455,61 @@ int runMonitor(const MonitorArgs& args) {
       break;
   }
   return kExitOk;
+}
+
+int runMonitor(const MonitorArgs& args) {
+  const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
+  RuleSettings settings;
+  Status built = files ? buildSettings(args, files->config, settings) : fail(files.error());
+  if (built) built = checkMonitorArgs(args);
+  if (!built) {
+    fmt::print(stderr, "ncservo monitor: {}\n", built.error().text());
+    return kExitUsage;
+  }
+  Result<LiveHandle> live = openLive(args.interface);
+  if (!live) {
+    fmt::print(stderr, "ncservo monitor: {}\n", live.error().text());
+    return kExitCapture;
+  }
+  pcap_t* handle = live->get();
+  auto writer = openMonitorReport(args, settings);
+  if (!writer) {
+    fmt::print(stderr, "ncservo monitor: {}\n", writer.error().text());
+    return kExitUsage;
+  }
+  stopOnSignals(handle);
+  MonitorOutput output;
+  output.record_at = severityFromName(args.record_severity);
+  if (!args.record_dir.empty()) {
+    output.recorder.emplace(args.record_dir, std::llround(args.record_window_s * 1e9),
+                            static_cast<std::uint64_t>(args.record_limit_mb * 1024 * 1024),
+                            pcap_datalink(handle),
+                            [&output](const std::string& text) { output.say(text); });
+  }
+  CaptureReport report;
+  report.path = args.interface;
+  report.timestamp_digits = pcap_get_tstamp_precision(handle) == PCAP_TSTAMP_PRECISION_NANO ? 9 : 6;
+  (*writer)->beginCapture(report);
+  CapturePipeline pipeline({decoderOptions(*files, args.layout), settings, TimeWindow{},
+                            *timestampModeFromName(args.timestamps)});
+  const auto start = [&](const DecoderOptions&) {
+    report.layout = pipeline.validator()->decoder().axes();
+  };
+  const auto frame = [&](const PipelineFrame&) {
+    report.first_time_ns = *pipeline.run().first_time_ns;
+  };
+  const auto findings = [&](const std::vector<Finding>& found) {
+    reportFindings(found, pipeline, **writer, report, output);
+  };
+  pipeline.setSinks({start, frame, nullptr, findings});
+  const LiveCapture captured = captureLive(args, handle, pipeline, output);
+  std::fflush(stdout);
+  output.board.clear();
+  pipeline.finish();  // what only the frames that did not come could tell (COM-002)
+  if (output.recorder) output.recorder->finish();
+  stopOnSignals(nullptr);
+  printDrops(args.interface, handle, captured.frames);
+  return endReport(args.interface, pipeline, captured, **writer, report);
 }
 
 }  // namespace

@@ -576,18 +576,8 @@ void WaveformWriter::clearFindings(AxisSlot& slot) {
 }
 
 Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
-                             const ByteReader& bytes, const std::vector<Finding>& findings,
-                             const Decoder& decoder) {
-  if (!header_written_ && frame.decode.axis_count == 0) {
-    for (const Finding& f : findings) {
-      if (early_findings_.size() >= kMaxEarlyFindings) {
-        ++early_findings_dropped_;
-      } else {
-        early_findings_.push_back(EarlyFinding{time_ns, f.axis, ruleDef(f.rule).code});
-      }
-    }
-    return {};
-  }
+                             const ByteReader& bytes, const Decoder& decoder) {
+  if (!header_written_ && frame.decode.axis_count == 0) return {};
   if (!header_written_) {
     if (Status written = writeHeader(decoder); !written) return written;
   }
@@ -610,6 +600,21 @@ Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
     }
     writeState(slot, frame.states[i]);
   }
+  return handed_over_;
+}
+
+Status WaveformWriter::findings(std::int64_t time_ns, const std::vector<Finding>& findings) {
+  if (!header_written_) {
+    for (const Finding& f : findings) {
+      if (early_findings_.size() >= kMaxEarlyFindings) {
+        ++early_findings_dropped_;
+      } else {
+        early_findings_.push_back(EarlyFinding{time_ns, f.axis, ruleDef(f.rule).code});
+      }
+    }
+    return {};
+  }
+  advance(time_ns);
   for (const Finding& f : findings) {
     if (AxisSlot* slot = findingSlot(f.axis)) showFinding(*slot, ruleDef(f.rule).code);
   }

@@ -10,27 +10,12 @@
 #include <string>
 
 #include "ncservo/base/error.hpp"
+#include "ncservo/wire/capture_record.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
 struct pcap;  // libpcap's handle, kept out of this header
 
 namespace ncservo {
-
-// Where a record is stored in the capture file: the pcap record (its 16-byte header and the
-// packet) or the pcapng block that holds the packet.
-struct RecordSpan {
-  std::uint64_t offset = 0;
-  std::uint64_t length = 0;
-};
-
-struct CaptureRecord {
-  std::uint64_t frame = 0;   // 1-based, as Wireshark numbers frames
-  std::int64_t time_ns = 0;  // absolute capture time in nanoseconds
-  const std::uint8_t* data = nullptr;
-  std::size_t captured = 0;
-  std::size_t original = 0;
-  std::optional<RecordSpan> stored;  // none when the capture is compressed or not a plain file
-};
 
 // The digits of a second the capture's timestamps hold (6: microseconds, 9: nanoseconds), from
 // its first bytes: the pcap magic, or if_tsresol of the first pcapng interface (6 when absent).

@@ -66,13 +66,16 @@ class WaveformWriter {
   WaveformWriter(const WaveformWriter&) = delete;
   WaveformWriter& operator=(const WaveformWriter&) = delete;
 
-  // One frame as the validator judged it, with the findings reported on it; `time_ns` is since
-  // the capture's first frame. A frame whose time goes back is written at the latest time.
-  // Master copies give the outputs and returned copies the inputs, each at its own time; a
-  // returned copy gives the outputs too where no master copy of them was captured. Fails once a
-  // write has failed.
+  // One frame as the validator judged it; `time_ns` is since the capture's first frame. A frame
+  // whose time goes back is written at the latest time. Master copies give the outputs and
+  // returned copies the inputs, each at its own time; a returned copy gives the outputs too where
+  // no master copy of them was captured. Fails once a write has failed.
   Status frame(std::int64_t time_ns, const ValidatedFrame& frame, const ByteReader& bytes,
-               const std::vector<Finding>& findings, const Decoder& decoder);
+               const Decoder& decoder);
+  // The findings reported on the frame just written (or at the end of the capture), shown at
+  // `time_ns` on their axis's findings signal or the bus's; those before the first axis was
+  // placed are kept for the header.
+  Status findings(std::int64_t time_ns, const std::vector<Finding>& findings);
   // The capture ended at `end_ns` (since its first frame): the rest is written and the file
   // flushed. Fails with the first failure, the header's or a write's.
   Status finish(std::int64_t end_ns, const Decoder& decoder);

@@ -1,0 +1,137 @@
+// A capture read frame by frame, the one way every command and the plugin's first pass read it:
+// each record walked (docs/protocol.md §8) and timed by the frame clock (the probe's or the
+// PC's); held in the learning window until the layout is known (docs/layout.md), then delivered
+// in capture order, the window's frames first; judged by the validator, frame by frame; and at
+// the end, what only the frames that did not come could tell (docs/rules.md#com-002). Frames
+// that are not EtherCAT, carry no datagrams or are a probe's bus faults are timed but not
+// delivered.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ncservo/base/byte_reader.hpp"
+#include "ncservo/base/error.hpp"
+#include "ncservo/layout/decoder.hpp"
+#include "ncservo/layout/layout_window.hpp"
+#include "ncservo/rules/finding.hpp"
+#include "ncservo/rules/rules.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/capture_record.hpp"
+#include "ncservo/wire/ethercat.hpp"
+#include "ncservo/wire/frame_clock.hpp"
+
+namespace ncservo {
+
+// `--from SECONDS --to SECONDS` (docs/cli.md): the frames whose time, in the capture's own
+// seconds (since its first record, as Wireshark's frame.time_relative), lies in [from, to]. The
+// frames outside are neither decoded for their values nor judged: the capture seen starts
+// mid-operation at `from`. They still show the layout (a start-up before the window, the
+// learning window's cyclic traffic): the pipeline gives them to `Sinks::layout_only`.
+struct TimeWindow {
+  std::optional<std::int64_t> from_ns, to_ns;
+  bool contains(std::int64_t relative_ns) const {
+    return (!from_ns || relative_ns >= *from_ns) && (!to_ns || relative_ns <= *to_ns);
+  }
+  bool limited() const { return from_ns || to_ns; }
+};
+// The window of `--from`/`--to` in seconds; fails when `to` is before `from` or either is not a
+// finite number.
+Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s);
+// "--from 1.5 --to 2", "--from 1.5", for messages.
+std::string describeTimeWindow(const TimeWindow& window);
+
+struct CaptureRun {
+  std::uint64_t records = 0;                  // read, of any kind
+  std::optional<std::int64_t> first_time_ns;  // of the first record
+  std::uint64_t in_window = 0;                // EtherCAT frames inside the time window
+  std::uint64_t snapped = 0;                  // records cut by the capture's snap length
+  std::uint64_t first_snapped = 0;            // the first of them (0: none)
+};
+
+struct PipelineOptions {
+  DecoderOptions layout;
+  // The validator's settings: each delivered frame is judged. None: the frames are only
+  // delivered (decode's rows decode them themselves).
+  std::optional<RuleSettings> rules;
+  TimeWindow window;
+  TimestampMode timestamps = TimestampMode::Auto;
+};
+
+// One delivered frame: walked over `bytes`, with its 1-based number and capture time.
+struct PipelineFrame {
+  std::uint64_t number;
+  std::int64_t time_ns;
+  const EcatFrame& frame;
+  const ByteReader& bytes;
+  const ValidatedFrame* judged;  // the validator's placements and states; null without rules
+};
+
+class CapturePipeline {
+ public:
+  struct Sinks {
+    // Once, with the layout decided, before the first frame is delivered; validator() is there.
+    std::function<void(const DecoderOptions& layout)> start;
+    // A frame inside the time window, after the validator judged it.
+    std::function<void(const PipelineFrame& frame)> frame;
+    // A frame outside it, after the validator took what it shows of the layout (may be null).
+    std::function<void(const PipelineFrame& frame)> layout_only;
+    // The findings the validator reported on a frame, after `frame`, and at the end of the
+    // capture (may be null).
+    std::function<void(const std::vector<Finding>& findings)> findings;
+  };
+
+  explicit CapturePipeline(PipelineOptions options, WindowLimits limits = {});
+  CapturePipeline(const CapturePipeline&) = delete;
+  CapturePipeline& operator=(const CapturePipeline&) = delete;
+
+  // Given before the first record or frame.
+  void setSinks(Sinks sinks) { sinks_ = std::move(sinks); }
+
+  // One record as read: walked, timed, held in the learning window or delivered.
+  void onRecord(LinkType link, const CaptureRecord& record);
+  // One frame already walked over `bytes` (any status but NotEtherCat, NotDatagrams and
+  // BusFault) and timed, as the plugin's first pass sees it: held or delivered. `judged`:
+  // inside the time window.
+  void onWalkedFrame(std::uint64_t number, std::int64_t time_ns, LinkType link,
+                     const ByteReader& bytes, const EcatFrame& frame, bool judged = true);
+  // The frames ended while learning: the window decides with what it held and delivers it.
+  void endLearning();
+  // The capture ended: endLearning, then the validator's end-of-capture judgement, whose
+  // findings go to `Sinks::findings`. `start` has been called even for a capture with no frame.
+  void finish();
+
+  // Frames are still held back in the learning window.
+  bool learning() const { return window_.learning(); }
+  // The layout decided and what the inference found, once no longer learning.
+  const DecoderOptions& layout() const { return window_.options(); }
+  const std::optional<InferenceResult>& inference() const { return window_.inference(); }
+  // Null until the layout is decided, and without rules.
+  const Validator* validator() const { return validator_ ? &*validator_ : nullptr; }
+  const FrameClock& clock() const { return clock_; }
+  const CaptureRun& run() const { return run_; }
+  const TimeWindow& timeWindow() const { return time_window_; }
+
+ private:
+  void decided();
+  void started();
+  void deliver(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+               const ByteReader& bytes);
+  void deliverLayoutOnly(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+                         const ByteReader& bytes);
+
+  std::optional<RuleSettings> rules_;
+  TimeWindow time_window_;
+  FrameClock clock_;
+  LayoutWindow window_;
+  std::optional<Validator> validator_;
+  Sinks sinks_;
+  bool started_ = false;
+  CaptureRun run_;
+  EcatFrame frame_;  // the record being walked
+};
+
+}  // namespace ncservo

@@ -1,0 +1,122 @@
+#include "ncservo/pipeline/capture_pipeline.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <tuple>
+#include <utility>
+
+namespace ncservo {
+
+Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s) {
+  constexpr double kLimitS = 1e9;  // about 30 years either way: the nanoseconds fit
+  TimeWindow window;
+  for (auto [option, seconds, ns] :
+       {std::tuple{"--from", from_s, &window.from_ns}, std::tuple{"--to", to_s, &window.to_ns}}) {
+    if (!seconds) continue;
+    if (!std::isfinite(*seconds) || std::fabs(*seconds) > kLimitS) {
+      return fail(
+          fmt::format("{} {}: expected seconds since the capture's first frame", option, *seconds));
+    }
+    *ns = std::llround(*seconds * 1e9);
+  }
+  if (window.from_ns && window.to_ns && *window.to_ns < *window.from_ns) {
+    return fail(fmt::format("--to {} is before --from {}", *to_s, *from_s));
+  }
+  return window;
+}
+
+std::string describeTimeWindow(const TimeWindow& window) {
+  std::string out;
+  auto add = [&out](const char* option, const std::optional<std::int64_t>& ns) {
+    if (ns) out += fmt::format("{}{} {:g}", out.empty() ? "" : " ", option, *ns / 1e9);
+  };
+  add("--from", window.from_ns);
+  add("--to", window.to_ns);
+  return out;
+}
+
+CapturePipeline::CapturePipeline(PipelineOptions options, WindowLimits limits)
+    : rules_(std::move(options.rules)),
+      time_window_(options.window),
+      clock_(options.timestamps),
+      window_(std::move(options.layout), limits) {
+  if (!window_.learning() && rules_) validator_.emplace(window_.options(), *rules_);
+}
+
+void CapturePipeline::started() {
+  if (started_) return;
+  started_ = true;
+  if (sinks_.start) sinks_.start(window_.options());
+}
+
+// The window decided the layout: the validator starts with it, then the held frames follow.
+void CapturePipeline::decided() {
+  if (rules_) validator_.emplace(window_.options(), *rules_);
+  started();
+  window_.replay(
+      [this](std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+             const ByteReader& bytes) { deliver(number, time_ns, frame, bytes); },
+      [this](std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+             const ByteReader& bytes) { deliverLayoutOnly(number, time_ns, frame, bytes); });
+}
+
+void CapturePipeline::deliver(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
+                              const ByteReader& bytes) {
+  started();
+  const ValidatedFrame* judged =
+      validator_ ? &validator_->onFrame(number, time_ns, frame, bytes) : nullptr;
+  if (sinks_.frame) sinks_.frame(PipelineFrame{number, time_ns, frame, bytes, judged});
+  if (validator_ && sinks_.findings && !validator_->findings().empty()) {
+    sinks_.findings(validator_->findings());
+  }
+}
+
+void CapturePipeline::deliverLayoutOnly(std::uint64_t number, std::int64_t time_ns,
+                                        const EcatFrame& frame, const ByteReader& bytes) {
+  started();
+  if (validator_) validator_->onLayoutOnlyFrame(frame, bytes);
+  if (sinks_.layout_only) sinks_.layout_only(PipelineFrame{number, time_ns, frame, bytes, nullptr});
+}
+
+void CapturePipeline::onRecord(LinkType link, const CaptureRecord& record) {
+  if (!run_.first_time_ns) run_.first_time_ns = record.time_ns;
+  run_.records = record.frame;
+  if (record.captured < record.original && run_.snapped++ == 0) run_.first_snapped = record.frame;
+  const ByteReader bytes(record.data, record.captured);
+  walkPacket(link, bytes, frame_);
+  if (frame_.status == WalkStatus::NotEtherCat) return;
+  const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame_.probe);
+  const bool judged = time_window_.contains(time_ns - *run_.first_time_ns);
+  run_.in_window += judged ? 1 : 0;
+  if (frame_.status == WalkStatus::NotDatagrams || frame_.status == WalkStatus::BusFault) return;
+  onWalkedFrame(record.frame, time_ns, link, bytes, frame_, judged);
+}
+
+void CapturePipeline::onWalkedFrame(std::uint64_t number, std::int64_t time_ns, LinkType link,
+                                    const ByteReader& bytes, const EcatFrame& frame, bool judged) {
+  if (window_.learning()) {
+    window_.hold(number, time_ns, link, bytes, frame, judged);
+    if (!window_.learning()) decided();
+  } else if (judged) {
+    deliver(number, time_ns, frame, bytes);
+  } else {
+    deliverLayoutOnly(number, time_ns, frame, bytes);
+  }
+}
+
+void CapturePipeline::endLearning() {
+  if (!window_.learning()) return;
+  window_.finish();
+  decided();
+}
+
+void CapturePipeline::finish() {
+  endLearning();
+  started();
+  if (!validator_) return;
+  validator_->finish();
+  if (sinks_.findings && !validator_->findings().empty()) sinks_.findings(validator_->findings());
+}
+
+}  // namespace ncservo
