@@ -86,6 +86,7 @@ struct WordItems {
 };
 WordItems word_items[kWordCount];
 expert_field ei_region_malformed = EI_INIT;
+expert_field ei_layout_learning = EI_INIT;
 expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
 const char* pref_config_path = "";
@@ -126,6 +127,12 @@ DecoderOptions* g_options = nullptr;
 RuleSettings* g_settings = nullptr;
 CapturePipeline* g_pipeline = nullptr;
 bool g_capture_open = false;
+// While the learning window holds the frames, a single pass shows each before the layout is
+// known: a validator with the layout known so far (none, as a start-up would have ended the
+// window) judges them in their turn, for the findings that need no layout. The window's replay
+// then keeps each frame's record anew for later passes.
+Validator* g_held_validator = nullptr;
+const char* g_held_info = nullptr;  // the Info text of a held frame without findings
 
 // What the first pass found in a frame, kept in file scope for later passes.
 enum AxisFlags : guint8 {
@@ -166,6 +173,9 @@ struct FrameRecord {
   guint16 finding_count;
   guint8 copy;
   guint8 timing;  // TimingFlags
+  // Held in the learning window when the first pass saw it: in a single pass, shown before the
+  // layout was known.
+  bool held;
   gint64 interval_ns;
   gint64 deviation_ns;
   gint64 latency_ns;
@@ -391,8 +401,15 @@ const Validator* validator() {
 
 void validateFrame(const PipelineFrame& delivered);
 
+void stopHeldJudging() {
+  delete g_held_validator;
+  g_held_validator = nullptr;
+}
+
 void initCapture() {
   plugin::resetItemTexts();
+  stopHeldJudging();
+  g_held_info = nullptr;
   g_frames.clear();
   g_shared_axes = {};
   g_next_shared = 0;
@@ -407,6 +424,7 @@ void initCapture() {
 }
 
 void cleanupCapture() {
+  stopHeldJudging();
   delete g_pipeline;
   g_pipeline = nullptr;
   std::vector<FrameRecord>().swap(g_frames);
@@ -414,11 +432,14 @@ void cleanupCapture() {
   g_capture_open = false;
 }
 
-const char* axisName(guint16 axis) {
-  if (validator() != nullptr && axis < validator()->decoder().axes().size()) {
-    return validator()->decoder().axes()[axis].name.c_str();
+const char* axisName(const Validator* by, guint16 axis) {
+  if (by != nullptr && axis < by->decoder().axes().size()) {
+    return by->decoder().axes()[axis].name.c_str();
   }
   return "?";
+}
+const char* axisName(guint16 axis) {
+  return axisName(validator(), axis);
 }
 
 LinkType linkTypeOf(const packet_info* pinfo) {
@@ -469,6 +490,7 @@ const char* infoText(const FrameRecord& record) {
     if (counts[d] > counts[most]) most = d;
   }
   wmem_strbuf_t* text = wmem_strbuf_new(wmem_file_scope(), " [NCSERVO");
+  if (record.held) wmem_strbuf_append(text, " layout being learned");
   if (distinct > 0 && counts[most] > 2) {
     wmem_strbuf_append_printf(text, " %s \u00d7%u", stateLabel(states[most]), counts[most]);
   }
@@ -549,22 +571,58 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
   return slot;
 }
 
+// The record of a frame, emptied: the window's replay keeps anew what the first pass held.
+FrameRecord& freshRecord(std::uint64_t number) {
+  if (number >= g_frames.size())
+    g_frames.resize(std::max<std::size_t>(number + 1, 2 * g_frames.size()));
+  return g_frames[number] = FrameRecord{};
+}
+
+// Whether a finding stands whatever layout the window decides: the rules on the slaves' state
+// machines read the AL registers, not the process data.
+bool needsNoLayout(const Finding& f) {
+  return ruleDef(f.rule).kind == RuleKind::Slave;
+}
+
+// The findings `by` reported on the frame (those `keep` accepts, all when null), kept with their
+// texts in file scope.
+void keepFindings(FrameRecord& record, const Validator& by, bool (*keep)(const Finding&)) {
+  const std::vector<Finding>& findings = by.findings();
+  const auto kept = static_cast<std::size_t>(
+      keep == nullptr ? findings.size() : std::count_if(findings.begin(), findings.end(), keep));
+  if (kept == 0) return;
+  auto* out =
+      static_cast<FindingRecord*>(wmem_alloc0(wmem_file_scope(), kept * sizeof(FindingRecord)));
+  std::size_t count = 0;
+  for (const Finding& f : findings) {
+    if (keep != nullptr && !keep(f)) continue;
+    const RuleDef& rule = ruleDef(f.rule);
+    FindingRecord& r = out[count++];
+    r.rule = static_cast<guint8>(f.rule);
+    r.axis = f.axis ? *f.axis : kBusAxis;
+    r.since = static_cast<guint32>(f.since.frame);
+    r.text = wmem_strdup_printf(wmem_file_scope(), "%s %s: %s: %s", rule.code, rule.slug,
+                                f.axis ? axisName(&by, *f.axis) : "bus", f.message.c_str());
+  }
+  record.findings = out;
+  record.finding_count = static_cast<guint16>(std::min<std::size_t>(kept, 0xFFFF));
+}
+
 // Keeps what the validator found in one frame, by frame number.
 void validateFrame(const PipelineFrame& delivered) {
   const std::uint64_t number = delivered.number;
   const ValidatedFrame& view = *delivered.judged;
   const FrameDecode& decode = view.decode;
-  const std::vector<Finding>& findings = validator()->findings();
-  if (decode.axis_count == 0 && findings.empty()) return;
-  if (number >= g_frames.size())
-    g_frames.resize(std::max<std::size_t>(number + 1, 2 * g_frames.size()));
-  FrameRecord& record = g_frames[number];
+  const bool any_findings = !validator()->findings().empty();
+  if (decode.axis_count == 0 && !any_findings) {
+    if (number < g_frames.size()) g_frames[number] = FrameRecord{};
+    return;
+  }
+  FrameRecord& record = freshRecord(number);
   record.copy = static_cast<guint8>(decode.copy);
   record.axis_count = static_cast<guint16>(decode.axis_count);
   SharedAxes* shared = decode.axis_count > 0 ? &keepAxes(number, view) : nullptr;
   record.axes = shared != nullptr ? shared->axes : nullptr;
-  record.findings = nullptr;
-  record.finding_count = 0;
   const FrameTiming& timing = validator()->frameTiming();
   record.timing = static_cast<guint8>((timing.interval_ns ? kHasInterval : 0) |
                                       (timing.deviation_ns ? kHasDeviation : 0) |
@@ -572,26 +630,50 @@ void validateFrame(const PipelineFrame& delivered) {
   record.interval_ns = timing.interval_ns.value_or(0);
   record.deviation_ns = timing.deviation_ns.value_or(0);
   record.latency_ns = timing.latency_ns.value_or(0);
-  if (!findings.empty()) {
-    auto* out = static_cast<FindingRecord*>(
-        wmem_alloc0(wmem_file_scope(), findings.size() * sizeof(FindingRecord)));
-    for (std::size_t i = 0; i < findings.size(); ++i) {
-      const Finding& f = findings[i];
-      const RuleDef& rule = ruleDef(f.rule);
-      out[i].rule = static_cast<guint8>(f.rule);
-      out[i].axis = f.axis ? *f.axis : kBusAxis;
-      out[i].since = static_cast<guint32>(f.since.frame);
-      out[i].text = wmem_strdup_printf(wmem_file_scope(), "%s %s: %s: %s", rule.code, rule.slug,
-                                       f.axis ? axisName(*f.axis) : "bus", f.message.c_str());
-    }
-    record.findings = out;
-    record.finding_count = static_cast<guint16>(std::min<std::size_t>(findings.size(), 0xFFFF));
-  }
-  if (shared == nullptr || !findings.empty()) {
+  keepFindings(record, *validator(), nullptr);
+  if (shared == nullptr || any_findings) {
     record.info = infoText(record);
   } else {
     if (shared->info == nullptr) shared->info = infoText(record);
     record.info = shared->info;
+  }
+}
+
+// Whether a frame may carry a servo's PDOs once the layout is known: a logical datagram, or one
+// addressed to a slave's process memory (above its registers), as a physical exchange is.
+bool mayCarryProcessData(const EcatFrame& frame) {
+  constexpr std::uint32_t kProcessMemory = 0x1000;
+  for (std::size_t i = 0; i < frame.count; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    if (ecat::isLogical(dg.command) ||
+        (ecat::isConfiguredAddress(dg.command) && dg.ado() >= kProcessMemory)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// A frame the learning window holds, on the first pass: judged in its turn for the findings that
+// need no layout; one that may carry process data says that its layout is being learned.
+void keepHeldFrame(std::uint64_t number, std::int64_t time_ns, const ByteReader& bytes,
+                   const EcatFrame& frame) {
+  if (g_held_validator == nullptr) {
+    g_held_validator =
+        new Validator(g_pipeline->layout(), g_settings != nullptr ? *g_settings : RuleSettings{});
+  }
+  g_held_validator->onFrame(number, time_ns, frame, bytes);
+  const std::vector<Finding>& findings = g_held_validator->findings();
+  const bool held = mayCarryProcessData(frame);
+  const bool any_findings = std::any_of(findings.begin(), findings.end(), needsNoLayout);
+  if (!held && !any_findings) return;
+  FrameRecord& record = freshRecord(number);
+  record.held = held;
+  keepFindings(record, *g_held_validator, needsNoLayout);
+  if (any_findings) {
+    record.info = infoText(record);
+  } else {
+    if (g_held_info == nullptr) g_held_info = infoText(record);
+    record.info = g_held_info;
   }
 }
 
@@ -616,6 +698,11 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   const std::int64_t time_ns =
       static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
   g_pipeline->onWalkedFrame(pinfo->num, time_ns, link, bytes, frame);
+  if (g_pipeline->learning()) {
+    keepHeldFrame(pinfo->num, time_ns, bytes, frame);
+  } else if (g_held_validator != nullptr) {
+    stopHeldJudging();
+  }
 }
 
 // Whether an item is needed: the tree is shown, or a filter, column or tap references the field
@@ -901,10 +988,12 @@ void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, 
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
   const auto& layer = *static_cast<const LayerData*>(data);
   const FrameRecord& record = *layer.record;
-  // A malformed region's expert info needs an item to be found by its filter.
-  const bool protocol_item =
-      protocolWanted(tree) || (tree != nullptr && layer.axis != nullptr &&
-                               (layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0);
+  // A malformed region's expert info, and a held frame's note, need an item to be found by
+  // their filters.
+  const bool protocol_item = protocolWanted(tree) ||
+                             (tree != nullptr && layer.axis != nullptr &&
+                              (layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0) ||
+                             (tree != nullptr && record.held);
   proto_item* root = nullptr;
   proto_tree* layer_tree = tree;
   guint start = 0;
@@ -940,6 +1029,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
   }
+  if (record.held && layer.first) expert_add_info(pinfo, root, &ei_layout_learning);
   for (guint i = 0; i < record.finding_count; ++i) {
     const FindingRecord& f = record.findings[i];
     const bool here = layer.axis != nullptr && f.axis == layer.axis->axis;
@@ -953,6 +1043,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 // Without a tree (the packet list) only the findings' expert info and the Info column are
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
+  if (record.held) expert_add_info(pinfo, nullptr, &ei_layout_learning);
   for (guint i = 0; i < record.finding_count; ++i) {
     expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);
   }
@@ -968,6 +1059,7 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
     // The capture may have ended inside the learning window: decide with what the first pass
     // held. The plugin has no end of capture: a gap in the last cycle goes unjudged here.
     g_pipeline->endLearning();
+    stopHeldJudging();
   }
   const FrameRecord* record = recordOf(pinfo);
   if (record == nullptr) return 0;
@@ -1055,6 +1147,9 @@ void registerProtocol() {
       {&ei_region_malformed,
        {"ncservo.malformed", PI_MALFORMED, PI_ERROR,
         "A PDO region is cut short or lies partly outside its datagram", EXPFILL}},
+      {&ei_layout_learning,
+       {"ncservo.layout_learning", PI_UNDECODED, PI_CHAT,
+        "layout being learned: `tshark -2` or the GUI decodes this frame", EXPFILL}},
   };
   expert_module_t* expert = expert_register_protocol(proto_ncservo);
   expert_register_field_array(expert, ei, static_cast<int>(std::size(ei)));
