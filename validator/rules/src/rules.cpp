@@ -250,15 +250,17 @@ std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
 }
 
 // --- Bus, per axis ---
+// docs/protocol.md §4: the drive raises ECatTErr after this many cycles without data.
+constexpr std::uint32_t kTimeoutReportCycles = 3;
 // Judged only on inputs the capture gave: ECatTErr may have risen in inputs it cut off.
 bool com003(const AxisModel& a, const RuleSettings&) {
-  return a.awaitingTimeoutReport() && a.knowsInputs();
+  return a.unansweredOutageCycles() >= kTimeoutReportCycles && a.knowsInputs();
 }
 std::string com003Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
   return fmt::format(
       "{} consecutive cycles failed, but SEW.ECatTErr did not rise within {} ms after traffic "
       "resumed",
-      a.lastOutageCycles(), ms(s, Timeout::DriveResponse));
+      a.unansweredOutageCycles(), ms(s, Timeout::DriveResponse));
 }
 
 bool com005(const AxisModel& a, const RuleSettings& s) {
@@ -327,26 +329,39 @@ std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&
                      nominal, untold);
 }
 
-bool com006(const CycleJitterEvent&, const RuleSettings&) {
-  return true;  // the bus model reports a deviation only beyond the limit
+// COM-006: one finding per run of deviating cycles. A gap deviates too but is COM-002's: it
+// starts a run without a finding, so a late cycle's short interval after it is not reported.
+bool com006(const CycleIntervalEvent& e, const RuleSettings& s, bool& in_run) {
+  const std::int64_t deviation =
+      e.interval_ns > e.nominal_ns ? e.interval_ns - e.nominal_ns : e.nominal_ns - e.interval_ns;
+  const bool deviates =
+      deviation * 100 > e.nominal_ns * std::int64_t{s.limitOf(Limit::CycleJitterPercent)};
+  const bool begins = deviates && !e.gap && !in_run;
+  in_run = deviates;
+  return begins;
 }
-std::string com006Text(const CycleJitterEvent& e, const Stamp&, const RuleSettings&) {
+std::string com006Text(const CycleIntervalEvent& e, const Stamp&, const RuleSettings& s) {
   const double deviation = static_cast<double>(e.interval_ns - e.nominal_ns) / 1e3;
   return fmt::format(
       "cycle of {:.3f} ms since frame {} deviates {:+.1f} us from the {:.3f} ms nominal, more "
       "than cycle_jitter_percent = {}",
       static_cast<double>(e.interval_ns) / 1e6, e.previous_frame, deviation,
-      static_cast<double>(e.nominal_ns) / 1e6, e.limit_percent);
+      static_cast<double>(e.nominal_ns) / 1e6, s.limitOf(Limit::CycleJitterPercent));
 }
 
-bool com007(const LateReturnEvent&, const RuleSettings&) {
-  return true;  // the bus model reports a return only beyond the limit
+// COM-007: one finding per run of late returns.
+bool com007(const ReturnLatencyEvent& e, const RuleSettings& s, bool& in_run) {
+  const bool late = e.latency_ns > std::int64_t{s.limitOf(Limit::ReturnLatencyUs)} * 1000;
+  const bool begins = late && !in_run;
+  in_run = late;
+  return begins;
 }
-std::string com007Text(const LateReturnEvent& e, const Stamp&, const RuleSettings&) {
+std::string com007Text(const ReturnLatencyEvent& e, const Stamp&, const RuleSettings& s) {
   return fmt::format(
       "returned {:.1f} us after its master copy (frame {}), more than "
       "return_latency_us = {}",
-      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, e.limit_ns / 1000);
+      static_cast<double>(e.latency_ns) / 1e3, e.master_frame,
+      s.limitOf(Limit::ReturnLatencyUs));
 }
 
 bool com004(const NotReturnedEvent&, const RuleSettings&) {
@@ -432,6 +447,12 @@ bool onEvent(const RuleSubject& s, const RuleSettings& settings) {
   const Event* e = std::get_if<Event>(&s.event->data);
   return e != nullptr && F(*e, settings);
 }
+// A measurement continues its cyclic frame's run for the judging rule.
+template <class Event, bool (*F)(const Event&, const RuleSettings&, bool& in_run)>
+bool onMeasurement(const RuleSubject& s, const RuleSettings& settings) {
+  const Event* e = std::get_if<Event>(&s.event->data);
+  return e != nullptr && F(*e, settings, s.runs->inRun(s.rule, e->cyclic_frame));
+}
 template <class Event, std::string (*F)(const Event&, const Stamp&, const RuleSettings&)>
 std::string describeEvent(const RuleSubject& s, const RuleSettings& settings, std::int64_t) {
   return F(std::get<Event>(s.event->data), s.event->since, settings);
@@ -455,6 +476,8 @@ constexpr Reads kNothing{};
 
 #define NCSERVO_AXIS(name) onAxis<name>, describeAxis<name##Text>
 #define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
+#define NCSERVO_MEASUREMENT(type, name, text) \
+  onMeasurement<type, name>, describeEvent<type, text>
 // clang-format off
 const std::array<RuleDef, kRuleCount> kRules{{
   {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false, ON,
@@ -534,10 +557,10 @@ const std::array<RuleDef, kRuleCount> kRules{{
    kNothing, NCSERVO_AXIS(com005),
    "consecutive failed cycles of an axis exceed the limit"},
   {RuleId::Com006, "COM-006", "cycle-jitter", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
-   kNothing, NCSERVO_EVENT(CycleJitterEvent, com006, com006Text),
+   kNothing, NCSERVO_MEASUREMENT(CycleIntervalEvent, com006, com006Text),
    "a master copy's interval deviates from the nominal cycle by more than cycle_jitter_percent"},
   {RuleId::Com007, "COM-007", "late-return", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
-   kNothing, NCSERVO_EVENT(LateReturnEvent, com007, com007Text),
+   kNothing, NCSERVO_MEASUREMENT(ReturnLatencyEvent, com007, com007Text),
    "a returned copy arrives more than return_latency_us after its master copy"},
   {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "docs/protocol.md §8 AL control", kNone, false, ON,
    kNothing, NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
@@ -555,6 +578,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
 // clang-format on
 #undef NCSERVO_AXIS
 #undef NCSERVO_EVENT
+#undef NCSERVO_MEASUREMENT
 
 const char* severityName(Severity severity) {
   switch (severity) {
@@ -668,11 +692,18 @@ const char* ruleKindName(RuleKind kind) {
   return "axis";
 }
 
-void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+bool& MeasurementRuns::inRun(RuleId rule, CyclicFrameId frame) {
+  Slot& slot = slots_[frame.slot];
+  if (slot.serial != frame.serial) slot = Slot{frame.serial, {}};
+  return slot.in_run[static_cast<std::size_t>(rule)];
+}
+
+void judgeEvent(const BusEvent& event, const RuleSettings& settings, MeasurementRuns& runs,
                 std::vector<EventFinding>& out) {
-  const RuleSubject subject{nullptr, &event};
+  RuleSubject subject{nullptr, &event, &runs};
   for (const RuleDef& rule : kRules) {
     if (rule.kind == RuleKind::Axis || !settings.isEnabled(rule.id)) continue;
+    subject.rule = rule.id;
     if (!rule.check(subject, settings)) continue;
     SlaveRef slave;
     if (const auto* control = std::get_if<AlControlEvent>(&event.data)) slave = control->slave;

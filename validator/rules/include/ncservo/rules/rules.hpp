@@ -124,14 +124,34 @@ enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
 enum class ByDefault : std::uint8_t { On, Off };
 const char* ruleKindName(RuleKind kind);
 
-// What a check looks at: the axis's model (axis rules) or one event of the bus and slave models.
+// The rules judged once per run of measurements beyond their limit (COM-006, COM-007): for each
+// cyclic frame, whether its last measurement was beyond the rule's limit. A capture segment
+// starts with none.
+class MeasurementRuns {
+ public:
+  bool& inRun(RuleId rule, CyclicFrameId frame);
+  void clear() { slots_ = {}; }
+
+ private:
+  struct Slot {
+    std::uint32_t serial = 0;  // of the frame it holds (0: none)
+    std::array<bool, kRuleCount> in_run{};
+  };
+  std::array<Slot, kMaxCyclicFrames> slots_{};
+};
+
+// What a check looks at: the axis's model (axis rules) or one event of the bus and slave models,
+// with the runs a measurement continues.
 struct RuleSubject {
   const AxisModel* axis = nullptr;
   const BusEvent* event = nullptr;
+  MeasurementRuns* runs = nullptr;
+  RuleId rule{};  // the rule judging, whose run it is
 };
 // Whether the rule's condition holds. An axis condition is evaluated on every frame that changes
 // what it reads; it is reported when it begins or, for a delayed rule, once it has held longer
-// than its timeout. An event condition is reported on the frame of the event.
+// than its timeout. An event condition is reported on the frame of the event; for a measurement,
+// the condition is that a run beyond the limit begins.
 using RuleCheck = bool (*)(const RuleSubject& subject, const RuleSettings& settings);
 // What was seen and what was expected; `held_ns` is how long the condition has held.
 using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleSettings& settings,
@@ -171,8 +191,9 @@ struct EventFinding {
   SlaveRef slave;  // the slave it is about, for slave rules
   std::string message;
 };
-// The enabled bus and slave rules that fire on the event, in table order.
-void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+// The enabled bus and slave rules that fire on the event, in table order; `runs` carries the
+// runs of measurements from one event to the next.
+void judgeEvent(const BusEvent& event, const RuleSettings& settings, MeasurementRuns& runs,
                 std::vector<EventFinding>& out);
 
 // What the user may change: RULES.md defaults, then the config file, then the command line.

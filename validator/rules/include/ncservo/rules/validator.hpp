@@ -102,7 +102,6 @@ class Validator {
     bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
-  static TimingLimits timingLimits(const RuleSettings& settings);
   void applyAccounts();
   bool unchanged(const AxisPlacement& placement, const ByteReader& bytes,
                  const AxisModel& model) const;
@@ -128,6 +127,7 @@ class Validator {
   CutRegions cut_;
   std::vector<BusEvent> events_;  // this frame's, from the slave and bus models
   std::vector<EventFinding> event_findings_;
+  MeasurementRuns runs_;
   std::vector<AxisAccount> accounts_;  // this frame's telegram accounting
   std::vector<AxisSlot> axes_;
   std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
