@@ -93,7 +93,8 @@ BusModel::CyclicFrame* BusModel::cyclicFrame(const EcatFrame& frame, const Frame
   for (const CyclicFrame& c : cyclic_) slot_taken[c.id.slot] = true;
   const auto free_slot = std::find(slot_taken.begin(), slot_taken.end(), false);
   cyclic_.push_back(CyclicFrame{});
-  cyclic_.back().id = {static_cast<std::uint8_t>(free_slot - slot_taken.begin()), ++cyclic_serials_};
+  cyclic_.back().id = {static_cast<std::uint8_t>(free_slot - slot_taken.begin()),
+                       ++cyclic_serials_};
   cyclic_.back().datagrams.assign(first, last);
   return remember(cyclic_.size() - 1);
 }
@@ -214,8 +215,8 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
     timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
     frame_timing_.latency_ns = latency;
-    events.push_back({cyclic.last_master,
-                      ReturnLatencyEvent{latency, cyclic.last_master.frame, cyclic.id}});
+    events.push_back(
+        {cyclic.last_master, ReturnLatencyEvent{latency, cyclic.last_master.frame, cyclic.id}});
   }
   cyclic.awaiting_return = false;
   cyclic.not_returned_episode = false;
@@ -258,9 +259,9 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
       }
       cyclic.pending_gap = std::move(pending);
     }
-    events_->push_back({*cyclic.last_tick,
-                        CycleIntervalEvent{interval, *median, cyclic.last_tick->frame,
-                                           cyclic.id, gap}});
+    events_->push_back(
+        {*cyclic.last_tick,
+         CycleIntervalEvent{interval, *median, cyclic.last_tick->frame, cyclic.id, gap}});
   }
   frame_timing_.interval_ns = interval;
   if (const std::optional<std::int64_t> nominal = nominalCycleNs()) {

@@ -360,8 +360,7 @@ std::string com007Text(const ReturnLatencyEvent& e, const Stamp&, const RuleSett
   return fmt::format(
       "returned {:.1f} us after its master copy (frame {}), more than "
       "return_latency_us = {}",
-      static_cast<double>(e.latency_ns) / 1e3, e.master_frame,
-      s.limitOf(Limit::ReturnLatencyUs));
+      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, s.limitOf(Limit::ReturnLatencyUs));
 }
 
 bool com004(const NotReturnedEvent&, const RuleSettings&) {
@@ -476,8 +475,7 @@ constexpr Reads kNothing{};
 
 #define NCSERVO_AXIS(name) onAxis<name>, describeAxis<name##Text>
 #define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
-#define NCSERVO_MEASUREMENT(type, name, text) \
-  onMeasurement<type, name>, describeEvent<type, text>
+#define NCSERVO_MEASUREMENT(type, name, text) onMeasurement<type, name>, describeEvent<type, text>
 // clang-format off
 const std::array<RuleDef, kRuleCount> kRules{{
   {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false, ON,
