@@ -106,10 +106,22 @@ struct LimitDef {
   const char* bounds;  // what it bounds, for docs and errors
 };
 inline constexpr std::array<LimitDef, 2> kLimits{{
-    {Limit::CycleJitterPercent, "cycle_jitter_percent", 10, 1, 100, "% of the nominal cycle",
-     RuleId::Com006, "how far a master copy's interval may deviate from the nominal cycle"},
-    {Limit::ReturnLatencyUs, "return_latency_us", 500, 1, 1'000'000, "µs", RuleId::Com007,
-     "how long after its master copy a returned copy may arrive"},
+    {.id = Limit::CycleJitterPercent,
+     .name = "cycle_jitter_percent",
+     .default_value = 10,
+     .min = 1,
+     .max = 100,
+     .unit = "% of the nominal cycle",
+     .rule = RuleId::Com006,
+     .bounds = "how far a master copy's interval may deviate from the nominal cycle"},
+    {.id = Limit::ReturnLatencyUs,
+     .name = "return_latency_us",
+     .default_value = 500,
+     .min = 1,
+     .max = 1'000'000,
+     .unit = "µs",
+     .rule = RuleId::Com007,
+     .bounds = "how long after its master copy a returned copy may arrive"},
 }};
 const LimitDef* limitByName(std::string_view name);
 
@@ -164,11 +176,11 @@ struct RuleDef {
   Severity severity;
   Party party;
   RuleKind kind;
-  const char* clause;              // where the protocol says so
-  std::optional<Timeout> timeout;  // the timeout the rule uses (RULES.md "Time")
-  bool delayed;                    // reported when the condition outlasts the timeout
-  ByDefault by_default;
-  Reads reads;  // axis rules: what check and describe read of the axis
+  const char* clause;                             // where the protocol says so
+  std::optional<Timeout> timeout = std::nullopt;  // the timeout the rule uses (docs/rules.md)
+  bool delayed = false;  // reported when the condition outlasts the timeout
+  ByDefault by_default = ByDefault::On;
+  Reads reads{};  // axis rules: what check and describe read of the axis
   RuleCheck check;
   RuleDescribe describe;
   const char* summary;  // one line, for `ncservo rules` and the expert item
