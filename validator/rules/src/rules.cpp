@@ -461,9 +461,10 @@ std::string describeEvent(const RuleSubject& s, const RuleSettings& settings, st
 
 #define NCSERVO_AXIS(name) .check = onAxis<name>, .describe = describeAxis<name##Text>
 #define NCSERVO_EVENT(type, name, text) \
-  .check = onEvent<type, name>, .describe = describeEvent<type, text>
-#define NCSERVO_MEASUREMENT(type, name, text) \
-  .check = onMeasurement<type, name>, .describe = describeEvent<type, text>
+  .event = eventIndex<type>(), .check = onEvent<type, name>, .describe = describeEvent<type, text>
+#define NCSERVO_MEASUREMENT(type, name, text)                      \
+  .event = eventIndex<type>(), .check = onMeasurement<type, name>, \
+  .describe = describeEvent<type, text>
 const std::array<RuleDef, kRuleCount> kRules{{
     {.id = RuleId::Se001,
      .code = "SE-001",
@@ -926,7 +927,7 @@ void judgeEvent(const BusEvent& event, const RuleSettings& settings, Measurement
                 std::vector<EventFinding>& out) {
   RuleSubject subject{nullptr, &event, &runs};
   for (const RuleDef& rule : kRules) {
-    if (rule.kind == RuleKind::Axis || !settings.isEnabled(rule.id)) continue;
+    if (rule.event != event.data.index() || !settings.isEnabled(rule.id)) continue;
     subject.rule = rule.id;
     if (!rule.check(subject, settings)) continue;
     SlaveRef slave;

@@ -10,7 +10,11 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
       judged_(judgedBits(settings_, fast_path)),
       fast_path_(fast_path == FastPath::On),
       dc_(settings_.dc_settled_ns),
-      segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
+      segments_(settings_.timeoutNs(Timeout::CapturePause)) {
+  for (const RuleDef& rule : kRules) {
+    if (rule.event != kNoEvent && settings_.isEnabled(rule.id)) judged_events_[rule.event] = true;
+  }
+}
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules
 // declare they read (STYLE.md "A rule declares what it reads").
@@ -266,6 +270,7 @@ const FrameTiming& Validator::frameTiming() const {
 // station it is.
 void Validator::reportEvents() {
   for (const BusEvent& event : events_) {
+    if (!judged_events_[event.data.index()]) continue;
     event_findings_.clear();
     judgeEvent(event, settings_, runs_, event_findings_);
     for (EventFinding& f : event_findings_) {

@@ -10,6 +10,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "ncservo/base/error.hpp"
@@ -128,6 +130,18 @@ const LimitDef* limitByName(std::string_view name);
 class AxisModel;
 struct RuleSettings;
 
+// The index in BusEventData of an event kind, as RuleDef::event names it.
+inline constexpr std::size_t kNoEvent = std::variant_size_v<BusEventData>;
+template <class Event, std::size_t I = 0>
+constexpr std::size_t eventIndex() {
+  static_assert(I < kNoEvent, "not a BusEventData alternative");
+  if constexpr (std::is_same_v<Event, std::variant_alternative_t<I, BusEventData>>) {
+    return I;
+  } else {
+    return eventIndex<Event, I + 1>();
+  }
+}
+
 // Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
 // cycles) or on what a slave's state machine did (AL control and status).
 enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
@@ -180,7 +194,8 @@ struct RuleDef {
   std::optional<Timeout> timeout = std::nullopt;  // the timeout the rule uses (docs/rules.md)
   bool delayed = false;  // reported when the condition outlasts the timeout
   ByDefault by_default = ByDefault::On;
-  Reads reads{};  // axis rules: what check and describe read of the axis
+  Reads reads{};                 // axis rules: what check and describe read of the axis
+  std::size_t event = kNoEvent;  // bus and slave rules: the BusEventData alternative judged
   RuleCheck check;
   RuleDescribe describe;
   const char* summary;  // one line, for `ncservo rules` and the expert item

@@ -128,7 +128,8 @@ class Validator {
   std::vector<BusEvent> events_;  // this frame's, from the slave and bus models
   std::vector<EventFinding> event_findings_;
   MeasurementRuns runs_;
-  std::vector<AxisAccount> accounts_;  // this frame's telegram accounting
+  std::array<bool, kNoEvent> judged_events_{};  // by BusEventData index: an enabled rule judges it
+  std::vector<AxisAccount> accounts_;           // this frame's telegram accounting
   std::vector<AxisSlot> axes_;
   std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
   std::uint64_t al_epoch_ = 1;      // frames so far that could move an AL state or a station
