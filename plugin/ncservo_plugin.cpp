@@ -744,10 +744,10 @@ proto_item* addValue(proto_tree* tree, int hf, tvbuff_t* tvb, guint offset, gint
   return nullptr;
 }
 
-// The word's bit fields one by one, for a shown tree: the parameter table by its number
-// (ExtPRMTBL·4 + PRMTBL + 1); SEW cause bits that are clear and SCW/SSW bits at rest hidden
-// behind one line, so that -V on many axes stays readable (hidden items still serve filters and
-// -T fields; -V and the details pane skip them).
+// The word's bit fields one by one, for a shown tree, as the field table's view says: a parameter
+// table by its number; cause bits that are clear and bits at rest hidden behind one line each, so
+// that -V on many axes stays readable (hidden items still serve filters and -T fields; -V and the
+// details pane skip them).
 void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const WordItems& word,
                   std::uint32_t value) {
   guint clear_causes = 0;
@@ -756,7 +756,7 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
   for (std::size_t c = 0; word.children[c] != nullptr; ++c) {
     const int hf = *word.children[c];
     const FieldDef& f = kFields[word.child_rows[c]];
-    if (f.word == Word::Sew && (f.mask & kSewCauseMask) != 0 && (value & f.mask) == 0) {
+    if (f.view == FieldView::Cause && (value & f.mask) == 0) {
       ++clear_causes;
       proto_item_set_hidden(proto_tree_add_boolean(word_tree, hf, tvb, offset, word.length, value));
       continue;
@@ -771,7 +771,7 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
               : proto_tree_add_uint(word_tree, hf, tvb, offset, word.length, value));
       continue;
     }
-    if ((f.word == Word::Scw || f.word == Word::Ssw) && f.mask == parameterTableBits(f.word).low) {
+    if (f.view == FieldView::ParameterTable) {
       proto_tree_add_uint_format_value(word_tree, hf, tvb, offset, word.length, value, "table %u",
                                        parameterTable(f.word, value));
       continue;
@@ -854,7 +854,7 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
       const auto value = static_cast<std::uint32_t>(values.raw[w]);
       item = proto_tree_add_uint(tree, hf_field[word.row], tvb, offset + word.offset, word.length,
                                  value);
-      if (kFields[word.row].word == Word::Sew && (value & kSewCauseMask) != 0) {
+      if ((value & causeMask(kFields[word.row].word)) != 0) {
         char causes[256];
         plugin::sewCausesText(value, causes, sizeof causes);
         proto_item_append_text(item, " (%s)", causes);

@@ -71,7 +71,8 @@ struct Harness {
     ++frame;
     tracker.onFrame(*w.frame, w.reader(), returned, paired, Stamp{frame, 0}, events);
     std::vector<EventFinding> judged;
-    for (const BusEvent& event : events) judgeEvent(event, RuleSettings{}, judged);
+    MeasurementRuns runs;
+    for (const BusEvent& event : events) judgeEvent(event, RuleSettings{}, runs, judged);
     std::vector<AlFinding> out;
     for (EventFinding& f : judged) {
       out.push_back({f.rule, f.slave.station, f.slave.position, std::move(f.message)});

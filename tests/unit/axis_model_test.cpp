@@ -292,21 +292,21 @@ TEST(AxisModelCounters, ConsecutiveFailuresAndTheTimeoutReport) {
     const char* name;
     int event;  // 0 ok, 1 lost, 2 failed (wrong WKC), 3 ECatTErr observed
     std::uint32_t failed, lost;
-    bool awaiting;
+    std::uint32_t unanswered;  // lost cycles awaiting ECatTErr
   };
   const Step steps[] = {
-      {"lost", 1, 1, 1, false},
-      {"lost", 1, 2, 2, false},
-      {"ok after 2 lost", 0, 0, 0, false},
-      {"lost", 1, 1, 1, false},
-      {"lost", 1, 2, 2, false},
-      {"lost", 1, 3, 3, false},
-      {"ok after 3 lost: awaiting ECatTErr", 0, 0, 0, true},
-      {"ECatTErr seen", 3, 0, 0, false},
-      {"wrong WKC", 2, 1, 0, false},
-      {"wrong WKC", 2, 2, 0, false},
-      {"wrong WKC", 2, 3, 0, false},
-      {"ok after 3 wrong WKCs: nothing to report", 0, 0, 0, false},
+      {"lost", 1, 1, 1, 0},
+      {"lost", 1, 2, 2, 0},
+      {"ok after 2 lost", 0, 0, 0, 2},
+      {"lost: a new outage", 1, 1, 1, 0},
+      {"lost", 1, 2, 2, 0},
+      {"lost", 1, 3, 3, 0},
+      {"ok after 3 lost: awaiting ECatTErr", 0, 0, 0, 3},
+      {"ECatTErr seen", 3, 0, 0, 0},
+      {"wrong WKC", 2, 1, 0, 0},
+      {"wrong WKC", 2, 2, 0, 0},
+      {"wrong WKC", 2, 3, 0, 0},
+      {"ok after 3 wrong WKCs: nothing to report", 0, 0, 0, 0},
   };
   AxisModel axis(0, std::nullopt);
   std::uint64_t frame = 0;
@@ -328,7 +328,7 @@ TEST(AxisModelCounters, ConsecutiveFailuresAndTheTimeoutReport) {
     }
     EXPECT_EQ(axis.consecutiveFailed(), step.failed);
     EXPECT_EQ(axis.consecutiveLost(), step.lost);
-    EXPECT_EQ(axis.awaitingTimeoutReport(), step.awaiting);
+    EXPECT_EQ(axis.unansweredOutageCycles(), step.unanswered);
   }
   EXPECT_EQ(axis.totalFailures(), 8u);
 }

@@ -109,7 +109,7 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
   now_ = now;
   if (lost) {
     consecutive_lost_ += cycles;
-    awaiting_timeout_report_ = false;  // a new outage: COM-003 is judged after it
+    unanswered_outage_cycles_ = 0;  // a new outage: COM-003 is judged after it
   } else {
     // A wrong but non-zero WKC: the slaves processed the frame, so traffic went through and a
     // run of lost cycles (COM-003) ends here.
@@ -119,12 +119,9 @@ void AxisModel::cycleFailed(bool lost, std::uint32_t cycles, const Stamp& now) {
   total_failures_ = std::min(kFailureCounterMax, total_failures_ + cycles);
 }
 
-// docs/rules.md#com-003: after 3 or more lost cycles the drive must raise ECatTErr.
+// Traffic resumed: the outage's lost cycles await ECatTErr (docs/rules.md#com-003).
 void AxisModel::endOutage() {
-  if (consecutive_lost_ >= 3) {
-    awaiting_timeout_report_ = true;
-    last_outage_cycles_ = consecutive_lost_;
-  }
+  if (consecutive_lost_ > 0) unanswered_outage_cycles_ = consecutive_lost_;
   consecutive_lost_ = 0;
 }
 
@@ -189,8 +186,7 @@ void AxisModel::startSegment() {
   clear_acknowledged_ = false;
   consecutive_lost_ = 0;
   consecutive_failed_ = 0;
-  awaiting_timeout_report_ = false;
-  last_outage_cycles_ = 0;
+  unanswered_outage_cycles_ = 0;
 }
 
 void AxisModel::observeOutputs(const PdoValues& values, const Stamp& now) {
@@ -234,7 +230,7 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
   servo_errors_.observe(sew & kServoErrors, now);
   ecat_timeout_.observe(sew & kEcatTimeout, now);
   if (err_clear_ack_.rose && error_clear_.on()) clear_acknowledged_ = true;
-  if (ecat_timeout_.on()) awaiting_timeout_report_ = false;
+  if (ecat_timeout_.on()) unanswered_outage_cycles_ = 0;
 
   // docs/protocol.md §7: an entry per rising cause bit, newest first; errors present when the axis
   // is first seen are entered too.

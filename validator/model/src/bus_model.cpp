@@ -89,7 +89,12 @@ BusModel::CyclicFrame* BusModel::cyclicFrame(const EcatFrame& frame, const Frame
     }
     cyclic_.erase(once);
   }
+  std::array<bool, kMaxCyclicFrames> slot_taken{};
+  for (const CyclicFrame& c : cyclic_) slot_taken[c.id.slot] = true;
+  const auto free_slot = std::find(slot_taken.begin(), slot_taken.end(), false);
   cyclic_.push_back(CyclicFrame{});
+  cyclic_.back().id = {static_cast<std::uint8_t>(free_slot - slot_taken.begin()),
+                       ++cyclic_serials_};
   cyclic_.back().datagrams.assign(first, last);
   return remember(cyclic_.size() - 1);
 }
@@ -126,8 +131,6 @@ void BusModel::startSegment(std::vector<BusEvent>& events) {
     c.last_tick.reset();
     c.awaiting_return = false;
     c.not_returned_episode = false;
-    c.jitter_episode = false;
-    c.late_return_episode = false;
   }
   for (WkcRecord& r : wkc_) r.wrong_episode = false;
 }
@@ -212,14 +215,16 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
     timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
     frame_timing_.latency_ns = latency;
-    judgeLatency(cyclic, latency, events);
+    events.push_back(
+        {cyclic.last_master, ReturnLatencyEvent{latency, cyclic.last_master.frame, cyclic.id}});
   }
   cyclic.awaiting_return = false;
   cyclic.not_returned_episode = false;
   return checkWorkingCounters(frame, decode);
 }
 
-// One tick of a cyclic frame's clock: the interval statistics, COM-002 and COM-006.
+// One tick of a cyclic frame's clock: the interval statistics, COM-002's gaps and the interval
+// COM-006 judges.
 void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
   ++cyclic.ticks;
   // docs/timing.md#rule-time: a timestamp that went back is not an error; the interval it would
@@ -254,7 +259,9 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
       }
       cyclic.pending_gap = std::move(pending);
     }
-    judgeJitter(cyclic, interval, *median, gap);
+    events_->push_back(
+        {*cyclic.last_tick,
+         CycleIntervalEvent{interval, *median, cyclic.last_tick->frame, cyclic.id, gap}});
   }
   frame_timing_.interval_ns = interval;
   if (const std::optional<std::int64_t> nominal = nominalCycleNs()) {
@@ -289,34 +296,6 @@ void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
   }
   events.push_back({gap.since, e});
   cyclic.pending_gap.reset();
-}
-
-// docs/rules.md#com-006: one finding per run of deviating cycles. A gap deviates but is COM-002's:
-// it starts a run without a finding, so a late cycle's short interval after it is not reported.
-void BusModel::judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int64_t nominal,
-                           bool gap) {
-  if (!limits_.cycle_jitter_percent) return;
-  const std::int64_t deviation = interval > nominal ? interval - nominal : nominal - interval;
-  const bool deviates =
-      deviation * 100 > nominal * static_cast<std::int64_t>(*limits_.cycle_jitter_percent);
-  if (deviates && !gap && !cyclic.jitter_episode) {
-    events_->push_back(
-        {*cyclic.last_tick, CycleJitterEvent{interval, nominal, *limits_.cycle_jitter_percent,
-                                             cyclic.last_tick->frame}});
-  }
-  cyclic.jitter_episode = deviates;
-}
-
-// docs/rules.md#com-007: one finding per run of late returns.
-void BusModel::judgeLatency(CyclicFrame& cyclic, std::int64_t latency,
-                            std::vector<BusEvent>& events) {
-  if (!limits_.return_latency_ns) return;
-  const bool late = latency > *limits_.return_latency_ns;
-  if (late && !cyclic.late_return_episode) {
-    events.push_back({cyclic.last_master, LateReturnEvent{latency, *limits_.return_latency_ns,
-                                                          cyclic.last_master.frame}});
-  }
-  cyclic.late_return_episode = late;
 }
 
 std::int16_t BusModel::wkcRecord(const Datagram& dg) {

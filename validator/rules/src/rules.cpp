@@ -250,15 +250,17 @@ std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
 }
 
 // --- Bus, per axis ---
+// docs/protocol.md §4: the drive raises ECatTErr after this many cycles without data.
+constexpr std::uint32_t kTimeoutReportCycles = 3;
 // Judged only on inputs the capture gave: ECatTErr may have risen in inputs it cut off.
 bool com003(const AxisModel& a, const RuleSettings&) {
-  return a.awaitingTimeoutReport() && a.knowsInputs();
+  return a.unansweredOutageCycles() >= kTimeoutReportCycles && a.knowsInputs();
 }
 std::string com003Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
   return fmt::format(
       "{} consecutive cycles failed, but SEW.ECatTErr did not rise within {} ms after traffic "
       "resumed",
-      a.lastOutageCycles(), ms(s, Timeout::DriveResponse));
+      a.unansweredOutageCycles(), ms(s, Timeout::DriveResponse));
 }
 
 bool com005(const AxisModel& a, const RuleSettings& s) {
@@ -327,26 +329,38 @@ std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&
                      nominal, untold);
 }
 
-bool com006(const CycleJitterEvent&, const RuleSettings&) {
-  return true;  // the bus model reports a deviation only beyond the limit
+// COM-006: one finding per run of deviating cycles. A gap deviates too but is COM-002's: it
+// starts a run without a finding, so a late cycle's short interval after it is not reported.
+bool com006(const CycleIntervalEvent& e, const RuleSettings& s, bool& in_run) {
+  const std::int64_t deviation =
+      e.interval_ns > e.nominal_ns ? e.interval_ns - e.nominal_ns : e.nominal_ns - e.interval_ns;
+  const bool deviates =
+      deviation * 100 > e.nominal_ns * std::int64_t{s.limitOf(Limit::CycleJitterPercent)};
+  const bool begins = deviates && !e.gap && !in_run;
+  in_run = deviates;
+  return begins;
 }
-std::string com006Text(const CycleJitterEvent& e, const Stamp&, const RuleSettings&) {
+std::string com006Text(const CycleIntervalEvent& e, const Stamp&, const RuleSettings& s) {
   const double deviation = static_cast<double>(e.interval_ns - e.nominal_ns) / 1e3;
   return fmt::format(
       "cycle of {:.3f} ms since frame {} deviates {:+.1f} us from the {:.3f} ms nominal, more "
       "than cycle_jitter_percent = {}",
       static_cast<double>(e.interval_ns) / 1e6, e.previous_frame, deviation,
-      static_cast<double>(e.nominal_ns) / 1e6, e.limit_percent);
+      static_cast<double>(e.nominal_ns) / 1e6, s.limitOf(Limit::CycleJitterPercent));
 }
 
-bool com007(const LateReturnEvent&, const RuleSettings&) {
-  return true;  // the bus model reports a return only beyond the limit
+// COM-007: one finding per run of late returns.
+bool com007(const ReturnLatencyEvent& e, const RuleSettings& s, bool& in_run) {
+  const bool late = e.latency_ns > std::int64_t{s.limitOf(Limit::ReturnLatencyUs)} * 1000;
+  const bool begins = late && !in_run;
+  in_run = late;
+  return begins;
 }
-std::string com007Text(const LateReturnEvent& e, const Stamp&, const RuleSettings&) {
+std::string com007Text(const ReturnLatencyEvent& e, const Stamp&, const RuleSettings& s) {
   return fmt::format(
       "returned {:.1f} us after its master copy (frame {}), more than "
       "return_latency_us = {}",
-      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, e.limit_ns / 1000);
+      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, s.limitOf(Limit::ReturnLatencyUs));
 }
 
 bool com004(const NotReturnedEvent&, const RuleSettings&) {
@@ -432,129 +446,364 @@ bool onEvent(const RuleSubject& s, const RuleSettings& settings) {
   const Event* e = std::get_if<Event>(&s.event->data);
   return e != nullptr && F(*e, settings);
 }
+// A measurement continues its cyclic frame's run for the judging rule.
+template <class Event, bool (*F)(const Event&, const RuleSettings&, bool& in_run)>
+bool onMeasurement(const RuleSubject& s, const RuleSettings& settings) {
+  const Event* e = std::get_if<Event>(&s.event->data);
+  return e != nullptr && F(*e, settings, s.runs->inRun(s.rule, e->cyclic_frame));
+}
 template <class Event, std::string (*F)(const Event&, const Stamp&, const RuleSettings&)>
 std::string describeEvent(const RuleSubject& s, const RuleSettings& settings, std::int64_t) {
   return F(std::get<Event>(s.event->data), s.event->since, settings);
 }
 
-constexpr auto E = Severity::Error;
-constexpr auto W = Severity::Warning;
-constexpr auto I = Severity::Info;
-constexpr auto NC = Party::Nc;
-constexpr auto DRIVE = Party::Drive;
-constexpr auto BUS = Party::Bus;
-constexpr auto AXIS = RuleKind::Axis;
-constexpr auto BUSK = RuleKind::Bus;
-constexpr auto SLAVE = RuleKind::Slave;
-constexpr auto ON = ByDefault::On;
-constexpr auto OFF = ByDefault::Off;
-constexpr std::optional<Timeout> kNone{};
-constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
-constexpr Reads kNothing{};
 }  // namespace
 
-#define NCSERVO_AXIS(name) onAxis<name>, describeAxis<name##Text>
-#define NCSERVO_EVENT(type, name, text) onEvent<type, name>, describeEvent<type, text>
-// clang-format off
+#define NCSERVO_AXIS(name) .check = onAxis<name>, .describe = describeAxis<name##Text>
+#define NCSERVO_EVENT(type, name, text) \
+  .event = eventIndex<type>(), .check = onEvent<type, name>, .describe = describeEvent<type, text>
+#define NCSERVO_MEASUREMENT(type, name, text)                      \
+  .event = eventIndex<type>(), .check = onMeasurement<type, name>, \
+  .describe = describeEvent<type, text>
 const std::array<RuleDef, kRuleCount> kRules{{
-  {RuleId::Se001, "SE-001", "illegal-enable-edge", E, NC, AXIS, "docs/protocol.md §2 SE", kNone, false, ON,
-   readsOf({"ncservo.scw.se"}), NCSERVO_AXIS(se001),
-   "SCW.SE becomes 0x2 from a value other than 0x1"},
-  {RuleId::Se002, "SE-002", "enable-without-edge", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, false, ON,
-   readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se002),
-   "SSW.ServoEn rises with no valid enable"},
-  {RuleId::Se003, "SE-003", "not-disabled", E, DRIVE, AXIS, "docs/protocol.md §2 SE", kDrive, true, ON,
-   readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}), NCSERVO_AXIS(se003),
-   "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
-  {RuleId::Se004, "SE-004", "enable-not-honoured", W, DRIVE, AXIS, "docs/protocol.md §2 SE, §5", Timeout::EnableResponse, true, ON,
-   readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake", "ncservo.ssw.servo_en",
-            "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(se004),
-   "a valid enable to a ready drive is not answered with ServoEn"},
-  {RuleId::Zp001, "ZP-001", "zpulse-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck", kDrive, true, ON,
-   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp001),
-   "ZPulseAck stays 1 after ZPulseRequest fell"},
-  {RuleId::Zp002, "ZP-002", "zpulse-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ZPulseAck", kDrive, false, ON,
-   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}), NCSERVO_AXIS(zp002),
-   "ZPulseAck rises with no ZPulseRequest"},
-  {RuleId::Zp003, "ZP-003", "zpulse-absolute-encoder", W, NC, AXIS, "docs/protocol.md §1, §2 ZPulseRequest", kNone, false, ON,
-   readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.incremental", "ncservo.ssw.no_encoder"}), NCSERVO_AXIS(zp003),
-   "ZPulseRequest on an axis with an absolute encoder or none"},
-  {RuleId::Ec001, "EC-001", "clear-ack-without-request", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, false, ON,
-   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec001),
-   "ErrClearAck rises with no ErrorClear"},
-  {RuleId::Ec002, "EC-002", "clear-request-held", W, NC, AXIS, "docs/protocol.md §2 ErrorClear", Timeout::NcRelease, true, ON,
-   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec002),
-   "ErrorClear held after ErrClearAck rose"},
-  {RuleId::Ec003, "EC-003", "clear-ack-not-cleared", E, DRIVE, AXIS, "docs/protocol.md §3 ErrClearAck", kDrive, true, ON,
-   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}), NCSERVO_AXIS(ec003),
-   "ErrClearAck stays 1 after ErrorClear fell"},
-  {RuleId::Ec004, "EC-004", "clear-not-acknowledged", W, DRIVE, AXIS, "docs/protocol.md §2 ErrorClear, §3 ErrClearAck", Timeout::ClearResponse, true, ON,
-   readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}), NCSERVO_AXIS(ec004),
-   "ErrorClear on a drive in error is not acknowledged"},
-  {RuleId::Sew001, "SEW-001", "cause-without-summary", E, DRIVE, AXIS, "docs/protocol.md §4", kNone, false, ON,
-   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew001),
-   "a SEW cause bit without the summary bit 0"},
-  {RuleId::Sew002, "SEW-002", "summary-without-cause", W, DRIVE, AXIS, "docs/protocol.md §4", kDrive, true, ON,
-   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew002),
-   "SEW summary bit 0 with no cause bit"},
-  {RuleId::Sew003, "SEW-003", "reserved-error-bits", W, DRIVE, AXIS, "docs/protocol.md §4", kNone, false, ON,
-   readsOf({"ncservo.sew"}), NCSERVO_AXIS(sew003),
-   "reserved SEW bits set"},
-  {RuleId::Ssw001, "SSW-001", "reserved-status-bits", W, DRIVE, AXIS, "docs/protocol.md §3", kNone, false, ON,
-   readsOf({"ncservo.ssw.reserved"}), NCSERVO_AXIS(ssw001),
-   "reserved SSW bits set"},
-  {RuleId::Scw001, "SCW-001", "reserved-control-bits", W, NC, AXIS, "docs/protocol.md §2", kNone, false, ON,
-   readsOf({"ncservo.scw.reserved"}), NCSERVO_AXIS(scw001),
-   "reserved SCW bits set"},
-  {RuleId::Rdy001, "RDY-001", "ready-mismatch", E, DRIVE, AXIS, "docs/protocol.md §5", kDrive, true, ON,
-   readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}), NCSERVO_AXIS(rdy001),
-   "ServoRDY differs from the Servo_Ready_Mode table"},
-  {RuleId::Flt001, "FLT-001", "enabled-with-error", E, DRIVE, AXIS, "docs/protocol.md §4, §6", Timeout::FaultReaction, true, ON,
-   readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}), NCSERVO_AXIS(flt001),
-   "the drive stays enabled while reporting an error"},
-  {RuleId::Pt001, "PT-001", "param-table-not-followed", W, DRIVE, AXIS, "docs/protocol.md §2 PRMTBL, §3 PRMTBL", Timeout::ParamTable, true, ON,
-   readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl", "ncservo.ssw.ext_prmtbl"}), NCSERVO_AXIS(pt001),
-   "the active parameter table differs from the commanded one"},
-  {RuleId::Msg001, "MSG-001", "undefined-message-code", W, DRIVE, AXIS, "docs/protocol.md §5", kNone, false, ON,
-   readsThrough("ncservo.msg_code", definedMessageCode), NCSERVO_AXIS(msg001),
-   "a message code outside 0-5"},
-  {RuleId::Com001, "COM-001", "working-counter", E, BUS, BUSK, "docs/protocol.md §8 WKC", kNone, false, ON,
-   kNothing, NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),
-   "a returned cyclic process-data datagram has an unexpected WKC"},
-  {RuleId::Com002, "COM-002", "cycle-gap", W, BUS, BUSK, "docs/protocol.md §8; docs/rules.md timeouts", kNone, false, ON,
-   kNothing, NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
-   "cycles late or missing between two master frames"},
-  {RuleId::Com003, "COM-003", "timeout-not-reported", I, DRIVE, AXIS, "docs/protocol.md §4 ECatTErr", kDrive, true, ON,
-   readsOf({"ncservo.sew.ecat_timeout"}), NCSERVO_AXIS(com003),
-   "3 or more failed cycles without SEW.ECatTErr"},
-  {RuleId::Com004, "COM-004", "frame-not-returned", W, BUS, BUSK, "docs/protocol.md §8", kNone, false, ON,
-   kNothing, NCSERVO_EVENT(NotReturnedEvent, com004, com004Text),
-   "a cyclic master frame was not returned"},
-  {RuleId::Com005, "COM-005", "telegram-failure-limit", E, BUS, AXIS, "docs/protocol.md §8", kNone, false, ON,
-   kNothing, NCSERVO_AXIS(com005),
-   "consecutive failed cycles of an axis exceed the limit"},
-  {RuleId::Com006, "COM-006", "cycle-jitter", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
-   kNothing, NCSERVO_EVENT(CycleJitterEvent, com006, com006Text),
-   "a master copy's interval deviates from the nominal cycle by more than cycle_jitter_percent"},
-  {RuleId::Com007, "COM-007", "late-return", W, BUS, BUSK, "docs/timing.md; docs/rules.md limits", kNone, false, OFF,
-   kNothing, NCSERVO_EVENT(LateReturnEvent, com007, com007Text),
-   "a returned copy arrives more than return_latency_us after its master copy"},
-  {RuleId::Esm001, "ESM-001", "invalid-al-transition", E, NC, SLAVE, "docs/protocol.md §8 AL control", kNone, false, ON,
-   kNothing, NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
-   "an AL control write requests a transition the state machine does not allow"},
-  {RuleId::Esm002, "ESM-002", "pdo-outside-op", W, NC, AXIS, "docs/protocol.md §8 AL states", kNone, false, ON,
-   readsOf({"ncservo.scw.se"}, true), NCSERVO_AXIS(esm002),
-   "process data exchanged with an axis outside OP/SAFE-OP"},
-  {RuleId::Esm003, "ESM-003", "al-error", E, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false, ON,
-   kNothing, NCSERVO_EVENT(AlErrorEvent, esm003, alErrorText),
-   "AL status shows the error indicator above INIT"},
-  {RuleId::Esm004, "ESM-004", "al-error-at-init", I, DRIVE, SLAVE, "docs/protocol.md §8 AL status", kNone, false, ON,
-   kNothing, NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
-   "AL status shows the error indicator at INIT"},
+    {.id = RuleId::Se001,
+     .code = "SE-001",
+     .slug = "illegal-enable-edge",
+     .severity = Severity::Error,
+     .party = Party::Nc,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 SE",
+     .reads = readsOf({"ncservo.scw.se"}),
+     NCSERVO_AXIS(se001),
+     .summary = "SCW.SE becomes 0x2 from a value other than 0x1"},
+    {.id = RuleId::Se002,
+     .code = "SE-002",
+     .slug = "enable-without-edge",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 SE",
+     .timeout = Timeout::DriveResponse,
+     .reads = readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}),
+     NCSERVO_AXIS(se002),
+     .summary = "SSW.ServoEn rises with no valid enable"},
+    {.id = RuleId::Se003,
+     .code = "SE-003",
+     .slug = "not-disabled",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 SE",
+     .timeout = Timeout::DriveResponse,
+     .delayed = true,
+     .reads = readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}),
+     NCSERVO_AXIS(se003),
+     .summary = "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
+    {.id = RuleId::Se004,
+     .code = "SE-004",
+     .slug = "enable-not-honoured",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 SE, §5",
+     .timeout = Timeout::EnableResponse,
+     .delayed = true,
+     .reads =
+         readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake",
+                  "ncservo.ssw.servo_en", "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}),
+     NCSERVO_AXIS(se004),
+     .summary = "a valid enable to a ready drive is not answered with ServoEn"},
+    {.id = RuleId::Zp001,
+     .code = "ZP-001",
+     .slug = "zpulse-ack-not-cleared",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck",
+     .timeout = Timeout::DriveResponse,
+     .delayed = true,
+     .reads = readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}),
+     NCSERVO_AXIS(zp001),
+     .summary = "ZPulseAck stays 1 after ZPulseRequest fell"},
+    {.id = RuleId::Zp002,
+     .code = "ZP-002",
+     .slug = "zpulse-ack-without-request",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §3 ZPulseAck",
+     .timeout = Timeout::DriveResponse,
+     .reads = readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}),
+     NCSERVO_AXIS(zp002),
+     .summary = "ZPulseAck rises with no ZPulseRequest"},
+    {.id = RuleId::Zp003,
+     .code = "ZP-003",
+     .slug = "zpulse-absolute-encoder",
+     .severity = Severity::Warning,
+     .party = Party::Nc,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §1, §2 ZPulseRequest",
+     .reads = readsOf(
+         {"ncservo.scw.zpulse_request", "ncservo.ssw.incremental", "ncservo.ssw.no_encoder"}),
+     NCSERVO_AXIS(zp003),
+     .summary = "ZPulseRequest on an axis with an absolute encoder or none"},
+    {.id = RuleId::Ec001,
+     .code = "EC-001",
+     .slug = "clear-ack-without-request",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §3 ErrClearAck",
+     .timeout = Timeout::DriveResponse,
+     .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}),
+     NCSERVO_AXIS(ec001),
+     .summary = "ErrClearAck rises with no ErrorClear"},
+    {.id = RuleId::Ec002,
+     .code = "EC-002",
+     .slug = "clear-request-held",
+     .severity = Severity::Warning,
+     .party = Party::Nc,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 ErrorClear",
+     .timeout = Timeout::NcRelease,
+     .delayed = true,
+     .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}),
+     NCSERVO_AXIS(ec002),
+     .summary = "ErrorClear held after ErrClearAck rose"},
+    {.id = RuleId::Ec003,
+     .code = "EC-003",
+     .slug = "clear-ack-not-cleared",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §3 ErrClearAck",
+     .timeout = Timeout::DriveResponse,
+     .delayed = true,
+     .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}),
+     NCSERVO_AXIS(ec003),
+     .summary = "ErrClearAck stays 1 after ErrorClear fell"},
+    {.id = RuleId::Ec004,
+     .code = "EC-004",
+     .slug = "clear-not-acknowledged",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 ErrorClear, §3 ErrClearAck",
+     .timeout = Timeout::ClearResponse,
+     .delayed = true,
+     .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}),
+     NCSERVO_AXIS(ec004),
+     .summary = "ErrorClear on a drive in error is not acknowledged"},
+    {.id = RuleId::Sew001,
+     .code = "SEW-001",
+     .slug = "cause-without-summary",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §4",
+     .reads = readsOf({"ncservo.sew"}),
+     NCSERVO_AXIS(sew001),
+     .summary = "a SEW cause bit without the summary bit 0"},
+    {.id = RuleId::Sew002,
+     .code = "SEW-002",
+     .slug = "summary-without-cause",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §4",
+     .timeout = Timeout::DriveResponse,
+     .delayed = true,
+     .reads = readsOf({"ncservo.sew"}),
+     NCSERVO_AXIS(sew002),
+     .summary = "SEW summary bit 0 with no cause bit"},
+    {.id = RuleId::Sew003,
+     .code = "SEW-003",
+     .slug = "reserved-error-bits",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §4",
+     .reads = readsOf({"ncservo.sew"}),
+     NCSERVO_AXIS(sew003),
+     .summary = "reserved SEW bits set"},
+    {.id = RuleId::Ssw001,
+     .code = "SSW-001",
+     .slug = "reserved-status-bits",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §3",
+     .reads = readsOf({"ncservo.ssw.reserved"}),
+     NCSERVO_AXIS(ssw001),
+     .summary = "reserved SSW bits set"},
+    {.id = RuleId::Scw001,
+     .code = "SCW-001",
+     .slug = "reserved-control-bits",
+     .severity = Severity::Warning,
+     .party = Party::Nc,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2",
+     .reads = readsOf({"ncservo.scw.reserved"}),
+     NCSERVO_AXIS(scw001),
+     .summary = "reserved SCW bits set"},
+    {.id = RuleId::Rdy001,
+     .code = "RDY-001",
+     .slug = "ready-mismatch",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §5",
+     .timeout = Timeout::DriveResponse,
+     .delayed = true,
+     .reads =
+         readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}),
+     NCSERVO_AXIS(rdy001),
+     .summary = "ServoRDY differs from the Servo_Ready_Mode table"},
+    {.id = RuleId::Flt001,
+     .code = "FLT-001",
+     .slug = "enabled-with-error",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §4, §6",
+     .timeout = Timeout::FaultReaction,
+     .delayed = true,
+     .reads = readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}),
+     NCSERVO_AXIS(flt001),
+     .summary = "the drive stays enabled while reporting an error"},
+    {.id = RuleId::Pt001,
+     .code = "PT-001",
+     .slug = "param-table-not-followed",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §2 PRMTBL, §3 PRMTBL",
+     .timeout = Timeout::ParamTable,
+     .delayed = true,
+     .reads = readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl",
+                       "ncservo.ssw.ext_prmtbl"}),
+     NCSERVO_AXIS(pt001),
+     .summary = "the active parameter table differs from the commanded one"},
+    {.id = RuleId::Msg001,
+     .code = "MSG-001",
+     .slug = "undefined-message-code",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §5",
+     .reads = readsThrough("ncservo.msg_code", definedMessageCode),
+     NCSERVO_AXIS(msg001),
+     .summary = "a message code outside 0-5"},
+    {.id = RuleId::Com001,
+     .code = "COM-001",
+     .slug = "working-counter",
+     .severity = Severity::Error,
+     .party = Party::Bus,
+     .kind = RuleKind::Bus,
+     .clause = "docs/protocol.md §8 WKC",
+     NCSERVO_EVENT(WorkingCounterEvent, com001, com001Text),
+     .summary = "a returned cyclic process-data datagram has an unexpected WKC"},
+    {.id = RuleId::Com002,
+     .code = "COM-002",
+     .slug = "cycle-gap",
+     .severity = Severity::Warning,
+     .party = Party::Bus,
+     .kind = RuleKind::Bus,
+     .clause = "docs/protocol.md §8; docs/rules.md timeouts",
+     NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
+     .summary = "cycles late or missing between two master frames"},
+    {.id = RuleId::Com003,
+     .code = "COM-003",
+     .slug = "timeout-not-reported",
+     .severity = Severity::Info,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §4 ECatTErr",
+     .timeout = Timeout::DriveResponse,
+     .delayed = true,
+     .reads = readsOf({"ncservo.sew.ecat_timeout"}),
+     NCSERVO_AXIS(com003),
+     .summary = "3 or more failed cycles without SEW.ECatTErr"},
+    {.id = RuleId::Com004,
+     .code = "COM-004",
+     .slug = "frame-not-returned",
+     .severity = Severity::Warning,
+     .party = Party::Bus,
+     .kind = RuleKind::Bus,
+     .clause = "docs/protocol.md §8",
+     NCSERVO_EVENT(NotReturnedEvent, com004, com004Text),
+     .summary = "a cyclic master frame was not returned"},
+    {.id = RuleId::Com005,
+     .code = "COM-005",
+     .slug = "telegram-failure-limit",
+     .severity = Severity::Error,
+     .party = Party::Bus,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §8",
+     NCSERVO_AXIS(com005),
+     .summary = "consecutive failed cycles of an axis exceed the limit"},
+    {.id = RuleId::Com006,
+     .code = "COM-006",
+     .slug = "cycle-jitter",
+     .severity = Severity::Warning,
+     .party = Party::Bus,
+     .kind = RuleKind::Bus,
+     .clause = "docs/timing.md; docs/rules.md limits",
+     .by_default = ByDefault::Off,
+     NCSERVO_MEASUREMENT(CycleIntervalEvent, com006, com006Text),
+     .summary = "a master copy's interval deviates from the nominal cycle by more than "
+                "cycle_jitter_percent"},
+    {.id = RuleId::Com007,
+     .code = "COM-007",
+     .slug = "late-return",
+     .severity = Severity::Warning,
+     .party = Party::Bus,
+     .kind = RuleKind::Bus,
+     .clause = "docs/timing.md; docs/rules.md limits",
+     .by_default = ByDefault::Off,
+     NCSERVO_MEASUREMENT(ReturnLatencyEvent, com007, com007Text),
+     .summary = "a returned copy arrives more than return_latency_us after its master copy"},
+    {.id = RuleId::Esm001,
+     .code = "ESM-001",
+     .slug = "invalid-al-transition",
+     .severity = Severity::Error,
+     .party = Party::Nc,
+     .kind = RuleKind::Slave,
+     .clause = "docs/protocol.md §8 AL control",
+     NCSERVO_EVENT(AlControlEvent, esm001, esm001Text),
+     .summary = "an AL control write requests a transition the state machine does not allow"},
+    {.id = RuleId::Esm002,
+     .code = "ESM-002",
+     .slug = "pdo-outside-op",
+     .severity = Severity::Warning,
+     .party = Party::Nc,
+     .kind = RuleKind::Axis,
+     .clause = "docs/protocol.md §8 AL states",
+     .reads = readsOf({"ncservo.scw.se"}, true),
+     NCSERVO_AXIS(esm002),
+     .summary = "process data exchanged with an axis outside OP/SAFE-OP"},
+    {.id = RuleId::Esm003,
+     .code = "ESM-003",
+     .slug = "al-error",
+     .severity = Severity::Error,
+     .party = Party::Drive,
+     .kind = RuleKind::Slave,
+     .clause = "docs/protocol.md §8 AL status",
+     NCSERVO_EVENT(AlErrorEvent, esm003, alErrorText),
+     .summary = "AL status shows the error indicator above INIT"},
+    {.id = RuleId::Esm004,
+     .code = "ESM-004",
+     .slug = "al-error-at-init",
+     .severity = Severity::Info,
+     .party = Party::Drive,
+     .kind = RuleKind::Slave,
+     .clause = "docs/protocol.md §8 AL status",
+     NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
+     .summary = "AL status shows the error indicator at INIT"},
 }};
-// clang-format on
 #undef NCSERVO_AXIS
 #undef NCSERVO_EVENT
+#undef NCSERVO_MEASUREMENT
 
 const char* severityName(Severity severity) {
   switch (severity) {
@@ -668,11 +917,18 @@ const char* ruleKindName(RuleKind kind) {
   return "axis";
 }
 
-void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+bool& MeasurementRuns::inRun(RuleId rule, CyclicFrameId frame) {
+  Slot& slot = slots_[frame.slot];
+  if (slot.serial != frame.serial) slot = Slot{frame.serial, {}};
+  return slot.in_run[static_cast<std::size_t>(rule)];
+}
+
+void judgeEvent(const BusEvent& event, const RuleSettings& settings, MeasurementRuns& runs,
                 std::vector<EventFinding>& out) {
-  const RuleSubject subject{nullptr, &event};
+  RuleSubject subject{nullptr, &event, &runs};
   for (const RuleDef& rule : kRules) {
-    if (rule.kind == RuleKind::Axis || !settings.isEnabled(rule.id)) continue;
+    if (rule.event != event.data.index() || !settings.isEnabled(rule.id)) continue;
+    subject.rule = rule.id;
     if (!rule.check(subject, settings)) continue;
     SlaveRef slave;
     if (const auto* control = std::get_if<AlControlEvent>(&event.data)) slave = control->slave;

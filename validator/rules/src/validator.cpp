@@ -10,19 +10,10 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
       judged_(judgedBits(settings_, fast_path)),
       fast_path_(fast_path == FastPath::On),
       dc_(settings_.dc_settled_ns),
-      bus_(timingLimits(settings_)),
-      segments_(settings_.timeoutNs(Timeout::CapturePause)) {}
-
-// The limits of the enabled timing rules (docs/rules.md#com-006, COM-007).
-TimingLimits Validator::timingLimits(const RuleSettings& settings) {
-  TimingLimits limits;
-  if (settings.isEnabled(RuleId::Com006)) {
-    limits.cycle_jitter_percent = settings.limitOf(Limit::CycleJitterPercent);
+      segments_(settings_.timeoutNs(Timeout::CapturePause)) {
+  for (const RuleDef& rule : kRules) {
+    if (rule.event != kNoEvent && settings_.isEnabled(rule.id)) judged_events_[rule.event] = true;
   }
-  if (settings.isEnabled(RuleId::Com007)) {
-    limits.return_latency_ns = std::int64_t{settings.limitOf(Limit::ReturnLatencyUs)} * 1000;
-  }
-  return limits;
 }
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules
@@ -207,6 +198,7 @@ void Validator::startSegment() {
   events_.clear();
   bus_.startSegment(events_);
   reportEvents();
+  runs_.clear();
   al_.startSegment();
   dc_.startSegment();
   ++al_epoch_;  // the AL states are taken again
@@ -278,8 +270,9 @@ const FrameTiming& Validator::frameTiming() const {
 // station it is.
 void Validator::reportEvents() {
   for (const BusEvent& event : events_) {
+    if (!judged_events_[event.data.index()]) continue;
     event_findings_.clear();
-    judgeEvent(event, settings_, event_findings_);
+    judgeEvent(event, settings_, runs_, event_findings_);
     for (EventFinding& f : event_findings_) {
       std::optional<std::uint16_t> axis;
       for (const AxisInfo& info : decoder().axes()) {

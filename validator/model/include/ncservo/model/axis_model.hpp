@@ -159,9 +159,9 @@ class AxisModel {
   std::uint32_t consecutiveLost() const { return consecutive_lost_; }
   std::uint32_t consecutiveFailed() const { return consecutive_failed_; }
   std::uint32_t totalFailures() const { return total_failures_; }
-  // Traffic resumed after 3 or more lost cycles and ECatTErr has not been seen since (COM-003).
-  bool awaitingTimeoutReport() const { return awaiting_timeout_report_; }
-  std::uint32_t lastOutageCycles() const { return last_outage_cycles_; }
+  // The lost cycles of the last outage after which traffic resumed, while ECatTErr has not been
+  // seen since; 0 when none. COM-003 judges how many.
+  std::uint32_t unansweredOutageCycles() const { return unanswered_outage_cycles_; }
 
   std::optional<DriveState> state() const { return state_; }
   // The edges of the observation taken in `frame`; empty when none was taken there.
@@ -211,8 +211,7 @@ class AxisModel {
   std::uint32_t consecutive_lost_ = 0;
   std::uint32_t consecutive_failed_ = 0;
   std::uint32_t total_failures_ = 0;
-  bool awaiting_timeout_report_ = false;
-  std::uint32_t last_outage_cycles_ = 0;
+  std::uint32_t unanswered_outage_cycles_ = 0;
 
   std::optional<DriveState> state_;
   std::uint64_t observed_frame_ = 0;

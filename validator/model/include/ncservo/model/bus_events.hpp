@@ -1,9 +1,10 @@
 // What the bus and slave models saw happen in one frame, for the bus and slave rules to judge
-// (docs/rules.md, COM-* and ESM-*). The models decide what happened (a datagram
-// returned with another WKC than its slaves add, an outage, an AL control write); the rules
-// decide whether that is a finding and say so.
+// (docs/rules.md). The models decide what happened (a datagram returned with another WKC than its
+// slaves add, an outage, an AL control write) and measure (a cycle interval, a return latency);
+// the rules compare with their limits, decide whether that is a finding and say so.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <variant>
@@ -37,21 +38,32 @@ struct CycleGapEvent {
   std::uint64_t next_frame = 0;      // the tick that ended it
 };
 
-// A master copy whose interval deviates from the nominal cycle by more than the configured share,
-// at the start of such a run of cycles (docs/rules.md#com-006).
-struct CycleJitterEvent {
-  std::int64_t interval_ns = 0;
-  std::int64_t nominal_ns = 0;
-  std::uint32_t limit_percent = 0;
-  std::uint64_t previous_frame = 0;
+// The bus model follows at most this many cyclic frames at once.
+inline constexpr std::size_t kMaxCyclicFrames = 16;
+
+// Which cyclic frame a measurement is of: its slot among the frames followed, which a frame keeps
+// while followed and a later one may reuse, and the serial number no other frame gets.
+struct CyclicFrameId {
+  std::uint8_t slot = 0;  // below kMaxCyclicFrames
+  std::uint32_t serial = 0;
 };
 
-// A returned copy later than the configured latency after its master copy, at the start of such
-// a run of cycles (docs/rules.md#com-007).
-struct LateReturnEvent {
+// The interval between two ticks of a cyclic frame's clock, once the segment has a nominal
+// cycle; COM-006 judges its deviation against cycle_jitter_percent (docs/rules.md#com-006).
+struct CycleIntervalEvent {
+  std::int64_t interval_ns = 0;
+  std::int64_t nominal_ns = 0;
+  std::uint64_t previous_frame = 0;  // the tick before it
+  CyclicFrameId cyclic_frame;        // whose clock: a run of cycles is one frame's
+  bool gap = false;                  // longer than 1.5 cycles: a CycleGapEvent tells it
+};
+
+// The time from a master copy to its returned copy; COM-007 judges it against
+// return_latency_us (docs/rules.md#com-007).
+struct ReturnLatencyEvent {
   std::int64_t latency_ns = 0;
-  std::int64_t limit_ns = 0;
   std::uint64_t master_frame = 0;
+  CyclicFrameId cyclic_frame;  // whose copies: a run of cycles is one frame's
 };
 
 // A cyclic master frame that was not returned before the next cycle's master frame, at the
@@ -95,8 +107,9 @@ struct AlErrorEvent {
   std::uint64_t status_code_frame = 0;  // where the status code was read
 };
 
-using BusEventData = std::variant<WorkingCounterEvent, CycleGapEvent, CycleJitterEvent,
-                                  LateReturnEvent, NotReturnedEvent, AlControlEvent, AlErrorEvent>;
+using BusEventData =
+    std::variant<WorkingCounterEvent, CycleGapEvent, CycleIntervalEvent, ReturnLatencyEvent,
+                 NotReturnedEvent, AlControlEvent, AlErrorEvent>;
 
 struct BusEvent {
   Stamp since;  // where the condition began

@@ -25,13 +25,6 @@ struct AxisAccount {
   std::uint32_t cycles = 1;
 };
 
-// The limits of the timing rules that are off by default, each set only while its rule is
-// enabled (docs/rules.md#com-006, COM-007).
-struct TimingLimits {
-  std::optional<std::uint32_t> cycle_jitter_percent;
-  std::optional<std::int64_t> return_latency_ns;
-};
-
 // A process-data datagram of a cyclic frame, as the report names what was judged.
 struct CyclicDatagram {
   std::uint8_t command = 0;
@@ -42,8 +35,6 @@ struct CyclicDatagram {
 
 class BusModel {
  public:
-  explicit BusModel(TimingLimits limits = {}) : limits_(limits) {}
-
   // Whether a frame exchanges process data: a logical datagram (LRW, LRD, LWR) or servo PDOs.
   // Only such a frame is a copy of a cyclic frame.
   static bool exchangesProcessData(const EcatFrame& frame, const FrameDecode& decode);
@@ -85,7 +76,7 @@ class BusModel {
   // Copies of frames not followed: kMaxCyclicFrames cyclic frames that repeated were already.
   std::uint64_t unfollowedFrames() const { return unfollowed_frames_; }
 
-  static constexpr std::size_t kMaxCyclicFrames = 16;
+  static constexpr std::size_t kMaxCyclicFrames = ncservo::kMaxCyclicFrames;
 
  private:
   // What a frame shape's process-data datagrams should return (COM-001), worked out once per
@@ -125,6 +116,7 @@ class BusModel {
   };
   // A frame that repeats with the same process-data datagrams.
   struct CyclicFrame {
+    CyclicFrameId id;  // names it in the measurements
     std::vector<DatagramKey> datagrams;
     std::uint64_t copies = 0;  // master and returned
     std::uint64_t ticks = 0;   // of its clock
@@ -135,8 +127,6 @@ class BusModel {
     std::vector<std::uint16_t> axes;  // axes of the last master copy (none: no servo PDOs)
     std::uint64_t axes_shape_id = 0;  // the shape they were taken from (0: none cached)
     std::optional<PendingGap> pending_gap;
-    bool jitter_episode = false;       // COM-006
-    bool late_return_episode = false;  // COM-007
   };
   // A cyclic process-data datagram: its WKC history (COM-001).
   struct WkcRecord {
@@ -160,8 +150,6 @@ class BusModel {
   void judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
                 CycleGapEvent::Verdict verdict, std::vector<BusEvent>& events,
                 std::vector<AxisAccount>* accounts);
-  void judgeJitter(CyclicFrame& cyclic, std::int64_t interval, std::int64_t nominal, bool gap);
-  void judgeLatency(CyclicFrame& cyclic, std::int64_t latency, std::vector<BusEvent>& events);
   bool checkWorkingCounters(const EcatFrame& frame, const FrameDecode& decode);
 
   // This frame's.
@@ -170,8 +158,8 @@ class BusModel {
   std::vector<BusEvent>* events_ = nullptr;
   std::vector<AxisAccount>* accounts_ = nullptr;
 
-  TimingLimits limits_;
   std::vector<CyclicFrame> cyclic_;                            // in the order first seen
+  std::uint32_t cyclic_serials_ = 0;                           // given so far
   std::array<DatagramKey, ecat::kMaxDatagrams> frame_keys_{};  // this frame's
   // The cyclic frame of recent frame shapes (FrameDecode::shape_id), by index in cyclic_: a
   // shape has the same process-data datagrams every cycle. Forgotten when cyclic_ changes.

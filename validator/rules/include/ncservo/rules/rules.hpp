@@ -10,6 +10,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "ncservo/base/error.hpp"
@@ -106,15 +108,39 @@ struct LimitDef {
   const char* bounds;  // what it bounds, for docs and errors
 };
 inline constexpr std::array<LimitDef, 2> kLimits{{
-    {Limit::CycleJitterPercent, "cycle_jitter_percent", 10, 1, 100, "% of the nominal cycle",
-     RuleId::Com006, "how far a master copy's interval may deviate from the nominal cycle"},
-    {Limit::ReturnLatencyUs, "return_latency_us", 500, 1, 1'000'000, "µs", RuleId::Com007,
-     "how long after its master copy a returned copy may arrive"},
+    {.id = Limit::CycleJitterPercent,
+     .name = "cycle_jitter_percent",
+     .default_value = 10,
+     .min = 1,
+     .max = 100,
+     .unit = "% of the nominal cycle",
+     .rule = RuleId::Com006,
+     .bounds = "how far a master copy's interval may deviate from the nominal cycle"},
+    {.id = Limit::ReturnLatencyUs,
+     .name = "return_latency_us",
+     .default_value = 500,
+     .min = 1,
+     .max = 1'000'000,
+     .unit = "µs",
+     .rule = RuleId::Com007,
+     .bounds = "how long after its master copy a returned copy may arrive"},
 }};
 const LimitDef* limitByName(std::string_view name);
 
 class AxisModel;
 struct RuleSettings;
+
+// The index in BusEventData of an event kind, as RuleDef::event names it.
+inline constexpr std::size_t kNoEvent = std::variant_size_v<BusEventData>;
+template <class Event, std::size_t I = 0>
+constexpr std::size_t eventIndex() {
+  static_assert(I < kNoEvent, "not a BusEventData alternative");
+  if constexpr (std::is_same_v<Event, std::variant_alternative_t<I, BusEventData>>) {
+    return I;
+  } else {
+    return eventIndex<Event, I + 1>();
+  }
+}
 
 // Where a rule is judged: on one axis's model, on what the bus model saw (working counters,
 // cycles) or on what a slave's state machine did (AL control and status).
@@ -124,14 +150,34 @@ enum class RuleKind : std::uint8_t { Axis, Bus, Slave };
 enum class ByDefault : std::uint8_t { On, Off };
 const char* ruleKindName(RuleKind kind);
 
-// What a check looks at: the axis's model (axis rules) or one event of the bus and slave models.
+// The rules judged once per run of measurements beyond their limit (COM-006, COM-007): for each
+// cyclic frame, whether its last measurement was beyond the rule's limit. A capture segment
+// starts with none.
+class MeasurementRuns {
+ public:
+  bool& inRun(RuleId rule, CyclicFrameId frame);
+  void clear() { slots_ = {}; }
+
+ private:
+  struct Slot {
+    std::uint32_t serial = 0;  // of the frame it holds (0: none)
+    std::array<bool, kRuleCount> in_run{};
+  };
+  std::array<Slot, kMaxCyclicFrames> slots_{};
+};
+
+// What a check looks at: the axis's model (axis rules) or one event of the bus and slave models,
+// with the runs a measurement continues.
 struct RuleSubject {
   const AxisModel* axis = nullptr;
   const BusEvent* event = nullptr;
+  MeasurementRuns* runs = nullptr;
+  RuleId rule{};  // the rule judging, whose run it is
 };
 // Whether the rule's condition holds. An axis condition is evaluated on every frame that changes
 // what it reads; it is reported when it begins or, for a delayed rule, once it has held longer
-// than its timeout. An event condition is reported on the frame of the event.
+// than its timeout. An event condition is reported on the frame of the event; for a measurement,
+// the condition is that a run beyond the limit begins.
 using RuleCheck = bool (*)(const RuleSubject& subject, const RuleSettings& settings);
 // What was seen and what was expected; `held_ns` is how long the condition has held.
 using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleSettings& settings,
@@ -144,11 +190,12 @@ struct RuleDef {
   Severity severity;
   Party party;
   RuleKind kind;
-  const char* clause;              // where the protocol says so
-  std::optional<Timeout> timeout;  // the timeout the rule uses (docs/rules.md)
-  bool delayed;                    // reported when the condition outlasts the timeout
-  ByDefault by_default;
-  Reads reads;  // axis rules: what check and describe read of the axis
+  const char* clause;                             // where the protocol says so
+  std::optional<Timeout> timeout = std::nullopt;  // the timeout the rule uses (docs/rules.md)
+  bool delayed = false;  // reported when the condition outlasts the timeout
+  ByDefault by_default = ByDefault::On;
+  Reads reads{};                 // axis rules: what check and describe read of the axis
+  std::size_t event = kNoEvent;  // bus and slave rules: the BusEventData alternative judged
   RuleCheck check;
   RuleDescribe describe;
   const char* summary;  // one line, for `ncservo rules` and the expert item
@@ -171,8 +218,9 @@ struct EventFinding {
   SlaveRef slave;  // the slave it is about, for slave rules
   std::string message;
 };
-// The enabled bus and slave rules that fire on the event, in table order.
-void judgeEvent(const BusEvent& event, const RuleSettings& settings,
+// The enabled bus and slave rules that fire on the event, in table order; `runs` carries the
+// runs of measurements from one event to the next.
+void judgeEvent(const BusEvent& event, const RuleSettings& settings, MeasurementRuns& runs,
                 std::vector<EventFinding>& out);
 
 // What the user may change: the defaults, then the config file, then the command line.

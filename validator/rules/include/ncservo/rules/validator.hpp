@@ -102,7 +102,6 @@ class Validator {
     bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
-  static TimingLimits timingLimits(const RuleSettings& settings);
   void applyAccounts();
   bool unchanged(const AxisPlacement& placement, const ByteReader& bytes,
                  const AxisModel& model) const;
@@ -128,7 +127,9 @@ class Validator {
   CutRegions cut_;
   std::vector<BusEvent> events_;  // this frame's, from the slave and bus models
   std::vector<EventFinding> event_findings_;
-  std::vector<AxisAccount> accounts_;  // this frame's telegram accounting
+  MeasurementRuns runs_;
+  std::array<bool, kNoEvent> judged_events_{};  // by BusEventData index: an enabled rule judges it
+  std::vector<AxisAccount> accounts_;           // this frame's telegram accounting
   std::vector<AxisSlot> axes_;
   std::array<AxisSlot*, kMaxAxesPerFrame> frame_slots_{};  // this frame's axes, in view order
   std::uint64_t al_epoch_ = 1;      // frames so far that could move an AL state or a station
