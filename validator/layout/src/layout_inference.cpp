@@ -52,6 +52,8 @@ constexpr std::uint32_t kMinAgreement = 8;
 constexpr std::int64_t kDisagreementWeight = 8;
 // Below this confidence an axis is ambiguous.
 constexpr double kMinConfidence = 0.25;
+// Parameter table changes a drive may refuse (the SSW's table not following the SCW's).
+constexpr std::uint32_t kRefusedTableChanges = 2;
 // Evidence in at least this many cycles before a candidate counts.
 constexpr std::uint32_t kMinObservations = 8;
 
@@ -86,6 +88,13 @@ std::uint8_t tableBit(Word word, std::uint32_t value) {
   return static_cast<std::uint8_t>(1u << (parameterTable(word, value) - 1));
 }
 
+void noteTable(std::uint8_t table, std::uint8_t& tables, std::uint8_t& last,
+               std::uint32_t& changes) {
+  if (last != 0 && table != last) ++changes;
+  tables |= table;
+  last = table;
+}
+
 // One bit per cycle, allocated on the first set bit.
 struct CycleBits {
   std::vector<std::uint64_t> words;
@@ -108,14 +117,23 @@ std::uint32_t popcount(std::uint64_t v) {
 struct RxCandidate {
   std::uint32_t seen = 0;
   std::uint32_t violations = 0;
-  std::uint32_t active = 0;    // cycles with a non-zero SCW
-  std::uint32_t se_flaps = 0;  // cycles in which SE changed again right after a change
-  bool se_changed = false;     // in the cycle before
-  std::uint8_t last_se = 0;
+  std::uint32_t active = 0;  // cycles with a non-zero SCW
+  // The control word changes on events (an enable, an error clear), never every cycle like a
+  // counter or a terminal's inputs: cycles in which it changed again right after a change.
+  std::uint32_t scw_flaps = 0;
+  bool scw_changed = false;  // in the cycle before
+  std::uint32_t last_scw = 0;
+  // The extra data code word selects what the drive sends: it changes now and then, never
+  // every cycle like a counter or a terminal's inputs.
+  std::uint32_t ext_code_flaps = 0;
+  bool ext_code_changed = false;
+  std::uint16_t last_ext_code = 0;
   std::uint8_t tables = 0;  // parameter tables commanded
-  CycleBits enabled;        // SE 0x2
-  CycleBits clear;          // ErrorClear
-  CycleBits zpulse;         // ZPulseRequest
+  std::uint8_t last_table = 0;
+  std::uint32_t table_changes = 0;
+  CycleBits enabled;  // SE 0x2
+  CycleBits clear;    // ErrorClear
+  CycleBits zpulse;   // ZPulseRequest
 };
 
 struct TxCandidate {
@@ -128,9 +146,11 @@ struct TxCandidate {
   std::uint8_t position_history = 0;   // 0, 1 or 2 positions known
   std::uint32_t ready_mismatches = 0;  // cycles with ServoRDY against the ready table
   std::uint8_t tables = 0;             // parameter tables shown active
-  CycleBits enabled;                   // ServoEn
-  CycleBits ack;                       // ErrClearAck
-  CycleBits zack;                      // ZPulseAck
+  std::uint8_t last_table = 0;
+  std::uint32_t table_changes = 0;
+  CycleBits enabled;  // ServoEn
+  CycleBits ack;      // ErrClearAck
+  CycleBits zack;     // ZPulseAck
 };
 
 bool dead(std::uint32_t seen, std::uint32_t violations) {
@@ -258,11 +278,16 @@ struct LayoutInference::State {
     }
     if (scw != 0) ++c.active;
     const auto se = static_cast<std::uint8_t>(scw & kScwSe);
-    const bool se_changed = c.seen > 1 && se != c.last_se;
-    if (se_changed && c.se_changed) ++c.se_flaps;
-    c.se_changed = se_changed;
-    c.last_se = se;
-    c.tables |= tableBit(Word::Scw, scw);
+    const bool scw_changed = c.seen > 1 && scw != c.last_scw;
+    if (scw_changed && c.scw_changed) ++c.scw_flaps;
+    c.scw_changed = scw_changed;
+    c.last_scw = scw;
+    const auto ext_code = static_cast<std::uint16_t>(loadLe<2>(pdo + wordOffset(Word::ExtCode)));
+    const bool ext_code_changed = c.seen > 1 && ext_code != c.last_ext_code;
+    if (ext_code_changed && c.ext_code_changed) ++c.ext_code_flaps;
+    c.ext_code_changed = ext_code_changed;
+    c.last_ext_code = ext_code;
+    noteTable(tableBit(Word::Scw, scw), c.tables, c.last_table, c.table_changes);
     if (se == kSeEnabled) c.enabled.set(cycle, bytes);
     if ((scw & kScwErrorClear) != 0) c.clear.set(cycle, bytes);
     if ((scw & kScwZPulseRequest) != 0) c.zpulse.set(cycle, bytes);
@@ -302,7 +327,7 @@ struct LayoutInference::State {
     if ((ssw & kSswErrClearAck) != 0) c.ack.set(cycle, bytes);
     if ((ssw & kSswZPulseAck) != 0) c.zack.set(cycle, bytes);
     if (!readyPerTable(ssw, sew)) ++c.ready_mismatches;
-    c.tables |= tableBit(Word::Ssw, ssw);
+    noteTable(tableBit(Word::Ssw, ssw), c.tables, c.last_table, c.table_changes);
   }
 
   // Slots cut short by the snap length are not observed.
@@ -738,11 +763,12 @@ bool servoLikeTx(const TxCandidate& t) {
          !dead(t.seen, t.ready_mismatches);
 }
 
-// A control word written by the master, reserved bits zero, SE steady, mostly not all zero.
+// A control word written by the master, reserved bits zero, steady (SE and every other bit) and
+// mostly not all zero, beside a steady extra data code word.
 bool servoLikeRx(const Stream& s, std::size_t o) {
   const RxCandidate& c = s.rx[o];
-  return c.seen >= kMinObservations && !dead(c.seen, c.violations) && !dead(c.seen, c.se_flaps) &&
-         c.active * 2 >= c.seen && !s.slaveWrote(o, kRxPdoSize);
+  return c.seen >= kMinObservations && !dead(c.seen, c.violations) && !dead(c.seen, c.scw_flaps) &&
+         !dead(c.seen, c.ext_code_flaps) && c.active * 2 >= c.seen && !s.slaveWrote(o, kRxPdoSize);
 }
 
 // Whether RxPDO `rx` can be TxPDO `tx`'s: the same station (or both logical), every parameter
@@ -750,7 +776,10 @@ bool servoLikeRx(const Stream& s, std::size_t o) {
 bool structureFits(const Stream& rs, const RxCandidate& rx, const Stream& ts, const TxCandidate& tx,
                    std::uint32_t cycles) {
   if (rs.logical() != ts.logical() || (!ts.logical() && rs.station() != ts.station())) return false;
+  // The SSW's table follows the SCW's: each table it showed was commanded, and it changed about as
+  // often as the SCW's did (a drive may refuse a change now and then).
   if ((tx.tables & ~rx.tables) != 0) return false;
+  if (rx.table_changes > tx.table_changes + kRefusedTableChanges) return false;
   if (!tx.enabled.any()) return true;
   if (!rx.enabled.any()) return false;
   const PairScore p = pairScore(rx, recentlyEnabled(rx.enabled, cycles), tx);
@@ -893,7 +922,7 @@ bool LayoutInference::fromStructure(InferenceResult& result, std::string& why) c
           tx, k);
       return false;
     }
-    if (fits.size() > 1 || through[k][choice[k]] > 1) {
+    if (fits.size() > 1) {
       refused.push_back(
           fmt::format("the RxPDO of the status word at {} could be at {}: each passes "
                       "the structure checks, only one by right",
