@@ -1014,6 +1014,19 @@ InferenceResult LayoutInference::decide() const {
   return result;
 }
 
+std::string describeInference(const AxisEvidence& e) {
+  std::string how;
+  if (e.outputs_only) {
+    how = "from the outputs only (no data the slaves wrote was captured)";
+  } else if (e.structure_only) {
+    how = "found from the structure only, no handshake seen";
+  } else {
+    how = fmt::format("{} handshake cycles", e.handshakes_seen);
+  }
+  if (e.paired_by_order) how += "; RxPDO paired with the TxPDO of the same rank in image order";
+  return fmt::format("inferred: {}; confidence {:.0f} %", how, 100 * e.confidence);
+}
+
 std::string describeEvidence(const InferredAxis& axis) {
   const AxisEvidence& e = axis.evidence;
   auto mark = [](bool ok) { return ok ? "ok" : "weak"; };

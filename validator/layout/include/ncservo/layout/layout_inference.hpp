@@ -64,6 +64,8 @@ struct InferenceResult {
 
 // One line per check for an inferred axis, for `decode --layout`.
 std::string describeEvidence(const InferredAxis& axis);
+// How an inferred axis was found and how sure, in a few words (the reports).
+std::string describeInference(const AxisEvidence& evidence);
 
 struct InferenceLimits {
   std::uint32_t max_cycles = 4096;   // cycles of evidence, at most
