@@ -340,6 +340,28 @@ INSTANTIATE_TEST_SUITE_P(
                       RefusalRow{"all zero twincat", Style::TwinCat, Motion::AllZero, "ambiguous"}),
     test::rowName<RefusalRow>);
 
+// An idle axis whose RxPDO is followed by two zero bytes: the window one byte later keeps a
+// non-zero, steady SCW (EMGON only) as well, so the structure cannot tell which is right.
+TEST(InferredLayout, ASlotThatFitsByChanceIsRefusedAndSaid) {
+  LayoutInference inference;
+  EcatFrame frame;
+  for (int c = 0; c < 600; ++c) {
+    const Bytes tx = test::txPdo(test::TxValues(1000000, 0x22, 0, c % 4, 560.0f, {1, 2, 3, 4}));
+    const Bytes data = test::concat({test::rxPdo(0, 0x405), Bytes(2, 0), tx});
+    const Bytes bytes = FrameBuilder().add(Dg(ecat::kLrw, 1, 0x00010000, data, 3)).bytes();
+    const ByteReader reader(bytes.data(), bytes.size());
+    walkPacket(LinkType::Ethernet, reader, frame);
+    inference.onFrame(frame, reader, true);
+  }
+  const InferenceResult result = inference.decide();
+  EXPECT_TRUE(result.axes.empty());
+  EXPECT_NE(result.refusal.find("1 slot refused: the RxPDO of the status word at LRW "
+                                "0x00010000+52 offset 12 could be at LRW 0x00010000+52 offset 0 "
+                                "or LRW 0x00010000+52 offset 1"),
+            std::string::npos)
+      << result.refusal;
+}
+
 TEST(InferredLayout, NoCyclicDataIsSaid) {
   LayoutInference inference;
   EXPECT_NE(inference.decide().refusal.find("no cyclic process data"), std::string::npos);

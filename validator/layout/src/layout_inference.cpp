@@ -773,8 +773,9 @@ bool servoLikeRx(const Stream& s, std::size_t o) {
 
 // Whether RxPDO `rx` can be TxPDO `tx`'s: the same station (or both logical), every parameter
 // table the SSW showed commanded by the SCW, and a ServoEn that SE explains.
-bool structureFits(const Stream& rs, const RxCandidate& rx, const Stream& ts, const TxCandidate& tx,
-                   std::uint32_t cycles) {
+bool structureFits(const Stream& rs, const RxCandidate& rx,
+                   const std::vector<std::uint64_t>& recent, const Stream& ts,
+                   const TxCandidate& tx) {
   if (rs.logical() != ts.logical() || (!ts.logical() && rs.station() != ts.station())) return false;
   // The SSW's table follows the SCW's: each table it showed was commanded, and it changed about as
   // often as the SCW's did (a drive may refuse a change now and then).
@@ -782,7 +783,7 @@ bool structureFits(const Stream& rs, const RxCandidate& rx, const Stream& ts, co
   if (rx.table_changes > tx.table_changes + kRefusedTableChanges) return false;
   if (!tx.enabled.any()) return true;
   if (!rx.enabled.any()) return false;
-  const PairScore p = pairScore(rx, recentlyEnabled(rx.enabled, cycles), tx);
+  const PairScore p = pairScore(rx, recent, tx);
   return p.agree >= kMinAgreement && p.score > 0;
 }
 
@@ -806,11 +807,14 @@ StructureCandidates structureCandidates(const std::vector<Stream>& streams, std:
     return streams[a.stream].imageAddress(a.offset) < streams[b.stream].imageAddress(b.offset);
   });
   c.fits.assign(c.tx.size(), std::vector<bool>(c.rx.size(), false));
-  for (std::size_t k = 0; k < c.tx.size(); ++k) {
-    const Stream& ts = streams[c.tx[k].stream];
-    for (std::size_t i = 0; i < c.rx.size(); ++i) {
-      const Stream& rs = streams[c.rx[i].stream];
-      c.fits[k][i] = structureFits(rs, rs.rx[c.rx[i].offset], ts, ts.tx[c.tx[k].offset], cycles);
+  for (std::size_t i = 0; i < c.rx.size(); ++i) {
+    const Stream& rs = streams[c.rx[i].stream];
+    const RxCandidate& rx = rs.rx[c.rx[i].offset];
+    const std::vector<std::uint64_t> recent =
+        rx.enabled.any() ? recentlyEnabled(rx.enabled, cycles) : std::vector<std::uint64_t>{};
+    for (std::size_t k = 0; k < c.tx.size(); ++k) {
+      const Stream& ts = streams[c.tx[k].stream];
+      c.fits[k][i] = structureFits(rs, rx, recent, ts, ts.tx[c.tx[k].offset]);
     }
   }
   return c;
