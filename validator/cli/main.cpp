@@ -497,6 +497,11 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   report.frames = run.records;
   if (timelines) report.timelines = timelines->finish();
   cli::summarise(validator, report);
+  if (pipeline.inference() && report.layout_source == LayoutSource::Inferred) {
+    for (const InferredAxis& axis : pipeline.inference()->axes) {
+      report.inferred.push_back(axis.evidence);
+    }
+  }
   report.coverage = coverageOf(validator);
   if (const std::string empty = emptyWindowReason(time_window, run); !empty.empty()) {
     report.coverage.reason = empty;

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <bitset>
+#include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <optional>
 
@@ -21,14 +23,22 @@ constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
 constexpr std::uint32_t kScwSe = mask32("ncservo.scw.se");
 constexpr std::uint32_t kSeEnabled = 0x2;  // §2
 constexpr std::uint32_t kScwErrorClear = mask32("ncservo.scw.error_clear");
+constexpr std::uint32_t kScwZPulseRequest = mask32("ncservo.scw.zpulse_request");
 constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
 constexpr std::uint32_t kSswStatus = ~kSswReserved;
 constexpr std::uint32_t kSswServoEn = mask32("ncservo.ssw.servo_en");
 constexpr std::uint32_t kSswErrClearAck = mask32("ncservo.ssw.err_clear_ack");
+constexpr std::uint32_t kSswServoRdy = mask32("ncservo.ssw.servo_rdy");
+constexpr std::uint32_t kSswZPulseAck = mask32("ncservo.ssw.zpulse_ack");
 constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
 constexpr std::uint32_t kSewSummary = kSewSummaryMask;
 constexpr std::uint32_t kSewCauses = kSewCauseMask;
 constexpr std::int32_t kMaxMessageCode = 9;  // §5: codes 0..9 are listed
+// The largest magnitude of the message datum a drive plausibly sends for each code with a meaning
+// (§5: rpm, A, %, V, °C, kW); an undefined code's datum only has to be finite.
+constexpr float kMessageDataBound[] = {1e5f, 1e4f, 1e4f, 1e4f, 1e3f, 1e4f};
+static_assert(std::size(kMessageDataBound) == kLastDefinedMessageCode + 1,
+              "one bound per message code with a meaning");
 // A position that moves by more than this many counts per cycle more than it did the cycle
 // before is not a position.
 constexpr std::int64_t kMaxPositionStep = std::int64_t{1} << 22;
@@ -42,6 +52,8 @@ constexpr std::uint32_t kMinAgreement = 8;
 constexpr std::int64_t kDisagreementWeight = 8;
 // Below this confidence an axis is ambiguous.
 constexpr double kMinConfidence = 0.25;
+// Parameter table changes a drive may refuse (the SSW's table not following the SCW's).
+constexpr std::uint32_t kRefusedTableChanges = 2;
 // Evidence in at least this many cycles before a candidate counts.
 constexpr std::uint32_t kMinObservations = 8;
 
@@ -54,6 +66,33 @@ bool plausibleFloat(std::uint32_t bits) {
   const std::uint32_t exponent = (bits >> 23) & 0xFF;
   const std::uint32_t mantissa = bits & 0x7FFFFF;
   return exponent != 0xFF && (exponent != 0 || mantissa == 0);
+}
+
+bool plausibleMessageData(std::int32_t code, std::uint32_t bits) {
+  if (!messageCodeDefined(code)) return true;
+  float value;
+  std::memcpy(&value, &bits, sizeof value);
+  return std::fabs(value) <= kMessageDataBound[code];
+}
+
+// ServoRDY as the ready table gives it in either Servo_Ready_Mode (§5).
+bool readyPerTable(std::uint32_t ssw, std::uint32_t sew) {
+  const bool ready = (ssw & kSswServoRdy) != 0;
+  const bool enabled = (ssw & kSswServoEn) != 0;
+  const bool errors = (sew & kSewSummary) != 0;
+  return ready == !errors || ready == (enabled && !errors);
+}
+
+// One bit per parameter table (1..8) that a SCW commands or a SSW shows.
+std::uint8_t tableBit(Word word, std::uint32_t value) {
+  return static_cast<std::uint8_t>(1u << (parameterTable(word, value) - 1));
+}
+
+void noteTable(std::uint8_t table, std::uint8_t& tables, std::uint8_t& last,
+               std::uint32_t& changes) {
+  if (last != 0 && table != last) ++changes;
+  tables |= table;
+  last = table;
 }
 
 // One bit per cycle, allocated on the first set bit.
@@ -79,8 +118,22 @@ struct RxCandidate {
   std::uint32_t seen = 0;
   std::uint32_t violations = 0;
   std::uint32_t active = 0;  // cycles with a non-zero SCW
-  CycleBits enabled;         // SE 0x2
-  CycleBits clear;           // ErrorClear
+  // The control word changes on events (an enable, an error clear), never every cycle like a
+  // counter or a terminal's inputs: cycles in which it changed again right after a change.
+  std::uint32_t scw_flaps = 0;
+  bool scw_changed = false;  // in the cycle before
+  std::uint32_t last_scw = 0;
+  // The extra data code word selects what the drive sends: it changes now and then, never
+  // every cycle like a counter or a terminal's inputs.
+  std::uint32_t ext_code_flaps = 0;
+  bool ext_code_changed = false;
+  std::uint16_t last_ext_code = 0;
+  std::uint8_t tables = 0;  // parameter tables commanded
+  std::uint8_t last_table = 0;
+  std::uint32_t table_changes = 0;
+  CycleBits enabled;  // SE 0x2
+  CycleBits clear;    // ErrorClear
+  CycleBits zpulse;   // ZPulseRequest
 };
 
 struct TxCandidate {
@@ -90,9 +143,14 @@ struct TxCandidate {
   std::uint32_t status = 0;
   std::uint32_t last_position = 0;
   std::int64_t last_step = 0;
-  std::uint8_t position_history = 0;  // 0, 1 or 2 positions known
-  CycleBits enabled;                  // ServoEn
-  CycleBits ack;                      // ErrClearAck
+  std::uint8_t position_history = 0;   // 0, 1 or 2 positions known
+  std::uint32_t ready_mismatches = 0;  // cycles with ServoRDY against the ready table
+  std::uint8_t tables = 0;             // parameter tables shown active
+  std::uint8_t last_table = 0;
+  std::uint32_t table_changes = 0;
+  CycleBits enabled;  // ServoEn
+  CycleBits ack;      // ErrClearAck
+  CycleBits zack;     // ZPulseAck
 };
 
 bool dead(std::uint32_t seen, std::uint32_t violations) {
@@ -107,6 +165,18 @@ struct Stream {
   std::uint32_t seen = 0;
   std::vector<RxCandidate> rx;  // by offset, when the master writes its data
   std::vector<TxCandidate> tx;  // by offset, when slaves write into it
+  // The master's copy of the current cycle, until its returned copy comes; a byte the returned
+  // copy changed was written by a slave, so no RxPDO holds it (docs/protocol.md §8).
+  std::vector<std::uint8_t> master_copy;
+  bool master_pending = false;
+  std::vector<bool> slave_written;  // by byte, when the master writes data too
+
+  bool slaveWrote(std::size_t offset, std::size_t size) const {
+    for (std::size_t i = offset; i < offset + size && i < slave_written.size(); ++i) {
+      if (slave_written[i]) return true;
+    }
+    return false;
+  }
 
   bool logical() const { return ecat::isLogical(command); }
   std::uint16_t station() const { return static_cast<std::uint16_t>(address & 0xFFFF); }
@@ -188,6 +258,8 @@ struct LayoutInference::State {
     s.length = dg.length;
     if (ecat::writesSlaves(dg.command) && dg.length >= kRxPdoSize) {
       s.rx.resize(dg.length - kRxPdoSize + 1);
+      s.slave_written.resize(dg.length, false);
+      bytes += dg.length + dg.length / 8;
     }
     if (ecat::readsSlaves(dg.command) && dg.length >= kTxPdoSize) {
       s.tx.resize(dg.length - kTxPdoSize + 1);
@@ -205,8 +277,20 @@ struct LayoutInference::State {
       return;
     }
     if (scw != 0) ++c.active;
-    if ((scw & kScwSe) == kSeEnabled) c.enabled.set(cycle, bytes);
+    const auto se = static_cast<std::uint8_t>(scw & kScwSe);
+    const bool scw_changed = c.seen > 1 && scw != c.last_scw;
+    if (scw_changed && c.scw_changed) ++c.scw_flaps;
+    c.scw_changed = scw_changed;
+    c.last_scw = scw;
+    const auto ext_code = static_cast<std::uint16_t>(loadLe<2>(pdo + wordOffset(Word::ExtCode)));
+    const bool ext_code_changed = c.seen > 1 && ext_code != c.last_ext_code;
+    if (ext_code_changed && c.ext_code_changed) ++c.ext_code_flaps;
+    c.ext_code_changed = ext_code_changed;
+    c.last_ext_code = ext_code;
+    noteTable(tableBit(Word::Scw, scw), c.tables, c.last_table, c.table_changes);
+    if (se == kSeEnabled) c.enabled.set(cycle, bytes);
     if ((scw & kScwErrorClear) != 0) c.clear.set(cycle, bytes);
+    if ((scw & kScwZPulseRequest) != 0) c.zpulse.set(cycle, bytes);
   }
 
   void observeTx(TxCandidate& c, const std::uint8_t* pdo, std::uint32_t cycle) {
@@ -216,7 +300,8 @@ struct LayoutInference::State {
     const auto code = static_cast<std::int32_t>(le32(pdo + wordOffset(Word::MsgCode)));
     bool ok = (ssw & kSswReserved) == 0 && (sew & kSewReserved) == 0 &&
               ((sew & kSewCauses) == 0 || (sew & kSewSummary) != 0) && code >= 0 &&
-              code <= kMaxMessageCode;
+              code <= kMaxMessageCode &&
+              plausibleMessageData(code, le32(pdo + wordOffset(Word::MsgData)));
     for (Word w : {Word::MsgData, Word::ExtData1, Word::ExtData2, Word::ExtData3, Word::ExtData4}) {
       ok = ok && plausibleFloat(le32(pdo + wordOffset(w)));
     }
@@ -240,6 +325,9 @@ struct LayoutInference::State {
     if ((ssw & kSswStatus) != 0) ++c.status;
     if ((ssw & kSswServoEn) != 0) c.enabled.set(cycle, bytes);
     if ((ssw & kSswErrClearAck) != 0) c.ack.set(cycle, bytes);
+    if ((ssw & kSswZPulseAck) != 0) c.zack.set(cycle, bytes);
+    if (!readyPerTable(ssw, sew)) ++c.ready_mismatches;
+    noteTable(tableBit(Word::Ssw, ssw), c.tables, c.last_table, c.table_changes);
   }
 
   // Slots cut short by the snap length are not observed.
@@ -261,6 +349,32 @@ struct LayoutInference::State {
     for (std::size_t k = 0; k < entry->slots.size(); ++k) {
       const std::size_t at = dg.data_offset + k * kRxPdoSize;
       if (frame.has(at, kRxPdoSize)) observeRx(entry->slots[k], frame.data() + at, cycle);
+    }
+  }
+
+  Stream* existingStream(const Datagram& dg) {
+    for (Stream& s : streams) {
+      if (s.command == dg.command && s.address == dg.address && s.length == dg.length) return &s;
+    }
+    return nullptr;
+  }
+
+  // A master's copy: kept until its returned copy shows which bytes the slaves wrote.
+  void keepMasterCopy(const Datagram& dg, const ByteReader& frame) {
+    if (!carriesProcessData(dg.command) || !dg.complete() || dg.length < kRxPdoSize) return;
+    if (!frame.has(dg.data_offset, dg.length)) return;
+    Stream* s = existingStream(dg);
+    if (s == nullptr || s->slave_written.empty()) return;
+    const std::uint8_t* data = frame.data() + dg.data_offset;
+    s->master_copy.assign(data, data + dg.length);
+    s->master_pending = true;
+  }
+
+  static void compareWithMaster(Stream& s, const std::uint8_t* data) {
+    if (!s.master_pending) return;
+    s.master_pending = false;
+    for (std::size_t i = 0; i < s.master_copy.size(); ++i) {
+      if (s.master_copy[i] != data[i]) s.slave_written[i] = true;
     }
   }
 
@@ -302,14 +416,19 @@ void LayoutInference::onFrame(const EcatFrame& frame, const ByteReader& bytes, b
   if (!returned || !st.master_seen) {
     for (std::size_t d = 0; d < frame.count; ++d) st.observeOutputsFirst(frame.datagrams[d], bytes);
   }
-  if (!returned) return;
+  if (!returned) {
+    for (std::size_t d = 0; d < frame.count; ++d) st.keepMasterCopy(frame.datagrams[d], bytes);
+    return;
+  }
   const std::uint32_t cycles_before = st.cycles;
   for (std::size_t d = 0; d < frame.count; ++d) {
     const Datagram& dg = frame.datagrams[d];
     if (!carriesProcessData(dg.command) || !dg.complete() || dg.wkc == 0) continue;
     if (dg.length < kRxPdoSize || !bytes.has(dg.data_offset, dg.length)) continue;
     Stream* stream = st.streamFor(dg);
-    if (stream != nullptr) st.observe(*stream, bytes.data() + dg.data_offset);
+    if (stream == nullptr) continue;
+    State::compareWithMaster(*stream, bytes.data() + dg.data_offset);
+    st.observe(*stream, bytes.data() + dg.data_offset);
   }
   if (st.cycles == cycles_before) return;
   if (st.cycles >= st.limits.max_cycles || st.bytes >= st.limits.max_bytes) {
@@ -351,6 +470,7 @@ struct PairScore {
   std::uint32_t agree = 0;
   std::uint32_t disagree = 0;
   std::uint32_t clear = 0;
+  std::uint32_t zpulse = 0;
 };
 
 // SE 0x2 now or in the kDisableLag cycles before (the drive's disable delay), per cycle.
@@ -375,12 +495,13 @@ PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& rec
   PairScore p;
   for (std::size_t w = 0; w < recent.size(); ++w) {
     const std::uint64_t en = tx.enabled.word(w);
-    if (en == 0 && tx.ack.word(w) == 0) continue;
+    if (en == 0 && tx.ack.word(w) == 0 && tx.zack.word(w) == 0) continue;
     p.agree += popcount(rx.enabled.word(w) & en);
     p.disagree += popcount(en & ~recent[w]);
     p.clear += popcount(rx.clear.word(w) & tx.ack.word(w));
+    p.zpulse += popcount(rx.zpulse.word(w) & tx.zack.word(w));
   }
-  p.score = std::int64_t{p.agree} + p.clear - kDisagreementWeight * p.disagree;
+  p.score = std::int64_t{p.agree} + p.clear + p.zpulse - kDisagreementWeight * p.disagree;
   return p;
 }
 
@@ -462,7 +583,10 @@ std::vector<RxChoice> chooseRx(const std::vector<Stream>& streams,
     const Stream& stream = streams[s];
     for (std::size_t o = 0; o < stream.rx.size(); ++o) {
       const RxCandidate& c = stream.rx[o];
-      if (c.seen < kMinObservations || dead(c.seen, c.violations) || !c.enabled.any()) continue;
+      if (c.seen < kMinObservations || dead(c.seen, c.violations) || !c.enabled.any() ||
+          stream.slaveWrote(o, kRxPdoSize)) {
+        continue;
+      }
       const bool inside_tx = std::any_of(tx.begin(), tx.end(), [&](const ChosenTx& t) {
         return t.stream == s && overlaps(o, kRxPdoSize, t.offset, kTxPdoSize);
       });
@@ -611,6 +735,9 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     e.enabled_agree = p.agree;
     e.enabled_disagree = p.disagree;
     e.clear_agree = p.clear;
+    e.zpulse_agree = p.zpulse;
+    e.ready_mismatches = t.ready_mismatches;
+    e.handshakes_seen = p.agree + p.clear + p.zpulse;
     e.confidence = std::min(servos.tx[k].confidence, rx_confidence);
     if (e.confidence < kMinConfidence) {
       ambiguous.push_back(fmt::format(
@@ -622,10 +749,212 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
   return ambiguous;
 }
 
+// The structure-only decision: each servo-like TxPDO of the chosen tiling gets the RxPDO of the
+// same rank in process-image order, among the windows the structure allows; it decides only when
+// exactly one such tiling exists.
+struct StructureCandidates {
+  std::vector<ChosenTx> tx;  // servo-like TxPDOs, in process-image order
+  std::vector<RxChoice> rx;  // RxPDO windows the structure allows, in process-image order
+  std::vector<std::vector<bool>> fits;  // [tx][rx]
+};
+
+bool servoLikeTx(const TxCandidate& t) {
+  return t.seen >= kMinObservations && !dead(t.seen, t.violations) && t.status * 2 >= t.seen &&
+         !dead(t.seen, t.ready_mismatches);
+}
+
+// A control word written by the master, reserved bits zero, steady (SE and every other bit) and
+// mostly not all zero, beside a steady extra data code word.
+bool servoLikeRx(const Stream& s, std::size_t o) {
+  const RxCandidate& c = s.rx[o];
+  return c.seen >= kMinObservations && !dead(c.seen, c.violations) && !dead(c.seen, c.scw_flaps) &&
+         !dead(c.seen, c.ext_code_flaps) && c.active * 2 >= c.seen && !s.slaveWrote(o, kRxPdoSize);
+}
+
+// Whether RxPDO `rx` can be TxPDO `tx`'s: the same station (or both logical), every parameter
+// table the SSW showed commanded by the SCW, and a ServoEn that SE explains.
+bool structureFits(const Stream& rs, const RxCandidate& rx,
+                   const std::vector<std::uint64_t>& recent, const Stream& ts,
+                   const TxCandidate& tx) {
+  if (rs.logical() != ts.logical() || (!ts.logical() && rs.station() != ts.station())) return false;
+  // The SSW's table follows the SCW's: each table it showed was commanded, and it changed about as
+  // often as the SCW's did (a drive may refuse a change now and then).
+  if ((tx.tables & ~rx.tables) != 0) return false;
+  if (rx.table_changes > tx.table_changes + kRefusedTableChanges) return false;
+  if (!tx.enabled.any()) return true;
+  if (!rx.enabled.any()) return false;
+  const PairScore p = pairScore(rx, recent, tx);
+  return p.agree >= kMinAgreement && p.score > 0;
+}
+
+StructureCandidates structureCandidates(const std::vector<Stream>& streams, std::uint32_t cycles,
+                                        const std::vector<ChosenTx>& tiles) {
+  StructureCandidates c;
+  for (const ChosenTx& t : tiles) {
+    if (servoLikeTx(streams[t.stream].tx[t.offset])) c.tx.push_back(t);
+  }
+  for (std::size_t s = 0; s < streams.size(); ++s) {
+    const Stream& stream = streams[s];
+    for (std::size_t o = 0; o < stream.rx.size(); ++o) {
+      if (!servoLikeRx(stream, o)) continue;
+      const bool inside_tx = std::any_of(c.tx.begin(), c.tx.end(), [&](const ChosenTx& t) {
+        return t.stream == s && overlaps(o, kRxPdoSize, t.offset, kTxPdoSize);
+      });
+      if (!inside_tx) c.rx.push_back(RxChoice{s, o});
+    }
+  }
+  std::sort(c.rx.begin(), c.rx.end(), [&](const RxChoice& a, const RxChoice& b) {
+    return streams[a.stream].imageAddress(a.offset) < streams[b.stream].imageAddress(b.offset);
+  });
+  c.fits.assign(c.tx.size(), std::vector<bool>(c.rx.size(), false));
+  for (std::size_t i = 0; i < c.rx.size(); ++i) {
+    const Stream& rs = streams[c.rx[i].stream];
+    const RxCandidate& rx = rs.rx[c.rx[i].offset];
+    const std::vector<std::uint64_t> recent =
+        rx.enabled.any() ? recentlyEnabled(rx.enabled, cycles) : std::vector<std::uint64_t>{};
+    for (std::size_t k = 0; k < c.tx.size(); ++k) {
+      const Stream& ts = streams[c.tx[k].stream];
+      c.fits[k][i] = structureFits(rs, rx, recent, ts, ts.tx[c.tx[k].offset]);
+    }
+  }
+  return c;
+}
+
+// For each rank k and RxPDO window i, in how many tilings (0, 1, or 2 for "more") RxPDO k is
+// window i: the tilings of ranks before it times those after it.
+std::vector<std::vector<std::uint32_t>> tilingsThrough(const std::vector<Stream>& streams,
+                                                       const StructureCandidates& c) {
+  const std::size_t n = c.tx.size();
+  const std::size_t m = c.rx.size();
+  auto at = [&](std::size_t i) { return streams[c.rx[i].stream].imageAddress(c.rx[i].offset); };
+  auto capped = [](std::uint64_t v) {
+    return static_cast<std::uint32_t>(std::min<std::uint64_t>(v, 2));
+  };
+  std::vector<std::vector<std::uint32_t>> before(n, std::vector<std::uint32_t>(m, 0));
+  std::vector<std::vector<std::uint32_t>> after(n, std::vector<std::uint32_t>(m, 0));
+  for (std::size_t k = 0; k < n; ++k) {
+    std::uint64_t ways = 0;  // tilings of ranks 0..k-1 ending at least 10 bytes before i
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      while (k > 0 && j < m && at(j) + kRxPdoSize <= at(i))
+        ways = capped(ways + before[k - 1][j++]);
+      if (c.fits[k][i]) before[k][i] = k == 0 ? 1 : static_cast<std::uint32_t>(ways);
+    }
+  }
+  for (std::size_t k = n; k-- > 0;) {
+    std::uint64_t ways = 0;  // tilings of ranks k+1..n-1 starting at least 10 bytes after i
+    std::size_t j = m;
+    for (std::size_t i = m; i-- > 0;) {
+      while (k + 1 < n && j > 0 && at(i) + kRxPdoSize <= at(j - 1))
+        ways = capped(ways + after[k + 1][--j]);
+      if (c.fits[k][i]) after[k][i] = k + 1 == n ? 1 : static_cast<std::uint32_t>(ways);
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t i = 0; i < m; ++i) {
+      before[k][i] = capped(std::uint64_t{before[k][i]} * after[k][i]);
+    }
+  }
+  return before;
+}
+
+std::string describeRx(const std::vector<Stream>& streams, const RxChoice& r) {
+  return fmt::format("{} offset {}", streams[r.stream].describe(), r.offset);
+}
+
+// The axis of rank k from the structure, its handshakes (if any) adding evidence.
+InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cycles,
+                           const ChosenTx& chosen, const RxChoice& r, std::size_t k) {
+  const Stream& rs = streams[r.stream];
+  const Stream& ts = streams[chosen.stream];
+  const RxCandidate& rx = rs.rx[r.offset];
+  const TxCandidate& t = ts.tx[chosen.offset];
+  InferredAxis axis;
+  axis.config.name = fmt::format("axis{}", k);
+  if (ts.logical()) {
+    axis.config.outputs = static_cast<std::uint32_t>(rs.address + r.offset);
+    axis.config.inputs = static_cast<std::uint32_t>(ts.address + chosen.offset);
+  } else {
+    axis.config.station = ts.station();
+    axis.config.sm_outputs = static_cast<std::uint16_t>(rs.ado() + r.offset);
+    axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + chosen.offset);
+  }
+  AxisEvidence& e = axis.evidence;
+  e.cycles = t.seen;
+  e.violations = t.violations;
+  e.rx_violations = rx.violations;
+  e.actpos_moves = t.moves;
+  e.status_cycles = t.status;
+  e.ready_mismatches = t.ready_mismatches;
+  const PairScore p = pairScore(rx, recentlyEnabled(rx.enabled, cycles), t);
+  e.enabled_agree = p.agree;
+  e.enabled_disagree = p.disagree;
+  e.clear_agree = p.clear;
+  e.zpulse_agree = p.zpulse;
+  e.handshakes_seen = p.agree + p.clear + p.zpulse;
+  e.paired_by_order = true;
+  e.structure_only = e.handshakes_seen == 0;
+  e.confidence = std::min(chosen.confidence, e.structure_only ? 0.5 : 0.75);
+  return axis;
+}
+
+}  // namespace
+
+// Decides from the structure alone when exactly one tiling fits; otherwise says why in `why`
+// (empty when there was no servo-like TxPDO to place).
+bool LayoutInference::fromStructure(InferenceResult& result, std::string& why) const {
+  const State& st = *state_;
+  const StructureCandidates c = structureCandidates(st.streams, st.cycles, chooseTx(st.streams));
+  if (c.tx.empty()) return false;
+  const std::vector<std::vector<std::uint32_t>> through = tilingsThrough(st.streams, c);
+  std::vector<std::string> refused;
+  std::vector<std::size_t> choice(c.tx.size(), c.rx.size());
+  for (std::size_t k = 0; k < c.tx.size(); ++k) {
+    std::vector<std::string> fits;
+    for (std::size_t i = 0; i < c.rx.size(); ++i) {
+      if (through[k][i] == 0) continue;
+      fits.push_back(describeRx(st.streams, c.rx[i]));
+      choice[k] = i;
+    }
+    const std::string tx =
+        fmt::format("{} offset {}", st.streams[c.tx[k].stream].describe(), c.tx[k].offset);
+    if (fits.empty()) {
+      why = fmt::format(
+          "from the structure, the status word at {} (rank {}) has no control word that fits "
+          "(SCW reserved bits zero, SE steady, the SSW's parameter tables commanded, in "
+          "process-image order)",
+          tx, k);
+      return false;
+    }
+    if (fits.size() > 1) {
+      refused.push_back(
+          fmt::format("the RxPDO of the status word at {} could be at {}: each passes "
+                      "the structure checks, only one by right",
+                      tx, fmt::join(fits, " or ")));
+    } else if (c.tx[k].confidence < kMinConfidence) {
+      refused.push_back(fmt::format(
+          "the status word at {} passes the checks as well as an overlapping window", tx));
+    }
+  }
+  if (!refused.empty()) {
+    why = fmt::format("from the structure, {} slot{} refused: {}", refused.size(),
+                      refused.size() == 1 ? "" : "s", fmt::join(refused, "; "));
+    return false;
+  }
+  result.axes.clear();
+  for (std::size_t k = 0; k < c.tx.size(); ++k) {
+    result.axes.push_back(structureAxis(st.streams, st.cycles, c.tx[k], c.rx[choice[k]], k));
+  }
+  return true;
+}
+
+namespace {
+
 // Refused: say why, list the candidates, show how to write the configuration.
 std::string refusal(const std::vector<Stream>& streams, std::uint32_t cycles,
                     const std::vector<std::string>& ambiguous,
-                    const std::vector<std::string>& unpaired, std::size_t n) {
+                    const std::vector<std::string>& unpaired, std::size_t n,
+                    const std::string& structure_why) {
   std::string why;
   if (!ambiguous.empty()) {
     why = fmt::format("the layout is ambiguous: more than one placement fits {}",
@@ -650,6 +979,7 @@ std::string refusal(const std::vector<Stream>& streams, std::uint32_t cycles,
         "constant)",
         cycles);
   }
+  if (!structure_why.empty()) why = fmt::format("{}; {}", why, structure_why);
   std::vector<std::string> listed;
   for (const Stream& s : streams) listed.push_back(s.describe());
   return fmt::format(
@@ -675,11 +1005,30 @@ InferenceResult LayoutInference::decide() const {
       n > 0 && std::all_of(choice.begin(), choice.end(), [m](std::size_t c) { return c != m; });
   std::vector<std::string> ambiguous;
   if (assigned) ambiguous = placeAxes(st.streams, rx, servos, choice, result);
-  if (assigned && ambiguous.empty() && servos.unpaired.empty()) return result;
+  const bool paired = assigned && ambiguous.empty() && servos.unpaired.empty();
+  if (paired && result.unexplained == 0) return result;
+  // Status words no handshake explains (idle axes): the structure may place every axis.
+  InferenceResult structure = result;
+  std::string structure_why;
+  if (fromStructure(structure, structure_why)) return structure;
+  if (paired) return result;
   if (st.streams.empty() && outputsFirst(result)) return result;
   result.axes.clear();
-  result.refusal = refusal(st.streams, st.cycles, ambiguous, servos.unpaired, n);
+  result.refusal = refusal(st.streams, st.cycles, ambiguous, servos.unpaired, n, structure_why);
   return result;
+}
+
+std::string describeInference(const AxisEvidence& e) {
+  std::string how;
+  if (e.outputs_only) {
+    how = "from the outputs only (no data the slaves wrote was captured)";
+  } else if (e.structure_only) {
+    how = "found from the structure only, no handshake seen";
+  } else {
+    how = fmt::format("{} handshake cycles", e.handshakes_seen);
+  }
+  if (e.paired_by_order) how += "; RxPDO paired with the TxPDO of the same rank in image order";
+  return fmt::format("inferred: {}; confidence {:.0f} %", how, 100 * e.confidence);
 }
 
 std::string describeEvidence(const InferredAxis& axis) {
@@ -692,15 +1041,25 @@ std::string describeEvidence(const InferredAxis& axis) {
         "TxPDO's place follows from the layout, unchecked; confidence {:.0f} %",
         e.cycles, e.rx_violations, 100 * e.confidence);
   }
-  return fmt::format(
+  std::string text = fmt::format(
       "cycles {}; signature (reserved bits zero, SEW summary, message code 0..{}, finite floats, "
       "smooth ActPos) {} ({} TxPDO and {} RxPDO mismatches); ActPos moved in {} cycles; SSW "
       "status bits in {} cycles; SSW.ServoEn followed SCW.SE in {} cycles, against it in {} ({}); "
-      "ErrClearAck with ErrorClear in {} cycles; confidence {:.0f} %",
+      "ErrClearAck with ErrorClear in {} cycles",
       e.cycles, kMaxMessageCode, mark(e.violations == 0 && e.rx_violations == 0), e.violations,
       e.rx_violations, e.actpos_moves, e.status_cycles, e.enabled_agree, e.enabled_disagree,
-      mark(e.enabled_agree >= kMinAgreement && e.enabled_disagree == 0), e.clear_agree,
-      100 * e.confidence);
+      mark(e.enabled_agree >= kMinAgreement && e.enabled_disagree == 0), e.clear_agree);
+  if (e.zpulse_agree > 0) {
+    text += fmt::format("; ZPulseAck with ZPulseRequest in {} cycles", e.zpulse_agree);
+  }
+  if (e.paired_by_order) {
+    text += fmt::format(
+        "; ServoRDY against the ready table in {} cycles; the SSW's parameter tables commanded "
+        "by the SCW; RxPDO paired with the TxPDO of the same rank in process-image order",
+        e.ready_mismatches);
+  }
+  if (e.structure_only) text += "; found from the structure only, no handshake seen";
+  return text + fmt::format("; confidence {:.0f} %", 100 * e.confidence);
 }
 
 }  // namespace ncservo

@@ -163,6 +163,19 @@ Json segmentsJson(const CaptureReport& r) {
 }
 
 // `timing` (docs/timing.md, docs/cli.md).
+namespace {
+
+// How an inferred axis was found (docs/layout.md): a confidence in percent, the handshake
+// cycles seen, and whether the structure alone decided.
+Json inferredJson(const AxisEvidence& e) {
+  return {{"confidence", static_cast<int>(std::lround(100 * e.confidence))},
+          {"handshakes_seen", e.handshakes_seen},
+          {"structure_only", e.structure_only},
+          {"paired_by_order", e.paired_by_order}};
+}
+
+}  // namespace
+
 Json timingJson(const CaptureReport& r) {
   Json timing{
       {"timestamps", timestampSourceName(r.timestamps)},
@@ -192,11 +205,13 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
                         {"p99", optionalNumber(r.cycle_time.p99_us)},
                         {"max", optionalNumber(r.cycle_time.max_us)}};
   Json layout_axes = Json::array();
-  for (const AxisInfo& info : r.layout) {
+  for (std::size_t i = 0; i < r.layout.size(); ++i) {
+    const AxisInfo& info = r.layout[i];
     Json a{{"index", info.index}, {"name", info.name}};
     if (info.has_station) a["station"] = hex16(info.station);
     a["outputs"] = hex32(info.logical ? info.outputs : info.sm_outputs);
     a["inputs"] = hex32(info.logical ? info.inputs : info.sm_inputs);
+    if (i < r.inferred.size()) a["inferred"] = inferredJson(r.inferred[i]);
     layout_axes.push_back(std::move(a));
   }
   c["timing"] = timingJson(r);

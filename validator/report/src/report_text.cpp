@@ -85,7 +85,8 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     fmt::print(out, "  {}\n", describeStartupCut(r.startup_frames_cut));
   }
   // Where each axis was found: its station and its PDOs' logical (or SM) addresses.
-  for (const AxisInfo& info : r.layout) {
+  for (std::size_t i = 0; i < r.layout.size(); ++i) {
+    const AxisInfo& info = r.layout[i];
     fmt::print(out, "  {}:", info.name);
     if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
     if (info.logical) {
@@ -93,6 +94,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     } else {
       fmt::print(out, " SM2 0x{:08X}, SM3 0x{:08X}\n", info.sm_outputs, info.sm_inputs);
     }
+    if (i < r.inferred.size()) fmt::print(out, "    {}\n", describeInference(r.inferred[i]));
   }
   for (const AxisReport& a : r.axes) {
     fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,

@@ -1,9 +1,13 @@
 // The layout inferred from the cyclic traffic itself (docs/protocol.md §9.4): every 10-byte window
 // of the data a master writes and every 40-byte window of the data slaves return, in every cyclic
 // logical or FPRD/FPWR datagram, is a candidate RxPDO or TxPDO. The signature of §1–5 rules
-// candidates out (reserved bits, SEW summary, message code range, finite floats, a smooth ActPos);
-// behaviour pairs them (SSW.ServoEn follows SCW.SE, SSW.ErrClearAck follows SCW.ErrorClear).
-// Evidence is gathered over a bounded number of cycles; memory is bounded.
+// candidates out (reserved bits, SEW summary, message code and its datum, finite floats, a smooth
+// or standing ActPos, a steady SE); the bytes the slaves changed against the master's copy are no
+// RxPDO's. Behaviour pairs them (SSW.ServoEn follows SCW.SE, ErrClearAck follows ErrorClear,
+// ZPulseAck follows ZPulseRequest). Without any handshake the structure alone decides when exactly
+// one tiling fits: RxPDO k with TxPDO k in process-image order, the SSW's parameter tables among
+// the SCW's, ServoRDY per the ready table. Evidence is gathered over a bounded number of cycles;
+// memory is bounded.
 #pragma once
 
 #include <cstddef>
@@ -28,10 +32,19 @@ struct AxisEvidence {
   std::uint32_t enabled_agree = 0;     // cycles with SCW.SE 0x2 and SSW.ServoEn 1
   std::uint32_t enabled_disagree = 0;  // cycles with ServoEn 1 long after SE left 0x2
   std::uint32_t clear_agree = 0;       // cycles with ErrorClear and ErrClearAck both 1
-  double confidence = 0;               // 0..1: how far the next best candidate is behind
+  std::uint32_t zpulse_agree = 0;      // cycles with ZPulseRequest and ZPulseAck both 1
+  std::uint32_t ready_mismatches = 0;  // cycles with ServoRDY against the ready table
+  // Cycles of the three handshakes above (ServoEn with SE, ErrClearAck, ZPulseAck): 0 when the
+  // layout came from the structure alone.
+  std::uint32_t handshakes_seen = 0;
+  double confidence = 0;  // 0..1: how far the next best candidate is behind
   // No data the slaves wrote was captured (master copies only, or frames cut before the
   // inputs): the outputs-first layout of §9.4 is taken from the outputs alone.
   bool outputs_only = false;
+  // No handshake decided this axis: the structure singled out one tiling (docs/layout.md).
+  bool structure_only = false;
+  // RxPDO k was paired with TxPDO k in process-image order, not by a handshake.
+  bool paired_by_order = false;
 };
 
 struct InferredAxis {
@@ -51,6 +64,8 @@ struct InferenceResult {
 
 // One line per check for an inferred axis, for `decode --layout`.
 std::string describeEvidence(const InferredAxis& axis);
+// How an inferred axis was found and how sure, in a few words (the reports).
+std::string describeInference(const AxisEvidence& evidence);
 
 struct InferenceLimits {
   std::uint32_t max_cycles = 4096;   // cycles of evidence, at most
@@ -77,6 +92,7 @@ class LayoutInference {
  private:
   struct State;
   bool outputsFirst(InferenceResult& result) const;
+  bool fromStructure(InferenceResult& result, std::string& why) const;
   std::unique_ptr<State> state_;
 };
 

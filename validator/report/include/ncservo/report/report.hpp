@@ -13,6 +13,7 @@
 
 #include "ncservo/base/error.hpp"
 #include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/model/timing.hpp"
 #include "ncservo/report/report_charts.hpp"
 #include "ncservo/rules/coverage.hpp"
@@ -73,6 +74,8 @@ struct CaptureReport {
   CycleTimeSummary cycle_time;
   LayoutSource layout_source = LayoutSource::None;
   std::vector<AxisInfo> layout;
+  // When the layout was inferred: the evidence of each axis of `layout`, in the same order.
+  std::vector<AxisEvidence> inferred;
   std::vector<Finding> findings;        // kept only for the formats written at the end
   std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
   std::vector<FindingGroup> groups;     // by (rule, axis), in the order of their first finding
