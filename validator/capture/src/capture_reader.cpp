@@ -376,7 +376,8 @@ Error CaptureReader::failure(std::uint64_t frame, const char* pcap_message) cons
 // block, which other blocks may precede, ends with its total length (pcapng §3.1).
 std::string describeCaptureDrops(const CaptureDrops& drops) {
   std::vector<std::string> parts;
-  if (drops.interface_dropped) parts.push_back(fmt::format("interface {}", *drops.interface_dropped));
+  if (drops.interface_dropped)
+    parts.push_back(fmt::format("interface {}", *drops.interface_dropped));
   if (drops.system_dropped) parts.push_back(fmt::format("system {}", *drops.system_dropped));
   return fmt::format("{} frames ({})", drops.dropped(), fmt::join(parts, ", "));
 }
@@ -429,9 +430,9 @@ void CaptureReader::scanBlocks(std::uint64_t from, std::uint64_t to) {
         option += 4 + (size + 3u) / 4 * 4;
       }
       if (drops.interface_dropped || drops.system_dropped) {
-        const auto same = std::find_if(
-            interface_drops_.begin(), interface_drops_.end(),
-            [&](const InterfaceDrops& d) { return d.interface == drops.interface; });
+        const auto same =
+            std::find_if(interface_drops_.begin(), interface_drops_.end(),
+                         [&](const InterfaceDrops& d) { return d.interface == drops.interface; });
         if (same != interface_drops_.end()) {
           *same = drops;
         } else if (interface_drops_.size() < 64) {

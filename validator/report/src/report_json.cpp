@@ -97,12 +97,11 @@ Json cyclicFramesJson(const CaptureReport& r) {
                            {"address", hex32(d.address)},
                            {"length", d.length}});
     }
-    list.push_back(
-        {{"datagrams", std::move(datagrams)},
-         {"frames", f.datagrams.empty() ? 0 : f.datagrams.front().frames},
-         {"cycles", f.cycles},
-         {"cycle_us",
-          f.cycle_ns ? Json(microseconds(static_cast<double>(*f.cycle_ns))) : Json(nullptr)}});
+    list.push_back({{"datagrams", std::move(datagrams)},
+                    {"frames", f.datagrams.empty() ? 0 : f.datagrams.front().frames},
+                    {"cycles", f.cycles},
+                    {"cycle_us", f.cycle_ns ? Json(microseconds(static_cast<double>(*f.cycle_ns)))
+                                            : Json(nullptr)}});
   }
   return list;
 }

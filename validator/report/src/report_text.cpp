@@ -192,8 +192,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({}{})\n",
              verdictHeadline(verdictOf(sink.policy, r)), r.count(Severity::Error),
              r.count(Severity::Error) == 1 ? "" : "s", r.count(Severity::Warning),
-             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path,
-             dropped);
+             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path, dropped);
 }
 
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {

@@ -218,8 +218,8 @@ struct Simulator::Impl {
           ++master_copies_dropped;
           return true;
         };
-        if (!master.cycle(drop_master ? dropping : sink, std::max(send, slot - cycle_ns / 4),
-                          cycle, outputs, lost_before, lost_after, latest_inputs)) {
+        if (!master.cycle(drop_master ? dropping : sink, std::max(send, slot - cycle_ns / 4), cycle,
+                          outputs, lost_before, lost_after, latest_inputs)) {
           return std::nullopt;
         }
       }

@@ -31,7 +31,9 @@ const char* compressionName(Compression compression);
 struct CaptureDrops {
   std::optional<std::uint64_t> interface_dropped;  // isb_ifdrop: by the network interface
   std::optional<std::uint64_t> system_dropped;     // isb_osdrop: by the operating system
-  std::uint64_t dropped() const { return interface_dropped.value_or(0) + system_dropped.value_or(0); }
+  std::uint64_t dropped() const {
+    return interface_dropped.value_or(0) + system_dropped.value_or(0);
+  }
 };
 // "12 frames (interface 12, system 0)".
 std::string describeCaptureDrops(const CaptureDrops& drops);

@@ -190,8 +190,8 @@ class BusModel {
   std::vector<WkcRecord> wkc_;
   std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
   std::size_t wkc_plan_next_ = 0;
-  WkcPlan uncached_plan_;            // for a frame whose shape is not cached
-  IntervalStats intervals_;          // this segment's
+  WkcPlan uncached_plan_;    // for a frame whose shape is not cached
+  IntervalStats intervals_;  // this segment's
   // Per slot of cyclic_: each frame's own intervals, this segment's (its nominal cycle) and
   // the capture's (its reported cycle).
   std::array<IntervalStats, kMaxCyclicFrames> frame_intervals_;
