@@ -37,6 +37,11 @@ struct Row {
   std::string message;                // part of the first finding's message
   std::uint64_t cycles = kCycles;
   std::uint64_t judged_frames = 2 * kCycles;  // frames of each judged datagram
+  int master_missing = kNone;  // only the returned copy captured: capture loss, not bus loss
+  int slow_every = 0;          // a second task's frame (LRW 0x03000000) every this many cycles
+  int run = kCycles;           // cycles of the fast frame
+  std::uint64_t master_copies_missing = 0;
+  std::uint64_t returned_copies_missing = 0;
 };
 
 // Frame numbers when nothing before the cycle was dropped and no one-off frame came first.
@@ -73,7 +78,55 @@ const Row kRows[] = {
      {masterOf(13) - 1},
      "the master frame 25 (LRD at 0x09000000, 1 byte, and 1 more datagram) was not returned",
      kCycles,
-     2 * kCycles - 1},
+     2 * kCycles - 1,
+     kNone,
+     0,
+     kCycles,
+     0,
+     1},
+    {"a returned copy whose master copy the capture missed: its cycle ran",
+     kNone,
+     kNone,
+     kNone,
+     0,
+     RuleId::Com002,
+     {},
+     "",
+     kCycles,
+     2 * kCycles - 1,
+     12,
+     0,
+     kCycles,
+     1,
+     0},
+    {"two missing master copies in a row",
+     kNone,
+     kNone,
+     kNone,
+     0,
+     RuleId::Com002,
+     {},
+     "",
+     kCycles,
+     2 * kCycles - 2,
+     20,
+     0,
+     kCycles,
+     2,
+     0},
+    {"a 10 ms task beside the 1 ms one: each frame its own clock",
+     kNone,
+     kNone,
+     kNone,
+     0,
+     RuleId::Com002,
+     {},
+     "",
+     200,
+     400,
+     kNone,
+     10,
+     200},
     {"one-off frames give way to cyclic ones",
      kNone,
      kNone,
@@ -115,11 +168,25 @@ TEST_P(ServolessBus, JudgesCyclicDatagrams) {
              .bytes(),
          t - kCycleNs + i);
   }
-  for (int c = 0; c < kCycles; ++c, t += kCycleNs) {
+  auto slow = [](int cycle, bool returned) {
+    return FrameBuilder()
+        .add(Dg(ecat::kLrw, static_cast<std::uint8_t>(cycle), 0x03000000, Bytes(8, 0),
+                returned ? 3 : 0))
+        .bytes();
+  };
+  // The second master copy of "two missing" is missed too.
+  const auto master_missing = [&](int c) {
+    return c == row.master_missing ||
+           (row.name.rfind("two", 0) == 0 && c == row.master_missing + 1);
+  };
+  for (int c = 0; c < row.run; ++c, t += kCycleNs) {
     if (c == row.lost_cycle) continue;
-    feed(cyclic(c, false, 0), t);
-    if (c == row.unreturned) continue;
-    feed(cyclic(c, true, c == row.wrong_wkc ? 4 : kLrwWkc), t + 20'000);
+    if (!master_missing(c)) feed(cyclic(c, false, 0), t);
+    if (c != row.unreturned) feed(cyclic(c, true, c == row.wrong_wkc ? 4 : kLrwWkc), t + 20'000);
+    if (row.slow_every > 0 && c % row.slow_every == 0) {
+      feed(slow(c, false), t + 500'000);
+      feed(slow(c, true), t + 520'000);
+    }
   }
 
   std::vector<std::uint64_t> reported;
@@ -137,8 +204,10 @@ TEST_P(ServolessBus, JudgesCyclicDatagrams) {
         << findings.front().message;
   }
   EXPECT_EQ(validator.cycles(), row.cycles);
+  EXPECT_EQ(validator.bus().masterCopiesMissing(), row.master_copies_missing);
+  EXPECT_EQ(validator.bus().returnedCopiesMissing(), row.returned_copies_missing);
   const std::vector<CyclicDatagram> judged = validator.bus().cyclicDatagrams();
-  ASSERT_EQ(judged.size(), 2u);
+  ASSERT_EQ(judged.size(), row.slow_every > 0 ? 3u : 2u);
   EXPECT_EQ(judged[0].command, ecat::kLrd);
   EXPECT_EQ(judged[0].address, 0x09000000u);
   EXPECT_EQ(judged[0].length, 1);
@@ -148,8 +217,17 @@ TEST_P(ServolessBus, JudgesCyclicDatagrams) {
   EXPECT_EQ(judged[1].frames, row.judged_frames);
   const TimingSummary timing = validator.bus().timing().summary();
   ASSERT_TRUE(timing.cycle);
-  EXPECT_EQ(timing.cycle->median_ns, kCycleNs);
   EXPECT_EQ(validator.bus().unfollowedFrames(), 0u);
+  const std::vector<CyclicFrameSummary> frames = validator.bus().cyclicFrames();
+  ASSERT_EQ(frames.size(), row.slow_every > 0 ? 2u : 1u);
+  EXPECT_EQ(frames[0].cycle_ns, kCycleNs);
+  EXPECT_EQ(frames[0].cycles, row.cycles);
+  if (row.slow_every > 0) {
+    EXPECT_EQ(frames[1].cycle_ns, kCycleNs * row.slow_every);
+    EXPECT_EQ(frames[1].cycles, static_cast<std::uint64_t>(row.run / row.slow_every));
+  } else {
+    EXPECT_EQ(timing.cycle->median_ns, kCycleNs);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Rows, ServolessBus, ::testing::ValuesIn(kRows), test::rowName<Row>);

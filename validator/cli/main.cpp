@@ -516,6 +516,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   report.timestamps = clock.source();
   report.probe = clock.counts();
   report.probe_note = clock.note();
+  report.capture_drops = reader->drops();
   if (!status) {
     report.error = status.error().text() + " (the frames before it were analysed)";
     fmt::print(output.messages, "ncservo: {}\n", *report.error);
@@ -988,6 +989,10 @@ int runSimulate(SimulateArgs& args) {
   if (args.output != "-") {
     fmt::print(stderr, "ncservo simulate: wrote {} frames to {}\n", *frames, args.output);
   }
+  if (args.options.capture_loss > 0) {
+    fmt::print(stderr, "ncservo simulate: {} master copies left out of the capture\n",
+               simulator.masterCopiesDropped());
+  }
   return kExitOk;
 }
 
@@ -1146,6 +1151,9 @@ Handler simulateCommand(CLI::App& command) {
                      "(repeatable)");
   command.add_option("--loss", sa.options.loss,
                      "probability that a returned frame is lost (COM-004 findings)");
+  command.add_option("--capture-loss", sa.options.capture_loss,
+                     "probability that the capture misses a cycle's master copies, keeping "
+                     "their returned copies (not the bus: no COM-002)");
   command.add_option("--layout-config", sa.layout_config,
                      "also write the layout as a configuration file for validate --config");
   command.add_option(

@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <pcap/pcap.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -373,6 +374,76 @@ Error CaptureReader::failure(std::uint64_t frame, const char* pcap_message) cons
 // A plain file is read by libpcap record by record, so its position is the record's end. pcap
 // records follow each other from the end of the 24-byte file header (pcap-savefile(5)); a pcapng
 // block, which other blocks may precede, ends with its total length (pcapng §3.1).
+std::string describeCaptureDrops(const CaptureDrops& drops) {
+  std::vector<std::string> parts;
+  if (drops.interface_dropped)
+    parts.push_back(fmt::format("interface {}", *drops.interface_dropped));
+  if (drops.system_dropped) parts.push_back(fmt::format("system {}", *drops.system_dropped));
+  return fmt::format("{} frames ({})", drops.dropped(), fmt::join(parts, ", "));
+}
+
+std::optional<CaptureDrops> CaptureReader::drops() const {
+  if (interface_drops_.empty()) return std::nullopt;
+  CaptureDrops total;
+  for (const InterfaceDrops& d : interface_drops_) {
+    if (d.interface_dropped)
+      total.interface_dropped = total.interface_dropped.value_or(0) + *d.interface_dropped;
+    if (d.system_dropped)
+      total.system_dropped = total.system_dropped.value_or(0) + *d.system_dropped;
+  }
+  return total;
+}
+
+// pcapng blocks (the pcapng specification): type, total length, body, total length again. An
+// interface statistics block's body: interface id, timestamp (8 bytes), then options of code,
+// length and a value padded to 4 bytes; isb_ifdrop (5) and isb_osdrop (7) are 64-bit counters
+// since the capture started.
+void CaptureReader::scanBlocks(std::uint64_t from, std::uint64_t to) {
+  constexpr std::uint32_t kStatisticsBlock = 5;
+  constexpr std::uint16_t kEndOfOptions = 0, kIfDrop = 5, kOsDrop = 7;
+  constexpr std::uint64_t kMaxScanned = 1 << 20;  // blocks between records are small
+  if (to <= from || to - from > kMaxScanned) return;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(to - from));
+  if (pread(fileno(pcap_file(handle_)), bytes.data(), bytes.size(), static_cast<off_t>(from)) !=
+      static_cast<ssize_t>(bytes.size())) {
+    return;
+  }
+  const bool big = (htonl(1) == 1) != (pcap_is_swapped(handle_) == 1);
+  const auto load64 = [&](const std::uint8_t* p) {
+    const std::uint64_t first = load32(p, big), second = load32(p + 4, big);
+    return big ? first << 32 | second : second << 32 | first;
+  };
+  std::size_t at = 0;
+  while (at + 12 <= bytes.size()) {
+    const std::uint32_t type = load32(&bytes[at], big);
+    const std::uint32_t length = load32(&bytes[at + 4], big);
+    if (length < 12 || length % 4 != 0 || length > bytes.size() - at) return;
+    const std::size_t end = at + length - 4;  // before the trailing length
+    if (type == kStatisticsBlock && length >= 24) {
+      InterfaceDrops drops{load32(&bytes[at + 8], big), std::nullopt, std::nullopt};
+      for (std::size_t option = at + 20; option + 4 <= end;) {
+        const std::uint16_t code = load16(&bytes[option], big);
+        const std::uint16_t size = load16(&bytes[option + 2], big);
+        if (code == kEndOfOptions || option + 4 + size > end) break;
+        if (size == 8 && code == kIfDrop) drops.interface_dropped = load64(&bytes[option + 4]);
+        if (size == 8 && code == kOsDrop) drops.system_dropped = load64(&bytes[option + 4]);
+        option += 4 + (size + 3u) / 4 * 4;
+      }
+      if (drops.interface_dropped || drops.system_dropped) {
+        const auto same =
+            std::find_if(interface_drops_.begin(), interface_drops_.end(),
+                         [&](const InterfaceDrops& d) { return d.interface == drops.interface; });
+        if (same != interface_drops_.end()) {
+          *same = drops;
+        } else if (interface_drops_.size() < 64) {
+          interface_drops_.push_back(drops);
+        }
+      }
+    }
+    at += length;
+  }
+}
+
 std::optional<RecordSpan> CaptureReader::storedSpan() {
   constexpr std::uint64_t kPcapFileHeader = 24;
   std::FILE* file = pcap_file(handle_);
@@ -393,6 +464,7 @@ std::optional<RecordSpan> CaptureReader::storedSpan() {
     length = load32(trailer, host_big != (pcap_is_swapped(handle_) == 1));
   }
   if (length == 0 || length > at) return std::nullopt;
+  if (pcapng_ && at - length > start) scanBlocks(start == kPcapFileHeader ? 0 : start, at - length);
   return RecordSpan{at - length, length};
 }
 
@@ -402,6 +474,13 @@ Result<bool> CaptureReader::next(CaptureRecord& record) {
   const int rc = pcap_next_ex(handle_, &header, &data);
   if (rc == PCAP_ERROR_BREAK) {
     if (stream_ && stream_->error()) return fail(failure(frames_ + 1, ""));
+    std::FILE* file = pcap_file(handle_);
+    struct stat info {};
+    if (pcapng_ && !stream_ && !tail_scanned_ && file != nullptr &&
+        fstat(fileno(file), &info) == 0 && S_ISREG(info.st_mode)) {
+      tail_scanned_ = true;
+      scanBlocks(record_end_, static_cast<std::uint64_t>(info.st_size));
+    }
     return false;
   }
   if (rc != 1) return fail(failure(frames_ + 1, pcap_geterr(handle_)));

@@ -92,9 +92,11 @@ BusModel::CyclicFrame* BusModel::cyclicFrame(const EcatFrame& frame, const Frame
   std::array<bool, kMaxCyclicFrames> slot_taken{};
   for (const CyclicFrame& c : cyclic_) slot_taken[c.id.slot] = true;
   const auto free_slot = std::find(slot_taken.begin(), slot_taken.end(), false);
+  const auto slot = static_cast<std::uint8_t>(free_slot - slot_taken.begin());
+  frame_intervals_[slot].clear();
+  frame_capture_intervals_[slot].clear();
   cyclic_.push_back(CyclicFrame{});
-  cyclic_.back().id = {static_cast<std::uint8_t>(free_slot - slot_taken.begin()),
-                       ++cyclic_serials_};
+  cyclic_.back().id = {slot, ++cyclic_serials_};
   cyclic_.back().datagrams.assign(first, last);
   return remember(cyclic_.size() - 1);
 }
@@ -121,9 +123,24 @@ std::vector<CyclicDatagram> BusModel::cyclicDatagrams() const {
   return out;
 }
 
+std::vector<CyclicFrameSummary> BusModel::cyclicFrames() const {
+  std::vector<CyclicFrameSummary> out;
+  for (const CyclicFrame& c : cyclic_) {
+    if (c.ticks < 2) continue;
+    CyclicFrameSummary summary;
+    for (const DatagramKey& key : c.datagrams)
+      summary.datagrams.push_back({key.command, key.address, key.length, c.copies});
+    summary.cycles = c.ticks;
+    summary.cycle_ns = frame_capture_intervals_[c.id.slot].medianNs();
+    out.push_back(std::move(summary));
+  }
+  return out;
+}
+
 void BusModel::startSegment(std::vector<BusEvent>& events) {
   earlier_intervals_.merge(intervals_);
   intervals_.clear();
+  for (IntervalStats& stats : frame_intervals_) stats.clear();
   for (CyclicFrame& c : cyclic_) {
     // The axes' failure counts restart with the segment: the untold gap counts no lost cycle.
     if (c.pending_gap)
@@ -179,6 +196,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   if (master) {
     // docs/rules.md#com-004: judged on the next master frame, once returned copies exist at all.
     if (cyclic.awaiting_return && returned_copies_seen_) {
+      ++returned_copies_missing_;
       if (!cyclic.not_returned_episode) {
         cyclic.not_returned_episode = true;
         NotReturnedEvent event;
@@ -206,15 +224,25 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
         cyclic.axes.push_back(decode.axes[i].axis);
       cyclic.axes_shape_id = decode.shape_id;
     }
-    tick(cyclic, decode);
+    tick(cyclic, decode, now_, false);
     return false;
   }
-  if (!master_copies_seen_) tick(cyclic, decode);
+  if (!master_copies_seen_) {
+    tick(cyclic, decode, now_, false);
+  } else if (!cyclic.awaiting_return && cyclic.last_tick) {
+    // Capture loss, not bus loss (docs/timing.md "Capture loss"): the returned copy proves its
+    // cycle ran; its master copy left about one return latency before it.
+    ++master_copies_missing_;
+    Stamp sent = now_;
+    sent.time_ns -= cyclic.last_latency_ns;
+    tick(cyclic, decode, sent, true);
+  }
   // A timestamp that went backwards gives no latency (docs/timing.md#rule-time).
   if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
     timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
     frame_timing_.latency_ns = latency;
+    cyclic.last_latency_ns = latency;
     events.push_back(
         {cyclic.last_master, ReturnLatencyEvent{latency, cyclic.last_master.frame, cyclic.id}});
   }
@@ -223,30 +251,37 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   return checkWorkingCounters(frame, decode);
 }
 
-// One tick of a cyclic frame's clock: the interval statistics, COM-002's gaps and the interval
-// COM-006 judges.
-void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
+// One tick of a cyclic frame's clock: the interval statistics, COM-002's gaps against the frame's
+// own nominal cycle and the interval COM-006 judges.
+void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode, const Stamp& at,
+                    bool estimated) {
   ++cyclic.ticks;
   // docs/timing.md#rule-time: a timestamp that went back is not an error; the interval it would
   // give is unknown, so the clock of this cyclic frame starts again at the next tick.
-  if (frame_time_ns_ < now_.time_ns) {
+  const bool went_back = cyclic.last_tick && at.time_ns < cyclic.last_tick->time_ns;
+  if (frame_time_ns_ < now_.time_ns || went_back) {
     cyclic.last_tick.reset();
+    cyclic.last_tick_estimated = false;
     return;
   }
+  const bool measured = !estimated && !cyclic.last_tick_estimated;
+  cyclic.last_tick_estimated = estimated;
   if (!cyclic.last_tick) {
-    cyclic.last_tick = now_;
+    cyclic.last_tick = at;
     return;
   }
-  const std::int64_t interval = now_.time_ns - cyclic.last_tick->time_ns;
+  const std::int64_t interval = at.time_ns - cyclic.last_tick->time_ns;
   // docs/rules.md#com-002: a gap is told late or lost by the interval after it.
   if (cyclic.pending_gap) {
     judgeGap(cyclic, interval, CycleGapEvent::Verdict::Lost, *events_, accounts_);
   }
-  const std::optional<std::int64_t> median = intervals_.medianNs();
-  if (intervals_.count() >= kIntervalsBeforeGaps && median && *median > 0) {
+  IntervalStats& own = frame_intervals_[cyclic.id.slot];
+  const std::optional<std::int64_t> median = own.medianNs();
+  const bool nominal_known = own.count() >= kIntervalsBeforeGaps && median && *median > 0;
+  if (nominal_known) {
     const bool gap = interval * kGapDenominator > *median * kGapNumerator;
     if (gap) {
-      PendingGap pending{*cyclic.last_tick, interval, *median, now_.frame, {}};
+      PendingGap pending{*cyclic.last_tick, interval, *median, at.frame, {}};
       for (std::size_t i = 0; i < decode.axis_count; ++i)
         pending.axes.push_back(decode.axes[i].axis);
       // From 2.5 cycles on no next interval makes it late: its cycles are lost now, so that
@@ -259,17 +294,21 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode) {
       }
       cyclic.pending_gap = std::move(pending);
     }
-    events_->push_back(
-        {*cyclic.last_tick,
-         CycleIntervalEvent{interval, *median, cyclic.last_tick->frame, cyclic.id, gap}});
+    if (measured) {
+      events_->push_back(
+          {*cyclic.last_tick,
+           CycleIntervalEvent{interval, *median, cyclic.last_tick->frame, cyclic.id, gap}});
+    }
   }
-  frame_timing_.interval_ns = interval;
-  if (const std::optional<std::int64_t> nominal = nominalCycleNs()) {
-    frame_timing_.deviation_ns = interval - *nominal;
+  if (measured) {
+    frame_timing_.interval_ns = interval;
+    if (nominal_known) frame_timing_.deviation_ns = interval - *median;
+    own.add(interval);
+    frame_capture_intervals_[cyclic.id.slot].add(interval);
+    intervals_.add(interval);
+    timing_.onCycle(at.frame, cyclic.last_tick->frame, interval);
   }
-  intervals_.add(interval);
-  timing_.onCycle(now_.frame, cyclic.last_tick->frame, interval);
-  cyclic.last_tick = now_;
+  cyclic.last_tick = at;
 }
 
 // docs/rules.md#com-002: late when the gap and the interval after it make about two cycles (nothing

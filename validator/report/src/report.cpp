@@ -75,6 +75,9 @@ void summarise(const Validator& validator, CaptureReport& report) {
   report.timing = validator.bus().timing().summary();
   report.cyclic_datagrams = validator.bus().cyclicDatagrams();
   report.unfollowed_frames = validator.bus().unfollowedFrames();
+  report.cyclic_frames = validator.bus().cyclicFrames();
+  report.master_copies_missing = validator.bus().masterCopiesMissing();
+  report.returned_copies_missing = validator.bus().returnedCopiesMissing();
   report.dc = validator.dc().stations();
   report.dc_settled_ns = validator.dc().settledNs();
   report.cycles = validator.cycles();

@@ -87,6 +87,25 @@ Json cyclicDatagramsJson(const CaptureReport& r) {
   return list;
 }
 
+// Each cyclic frame with its own cycle (docs/timing.md "Which frames").
+Json cyclicFramesJson(const CaptureReport& r) {
+  Json list = Json::array();
+  for (const CyclicFrameSummary& f : r.cyclic_frames) {
+    Json datagrams = Json::array();
+    for (const CyclicDatagram& d : f.datagrams) {
+      datagrams.push_back({{"command", ecat::commandName(d.command)},
+                           {"address", hex32(d.address)},
+                           {"length", d.length}});
+    }
+    list.push_back({{"datagrams", std::move(datagrams)},
+                    {"frames", f.datagrams.empty() ? 0 : f.datagrams.front().frames},
+                    {"cycles", f.cycles},
+                    {"cycle_us", f.cycle_ns ? Json(microseconds(static_cast<double>(*f.cycle_ns)))
+                                            : Json(nullptr)}});
+  }
+  return list;
+}
+
 // `timing.dc` (docs/timing.md): one entry per slave whose distributed clock was read.
 Json dcJson(const CaptureReport& r) {
   Json list = Json::array();
@@ -185,7 +204,10 @@ Json timingJson(const CaptureReport& r) {
       {"worst_cycles", worstJson(r.timing.worst_cycles, "since_frame", "interval_us")},
       {"worst_latencies", worstJson(r.timing.worst_latencies, "master_frame", "latency_us")},
       {"segments", segmentsJson(r)},
-      {"cyclic_datagrams", cyclicDatagramsJson(r)}};
+      {"cyclic_datagrams", cyclicDatagramsJson(r)},
+      {"cyclic_frames", cyclicFramesJson(r)},
+      {"master_copies_missing", r.master_copies_missing},
+      {"returned_copies_missing", r.returned_copies_missing}};
   if (r.unfollowed_frames > 0) timing["frames_not_followed"] = r.unfollowed_frames;
   if (r.segment_count > r.segments.size())
     timing["segments_omitted"] = r.segment_count - r.segments.size();
@@ -204,6 +226,14 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},
                         {"p99", optionalNumber(r.cycle_time.p99_us)},
                         {"max", optionalNumber(r.cycle_time.max_us)}};
+  // What the capture file says it dropped (docs/timing.md "Capture loss").
+  if (r.capture_drops) {
+    const CaptureDrops& d = *r.capture_drops;
+    c["capture_dropped"] = {
+        {"frames", d.dropped()},
+        {"interface", d.interface_dropped ? Json(*d.interface_dropped) : Json(nullptr)},
+        {"system", d.system_dropped ? Json(*d.system_dropped) : Json(nullptr)}};
+  }
   Json layout_axes = Json::array();
   for (std::size_t i = 0; i < r.layout.size(); ++i) {
     const AxisInfo& info = r.layout[i];

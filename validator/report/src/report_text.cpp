@@ -57,6 +57,35 @@ std::string describeCyclicDatagrams(const CaptureReport& r) {
   return line;
 }
 
+// Each cyclic frame's own cycle, when there are several (one is the header's cycle).
+void writeCyclicFrames(std::FILE* out, const CaptureReport& r) {
+  if (r.cyclic_frames.size() < 2) return;
+  std::vector<std::string> items;
+  for (const CyclicFrameSummary& f : r.cyclic_frames) {
+    std::vector<std::string> names;
+    for (const CyclicDatagram& d : f.datagrams)
+      names.push_back(fmt::format("{} 0x{:08X}", ecat::commandName(d.command), d.address));
+    items.push_back(fmt::format(
+        "{} every {}, {} cycles", fmt::join(names, "+"),
+        f.cycle_ns ? fmt::format("{:.1f} us", static_cast<double>(*f.cycle_ns) / 1000.0) : "?",
+        f.cycles));
+  }
+  fmt::print(out, "cyclic frames: {}\n", fmt::join(items, "; "));
+}
+
+// Copies the capture missed, told apart from cycles the bus lost (docs/timing.md "Capture loss").
+void writeCaptureLoss(std::FILE* out, const CaptureReport& r) {
+  if (r.master_copies_missing > 0 || r.returned_copies_missing > 0) {
+    fmt::print(out,
+               "copies missing: {} master copies missing from the capture (their returned copies "
+               "prove the cycles ran), {} returned copies never came\n",
+               r.master_copies_missing, r.returned_copies_missing);
+  }
+  if (r.capture_drops && r.capture_drops->dropped() > 0) {
+    fmt::print(out, "capture drops: {}\n", describeCaptureDrops(*r.capture_drops));
+  }
+}
+
 }  // namespace
 
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
@@ -112,6 +141,8 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
                  .c_str(),
              out);
   fmt::print(out, "{}\n", describeCyclicDatagrams(r));
+  writeCyclicFrames(out, r);
+  writeCaptureLoss(out, r);
   std::fputs(dcText(r.dc, r.dc_settled_ns).c_str(), out);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
@@ -156,10 +187,14 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   }
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
-  fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({})\n",
+  const std::string dropped =
+      r.capture_drops && r.capture_drops->dropped() > 0
+          ? fmt::format("; the capture dropped {} frames", r.capture_drops->dropped())
+          : std::string();
+  fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({}{})\n",
              verdictHeadline(verdictOf(sink.policy, r)), r.count(Severity::Error),
              r.count(Severity::Error) == 1 ? "" : "s", r.count(Severity::Warning),
-             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path);
+             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path, dropped);
 }
 
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {

@@ -148,6 +148,8 @@ Status checkBusOptions(SimOptions& o) {
                             o.cycle_us / 5));
   }
   if (!(o.loss >= 0 && o.loss <= 0.5)) return fail(fmt::format("--loss {}: from 0 to 0.5", o.loss));
+  if (!(o.capture_loss >= 0 && o.capture_loss <= 0.5))
+    return fail(fmt::format("--capture-loss {}: from 0 to 0.5", o.capture_loss));
   // The returned copy comes back before the next cycle's master copy, jitter and all.
   if (o.latency_us < 0 || o.latency_us > o.cycle_us / 2) {
     return fail(fmt::format("--latency-us {}: from 0 to half the cycle ({})", o.latency_us,

@@ -38,6 +38,9 @@ struct Simulator::Impl {
   std::vector<RxPdo> outputs;                       // per axis, from the NC this cycle
   std::vector<std::optional<TxPdo>> latest_inputs;  // per axis, from this cycle's returned frame
   std::int64_t soak_planned_until_ns = 0;
+  // --capture-loss draws from its own generator: without it the capture is the same as before.
+  Rng capture_loss_rng{o.seed ^ 0xC0FFEE5EEDULL};
+  std::uint64_t master_copies_dropped = 0;
 
   explicit Impl(const SimOptions& options)
       : o(options),
@@ -206,8 +209,17 @@ struct Simulator::Impl {
         const bool lost_before = faults.takeLossBeforeSlaves();
         const bool lost_after =
             faults.takeLossAfterSlaves() || (o.loss > 0 && rng.uniform() < o.loss);
-        if (!master.cycle(sink, std::max(send, slot - cycle_ns / 4), cycle, outputs, lost_before,
-                          lost_after, latest_inputs)) {
+        // The capture, not the bus, misses the master copies of a cycle whose returned copies
+        // it holds (docs/simulate.md); never the first cycle's, which starts each frame's clock.
+        const bool drop_master = o.capture_loss > 0 && cycle > 0 && !lost_before && !lost_after &&
+                                 capture_loss_rng.uniform() < o.capture_loss;
+        const FrameSink dropping = [&](const SimFrame& frame) {
+          if (frame.returned) return sink(frame);
+          ++master_copies_dropped;
+          return true;
+        };
+        if (!master.cycle(drop_master ? dropping : sink, std::max(send, slot - cycle_ns / 4), cycle,
+                          outputs, lost_before, lost_after, latest_inputs)) {
           return std::nullopt;
         }
       }
@@ -224,12 +236,16 @@ struct Simulator::Impl {
         }
       }
     }
-    return master.frames();
+    return master.frames() - master_copies_dropped;
   }
 };
 
 Simulator::Simulator(const SimOptions& options) : impl_(std::make_unique<Impl>(options)) {}
 Simulator::~Simulator() = default;
+
+std::uint64_t Simulator::masterCopiesDropped() const {
+  return impl_->master_copies_dropped;
+}
 
 const std::vector<AxisConfig>& Simulator::layout() const {
   return impl_->axis_layout;

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "ncservo/base/error.hpp"
 #include "ncservo/wire/capture_record.hpp"
@@ -24,6 +25,18 @@ int timestampDigits(const std::uint8_t* head, std::size_t size);
 // How the capture's bytes are stored.
 enum class Compression : std::uint8_t { None, Gzip, Zstd };
 const char* compressionName(Compression compression);
+
+// What a pcapng's interface statistics blocks say the capture dropped (docs/timing.md "Capture
+// loss"): the last block's counters of each interface, summed over the interfaces.
+struct CaptureDrops {
+  std::optional<std::uint64_t> interface_dropped;  // isb_ifdrop: by the network interface
+  std::optional<std::uint64_t> system_dropped;     // isb_osdrop: by the operating system
+  std::uint64_t dropped() const {
+    return interface_dropped.value_or(0) + system_dropped.value_or(0);
+  }
+};
+// "12 frames (interface 12, system 0)".
+std::string describeCaptureDrops(const CaptureDrops& drops);
 
 class DecompressedStream;  // the decompressing source libpcap reads through (capture_reader.cpp)
 
@@ -48,11 +61,16 @@ class CaptureReader {
   int timestampDigits() const { return timestamp_digits_; }
   // A pcapng (of any compression), not a pcap.
   bool pcapng() const { return pcapng_format_; }
+  // The drop counts of the interface statistics blocks read so far, once one gave any; read from
+  // plain pcapng files only (a compressed one is not searched for them).
+  std::optional<CaptureDrops> drops() const;
 
  private:
   CaptureReader() = default;
   Error failure(std::uint64_t frame, const char* pcap_message) const;
   std::optional<RecordSpan> storedSpan();
+  // The blocks in [from, to) of a plain pcapng, between records: interface statistics.
+  void scanBlocks(std::uint64_t from, std::uint64_t to);
 
   static constexpr std::size_t kReadBufferSize = 1 << 16;
   std::unique_ptr<char[]> buffer_;              // the FILE's buffer: outlives the handle
@@ -68,6 +86,13 @@ class CaptureReader {
   bool pcapng_ = false;           // a plain pcapng file, whose records are located
   bool pcapng_format_ = false;    // a pcapng, plain or not
   std::uint64_t record_end_ = 0;  // in the file, of the last record read
+  bool tail_scanned_ = false;     // the blocks after the last record
+  struct InterfaceDrops {
+    std::uint32_t interface = 0;
+    std::optional<std::uint64_t> interface_dropped;
+    std::optional<std::uint64_t> system_dropped;
+  };
+  std::vector<InterfaceDrops> interface_drops_;  // the last statistics of each interface
 };
 
 }  // namespace ncservo

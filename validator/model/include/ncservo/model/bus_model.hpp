@@ -33,6 +33,13 @@ struct CyclicDatagram {
   std::uint64_t frames = 0;  // copies (master and returned) of the cyclic frames holding it
 };
 
+// A cyclic frame that repeated, with its own clock (docs/timing.md "Which frames").
+struct CyclicFrameSummary {
+  std::vector<CyclicDatagram> datagrams;  // its process-data datagrams; `frames` its copies
+  std::uint64_t cycles = 0;               // ticks of its clock
+  std::optional<std::int64_t> cycle_ns;   // the median of its own intervals
+};
+
 class BusModel {
  public:
   // Whether a frame exchanges process data: a logical datagram (LRW, LRD, LWR) or servo PDOs.
@@ -73,8 +80,15 @@ class BusModel {
   // The process-data datagrams of the cyclic frames that repeated, in the order they were first
   // seen; one entry per command, address and length.
   std::vector<CyclicDatagram> cyclicDatagrams() const;
+  // The cyclic frames that repeated, in the order they were first seen, each with its cycle.
+  std::vector<CyclicFrameSummary> cyclicFrames() const;
   // Copies of frames not followed: kMaxCyclicFrames cyclic frames that repeated were already.
   std::uint64_t unfollowedFrames() const { return unfollowed_frames_; }
+  // Returned copies whose master copy the capture does not hold: their cycles ran
+  // (docs/timing.md "Capture loss").
+  std::uint64_t masterCopiesMissing() const { return master_copies_missing_; }
+  // Master copies not returned before the next master copy of their cyclic frame (COM-004).
+  std::uint64_t returnedCopiesMissing() const { return returned_copies_missing_; }
 
   static constexpr std::size_t kMaxCyclicFrames = ncservo::kMaxCyclicFrames;
 
@@ -121,6 +135,8 @@ class BusModel {
     std::uint64_t copies = 0;  // master and returned
     std::uint64_t ticks = 0;   // of its clock
     std::optional<Stamp> last_tick;
+    bool last_tick_estimated = false;  // from a returned copy whose master copy is missing
+    std::int64_t last_latency_ns = 0;
     bool awaiting_return = false;
     bool not_returned_episode = false;
     Stamp last_master;
@@ -145,7 +161,9 @@ class BusModel {
   CyclicFrame* cyclicFrame(const EcatFrame& frame, const FrameDecode& decode);
   std::int16_t wkcRecord(const Datagram& dg);
   WkcPlan& wkcPlan(const EcatFrame& frame, const FrameDecode& decode);
-  void tick(CyclicFrame& cyclic, const FrameDecode& decode);
+  // `at` is the master copy's time; `estimated` when only its returned copy was captured: an
+  // interval from or to such a tick is judged for gaps only (no statistics, no COM-006).
+  void tick(CyclicFrame& cyclic, const FrameDecode& decode, const Stamp& at, bool estimated);
   // Judges the pending gap with the interval after it, or untold (`next` empty) as `verdict`.
   void judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
                 CycleGapEvent::Verdict verdict, std::vector<BusEvent>& events,
@@ -172,12 +190,18 @@ class BusModel {
   std::vector<WkcRecord> wkc_;
   std::array<WkcPlan, 4> wkc_plans_{};  // of recent frame shapes, replaced in turn
   std::size_t wkc_plan_next_ = 0;
-  WkcPlan uncached_plan_;            // for a frame whose shape is not cached
-  IntervalStats intervals_;          // this segment's
+  WkcPlan uncached_plan_;    // for a frame whose shape is not cached
+  IntervalStats intervals_;  // this segment's
+  // Per slot of cyclic_: each frame's own intervals, this segment's (its nominal cycle) and
+  // the capture's (its reported cycle).
+  std::array<IntervalStats, kMaxCyclicFrames> frame_intervals_;
+  std::array<IntervalStats, kMaxCyclicFrames> frame_capture_intervals_;
   IntervalStats earlier_intervals_;  // the segments' before it
   TimingStats timing_;
   FrameTiming frame_timing_;
   std::uint64_t unfollowed_frames_ = 0;
+  std::uint64_t master_copies_missing_ = 0;
+  std::uint64_t returned_copies_missing_ = 0;
   std::uint64_t uncaptured_wkcs_ = 0;
   std::uint64_t first_uncaptured_wkc_frame_ = 0;
   bool master_copies_seen_ = false;

@@ -95,9 +95,14 @@ struct CaptureReport {
   // What the HTML report draws around findings (when a format draws them).
   FindingTimelines timelines;
   TimingSummary timing;
-  std::vector<CyclicDatagram> cyclic_datagrams;  // what the bus rules judged
-  std::uint64_t unfollowed_frames = 0;           // beyond BusModel::kMaxCyclicFrames
-  std::vector<DcStation> dc;                     // distributed clocks (docs/timing.md)
+  std::vector<CyclicDatagram> cyclic_datagrams;   // what the bus rules judged
+  std::uint64_t unfollowed_frames = 0;            // beyond BusModel::kMaxCyclicFrames
+  std::vector<CyclicFrameSummary> cyclic_frames;  // each with its own cycle
+  std::uint64_t master_copies_missing = 0;        // from the capture; their cycles ran
+  std::uint64_t returned_copies_missing = 0;      // never came back (COM-004)
+  // What the capture file says it dropped (pcapng interface statistics), if it says.
+  std::optional<CaptureDrops> capture_drops;
+  std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
   std::int64_t dc_settled_ns = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.

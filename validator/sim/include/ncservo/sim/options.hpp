@@ -94,6 +94,7 @@ struct SimOptions {
   int jitter_us = 0;   // master send jitter, at most a quarter cycle
   double loss = 0;     // probability that a returned frame is lost after the slaves
   int latency_us = 0;  // returned copy this long after its master copy (0: the ring's own delay)
+  double capture_loss = 0;  // probability that the capture misses a cycle's master copies
   std::vector<CycleDisturbance> late_cycles;
   std::vector<CycleDisturbance> lost_cycles;
   std::vector<FaultRequest> faults;

@@ -40,6 +40,8 @@ class Simulator {
   std::string eni() const;
   // Runs the whole simulation; the number of frames written, or nothing if the sink stopped.
   std::optional<std::uint64_t> run(const FrameSink& sink);
+  // The master copies --capture-loss left out of the capture: its truth.
+  std::uint64_t masterCopiesDropped() const;
 
  private:
   struct Impl;
