@@ -677,6 +677,7 @@ InferenceResult LayoutInference::decide() const {
   if (assigned) ambiguous = placeAxes(st.streams, rx, servos, choice, result);
   if (assigned && ambiguous.empty() && servos.unpaired.empty()) return result;
   if (st.streams.empty() && outputsFirst(result)) return result;
+  result.candidates = std::move(result.axes);
   result.axes.clear();
   result.refusal = refusal(st.streams, st.cycles, ambiguous, servos.unpaired, n);
   return result;
