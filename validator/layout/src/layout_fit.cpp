@@ -15,9 +15,9 @@ constexpr double kMisfitShare = 0.5;
 // A check named in the warning fails in at least this share.
 constexpr double kNamedShare = 0.1;
 // Fewer cycles than this say nothing.
-constexpr std::uint32_t kMinCycles = 16;
+constexpr std::uint64_t kMinCycles = 16;
 
-int percent(std::uint32_t part, std::uint32_t whole) {
+int percent(std::uint64_t part, std::uint64_t whole) {
   return static_cast<int>(100.0 * part / whole + 0.5);
 }
 
@@ -35,8 +35,7 @@ void LayoutFit::onFrame(const FrameDecode& decode, const ByteReader& bytes) {
         if ((failures & (1u << c)) != 0) ++tally.by_check[c];
       }
     };
-    if (p.has_tx && !p.tx_malformed && axis.tx.cycles < kCycles &&
-        bytes.has(p.tx_offset, kTxPdoSize)) {
+    if (p.has_tx && !p.tx_malformed && bytes.has(p.tx_offset, kTxPdoSize)) {
       const std::uint8_t* pdo = bytes.data() + p.tx_offset;
       const std::uint32_t failures = txSignatureFailures(pdo);
       if ((failures & kMessageCodeUndefined) != 0 && !axis.tx.undefined_code) {
@@ -45,18 +44,10 @@ void LayoutFit::onFrame(const FrameDecode& decode, const ByteReader& bytes) {
       }
       count(axis.tx, failures);
     }
-    if (p.has_rx && !p.rx_malformed && axis.rx.cycles < kCycles &&
-        bytes.has(p.rx_offset, kRxPdoSize)) {
+    if (p.has_rx && !p.rx_malformed && bytes.has(p.rx_offset, kRxPdoSize)) {
       count(axis.rx, rxSignatureFailures(bytes.data() + p.rx_offset));
     }
   }
-}
-
-bool LayoutFit::done() const {
-  for (const AxisTally& axis : axes_) {
-    if (axis.tx.cycles < kCycles) return false;
-  }
-  return !axes_.empty();
 }
 
 std::vector<std::string> LayoutFit::warnings(const std::vector<AxisInfo>& axes) const {

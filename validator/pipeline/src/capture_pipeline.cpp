@@ -71,7 +71,7 @@ void CapturePipeline::deliver(std::uint64_t number, std::int64_t time_ns, const 
   started();
   const ValidatedFrame* judged =
       validator_ ? &validator_->onFrame(number, time_ns, frame, bytes) : nullptr;
-  if (fit_ && judged != nullptr && !fit_->done()) fit_->onFrame(judged->decode, bytes);
+  if (fit_ && judged != nullptr) fit_->onFrame(judged->decode, bytes);
   if (sinks_.frame) sinks_.frame(PipelineFrame{number, time_ns, frame, bytes, judged});
   if (validator_ && sinks_.findings && !validator_->findings().empty()) {
     sinks_.findings(validator_->findings());

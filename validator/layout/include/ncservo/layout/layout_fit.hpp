@@ -1,7 +1,8 @@
 // Whether a configured or ENI layout fits the capture (docs/layout.md#a-layout-that-does-not-fit):
-// over each axis's first cycles, the data at its addresses is held against the protocol's
-// signature (ncservo/protocol/pdo_signature.hpp). An axis whose data fails it in most cycles is
-// named in one warning, with what failed. Bounded: a few counters per axis.
+// in every cycle, the data at each axis's addresses is held against the protocol's signature
+// (ncservo/protocol/pdo_signature.hpp). An axis whose data fails it in most cycles is named in one
+// warning, with what failed. Over the whole capture, since data two bytes off can look like a
+// PDO while nothing moves. Bounded: a few counters per axis.
 #pragma once
 
 #include <array>
@@ -18,21 +19,16 @@ namespace ncservo {
 
 class LayoutFit {
  public:
-  // Cycles of each axis's TxPDO (and RxPDO) looked at.
-  static constexpr std::uint32_t kCycles = 256;
-
   // Each frame's placements, with the bytes they point into.
   void onFrame(const FrameDecode& decode, const ByteReader& bytes);
-  // Every axis looked at for kCycles (or none was placed at all so far).
-  bool done() const;
   // One line per axis whose data does not fit, in axis order.
   std::vector<std::string> warnings(const std::vector<AxisInfo>& axes) const;
 
  private:
   struct Tally {
-    std::uint32_t cycles = 0;
-    std::uint32_t failed = 0;  // cycles failing any check
-    std::array<std::uint32_t, kSignatureChecks> by_check{};
+    std::uint64_t cycles = 0;
+    std::uint64_t failed = 0;  // cycles failing any check
+    std::array<std::uint64_t, kSignatureChecks> by_check{};
     std::optional<std::int32_t> undefined_code;  // the first message code outside the set
   };
   struct AxisTally {
