@@ -70,23 +70,29 @@ void LayoutWindow::finish() {
   if (learning_) endOfWindow(last_number_, true);
 }
 
+namespace {
+// After the first window, a layout that leaves servo-like status words unexplained is taken once
+// this many windows found no more axes (an axis that never enables); axes enabled one after
+// another, seconds apart, are all found first.
+constexpr std::uint32_t kWindowsWithoutNewAxes = 4;
+}  // namespace
+
 // A window of evidence ended: its layout is taken, or, refused, the next window begins (the
-// frames held so far become the older generation), unless the capture ended. After the first
-// window, a layout that leaves servo-like status words unexplained is taken only once a window
-// finds no more axes than the best before it (an axis that never enables), or at the end.
+// frames held so far become the older generation), unless the capture ended.
 void LayoutWindow::endOfWindow(std::uint64_t frame_number, bool capture_ended) {
   InferenceResult result = inference_->decide();
   late_.cycles += result.cycles;
   const std::size_t best = best_partial_ ? best_partial_->axes.size() : 0;
   if (!result.axes.empty() || best > 0) {
     const bool complete = !result.axes.empty() && result.unexplained == 0;
+    windows_without_new_axes_ = result.axes.size() > best ? 0 : windows_without_new_axes_ + 1;
     if (!looking_further_ || complete || capture_ended ||
-        (best > 0 && result.axes.size() <= best)) {
+        windows_without_new_axes_ >= kWindowsWithoutNewAxes) {
       if (looking_further_) late_.certain_at = frame_number;
-      adopt(complete || result.axes.size() >= best ? std::move(result) : std::move(*best_partial_));
+      adopt(result.axes.size() >= best ? std::move(result) : std::move(*best_partial_));
       return;
     }
-    best_partial_ = std::move(result);
+    if (result.axes.size() >= best) best_partial_ = std::move(result);
   } else if (capture_ended || !limits_.keep_looking) {
     if (looking_further_) {
       // A last window cut short by the end of the capture says less than a whole one.

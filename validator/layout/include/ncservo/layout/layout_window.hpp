@@ -100,6 +100,7 @@ class LayoutWindow {
   bool looking_further_ = false;  // the first window could not decide
   std::optional<InferenceResult> last_refusal_;
   std::optional<InferenceResult> best_partial_;  // axes found, some status words unexplained
+  std::uint32_t windows_without_new_axes_ = 0;
   std::uint64_t last_number_ = 0;
   LateLayout late_;
   Generation older_;
