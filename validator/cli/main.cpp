@@ -340,7 +340,9 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());
     return kExitUsage;
   }
-  if (args.layout_only && session->decoder().axes().empty()) return kExitNoServo;
+  // The inference refused (docs/layout.md): the layout written holds no axis.
+  const std::optional<InferenceResult>& inferred = pipeline.inference();
+  if (args.layout_only && inferred && inferred->axes.empty()) return kExitNoServo;
   return kExitOk;
 }
 
