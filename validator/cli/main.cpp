@@ -207,13 +207,23 @@ std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
   return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
 }
 
-// `decode --layout`: the layout as a configuration file, then every slave the start-up showed.
+// Every line of `text` as a TOML comment.
+std::string commented(std::string_view text) {
+  while (!text.empty() && text.back() == '\n') text.remove_suffix(1);
+  std::string out = "# ";
+  for (const char c : text) out += c == '\n' ? std::string("\n# ") : std::string(1, c);
+  return out + "\n";
+}
+
+// `decode --layout`: the layout as a configuration file, then every slave the start-up showed;
+// with no layout, the placements the inference found, commented out. Always valid TOML.
 void printLayout(const Decoder& decoder, const std::optional<InferenceResult>& inference) {
   std::vector<AxisConfig> axes;
   for (const AxisInfo& info : decoder.axes()) axes.push_back(axisConfigOf(info));
-  fmt::print("# layout source: {}, {} ax{}{}\n", layoutSourceName(decoder.source()), axes.size(),
-             axes.size() == 1 ? "is" : "es",
-             axes.empty() ? " (" + decoder.noServoReason() + ")" : std::string());
+  fmt::print("{}", commented(fmt::format(
+                       "layout source: {}, {} ax{}{}", layoutSourceName(decoder.source()),
+                       axes.size(), axes.size() == 1 ? "is" : "es",
+                       axes.empty() ? " (" + decoder.noServoReason() + ")" : std::string())));
   if (inference && !inference->axes.empty()) {
     fmt::print("# inferred from {} cycles of cyclic traffic (docs/layout.md)\n", inference->cycles);
     for (const InferredAxis& axis : inference->axes) {
@@ -224,6 +234,12 @@ void printLayout(const Decoder& decoder, const std::optional<InferenceResult>& i
     fmt::print("# slave {}\n", describeSlaveLayout(slave));
   }
   if (!axes.empty()) fmt::print("{}", writeConfig(axes, std::nullopt));
+  if (!axes.empty() || !inference || inference->candidates.empty()) return;
+  fmt::print("# candidates found, not certain enough to decode (uncomment to use):\n");
+  for (const InferredAxis& axis : inference->candidates) {
+    fmt::print("# {}: {}\n", axis.config.name, describeEvidence(axis));
+    fmt::print("{}", commented(writeConfig({axis.config}, std::nullopt)));
+  }
 }
 
 struct DecodeArgs {
@@ -310,6 +326,10 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   }
   if (args.layout_only) printLayout(session->decoder(), pipeline.inference());
   noteDecoded(*reader, clock, session->decoder());
+  if (pipeline.lateLayout().certain_at > 0) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader->path(),
+               cli::describeLateLayout(pipeline.lateLayout()));
+  }
   if (const Validator* timing = pipeline.validator()) {
     fmt::print(stderr, "ncservo: {}: {}", reader->path(),
                timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
@@ -320,6 +340,9 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());
     return kExitUsage;
   }
+  // The inference refused (docs/layout.md): the layout written holds no axis.
+  const std::optional<InferenceResult>& inferred = pipeline.inference();
+  if (args.layout_only && inferred && inferred->axes.empty()) return kExitNoServo;
   return kExitOk;
 }
 
@@ -495,6 +518,11 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   const FrameClock& clock = pipeline.clock();
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
+  report.late_layout = pipeline.lateLayout();
+  report.layout_warnings = pipeline.layoutWarnings();
+  for (const std::string& warning : report.layout_warnings) {
+    fmt::print(output.messages, "ncservo: {}: layout does not fit: {}\n", path, warning);
+  }
   if (timelines) report.timelines = timelines->finish();
   cli::summarise(validator, report);
   if (pipeline.inference() && report.layout_source == LayoutSource::Inferred) {

@@ -1013,6 +1013,7 @@ InferenceResult LayoutInference::decide() const {
   if (fromStructure(structure, structure_why)) return structure;
   if (paired) return result;
   if (st.streams.empty() && outputsFirst(result)) return result;
+  result.candidates = std::move(result.axes);
   result.axes.clear();
   result.refusal = refusal(st.streams, st.cycles, ambiguous, servos.unpaired, n, structure_why);
   return result;

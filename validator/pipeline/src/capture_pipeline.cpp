@@ -42,6 +42,11 @@ CapturePipeline::CapturePipeline(PipelineOptions options, WindowLimits limits)
       clock_(options.timestamps),
       window_(std::move(options.layout), limits) {
   if (!window_.learning() && rules_) validator_.emplace(window_.options(), *rules_);
+  const LayoutSource source = window_.options().explicit_source;
+  if (validator_ && !window_.options().axes.empty() &&
+      (source == LayoutSource::Config || source == LayoutSource::Eni)) {
+    fit_.emplace();
+  }
 }
 
 void CapturePipeline::started() {
@@ -66,6 +71,7 @@ void CapturePipeline::deliver(std::uint64_t number, std::int64_t time_ns, const 
   started();
   const ValidatedFrame* judged =
       validator_ ? &validator_->onFrame(number, time_ns, frame, bytes) : nullptr;
+  if (fit_ && judged != nullptr) fit_->onFrame(judged->decode, bytes);
   if (sinks_.frame) sinks_.frame(PipelineFrame{number, time_ns, frame, bytes, judged});
   if (validator_ && sinks_.findings && !validator_->findings().empty()) {
     sinks_.findings(validator_->findings());
@@ -115,6 +121,7 @@ void CapturePipeline::finish() {
   endLearning();
   started();
   if (!validator_) return;
+  if (fit_) layout_warnings_ = fit_->warnings(validator_->decoder().axes());
   validator_->finish();
   if (sinks_.findings && !validator_->findings().empty()) sinks_.findings(validator_->findings());
 }

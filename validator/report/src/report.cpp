@@ -34,6 +34,17 @@ constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
 void (*g_previous[std::size(kInterrupts)])(int) = {};
 }  // namespace
 
+std::string describeLateLayout(const LateLayout& late) {
+  const std::string unjudged = late.unjudged_frames == 0
+                                   ? std::string("none")
+                                   : fmt::format("{} ({}\u2013{})", late.unjudged_frames,
+                                                 late.first_unjudged, late.last_unjudged);
+  return fmt::format(
+      "layout certain at frame {}, after {} cycles in {} windows of evidence; frames before the "
+      "layout was certain, not judged: {}",
+      late.certain_at, late.cycles, late.windows, unjudged);
+}
+
 std::string describeStartupCut(std::uint64_t frames) {
   return fmt::format(
       "incomplete: the snap length cut {} start-up frame{} short; a servo configured after a cut "

@@ -250,6 +250,19 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
   c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
   if (r.startup_frames_cut > 0) c["layout"]["startup_frames_cut"] = r.startup_frames_cut;
+  if (!r.layout_warnings.empty()) c["layout"]["warnings"] = r.layout_warnings;
+  if (r.late_layout.any()) {
+    const LateLayout& late = r.late_layout;
+    c["layout"]["inference_windows"] = late.windows;
+    c["layout"]["inference_cycles"] = late.cycles;
+    if (late.certain_at > 0) {
+      c["layout"]["certain_at_frame"] = late.certain_at;
+      // docs/layout.md#keep-looking: forgotten while the layout was not yet certain.
+      c["layout"]["unjudged_before_certain"] = {{"frames", late.unjudged_frames},
+                                                {"first_frame", late.first_unjudged},
+                                                {"last_frame", late.last_unjudged}};
+    }
+  }
   Json findings = Json::array();
   for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
   c["findings"] = std::move(findings);

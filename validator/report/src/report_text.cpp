@@ -102,6 +102,10 @@ void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Find
 
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   std::FILE* out = sink.out;
+  // Before the findings: a layout that does not fit explains them.
+  for (const std::string& warning : r.layout_warnings) {
+    fmt::print(out, "warning: layout does not fit: {}\n", warning);
+  }
   if (!sink.policy.verbose) writeTextGroups(sink, r);
   fmt::print(out, "{}: {} frames, {} cycles", r.path, r.frames, r.cycles);
   if (r.cycle_time.median_us) {
@@ -113,6 +117,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   if (r.startup_frames_cut > 0) {
     fmt::print(out, "  {}\n", describeStartupCut(r.startup_frames_cut));
   }
+  if (r.late_layout.certain_at > 0) fmt::print(out, "  {}\n", describeLateLayout(r.late_layout));
   // Where each axis was found: its station and its PDOs' logical (or SM) addresses.
   for (std::size_t i = 0; i < r.layout.size(); ++i) {
     const AxisInfo& info = r.layout[i];

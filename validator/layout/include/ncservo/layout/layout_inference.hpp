@@ -54,7 +54,9 @@ struct InferredAxis {
 
 struct InferenceResult {
   std::vector<InferredAxis> axes;  // in process-image order; empty when refused
-  std::uint32_t cycles = 0;        // cycles observed
+  // When refused: the placements that were found, with their evidence (not certain enough).
+  std::vector<InferredAxis> candidates;
+  std::uint32_t cycles = 0;  // cycles observed
   // TxPDOs that look like a servo's but that no control word explains (yet): the window goes on.
   std::uint32_t unexplained = 0;
   // Why nothing was inferred, the candidates and how to write a configuration (empty when axes

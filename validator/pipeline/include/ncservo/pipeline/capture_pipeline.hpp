@@ -16,6 +16,7 @@
 #include "ncservo/base/byte_reader.hpp"
 #include "ncservo/base/error.hpp"
 #include "ncservo/layout/decoder.hpp"
+#include "ncservo/layout/layout_fit.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
@@ -109,6 +110,11 @@ class CapturePipeline {
   // The layout decided and what the inference found, once no longer learning.
   const DecoderOptions& layout() const { return window_.options(); }
   const std::optional<InferenceResult>& inference() const { return window_.inference(); }
+  // A configured or ENI layout whose data does not look like the protocol's PDOs: one line per
+  // axis (docs/layout.md#a-layout-that-does-not-fit), after finish().
+  const std::vector<std::string>& layoutWarnings() const { return layout_warnings_; }
+  // Whether the layout was inferred after the first window, and the frames not judged then.
+  const LateLayout& lateLayout() const { return window_.late(); }
   // Null until the layout is decided, and without rules.
   const Validator* validator() const { return validator_ ? &*validator_ : nullptr; }
   const FrameClock& clock() const { return clock_; }
@@ -128,6 +134,8 @@ class CapturePipeline {
   FrameClock clock_;
   LayoutWindow window_;
   std::optional<Validator> validator_;
+  std::optional<LayoutFit> fit_;  // a configured or ENI layout, judged
+  std::vector<std::string> layout_warnings_;
   Sinks sinks_;
   bool started_ = false;
   CaptureRun run_;

@@ -14,6 +14,7 @@
 #include "ncservo/base/error.hpp"
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/layout/layout_inference.hpp"
+#include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/timing.hpp"
 #include "ncservo/report/report_charts.hpp"
 #include "ncservo/rules/coverage.hpp"
@@ -60,6 +61,8 @@ struct Truncation {
 };
 // One line (stderr, the text report); empty when nothing was cut.
 std::string describeTruncation(const Truncation& truncation);
+// Where the layout became certain and the frames forgotten before it, never judged.
+std::string describeLateLayout(const LateLayout& late);
 // The layout learnt from a start-up the snap length cut: axes may be missing.
 std::string describeStartupCut(std::uint64_t frames);
 Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
@@ -89,6 +92,9 @@ struct CaptureReport {
   std::string probe_note;  // FrameClock::note()
   Truncation truncation;
   std::uint64_t startup_frames_cut = 0;  // layout from a start-up cut by the snap length
+  LateLayout late_layout;                // inference went on looking after its first window
+  // A configured or ENI layout whose data does not look like the protocol's PDOs, per axis.
+  std::vector<std::string> layout_warnings;
   std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
   std::uint64_t segment_count = 0;
   std::int64_t last_time_ns = 0;  // the last frame's
