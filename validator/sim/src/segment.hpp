@@ -43,6 +43,8 @@ struct SlaveModel {
   std::uint16_t input_phys;
 };
 const SlaveModel& servoModel();
+// A CiA 402 drive whose PDOs are a servo's 10 and 40 bytes (--cia402).
+const SlaveModel& cia402Model();
 
 // A datagram on its way round the ring: the slaves read and write its data and count its WKC.
 struct RingDatagram {
@@ -69,6 +71,9 @@ class Esc {
   bool skip_next_lrw = false;   // COM-001
   std::uint32_t outputs_logical = 0;
   std::uint32_t inputs_logical = 0;
+  // A terminal's inputs change this often; 0: every cycle, to values drawn from the slave and time.
+  std::int64_t input_step_ns = 50 * kMs;
+  std::uint64_t cycle_ns = kMs;
 
   bool servo() const { return model->role == SlaveRole::Servo; }
   // Process data: bytes, and where they lie in the process RAM.
@@ -122,6 +127,7 @@ struct FrameGroup {  // the slaves whose process data one cyclic frame carries
   std::vector<int> slaves;
   std::vector<ImageDatagram> datagrams;  // in frame order
   std::size_t bytes = 0;                 // the slaves' process data
+  std::uint64_t every_cycles = 1;        // sent every this many cycles (a slower task's frame)
   std::optional<ImagePlace> place(std::uint32_t logical) const;
 };
 
