@@ -38,6 +38,7 @@ struct Simulator::Impl {
   std::vector<RxPdo> outputs;                       // per axis, from the NC this cycle
   std::vector<std::optional<TxPdo>> latest_inputs;  // per axis, from this cycle's returned frame
   std::int64_t soak_planned_until_ns = 0;
+  std::uint64_t frames_cut = 0;  // before --start-in's moment
 
   explicit Impl(const SimOptions& options)
       : o(options),
@@ -151,11 +152,13 @@ struct Simulator::Impl {
 
   // --start-in: the capture keeps nothing before the moment (half a cycle early, so that each
   // cycle keeps both its copies).
-  FrameSink midStartSink(const FrameSink& captured) const {
+  FrameSink midStartSink(const FrameSink& captured) {
     const std::int64_t from_ns =
         kEpochNs + plan_start_ns + at(midStartRow(o.mid_start).after_plan_s) - cycle_ns / 2;
-    return [captured, from_ns](const SimFrame& frame) {
-      return frame.time_ns < from_ns || captured(frame);
+    return [this, captured, from_ns](const SimFrame& frame) {
+      if (frame.time_ns >= from_ns) return captured(frame);
+      ++frames_cut;
+      return true;
     };
   }
 
@@ -240,7 +243,7 @@ struct Simulator::Impl {
         }
       }
     }
-    return master.frames();
+    return master.frames() - frames_cut;
   }
 };
 
