@@ -77,7 +77,7 @@ enum class MidStart : std::uint8_t { None, Homing, Fault, ErrorClear };
 struct MidStartName {
   const char* name;
   MidStart start;
-  double after_plan_s;  // the moment, from the start of the NC's plan
+  double after_plan_s;  // the moment, from the start of the plan (axis 1 faults 0.8 s into it)
   const char* summary;
 };
 inline constexpr MidStartName kMidStarts[] = {
@@ -142,7 +142,7 @@ struct SimOptions {
   std::vector<CycleDisturbance> late_cycles;
   std::vector<CycleDisturbance> lost_cycles;
   std::vector<FaultRequest> faults;
-  // Shapes of a machine's bus (docs/simulate.md#shapes); the defaults leave the output as it was.
+  // Shapes of a machine's bus (docs/simulate.md#shapes); the defaults add none.
   TerminalInputs terminal_inputs = TerminalInputs::Slow;
   int cia402_drives = 0;  // neighbours of another protocol with 10/40-byte PDOs, 0..32
   double idle_s = 0;      // the NC enables nothing for this long after the start-up
