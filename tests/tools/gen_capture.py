@@ -1581,8 +1581,9 @@ def parse_args(argv):
         p.error("--inject and --findings need a capture without random --loss")
     if args.io_terminals < 0 or args.cia402 < 0:
         p.error("--io-terminals and --cia402 cannot be negative")
-    if (args.axes + args.cia402) * (RX_SIZE + TX_SIZE) + 2 * args.io_terminals > 1400:
-        p.error("the servos and their neighbours must fit one LRW of at most 1400 bytes")
+    if (args.axes + args.cia402) * (RX_SIZE + TX_SIZE) + 2 * args.io_terminals > \
+            MAX_AXES * (RX_SIZE + TX_SIZE):
+        p.error("the servos and their neighbours must fit one LRW of at most 1450 bytes")
     if args.idle_all and (args.inject or args.idle_cycles):
         p.error("--idle-all: nothing is enabled, so no --inject and no --idle-cycles")
     if not 0 <= args.idle_cycles <= args.cycles - 200:
