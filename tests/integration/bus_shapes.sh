@@ -8,8 +8,9 @@
 # - its findings equal those with the exact `--config` (JSON Lines, byte for byte);
 # - `tshark -2` with the plugin shows the findings validate reports, on the same frames, and the
 #   same as with the exact configuration (ncservo.config).
-# And an idle 4-axis capture (nothing enabled anywhere) decodes all 4 axes, says they were found
-# from the structure only, and yields no finding.
+# And an idle 4-axis capture (nothing enabled anywhere) decodes all 4 axes (validate, decode and
+# tshark -2), says they were found from the structure only (text and JSON report), and yields no
+# finding.
 # SHAPE... (optional): run only the cases whose names are given.
 SRC=$1 BUILD=$2
 shift 2
@@ -231,6 +232,10 @@ print(len({json.loads(l).get("axis") for l in open(sys.argv[1]) if l.strip()} - 
     { case_failed "$name" "idle: the text report does not say the layout came from the structure only"; ok=1; }
   grep -qi 'structure' "$dir/free.json" ||
     { case_failed "$name" "idle: the JSON report does not say the layout came from the structure only"; ok=1; }
+  "$TSHARK" "$PLUGIN" -2 -r "$cap" -Y ncservo -T fields -E occurrence=a -E aggregator=, \
+    -e ncservo.axis >"$dir/plugin-axes.txt" 2>/dev/null || true
+  axes=$(tr ',' '\n' <"$dir/plugin-axes.txt" | awk 'NF' | sort -u | wc -l)
+  [ "$axes" = 4 ] || { case_failed "$name" "idle: tshark -2 decodes $axes axes, expected 4"; ok=1; }
   grep -q '"rule"' "$dir/free.json" &&
     { case_failed "$name" "idle: findings: $(grep -o '"rule":"[^"]*"' "$dir/free.json" | sort | uniq -c | head -3 | tr '\n' ' ')"; ok=1; }
   [ $ok = 0 ] && passes+=("$name (idle: 4 axes, structure only)")
