@@ -151,9 +151,6 @@ constexpr std::uint64_t kOutputPatternCycles = 100;  // the lit output moves thi
 const SlaveModel& servoModel() {
   return kServo;
 }
-const SlaveModel& cia402Model() {
-  return kCia402;
-}
 
 void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uint8_t* out) {
   const std::size_t size = model.output_bytes;

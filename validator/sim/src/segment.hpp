@@ -43,8 +43,6 @@ struct SlaveModel {
   std::uint16_t input_phys;
 };
 const SlaveModel& servoModel();
-// A CiA 402 drive whose PDOs are a servo's 10 and 40 bytes (--cia402).
-const SlaveModel& cia402Model();
 
 // A datagram on its way round the ring: the slaves read and write its data and count its WKC.
 struct RingDatagram {
