@@ -19,6 +19,22 @@ time from 125 us to 10 ms: the drive answers every handshake within 10 ms of cap
 handled correctly (cause and summary bits together, disabled in time, ErrorClear/ErrClearAck,
 re-enable by SE 0x1 -> 0x2), which is not a finding (docs/protocol.md §4).
 
+Shapes of a machine's bus (the layout then has to be found without a start-up, as on a running
+machine; --layout-config writes the exact one for `validate --config`):
+
+--io-terminals N / --cia402 N
+    neighbours before the servos in their LRW: N I/O terminals of one output and one input byte
+    whose inputs change every cycle (an odd N puts every servo PDO at an odd offset), N CiA 402
+    drives whose PDOs have a servo's 10 and 40 bytes.
+--idle-cycles N / --idle-all
+    the drives ready and nothing enabled for the first N cycles (the session runs in the rest),
+    or in the whole capture (no drive fault either; no --inject).
+--io-task-cycles N
+    a second task: after every N-th cycle's frame, an I/O frame with its own LRW at 0x00020000
+    (both copies); no bus (COM-*) injection beside it.
+--echo-inputs
+    master copies carry the inputs of the last returned copy, as a SOEM master's do.
+
 It is also the oracle for the rule engine (`ncservo validate`):
 
 --ready-mode 0|1
@@ -157,6 +173,8 @@ DC_ADP, DC_ADO = 0x1001, 0x0910
 LEN_MORE = 0x8000
 RX_SIZE, TX_SIZE = 10, 40
 MAX_AXES = 29
+IO_TASK_ADDRESS = 0x00020000
+IO_TASK_BYTES = 4
 
 MASTER_MAC = bytes.fromhex("000000000001")
 RETURNED_MAC = bytes.fromhex("020000000001")  # slaves set the locally-administered bit
@@ -190,7 +208,9 @@ def wrap32(value):
 class Plan:
     """When each phase of one axis's session starts, scaled to the run length."""
 
-    def __init__(self, axis, n_axes, cycles, rng, enable_by=None):
+    def __init__(self, axis, n_axes, cycles, rng, enable_by=None, idle=0, idle_all=False):
+        self.idle_all = idle_all
+        cycles -= idle  # the session runs in what the idle start leaves
         stagger = axis * max(1, cycles // (20 * n_axes))
         self.enable = max(3, cycles // 50) + stagger
         if enable_by is not None:  # the same staggered enables, squeezed into [B/4, 3B/4)
@@ -206,6 +226,12 @@ class Plan:
         self.creep = 3000 if self.speeds[0] > 0 else -3000
         # ExtPRMTBL*4 + PRMTBL, i.e. the table number - 1; axis 0 uses ExtPRMTBL
         self.table = rng.randint(4, 7) if axis == 0 else rng.randint(1, 7)
+        self.enable += idle
+        self.table_change += idle
+        self.reverse += idle
+        self.estop += idle
+        if self.fault is not None:
+            self.fault = None if idle_all else self.fault + idle
 
     @staticmethod
     def _speeds(axis, rng):
@@ -314,6 +340,10 @@ class Nc:
     # --- the session ---
     def _session(self):
         plan = self.plan
+        if plan.idle_all:  # drives ready, nothing enabled, to the end
+            self.done = True
+            while True:
+                yield
         yield from self._until_cycle(plan.enable)
         yield from self._enable()
         if self.incremental:
@@ -1170,13 +1200,16 @@ def ipv4_header(total_len, src, dst):
 class FrameBuilder:
     """Packs the master and returned copies of one cycle's frame."""
 
-    def __init__(self, n_axes, encap):
+    def __init__(self, n_axes, encap, neighbours=None):
         self.rx = struct.Struct("<" + "iIh" * n_axes)
         self.tx = struct.Struct("<" + "qIIif4f" * n_axes)
-        lrw_len = n_axes * (RX_SIZE + TX_SIZE)
-        # frame header, LRW header, outputs, inputs, WKC, FRMW header, DC time, WKC
-        self.body = struct.Struct(f"<H BBIHH {n_axes * RX_SIZE}s {n_axes * TX_SIZE}s H "
-                                  "BBHHHH Q H")
+        self.neighbours = neighbours or Neighbours(0, 0)
+        nb = self.neighbours
+        lrw_len = n_axes * (RX_SIZE + TX_SIZE) + nb.out_size + nb.in_size
+        # frame header, LRW header, neighbours' outputs, outputs, neighbours' inputs, inputs,
+        # WKC, FRMW header, DC time, WKC
+        self.body = struct.Struct(f"<H BBIHH {nb.out_size}s {n_axes * RX_SIZE}s {nb.in_size}s "
+                                  f"{n_axes * TX_SIZE}s H BBHHHH Q H")
         chain_len = self.body.size - 2
         self.ecat_header = chain_len | (1 << 12)
         self.lrw_len_word = lrw_len | LEN_MORE
@@ -1186,17 +1219,81 @@ class FrameBuilder:
         self.prefix_returned = link_header(encap, RETURNED_MAC, self.body.size)
         self.pad = bytes(max(0, 60 - len(self.prefix_master) - self.body.size))
 
-    def frame(self, returned, index, outputs, inputs, dc_time, wkc=None):
+    def frame(self, returned, index, outputs, inputs, dc_time, wkc=None, nb_out=b"",
+              nb_in=b""):
         n = self.n_axes
         if wkc is None:
-            wkc = 3 * n if returned else 0
+            wkc = 3 * (n + self.neighbours.slaves) if returned else 0
         body = self.body.pack(self.ecat_header,
                               CMD_LRW, index, LOGICAL_ADDRESS, self.lrw_len_word, 0,
-                              outputs, inputs, wkc,
+                              nb_out, outputs, nb_in, inputs, wkc,
                               CMD_FRMW, index, DC_ADP, DC_ADO, 8, 0,
                               dc_time, n if returned else 0)
         prefix = self.prefix_returned if returned else self.prefix_master
         return prefix + body + self.pad
+
+
+class Neighbours:
+    """Slaves of the servos' LRW that are not servos, before them in the ring: I/O terminals of
+    one output and one input byte whose inputs change every cycle (an odd count puts the servos
+    at odd offsets), then CiA 402 drives whose PDOs have a servo's 10 and 40 bytes."""
+
+    def __init__(self, terminals, cia402, seed=0):
+        self.terminals, self.cia402 = terminals, cia402
+        self.slaves = terminals + cia402
+        self.out_size = terminals + cia402 * RX_SIZE
+        self.in_size = terminals + cia402 * TX_SIZE
+        self.rng = random.Random(f"{seed}/neighbours")
+
+    def outputs(self, k):
+        terminals = bytes((1 << (k // 100 + i) % 8) for i in range(self.terminals))
+        drive = struct.pack("<HiI", 0x000F, k * 100, 1000)  # control word, target, velocity
+        return terminals + drive * self.cia402
+
+    def inputs(self, k):
+        terminals = bytes(self.rng.getrandbits(8) for _ in range(self.terminals))
+        drives = b"".join(struct.pack("<HiIh", 0x1237, k * 100 + 7 * d, 1000, k % 200)
+                          + bytes(TX_SIZE - 12) for d in range(self.cia402))
+        return terminals + drives
+
+    def servo_outputs(self, axis):
+        return LOGICAL_ADDRESS + self.out_size + axis * RX_SIZE
+
+    def servo_inputs(self, axis, n_axes):
+        return LOGICAL_ADDRESS + self.out_size + n_axes * RX_SIZE + self.in_size + axis * TX_SIZE
+
+
+class IoTask:
+    """A second task: an LRW of its own at another logical address every `every` cycles, for
+    an output terminal and an input terminal of IO_TASK_BYTES each (WKC 2 + 1)."""
+
+    def __init__(self, every, seed=0):
+        self.every = every
+        self.rng = random.Random(f"{seed}/io-task")
+        self.body = struct.Struct(f"<H BBIHH {2 * IO_TASK_BYTES}s H")
+        self.ecat_header = (self.body.size - 2) | (1 << 12)
+
+    def frame(self, returned, index, k, inputs):
+        outputs = struct.pack("<I", k // self.every)
+        data = outputs + (inputs if returned else bytes(IO_TASK_BYTES))
+        body = self.body.pack(self.ecat_header, CMD_LRW, index, IO_TASK_ADDRESS,
+                              2 * IO_TASK_BYTES, 0, data, 3 if returned else 0)
+        prefix = link_header("eth", RETURNED_MAC if returned else MASTER_MAC, self.body.size)
+        return prefix + body + bytes(max(0, 60 - len(prefix) - self.body.size))
+
+    def new_inputs(self):
+        return bytes(self.rng.getrandbits(8) for _ in range(IO_TASK_BYTES))
+
+
+def write_layout_config(path, n_axes, neighbours, ready_mode):
+    """The exact layout, for `ncservo validate --config` and the plugin's ncservo.config."""
+    with open(path, "w", encoding="ascii") as f:
+        f.write("# The layout of gen_capture.py's capture.\n")
+        f.write(f"servo_ready_mode = {ready_mode}\n")
+        for a in range(n_axes):
+            f.write(f"\n[[axis]]\nname = 'axis{a}'\n"
+                    f"outputs = 0x{neighbours.servo_outputs(a):X}\n"
+                    f"inputs = 0x{neighbours.servo_inputs(a, n_axes):X}\n")
 
 
 class PcapWriter:
@@ -1283,7 +1380,7 @@ class Session:
         self.ncs, self.drives = [], []
         for axis in range(args.axes):
             plan = Plan(axis, args.axes, args.cycles, random.Random(f"{args.seed}/plan/{axis}"),
-                        args.enable_by)
+                        args.enable_by, args.idle_cycles, args.idle_all)
             self.ncs.append(Nc(axis, plan, random.Random(f"{args.seed}/nc/{axis}")))
             self.drives.append(Drive(axis, plan, args.cycle_us,
                                      random.Random(f"{args.seed}/drive/{axis}"), args.ready_mode))
@@ -1351,7 +1448,12 @@ class Session:
 
 
 def generate(args, out, truth_out, expect=None):
-    builder = FrameBuilder(args.axes, args.encap)
+    neighbours = Neighbours(args.io_terminals, args.cia402, args.seed)
+    builder = FrameBuilder(args.axes, args.encap, neighbours)
+    io_task = IoTask(args.io_task_cycles, args.seed) if args.io_task_cycles else None
+    io_inputs = bytes(IO_TASK_BYTES)
+    echoed = builder.zero_inputs  # --echo-inputs: the last inputs received
+    nb_echoed = bytes(neighbours.in_size)
     writer = PcapngWriter(out) if args.format == "pcapng" else PcapWriter(out, args.nanosecond)
     truth = TruthWriter(truth_out, builder) if truth_out else None
     session = Session(args, args.inject, expect, args.self_check)
@@ -1367,30 +1469,52 @@ def generate(args, out, truth_out, expect=None):
         t_ns = T0_NS + k * cycle_ns
         index = k & 0xFF
         directive = session.directive
+        nb_out, nb_in = neighbours.outputs(k), neighbours.inputs(k)
         if want_master and directive != DROP:
-            writer.write(t_ns, builder.frame(False, index, out_bytes, builder.zero_inputs, 0))
+            writer.write(t_ns, builder.frame(False, index, out_bytes, echoed, 0, nb_out=nb_out,
+                                             nb_in=nb_echoed))
             if truth:
                 truth.write(t_ns, "master", out_bytes, None)
             if expect:
                 expect.frame(t_ns, k, MASTER)
         if directive == LOST or (args.loss and loss_rng.random() < args.loss):
+            io_inputs = write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect)
             continue
         session.deliver(inputs)
+        in_bytes = builder.tx.pack(*chain(inputs))
+        if args.echo_inputs:
+            echoed, nb_echoed = in_bytes, nb_in
         if want_returned and directive != DROP:
-            in_bytes = builder.tx.pack(*chain(inputs))
             t_ret = t_ns + delay_ns
             frame = builder.frame(True, index, out_bytes, in_bytes, dc_start + t_ret - T0_NS,
-                                  session.wkc)
+                                  session.wkc, nb_out, nb_in)
             writer.write(t_ret, frame)
             if truth:
                 truth.write(t_ret, "returned", out_bytes, in_bytes)
             if expect:
                 expect.frame(t_ret, k, RETURNED)
+        io_inputs = write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect)
     unfinished = session.unfinished()
     if unfinished:
         print("gen_capture: injections not done before the last cycle (more --cycles, or "
               "earlier @SECONDS): " + ", ".join(unfinished), file=sys.stderr)
     return session.complete() and not unfinished
+
+
+def write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect):
+    """The second task's frame after this cycle's (both copies); its echoed inputs next time.
+    Its frames count as the cycle's returned copy for the findings' frame windows."""
+    if io_task is None or k % io_task.every:
+        return io_inputs
+    index = (k + 0x80) & 0xFF
+    t_io = t_ns + 2 * delay_ns
+    writer.write(t_io, io_task.frame(False, index, k, io_inputs))
+    returned = io_task.new_inputs()
+    writer.write(t_io + delay_ns, io_task.frame(True, index, k, returned))
+    if expect:
+        expect.frame(t_io, k, RETURNED)
+        expect.frame(t_io + delay_ns, k, RETURNED)
+    return returned
 
 
 def parse_args(argv):
@@ -1421,6 +1545,21 @@ def parse_args(argv):
                         "(on with --findings)")
     p.add_argument("--list-rules", action="store_true",
                    help="print the rules --inject can violate, one per line, and exit")
+    p.add_argument("--io-terminals", type=int, default=0, metavar="N",
+                   help="N I/O terminals (1 output and 1 input byte, inputs changing every "
+                        "cycle) before the servos in their LRW (default 0)")
+    p.add_argument("--cia402", type=int, default=0, metavar="N",
+                   help="N CiA 402 drives with 10/40-byte PDOs before the servos (default 0)")
+    p.add_argument("--idle-cycles", type=int, default=0, metavar="N",
+                   help="the drives ready and nothing enabled for the first N cycles")
+    p.add_argument("--idle-all", action="store_true",
+                   help="the drives ready and nothing enabled in the whole capture")
+    p.add_argument("--io-task-cycles", type=int, default=0, metavar="N",
+                   help="a second task: an I/O frame with its own LRW every N cycles")
+    p.add_argument("--echo-inputs", action="store_true",
+                   help="master copies carry the last inputs received, as SOEM's do")
+    p.add_argument("--layout-config", metavar="FILE",
+                   help="write the exact layout as a configuration file (TOML)")
     p.add_argument("-o", "--output", help="capture file to write (required)")
     p.add_argument("--truth", help="JSON Lines truth file to write")
     args = p.parse_args(argv)
@@ -1440,6 +1579,20 @@ def parse_args(argv):
         p.error("--loss must be in [0, 1)")
     if args.loss and (args.inject or args.findings):
         p.error("--inject and --findings need a capture without random --loss")
+    if args.io_terminals < 0 or args.cia402 < 0:
+        p.error("--io-terminals and --cia402 cannot be negative")
+    if (args.axes + args.cia402) * (RX_SIZE + TX_SIZE) + 2 * args.io_terminals > \
+            MAX_AXES * (RX_SIZE + TX_SIZE):
+        p.error("the servos and their neighbours must fit one LRW of at most 1450 bytes")
+    if args.idle_all and (args.inject or args.idle_cycles):
+        p.error("--idle-all: nothing is enabled, so no --inject and no --idle-cycles")
+    if not 0 <= args.idle_cycles <= args.cycles - 200:
+        p.error("--idle-cycles must leave at least 200 cycles for the session")
+    if args.io_task_cycles and not 2 <= args.io_task_cycles:
+        p.error("--io-task-cycles must be 2 or more")
+    if args.io_task_cycles and any(rule.partition("@")[0].partition(":")[0].upper() in BUS_RULES
+                                   for rule in args.inject):
+        p.error("--io-task-cycles: no bus (COM-*) injections beside the second task")
     if args.findings:
         args.self_check = True
     args.inject = [parse_injection(text, i, args, p.error) for i, text in enumerate(args.inject)]
@@ -1454,6 +1607,9 @@ def main(argv=None):
     if args.list_rules:
         print("\n".join(sorted(INJECTABLE)))
         return 0
+    if args.layout_config:
+        write_layout_config(args.layout_config, args.axes,
+                            Neighbours(args.io_terminals, args.cia402), args.ready_mode)
     truth_out = open(args.truth, "w", encoding="ascii", buffering=1 << 20) if args.truth else None
     expect = Expectations(args.cycle_us * 1000, args.return_delay_us * 1000) \
         if args.findings else None

@@ -292,7 +292,68 @@ INSTANTIATE_TEST_SUITE_P(
                      o.startup = false;
                      o.faults = {fault("SE-001@0.45")};
                    },
-                   ""}),
+                   ""},
+        ResolveRow{"cia402_33", [](SimOptions& o) { o.cia402_drives = 33; },
+                   "--cia402 33: from 0 to 32"},
+        ResolveRow{"io_task_not_a_multiple",
+                   [](SimOptions& o) {
+                     o.io_slaves = 2;
+                     o.io_task_us = 2500;
+                   },
+                   "--io-task-us 2500: a multiple of the cycle (1000 us)"},
+        ResolveRow{"io_task_without_terminals", [](SimOptions& o) { o.io_task_us = 10000; },
+                   "--io-task-us needs terminals"},
+        ResolveRow{"io_task_10ms",
+                   [](SimOptions& o) {
+                     o.io_slaves = 2;
+                     o.io_task_us = 10000;
+                   },
+                   ""},
+        ResolveRow{"idle_faults_scenario",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Faults;
+                     o.idle_s = 1;
+                   },
+                   "--idle: not with --scenario faults"},
+        ResolveRow{"idle_all_with_fault",
+                   [](SimOptions& o) {
+                     o.idle_all = true;
+                     o.faults = {fault("SE-001")};
+                   },
+                   "--idle all: nothing is enabled"},
+        ResolveRow{"idle_moves_the_quiet_part",
+                   [](SimOptions& o) {
+                     o.idle_s = 1;
+                     o.duration_s = 4;
+                     o.faults = {fault("SE-001@1.6")};
+                   },
+                   "outside the quiet part of the run (1.65 s to 2.34 s)"},
+        ResolveRow{"idle_fault_after_it",
+                   [](SimOptions& o) {
+                     o.idle_s = 1;
+                     o.duration_s = 4;
+                     o.faults = {fault("SE-001@2.0")};
+                   },
+                   ""},
+        ResolveRow{"start_in_soak",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Soak;
+                     o.mid_start = MidStart::Homing;
+                   },
+                   "--start-in: a commissioning run only"},
+        ResolveRow{"start_in_startup_fault",
+                   [](SimOptions& o) {
+                     o.mid_start = MidStart::Fault;
+                     o.faults = {fault("ESM-004")};
+                   },
+                   "which --start-in cuts away"},
+        ResolveRow{"start_in_fault_before_the_moment",
+                   [](SimOptions& o) {
+                     o.mid_start = MidStart::Fault;
+                     o.duration_s = 5;
+                     o.faults = {fault("SE-001@1.0")};
+                   },
+                   "outside the quiet part"}),
     [](const ::testing::TestParamInfo<ResolveRow>& row) { return std::string(row.param.name); });
 
 bool incrementalAxis(int axis) {
@@ -890,6 +951,144 @@ TEST(EslProbe, EachFrameBehindAHeaderWithTheExactTime) {
   }
   EXPECT_EQ(fnv1a(captured), fnv1a(simulate(probed))) << "the noise comes from the seed";
 }
+
+// --- shapes of a machine's bus (docs/simulate.md#shapes) ---
+
+// The logical address of each LRW of a frame.
+std::vector<std::uint32_t> lrwAddresses(const Bytes& bytes) {
+  std::vector<std::uint32_t> addresses;
+  const EcatFrame frame = walked(bytes);
+  for (std::size_t d = 0; d < frame.count; ++d) {
+    if (frame.datagrams[d].command == ecat::kLrw) addresses.push_back(frame.datagrams[d].address);
+  }
+  return addresses;
+}
+
+TEST(Shapes, SecondTaskFrameEveryTenCyclesWithItsOwnLrw) {
+  SimOptions o = options(Scenario::Commissioning, 4, 1.0);
+  o.startup = false;
+  o.io_slaves = 4;
+  o.io_task_us = 10000;
+  const std::vector<Frame> frames = simulate(o);
+  std::map<std::uint32_t, std::size_t> copies;  // per LRW address, both copies
+  for (const Frame& f : frames) {
+    const std::vector<std::uint32_t> lrws = lrwAddresses(f.bytes);
+    ASSERT_EQ(lrws.size(), 1U) << "one LRW per frame";
+    ++copies[lrws[0]];
+  }
+  ASSERT_EQ(copies.size(), 2U);
+  EXPECT_EQ(copies.begin()->second, 2U * 1000) << "the servos' frame every 1 ms cycle";
+  EXPECT_EQ(std::next(copies.begin())->second, 2U * 100) << "the terminals' frame every 10 ms";
+  const Simulator simulator(o);
+  for (const AxisConfig& axis : simulator.layout()) {
+    EXPECT_LT(axis.inputs, std::next(copies.begin())->first) << "servos in the first frame";
+  }
+}
+
+TEST(Shapes, MidStartHoldsNothingBeforeItsMoment) {
+  for (const MidStartName& row : kMidStarts) {
+    SCOPED_TRACE(row.name);
+    SimOptions o = options(Scenario::Commissioning, 4, 3.0);
+    o.mid_start = row.start;
+    const std::vector<Frame> frames = simulate(o);
+    ASSERT_FALSE(frames.empty());
+    const std::int64_t moment_ns =
+        static_cast<std::int64_t>(std::llround((kStartupSeconds + row.after_plan_s) * 1e9));
+    SimOptions whole = o;
+    whole.mid_start = MidStart::None;
+    const std::int64_t first_ns = simulate(whole).front().time_ns;  // the session's start
+    EXPECT_GE(frames.front().time_ns - first_ns, moment_ns - kMs / 2);
+    EXPECT_LT(frames.front().time_ns - first_ns, moment_ns + kMs);
+    for (const Frame& f : frames) ASSERT_EQ(lrwAddresses(f.bytes).size(), 1U) << "no start-up";
+  }
+}
+
+TEST(Shapes, BusyTerminalInputsChangeEveryCycle) {
+  SimOptions o = options(Scenario::Commissioning, 2, 1.0);
+  o.startup = false;
+  o.io_slaves = 3;
+  o.terminal_inputs = TerminalInputs::EveryCycle;
+  const std::vector<Frame> frames = simulate(o);
+  // SOEM style: servo, terminal (out), servo, terminal (in), terminal (out); the input terminal's
+  // byte lies after the servos' 80 input bytes, behind 20 + 2 output bytes.
+  std::size_t changes = 0, returned = 0;
+  std::optional<std::uint8_t> last;
+  for (const Frame& f : frames) {
+    if (!returnedMac(f.bytes)) continue;
+    const EcatFrame frame = walked(f.bytes);
+    const Datagram& lrw = frame.datagrams.front();
+    const std::uint8_t input = f.bytes[lrw.data_offset + lrw.length - 1];
+    if (last && *last != input) ++changes;
+    last = input;
+    ++returned;
+  }
+  EXPECT_GT(changes, returned * 9 / 10) << "the terminal's input byte, cycle after cycle";
+}
+
+// With its exact layout, each shape is a clean run: every axis decoded, no finding of any
+// severity (idle for the whole run), or none at warning or error.
+struct ShapeRow {
+  const char* name;
+  std::function<void(SimOptions&)> shape;
+  bool no_finding_at_all = false;
+};
+class ShapeRun : public ::testing::TestWithParam<ShapeRow> {};
+
+TEST_P(ShapeRun, CleanWithItsLayout) {
+  const ShapeRow& row = GetParam();
+  SimOptions o = options(Scenario::Commissioning, 4, 3.0);
+  o.startup = false;
+  row.shape(o);
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
+  const Validated v = validate(o, true);
+  ASSERT_EQ(v.axes, 4U);
+  std::vector<Finding> reported;
+  for (const Finding& f : v.findings) {
+    if (row.no_finding_at_all || f.severity != Severity::Info) reported.push_back(f);
+  }
+  EXPECT_TRUE(reported.empty()) << row.name << ":\n" << findingsText(reported);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rows, ShapeRun,
+    ::testing::Values(ShapeRow{"busy_io_soem",
+                               [](SimOptions& o) {
+                                 o.io_slaves = 5;
+                                 o.terminal_inputs = TerminalInputs::EveryCycle;
+                               }},
+                      ShapeRow{"busy_io_mixed",
+                               [](SimOptions& o) {
+                                 o.image = ImageStyle::Mixed;
+                                 o.terminal_inputs = TerminalInputs::EveryCycle;
+                               }},
+                      ShapeRow{"cia402", [](SimOptions& o) { o.cia402_drives = 2; }},
+                      ShapeRow{"cia402_twincat",
+                               [](SimOptions& o) {
+                                 o.image = ImageStyle::TwinCat;
+                                 o.cia402_drives = 3;
+                               }},
+                      ShapeRow{"idle_then_session",
+                               [](SimOptions& o) {
+                                 o.idle_s = 1.5;
+                                 o.duration_s = 4.0;
+                               }},
+                      ShapeRow{"idle_all", [](SimOptions& o) { o.idle_all = true; }, true},
+                      ShapeRow{"start_in_fault",
+                               [](SimOptions& o) {
+                                 o.startup = true;
+                                 o.mid_start = MidStart::Fault;
+                               }},
+                      ShapeRow{"start_in_error_clear",
+                               [](SimOptions& o) {
+                                 o.startup = true;
+                                 o.mid_start = MidStart::ErrorClear;
+                               }},
+                      ShapeRow{"start_in_homing",
+                               [](SimOptions& o) {
+                                 o.startup = true;
+                                 o.mid_start = MidStart::Homing;
+                               }}),
+    [](const ::testing::TestParamInfo<ShapeRow>& row) { return std::string(row.param.name); });
 
 struct CleanRow {
   const char* name;

@@ -23,6 +23,7 @@
 
 #include "commands.hpp"
 #include "ncservo/base/error.hpp"
+#include "ncservo/base/number.hpp"
 #include "ncservo/base/ordered_jobs.hpp"
 #include "ncservo/base/text.hpp"
 #include "ncservo/capture/capture_reader.hpp"
@@ -922,9 +923,28 @@ struct SimulateArgs {
   std::vector<std::string> lost_cycles;
   std::string layout_config;
   std::string eni;
+  std::string io_inputs = "slow";
+  std::string idle;      // SECONDS or all; empty: none
+  std::string start_in;  // empty: the capture starts with the session
   bool no_startup = false;
   bool list_faults = false;
 };
+
+// --idle SECONDS|all into the options; false (with the message printed) when malformed.
+bool parseIdle(const std::string& text, sim::SimOptions& o) {
+  if (text.empty()) return true;
+  if (text == "all") {
+    o.idle_all = true;
+    return true;
+  }
+  const Result<double> seconds = parseNumber<double>(text);
+  if (seconds && *seconds > 0) {
+    o.idle_s = *seconds;
+    return true;
+  }
+  fmt::print(stderr, "ncservo simulate: --idle {}: seconds above 0, or all\n", text);
+  return false;
+}
 
 void printFaults() {
   fmt::print("{:<8} {:<11} {}\n", "rule", "companions", "what the simulator does");
@@ -955,6 +975,9 @@ int runSimulate(SimulateArgs& args) {
   o.image = style.empty() ? sim::ImageStyle::Soem : *sim::imageStyleFromName(style);
   o.probe = rowNamed(kProbes, args.probe).probe;
   o.startup = !args.no_startup;
+  o.terminal_inputs = rowNamed(sim::kTerminalInputs, args.io_inputs).inputs;
+  if (!args.start_in.empty()) o.mid_start = *sim::midStartFromName(args.start_in);
+  if (!parseIdle(args.idle, o)) return kExitUsage;
   for (const std::string& text : args.faults) {
     Result<sim::FaultRequest> fault = sim::parseFault(text);
     if (!fault) {
@@ -1182,6 +1205,28 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--capture-loss", sa.options.capture_loss,
                      "probability that the capture misses a cycle's master copies, keeping "
                      "their returned copies (not the bus: no COM-002)");
+  std::string inputs_help = "how often the terminals' inputs change (default slow):";
+  for (const sim::TerminalInputsName& row : sim::kTerminalInputs) {
+    inputs_help += fmt::format(" {} ({}),", row.name, row.summary);
+  }
+  inputs_help.back() = '.';
+  command.add_option("--io-inputs", sa.io_inputs, inputs_help)
+      ->check(CLI::IsMember(namesOf(sim::kTerminalInputs)));
+  command.add_option("--cia402", sa.options.cia402_drives,
+                     "CiA 402 drives with a servo's 10/40-byte PDOs beside the servos, 0 to 32");
+  command.add_option("--idle", sa.idle,
+                     "SECONDS or all: the drives ready and nothing enabled for that long after "
+                     "the start-up, or for the whole capture");
+  std::string start_help = "the capture begins in the middle of the commissioning session:";
+  for (const sim::MidStartName& row : sim::kMidStarts) {
+    start_help += fmt::format(" {} ({}),", row.name, row.summary);
+  }
+  start_help.back() = '.';
+  command.add_option("--start-in", sa.start_in, start_help)
+      ->check(CLI::IsMember(namesOf(sim::kMidStarts)));
+  command.add_option("--io-task-us", sa.options.io_task_us,
+                     "a second task: the terminals in a frame of their own at this cycle time, a "
+                     "multiple of --cycle-us");
   command.add_option("--layout-config", sa.layout_config,
                      "also write the layout as a configuration file for validate --config");
   command.add_option(

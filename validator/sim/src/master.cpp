@@ -263,8 +263,13 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
 bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle,
                    const std::vector<RxPdo>& outputs, bool lost_before, bool lost_after,
                    std::vector<std::optional<TxPdo>>& inputs) {
+  std::size_t last_sent = 0;  // the cycle's last frame (a slower task's frame is not in every one)
+  for (std::size_t g = 0; g < segment_.groups.size(); ++g) {
+    if (cycle % segment_.groups[g].every_cycles == 0) last_sent = g;
+  }
   for (std::size_t g = 0; g < segment_.groups.size(); ++g) {
     const FrameGroup& fg = segment_.groups[g];
+    if (cycle % fg.every_cycles != 0) continue;
     std::vector<std::vector<std::uint8_t>>& images = images_[g];  // per datagram
     // the NC's outputs, and the terminals', into the master's image
     for (int pos : fg.slaves) {
@@ -313,7 +318,7 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
     }
     const std::int64_t at_ns = t_ns + static_cast<std::int64_t>(g) * 2 * return_delay_ns_;
     bool came_back = false;
-    if (g + 1 == segment_.groups.size()) return_late_ns_ = std::exchange(next_return_late_ns_, 0);
+    if (g == last_sent) return_late_ns_ = std::exchange(next_return_late_ns_, 0);
     const bool exchanged = exchange(sink, frame, at_ns, lost_before, lost_after, &came_back);
     return_late_ns_ = 0;
     if (!exchanged) return false;

@@ -44,6 +44,18 @@ const ImageStyleName& imageStyleRow(ImageStyle style) {
   }
   return kImageStyles[0];
 }
+std::optional<MidStart> midStartFromName(std::string_view name) {
+  for (const MidStartName& row : kMidStarts) {
+    if (name == row.name) return row.start;
+  }
+  return std::nullopt;
+}
+const MidStartName& midStartRow(MidStart start) {
+  for (const MidStartName& row : kMidStarts) {
+    if (row.start == start) return row;
+  }
+  return kMidStarts[0];
+}
 int defaultIoSlaves(ImageStyle style) {
   switch (style) {
     case ImageStyle::Mixed:
@@ -129,6 +141,31 @@ Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::str
 
 namespace {
 
+// The shapes of a machine's bus (docs/simulate.md#shapes), each within its range.
+Status checkShapeOptions(const SimOptions& o) {
+  if (o.cia402_drives < 0 || o.cia402_drives > 32) {
+    return fail(fmt::format("--cia402 {}: from 0 to 32", o.cia402_drives));
+  }
+  if (o.io_task_us != 0) {
+    if (o.io_task_us <= o.cycle_us || o.io_task_us % o.cycle_us != 0 || o.io_task_us > 100000) {
+      return fail(
+          fmt::format("--io-task-us {}: a multiple of the cycle ({} us) above it, at most 100000",
+                      o.io_task_us, o.cycle_us));
+    }
+    if (*o.io_slaves == 0) return fail("--io-task-us needs terminals: give --io-slaves");
+  }
+  if (!(o.idle_s >= 0)) return fail(fmt::format("--idle {}: seconds, or all", o.idle_s));
+  const bool idle = o.idle_all || o.idle_s > 0;
+  if (idle && o.scenario == Scenario::Faults) return fail("--idle: not with --scenario faults");
+  if (o.idle_all && !o.faults.empty()) {
+    return fail("--idle all: nothing is enabled, so no --fault can happen");
+  }
+  if (o.mid_start != MidStart::None && (o.scenario != Scenario::Commissioning || idle)) {
+    return fail("--start-in: a commissioning run only, without --idle");
+  }
+  return {};
+}
+
 // The bus's numbers and its disturbances, each within its range.
 Status checkBusOptions(SimOptions& o) {
   if (o.axes < 1 || o.axes > 32) return fail(fmt::format("--axes {}: from 1 to 32", o.axes));
@@ -165,7 +202,7 @@ Status checkBusOptions(SimOptions& o) {
                       late.text, most_late_us));
     }
   }
-  return {};
+  return checkShapeOptions(o);
 }
 
 // The run's length (the scenario's when not given), and what the faults scenario needs.
@@ -198,6 +235,10 @@ Status placeFault(FaultRequest& f, const SimOptions& o) {
   }
   const FaultRecipe& r = *recipe;
   if (r.phase == FaultPhase::Startup) {
+    if (o.mid_start != MidStart::None) {
+      return fail(fmt::format("--fault {}: {} happens in the start-up, which --start-in cuts away",
+                              f.text, code));
+    }
     if (!o.startup)
       return fail(fmt::format("--fault {}: {} happens in the start-up", f.text, code));
     if (f.at_s) {
@@ -207,9 +248,13 @@ Status placeFault(FaultRequest& f, const SimOptions& o) {
   } else {
     // After the start-up and the enables; in a commissioning run before the emergency stop
     // and the disables that end it (at 53 % and 85 % of the run), else before the end.
-    const double earliest = start + 0.45;
-    const double latest =
-        o.scenario == Scenario::Commissioning ? 0.53 * duration - 0.25 : duration - 0.4;
+    double earliest = start + o.idle_s + 0.45;
+    if (o.mid_start != MidStart::None) {
+      earliest = std::max(earliest, start + midStartRow(o.mid_start).after_plan_s + 0.1);
+    }
+    const double latest = o.scenario == Scenario::Commissioning
+                              ? o.idle_s + 0.53 * (duration - o.idle_s) - 0.25
+                              : duration - 0.4;
     if (latest < earliest) {
       return fail(fmt::format("--fault {}: the run is too short for a fault; use --duration {:g}",
                               f.text, o.scenario == Scenario::Commissioning ? 2.5 : 1.5));

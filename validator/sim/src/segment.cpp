@@ -123,6 +123,15 @@ constexpr SlaveModel kTerminalModels[] = {
      .output_phys = kRxPhys,
      .input_phys = kTxPhys},
 };
+// A neighbour that looks alike: another protocol's drive with PDOs of a servo's sizes.
+constexpr SlaveModel kCia402 = {.name = "CiA 402 drive (10/40)",
+                                .role = SlaveRole::Drive,
+                                .output_bytes = kRxPdoSize,
+                                .input_bytes = kTxPdoSize,
+                                .output_sm = 2,
+                                .input_sm = 3,
+                                .output_phys = kRxPhys,
+                                .input_phys = kTxPhys};
 constexpr std::uint64_t kMixSeedSalt = 0x6D69786564ULL;  // the set-up's own random stream
 
 // The master's process image: one region per cyclic frame.
@@ -135,8 +144,7 @@ constexpr std::size_t kMaxLrwData = 1450;  // 29 axes of 50 bytes (docs/protocol
 // Several datagrams' headers, the DC FRMW and the status BRD must fit too (1498 bytes in all).
 constexpr std::size_t kMaxSplitData = 1400;
 constexpr int kMaxServosPerFrame = 29;
-constexpr std::int64_t kInputTerminalStepNs = 50 * kMs;  // the inputs count up this often
-constexpr std::uint64_t kOutputPatternCycles = 100;      // the lit output moves this often
+constexpr std::uint64_t kOutputPatternCycles = 100;  // the lit output moves this often
 
 }  // namespace
 
@@ -159,7 +167,8 @@ void writeTerminalOutputs(const SlaveModel& model, std::uint64_t cycle, std::uin
       storeLe(out, 0x000F, 2);
       storeLe(out + 2, cycle * 100, 4);
       storeLe(out + 6, 1000, 4);
-      out[10] = 8;  // cyclic synchronous position
+      if (size < 12) break;  // a 10-byte RxPDO has no room for the mode
+      out[10] = 8;           // cyclic synchronous position
       out[11] = 0;
       break;
     case SlaveRole::Bridge:
@@ -174,7 +183,20 @@ void Esc::updateTerminalInputs(std::int64_t now_ns) {
   if (inputBytes() == 0) return;
   std::uint8_t* in = &mem[inputsPhysical()];
   const std::size_t size = inputBytes();
-  const auto step = static_cast<std::uint64_t>(now_ns / kInputTerminalStepNs);
+  if (input_step_ns == 0 && model->role != SlaveRole::Drive) {
+    // Busy inputs: every byte new every cycle, drawn from the time and the slave's address.
+    std::uint64_t x = static_cast<std::uint64_t>(now_ns) / cycle_ns * 0x9E3779B97F4A7C15ULL ^
+                      (std::uint64_t{inputs_logical} << 32);
+    for (std::size_t i = 0; i < size; ++i) {
+      x ^= x >> 29;
+      x *= 0xBF58476D1CE4E5B9ULL;
+      x ^= x >> 32;
+      in[i] = static_cast<std::uint8_t>(x);
+    }
+    return;
+  }
+  const auto step = static_cast<std::uint64_t>(
+      now_ns / (input_step_ns != 0 ? input_step_ns : static_cast<std::int64_t>(cycle_ns)));
   const auto us = static_cast<std::uint64_t>(now_ns / kUs);
   switch (model->role) {
     case SlaveRole::Servo:
@@ -418,7 +440,20 @@ std::vector<const SlaveModel*> ringOrder(const SimOptions& o, Rng& mix) {
     }
     ++terminals;
   }
+  // --cia402: a drive of another protocol after each of the first servos, then after the last.
+  int placed = 0;
+  for (std::size_t pos = 0; pos < ring.size() && placed < o.cia402_drives; ++pos) {
+    if (ring[pos] != &kServo) continue;
+    ring.insert(ring.begin() + static_cast<std::ptrdiff_t>(pos) + 1, &kCia402);
+    ++placed;
+  }
+  for (; placed < o.cia402_drives; ++placed) ring.push_back(&kCia402);
   return ring;
+}
+
+// With --io-task-us the terminals go in a frame of their own; the drives stay with the servos.
+bool inIoTask(const SimOptions& o, const SlaveModel& model) {
+  return o.io_task_us != 0 && model.role != SlaveRole::Servo && model.role != SlaveRole::Drive;
 }
 
 // TwinCAT-like: one area split in two datagrams at a slave boundary once it holds two slaves.
@@ -451,6 +486,8 @@ Segment::Segment(const SimOptions& o, Rng& rng) : style(o.image) {
     }
     esc.mem[ecat::kRegType] = kEscTypeValue;
     esc.transition_frames = static_cast<int>(rng.between(1, 3));
+    esc.cycle_ns = static_cast<std::uint64_t>(o.cycle_us) * kUs;
+    if (o.terminal_inputs == TerminalInputs::EveryCycle) esc.input_step_ns = 0;
     esc.publishAlStatus();
     escs.push_back(std::move(esc));
   }
@@ -460,22 +497,29 @@ Segment::Segment(const SimOptions& o, Rng& rng) : style(o.image) {
   status_poll = split;
   // Frames: at most 29 servos and 1450 bytes of process data each (1400 when split).
   const std::size_t max_data = split ? kMaxSplitData : kMaxLrwData;
-  FrameGroup group;
-  int servos_in_group = 0;
-  for (std::size_t pos = 0; pos < escs.size(); ++pos) {
-    const Esc& esc = escs[pos];
-    const std::size_t need = esc.outputBytes() + esc.inputBytes();
-    if (!group.slaves.empty() &&
-        (group.bytes + need > max_data || (esc.servo() && servos_in_group == kMaxServosPerFrame))) {
-      groups.push_back(std::move(group));
-      group = FrameGroup{};
-      servos_in_group = 0;
+  // The servo task's frames first, then (--io-task-us) the slower task's.
+  for (const bool io_task : {false, true}) {
+    FrameGroup group;
+    group.every_cycles = io_task ? static_cast<std::uint64_t>(o.io_task_us / o.cycle_us) : 1;
+    int servos_in_group = 0;
+    for (std::size_t pos = 0; pos < escs.size(); ++pos) {
+      const Esc& esc = escs[pos];
+      if (inIoTask(o, *esc.model) != io_task) continue;
+      const std::size_t need = esc.outputBytes() + esc.inputBytes();
+      if (!group.slaves.empty() && (group.bytes + need > max_data ||
+                                    (esc.servo() && servos_in_group == kMaxServosPerFrame))) {
+        const std::uint64_t every = group.every_cycles;
+        groups.push_back(std::move(group));
+        group = FrameGroup{};
+        group.every_cycles = every;
+        servos_in_group = 0;
+      }
+      group.slaves.push_back(static_cast<int>(pos));
+      group.bytes += need;
+      if (esc.servo()) ++servos_in_group;
     }
-    group.slaves.push_back(static_cast<int>(pos));
-    group.bytes += need;
-    if (esc.servo()) ++servos_in_group;
+    if (!group.slaves.empty()) groups.push_back(std::move(group));
   }
-  groups.push_back(std::move(group));
   // Logical addresses of each slave's outputs and inputs, and the datagrams over them.
   for (std::size_t g = 0; g < groups.size(); ++g) {
     FrameGroup& fg = groups[g];

@@ -69,6 +69,9 @@ class Esc {
   bool skip_next_lrw = false;   // COM-001
   std::uint32_t outputs_logical = 0;
   std::uint32_t inputs_logical = 0;
+  // A terminal's inputs change this often; 0: every cycle, to values drawn from the slave and time.
+  std::int64_t input_step_ns = 50 * kMs;
+  std::uint64_t cycle_ns = kMs;
 
   bool servo() const { return model->role == SlaveRole::Servo; }
   // Process data: bytes, and where they lie in the process RAM.
@@ -122,6 +125,7 @@ struct FrameGroup {  // the slaves whose process data one cyclic frame carries
   std::vector<int> slaves;
   std::vector<ImageDatagram> datagrams;  // in frame order
   std::size_t bytes = 0;                 // the slaves' process data
+  std::uint64_t every_cycles = 1;        // sent every this many cycles (a slower task's frame)
   std::optional<ImagePlace> place(std::uint32_t logical) const;
 };
 

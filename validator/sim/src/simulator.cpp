@@ -41,12 +41,14 @@ struct Simulator::Impl {
   // --capture-loss draws from its own generator: without it the capture is the same as before.
   Rng capture_loss_rng{o.seed ^ 0xC0FFEE5EEDULL};
   std::uint64_t master_copies_dropped = 0;
+  std::uint64_t frames_cut = 0;  // before --start-in's moment
 
   explicit Impl(const SimOptions& options)
       : o(options),
         cycle_ns(static_cast<std::int64_t>(options.cycle_us) * kUs),
         duration_ns(static_cast<std::int64_t>(std::llround(*options.duration_s * 1e9))),
-        plan_start_ns(options.startup ? static_cast<std::int64_t>(kStartupSeconds * 1e9) : 0),
+        plan_start_ns((options.startup ? static_cast<std::int64_t>(kStartupSeconds * 1e9) : 0) +
+                      at(options.idle_s)),
         rng(options.seed),
         segment(options, rng),
         axis_layout(segment.axisLayout()),
@@ -79,7 +81,10 @@ struct Simulator::Impl {
 
   void planScenario() {
     const double base = static_cast<double>(plan_start_ns) * 1e-9;
-    const double d = *o.duration_s;
+    // The run's later steps fall at fractions of what the idle time leaves.
+    const double idle = o.idle_s;
+    auto late = [&](double fraction) { return at(idle + fraction * (*o.duration_s - idle)); };
+    if (o.idle_all) return;                    // drives ready, nothing enabled
     if (o.scenario == Scenario::Soak) return;  // planned period by period (planSoak)
     for (int a = 0; a < o.axes; ++a) {
       NcAxis& nc = ncs[static_cast<std::size_t>(a)];
@@ -89,10 +94,10 @@ struct Simulator::Impl {
       if (o.scenario == Scenario::Faults) continue;
       if (isIncrementalAxis(a)) nc.schedule({at(base + 0.30), NcAction::ZeroPulse});
       nc.schedule({at(base + 0.55), NcAction::Table, static_cast<double>(a % 3 + 2)});
-      nc.schedule({at(0.53 * d), NcAction::Emergency, 150});
-      nc.schedule({at(0.62 * d), NcAction::Table, 1});
-      nc.schedule({at(0.78 * d), NcAction::Speed, 0});
-      nc.schedule({at(0.85 * d), NcAction::Disable});
+      nc.schedule({late(0.53), NcAction::Emergency, 150});
+      nc.schedule({late(0.62), NcAction::Table, 1});
+      nc.schedule({late(0.78), NcAction::Speed, 0});
+      nc.schedule({late(0.85), NcAction::Disable});
     }
     if (o.scenario == Scenario::Commissioning) {
       faults.scheduleDriveFault(at(base + 0.8), 1 % o.axes, bits::kFollowing);
@@ -101,6 +106,7 @@ struct Simulator::Impl {
 
   // Soak: a 10 s pattern repeated, planned a period ahead (constant memory).
   void planSoak(std::int64_t now_ns) {
+    if (o.idle_all) return;
     while (soak_planned_until_ns <= now_ns + kSoakPeriodNs) {
       const std::int64_t p = soak_planned_until_ns == 0 ? plan_start_ns : soak_planned_until_ns;
       const std::int64_t k = (p - plan_start_ns) / kSoakPeriodNs;
@@ -147,6 +153,18 @@ struct Simulator::Impl {
     }
   }
 
+  // --start-in: the capture keeps nothing before the moment (half a cycle early, so that each
+  // cycle keeps both its copies).
+  FrameSink midStartSink(const FrameSink& captured) {
+    const std::int64_t from_ns =
+        kEpochNs + plan_start_ns + at(midStartRow(o.mid_start).after_plan_s) - cycle_ns / 2;
+    return [this, captured, from_ns](const SimFrame& frame) {
+      if (frame.time_ns >= from_ns) return captured(frame);
+      ++frames_cut;
+      return true;
+    };
+  }
+
   // The cycle slot at or after a capture time; SimFrame times count from the capture's start.
   std::int64_t firstSlotAt(double at_s) const {
     const auto at = static_cast<std::int64_t>(std::llround(at_s * 1e9));
@@ -162,7 +180,8 @@ struct Simulator::Impl {
   }
 
   std::optional<std::uint64_t> run(const FrameSink& captured) {
-    const FrameSink sink = o.probe == Probe::Esl ? eslProbeSink(captured, o.seed) : captured;
+    const FrameSink kept = o.mid_start == MidStart::None ? captured : midStartSink(captured);
+    const FrameSink sink = o.probe == Probe::Esl ? eslProbeSink(kept, o.seed) : kept;
     std::int64_t t = 0;
     const std::int64_t step_ns = std::min<std::int64_t>(cycle_ns, kMs);
     if (o.startup) {
@@ -236,7 +255,7 @@ struct Simulator::Impl {
         }
       }
     }
-    return master.frames() - master_copies_dropped;
+    return master.frames() - master_copies_dropped - frames_cut;
   }
 };
 

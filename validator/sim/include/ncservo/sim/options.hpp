@@ -52,6 +52,51 @@ inline constexpr ImageStyleName kImageStyles[] = {
 std::optional<ImageStyle> imageStyleFromName(std::string_view name);
 const ImageStyleName& imageStyleRow(ImageStyle style);
 
+// How often the terminals' inputs change (--io-inputs).
+enum class TerminalInputs : std::uint8_t {
+  Slow,        // counters and triangles that step every 50 ms
+  EveryCycle,  // values that change every cycle, drawn from the cycle and the slave
+};
+struct TerminalInputsName {
+  const char* name;
+  TerminalInputs inputs;
+  const char* summary;
+};
+inline constexpr TerminalInputsName kTerminalInputs[] = {
+    {.name = "slow",
+     .inputs = TerminalInputs::Slow,
+     .summary = "counters and triangles stepping every 50 ms"},
+    {.name = "cycle",
+     .inputs = TerminalInputs::EveryCycle,
+     .summary = "values that change every cycle, as busy inputs do"},
+};
+
+// Where a capture that begins in the middle of a commissioning session begins (--start-in):
+// the capture drops every frame before that moment, the start-up included.
+enum class MidStart : std::uint8_t { None, Homing, Fault, ErrorClear };
+struct MidStartName {
+  const char* name;
+  MidStart start;
+  double after_plan_s;  // the moment, from the start of the plan (axis 1 faults 0.8 s into it)
+  const char* summary;
+};
+inline constexpr MidStartName kMidStarts[] = {
+    {.name = "homing",
+     .start = MidStart::Homing,
+     .after_plan_s = 0.31,
+     .summary = "during the odd axes' zero-pulse search"},
+    {.name = "fault",
+     .start = MidStart::Fault,
+     .after_plan_s = 0.81,
+     .summary = "while axis 1's drive fault stands, before its error clear"},
+    {.name = "error-clear",
+     .start = MidStart::ErrorClear,
+     .after_plan_s = 0.827,
+     .summary = "during axis 1's error-clear handshake"},
+};
+std::optional<MidStart> midStartFromName(std::string_view name);
+const MidStartName& midStartRow(MidStart start);
+
 // A probe in the line between the master and the first slave.
 enum class Probe : std::uint8_t {
   None,
@@ -98,6 +143,13 @@ struct SimOptions {
   std::vector<CycleDisturbance> late_cycles;
   std::vector<CycleDisturbance> lost_cycles;
   std::vector<FaultRequest> faults;
+  // Shapes of a machine's bus (docs/simulate.md#shapes); the defaults add none.
+  TerminalInputs terminal_inputs = TerminalInputs::Slow;
+  int cia402_drives = 0;  // neighbours of another protocol with 10/40-byte PDOs, 0..32
+  double idle_s = 0;      // the NC enables nothing for this long after the start-up
+  bool idle_all = false;  // ... or for the whole capture
+  MidStart mid_start = MidStart::None;
+  int io_task_us = 0;  // the terminals in a frame of their own at this cycle (0: none)
 };
 
 // This simulator's set-up: the odd axes have an incremental encoder (zero-pulse search), the even
