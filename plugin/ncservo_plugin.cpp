@@ -1,7 +1,7 @@
-// Wireshark 4.0 plugin: a thin presenter over the ncservo library. The field registration is
-// generated from the library's field table; layout, copy detection and drive state come from the
-// library's Validator — as are the rules' findings, shown as expert info — computed on the first
-// pass and kept per frame (PROTOCOL.md §10).
+// Wireshark plugin (4.0 to 4.6, plugin/ws_compat.hpp): a thin presenter over the ncservo library.
+// The field registration is generated from the library's field table; layout, copy detection and
+// drive state come from the library's Validator — as are the rules' findings, shown as expert info
+// — computed on the first pass and kept per frame (PROTOCOL.md §10).
 //
 // Wireshark raises exceptions with longjmp: no object with a destructor may be alive in a frame
 // of this file across a tvb_* or proto_tree_add_* call. The dissector therefore works on plain
@@ -39,6 +39,7 @@
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/frame_clock.hpp"
+#include "ws_compat.hpp"
 
 extern "C" {
 WS_DLL_PUBLIC const char plugin_version[];
@@ -49,6 +50,7 @@ WS_DLL_PUBLIC void plugin_register(void);
 const char plugin_version[] = NCSERVO_VERSION;
 const int plugin_want_major = WIRESHARK_VERSION_MAJOR;
 const int plugin_want_minor = WIRESHARK_VERSION_MINOR;
+NCSERVO_WS_DESCRIBE_PLUGIN(WS_PLUGIN_DESC_DISSECTOR)
 
 namespace {
 
@@ -90,7 +92,7 @@ expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<sl
 
 const char* pref_config_path = "";
 const char* pref_eni_path = "";
-gboolean pref_default_layout = TRUE;
+ws::PrefBool pref_default_layout = true;
 // A string preference, checked in applyPreferences: Wireshark 4.0 keeps an enum preference as it
 // was, silently, when `-o` names none of its values (epan/prefs.c, PREF_ENUM), and a mistyped
 // mode must be reported. The descriptions are what 4.0's enum preference wrote to preference
@@ -377,7 +379,7 @@ void applyPreferences() {
     report_failure("NCSERVO: %s", mode.error().text().c_str());
   }
   auto* options = new DecoderOptions(
-      layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != FALSE));
+      layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != 0));
   delete g_options;
   g_options = options;
   delete g_settings;
