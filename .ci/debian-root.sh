@@ -4,6 +4,8 @@
 #   .ci/debian-root.sh create RELEASE ROOT   a fresh ROOT of RELEASE (bookworm, trixie, sid), mounted
 #   .ci/debian-root.sh run ROOT COMMAND...   COMMAND as root inside ROOT
 #   .ci/debian-root.sh remove ROOT           unmounts and deletes ROOT
+#   .ci/debian-root.sh base RELEASE          makes the cached base of RELEASE if it has none
+#   .ci/debian-root.sh has-base RELEASE      whether the cache has a base of RELEASE
 #   .ci/debian-root.sh purge                 deletes the cache
 #
 # Cached between runs on the same machine: the debootstrapped base of each release as a tarball, and
@@ -22,9 +24,14 @@ die() {
   exit 1
 }
 
+has_base() {
+  local tarball="$cache/$1-base.tar"
+  [ -f "$tarball" ] && [ -z "$(find "$tarball" -mtime "+$max_age_days")" ]
+}
+
 base_tarball() {
   local release=$1 tarball="$cache/$1-base.tar"
-  if [ -f "$tarball" ] && [ -z "$(find "$tarball" -mtime "+$max_age_days")" ]; then
+  if has_base "$release"; then
     echo "$tarball"
     return
   fi
@@ -57,6 +64,10 @@ mount_all() {
   mount -t tmpfs tmpfs "$root/run"
   mkdir -p "$cache/$release-debs" "$root/var/cache/apt/archives"
   mount --bind "$cache/$release-debs" "$root/var/cache/apt/archives"
+  # The cache itself, so that a test inside the root (the package install) makes its own root
+  # from the same bases.
+  mkdir -p "$root$cache"
+  mount --bind "$cache" "$root$cache"
 }
 
 create() {
@@ -103,5 +114,6 @@ run) [ $# -ge 3 ] || die "usage: run ROOT COMMAND..."; shift; run "$@" ;;
 remove) [ $# = 2 ] || die "usage: remove ROOT"; remove "$2" ;;
 purge) rm -rf "$cache" ;;
 base) [ $# = 2 ] || die "usage: base RELEASE"; base_tarball "$2" ;;
-*) die "usage: create RELEASE ROOT | run ROOT COMMAND... | remove ROOT | purge | base RELEASE" ;;
+has-base) [ $# = 2 ] || die "usage: has-base RELEASE"; has_base "$2" ;;
+*) die "usage: create RELEASE ROOT | run ROOT COMMAND... | remove ROOT | purge | base RELEASE | has-base RELEASE" ;;
 esac
