@@ -1,7 +1,7 @@
-// Wireshark plugin (4.0 to 4.6, plugin/ws_compat.hpp): a thin presenter over the ncservo library.
-// The field registration is generated from the library's field table; layout, copy detection and
-// drive state come from the library's Validator — as are the rules' findings, shown as expert info
-// — computed on the first pass and kept per frame (PROTOCOL.md §10).
+// Wireshark 4.0–4.6 plugin: a thin presenter over the ncservo library. The field registration is
+// generated from the library's field table; layout, copy detection and drive state come from the
+// library's Validator — as are the rules' findings, shown as expert info — computed on the first
+// pass and kept per frame (PROTOCOL.md §10).
 //
 // Wireshark raises exceptions with longjmp: no object with a destructor may be alive in a frame
 // of this file across a tvb_* or proto_tree_add_* call. The dissector therefore works on plain
