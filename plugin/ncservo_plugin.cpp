@@ -1029,23 +1029,30 @@ void drawTiming(void*) {
               std::string(67, '=').c_str());
 }
 
-void startTimingStat(const char* arguments, void*) {
+// Whether the statistic started.
+bool startTimingStat(const char* arguments, void*) {
   if (std::strcmp(arguments, kTimingStat) != 0) {
     report_failure("NCSERVO: -z %s: %s takes no filter or other arguments", arguments, kTimingStat);
-    return;
+    return false;
   }
   GString* error = register_tap_listener("ncservo", &timing_listener, nullptr, TL_REQUIRES_NOTHING,
                                          nullptr, takeNoPacket, drawTiming, nullptr);
   if (error != nullptr) {
     report_failure("NCSERVO: -z %s: %s", arguments, error->str);
     g_string_free(error, TRUE);
+    return false;
   }
+  return true;
 }
 
 void registerTimingStat() {
   register_tap("ncservo");
-  static stat_tap_ui timing_stat = {
-      REGISTER_STAT_GROUP_GENERIC, "NC-Servo timing", kTimingStat, startTimingStat, 0, nullptr};
+  static stat_tap_ui timing_stat = {REGISTER_STAT_GROUP_GENERIC,
+                                    "NC-Servo timing",
+                                    kTimingStat,
+                                    ws::statTapInit<startTimingStat>,
+                                    0,
+                                    nullptr};
   register_stat_tap_ui(&timing_stat, nullptr);
 }
 

@@ -6,7 +6,9 @@
 #include <epan/packet.h>
 #include <epan/prefs.h>
 #include <epan/proto.h>
+#include <epan/stat_tap_ui.h>
 #include <epan/stats_tree.h>
+#include <epan/tfs.h>  // true_false_string: proto.h no longer brings it in 4.6
 #include <epan/tvbuff.h>
 #include <epan/uat.h>
 #include <wireshark.h>
@@ -70,5 +72,18 @@ inline void registerStatsTree(const char* tap, const char* abbrev, const char* n
   stats_tree_register_with_group(tap, abbrev, name, flags, packet, init, cleanup, group);
 #endif
 }
+
+// A `-z` statistic's start (stat_tap_ui's init callback) returns whether it started from 4.6,
+// nothing before: the plugin writes it the 4.6 way, statTapInit<start> adapts it.
+template <bool (*start)(const char*, void*)>
+#if NCSERVO_WS_AT_LEAST(4, 6)
+bool statTapInit(const char* arguments, void* user_data) {
+  return start(arguments, user_data);
+}
+#else
+void statTapInit(const char* arguments, void* user_data) {
+  start(arguments, user_data);
+}
+#endif
 
 }  // namespace ncservo::ws
