@@ -86,6 +86,12 @@ create() {
   # Keep what apt fetches (the archives folder is the shared cache).
   echo 'APT::Keep-Downloaded-Packages "true";' >>"$root/etc/apt/apt.conf.d/99ncservo-snapshot"
   rm -f "$root/etc/apt/apt.conf.d/docker-clean"
+  # A machine whose HTTPS goes through a proxy with its own certificate authority names it to
+  # Node.js (npm fetches the report schemas): the root gets the same file.
+  if [ -n "${NODE_EXTRA_CA_CERTS:-}" ] && [ -f "$NODE_EXTRA_CA_CERTS" ]; then
+    mkdir -p "$root$(dirname "$NODE_EXTRA_CA_CERTS")"
+    cp "$NODE_EXTRA_CA_CERTS" "$root$NODE_EXTRA_CA_CERTS"
+  fi
   mount_all "$root" "$release"
 }
 
@@ -94,7 +100,8 @@ run() {
   shift
   [ -f "$root/.ncservo-release" ] || die "$root is not a root made by debian-root.sh"
   chroot "$root" env -i HOME=/root LANG=C.UTF-8 TERM=dumb DEBIAN_FRONTEND=noninteractive \
-    PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin CI="${CI:-}" "$@"
+    PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin CI="${CI:-}" \
+    ${NODE_EXTRA_CA_CERTS:+NODE_EXTRA_CA_CERTS="$NODE_EXTRA_CA_CERTS"} "$@"
 }
 
 remove() {
