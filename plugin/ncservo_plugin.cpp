@@ -1,4 +1,4 @@
-// Wireshark 4.0 plugin: a thin presenter over the ncservo library. The field registration is
+// Wireshark 4.0–4.6 plugin: a thin presenter over the ncservo library. The field registration is
 // generated from the library's field table; layout, copy detection and drive state come from the
 // library's Validator — as are the rules' findings, shown as expert info — computed on the first
 // pass and kept per frame, as Wireshark's later passes do not visit frames in order.
@@ -39,6 +39,7 @@
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/frame_clock.hpp"
+#include "ws_compat.hpp"
 
 extern "C" {
 WS_DLL_PUBLIC const char plugin_version[];
@@ -49,6 +50,7 @@ WS_DLL_PUBLIC void plugin_register(void);
 const char plugin_version[] = NCSERVO_VERSION;
 const int plugin_want_major = WIRESHARK_VERSION_MAJOR;
 const int plugin_want_minor = WIRESHARK_VERSION_MINOR;
+NCSERVO_WS_DESCRIBE_PLUGIN(WS_PLUGIN_DESC_DISSECTOR)
 
 namespace {
 
@@ -91,7 +93,7 @@ expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<sl
 
 const char* pref_config_path = "";
 const char* pref_eni_path = "";
-gboolean pref_default_layout = TRUE;
+ws::PrefBool pref_default_layout = true;
 // A string preference, checked in applyPreferences: Wireshark 4.0 keeps an enum preference as it
 // was, silently, when `-o` names none of its values (epan/prefs.c, PREF_ENUM), and a mistyped
 // mode must be reported. The descriptions are what 4.0's enum preference wrote to preference
@@ -387,7 +389,7 @@ void applyPreferences() {
     report_failure("NCSERVO: %s", mode.error().text().c_str());
   }
   auto* options = new DecoderOptions(
-      layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != FALSE));
+      layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != 0));
   delete g_options;
   g_options = options;
   delete g_settings;
@@ -1105,23 +1107,30 @@ void drawTiming(void*) {
               std::string(67, '=').c_str());
 }
 
-void startTimingStat(const char* arguments, void*) {
+// Whether the statistic started.
+bool startTimingStat(const char* arguments, void*) {
   if (std::strcmp(arguments, kTimingStat) != 0) {
     report_failure("NCSERVO: -z %s: %s takes no filter or other arguments", arguments, kTimingStat);
-    return;
+    return false;
   }
   GString* error = register_tap_listener("ncservo", &timing_listener, nullptr, TL_REQUIRES_NOTHING,
                                          nullptr, takeNoPacket, drawTiming, nullptr);
   if (error != nullptr) {
     report_failure("NCSERVO: -z %s: %s", arguments, error->str);
     g_string_free(error, TRUE);
+    return false;
   }
+  return true;
 }
 
 void registerTimingStat() {
   register_tap("ncservo");
-  static stat_tap_ui timing_stat = {
-      REGISTER_STAT_GROUP_GENERIC, "NC-Servo timing", kTimingStat, startTimingStat, 0, nullptr};
+  static stat_tap_ui timing_stat = {REGISTER_STAT_GROUP_GENERIC,
+                                    "NC-Servo timing",
+                                    kTimingStat,
+                                    ws::statTapInit<startTimingStat>,
+                                    0,
+                                    nullptr};
   register_stat_tap_ui(&timing_stat, nullptr);
 }
 

@@ -37,8 +37,9 @@ trap cleanup EXIT
 # A home of its own: the plugin in its personal plugin folder, the window's size and the
 # packet list's height in the recent files, no other preferences.
 home=$tmp/home
-mkdir -p "$home/.local/lib/wireshark/plugins/4.0/epan" "$home/.config/wireshark"
-cp "$plugin" "$home/.local/lib/wireshark/plugins/4.0/epan/"
+plugins=$home/.local/lib/wireshark/plugins/$(tshark -v | sed -n '1s/^TShark (Wireshark) \([0-9]*\.[0-9]*\).*/\1/p')/epan
+mkdir -p "$plugins" "$home/.config/wireshark"
+cp "$plugin" "$plugins/"
 cp "$capture" "$home/"
 printf 'gui.geometry_main_x: 0\ngui.geometry_main_y: 0\ngui.geometry_main_width: %s\ngui.geometry_main_height: %s\ngui.geometry_main_maximized: FALSE\n' \
   "$width" "$height" >"$home/.config/wireshark/recent_common"

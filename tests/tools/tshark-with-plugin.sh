@@ -7,20 +7,31 @@
 set -euo pipefail
 plugin=$1
 shift
-stock_dir=$(dirname "$(find /usr/lib/*/wireshark/plugins/4.0/epan -name ethercat.so | head -n1)")
 key=$(echo "$plugin" | md5sum | cut -c1-12)
 dir=${NCSERVO_PLUGIN_STAGE:-/tmp}/ncservo-wsplug-$key
-mkdir -p "$dir/4.0/epan"
-for so in "$stock_dir"/*.so; do ln -sf "$so" "$dir/4.0/epan/"; done
+mkdir -p "$dir"
+# The stock plugins are in the installed tshark's global folder, named for its major.minor
+# (plugins/4.4): asked of tshark once per staging folder.
+if [ ! -s "$dir/.global-plugins" ]; then
+  global=$(tshark -G folders 2>/dev/null | sed -n 's/^Global Plugins:[[:space:]]*//p')
+  [ -d "$global/epan" ] || { echo "tshark-with-plugin.sh: no global plugin folder from 'tshark -G folders'" >&2; exit 2; }
+  tmp=$(mktemp "$dir/.global-plugins.XXXXXX")
+  echo "$global" >"$tmp"
+  mv -f "$tmp" "$dir/.global-plugins"
+fi
+global=$(cat "$dir/.global-plugins")
+version_dir=$dir/$(basename "$global")
+mkdir -p "$version_dir/epan"
+for so in "$global"/epan/*.so; do ln -sf "$so" "$version_dir/epan/"; done
 if [ "$plugin" != none ]; then
   # Copy then rename, so a tshark starting in parallel never loads a half-written plugin.
-  tmp=$(mktemp "$dir/4.0/epan/.ncservo.XXXXXX")
+  tmp=$(mktemp "$version_dir/epan/.ncservo.XXXXXX")
   cp -f "$plugin" "$tmp"
   chmod a+r "$tmp"
-  mv -f "$tmp" "$dir/4.0/epan/ncservo.so"
+  mv -f "$tmp" "$version_dir/epan/ncservo.so"
 fi
 # Not recursive: another run may be renaming its copy of the plugin in there right now.
-chmod a+rx "$dir" "$dir/4.0" "$dir/4.0/epan"
+chmod a+rx "$dir" "$version_dir" "$version_dir/epan"
 # A plugin built with ASan + UBSan (NCSERVO_SANITIZE) needs the sanitizer runtime preloaded into
 # the stock tshark; its build leaves the runtime's path beside it. Any report aborts tshark.
 # Leaks are not checked: tshark's own allocations at exit would drown ours. The extcap helpers

@@ -3,6 +3,7 @@
 // (kRowFormats, kFieldListFormats, kRuleListFormats, kCaptureFormats, report.hpp's ReportFormat)
 // is a row: the options, their choices and help, and the dispatch are derived from the rows.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>

@@ -72,12 +72,18 @@ Result<LiveHandle> openLive(const std::string& interface) {
   char errbuf[PCAP_ERRBUF_SIZE] = {};
   LiveHandle handle(pcap_create(interface.c_str(), errbuf));
   if (!handle) return fail(fmt::format("{}: cannot capture: {}", interface, errbuf));
-  pcap_set_snaplen(handle.get(), kSnapLength);
-  pcap_set_promisc(handle.get(), 1);
-  pcap_set_immediate_mode(handle.get(), 1);
-  pcap_set_buffer_size(handle.get(), kKernelBuffer);
-  pcap_set_timeout(handle.get(), kReadTimeoutMs);
-  pcap_set_tstamp_precision(handle.get(), PCAP_TSTAMP_PRECISION_NANO);
+  // These fail only on a handle already activated (newer libpcap insists they are checked).
+  for (const int status :
+       {pcap_set_snaplen(handle.get(), kSnapLength), pcap_set_promisc(handle.get(), 1),
+        pcap_set_immediate_mode(handle.get(), 1), pcap_set_buffer_size(handle.get(), kKernelBuffer),
+        pcap_set_timeout(handle.get(), kReadTimeoutMs)}) {
+    if (status != 0) {
+      return fail(fmt::format("{}: cannot capture: {}", interface, pcap_statustostr(status)));
+    }
+  }
+  // A device without nanosecond time stamps keeps microseconds: the loop asks which it got.
+  const int nanoseconds = pcap_set_tstamp_precision(handle.get(), PCAP_TSTAMP_PRECISION_NANO);
+  static_cast<void>(nanoseconds);
   const int activated = pcap_activate(handle.get());
   if (activated == PCAP_ERROR_PERM_DENIED || activated == PCAP_ERROR_PROMISC_PERM_DENIED) {
     return fail(fmt::format(

@@ -1,6 +1,7 @@
 #include "ncservo/layout/layout_inference.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <bitset>

@@ -1,6 +1,7 @@
 #include "ncservo/report/report.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <stdlib.h>
 #include <sys/stat.h>
 #include <unistd.h>

@@ -1,6 +1,7 @@
 #include "ncservo/rules/coverage.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace ncservo {
 

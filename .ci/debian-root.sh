@@ -1,0 +1,126 @@
+#!/usr/bin/env bash
+# Fresh Debian roots for CI: the test suite on other releases (.ci/run) and the package install test.
+#
+#   .ci/debian-root.sh create RELEASE ROOT   a fresh ROOT of RELEASE (bookworm, trixie, sid), mounted
+#   .ci/debian-root.sh run ROOT COMMAND...   COMMAND as root inside ROOT
+#   .ci/debian-root.sh remove ROOT           unmounts and deletes ROOT
+#   .ci/debian-root.sh base RELEASE          makes the cached base of RELEASE if it has none
+#   .ci/debian-root.sh has-base RELEASE      whether the cache has a base of RELEASE
+#   .ci/debian-root.sh purge                 deletes the cache
+#
+# Cached between runs on the same machine: the debootstrapped base of each release as a tarball, and
+# the .deb files apt fetched into roots of that release (under NCSERVO_ROOT_CACHE, default
+# /var/cache/ncservo-roots). The live root is always unpacked fresh and removed when the run is over,
+# so nothing one run installs leaks into the next. A base older than NCSERVO_ROOT_MAX_AGE_DAYS
+# (default 7) is made anew, so the roots follow the archive.
+set -euo pipefail
+
+cache=${NCSERVO_ROOT_CACHE:-/var/cache/ncservo-roots}
+mirror=${NCSERVO_DEBIAN_MIRROR:-http://deb.debian.org/debian}
+max_age_days=${NCSERVO_ROOT_MAX_AGE_DAYS:-7}
+
+die() {
+  echo "debian-root.sh: $*" >&2
+  exit 1
+}
+
+has_base() {
+  local tarball="$cache/$1-base.tar"
+  [ -f "$tarball" ] && [ -z "$(find "$tarball" -mtime "+$max_age_days")" ]
+}
+
+base_tarball() {
+  local release=$1 tarball="$cache/$1-base.tar"
+  if has_base "$release"; then
+    echo "$tarball"
+    return
+  fi
+  command -v debootstrap >/dev/null || die "debootstrap not installed (.ci/setup)"
+  mkdir -p "$cache"
+  local staging="$cache/$release.partial"
+  rm -rf "$staging"
+  echo "debian-root.sh: debootstrap $release from $mirror (minutes)" >&2
+  # sid's Release file in a snapshot archive is past its Valid-Until date; debootstrap itself does
+  # not check it, apt inside the root does (configured in create).
+  if ! debootstrap --variant=minbase "$release" "$staging" "$mirror" >"$cache/$release.log" 2>&1; then
+    rm -rf "$staging"
+    die "debootstrap $release failed: $(tail -3 "$cache/$release.log")"
+  fi
+  rm -rf "$staging/var/cache/apt/archives/"*.deb
+  tar -C "$staging" -cf "$tarball.new" . && mv "$tarball.new" "$tarball"
+  rm -rf "$staging"
+  echo "$tarball"
+}
+
+mount_all() {
+  local root=$1 release=$2
+  # A bind mount of the root onto itself makes it a mount point, which `ip netns` needs in a chroot.
+  mount --bind "$root" "$root"
+  mount -t proc proc "$root/proc"
+  mount -t sysfs sysfs "$root/sys"
+  mount --bind /dev "$root/dev"
+  mount -t devpts devpts "$root/dev/pts" -o newinstance,ptmxmode=0666 2>/dev/null || true
+  mount -t tmpfs tmpfs "$root/dev/shm"
+  mount -t tmpfs tmpfs "$root/run"
+  mkdir -p "$cache/$release-debs" "$root/var/cache/apt/archives"
+  mount --bind "$cache/$release-debs" "$root/var/cache/apt/archives"
+  # The cache itself, so that a test inside the root (the package install) makes its own root
+  # from the same bases.
+  mkdir -p "$root$cache"
+  mount --bind "$cache" "$root$cache"
+}
+
+create() {
+  local release=$1 root=$2
+  [ ! -e "$root" ] || die "$root exists; remove it first"
+  local tarball
+  tarball=$(base_tarball "$release")
+  mkdir -p "$root"
+  tar -C "$root" -xf "$tarball"
+  echo "$release" >"$root/.ncservo-release"
+  cp /etc/resolv.conf "$root/etc/resolv.conf"
+  printf '127.0.0.1 localhost\n::1 localhost ip6-localhost ip6-loopback\n' >"$root/etc/hosts"
+  echo "deb $mirror $release main" >"$root/etc/apt/sources.list"
+  # The archive here is a snapshot: sid's Release file is past its Valid-Until date.
+  echo 'Acquire::Check-Valid-Until "false";' >"$root/etc/apt/apt.conf.d/99ncservo-snapshot"
+  # Keep what apt fetches (the archives folder is the shared cache).
+  echo 'APT::Keep-Downloaded-Packages "true";' >>"$root/etc/apt/apt.conf.d/99ncservo-snapshot"
+  rm -f "$root/etc/apt/apt.conf.d/docker-clean"
+  # A machine whose HTTPS goes through a proxy with its own certificate authority names it to
+  # Node.js (npm fetches the report schemas): the root gets the same file.
+  if [ -n "${NODE_EXTRA_CA_CERTS:-}" ] && [ -f "$NODE_EXTRA_CA_CERTS" ]; then
+    mkdir -p "$root$(dirname "$NODE_EXTRA_CA_CERTS")"
+    cp "$NODE_EXTRA_CA_CERTS" "$root$NODE_EXTRA_CA_CERTS"
+  fi
+  mount_all "$root" "$release"
+}
+
+run() {
+  local root=$1
+  shift
+  [ -f "$root/.ncservo-release" ] || die "$root is not a root made by debian-root.sh"
+  chroot "$root" env -i HOME=/root LANG=C.UTF-8 TERM=dumb DEBIAN_FRONTEND=noninteractive \
+    PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin CI="${CI:-}" \
+    ${NODE_EXTRA_CA_CERTS:+NODE_EXTRA_CA_CERTS="$NODE_EXTRA_CA_CERTS"} "$@"
+}
+
+remove() {
+  local root=$1
+  [ -e "$root" ] || return 0
+  [ -f "$root/.ncservo-release" ] || die "$root is not a root made by debian-root.sh; not deleting it"
+  root=$(realpath "$root")
+  # Innermost first; lazily, so a process still running inside cannot keep the root.
+  grep -o " $root[^ ]*" /proc/self/mounts | sort -r | while read -r m; do umount -l "$m" 2>/dev/null || true; done
+  if grep -q " $root[ /]" /proc/self/mounts; then die "$root still has mounts; not deleting it"; fi
+  rm -rf "$root"
+}
+
+case "${1:-}" in
+create) [ $# = 3 ] || die "usage: create RELEASE ROOT"; create "$2" "$3" ;;
+run) [ $# -ge 3 ] || die "usage: run ROOT COMMAND..."; shift; run "$@" ;;
+remove) [ $# = 2 ] || die "usage: remove ROOT"; remove "$2" ;;
+purge) rm -rf "$cache" ;;
+base) [ $# = 2 ] || die "usage: base RELEASE"; base_tarball "$2" ;;
+has-base) [ $# = 2 ] || die "usage: has-base RELEASE"; has_base "$2" ;;
+*) die "usage: create RELEASE ROOT | run ROOT COMMAND... | remove ROOT | purge | base RELEASE | has-base RELEASE" ;;
+esac
