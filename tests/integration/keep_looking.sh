@@ -8,25 +8,32 @@ SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 ZERO="$SRC/tests/tools/zero_lrw_capture.py"
 
-# gen_capture enables axis 0 at 2 % of the cycles: after the 4096-cycle window here.
-python3 "$GEN" --axes 4 --cycles 220000 -o "$WORK/late.pcap"
+# 6000 cycles of zeros (12000 frames: no layout can be told from them, not even from the
+# structure), then a 4-axis session: the layout becomes certain in a later window. The zeros are
+# then judged with that layout (their WKC 3 against the servos' 12 gives COM-001 and COM-005), so
+# only the layout's fields are checked here.
+python3 "$ZERO" "$WORK/zero-start.pcap" 6000 200
+python3 "$GEN" --axes 4 --cycles 20000 -o "$WORK/session.pcap" >/dev/null
+require_program mergecap
+mergecap -a -F pcap -w "$WORK/late.pcap" "$WORK/zero-start.pcap" "$WORK/session.pcap"
 rc=0
 "$NCSERVO" validate --format json "$WORK/late.pcap" >"$WORK/out" 2>"$WORK/err" || rc=$?
-[ "$rc" = 0 ] || fail "late enables: exit $rc: $(head -3 "$WORK/err")"
-python3 - "$WORK/out" <<'PY' || fail "late enables json"
+[ "$rc" -le 1 ] || fail "late layout: exit $rc: $(head -3 "$WORK/err")"
+python3 - "$WORK/out" <<'PY' || fail "late layout json"
 import json, sys
 c = json.load(open(sys.argv[1]))["captures"][0]
 layout = c["layout"]
 assert layout["source"] == "inferred" and len(layout["axes"]) == 4, layout
-assert layout["inference_windows"] > 1 and layout["certain_at_frame"] > 8192, layout
+assert layout["inference_windows"] > 1 and layout["certain_at_frame"] > 12000, layout
 u = layout["unjudged_before_certain"]
-assert u["frames"] > 0 and u["first_frame"] == 1 and u["last_frame"] < layout["certain_at_frame"], u
-assert c["verdict"] == "pass", c["verdict"]
+assert u["frames"] == 0 or (u["first_frame"] == 1 and u["last_frame"] < layout["certain_at_frame"]), u
 PY
-"$NCSERVO" validate "$WORK/late.pcap" >"$WORK/out" 2>&1 || fail "late enables text"
-grep -q "^  layout certain at frame [0-9]*, after [0-9]* cycles in [0-9]* windows of evidence; frames before the layout was certain, not judged: [0-9]* (1–[0-9]*)$" "$WORK/out" ||
+rc=0
+"$NCSERVO" validate "$WORK/late.pcap" >"$WORK/out" 2>&1 || rc=$?
+[ "$rc" -le 1 ] || fail "late layout text: exit $rc"
+grep -q "^  layout certain at frame [0-9]*, after [0-9]* cycles in [0-9]* windows of evidence; frames before the layout was certain, not judged: [0-9]*" "$WORK/out" ||
   fail "text: $(grep -i certain "$WORK/out")"
-echo "ok axes enabled after the first window"
+echo "ok layout certain after the first window"
 
 # Zeros only, over several windows: never certain.
 python3 "$ZERO" "$WORK/zero.pcap" 13000

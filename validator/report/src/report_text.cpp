@@ -86,6 +86,65 @@ void writeCaptureLoss(std::FILE* out, const CaptureReport& r) {
   }
 }
 
+// Each axis: where it was found (station, its PDOs' logical or SM addresses, the inference's
+// evidence), then its final state and error history.
+void writeTextAxes(std::FILE* out, const CaptureReport& r) {
+  for (std::size_t i = 0; i < r.layout.size(); ++i) {
+    const AxisInfo& info = r.layout[i];
+    fmt::print(out, "  {}:", info.name);
+    if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
+    if (info.logical) {
+      fmt::print(out, " outputs 0x{:08X}, inputs 0x{:08X}\n", info.outputs, info.inputs);
+    } else {
+      fmt::print(out, " SM2 0x{:08X}, SM3 0x{:08X}\n", info.sm_outputs, info.sm_inputs);
+    }
+    if (i < r.inferred.size()) fmt::print(out, "    {}\n", describeInference(r.inferred[i]));
+  }
+  for (const AxisReport& a : r.axes) {
+    fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
+               a.state ? driveStateName(*a.state) : "no inputs seen", a.telegram_failures);
+    if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);
+    fmt::print(out, "\n");
+    for (const ErrorHistoryEntry& e : a.error_history) {
+      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", e.cause->display,
+                 e.cause->canopen, e.at.frame, seconds(r, e.at));
+    }
+  }
+}
+
+// The rules that judged nothing, in one line: the rules of each axis (or the bus), axes with the
+// same rules named together.
+void writeNotJudged(std::FILE* out, const CaptureReport& r) {
+  if (r.coverage.not_judged.empty()) return;
+  std::vector<std::pair<std::string, std::vector<std::string>>> groups;  // rules, axes
+  std::optional<std::uint16_t> current;
+  std::vector<std::string> codes;
+  const auto close = [&] {
+    if (codes.empty()) return;
+    const std::string rules = fmt::format("{}", fmt::join(codes, ", "));
+    const std::string who = current ? axisName(r, *current) : std::string("bus");
+    auto same =
+        std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == rules; });
+    if (same == groups.end()) {
+      groups.push_back({rules, {who}});
+    } else {
+      same->second.push_back(who);
+    }
+    codes.clear();
+  };
+  for (const NotJudged& n : r.coverage.not_judged) {
+    if (!codes.empty() && n.axis != current) close();
+    current = n.axis;
+    codes.emplace_back(ruleDef(n.rule).code);
+  }
+  close();
+  std::vector<std::string> items;
+  for (const auto& [rules, who] : groups) {
+    items.push_back(fmt::format("{}: {}", fmt::join(who, ", "), rules));
+  }
+  fmt::print(out, "not judged (what they read was never captured): {}\n", fmt::join(items, "; "));
+}
+
 }  // namespace
 
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
@@ -118,28 +177,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     fmt::print(out, "  {}\n", describeStartupCut(r.startup_frames_cut));
   }
   if (r.late_layout.certain_at > 0) fmt::print(out, "  {}\n", describeLateLayout(r.late_layout));
-  // Where each axis was found: its station and its PDOs' logical (or SM) addresses.
-  for (std::size_t i = 0; i < r.layout.size(); ++i) {
-    const AxisInfo& info = r.layout[i];
-    fmt::print(out, "  {}:", info.name);
-    if (info.has_station) fmt::print(out, " station 0x{:04X},", info.station);
-    if (info.logical) {
-      fmt::print(out, " outputs 0x{:08X}, inputs 0x{:08X}\n", info.outputs, info.inputs);
-    } else {
-      fmt::print(out, " SM2 0x{:08X}, SM3 0x{:08X}\n", info.sm_outputs, info.sm_inputs);
-    }
-    if (i < r.inferred.size()) fmt::print(out, "    {}\n", describeInference(r.inferred[i]));
-  }
-  for (const AxisReport& a : r.axes) {
-    fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
-               a.state ? driveStateName(*a.state) : "no inputs seen", a.telegram_failures);
-    if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);
-    fmt::print(out, "\n");
-    for (const ErrorHistoryEntry& e : a.error_history) {
-      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", e.cause->display,
-                 e.cause->canopen, e.at.frame, seconds(r, e.at));
-    }
-  }
+  writeTextAxes(out, r);
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
   std::fputs(timingText(r.timing, timestampSourceName(r.timestamps),
                         timestampResolutionNs(r.timestamps, r.timestamp_digits))
@@ -160,36 +198,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   }
   if (!r.probe_note.empty()) fmt::print(out, "probe: {}\n", r.probe_note);
   if (r.truncation.any()) fmt::print(out, "truncated: {}\n", describeTruncation(r.truncation));
-  if (!r.coverage.not_judged.empty()) {
-    // One line: the rules of each axis (or the bus), axes with the same rules named together.
-    std::vector<std::pair<std::string, std::vector<std::string>>> groups;  // rules, axes
-    std::optional<std::uint16_t> current;
-    std::vector<std::string> codes;
-    const auto close = [&] {
-      if (codes.empty()) return;
-      const std::string rules = fmt::format("{}", fmt::join(codes, ", "));
-      const std::string who = current ? axisName(r, *current) : std::string("bus");
-      auto same = std::find_if(groups.begin(), groups.end(),
-                               [&](const auto& g) { return g.first == rules; });
-      if (same == groups.end()) {
-        groups.push_back({rules, {who}});
-      } else {
-        same->second.push_back(who);
-      }
-      codes.clear();
-    };
-    for (const NotJudged& n : r.coverage.not_judged) {
-      if (!codes.empty() && n.axis != current) close();
-      current = n.axis;
-      codes.emplace_back(ruleDef(n.rule).code);
-    }
-    close();
-    std::vector<std::string> items;
-    for (const auto& [rules, who] : groups) {
-      items.push_back(fmt::format("{}: {}", fmt::join(who, ", "), rules));
-    }
-    fmt::print(out, "not judged (what they read was never captured): {}\n", fmt::join(items, "; "));
-  }
+  writeNotJudged(out, r);
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
   const std::string dropped =
