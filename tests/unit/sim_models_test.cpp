@@ -543,15 +543,13 @@ const std::vector<QuirkRow>& quirkRows() {
        }},
       {"CauseWithoutSummary", DriveQuirk::CauseWithoutSummary, false, 0,
        [](Bench& b) {
-         return idleCount(b, 100, [](const TxPdo& in) {
-           return (in.sew & bits::kSewCauses) != 0 && !summary(in);
-         });
+         return idleCount(
+             b, 100, [](const TxPdo& in) { return (in.sew & kSewCauseMask) != 0 && !summary(in); });
        }},
       {"SummaryWithoutCause", DriveQuirk::SummaryWithoutCause, false, kDriveResponseMs,
        [](Bench& b) {
-         return idleCount(b, 150, [](const TxPdo& in) {
-           return summary(in) && (in.sew & bits::kSewCauses) == 0;
-         });
+         return idleCount(
+             b, 150, [](const TxPdo& in) { return summary(in) && (in.sew & kSewCauseMask) == 0; });
        }},
       {"ReservedErrorBit", DriveQuirk::ReservedErrorBit, false, 0,
        [](Bench& b) {

@@ -17,6 +17,18 @@ void addTimestampsOption(CLI::App& command, std::string& timestamps) {
       ->check(CLI::IsMember({"capture", "probe", "auto"}));
 }
 
+void addFailOnOption(CLI::App& command, std::string& fail_on) {
+  command
+      .add_option("--fail-on", fail_on,
+                  "exit 1 on findings at or above: error, warning, info, never")
+      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+}
+
+void setFailOn(const std::string& fail_on, ReportPolicy& policy) {
+  policy.never = fail_on == "never";
+  policy.fail_on = policy.never ? Severity::Error : *severityFromName(fail_on);
+}
+
 void addLayoutOptions(CLI::App& command, LayoutArgs& layout) {
   command.add_option("--config", layout.config_path, "TOML configuration file");
   command.add_flag("--no-default-layout", layout.no_default_layout,

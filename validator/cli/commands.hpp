@@ -13,6 +13,7 @@
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/decoder.hpp"
 #include "ncservo/layout/eni.hpp"
+#include "ncservo/report/report.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 
@@ -32,6 +33,11 @@ using Handler = std::function<int()>;
 
 // --timestamps (docs/protocol.md §8: a probe's clock or the capturing PC's).
 void addTimestampsOption(CLI::App& command, std::string& timestamps);
+
+// --fail-on (docs/cli.md#exit-status): the least severity whose findings make the exit status 1,
+// or never; and what it sets in the report's policy.
+void addFailOnOption(CLI::App& command, std::string& fail_on);
+void setFailOn(const std::string& fail_on, ReportPolicy& policy);
 
 // The layout files of every command that reads a capture (docs/protocol.md §9.1, §9.2).
 struct LayoutArgs {

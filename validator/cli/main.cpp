@@ -663,8 +663,7 @@ int runValidate(const ValidateArgs& o) {
     return kExitUsage;
   }
   cli::ReportPolicy policy;
-  policy.never = o.fail_on == "never";
-  policy.fail_on = policy.never ? Severity::Error : *severityFromName(o.fail_on);
+  cli::setFailOn(o.fail_on, policy);
   policy.allow_empty = o.allow_empty;
   policy.verbose = o.verbose;
   policy.enabled = settings.enabled;
@@ -1090,10 +1089,7 @@ Handler validateCommand(CLI::App& command) {
       ->allow_extra_args(false);
   command.add_flag("-v,--verbose", args->verbose,
                    "text: every finding, not one line per rule and axis");
-  command
-      .add_option("--fail-on", args->fail_on,
-                  "exit 1 on findings at or above: error, warning, info, never")
-      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+  cli::addFailOnOption(command, args->fail_on);
   cli::addRuleOptions(command, *args);
   addTimestampsOption(command, args->timestamps);
   addWindowOptions(command, args->window);

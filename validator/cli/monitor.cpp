@@ -311,8 +311,7 @@ Status checkMonitorArgs(const MonitorArgs& args) {
 Result<std::unique_ptr<ReportWriter>> openMonitorReport(const MonitorArgs& args,
                                                         const RuleSettings& settings) {
   ReportPolicy policy;
-  policy.never = args.fail_on == "never";
-  policy.fail_on = policy.never ? Severity::Error : *severityFromName(args.fail_on);
+  setFailOn(args.fail_on, policy);
   policy.verbose = true;  // text: every finding as it happens
   policy.enabled = settings.enabled;
   return ReportWriter::open({{findReportFormat(args.format), ""}}, policy);
@@ -528,10 +527,7 @@ Handler monitorCommand(CLI::App& command) {
       ->check(CLI::IsMember({"text", "jsonl"}));
   command.add_option("--duration", args->duration_s,
                      "stop after SECONDS (default: at Ctrl-C), then report");
-  command
-      .add_option("--fail-on", args->fail_on,
-                  "exit 1 on findings at or above: error, warning, info, never")
-      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+  addFailOnOption(command, args->fail_on);
   command.add_option("--record", args->record_dir,
                      "flight recorder: write an annotated pcapng around each finding into DIR");
   command.add_option("--record-window", args->record_window_s,

@@ -5,23 +5,12 @@
 #include <algorithm>
 
 #include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/word_bits.hpp"
 
 namespace ncservo {
 
 namespace {
-constexpr std::uint32_t kSe = mask32("ncservo.scw.se");
-constexpr std::uint32_t kSeArmed = 0x1;  // docs/protocol.md §2: 0x2 enables only from 0x1
-constexpr std::uint32_t kSeEnable = 0x2;
-constexpr std::uint32_t kEmgon = mask32("ncservo.scw.emgon");
-constexpr std::uint32_t kBrake = mask32("ncservo.scw.brake");
-constexpr std::uint32_t kZPulseRequest = mask32("ncservo.scw.zpulse_request");
-constexpr std::uint32_t kErrorClear = mask32("ncservo.scw.error_clear");
-constexpr std::uint32_t kServoEn = mask32("ncservo.ssw.servo_en");
-constexpr std::uint32_t kServoRdy = mask32("ncservo.ssw.servo_rdy");
-constexpr std::uint32_t kZPulseAck = mask32("ncservo.ssw.zpulse_ack");
-constexpr std::uint32_t kErrClearAck = mask32("ncservo.ssw.err_clear_ack");
-constexpr std::uint32_t kServoErrors = mask32("ncservo.sew.servo_errors");
-constexpr std::uint32_t kEcatTimeout = mask32("ncservo.sew.ecat_timeout");
+using namespace bits;
 
 constexpr bool declared(Word w, std::uint64_t bits) {
   return (AxisModel::kReads.bits[static_cast<std::size_t>(w)] & bits) == bits;
@@ -196,7 +185,7 @@ void AxisModel::observeOutputs(const PdoValues& values, const Stamp& now) {
   previous_se_ = se_.value;
   // docs/timing.md#rule-time: an axis first seen with SE 0x2 is taken as validly enabled.
   if (se == kSeEnable) {
-    if (first || previous_se_ == kSeArmed) {
+    if (first || previous_se_ == kSePrepare) {
       valid_enable_ = true;
     } else if (previous_se_ != kSeEnable) {
       illegal_enable_edge_ = true;

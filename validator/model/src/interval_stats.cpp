@@ -13,13 +13,18 @@ std::int64_t IntervalStats::bucketOf(std::int64_t ns) const {
 void IntervalStats::add(std::int64_t interval_ns) {
   max_ns_ = count_ == 0 ? interval_ns : std::max(max_ns_, interval_ns);
   const std::int64_t bucket = bucketOf(interval_ns);
-  auto [it, inserted] = buckets_.try_emplace(bucket, 0);
-  ++it->second;
-  if (count_ == 0) {
-    median_ = it;
-    below_median_ = 0;
-  } else if (bucket < median_->first) {
-    ++below_median_;
+  // A steady cycle's intervals mostly fall in the median's bucket: no look-up for them.
+  if (count_ != 0 && bucket == median_->first) {
+    ++median_->second;
+  } else {
+    auto [it, inserted] = buckets_.try_emplace(bucket, 0);
+    ++it->second;
+    if (count_ == 0) {
+      median_ = it;
+      below_median_ = 0;
+    } else if (bucket < median_->first) {
+      ++below_median_;
+    }
   }
   ++count_;
   rebalance();

@@ -1,14 +1,11 @@
 #include "ncservo/protocol/drive_state.hpp"
 
+#include "ncservo/protocol/word_bits.hpp"
+
 namespace ncservo {
 
 namespace {
-constexpr std::uint32_t kServoErrors = mask32("ncservo.sew.servo_errors");
-constexpr std::uint32_t kServoEn = mask32("ncservo.ssw.servo_en");
-constexpr std::uint32_t kPulseEnabled = mask32("ncservo.ssw.pulse_enabled");
-constexpr std::uint32_t kServoRdy = mask32("ncservo.ssw.servo_rdy");
-constexpr std::uint32_t kEmgon = mask32("ncservo.scw.emgon");
-constexpr std::uint32_t kBrake = mask32("ncservo.scw.brake");
+using namespace bits;
 }  // namespace
 
 const char* driveStateName(DriveState state) {

@@ -8,10 +8,12 @@
 #include <cstring>
 #include <utility>
 
+#include "ncservo/protocol/word_bits.hpp"
+
 namespace ncservo {
 
 namespace {
-constexpr std::uint32_t kIncrementalEncoder = mask32("ncservo.ssw.incremental");
+using namespace bits;
 constexpr const FieldDef& kMsgCodeField = field("ncservo.msg_code");
 
 std::int64_t signExtend(std::uint64_t raw, unsigned bits) {
@@ -60,7 +62,7 @@ bool fieldApplies(const FieldDef& field, const PdoValues& values) {
     case FieldWhen::Always:
       return true;
     case FieldWhen::IncrementalEncoder:
-      return (values.ssw() & kIncrementalEncoder) != 0;
+      return (values.ssw() & kIncremental) != 0;
   }
   return false;
 }

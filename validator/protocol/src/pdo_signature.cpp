@@ -3,14 +3,12 @@
 #include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"
+#include "ncservo/protocol/word_bits.hpp"
 
 namespace ncservo {
 
 namespace {
-
-constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
-constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
-constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
+using namespace bits;
 
 std::uint32_t word32(const std::uint8_t* pdo, Word word) {
   return static_cast<std::uint32_t>(loadLe<4>(pdo + wordOffset(word)));

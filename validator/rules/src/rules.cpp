@@ -11,17 +11,13 @@
 #include "ncservo/model/al_tracker.hpp"
 #include "ncservo/model/axis_model.hpp"
 #include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/word_bits.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo {
 
 namespace {
-constexpr std::uint32_t kServoErrors = mask32("ncservo.sew.servo_errors");
-constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
-constexpr std::uint32_t kSswReserved = mask32("ncservo.ssw.reserved");
-constexpr std::uint32_t kScwReserved = mask32("ncservo.scw.reserved");
-constexpr std::uint32_t kIncremental = mask32("ncservo.ssw.incremental");
-constexpr std::uint32_t kNoEncoder = mask32("ncservo.ssw.no_encoder");
+using namespace bits;
 
 std::int64_t ms(const RuleSettings& s, Timeout t) {
   return s.timeoutNs(t) / 1'000'000;
