@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Two builds of ncservo on the same capture, run by run in turn (a busy machine's load falls on
 # both alike): the new build's frame rate as a ratio of the old one's, the median of the run
-# pairs' ratios with the lowest and highest. For "no slower than before" goals.
+# pairs' ratios with the lowest and highest, by wall time and by CPU time (user + system, which a
+# busy machine's other processes disturb less). For "no slower than before" goals.
 #
 # Usage: tests/bench/compare_builds.sh OLD_NCSERVO NEW_NCSERVO [CAPTURE]
 # Env:   NCSERVO_BENCH_RUNS    run pairs (default 7)
@@ -25,22 +26,28 @@ if [ -z "$capture" ]; then
   python3 "$root/tests/tools/gen_capture.py" --axes 8 --seed 3 --cycles "$cycles" \
     --enable-by $((cycles / 10 < 2048 ? cycles / 10 : 2048)) -o "$capture" >/dev/null
 fi
-seconds() {  # BINARY: wall seconds of one run
-  local start end
-  start=$(date +%s.%N)
-  "$1" "${args[@]}" "$capture" >/dev/null 2>&1 || [ $? -le 4 ]
-  end=$(date +%s.%N)
-  echo "$end - $start" | bc -l
+seconds() {  # BINARY: "WALL CPU" seconds of one run
+  local TIMEFORMAT='%3R %3U %3S' times
+  times=$({ time "$1" "${args[@]}" "$capture" >/dev/null 2>&1 || [ $? -le 4 ]; } 2>&1)
+  read -r wall user sys <<<"$times"
+  echo "$wall $(echo "$user + $sys" | bc -l)"
 }
 "$old" "${args[@]}" "$capture" >/dev/null 2>&1 || true  # page cache
-ratios=()
+wall_ratios=() cpu_ratios=()
 for ((i = 0; i < runs; i++)); do
-  t_old=$(seconds "$old")
-  t_new=$(seconds "$new")
-  ratios+=("$(echo "$t_old / $t_new" | bc -l)")
+  read -r wall_old cpu_old <<<"$(seconds "$old")"
+  read -r wall_new cpu_new <<<"$(seconds "$new")"
+  wall_ratios+=("$(echo "$wall_old / $wall_new" | bc -l)")
+  cpu_ratios+=("$(echo "$cpu_old / $cpu_new" | bc -l)")
 done
-sorted=$(printf '%s\n' "${ratios[@]}" | sort -g)
-median=$(echo "$sorted" | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}')
-printf 'frame rate new/old: %.3fx (median of %d run pairs; lowest %.3f, highest %.3f; load %s)\n' \
-  "$median" "$runs" "$(echo "$sorted" | head -1)" "$(echo "$sorted" | tail -1)" \
-  "$(cut -d' ' -f1 /proc/loadavg)"
+summary() {  # WHAT RATIO...: median, lowest and highest
+  local what=$1 sorted median
+  shift
+  sorted=$(printf '%s\n' "$@" | sort -g)
+  median=$(echo "$sorted" | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}')
+  printf 'frame rate new/old by %s: %.3fx (median of %d run pairs; lowest %.3f, highest %.3f)\n' \
+    "$what" "$median" "$runs" "$(echo "$sorted" | head -1)" "$(echo "$sorted" | tail -1)"
+}
+summary "wall time" "${wall_ratios[@]}"
+summary "CPU time" "${cpu_ratios[@]}"
+echo "load $(cut -d' ' -f1 /proc/loadavg)"
