@@ -117,6 +117,15 @@ void CapturePipeline::endLearning() {
   decided();
 }
 
+bool CapturePipeline::structureOnly(std::uint16_t axis) const {
+  const std::optional<InferenceResult>& inferred = window_.inference();
+  const bool layout_inferred =
+      validator_ ? validator_->decoder().source() == LayoutSource::Inferred
+                 : layout().explicit_source == LayoutSource::Inferred && !layout().axes.empty();
+  return layout_inferred && inferred && axis < inferred->axes.size() &&
+         inferred->axes[axis].evidence.structure_only;
+}
+
 void CapturePipeline::finish() {
   endLearning();
   started();

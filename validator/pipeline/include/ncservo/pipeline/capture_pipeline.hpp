@@ -110,6 +110,9 @@ class CapturePipeline {
   // The layout decided and what the inference found, once no longer learning.
   const DecoderOptions& layout() const { return window_.options(); }
   const std::optional<InferenceResult>& inference() const { return window_.inference(); }
+  // Whether `axis` of the layout was inferred from the PDO structure alone, no handshake
+  // confirming it (docs/layout.md): what every view of its findings says.
+  bool structureOnly(std::uint16_t axis) const;
   // A configured or ENI layout whose data does not look like the protocol's PDOs: one line per
   // axis (docs/layout.md#a-layout-that-does-not-fit), after finish().
   const std::vector<std::string>& layoutWarnings() const { return layout_warnings_; }
