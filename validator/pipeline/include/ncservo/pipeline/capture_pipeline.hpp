@@ -16,8 +16,10 @@
 #include "ncservo/base/byte_reader.hpp"
 #include "ncservo/base/error.hpp"
 #include "ncservo/layout/decoder.hpp"
+#include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_fit.hpp"
 #include "ncservo/layout/layout_window.hpp"
+#include "ncservo/model/bus_model.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -44,6 +46,12 @@ struct TimeWindow {
 Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s);
 // "--from 1.5 --to 2", "--from 1.5", for messages.
 std::string describeTimeWindow(const TimeWindow& window);
+
+// An ENI whose tasks' cycle times the capture does not bear out (docs/layout.md#eni-cycle-times):
+// one line per cyclic frame of the ENI whose frame in the capture (one sharing a command, address
+// and length) repeats at a cycle more than a tenth off its task's <CycleTime>.
+std::vector<std::string> eniCycleWarnings(const std::vector<EniCyclicFrame>& eni,
+                                          const std::vector<CyclicFrameSummary>& seen);
 
 struct CaptureRun {
   std::uint64_t records = 0;                  // read, of any kind
