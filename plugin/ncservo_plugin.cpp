@@ -31,6 +31,7 @@
 #include "ncservo/base/text.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/eni.hpp"
+#include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/model/timing_text.hpp"
 #include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/protocol/fields.hpp"
@@ -89,6 +90,7 @@ struct WordItems {
 WordItems word_items[kWordCount];
 expert_field ei_region_malformed = EI_INIT;
 expert_field ei_layout_learning = EI_INIT;
+expert_field ei_structure_only = EI_INIT;
 expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
 const char* pref_config_path = "";
@@ -143,6 +145,8 @@ enum AxisFlags : guint8 {
   kRxMalformed = 4,
   kTxMalformed = 8,
   kHasState = 16,
+  // The axis's layout came from the PDO structure alone, no handshake confirming it.
+  kStructureOnly = 32,
 };
 struct AxisRecord {
   guint16 axis;
@@ -538,10 +542,10 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
     const std::optional<DriveState>& state = view.states[i];
     AxisRecord& r = axes[i];
     r.axis = placement.axis;
-    r.flags =
-        static_cast<guint8>((placement.has_rx ? kHasRx : 0) | (placement.has_tx ? kHasTx : 0) |
-                            (placement.rx_malformed ? kRxMalformed : 0) |
-                            (placement.tx_malformed ? kTxMalformed : 0) | (state ? kHasState : 0));
+    r.flags = static_cast<guint8>(
+        (placement.has_rx ? kHasRx : 0) | (placement.has_tx ? kHasTx : 0) |
+        (placement.rx_malformed ? kRxMalformed : 0) | (placement.tx_malformed ? kTxMalformed : 0) |
+        (state ? kHasState : 0) | (g_pipeline->structureOnly(placement.axis) ? kStructureOnly : 0));
     r.state = state ? static_cast<guint8>(*state) : 0;
     r.rx_offset = static_cast<guint32>(placement.rx_offset);
     r.tx_offset = static_cast<guint32>(placement.tx_offset);
@@ -990,12 +994,13 @@ void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, 
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
   const auto& layer = *static_cast<const LayerData*>(data);
   const FrameRecord& record = *layer.record;
-  // A malformed region's expert info, and a held frame's note, need an item to be found by
-  // their filters.
-  const bool protocol_item = protocolWanted(tree) ||
-                             (tree != nullptr && layer.axis != nullptr &&
-                              (layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0) ||
-                             (tree != nullptr && record.held);
+  // A malformed region's expert info, a structure-only layout's note and a held frame's note
+  // need an item to be found by their filters.
+  const bool protocol_item =
+      protocolWanted(tree) ||
+      (tree != nullptr && layer.axis != nullptr &&
+       (layer.axis->flags & (kRxMalformed | kTxMalformed | kStructureOnly)) != 0) ||
+      (tree != nullptr && record.held);
   proto_item* root = nullptr;
   proto_tree* layer_tree = tree;
   guint start = 0;
@@ -1027,6 +1032,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
                              static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
                              rx ? r.rx_offset : r.tx_offset);
     }
+    if (r.flags & kStructureOnly) expert_add_info(pinfo, root, &ei_structure_only);
   } else if (protocol_item) {
     root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
@@ -1046,6 +1052,9 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   if (record.held) expert_add_info(pinfo, nullptr, &ei_layout_learning);
+  for (guint a = 0; a < record.axis_count; ++a) {
+    if (record.axes[a].flags & kStructureOnly) expert_add_info(pinfo, nullptr, &ei_structure_only);
+  }
   for (guint i = 0; i < record.finding_count; ++i) {
     expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);
   }
@@ -1159,6 +1168,8 @@ void registerProtocol() {
       {&ei_layout_learning,
        {"ncservo.layout_learning", PI_UNDECODED, PI_CHAT,
         "layout being learned: `tshark -2` or the GUI decodes this frame", EXPFILL}},
+      {&ei_structure_only,
+       {"ncservo.structure_only", PI_ASSUMPTION, PI_NOTE, kStructureOnlyNote, EXPFILL}},
   };
   expert_module_t* expert = expert_register_protocol(proto_ncservo);
   expert_register_field_array(expert, ei, static_cast<int>(std::size(ei)));

@@ -9,8 +9,8 @@
 # - `tshark -2` with the plugin shows the findings validate reports, on the same frames, and the
 #   same as with the exact configuration (ncservo.config).
 # And an idle 4-axis capture (nothing enabled anywhere) decodes all 4 axes (validate, decode and
-# tshark -2), says they were found from the structure only (text and JSON report), and yields no
-# finding.
+# tshark -2), says they were found from the structure only (text and JSON report, an expert note
+# in tshark -2), and yields no finding.
 # SHAPE... (optional): run only the cases whose names are given.
 SRC=$1 BUILD=$2
 shift 2
@@ -250,6 +250,13 @@ print(len({json.loads(l).get("axis") for l in open(sys.argv[1]) if l.strip()} - 
     -e ncservo.axis >"$dir/plugin-axes.txt" 2>/dev/null || true
   axes=$(tr ',' '\n' <"$dir/plugin-axes.txt" | awk 'NF' | sort -u | wc -l)
   [ "$axes" = 4 ] || { case_failed "$name" "idle: tshark -2 decodes $axes axes, expected 4"; ok=1; }
+  # Wireshark says it too: an expert note on each axis's layer (docs/plugin.md).
+  "$TSHARK" "$PLUGIN" -2 -r "$cap" -Y ncservo.structure_only -T fields -E occurrence=a \
+    -E aggregator=, -e ncservo.axis -e _ws.expert.message >"$dir/plugin-notes.txt" 2>&1 || true
+  axes=$(cut -f1 "$dir/plugin-notes.txt" | tr ',' '\n' | awk 'NF' | sort -u | wc -l)
+  [ "$axes" = 4 ] && grep -q 'layout inferred from the PDO structure alone' "$dir/plugin-notes.txt" ||
+    { case_failed "$name" "idle: tshark -2 notes the structure-only layout on $axes axes, expected 4: \
+$(head -c 200 "$dir/plugin-notes.txt")"; ok=1; }
   grep -q '"rule"' "$dir/free.json" &&
     { case_failed "$name" "idle: findings: $(grep -o '"rule":"[^"]*"' "$dir/free.json" | sort | uniq -c | head -3 | tr '\n' ' ')"; ok=1; }
   [ $ok = 0 ] && passes+=("$name (idle: 4 axes, structure only)")

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # layout_fit.sh SRC BUILD
 # A configured layout that does not fit says so (docs/layout.md#a-layout-that-does-not-fit): one
-# axis's inputs two bytes off give exactly one warning, naming that axis, in the text and JSON
-# reports and on standard error; the exact configuration gives none.
+# axis's inputs two bytes off give exactly one warning, naming that axis, in the text, JSON, JSON
+# Lines, SARIF and JUnit reports and on standard error; the exact configuration gives none.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 "$NCSERVO" simulate -o "$WORK/c.pcap" --layout-config "$WORK/exact.toml" 2>/dev/null
@@ -34,4 +34,25 @@ import json, sys
 w = json.load(open(sys.argv[1]))["captures"][0]["layout"]["warnings"]
 assert len(w) == 1 and w[0].startswith("axis1: the data at inputs 0x00010052"), w
 PY
-echo "ok one warning for the axis off by two, none for the exact layout"
+# The other formats carry it too: SARIF a notification, JUnit a test case, JSON Lines a line.
+"$NCSERVO" validate --fail-on never --config "$WORK/off.toml" --format jsonl "$WORK/c.pcap" \
+  --report sarif:"$WORK/off.sarif" --report junit:"$WORK/off.xml" >"$WORK/off.jsonl" 2>/dev/null ||
+  fail "validate --report: exit $?"
+python3 - "$WORK/off.sarif" "$WORK/off.xml" "$WORK/off.jsonl" <<'PY' || fail "sarif, junit, jsonl"
+import json, sys, xml.etree.ElementTree as ET
+want = "axis1: the data at inputs 0x00010052"
+notes = json.load(open(sys.argv[1]))["runs"][0]["invocations"][0].get("toolExecutionNotifications", [])
+fits = [n for n in notes if n["descriptor"]["id"] == "LAYOUT-FIT"]
+assert len(fits) == 1 and fits[0]["level"] == "warning" and want in fits[0]["message"]["text"], notes
+cases = [c for c in ET.parse(sys.argv[2]).iter("testcase") if c.get("name") == "layout fits the data"]
+assert len(cases) == 1 and want in "".join(cases[0].itertext()), [ET.tostring(c) for c in cases]
+lines = [json.loads(l) for l in open(sys.argv[3])]
+warnings = [l["layout"]["warnings"] for l in lines if "layout" in l]
+assert len(warnings) == 1 and len(warnings[0]) == 1 and warnings[0][0].startswith(want), warnings
+PY
+# And nothing of it for the exact layout.
+"$NCSERVO" validate --config "$WORK/exact.toml" --format jsonl "$WORK/c.pcap" \
+  --report sarif:"$WORK/exact.sarif" --report junit:"$WORK/exact.xml" >"$WORK/exact.jsonl" 2>/dev/null
+! grep -q 'LAYOUT-FIT\|layout fits the data\|"warnings"' "$WORK/exact.sarif" "$WORK/exact.xml" \
+  "$WORK/exact.jsonl" || fail "exact configuration: a layout warning in SARIF, JUnit or JSON Lines"
+echo "ok one warning for the axis off by two (text, JSON, JSON Lines, SARIF, JUnit), none for the exact layout"

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # report_schemas.sh SRC BUILD: every kind of JUnit and SARIF report `validate` writes (findings,
-# disabled rules, NO SERVO, unreadable and compressed captures, several captures) is valid against
-# the schema its readers use: Jenkins' JUnit XSD (xmllint) and the OASIS SARIF 2.1.0 JSON schema
-# (python3-jsonschema). The schemas are fetched from npm packages into the build tree
-# (tests/tools/fetch_schemas.sh, run by .ci/setup), never kept in the repository.
+# disabled rules, NO SERVO, a layout that does not fit, unreadable and compressed captures, several
+# captures) is valid against the schema its readers use: Jenkins' JUnit XSD (xmllint) and the OASIS
+# SARIF 2.1.0 JSON schema (python3-jsonschema). The schemas are fetched from npm packages into the
+# build tree (tests/tools/fetch_schemas.sh, run by .ci/setup), never kept in the repository.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 schemas="$BUILD/schemas"
@@ -18,12 +18,24 @@ gzip -c "$WORK/nano.pcapng" >"$WORK/nano.pcapng.gz"
 python3 "$GEN" --axes 2 --cycles 200 -o "$WORK/clean.pcap"
 printf 'not a capture\n' >"$WORK/text.pcap"
 printf '[[axis]]\nname = "ghost"\noutputs = 0x00090000\ninputs = 0x00090028\n' >"$WORK/ghost.toml"
+# A layout whose second axis's inputs are two bytes off (docs/layout.md#a-layout-that-does-not-fit).
+"$NCSERVO" simulate -o "$WORK/fit.pcap" --layout-config "$WORK/fit.toml" 2>/dev/null
+python3 - "$WORK/fit.toml" "$WORK/misfit.toml" <<'PY'
+import sys, tomllib
+axes = tomllib.load(open(sys.argv[1], "rb"))["axis"]
+with open(sys.argv[2], "w") as out:
+    for i, a in enumerate(axes):
+        out.write(f'[[axis]]\nname = "{a["name"]}"\noutputs = {a["outputs"]:#x}\n'
+                  f'inputs = {a["inputs"] + (2 if i == 1 else 0):#x}\n')
+PY
 
 cases=(  # NAME|ARGS (captures from $WORK)
   "findings|faults.pcap nano.pcapng nano.pcapng.gz"
   "disabled|faults.pcap --disable SE-001,COM-004 --fail-on warning"
   "clean|clean.pcap"
   "no_servo|clean.pcap --config ghost.toml"
+  "misfit|fit.pcap --config misfit.toml"
+  "misfit_failing|fit.pcap --config misfit.toml --fail-on warning"
   "unreadable|text.pcap missing.pcap faults.pcap"
 )
 n=0
@@ -45,6 +57,10 @@ for e in errors[:5]:
     print(list(e.path), e.message[:300], file=sys.stderr)
 sys.exit(1 if errors else 0)
 PY
+  if [[ $name == misfit* ]]; then
+    grep -q LAYOUT-FIT "$WORK/$name.sarif" && grep -q 'layout fits the data' "$WORK/$name.xml" ||
+      fail "$name: no layout warning in SARIF or JUnit"
+  fi
   n=$((n + 1))
 done
 echo "report_schemas: $n runs' JUnit and SARIF valid against Jenkins' XSD and SARIF 2.1.0"

@@ -47,6 +47,14 @@ const EniCase kEniCases[] = {
      "<DataLength>50</DataLength><InputOffs>26</InputOffs><OutputOffs>26</OutputOffs></Cmd>"
      "</Frame></Cyclic></Config></EtherCATConfig>",
      1, 0, ""},
+    {"one servo in the LRW of a second task",
+     "<EtherCATConfig><Config>\n%s<Cyclic><CycleTime>10000</CycleTime><Frame><Cmd><Cmd>12</Cmd>"
+     "<Addr>#x00020000</Addr><DataLength>4</DataLength><InputOffs>2074</InputOffs>"
+     "<OutputOffs>2074</OutputOffs></Cmd></Frame></Cyclic><Cyclic><CycleTime>1000</CycleTime>"
+     "<Frame><Cmd><Cmd>12</Cmd><Addr>#x00010000</Addr><DataLength>50</DataLength>"
+     "<InputOffs>26</InputOffs><OutputOffs>26</OutputOffs></Cmd></Frame></Cyclic></Config>"
+     "</EtherCATConfig>",
+     1, 0, ""},
     {"not XML", "<EtherCATConfig>\n<Config>\n</EtherCATConfig>", 0, 3, "not well-formed XML"},
     {"not an ENI", "<EtherCATInfo/>", 0, 0, "not an ENI file"},
     {"a command without its address",
@@ -85,6 +93,23 @@ TEST_P(EniFile, ParsesOrNamesTheLine) {
   EXPECT_EQ(r.error().text().rfind("eni.xml", 0), 0u);
 }
 INSTANTIATE_TEST_SUITE_P(Cases, EniFile, ::testing::ValuesIn(kEniCases), test::rowName<EniCase>);
+
+// Each task's frames carry that task's <CycleTime> (docs/layout.md#eni-cycle-times).
+TEST(EniTasks, EachFrameHasItsTasksCycleTime) {
+  sim::SimOptions options;
+  options.axes = 2;
+  options.io_slaves = 2;
+  options.io_task_us = 10000;
+  options.duration_s = 1.0;
+  ASSERT_EQ(test::statusText(sim::resolveOptions(options)), "");
+  sim::Simulator simulator(options);
+  const Result<EniLayout> eni = parseEni(simulator.eni(), "sim.xml");
+  ASSERT_TRUE(eni.has_value()) << eni.error().text();
+  ASSERT_EQ(eni->frames.size(), 2u);
+  EXPECT_EQ(eni->frames[0].cycle_us, 1000u);
+  EXPECT_EQ(eni->frames[1].cycle_us, 10000u);
+  EXPECT_EQ(eni->axes.size(), 2u);
+}
 
 }  // namespace
 }  // namespace ncservo

@@ -479,10 +479,12 @@ struct CaptureOutput {
 };
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
+// `eni_frames`: the cyclic frames of --eni, whose cycle times the capture is held against.
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
-                    const RuleSettings& settings, TimestampMode timestamps,
-                    const TimeWindow& time_window, const cli::ReportWriter& writer,
-                    const CaptureOutput& output, cli::CaptureReport& report) {
+                    const std::vector<EniCyclicFrame>* eni_frames, const RuleSettings& settings,
+                    TimestampMode timestamps, const TimeWindow& time_window,
+                    const cli::ReportWriter& writer, const CaptureOutput& output,
+                    cli::CaptureReport& report) {
   report.path = path;
   if (output.live != nullptr) output.live->beginCapture(report);
   auto opened = CaptureReader::open(path);
@@ -522,6 +524,11 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   report.frames = run.records;
   report.late_layout = pipeline.lateLayout();
   report.layout_warnings = pipeline.layoutWarnings();
+  if (eni_frames != nullptr) {
+    for (std::string& warning : eniCycleWarnings(*eni_frames, validator.bus().cyclicFrames())) {
+      report.layout_warnings.push_back(std::move(warning));
+    }
+  }
   for (const std::string& warning : report.layout_warnings) {
     fmt::print(output.messages, "ncservo: {}: layout does not fit: {}\n", path, warning);
   }
@@ -674,13 +681,15 @@ int runValidate(const ValidateArgs& o) {
   }
   const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
   const DecoderOptions layout = decoderOptions(*files, o.layout);
+  const std::vector<EniCyclicFrame>* eni_frames = files->eni ? &files->eni->frames : nullptr;
   std::vector<cli::CaptureReport> reports(o.captures.size());
   int rc = kExitOk;
   const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
   if (jobs <= 1 || o.captures.size() <= 1) {
     for (std::size_t i = 0; i < o.captures.size(); ++i) {
-      rc = combine(rc, validateCapture(o.captures[i], layout, settings, timestamps, *time_window,
-                                       **writer, {writer->get(), stderr}, reports[i]));
+      rc =
+          combine(rc, validateCapture(o.captures[i], layout, eni_frames, settings, timestamps,
+                                      *time_window, **writer, {writer->get(), stderr}, reports[i]));
     }
   } else {
     struct Validated {
@@ -691,8 +700,8 @@ int runValidate(const ValidateArgs& o) {
       char* buffer = nullptr;
       std::size_t size = 0;
       std::FILE* messages = open_memstream(&buffer, &size);
-      const int status = validateCapture(o.captures[i], layout, settings, timestamps, *time_window,
-                                         **writer, {nullptr, messages}, reports[i]);
+      const int status = validateCapture(o.captures[i], layout, eni_frames, settings, timestamps,
+                                         *time_window, **writer, {nullptr, messages}, reports[i]);
       std::fclose(messages);
       Validated validated{status, std::string(buffer, size)};
       std::free(buffer);

@@ -14,7 +14,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <optional>
+#include <vector>
 
 namespace ncservo {
 
@@ -67,6 +69,7 @@ constexpr std::uint32_t kPcapNanoMagic = 0xA1B23C4D;
 constexpr std::uint32_t kSectionHeaderBlock = 0x0A0D0D0A;
 constexpr std::uint32_t kByteOrderMagic = 0x1A2B3C4D;
 constexpr std::uint32_t kInterfaceBlock = 1;
+constexpr std::uint32_t kStatisticsBlock = 5;
 constexpr std::uint16_t kOptionEnd = 0;
 constexpr std::uint16_t kOptionTsresol = 9;
 constexpr int kMicrosecondDigits = 6;
@@ -109,6 +112,99 @@ const char* compressionName(Compression compression) {
   }
   return "none";
 }
+
+namespace {
+
+// Follows the pcapng blocks of a stream as it is read, in pieces of any size (each block: type,
+// total length, body, total length again; a section header gives the byte order), and hands each
+// interface statistics block whole to its sink: a compressed or piped pcapng cannot be read
+// again at its blocks' places, as a plain file is. Other blocks are skipped by their length;
+// anything that is no pcapng (a pcap) or a block that makes no sense ends the walk.
+class PcapngBlockWalker {
+ public:
+  using Sink = std::function<void(const std::uint8_t* block, std::size_t length, bool big)>;
+  explicit PcapngBlockWalker(Sink sink) : sink_(std::move(sink)) {}
+
+  void feed(const std::uint8_t* data, std::size_t size) {
+    while (size > 0 && !lost_) {
+      if (skip_ > 0) {
+        const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(skip_, size));
+        skip_ -= n;
+        data += n;
+        size -= n;
+        continue;
+      }
+      const std::size_t n = std::min(want_ - block_.size(), size);
+      block_.insert(block_.end(), data, data + n);
+      data += n;
+      size -= n;
+      if (block_.size() == want_) advance();
+    }
+  }
+
+ private:
+  static constexpr std::size_t kHeader = 8;         // type and total length
+  static constexpr std::size_t kSectionHead = 12;   // and the byte-order magic
+  static constexpr std::size_t kMaxKept = 1 << 16;  // a statistics block is far smaller
+
+  // block_ holds want_ bytes: a block's head, or a whole statistics block.
+  void advance() {
+    if (body_) {
+      sink_(block_.data(), block_.size(), big_);
+      body_ = false;
+      restart();
+      return;
+    }
+    // The section header's type reads the same in either byte order.
+    const bool section = load32(block_.data(), false) == kSectionHeaderBlock;
+    if (!section && !started_) {
+      lost_ = true;
+      return;
+    }
+    if (section && block_.size() < kSectionHead) {
+      want_ = kSectionHead;
+      return;
+    }
+    if (section) {
+      if (load32(block_.data() + kHeader, false) == kByteOrderMagic) {
+        big_ = false;
+      } else if (load32(block_.data() + kHeader, true) == kByteOrderMagic) {
+        big_ = true;
+      } else {
+        lost_ = true;
+        return;
+      }
+      started_ = true;
+    }
+    const std::uint32_t length = load32(block_.data() + 4, big_);
+    if (length < kSectionHead || length % 4 != 0 || length < block_.size()) {
+      lost_ = true;
+      return;
+    }
+    if (!section && load32(block_.data(), big_) == kStatisticsBlock && length <= kMaxKept) {
+      body_ = true;
+      want_ = length;
+      return;
+    }
+    skip_ = length - block_.size();
+    restart();
+  }
+  void restart() {
+    block_.clear();
+    want_ = kHeader;
+  }
+
+  Sink sink_;
+  std::vector<std::uint8_t> block_;
+  std::size_t want_ = kHeader;
+  std::uint64_t skip_ = 0;  // of the block being passed over
+  bool body_ = false;       // block_ is collecting a statistics block
+  bool big_ = false;
+  bool started_ = false;  // a section header was seen
+  bool lost_ = false;
+};
+
+}  // namespace
 
 // The capture's bytes as libpcap reads them: the bytes already read to recognise the format,
 // then the rest of the file, decompressed on the fly in fixed-size buffers (constant memory).
@@ -161,18 +257,28 @@ class DecompressedStream {
   // What went wrong, if reading stopped before the end of the compressed data.
   const std::optional<std::string>& error() const { return error_; }
 
+  // The bytes read from here on are followed as pcapng blocks, each interface statistics block
+  // given to `sink`.
+  void followBlocks(PcapngBlockWalker::Sink sink) { walker_.emplace(std::move(sink)); }
+
  private:
   static constexpr std::size_t kInputSize = 1 << 17;
   static constexpr std::size_t kOutputSize = 1 << 17;
 
   ssize_t read(char* out, std::size_t size) {
+    ssize_t got = 0;
     if (ahead_pos_ < ahead_.size()) {
       const std::size_t n = std::min(size, ahead_.size() - ahead_pos_);
       std::memcpy(out, ahead_.data() + ahead_pos_, n);
       ahead_pos_ += n;
-      return static_cast<ssize_t>(n);
+      got = static_cast<ssize_t>(n);
+    } else {
+      got = decodeInto(out, size);
     }
-    return decodeInto(out, size);
+    if (walker_ && got > 0) {
+      walker_->feed(reinterpret_cast<const std::uint8_t*>(out), static_cast<std::size_t>(got));
+    }
+    return got;
   }
 
   ssize_t decodeInto(char* out, std::size_t size) {
@@ -276,6 +382,7 @@ class DecompressedStream {
   std::optional<std::string> error_;
   std::string ahead_;  // peek()'s bytes
   std::size_t ahead_pos_ = 0;
+  std::optional<PcapngBlockWalker> walker_;
 };
 
 CaptureReader::~CaptureReader() {
@@ -330,6 +437,12 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
     reader->pcapng_format_ =
         ahead.size() >= 4 &&
         load32(reinterpret_cast<const std::uint8_t*>(ahead.data()), false) == kSectionHeaderBlock;
+    // Its interface statistics as they pass, read as a plain file's are (docs/timing.md).
+    if (reader->pcapng_format_) {
+      CaptureReader* self = reader.get();
+      reader->stream_->followBlocks([self](const std::uint8_t* block, std::size_t length,
+                                           bool big) { self->readStatistics(block, length, big); });
+    }
     pcap_file = reader->stream_->file();
     if (pcap_file == nullptr) return cannot(std::strerror(errno));
   } else {
@@ -394,13 +507,39 @@ std::optional<CaptureDrops> CaptureReader::drops() const {
   return total;
 }
 
-// pcapng blocks (the pcapng specification): type, total length, body, total length again. An
-// interface statistics block's body: interface id, timestamp (8 bytes), then options of code,
-// length and a value padded to 4 bytes; isb_ifdrop (5) and isb_osdrop (7) are 64-bit counters
-// since the capture started.
-void CaptureReader::scanBlocks(std::uint64_t from, std::uint64_t to) {
-  constexpr std::uint32_t kStatisticsBlock = 5;
+// An interface statistics block (the pcapng specification), whole: type, total length, interface
+// id, timestamp (8 bytes), then options of code, length and a value padded to 4 bytes; isb_ifdrop
+// (5) and isb_osdrop (7) are 64-bit counters since the capture started.
+void CaptureReader::readStatistics(const std::uint8_t* block, std::size_t length, bool big) {
   constexpr std::uint16_t kEndOfOptions = 0, kIfDrop = 5, kOsDrop = 7;
+  if (length < 24) return;
+  const auto load64 = [&](const std::uint8_t* p) {
+    const std::uint64_t first = load32(p, big), second = load32(p + 4, big);
+    return big ? first << 32 | second : second << 32 | first;
+  };
+  const std::size_t end = length - 4;  // before the trailing length
+  InterfaceDrops drops{load32(block + 8, big), std::nullopt, std::nullopt};
+  for (std::size_t option = 20; option + 4 <= end;) {
+    const std::uint16_t code = load16(block + option, big);
+    const std::uint16_t size = load16(block + option + 2, big);
+    if (code == kEndOfOptions || option + 4 + size > end) break;
+    if (size == 8 && code == kIfDrop) drops.interface_dropped = load64(block + option + 4);
+    if (size == 8 && code == kOsDrop) drops.system_dropped = load64(block + option + 4);
+    option += 4 + (size + 3u) / 4 * 4;
+  }
+  if (!drops.interface_dropped && !drops.system_dropped) return;
+  const auto same =
+      std::find_if(interface_drops_.begin(), interface_drops_.end(),
+                   [&](const InterfaceDrops& d) { return d.interface == drops.interface; });
+  if (same != interface_drops_.end()) {
+    *same = drops;
+  } else if (interface_drops_.size() < 64) {
+    interface_drops_.push_back(drops);
+  }
+}
+
+// The blocks in [from, to) of a plain pcapng file, read again at their place.
+void CaptureReader::scanBlocks(std::uint64_t from, std::uint64_t to) {
   constexpr std::uint64_t kMaxScanned = 1 << 20;  // blocks between records are small
   if (to <= from || to - from > kMaxScanned) return;
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(to - from));
@@ -409,37 +548,12 @@ void CaptureReader::scanBlocks(std::uint64_t from, std::uint64_t to) {
     return;
   }
   const bool big = (htonl(1) == 1) != (pcap_is_swapped(handle_) == 1);
-  const auto load64 = [&](const std::uint8_t* p) {
-    const std::uint64_t first = load32(p, big), second = load32(p + 4, big);
-    return big ? first << 32 | second : second << 32 | first;
-  };
   std::size_t at = 0;
   while (at + 12 <= bytes.size()) {
     const std::uint32_t type = load32(&bytes[at], big);
     const std::uint32_t length = load32(&bytes[at + 4], big);
     if (length < 12 || length % 4 != 0 || length > bytes.size() - at) return;
-    const std::size_t end = at + length - 4;  // before the trailing length
-    if (type == kStatisticsBlock && length >= 24) {
-      InterfaceDrops drops{load32(&bytes[at + 8], big), std::nullopt, std::nullopt};
-      for (std::size_t option = at + 20; option + 4 <= end;) {
-        const std::uint16_t code = load16(&bytes[option], big);
-        const std::uint16_t size = load16(&bytes[option + 2], big);
-        if (code == kEndOfOptions || option + 4 + size > end) break;
-        if (size == 8 && code == kIfDrop) drops.interface_dropped = load64(&bytes[option + 4]);
-        if (size == 8 && code == kOsDrop) drops.system_dropped = load64(&bytes[option + 4]);
-        option += 4 + (size + 3u) / 4 * 4;
-      }
-      if (drops.interface_dropped || drops.system_dropped) {
-        const auto same =
-            std::find_if(interface_drops_.begin(), interface_drops_.end(),
-                         [&](const InterfaceDrops& d) { return d.interface == drops.interface; });
-        if (same != interface_drops_.end()) {
-          *same = drops;
-        } else if (interface_drops_.size() < 64) {
-          interface_drops_.push_back(drops);
-        }
-      }
-    }
+    if (type == kStatisticsBlock) readStatistics(&bytes[at], length, big);
     at += length;
   }
 }

@@ -3,7 +3,9 @@
 //   Slave/Info/{Name, PhysAddr, AutoIncAddr}
 //   Slave/ProcessData/Send|Recv/{BitStart, BitLength}     outputs | inputs, in image bits
 //   Slave/ProcessData/Sm2|Sm3/DefaultSize                   the sync managers' sizes, bytes
+//   Cyclic/CycleTime                                        each task's cycle, µs
 //   Cyclic/Frame/Cmd/{Cmd, Addr, DataLength, OutputOffs, InputOffs, Cnt}
+// Every <Cyclic> element is read: a second task has one of its own.
 // A slave's logical address: for the LRD/LWR/LRW whose image range holds its first byte,
 // Addr + floor(BitStart / 8) - OutputOffs (outputs) or - InputOffs (inputs).
 #include "ncservo/layout/eni.hpp"
@@ -13,6 +15,7 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
+#include <limits>
 #include <pugixml.hpp>
 #include <sstream>
 
@@ -111,21 +114,31 @@ Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
   }
 
   std::vector<Command> commands;
-  for (pugi::xml_node frame : config.child("Cyclic").children("Frame")) {
-    for (pugi::xml_node cmd : frame.children("Cmd")) {
-      auto code = reader.number(cmd, "Cmd", true);
-      if (reader.failed()) return fail(reader.firstError());
-      if (!ecat::isLogical(static_cast<std::uint8_t>(*code))) continue;
-      Command c;
-      c.cmd = static_cast<std::uint8_t>(*code);
-      auto addr = reader.number(cmd, "Addr", true);
-      auto length = reader.number(cmd, "DataLength", true);
-      c.output_offset = reader.number(cmd, "OutputOffs", false);
-      c.input_offset = reader.number(cmd, "InputOffs", false);
-      if (reader.failed()) return fail(reader.firstError());
-      c.address = static_cast<std::uint32_t>(*addr);
-      c.length = *length;
-      commands.push_back(c);
+  for (pugi::xml_node cyclic : config.children("Cyclic")) {
+    const std::optional<std::int64_t> cycle_us = reader.number(cyclic, "CycleTime", false);
+    if (reader.failed()) return fail(reader.firstError());
+    for (pugi::xml_node frame : cyclic.children("Frame")) {
+      EniCyclicFrame& kept = layout.frames.emplace_back();
+      if (cycle_us && *cycle_us > 0 && *cycle_us <= std::numeric_limits<std::uint32_t>::max()) {
+        kept.cycle_us = static_cast<std::uint32_t>(*cycle_us);
+      }
+      for (pugi::xml_node cmd : frame.children("Cmd")) {
+        auto code = reader.number(cmd, "Cmd", true);
+        if (reader.failed()) return fail(reader.firstError());
+        if (!ecat::isLogical(static_cast<std::uint8_t>(*code))) continue;
+        Command c;
+        c.cmd = static_cast<std::uint8_t>(*code);
+        auto addr = reader.number(cmd, "Addr", true);
+        auto length = reader.number(cmd, "DataLength", true);
+        c.output_offset = reader.number(cmd, "OutputOffs", false);
+        c.input_offset = reader.number(cmd, "InputOffs", false);
+        if (reader.failed()) return fail(reader.firstError());
+        c.address = static_cast<std::uint32_t>(*addr);
+        c.length = *length;
+        commands.push_back(c);
+        kept.commands.push_back(
+            {c.cmd, c.address, static_cast<std::uint32_t>(std::max<std::int64_t>(0, c.length))});
+      }
     }
   }
   // The logical address of image byte `byte`, through the command whose range holds it.

@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <tuple>
 #include <utility>
 
@@ -115,6 +117,41 @@ void CapturePipeline::endLearning() {
   if (!window_.learning()) return;
   window_.finish();
   decided();
+}
+
+std::vector<std::string> eniCycleWarnings(const std::vector<EniCyclicFrame>& eni,
+                                          const std::vector<CyclicFrameSummary>& seen) {
+  std::vector<std::string> warnings;
+  for (const EniCyclicFrame& frame : eni) {
+    if (!frame.cycle_us || frame.commands.empty()) continue;
+    const EniCommand& first = frame.commands.front();
+    const auto carries = [&](const CyclicFrameSummary& s) {
+      return std::any_of(s.datagrams.begin(), s.datagrams.end(), [&](const CyclicDatagram& d) {
+        return std::any_of(frame.commands.begin(), frame.commands.end(), [&](const EniCommand& c) {
+          return c.command == d.command && c.address == d.address && c.length == d.length;
+        });
+      });
+    };
+    const auto shown = std::find_if(seen.begin(), seen.end(), carries);
+    if (shown == seen.end() || !shown->cycle_ns) continue;
+    const std::int64_t eni_ns = std::int64_t{*frame.cycle_us} * 1000;
+    if (std::abs(*shown->cycle_ns - eni_ns) * 10 <= eni_ns) continue;
+    warnings.push_back(fmt::format(
+        "the ENI's cyclic frame of {} {:#010x} ({} bytes) has the cycle time {} us of its task; "
+        "the capture shows it every {:.1f} us (docs/layout.md#eni-cycle-times)",
+        ecat::commandName(first.command), first.address, first.length, *frame.cycle_us,
+        static_cast<double>(*shown->cycle_ns) / 1000.0));
+  }
+  return warnings;
+}
+
+bool CapturePipeline::structureOnly(std::uint16_t axis) const {
+  const std::optional<InferenceResult>& inferred = window_.inference();
+  const bool layout_inferred =
+      validator_ ? validator_->decoder().source() == LayoutSource::Inferred
+                 : layout().explicit_source == LayoutSource::Inferred && !layout().axes.empty();
+  return layout_inferred && inferred && axis < inferred->axes.size() &&
+         inferred->axes[axis].evidence.structure_only;
 }
 
 void CapturePipeline::finish() {

@@ -14,9 +14,15 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-// JSON Lines: each capture closes with its timing line; one where not every axis was checked
-// with a line that says so, and so does one with several segments.
+// JSON Lines: each capture closes with its timing line, after a line of its layout's warnings
+// where it does not fit; one where not every axis was checked with a line that says so, and so
+// does one with several segments.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
+  // A layout that does not fit, as JSON's `layout.warnings` (docs/layout.md).
+  if (!r.layout_warnings.empty()) {
+    const Json j{{"capture", r.path}, {"layout", {{"warnings", r.layout_warnings}}}};
+    std::fputs((j.dump() + "\n").c_str(), sink.out);
+  }
   std::fputs((Json{{"capture", r.path}, {"timing", timingJson(r)}}.dump() + "\n").c_str(),
              sink.out);
   if (r.coverage.complete() && r.segment_count <= 1 && r.coverage.not_judged.empty() &&

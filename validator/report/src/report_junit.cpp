@@ -1,4 +1,5 @@
-// `validate --format junit`: one test suite per capture, one test case per rule.
+// `validate --format junit`: one test suite per capture, one test case per rule, and one for a
+// layout that does not fit.
 #include <fmt/format.h>
 
 #include <pugixml.hpp>
@@ -71,6 +72,28 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       }
       node.text() = body.c_str();
     }
+    // A configured or ENI layout that does not fit (docs/layout.md#a-layout-that-does-not-fit):
+    // one more case, failed as a warning finding would be.
+    const bool misfit = !r.layout_warnings.empty();
+    if (misfit) {
+      auto testcase = suite.append_child("testcase");
+      testcase.append_attribute("classname") = (r.path + ".layout").c_str();
+      testcase.append_attribute("name") = "layout fits the data";
+      testcase.append_attribute("time") = "0";
+      std::string body;
+      for (const std::string& warning : r.layout_warnings) body += warning + "\n";
+      const bool failing = !sink.policy.never && Severity::Warning >= sink.policy.fail_on;
+      auto node = testcase.append_child(failing ? "failure" : "system-out");
+      if (failing) {
+        ++failures;
+        node.append_attribute("message") =
+            fmt::format("layout does not fit: {} ax{}", r.layout_warnings.size(),
+                        r.layout_warnings.size() == 1 ? "is" : "es")
+                .c_str();
+        node.append_attribute("type") = "LAYOUT-FIT";
+      }
+      node.text() = body.c_str();
+    }
     if (r.error) {
       auto testcase = suite.append_child("testcase");
       testcase.append_attribute("classname") = r.path.c_str();
@@ -79,7 +102,7 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       error.append_attribute("message") = r.error->c_str();
       ++total_errors;
     }
-    const std::size_t tests = kRules.size() + (r.error ? 1 : 0);
+    const std::size_t tests = kRules.size() + (misfit ? 1 : 0) + (r.error ? 1 : 0);
     suite.append_attribute("tests") = tests;
     suite.append_attribute("failures") = failures;
     suite.append_attribute("errors") = r.error ? 1 : 0;

@@ -1,5 +1,5 @@
 // `validate --format sarif`: SARIF 2.1.0, one run, a result per finding, a notification per
-// capture not read to its end or not fully checked.
+// capture not read to its end or not fully checked and per axis whose layout does not fit.
 #include <fmt/format.h>
 
 #include "report_format.hpp"
@@ -21,7 +21,8 @@ const char* sarifLevel(Severity s) {
 }
 
 // A capture is a notification, not a result (SARIF 2.1.0 §3.58), where it could not be read to its
-// end or not every axis was checked: nothing there was found, nor shown to be right.
+// end, not every axis was checked or an axis's layout does not fit: nothing there was found, nor
+// shown to be right.
 void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_t artifact,
                       Json& notifications) {
   const Json where = {
@@ -31,6 +32,15 @@ void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_
                              {"level", "error"},
                              {"message", {{"text", fmt::format("{}: {}", r.path, *r.error)}}},
                              {"locations", where}});
+  }
+  // A configured or ENI layout that does not fit (docs/layout.md#a-layout-that-does-not-fit):
+  // not a rule's finding, but what makes the axis's findings untrustworthy.
+  for (const std::string& warning : r.layout_warnings) {
+    notifications.push_back(
+        {{"descriptor", {{"id", "LAYOUT-FIT"}}},
+         {"level", "warning"},
+         {"message", {{"text", fmt::format("{}: layout does not fit: {}", r.path, warning)}}},
+         {"locations", where}});
   }
   if (!r.coverage.complete()) {
     notifications.push_back(

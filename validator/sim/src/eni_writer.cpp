@@ -11,7 +11,7 @@
 namespace ncservo::sim {
 
 std::string writeEni(const std::vector<EniSlave>& slaves,
-                     const std::vector<EniCyclicCommand>& commands, std::uint32_t cycle_us) {
+                     const std::vector<EniCyclicCommand>& commands) {
   // Image offsets: each command's data at its own place in the process image, as a frame's
   // first datagram would sit (after the Ethernet, EtherCAT and datagram headers), one region per
   // command.
@@ -62,12 +62,16 @@ std::string writeEni(const std::vector<EniSlave>& slaves,
       }
     }
   }
-  pugi::xml_node cyclic = config.append_child("Cyclic");
-  cyclic.append_child("CycleTime").text().set(cycle_us);
+  pugi::xml_node cyclic;
   pugi::xml_node frame;
   for (std::size_t i = 0; i < commands.size(); ++i) {
     const EniCyclicCommand& c = commands[i];
-    if (i == 0 || c.frame != commands[i - 1].frame) frame = cyclic.append_child("Frame");
+    const bool new_task = i == 0 || c.cycle_us != commands[i - 1].cycle_us;
+    if (new_task) {
+      cyclic = config.append_child("Cyclic");
+      cyclic.append_child("CycleTime").text().set(c.cycle_us);
+    }
+    if (new_task || c.frame != commands[i - 1].frame) frame = cyclic.append_child("Frame");
     pugi::xml_node cmd = frame.append_child("Cmd");
     cmd.append_child("State").text().set("SAFEOP");
     cmd.append_child("State").text().set("OP");

@@ -297,11 +297,12 @@ std::string Simulator::eni() const {
   std::vector<EniCyclicCommand> commands;
   for (std::size_t g = 0; g < segment.groups.size(); ++g) {
     for (const ImageDatagram& dg : segment.groups[g].datagrams) {
-      commands.push_back({dg.command, dg.logical, static_cast<std::uint16_t>(dg.size),
-                          segment.expectedWkc(dg), g});
+      commands.push_back(
+          {dg.command, dg.logical, static_cast<std::uint16_t>(dg.size), segment.expectedWkc(dg), g,
+           static_cast<std::uint32_t>(impl_->o.cycle_us * segment.groups[g].every_cycles)});
     }
   }
-  return writeEni(slaves, commands, static_cast<std::uint32_t>(impl_->o.cycle_us));
+  return writeEni(slaves, commands);
 }
 
 std::optional<std::uint64_t> Simulator::run(const FrameSink& sink) {

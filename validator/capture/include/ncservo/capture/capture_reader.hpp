@@ -61,8 +61,8 @@ class CaptureReader {
   int timestampDigits() const { return timestamp_digits_; }
   // A pcapng (of any compression), not a pcap.
   bool pcapng() const { return pcapng_format_; }
-  // The drop counts of the interface statistics blocks read so far, once one gave any; read from
-  // plain pcapng files only (a compressed one is not searched for them).
+  // The drop counts of the interface statistics blocks read so far, once one gave any: of a plain
+  // pcapng file, a compressed one and one from standard input alike.
   std::optional<CaptureDrops> drops() const;
 
  private:
@@ -71,6 +71,8 @@ class CaptureReader {
   std::optional<RecordSpan> storedSpan();
   // The blocks in [from, to) of a plain pcapng, between records: interface statistics.
   void scanBlocks(std::uint64_t from, std::uint64_t to);
+  // One interface statistics block, whole, in its section's byte order.
+  void readStatistics(const std::uint8_t* block, std::size_t length, bool big);
 
   static constexpr std::size_t kReadBufferSize = 1 << 16;
   std::unique_ptr<char[]> buffer_;              // the FILE's buffer: outlives the handle

@@ -13,11 +13,25 @@
 
 namespace ncservo {
 
+// A cyclic command of the ENI (<Cyclic>/<Frame>/<Cmd>).
+struct EniCommand {
+  std::uint8_t command = 0;  // its EtherCAT command code
+  std::uint32_t address = 0;
+  std::uint32_t length = 0;
+};
+// A cyclic frame of the ENI, with the cycle time of the task it belongs to: each <Cyclic> element
+// is one task with its own <CycleTime> (µs) and frames.
+struct EniCyclicFrame {
+  std::optional<std::uint32_t> cycle_us;  // none: its <Cyclic> gives no <CycleTime>
+  std::vector<EniCommand> commands;
+};
+
 // One axis per servo of this protocol (10-byte RxPDO, 40-byte TxPDO), in the file's slave order,
-// with its logical addresses and its station address.
+// with its logical addresses and its station address; and the cyclic frames of every task.
 struct EniLayout {
   std::vector<AxisConfig> axes;
   std::size_t slaves = 0;  // slaves in the file, servos or not
+  std::vector<EniCyclicFrame> frames;
 };
 
 // An error names the file and, when it is about one element, its line: "FILE:LINE: MESSAGE".

@@ -64,6 +64,11 @@ struct InferenceResult {
   std::string refusal;
 };
 
+// What a view of an axis found from the structure alone says beside its decoded data (the
+// plugin's expert note; docs/layout.md).
+inline constexpr const char* kStructureOnlyNote =
+    "layout inferred from the PDO structure alone; no handshake confirmed it (docs/layout.md)";
+
 // One line per check for an inferred axis, for `decode --layout`.
 std::string describeEvidence(const InferredAxis& axis);
 // How an inferred axis was found and how sure, in a few words (the reports).

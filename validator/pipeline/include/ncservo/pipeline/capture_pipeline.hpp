@@ -16,8 +16,10 @@
 #include "ncservo/base/byte_reader.hpp"
 #include "ncservo/base/error.hpp"
 #include "ncservo/layout/decoder.hpp"
+#include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_fit.hpp"
 #include "ncservo/layout/layout_window.hpp"
+#include "ncservo/model/bus_model.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -44,6 +46,12 @@ struct TimeWindow {
 Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s);
 // "--from 1.5 --to 2", "--from 1.5", for messages.
 std::string describeTimeWindow(const TimeWindow& window);
+
+// An ENI whose tasks' cycle times the capture does not bear out (docs/layout.md#eni-cycle-times):
+// one line per cyclic frame of the ENI whose frame in the capture (one sharing a command, address
+// and length) repeats at a cycle more than a tenth off its task's <CycleTime>.
+std::vector<std::string> eniCycleWarnings(const std::vector<EniCyclicFrame>& eni,
+                                          const std::vector<CyclicFrameSummary>& seen);
 
 struct CaptureRun {
   std::uint64_t records = 0;                  // read, of any kind
@@ -110,6 +118,9 @@ class CapturePipeline {
   // The layout decided and what the inference found, once no longer learning.
   const DecoderOptions& layout() const { return window_.options(); }
   const std::optional<InferenceResult>& inference() const { return window_.inference(); }
+  // Whether `axis` of the layout was inferred from the PDO structure alone, no handshake
+  // confirming it (docs/layout.md): what every view of its findings says.
+  bool structureOnly(std::uint16_t axis) const;
   // A configured or ENI layout whose data does not look like the protocol's PDOs: one line per
   // axis (docs/layout.md#a-layout-that-does-not-fit), after finish().
   const std::vector<std::string>& layoutWarnings() const { return layout_warnings_; }

@@ -25,9 +25,12 @@ struct EniCyclicCommand {
   std::uint32_t address = 0;  // logical address
   std::uint16_t length = 0;
   std::uint16_t expected_wkc = 0;
-  std::size_t frame = 0;  // the cyclic frame that carries it; the commands in frame order
+  std::size_t frame = 0;       // the cyclic frame that carries it; the commands in frame order
+  std::uint32_t cycle_us = 0;  // of the task that sends that frame
 };
+// One <Cyclic> element per task (the frames of one cycle time, in a row), each with its
+// <CycleTime>.
 std::string writeEni(const std::vector<EniSlave>& slaves,
-                     const std::vector<EniCyclicCommand>& commands, std::uint32_t cycle_us);
+                     const std::vector<EniCyclicCommand>& commands);
 
 }  // namespace ncservo::sim
