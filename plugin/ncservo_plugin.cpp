@@ -189,6 +189,9 @@ struct FrameRecord {
 // By frame number: frames are numbered from 1 without gaps, so an index finds a frame's record
 // for less than a hash map, whose growth and scattered inserts cost the packet list measurably.
 std::vector<FrameRecord> g_frames;
+// By axis: the first frame that decodes an axis whose layout came from the PDO structure alone
+// (0: none). That frame and those with the axis's findings carry the note, not every frame.
+std::vector<guint32> g_structure_only_first;
 // The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
 // traffic most frames carry the same axes in the same states at the same offsets, alternating
 // between a few such arrays (the master copy and the returned one, frames of a split image).
@@ -417,6 +420,7 @@ void initCapture() {
   stopHeldJudging();
   g_held_info = nullptr;
   g_frames.clear();
+  g_structure_only_first.clear();
   g_shared_axes = {};
   g_next_shared = 0;
   g_timestamp_digits.reset();
@@ -434,6 +438,7 @@ void cleanupCapture() {
   delete g_pipeline;
   g_pipeline = nullptr;
   std::vector<FrameRecord>().swap(g_frames);
+  std::vector<guint32>().swap(g_structure_only_first);
   g_shared_axes = {};
   g_capture_open = false;
 }
@@ -546,6 +551,11 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
         (placement.has_rx ? kHasRx : 0) | (placement.has_tx ? kHasTx : 0) |
         (placement.rx_malformed ? kRxMalformed : 0) | (placement.tx_malformed ? kTxMalformed : 0) |
         (state ? kHasState : 0) | (g_pipeline->structureOnly(placement.axis) ? kStructureOnly : 0));
+    if (r.flags & kStructureOnly) {
+      if (g_structure_only_first.size() <= r.axis) g_structure_only_first.resize(r.axis + 1u, 0);
+      if (g_structure_only_first[r.axis] == 0)
+        g_structure_only_first[r.axis] = static_cast<guint32>(number);
+    }
     r.state = state ? static_cast<guint8>(*state) : 0;
     r.rx_offset = static_cast<guint32>(placement.rx_offset);
     r.tx_offset = static_cast<guint32>(placement.tx_offset);
@@ -989,6 +999,18 @@ void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, 
   }
 }
 
+// docs/plugin.md: a structure-only layout is noted on the axis's first frame and on the frames
+// with its findings.
+bool structureOnlyNoted(const FrameRecord& record, const AxisRecord& axis, guint32 frame) {
+  if (!(axis.flags & kStructureOnly)) return false;
+  if (axis.axis < g_structure_only_first.size() && g_structure_only_first[axis.axis] == frame)
+    return true;
+  for (guint i = 0; i < record.finding_count; ++i) {
+    if (record.findings[i].axis == axis.axis) return true;
+  }
+  return false;
+}
+
 // One layer of the protocol per axis, so that Wireshark's layer operator selects an axis:
 // `ncservo.state#3` is the third axis of the frame (docs/plugin.md).
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
@@ -996,10 +1018,12 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
   const FrameRecord& record = *layer.record;
   // A malformed region's expert info, a structure-only layout's note and a held frame's note
   // need an item to be found by their filters.
+  const bool structure_only_note =
+      layer.axis != nullptr && structureOnlyNoted(record, *layer.axis, pinfo->num);
   const bool protocol_item =
       protocolWanted(tree) ||
       (tree != nullptr && layer.axis != nullptr &&
-       (layer.axis->flags & (kRxMalformed | kTxMalformed | kStructureOnly)) != 0) ||
+       ((layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0 || structure_only_note)) ||
       (tree != nullptr && record.held);
   proto_item* root = nullptr;
   proto_tree* layer_tree = tree;
@@ -1032,7 +1056,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
                              static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
                              rx ? r.rx_offset : r.tx_offset);
     }
-    if (r.flags & kStructureOnly) expert_add_info(pinfo, root, &ei_structure_only);
+    if (structure_only_note) expert_add_info(pinfo, root, &ei_structure_only);
   } else if (protocol_item) {
     root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
@@ -1053,7 +1077,8 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   if (record.held) expert_add_info(pinfo, nullptr, &ei_layout_learning);
   for (guint a = 0; a < record.axis_count; ++a) {
-    if (record.axes[a].flags & kStructureOnly) expert_add_info(pinfo, nullptr, &ei_structure_only);
+    if (structureOnlyNoted(record, record.axes[a], pinfo->num))
+      expert_add_info(pinfo, nullptr, &ei_structure_only);
   }
   for (guint i = 0; i < record.finding_count; ++i) {
     expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);

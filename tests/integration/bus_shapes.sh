@@ -257,6 +257,10 @@ print(len({json.loads(l).get("axis") for l in open(sys.argv[1]) if l.strip()} - 
   [ "$axes" = 4 ] && grep -q 'layout inferred from the PDO structure alone' "$dir/plugin-notes.txt" ||
     { case_failed "$name" "idle: tshark -2 notes the structure-only layout on $axes axes, expected 4: \
 $(head -c 200 "$dir/plugin-notes.txt")"; ok=1; }
+  # Once per axis, on its first frame: with no finding, no other frame carries it.
+  local notes
+  notes=$(grep -o 'layout inferred from the PDO structure alone' "$dir/plugin-notes.txt" | wc -l)
+  [ "$notes" = 4 ] || { case_failed "$name" "idle: $notes structure-only notes, expected 4 (one per axis)"; ok=1; }
   grep -q '"rule"' "$dir/free.json" &&
     { case_failed "$name" "idle: findings: $(grep -o '"rule":"[^"]*"' "$dir/free.json" | sort | uniq -c | head -3 | tr '\n' ' ')"; ok=1; }
   [ $ok = 0 ] && passes+=("$name (idle: 4 axes, structure only)")

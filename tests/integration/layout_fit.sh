@@ -50,6 +50,18 @@ lines = [json.loads(l) for l in open(sys.argv[3])]
 warnings = [l["layout"]["warnings"] for l in lines if "layout" in l]
 assert len(warnings) == 1 and len(warnings[0]) == 1 and warnings[0][0].startswith(want), warnings
 PY
+# The warning is no finding: under --fail-on warning it sets no exit status, and its JUnit case
+# does not fail, so the two agree.
+rc=0
+"$NCSERVO" validate --fail-on warning --config "$WORK/off.toml" --format junit "$WORK/c.pcap" \
+  >"$WORK/off-warning.xml" 2>/dev/null || rc=$?
+python3 - "$WORK/off-warning.xml" <<'PY' || fail "junit under --fail-on warning"
+import sys, xml.etree.ElementTree as ET
+cases = [c for c in ET.parse(sys.argv[1]).iter("testcase") if c.get("name") == "layout fits the data"]
+assert len(cases) == 1 and cases[0].find("failure") is None, [ET.tostring(c) for c in cases]
+PY
+[ $rc = "$(python3 -c 'import sys,xml.etree.ElementTree as E; print(1 if any(c.find("failure") is not None for c in E.parse(sys.argv[1]).iter("testcase")) else 0)' "$WORK/off-warning.xml")" ] ||
+  fail "--fail-on warning: exit $rc disagrees with the JUnit report's failures"
 # And nothing of it for the exact layout.
 "$NCSERVO" validate --config "$WORK/exact.toml" --format jsonl "$WORK/c.pcap" \
   --report sarif:"$WORK/exact.sarif" --report junit:"$WORK/exact.xml" >"$WORK/exact.jsonl" 2>/dev/null

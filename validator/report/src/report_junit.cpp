@@ -73,7 +73,8 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       node.text() = body.c_str();
     }
     // A configured or ENI layout that does not fit (docs/layout.md#a-layout-that-does-not-fit):
-    // one more case, failed as a warning finding would be.
+    // one more case whose output names each axis. It is no finding and sets no exit status, so
+    // the case does not fail either.
     const bool misfit = !r.layout_warnings.empty();
     if (misfit) {
       auto testcase = suite.append_child("testcase");
@@ -82,17 +83,7 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       testcase.append_attribute("time") = "0";
       std::string body;
       for (const std::string& warning : r.layout_warnings) body += warning + "\n";
-      const bool failing = !sink.policy.never && Severity::Warning >= sink.policy.fail_on;
-      auto node = testcase.append_child(failing ? "failure" : "system-out");
-      if (failing) {
-        ++failures;
-        node.append_attribute("message") =
-            fmt::format("layout does not fit: {} ax{}", r.layout_warnings.size(),
-                        r.layout_warnings.size() == 1 ? "is" : "es")
-                .c_str();
-        node.append_attribute("type") = "LAYOUT-FIT";
-      }
-      node.text() = body.c_str();
+      testcase.append_child("system-out").text() = body.c_str();
     }
     if (r.error) {
       auto testcase = suite.append_child("testcase");
