@@ -18,6 +18,7 @@ set -euo pipefail
 cache=${NCSERVO_ROOT_CACHE:-/var/cache/ncservo-roots}
 mirror=${NCSERVO_DEBIAN_MIRROR:-http://deb.debian.org/debian}
 max_age_days=${NCSERVO_ROOT_MAX_AGE_DAYS:-7}
+node_extra_ca=/etc/ncservo-node-extra-ca.crt  # in the root
 
 die() {
   echo "debian-root.sh: $*" >&2
@@ -87,10 +88,10 @@ create() {
   echo 'APT::Keep-Downloaded-Packages "true";' >>"$root/etc/apt/apt.conf.d/99ncservo-snapshot"
   rm -f "$root/etc/apt/apt.conf.d/docker-clean"
   # A machine whose HTTPS goes through a proxy with its own certificate authority names it to
-  # Node.js (npm fetches the report schemas): the root gets the same file.
+  # Node.js (npm fetches the report schemas): the root gets the same file, at a path of its own,
+  # since the root's ca-certificates package rewrites its own bundle without that authority.
   if [ -n "${NODE_EXTRA_CA_CERTS:-}" ] && [ -f "$NODE_EXTRA_CA_CERTS" ]; then
-    mkdir -p "$root$(dirname "$NODE_EXTRA_CA_CERTS")"
-    cp "$NODE_EXTRA_CA_CERTS" "$root$NODE_EXTRA_CA_CERTS"
+    cp "$NODE_EXTRA_CA_CERTS" "$root$node_extra_ca"
   fi
   mount_all "$root" "$release"
 }
@@ -99,9 +100,11 @@ run() {
   local root=$1
   shift
   [ -f "$root/.ncservo-release" ] || die "$root is not a root made by debian-root.sh"
+  local extra_ca=""
+  [ -f "$root$node_extra_ca" ] && extra_ca=$node_extra_ca
   chroot "$root" env -i HOME=/root LANG=C.UTF-8 TERM=dumb DEBIAN_FRONTEND=noninteractive \
     PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin CI="${CI:-}" \
-    ${NODE_EXTRA_CA_CERTS:+NODE_EXTRA_CA_CERTS="$NODE_EXTRA_CA_CERTS"} "$@"
+    ${extra_ca:+NODE_EXTRA_CA_CERTS="$extra_ca"} "$@"
 }
 
 remove() {

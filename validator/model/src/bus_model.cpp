@@ -186,6 +186,8 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   if (followed == nullptr) return false;
   CyclicFrame& cyclic = *followed;
   ++cyclic.copies;
+  servo_frames_seen_ = servo_frames_seen_ || decode.axis_count > 0;
+  capture_clock_ = decode.axis_count > 0 || !servo_frames_seen_;
   const bool master = decode.copy == CopyKind::Master;
   if (master && !master_copies_seen_) {
     master_copies_seen_ = true;
@@ -240,7 +242,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   // A timestamp that went backwards gives no latency (docs/timing.md#rule-time).
   if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
-    timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
+    if (capture_clock_) timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
     frame_timing_.latency_ns = latency;
     cyclic.last_latency_ns = latency;
     events.push_back(
@@ -305,8 +307,10 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode, const Stamp&
     if (nominal_known) frame_timing_.deviation_ns = interval - *median;
     own.add(interval);
     frame_capture_intervals_[cyclic.id.slot].add(interval);
-    intervals_.add(interval);
-    timing_.onCycle(at.frame, cyclic.last_tick->frame, interval);
+    if (capture_clock_) {
+      intervals_.add(interval);
+      timing_.onCycle(at.frame, cyclic.last_tick->frame, interval);
+    }
   }
   cyclic.last_tick = at;
 }

@@ -205,6 +205,10 @@ class BusModel {
   std::uint64_t uncaptured_wkcs_ = 0;
   std::uint64_t first_uncaptured_wkc_frame_ = 0;
   bool master_copies_seen_ = false;
+  // docs/timing.md#which-frames: once a frame with servo PDOs was seen, the capture's cycle and
+  // latency statistics are the servos' task's; another task's frames keep only their own clock.
+  bool servo_frames_seen_ = false;
+  bool capture_clock_ = true;  // the frame in hand feeds the capture's statistics
   bool returned_copies_seen_ = false;
 };
 
