@@ -220,6 +220,9 @@ gen_case gen-second-task "--cycles 3000 --io-task-cycles 10 --inject SE-001 --in
 # SOEM's echoed inputs in the master copies (the simulator's master always echoes).
 sim_case sim-soem-echo "--no-startup --image soem $faults" SE-001:0 MSG-001:1
 gen_case gen-soem-echo "--cycles 3000 --echo-inputs --inject SE-001 --inject MSG-001"
+# Master copies the capture missed (capture loss, docs/timing.md "Capture loss"): no COM-002,
+# COM-003 or COM-005 for them.
+sim_case sim-capture-loss "--no-startup --capture-loss 0.03 --seed 5 $faults" SE-001:0 MSG-001:1
 # All of it at once.
 gen_case gen-machine "--cycles 6000 --io-terminals 5 --cia402 1 --echo-inputs --io-task-cycles 10 \
 --idle-cycles 2500 --inject SE-001@4.0 --inject EC-004@4.5"
