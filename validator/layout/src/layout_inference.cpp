@@ -679,7 +679,6 @@ std::vector<RxChoice> chooseRx(const std::vector<Stream>& streams,
   for (std::size_t s = 0; s < streams.size(); ++s) {
     const Stream& stream = streams[s];
     for (std::size_t o = 0; o < stream.rx.size(); ++o) {
-      const RxCandidate& c = stream.rx[o];
       if (!handshakeRx(stream, o)) continue;
       const bool inside_tx = std::any_of(tx.begin(), tx.end(), [&](const ChosenTx& t) {
         return t.stream == s && overlaps(o, kRxPdoSize, t.offset, kTxPdoSize);
