@@ -821,7 +821,7 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     }
     AxisEvidence& e = axis.evidence;
     e.cycles = t.seen;
-    e.violations = t.violations;
+    e.violations = t.violations + t.faulty;  // cycles failing any check
     e.rx_violations = rs.rx[r.offset].violations;
     e.actpos_moves = t.moves;
     e.status_cycles = t.status;
@@ -974,7 +974,7 @@ InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cyc
   }
   AxisEvidence& e = axis.evidence;
   e.cycles = t.seen;
-  e.violations = t.violations;
+  e.violations = t.violations + t.faulty;  // cycles failing any check
   e.rx_violations = rx.violations;
   e.actpos_moves = t.moves;
   e.status_cycles = t.status;
