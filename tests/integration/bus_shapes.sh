@@ -129,21 +129,7 @@ PY
   return $ok
 }
 
-# Shapes the inference does not handle yet: beside a CiA 402 drive, a servo whose message code
-# is out of range (MSG-001) is not taken for an axis, so 3 of 4 axes are decoded. They run with
-# NCSERVO_BUS_SHAPES_ALL=1 and are named as not run otherwise, so a fix shows at once.
-OPEN_SHAPES=(sim-cia402 sim-cia402-mixed gen-cia402 gen-machine)
-
 wanted() {
-  local open
-  if [ -z "${NCSERVO_BUS_SHAPES_ALL:-}" ]; then
-    for open in "${OPEN_SHAPES[@]}"; do
-      if [ "$open" = "$1" ]; then
-        echo "NOT RUN (open: servo beside a CiA 402 drive with MSG-001 not inferred): $1"
-        return 1
-      fi
-    done
-  fi
   [ ${#ONLY[@]} = 0 ] && return 0
   local n
   for n in "${ONLY[@]}"; do [ "$n" = "$1" ] && return 0; done

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <array>
 #include <bitset>
 #include <cmath>
 #include <cstring>
@@ -55,6 +56,10 @@ constexpr std::int64_t kDisagreementWeight = 8;
 constexpr double kMinConfidence = 0.25;
 // Parameter table changes a drive may refuse (the SSW's table not following the SCW's).
 constexpr std::uint32_t kRefusedTableChanges = 2;
+// A drive's parameter table changes when the NC commands it, seconds apart: a table change beyond
+// the refused ones outweighs this many cycles of evidence (a word whose table bits change every
+// few dozen cycles is a counter or a measured value).
+constexpr std::int64_t kTableChangeWeight = 128;
 // Evidence in at least this many cycles before a candidate counts.
 constexpr std::uint32_t kMinObservations = 8;
 
@@ -137,6 +142,16 @@ struct RxCandidate {
   CycleBits zpulse;   // ZPulseRequest
 };
 
+// The TxPDO signature's independent checks (docs/layout.md).
+enum TxCheck : std::size_t {
+  kCheckSswReserved,
+  kCheckSew,  // reserved bits, summary bit with any cause
+  kCheckMessage,
+  kCheckFloats,
+  kCheckPosition,
+  kTxCheckCount,
+};
+
 struct TxCandidate {
   std::uint32_t seen = 0;
   std::uint32_t violations = 0;
@@ -146,7 +161,9 @@ struct TxCandidate {
   std::int64_t last_step = 0;
   std::uint8_t position_history = 0;   // 0, 1 or 2 positions known
   std::uint32_t ready_mismatches = 0;  // cycles with ServoRDY against the ready table
-  std::uint8_t tables = 0;             // parameter tables shown active
+  std::uint32_t faulty = 0;            // cycles failing exactly one signature check
+  std::array<std::uint32_t, kTxCheckCount> check_failures{};  // cycles failing each check
+  std::uint8_t tables = 0;                                    // parameter tables shown active
   std::uint8_t last_table = 0;
   std::uint32_t table_changes = 0;
   CycleBits enabled;  // ServoEn
@@ -156,6 +173,14 @@ struct TxCandidate {
 
 bool dead(std::uint32_t seen, std::uint32_t violations) {
   return violations > 2 + seen / kToleranceDivisor;
+}
+
+// Not a TxPDO of this protocol: several checks failing at once in more than the tolerated
+// cycles, or one check failing in most of them (a drive's fault fails one check now and then).
+bool dead(const TxCandidate& c) {
+  if (dead(c.seen, c.violations)) return true;
+  return std::any_of(c.check_failures.begin(), c.check_failures.end(),
+                     [&](std::uint32_t failures) { return failures > 2 + c.seen / 2; });
 }
 
 // A cyclic datagram: command, address and length identify it (docs/protocol.md §8).
@@ -299,12 +324,14 @@ struct LayoutInference::State {
     const std::uint32_t ssw = le32(pdo + wordOffset(Word::Ssw));
     const std::uint32_t sew = le32(pdo + wordOffset(Word::Sew));
     const auto code = static_cast<std::int32_t>(le32(pdo + wordOffset(Word::MsgCode)));
-    bool ok = (ssw & kSswReserved) == 0 && (sew & kSewReserved) == 0 &&
-              ((sew & kSewCauses) == 0 || (sew & kSewSummary) != 0) && code >= 0 &&
-              code <= kMaxMessageCode &&
-              plausibleMessageData(code, le32(pdo + wordOffset(Word::MsgData)));
+    std::array<bool, kTxCheckCount> failed{};
+    failed[kCheckSswReserved] = (ssw & kSswReserved) != 0;
+    failed[kCheckSew] =
+        (sew & kSewReserved) != 0 || ((sew & kSewCauses) != 0 && (sew & kSewSummary) == 0);
+    failed[kCheckMessage] = code < 0 || code > kMaxMessageCode ||
+                            !plausibleMessageData(code, le32(pdo + wordOffset(Word::MsgData)));
     for (Word w : {Word::MsgData, Word::ExtData1, Word::ExtData2, Word::ExtData3, Word::ExtData4}) {
-      ok = ok && plausibleFloat(le32(pdo + wordOffset(w)));
+      failed[kCheckFloats] = failed[kCheckFloats] || !plausibleFloat(le32(pdo + wordOffset(w)));
     }
     // The low 32 bits of ActPos are the position of either encoder kind (§1).
     const std::uint32_t position = le32(pdo + wordOffset(Word::ActPos));
@@ -312,16 +339,25 @@ struct LayoutInference::State {
     bool moved = false;
     if (c.position_history == 2) {
       const std::int64_t change = step - c.last_step;
-      ok = ok && change <= kMaxPositionStep && change >= -kMaxPositionStep;
+      failed[kCheckPosition] = change > kMaxPositionStep || change < -kMaxPositionStep;
       moved = step != 0;
     }
     if (c.position_history < 2) ++c.position_history;
     c.last_position = position;
     c.last_step = step;
-    if (!ok) {
+    // One check failing is a fault of a servo, which the rules report; several at once are data
+    // of another kind (docs/layout.md).
+    std::uint32_t failures = 0;
+    for (std::size_t check = 0; check < kTxCheckCount; ++check) {
+      if (!failed[check]) continue;
+      ++failures;
+      ++c.check_failures[check];
+    }
+    if (failures > 1) {
       ++c.violations;
       return;
     }
+    if (failures == 1) ++c.faulty;
     if (moved) ++c.moves;
     if ((ssw & kSswStatus) != 0) ++c.status;
     if ((ssw & kSswServoEn) != 0) c.enabled.set(cycle, bytes);
@@ -389,7 +425,7 @@ struct LayoutInference::State {
     }
     for (std::size_t o = 0; o < s.tx.size(); ++o) {
       TxCandidate& c = s.tx[o];
-      if (!dead(c.seen, c.violations)) observeTx(c, data + o, cycle);
+      if (!dead(c)) observeTx(c, data + o, cycle);
     }
   }
 };
@@ -506,9 +542,18 @@ PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& rec
   return p;
 }
 
+// The evidence that a window is a servo's TxPDO, weighed over the whole learning window: ActPos
+// moving and status bits set count for it; a cycle failing one signature check counts as no
+// evidence, and each cycle against the structure (ServoRDY against the ready table, the SSW's
+// parameter table changing on its own) outweighs several for it.
 std::int64_t txScore(const TxCandidate& c) {
-  if (c.seen < kMinObservations || dead(c.seen, c.violations)) return 0;
-  return std::int64_t{c.moves} + c.status;
+  if (c.seen < kMinObservations || dead(c)) return 0;
+  const std::int64_t table_changes =
+      c.table_changes > kRefusedTableChanges ? c.table_changes - kRefusedTableChanges : 0;
+  const std::int64_t against = 2 * std::int64_t{c.faulty} +
+                               kDisagreementWeight * c.ready_mismatches +
+                               kTableChangeWeight * table_changes;
+  return std::max<std::int64_t>(0, std::int64_t{c.moves} + c.status - against);
 }
 
 bool overlaps(std::size_t a, std::size_t a_size, std::size_t b, std::size_t b_size) {
@@ -552,13 +597,64 @@ bool LayoutInference::outputsFirst(InferenceResult& result) const {
 
 namespace {
 
-// 1. TxPDOs: the best tiling of each stream slaves write into, by the signature's evidence.
-std::vector<ChosenTx> chooseTx(const std::vector<Stream>& streams) {
+// A control word whose SE may explain a ServoEn: written by the master, reserved bits zero, SE
+// 0x2 at least once.
+bool handshakeRx(const Stream& s, std::size_t o) {
+  const RxCandidate& c = s.rx[o];
+  return c.seen >= kMinObservations && !dead(c.seen, c.violations) && c.enabled.any() &&
+         !s.slaveWrote(o, kRxPdoSize);
+}
+
+// The handshake evidence of each TxPDO window that shows ServoEn: the best pair score of any
+// control word that explains it (0 when none does). A neighbour of another protocol never has
+// one, so a servo's TxPDO outweighs any window overlapping it (docs/layout.md).
+std::vector<std::vector<std::int64_t>> handshakeScores(const std::vector<Stream>& streams,
+                                                       std::uint32_t cycles) {
+  struct Control {
+    const Stream* stream;
+    const RxCandidate* rx;
+    std::vector<std::uint64_t> recent;
+  };
+  std::vector<Control> controls;
+  for (const Stream& s : streams) {
+    for (std::size_t o = 0; o < s.rx.size(); ++o) {
+      if (handshakeRx(s, o))
+        controls.push_back({&s, &s.rx[o], recentlyEnabled(s.rx[o].enabled, cycles)});
+    }
+  }
+  std::vector<std::vector<std::int64_t>> scores(streams.size());
+  for (std::size_t s = 0; s < streams.size(); ++s) {
+    const Stream& ts = streams[s];
+    scores[s].assign(ts.tx.size(), 0);
+    if (controls.empty()) continue;
+    for (std::size_t o = 0; o < ts.tx.size(); ++o) {
+      const TxCandidate& t = ts.tx[o];
+      if (!t.enabled.any() || t.seen < kMinObservations || dead(t)) continue;
+      for (const Control& c : controls) {
+        if (c.stream->logical() != ts.logical() ||
+            (!ts.logical() && c.stream->station() != ts.station())) {
+          continue;
+        }
+        const PairScore p = pairScore(*c.rx, c.recent, t);
+        if (p.agree >= kMinAgreement && p.score > 0) scores[s][o] = std::max(scores[s][o], p.score);
+      }
+    }
+  }
+  return scores;
+}
+
+// 1. TxPDOs: the best tiling of each stream slaves write into, by the signature's evidence and
+// the handshakes that explain it.
+std::vector<ChosenTx> chooseTx(const std::vector<Stream>& streams, std::uint32_t cycles) {
   std::vector<ChosenTx> tx;
+  const std::vector<std::vector<std::int64_t>> handshakes = handshakeScores(streams, cycles);
   for (std::size_t s = 0; s < streams.size(); ++s) {
     const Stream& stream = streams[s];
     std::vector<std::int64_t> score(stream.tx.size());
-    for (std::size_t o = 0; o < stream.tx.size(); ++o) score[o] = txScore(stream.tx[o]);
+    for (std::size_t o = 0; o < stream.tx.size(); ++o) {
+      score[o] = txScore(stream.tx[o]);
+      if (score[o] > 0) score[o] += handshakes[s][o];
+    }
     for (std::size_t o : tile(score, kTxPdoSize)) {
       std::int64_t rival = 0;  // the best overlapping candidate not chosen
       for (std::size_t r = o >= kTxPdoSize ? o - kTxPdoSize + 1 : 0;
@@ -583,11 +679,7 @@ std::vector<RxChoice> chooseRx(const std::vector<Stream>& streams,
   for (std::size_t s = 0; s < streams.size(); ++s) {
     const Stream& stream = streams[s];
     for (std::size_t o = 0; o < stream.rx.size(); ++o) {
-      const RxCandidate& c = stream.rx[o];
-      if (c.seen < kMinObservations || dead(c.seen, c.violations) || !c.enabled.any() ||
-          stream.slaveWrote(o, kRxPdoSize)) {
-        continue;
-      }
+      if (!handshakeRx(stream, o)) continue;
       const bool inside_tx = std::any_of(tx.begin(), tx.end(), [&](const ChosenTx& t) {
         return t.stream == s && overlaps(o, kRxPdoSize, t.offset, kTxPdoSize);
       });
@@ -729,7 +821,7 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     }
     AxisEvidence& e = axis.evidence;
     e.cycles = t.seen;
-    e.violations = t.violations;
+    e.violations = t.violations + t.faulty;  // cycles failing any check
     e.rx_violations = rs.rx[r.offset].violations;
     e.actpos_moves = t.moves;
     e.status_cycles = t.status;
@@ -760,7 +852,7 @@ struct StructureCandidates {
 };
 
 bool servoLikeTx(const TxCandidate& t) {
-  return t.seen >= kMinObservations && !dead(t.seen, t.violations) && t.status * 2 >= t.seen &&
+  return t.seen >= kMinObservations && !dead(t) && t.status * 2 >= t.seen &&
          !dead(t.seen, t.ready_mismatches);
 }
 
@@ -882,7 +974,7 @@ InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cyc
   }
   AxisEvidence& e = axis.evidence;
   e.cycles = t.seen;
-  e.violations = t.violations;
+  e.violations = t.violations + t.faulty;  // cycles failing any check
   e.rx_violations = rx.violations;
   e.actpos_moves = t.moves;
   e.status_cycles = t.status;
@@ -905,7 +997,8 @@ InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cyc
 // (empty when there was no servo-like TxPDO to place).
 bool LayoutInference::fromStructure(InferenceResult& result, std::string& why) const {
   const State& st = *state_;
-  const StructureCandidates c = structureCandidates(st.streams, st.cycles, chooseTx(st.streams));
+  const StructureCandidates c =
+      structureCandidates(st.streams, st.cycles, chooseTx(st.streams, st.cycles));
   if (c.tx.empty()) return false;
   const std::vector<std::vector<std::uint32_t>> through = tilingsThrough(st.streams, c);
   std::vector<std::string> refused;
@@ -996,7 +1089,7 @@ InferenceResult LayoutInference::decide() const {
   const State& st = *state_;
   InferenceResult result;
   result.cycles = st.cycles;
-  const std::vector<ChosenTx> tx = chooseTx(st.streams);
+  const std::vector<ChosenTx> tx = chooseTx(st.streams, st.cycles);
   const std::vector<RxChoice> rx = chooseRx(st.streams, tx);
   const ServoCandidates servos = servoCandidates(st.streams, st.cycles, tx, rx, result);
   const std::vector<std::size_t> choice = assignPairs(st.streams, rx, servos.pair);
