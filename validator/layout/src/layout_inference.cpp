@@ -785,6 +785,38 @@ std::vector<std::size_t> assignPairs(const std::vector<Stream>& streams,
   return choice;
 }
 
+// The axis of rank k at these two windows, with the evidence they and their pairing gave; its
+// confidence is the caller's.
+InferredAxis axisAt(const std::vector<Stream>& streams, std::size_t k, const RxChoice& r,
+                    const ChosenTx& chosen, const PairScore& p) {
+  const Stream& rs = streams[r.stream];
+  const Stream& ts = streams[chosen.stream];
+  const TxCandidate& t = ts.tx[chosen.offset];
+  InferredAxis axis;
+  axis.config.name = fmt::format("axis{}", k);
+  if (ts.logical()) {
+    axis.config.outputs = static_cast<std::uint32_t>(rs.address + r.offset);
+    axis.config.inputs = static_cast<std::uint32_t>(ts.address + chosen.offset);
+  } else {
+    axis.config.station = ts.station();
+    axis.config.sm_outputs = static_cast<std::uint16_t>(rs.ado() + r.offset);
+    axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + chosen.offset);
+  }
+  AxisEvidence& e = axis.evidence;
+  e.cycles = t.seen;
+  e.violations = t.violations + t.faulty;  // cycles failing any check
+  e.rx_violations = rs.rx[r.offset].violations;
+  e.actpos_moves = t.moves;
+  e.status_cycles = t.status;
+  e.ready_mismatches = t.ready_mismatches;
+  e.enabled_agree = p.agree;
+  e.enabled_disagree = p.disagree;
+  e.clear_agree = p.clear;
+  e.zpulse_agree = p.zpulse;
+  e.handshakes_seen = p.agree + p.clear + p.zpulse;
+  return axis;
+}
+
 // 5. Confidence: how far the best overlapping rival is behind, for both PDOs.
 // The axes go to `result`; the ones too close to a rival are returned, described.
 std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
@@ -798,7 +830,6 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     const RxChoice& r = rx[choice[k]];
     const Stream& rs = streams[r.stream];
     const Stream& ts = streams[servos.tx[k].stream];
-    const TxCandidate& t = ts.tx[servos.tx[k].offset];
     const PairScore& p = servos.pair[k][choice[k]];
     std::int64_t rival = 0;
     for (std::size_t i = 0; i < m; ++i) {
@@ -809,28 +840,8 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     }
     const double rx_confidence =
         std::max(0.0, 1.0 - static_cast<double>(rival) / static_cast<double>(p.score));
-    InferredAxis axis;
-    axis.config.name = fmt::format("axis{}", k);
-    if (ts.logical()) {
-      axis.config.outputs = static_cast<std::uint32_t>(rs.address + r.offset);
-      axis.config.inputs = static_cast<std::uint32_t>(ts.address + servos.tx[k].offset);
-    } else {
-      axis.config.station = ts.station();
-      axis.config.sm_outputs = static_cast<std::uint16_t>(rs.ado() + r.offset);
-      axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + servos.tx[k].offset);
-    }
+    InferredAxis axis = axisAt(streams, k, r, servos.tx[k], p);
     AxisEvidence& e = axis.evidence;
-    e.cycles = t.seen;
-    e.violations = t.violations + t.faulty;  // cycles failing any check
-    e.rx_violations = rs.rx[r.offset].violations;
-    e.actpos_moves = t.moves;
-    e.status_cycles = t.status;
-    e.enabled_agree = p.agree;
-    e.enabled_disagree = p.disagree;
-    e.clear_agree = p.clear;
-    e.zpulse_agree = p.zpulse;
-    e.ready_mismatches = t.ready_mismatches;
-    e.handshakes_seen = p.agree + p.clear + p.zpulse;
     e.confidence = std::min(servos.tx[k].confidence, rx_confidence);
     if (e.confidence < kMinConfidence) {
       ambiguous.push_back(fmt::format(
@@ -960,31 +971,10 @@ InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cyc
                            const ChosenTx& chosen, const RxChoice& r, std::size_t k) {
   const Stream& rs = streams[r.stream];
   const Stream& ts = streams[chosen.stream];
-  const RxCandidate& rx = rs.rx[r.offset];
-  const TxCandidate& t = ts.tx[chosen.offset];
-  InferredAxis axis;
-  axis.config.name = fmt::format("axis{}", k);
-  if (ts.logical()) {
-    axis.config.outputs = static_cast<std::uint32_t>(rs.address + r.offset);
-    axis.config.inputs = static_cast<std::uint32_t>(ts.address + chosen.offset);
-  } else {
-    axis.config.station = ts.station();
-    axis.config.sm_outputs = static_cast<std::uint16_t>(rs.ado() + r.offset);
-    axis.config.sm_inputs = static_cast<std::uint16_t>(ts.ado() + chosen.offset);
-  }
+  const PairScore p = pairScore(rs.rx[r.offset], recentlyEnabled(rs.rx[r.offset].enabled, cycles),
+                                ts.tx[chosen.offset]);
+  InferredAxis axis = axisAt(streams, k, r, chosen, p);
   AxisEvidence& e = axis.evidence;
-  e.cycles = t.seen;
-  e.violations = t.violations + t.faulty;  // cycles failing any check
-  e.rx_violations = rx.violations;
-  e.actpos_moves = t.moves;
-  e.status_cycles = t.status;
-  e.ready_mismatches = t.ready_mismatches;
-  const PairScore p = pairScore(rx, recentlyEnabled(rx.enabled, cycles), t);
-  e.enabled_agree = p.agree;
-  e.enabled_disagree = p.disagree;
-  e.clear_agree = p.clear;
-  e.zpulse_agree = p.zpulse;
-  e.handshakes_seen = p.agree + p.clear + p.zpulse;
   e.paired_by_order = true;
   e.structure_only = e.handshakes_seen == 0;
   e.confidence = std::min(chosen.confidence, e.structure_only ? 0.5 : 0.75);
