@@ -11,6 +11,13 @@ source "$SRC/tests/integration/lib.sh"
 home=$WORK/home
 mkdir -p "$home"
 as_user=(env -i PATH=/usr/bin:/bin HOME="$home")
+# An ASan + UBSan plugin needs the sanitizer runtime preloaded, as tshark-with-plugin.sh does.
+if [ -f "$PLUGIN.preload" ]; then
+  mkdir -p "$WORK/no-extcap"
+  as_user+=(LD_PRELOAD="$(cat "$PLUGIN.preload")" WIRESHARK_EXTCAP_DIR="$WORK/no-extcap"
+    ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:halt_on_error=1
+    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1)
+fi
 if [ "$(id -u)" = 0 ]; then
   chown 65534:65534 "$home"
   chmod a+rx "$WORK"
