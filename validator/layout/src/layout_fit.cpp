@@ -28,6 +28,10 @@ void LayoutFit::onFrame(const FrameDecode& decode, const ByteReader& bytes) {
     const AxisPlacement& p = decode.axes[i];
     if (p.axis >= axes_.size()) axes_.resize(p.axis + 1);
     AxisTally& axis = axes_[p.axis];
+    auto checked = [](Tally& tally) {
+      const std::uint64_t n = tally.seen++;
+      return n < kEveryCycle || n % kSampleEvery == 0;
+    };
     auto count = [](Tally& tally, std::uint32_t failures) {
       ++tally.cycles;
       if (failures != 0) ++tally.failed;
@@ -35,7 +39,7 @@ void LayoutFit::onFrame(const FrameDecode& decode, const ByteReader& bytes) {
         if ((failures & (1u << c)) != 0) ++tally.by_check[c];
       }
     };
-    if (p.has_tx && !p.tx_malformed && bytes.has(p.tx_offset, kTxPdoSize)) {
+    if (p.has_tx && !p.tx_malformed && bytes.has(p.tx_offset, kTxPdoSize) && checked(axis.tx)) {
       const std::uint8_t* pdo = bytes.data() + p.tx_offset;
       const std::uint32_t failures = txSignatureFailures(pdo);
       if ((failures & kMessageCodeUndefined) != 0 && !axis.tx.undefined_code) {
@@ -44,7 +48,7 @@ void LayoutFit::onFrame(const FrameDecode& decode, const ByteReader& bytes) {
       }
       count(axis.tx, failures);
     }
-    if (p.has_rx && !p.rx_malformed && bytes.has(p.rx_offset, kRxPdoSize)) {
+    if (p.has_rx && !p.rx_malformed && bytes.has(p.rx_offset, kRxPdoSize) && checked(axis.rx)) {
       count(axis.rx, rxSignatureFailures(bytes.data() + p.rx_offset));
     }
   }
@@ -65,11 +69,11 @@ std::vector<std::string> LayoutFit::warnings(const std::vector<AxisInfo>& axes) 
                                      ? fmt::format("message code {} outside 0..{}",
                                                    *t.undefined_code, kMaxListedMessageCode)
                                      : signatureCheckName(check);
-        failed.push_back(fmt::format("{} in {} % of {} cycles", what,
+        failed.push_back(fmt::format("{} in {} % of {} cycles checked", what,
                                      percent(t.by_check[c], t.cycles), t.cycles));
       }
       if (failed.empty()) {
-        failed.push_back(fmt::format("some check failing in {} % of {} cycles",
+        failed.push_back(fmt::format("some check failing in {} % of {} cycles checked",
                                      percent(t.failed, t.cycles), t.cycles));
       }
       const bool tx = pdo == Pdo::Tx;
