@@ -1,6 +1,7 @@
 #include "ncservo/layout/layout_fit.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "ncservo/base/little_endian.hpp"
 #include "ncservo/protocol/pdo_layout.hpp"

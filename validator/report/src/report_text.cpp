@@ -1,6 +1,7 @@
 // `validate --format text`: findings grouped per rule and axis (each one with --verbose), each
 // capture's summary, and the verdict line.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cstdio>
 #include <string>
