@@ -479,9 +479,8 @@ struct CaptureOutput {
 };
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
-// `eni_frames`: the cyclic frames of --eni, whose cycle times the capture is held against.
 int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
-                    const std::vector<EniCyclicFrame>* eni_frames, const RuleSettings& settings,
+                    const std::vector<EniCyclicFrame>& eni_frames, const RuleSettings& settings,
                     TimestampMode timestamps, const TimeWindow& time_window,
                     const cli::ReportWriter& writer, const CaptureOutput& output,
                     cli::CaptureReport& report) {
@@ -497,6 +496,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   report.timestamp_digits = reader->timestampDigits();
   CapturePipeline pipeline({decoder_options, settings, time_window, timestamps});
+  pipeline.holdEniCycles(eni_frames);
   std::optional<cli::TimelineRecorder> timelines;
   if (writer.drawsTimelines()) timelines.emplace(settings);
   const auto start = [&](const DecoderOptions&) {
@@ -524,11 +524,6 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   report.frames = run.records;
   report.late_layout = pipeline.lateLayout();
   report.layout_warnings = pipeline.layoutWarnings();
-  if (eni_frames != nullptr) {
-    for (std::string& warning : eniCycleWarnings(*eni_frames, validator.bus().cyclicFrames())) {
-      report.layout_warnings.push_back(std::move(warning));
-    }
-  }
   for (const std::string& warning : report.layout_warnings) {
     fmt::print(output.messages, "ncservo: {}: layout does not fit: {}\n", path, warning);
   }
@@ -681,7 +676,10 @@ int runValidate(const ValidateArgs& o) {
   }
   const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
   const DecoderOptions layout = decoderOptions(*files, o.layout);
-  const std::vector<EniCyclicFrame>* eni_frames = files->eni ? &files->eni->frames : nullptr;
+  // The ENI's tasks, whose cycle times the capture is held against
+  // (docs/layout.md#eni-cycle-times).
+  const std::vector<EniCyclicFrame> eni_frames =
+      files->eni ? files->eni->frames : std::vector<EniCyclicFrame>{};
   std::vector<cli::CaptureReport> reports(o.captures.size());
   int rc = kExitOk;
   const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));

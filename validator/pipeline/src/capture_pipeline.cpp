@@ -159,6 +159,9 @@ void CapturePipeline::finish() {
   started();
   if (!validator_) return;
   if (fit_) layout_warnings_ = fit_->warnings(validator_->decoder().axes());
+  for (std::string& warning : eniCycleWarnings(eni_frames_, validator_->bus().cyclicFrames())) {
+    layout_warnings_.push_back(std::move(warning));
+  }
   validator_->finish();
   if (sinks_.findings && !validator_->findings().empty()) sinks_.findings(validator_->findings());
 }

@@ -121,8 +121,12 @@ class CapturePipeline {
   // Whether `axis` of the layout was inferred from the PDO structure alone, no handshake
   // confirming it (docs/layout.md): what every view of its findings says.
   bool structureOnly(std::uint16_t axis) const;
+  // An ENI's cyclic frames, whose tasks' cycle times the capture is held against at the end
+  // (docs/layout.md#eni-cycle-times); their warnings join layoutWarnings().
+  void holdEniCycles(std::vector<EniCyclicFrame> frames) { eni_frames_ = std::move(frames); }
   // A configured or ENI layout whose data does not look like the protocol's PDOs: one line per
-  // axis (docs/layout.md#a-layout-that-does-not-fit), after finish().
+  // axis (docs/layout.md#a-layout-that-does-not-fit); then one per ENI frame whose cycle the
+  // capture does not bear out; after finish().
   const std::vector<std::string>& layoutWarnings() const { return layout_warnings_; }
   // Whether the layout was inferred after the first window, and the frames not judged then.
   const LateLayout& lateLayout() const { return window_.late(); }
@@ -146,6 +150,7 @@ class CapturePipeline {
   LayoutWindow window_;
   std::optional<Validator> validator_;
   std::optional<LayoutFit> fit_;  // a configured or ENI layout, judged
+  std::vector<EniCyclicFrame> eni_frames_;
   std::vector<std::string> layout_warnings_;
   Sinks sinks_;
   bool started_ = false;
