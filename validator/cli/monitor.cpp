@@ -4,6 +4,7 @@
 // writes an annotated pcapng of the seconds around each finding.
 #include <fmt/format.h>
 #include <pcap/pcap.h>
+#include <poll.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -42,7 +43,7 @@ constexpr const char* kCaptureFilter =
     "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";
 constexpr int kSnapLength = 262144;
 constexpr int kKernelBuffer = 64 << 20;  // bytes: seconds of a busy bus while we are descheduled
-constexpr int kReadTimeoutMs = 100;      // so the status, --duration and Ctrl-C are seen
+constexpr int kReadTimeoutMs = 100;      // the kernel's buffer hand-over, for a quiet link
 constexpr auto kStatusPeriod = std::chrono::milliseconds(250);
 constexpr std::size_t kRecorderMemory = 256u << 20;  // bytes of frames the recorder keeps at most
 
@@ -377,17 +378,34 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
   const LinkType link = linkTypeFromDlt(pcap_datalink(handle));
   using Clock = std::chrono::steady_clock;
   const auto began = Clock::now();
+  std::optional<Clock::time_point> deadline;
+  if (args.duration_s) {
+    deadline = began + std::chrono::duration_cast<Clock::duration>(
+                           std::chrono::duration<double>(*args.duration_s));
+  }
   auto next_status = began;
+  // A blocking read can wait for ever on a quiet link (libpcap's TPACKET_V3 reader hands over
+  // nothing until a frame comes, whatever its timeout): the handle reads without blocking and
+  // the loop itself waits for the next frame, the status line or the deadline, whichever is
+  // first (docs/field.md#monitor).
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  int selectable = pcap_get_selectable_fd(handle);
+  if (selectable >= 0 && pcap_setnonblock(handle, 1, errbuf) != 0) selectable = -1;
   LiveCapture live;
   while (g_stop == 0) {
-    if (args.duration_s &&
-        Clock::now() - began >= std::chrono::duration<double>(*args.duration_s)) {
-      break;
-    }
+    if (deadline && Clock::now() >= *deadline) break;
     pcap_pkthdr* header = nullptr;
     const u_char* data = nullptr;
     const int got = pcap_next_ex(handle, &header, &data);
-    if (got == 1) {
+    if (got == 0 && selectable >= 0) {
+      auto wake = std::min(next_status, Clock::now() + std::chrono::milliseconds(kReadTimeoutMs));
+      if (deadline) wake = std::min(wake, *deadline);
+      const auto wait_ms =
+          std::chrono::ceil<std::chrono::milliseconds>(wake - Clock::now()).count();
+      pollfd readable{selectable, POLLIN, 0};
+      // Ctrl-C interrupts the wait (EINTR), and g_stop ends the loop.
+      static_cast<void>(poll(&readable, 1, static_cast<int>(std::max<long long>(wait_ms, 0))));
+    } else if (got == 1) {
       CaptureRecord record;
       record.frame = ++live.frames;
       record.time_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1'000'000'000 +

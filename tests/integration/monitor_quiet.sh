@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# monitor_quiet.sh SRC BUILD: `ncservo monitor` on a link with no traffic at all (one end of a
+# veth pair whose other end is silent, in a network namespace of its own) ends on time:
+# `--duration 3` exits within 3-4 s, and Ctrl-C within a second, each with the usual report (no
+# servo was seen: exit 4, the NO SERVO verdict). Needs root (veth, namespaces): otherwise exit 77
+# with the reason (under CI: fails).
+SRC=$1 BUILD=$2
+source "$SRC/tests/integration/lib.sh"
+
+[ "$(id -u)" = 0 ] || skip "needs root (veth pair, network namespace)"
+require_program ip
+
+ns=ncservo-quiet-$$
+host=ncsq$$a peer=ncsq$$b
+cleanup() { ip netns del "$ns" 2>/dev/null || true; ip link del "$host" 2>/dev/null || true; rm -rf "$WORK"; }
+trap cleanup EXIT
+ip netns add "$ns"
+ip link add "$host" type veth peer name "$peer" netns "$ns"
+ip link set "$host" up
+ip -n "$ns" link set "$peer" up
+cd "$WORK"
+
+# --duration on a quiet link: the run ends by itself; `timeout` only guards the test.
+start=$(date +%s%N)
+rc=0
+timeout 20 "$NCSERVO" monitor -i "$host" --duration 3 >out.txt 2>err.txt || rc=$?
+ms=$((($(date +%s%N) - start) / 1000000))
+[ "$rc" != 124 ] || fail "--duration 3 on a quiet link: still running after 20 s"
+[ "$rc" = 4 ] || fail "--duration 3: exit $rc, expected 4 (no servo): $(cat err.txt)"
+[ "$ms" -ge 3000 ] && [ "$ms" -lt 4000 ] || fail "--duration 3 took $ms ms, expected 3000-3999"
+grep -q "0 frames captured" err.txt || fail "no capture summary: $(cat err.txt)"
+grep -q "NO SERVO" out.txt || fail "no report: $(cat out.txt)"
+echo "ok --duration 3 on a quiet link: exit $rc after $ms ms"
+
+# Ctrl-C on a quiet link, a second in: the report follows at once.
+"$NCSERVO" monitor -i "$host" >out.txt 2>err.txt &
+pid=$!
+sleep 1
+start=$(date +%s%N)
+kill -INT "$pid"
+rc=0
+for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+kill -0 "$pid" 2>/dev/null && { kill -KILL "$pid"; fail "Ctrl-C on a quiet link: still running after 5 s"; }
+wait "$pid" || rc=$?
+ms=$((($(date +%s%N) - start) / 1000000))
+[ "$rc" = 4 ] || fail "Ctrl-C: exit $rc, expected 4 (no servo): $(cat err.txt)"
+[ "$ms" -lt 1000 ] || fail "Ctrl-C took $ms ms to end the run"
+grep -q "NO SERVO" out.txt || fail "no report after Ctrl-C: $(cat out.txt)"
+echo "ok Ctrl-C on a quiet link: exit $rc after $ms ms"
+echo PASS
