@@ -69,9 +69,9 @@ PY
     # The plugin's own items (not Wireshark's layout, which changes with its version): the
     # findings of the listed frames, then each axis layer of frame 1203.
     "$tshark" "$plugin" -2 -r "$capture" -Y ncservo.finding -T fields -E occurrence=a \
-      -E aggregator=' | ' -e frame.number -e ncservo.finding | sed 's/^/list: /'
+      -E aggregator='|' -e frame.number -e ncservo.finding | sed 's/^/list: /'
     "$tshark" "$plugin" -2 -r "$capture" -Y 'frame.number == 1203' -T fields -E occurrence=a \
-      -E aggregator=' | ' -e frame.number -e ncservo.axis_name -e ncservo.state -e ncservo.scw \
+      -E aggregator='|' -e frame.number -e ncservo.axis_name -e ncservo.state -e ncservo.scw \
       -e ncservo.ssw -e ncservo.sew -e ncservo.finding -e ncservo.since_frame | sed 's/^/Frame /'
     ;;
   *)
