@@ -35,8 +35,8 @@ for rule in open(rules).read().split():
 json.dump(reads, open(out, "w"))
 PY
 # The line at the finding's frame, as the page's reader is told it looks.
-marker=$(grep -o 'The [a-z]* [a-z]* line is the frame the finding was reported on' "$SRC/docs/html-report.md" |
-  cut -d' ' -f2,3)
+marker=$(grep -oE 'The ([a-z]+ )?[a-z]+ line is the frame the finding was reported on' "$SRC/docs/html-report.md" |
+  sed 's/^The //; s/ line is.*//')
 [ -n "$marker" ] || fail "docs/html-report.md does not say how the finding's line is drawn"
 "$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/faults.html" "$WORK/faults.json" "$WORK/reads.json" "$marker" ||
   fail "the HTML report in Chromium"
