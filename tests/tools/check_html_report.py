@@ -8,8 +8,8 @@ them. The page is loaded from file:// with the network switched off; it must log
 error, list one table row per finding of the JSON report (same rule, axis and frame, in order),
 draw a timeline for some findings, and draw in each timeline exactly the rows its rule reads, each
 with data. A finding whose rule reads no row gets no timeline and no link; every link leads to a
-drawn timeline. Measured in the browser as each timeline is drawn again: no two of its texts (tick
-labels, titles) overlap, and a line at the finding's time spans the plot in MARKER's style
+drawn timeline. Measured in the browser as each chart is drawn again: no two texts (tick labels,
+titles) of a timeline or an axis's state chart overlap, and a line at the finding's time spans the plot in MARKER's style
 ("dashed black", as docs/html-report.md says; default that).
 Exit 0 when all hold, 1 with the reasons otherwise.
 """
@@ -152,6 +152,15 @@ def main():
                 if not any(marker_matches(m, marker_style) for m in figure["markers"]):
                     problems.append(f"{name}: no {marker_style} line at the finding's time; lines"
                                     f" there: {figure['markers']}")
+            # The axes' state charts: their state names and seconds must not overlap either.
+            for chart in driver.execute_script(MEASURE_JS, f"#capture-{index} div.axis"):
+                texts = chart["texts"]
+                for i, a in enumerate(texts):
+                    for b in texts[i + 1:]:
+                        if overlaps(a["box"], b["box"]):
+                            problems.append(f"capture {index}, a state chart: labels {a['text']!r}"
+                                            f" and {b['text']!r} overlap")
+                measured.append(chart)
             labels = sum(len(f["texts"]) for f in measured)
             print(f"capture {index}: {len(rows)} table rows, {len(drawn)} timelines, {labels} labels"
                   f" measured")
