@@ -72,6 +72,7 @@ int ett_ncservo = -1;
 int ett_axis = -1;
 int ett_finding = -1;
 int ett_clear_causes = -1;
+int ett_transition = -1;
 int ett_word[kWordCount];
 // The protocol's layer, one per axis of a frame; called by the postdissector.
 dissector_handle_t layer_handle = nullptr;
@@ -960,11 +961,23 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::Message), tvb, r.tx_offset, 0, message));
   }
-  if (r.change != nullptr && wanted(tree, Derived::Transition)) {
+  // The transition's own axis under it: a frame's layers are all `ncservo`, so `-e ncservo.axis`
+  // on a transition filter lists every axis of the frame (docs/plugin.md).
+  const bool transition_axis_wanted =
+      wanted(tree, Derived::TransitionAxis) || wanted(tree, Derived::TransitionAxisName);
+  if (r.change != nullptr && (wanted(tree, Derived::Transition) || transition_axis_wanted)) {
     char transition[96];
     plugin::transitionText(*r.change, transition, sizeof transition);
-    proto_item_set_generated(
-        proto_tree_add_string(tree, derivedHf(Derived::Transition), tvb, start, 0, transition));
+    proto_item* item =
+        proto_tree_add_string(tree, derivedHf(Derived::Transition), tvb, start, 0, transition);
+    proto_item_set_generated(item);
+    if (transition_axis_wanted) {
+      proto_tree* sub = proto_item_add_subtree(item, ett_transition);
+      proto_item_set_generated(
+          proto_tree_add_uint(sub, derivedHf(Derived::TransitionAxis), tvb, start, 0, r.axis));
+      proto_item_set_generated(
+          proto_tree_add_string(sub, derivedHf(Derived::TransitionAxisName), tvb, start, 0, name));
+    }
   }
   if (r.edge_count > 0 && wanted(tree, Derived::Edge)) {
     for (guint e = 0; e < r.edge_count; ++e) {
@@ -1175,14 +1188,15 @@ void registerProtocol() {
   proto_register_field_array(proto_ncservo, hf, static_cast<int>(count));
   buildWordItems();
 
-  static gint* ett[4 + kWordCount];
+  static gint* ett[5 + kWordCount];
   ett[0] = &ett_ncservo;
   ett[1] = &ett_axis;
   ett[2] = &ett_finding;
   ett[3] = &ett_clear_causes;
+  ett[4] = &ett_transition;
   for (std::size_t w = 0; w < kWordCount; ++w) {
     ett_word[w] = -1;
-    ett[4 + w] = &ett_word[w];
+    ett[5 + w] = &ett_word[w];
   }
   proto_register_subtree_array(ett, static_cast<int>(std::size(ett)));
 

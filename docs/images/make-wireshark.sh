@@ -4,6 +4,8 @@
 # Needs Xvfb, the Wireshark GUI, xdotool and ImageMagick (Debian: xvfb wireshark xdotool
 # imagemagick). Not run in CI: it drives the GUI by screen positions and keystrokes, and its
 # pixels change with Wireshark's and the fonts' versions; look at the image after making it.
+# Beside the picture, the text it shows (wireshark-finding.txt, from docs/images/shown.sh), which
+# tests/integration/readme_pictures.sh compares with today's output.
 # Usage: docs/images/make-wireshark.sh [BUILD_DIR] [OUT.png]
 #   default BUILD_DIR build, OUT docs/images/wireshark-finding.png
 set -euo pipefail
@@ -74,4 +76,5 @@ xdotool key shift+Right
 sleep 1
 mkdir -p "$(dirname "$out")"
 import -window root "$out"
+"$root/docs/images/shown.sh" wireshark-finding.png "$build" >"${out%.png}.txt"
 echo "make-wireshark: wrote $out (window $window); look at it before committing it"

@@ -4,6 +4,8 @@
 #   docs/images/html-report.png  the HTML report (validate --format html) in headless Chromium
 #   docs/images/gtkwave.png      GTKWave under Xvfb with decode --format vcd's save file, zoomed
 #                                onto the first illegal-enable finding (SE-001)
+# and beside each the text it shows (html-report.txt, gtkwave.txt, from docs/images/shown.sh), which
+# tests/integration/readme_pictures.sh compares with today's output.
 # Needs Debian's chromium, gtkwave, xvfb and imagemagick (.ci/setup installs them).
 #
 # Usage: docs/images/make.sh [BUILD_DIR]     (default: the repository's build/)
@@ -28,6 +30,7 @@ chromium --headless=new --no-sandbox --disable-gpu --hide-scrollbars \
   --host-resolver-rules='MAP * ~NOTFOUND' --window-size=1280,1600 \
   --screenshot="$work/html.png" "file://$work/faults.html" >/dev/null 2>&1
 convert "$work/html.png" -strip "$images/html-report.png"
+"$images/shown.sh" html-report.png "$build" >"$images/html-report.txt"
 
 # The first SE-001 of the JSON report: its axis, and its time in ns since the capture's start
 # (the VCD's time 0 is the first frame, as the report's `time`).
@@ -55,4 +58,5 @@ TCL
   gtkwave -6 faults.gtkw -S shot.tcl >/dev/null 2>&1) || true
 [ -s "$work/gtkwave.png" ] || { echo "make.sh: GTKWave gave no screenshot" >&2; exit 1; }
 convert "$work/gtkwave.png" -trim +repage -strip "$images/gtkwave.png"  # the window, not the screen
+"$images/shown.sh" gtkwave.png "$build" >"$images/gtkwave.txt"
 echo "make.sh: wrote $images/html-report.png and $images/gtkwave.png ($axis, SE-001 at $at_ns ns)"

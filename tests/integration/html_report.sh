@@ -2,7 +2,9 @@
 # html_report.sh SRC BUILD: the HTML report of the faults capture in a real browser:
 # loaded in headless Chromium from file:// with the network off, no console error, one table row
 # per finding of the JSON report, each finding timeline drawing the rows its rule reads (as
-# `ncservo rules --explain` lists them). Skipped (77) without Chromium and Selenium; under CI: fails.
+# `ncservo rules --explain` lists them), no timeline for a rule that reads none (COM-005, on the
+# simulated faults capture), no two labels of a timeline overlapping, and the finding's line drawn
+# as docs/html-report.md describes it. Skipped (77) without Chromium and Selenium; under CI: fails.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 # Debian's python3, where python3-selenium is (another python3 may come first on the PATH).
@@ -32,8 +34,20 @@ for rule in open(rules).read().split():
     reads[rule] = ["ncservo." + n.replace(" (its class)", "") for n in names if n not in ("-", "al_state")]
 json.dump(reads, open(out, "w"))
 PY
-"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/faults.html" "$WORK/faults.json" "$WORK/reads.json" ||
+# The line at the finding's frame, as the page's reader is told it looks.
+marker=$(grep -oE 'The ([a-z]+ )?[a-z]+ line is the frame the finding was reported on' "$SRC/docs/html-report.md" |
+  sed 's/^The //; s/ line is.*//')
+[ -n "$marker" ] || fail "docs/html-report.md does not say how the finding's line is drawn"
+"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/faults.html" "$WORK/faults.json" "$WORK/reads.json" "$marker" ||
   fail "the HTML report in Chromium"
+
+# COM-005 reads no PDO bit: on the simulated faults capture (which has it) its findings get no
+# timeline, and every other timeline still draws.
+"$NCSERVO" validate --format html -o "$WORK/sim.html" --report json:"$WORK/sim.json" \
+  "$SRC/captures/sim-faults-4axis.pcap" >/dev/null 2>&1 || [ $? = 1 ] || fail "validate exited $?"
+grep -q '"rule": *"COM-005"' "$WORK/sim.json" || fail "captures/sim-faults-4axis.pcap has no COM-005"
+"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/sim.html" "$WORK/sim.json" "$WORK/reads.json" "$marker" ||
+  fail "the HTML report of the simulated faults capture in Chromium"
 
 # A report of several captures, one of them unreadable, also loads without a console error.
 printf 'not a capture\n' >"$WORK/text.pcap"

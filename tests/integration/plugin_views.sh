@@ -6,6 +6,8 @@
 # - ncservo.transition appears on exactly the (frame, axis) of the CLI's state timeline, named as
 #   there; ncservo.edge on every such change after the first, and SE / ServoEn edges exactly where
 #   the decode rows change;
+# - the README's FAULT example prints one axis per FAULT transition: the (frame, axis name) pairs
+#   of the CLI's state timeline (ncservo.transition.axis_name, where ncservo.axis names them all);
 # - ncservo.since_frame equals the CLI's since_frame on every finding;
 # - `tshark -z expert` shows one line per rule, counting its findings;
 # - readable at many axes: on a simulated 32-axis capture every Info column stays short and names
@@ -37,6 +39,12 @@ run_tshark "$WORK/views.json" -Y "ncservo.edge || ncservo.transition" -T json --
 run_tshark "$WORK/findings.tsv" -Y ncservo.finding -T fields -E occurrence=a -E aggregator='|' \
   -e frame.number -e ncservo.finding -e ncservo.since_frame
 run_tshark "$WORK/expert.txt" -q -z expert
+# The README's example as it stands there (its capture path is the repository's).
+example=$(grep -o "^tshark -r captures/faults-4axis.pcap -Y 'ncservo.transition == \"FAULT\"' .*" "$SRC/README.md")
+[ -n "$example" ] || fail "README.md has no FAULT example"
+eval "set -- ${example#tshark }"
+(cd "$SRC" && "$TSHARK" "$PLUGIN" "$@") >"$WORK/fault_example.tsv" 2>"$WORK/tshark.err" ||
+  fail "the README's FAULT example exited $?: $(cat "$WORK/tshark.err")"
 
 many="$WORK/axes32.pcap"
 "$NCSERVO" simulate --scenario faults --axes 32 --seed 5 -o "$many" >/dev/null ||
@@ -132,6 +140,19 @@ for packet in json.load(open(f"{work}/views.json")):
         for edge in layers(layer.get("ncservo.edge", [])):
             edges[(frame, axis)].add(edge)
 check("ncservo.transition frames", set(timeline), set(transitions))
+names = {axis["index"]: axis["name"] for axis in report["axes"]}
+faults = {(frame, names[axis]) for (frame, axis), name in timeline.items() if name == "FAULT"}
+printed = set()
+for line in open(f"{work}/fault_example.tsv"):
+    frame, axis = line.rstrip("\n").split("\t")
+    if "," in axis:
+        ok = False
+        print(f"README's FAULT example: frame {frame} prints the axes {axis}")
+    printed |= {(int(frame), a) for a in axis.split(",")}
+if not faults:
+    ok = False
+    print("no FAULT transition in the CLI's state timeline")
+check("README's FAULT example (frame, axis)", faults, printed)
 for key, name in timeline.items():
     if name is not None and transitions.get(key) != name:
         ok = False

@@ -318,7 +318,7 @@ function captureSection(capture, index) {
   section.appendChild(el('h3', {}, 'Findings'));
   findingsTable(capture, section, index);
   section.appendChild(el('h3', {}, 'Finding timelines'));
-  section.appendChild(el('p', {class: 'note'}, `The bits each rule reads (docs/rules.md), ${data.frames_around} frames either side (dashed line: the finding's frame); green: the window the rule's timeout allowed. Drawn: the first ${data.per_rule_and_axis} findings of each rule and axis, at most ${data.max_timelines} in all` + (capture.timelines_omitted ? `; ${capture.timelines_omitted} axis findings not drawn.` : '.')));
+  section.appendChild(el('p', {class: 'note'}, `The bits each rule reads (docs/rules.md), from ${data.frames_around} frames before the condition began to ${data.frames_around} after the finding (dashed black line: the finding's frame); green: the window the rule's timeout allowed. A rule that reads no bits (the bus rules, COM-005) gets none. Drawn: the first ${data.per_rule_and_axis} findings of each rule and axis, at most ${data.max_timelines} in all` + (capture.timelines_omitted ? `; ${capture.timelines_omitted} axis findings not drawn.` : '.')));
   const timelines = el('div', {class: 'timelines'});
   section.appendChild(timelines);
   for (const t of capture.timelines) {

@@ -61,6 +61,9 @@ void TimelineRecorder::finding(const Finding& f) {
   const std::size_t index = findings_++;
   const RuleDef& rule = ruleDef(f.rule);
   if (!f.axis || rule.kind != RuleKind::Axis) return;
+  // A rule that reads no field-table row (COM-005 counts failed cycles) has nothing to draw: no
+  // timeline, and the page links none (docs/html-report.md).
+  if (fieldsRead(rule.reads).empty()) return;
   AxisRing& r = ring(*f.axis);
   std::size_t& drawn = r.drawn[static_cast<std::size_t>(f.rule)];
   if (drawn >= kPerRuleAndAxis || out_.drawn.size() + pendingCount() >= kMaxTimelines) {
