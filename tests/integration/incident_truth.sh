@@ -126,7 +126,7 @@ for name in sim gen bundled; do
   python3 "$CHECK_INCIDENTS" "$WORK/$name.incidents.json" --report "$WORK/$name.json" ||
     fail "$name: validate's incidents differ from the truth (exit $?; 2: no incident detector)"
   "$TSHARK" "$PLUGIN" -r "$WORK/$name.pcap" -Y ncservo.incident -T fields -E occurrence=a \
-    -E aggregator=, -e frame.number -e ncservo.axis -e ncservo.incident \
+    -E 'aggregator=|' -e frame.number -e ncservo.axis -e ncservo.incident \
     >"$WORK/$name.tshark" 2>"$WORK/tshark.err" || fail "$name: tshark exit $?: $(cat "$WORK/tshark.err")"
   [ ! -s "$WORK/tshark.err" ] || fail "$name: tshark: $(head -3 "$WORK/tshark.err")"
   python3 "$CHECK_INCIDENTS" "$WORK/$name.incidents.json" --tshark "$WORK/$name.tshark" ||

@@ -11,8 +11,8 @@ TRUTH is what `ncservo simulate --incidents-truth` and `gen_capture.py --inciden
 
 With --report every truth incident must be in the first capture's `incidents` with the same
 kind, axis, frame and cause id (`cause.id`), and nothing more.  With --tshark each frame must
-carry exactly the truth's incidents of that frame, by cause id (the leading id of each
-ncservo.incident value); the axes are compared too when the frame lists one ncservo.axis per
+carry exactly the truth's incidents of that frame, by cause id (the first cause id in each
+ncservo.incident value; tshark's -E aggregator=| keeps the values apart); the axes are compared too when the frame lists one ncservo.axis per
 incident.  Exit 0 when they agree, 1 with every difference listed, 2 when an input cannot be read
 (a report without `incidents` is that: the detector is missing).
 """
@@ -23,7 +23,12 @@ import json
 import re
 import sys
 
-CAUSE_ID = re.compile(r"[a-z]+(?:-[a-z]+)*")
+# INTERFACES.md "Incidents": the cause ids, longest first so that an alternation takes the whole id.
+CAUSE_IDS = ("communication-loss", "overtemperature", "following-error-after-step",
+             "following-error", "overcurrent", "bus-voltage", "encoder", "overspeed",
+             "configuration", "nc-command", "unknown")
+CAUSE_ID = re.compile("|".join(sorted(CAUSE_IDS, key=len, reverse=True)))
+AGGREGATOR = "|"  # tshark -E aggregator: the incident texts may hold commas
 
 
 def load_truth(path):
@@ -74,11 +79,11 @@ def compare_tshark(truth, path):
             if not columns or not columns[0].strip():
                 continue
             frame = int(columns[0])
-            axes = [a for a in (columns[1] if len(columns) > 1 else "").split(",") if a != ""]
-            values = [v for v in (columns[2] if len(columns) > 2 else "").split(",") if v != ""]
+            axes = [a for a in (columns[1] if len(columns) > 1 else "").split(AGGREGATOR) if a]
+            values = [v for v in (columns[2] if len(columns) > 2 else "").split(AGGREGATOR) if v]
             causes = []
             for value in values:
-                match = CAUSE_ID.match(value.strip())
+                match = CAUSE_ID.search(value)
                 causes.append(match.group(0) if match else value)
             got[frame] = (causes, axes)
     problems = []

@@ -96,6 +96,25 @@ It is also the oracle for the rule engine (`ncservo validate`):
     to two cycles after the first frame more than drive_response after its returned copy.
     companions lists, per injected rule, other rules it necessarily causes as well (see
     COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
+--incident KIND[@SECONDS][:AXIS]   (repeatable)
+    a drive fault after the chain of evidence its incident cause needs (`validate`'s incidents),
+    run like an injection; the defaults place each on its own axis and time:
+      communication-loss          2 cycles lost before the drives (COM-004; under the telegram
+                                  failure limit, so no ECatTErr), then ECatWatchDog 3 cycles
+                                  later (default 20 % of the session, axis 2)
+      overtemperature             the motor temperature (message code 4, extra data 4) climbs at
+                                  200 °C/s, SSW.TempWarning above 80 °C, I2t_Endat at 96 °C; the
+                                  motor cools after it (30 %, axis 3)
+      following-error-after-step  the NC steps the speed set point by 2000 rpm in one cycle;
+                                  FollowerErr 25 ms later (40 %, axis 0)
+    The NC clears each fault (ErrorClear/ErrClearAck) and enables the axis again.
+--incidents FILE
+    write every drive fault of the capture as JSON, the truth `ncservo validate` must list:
+      {"incidents": [{"kind": "drive-fault", "axis": 2, "frame": N, "cause": "..."}, ...]}
+    frame: the returned copy in which the axis's SEW.ServoErrors first reads 1 (1-based, every
+    record counted); cause: the chain's kind, "following-error" for the session's own fault
+    (axis 1, at a steady set point), "communication-loss" for ECatTErr after lost frames.
+    Not with --inject or --loss, and only with both copies.
 --self-check
     assert, cycle by cycle, that every axis not under an injection conforms (reserved bits,
     SE edges, SEW summary, ServoRDY table, message codes, and every handshake answered within

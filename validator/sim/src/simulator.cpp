@@ -212,7 +212,8 @@ struct Simulator::Impl {
   }
 
   // After a cycle's exchange: the drive faults its returned copies show first (SEW.ServoErrors
-  // rising, the FAULT transition of docs/protocol.md §6).
+  // rising: the axis enters "fault reaction active", or "error" when the drive was already off;
+  // docs/protocol.md §6).
   void watchDriveFaults(std::int64_t slot) {
     for (int a = 0; a < o.axes; ++a) {
       const auto& in = latest_inputs[static_cast<std::size_t>(a)];
