@@ -22,6 +22,28 @@ bundled="$SRC/captures/sim-incidents-4axis"
 cp "$bundled.pcap" "$WORK/bundled.pcap"
 cp "$bundled.incidents.json" "$WORK/bundled.incidents.json"
 
+# docs/simulate.md's table of the scenario is the scenario: its rows in order give the truth's
+# incidents (a bus outage row: the outage, then a drive fault on every axis).
+python3 - "$SRC/docs/simulate.md" "$WORK/sim.incidents.json" <<'PY' ||
+import json, re, sys
+text = open(sys.argv[1], encoding="utf-8").read()
+section = text[text.index("## Incidents"):]
+rows = re.findall(r"^\| `([a-z-]+)` \| ([^|]+) \| ([^|]+) \|", section, re.M)
+want = []
+for cause, kind, axis in rows:
+    kind, axis = kind.strip(), axis.strip()
+    if kind.startswith("bus outage"):
+        want.append(("bus-outage", None, cause))
+        want += [("drive-fault", a, "communication-loss") for a in range(4)]
+    else:
+        want.append(({"drive fault": "drive-fault", "ESM fall": "esm"}[kind], int(axis), cause))
+truth = json.load(open(sys.argv[2]))["incidents"]
+got = [(i["kind"], i["axis"], i["cause"]) for i in truth]
+if got != want:
+    sys.exit(f"docs/simulate.md's incidents {want}\nthe scenario's {got}")
+PY
+  fail "docs/simulate.md's table of the incidents scenario differs from the scenario"
+
 # --- the truth, against today's outputs ---
 for name in sim gen bundled; do
   capture="$WORK/$name.pcap" truth="$WORK/$name.incidents.json"
