@@ -16,7 +16,7 @@ CHECK_INCIDENTS="$SRC/tests/tools/check_incidents.py"
   --incidents-truth "$WORK/sim.incidents.json" 2>"$WORK/sim.err" ||
   fail "simulate --scenario incidents exit $?: $(cat "$WORK/sim.err")"
 python3 "$GEN" --axes 4 --cycles 4000 --seed 5 --incident communication-loss \
-  --incident overtemperature --incident following-error-after-step \
+  --incident overtemperature --incident following-error-after-step --incident bus-outage \
   --incidents "$WORK/gen.incidents.json" -o "$WORK/gen.pcap" || fail "gen_capture.py exit $?"
 bundled="$SRC/captures/sim-incidents-4axis"
 cp "$bundled.pcap" "$WORK/bundled.pcap"

@@ -107,13 +107,18 @@ It is also the oracle for the rule engine (`ncservo validate`):
                                   motor cools after it (30 %, axis 3)
       following-error-after-step  the NC steps the speed set point by 2000 rpm in one cycle;
                                   FollowerErr 25 ms later (40 %, axis 0)
+      bus-outage                  8 cycles lost before the drives (no :AXIS): every axis fails
+                                  longer than the telegram failure limit (3), and every drive
+                                  raises ECatTErr (65 %)
     The NC clears each fault (ErrorClear/ErrClearAck) and enables the axis again.
 --incidents FILE
     write every drive fault of the capture as JSON, the truth `ncservo validate` must list:
       {"incidents": [{"kind": "drive-fault", "axis": 2, "frame": N, "cause": "..."}, ...]}
     frame: the returned copy in which the axis's SEW.ServoErrors first reads 1 (1-based, every
     record counted); cause: the chain's kind, "following-error" for the session's own fault
-    (axis 1, at a steady set point), "communication-loss" for ECatTErr after lost frames.
+    (axis 1, at a steady set point), "communication-loss" for ECatTErr after lost frames; a bus
+    outage is {"kind": "bus-outage", "axis": null, "frame": N, "cause": "communication-loss"}
+    on the master copy of the cycle after the limit's (where COM-005 is reported).
     Not with --inject or --loss, and only with both copies.
 --self-check
     assert, cycle by cycle, that every axis not under an injection conforms (reserved bits,
@@ -756,8 +761,11 @@ CHAINS = {
     "communication-loss": (0.20, 2),
     "overtemperature": (0.30, 3),
     "following-error-after-step": (0.40, 0),
+    "bus-outage": (0.65, None),
 }
-BUS_CHAINS = frozenset(("communication-loss",))
+BUS_CHAINS = frozenset(("communication-loss", "bus-outage"))
+OUTAGE_CYCLES = 8  # the bus outage: frames lost before the drives
+TELEGRAM_FAILURE_LIMIT = 3  # COM-005's default: an outage is every axis failing longer
 STEP_UNITS = 200_000  # the set-point step: 2000 rpm in one cycle
 HEATING_C_PER_S, TRIP_C = 200.0, 96.0  # the overtemperature chain's climb and I2t_Endat trip
 FOLLOWING_AFTER_STEP_NS = 25_000_000  # FollowerErr this long after the step
@@ -774,14 +782,18 @@ def parse_chain(text, order, args, error):
     cycle_s = args.cycle_us * 1e-6
     try:
         seconds = float(time_text) if time_text else fraction * args.cycles * cycle_s
-        axis = int(axis_text) if axis_text else default_axis % args.axes
+        axis = int(axis_text) if axis_text else default_axis
+        if axis is not None:
+            axis %= args.axes
     except ValueError:
         error(f"--incident {text}: expected KIND[@SECONDS][:AXIS], e.g. overtemperature@0.6:3")
     start_cycle = max(FIRST_INJECTION_CYCLE, math.ceil(seconds / cycle_s - 1e-9))
     if not 0 <= seconds or start_cycle >= args.cycles:
         error(f"--incident {text}: {seconds} s is outside the capture "
               f"({args.cycles * cycle_s:g} s)")
-    if not 0 <= axis < args.axes:
+    if (axis is None) != (kind == "bus-outage"):
+        error(f"--incident {text}: the bus outage has no axis, every other chain one")
+    if axis is not None and not 0 <= axis < args.axes:
         error(f"--incident {text}: axis {axis} does not exist (--axes {args.axes})")
     chain = Injection(kind, axis, start_cycle, order)
     chain.bus = kind in BUS_CHAINS
@@ -1145,6 +1157,16 @@ class Injector:
         yield from self.hold(3)
         self.session.drives[axis].fault(SEW_ECAT_WATCHDOG, "communication-loss")
         yield from self._until_fault_recovered(self.session.ncs[axis], recoveries)
+
+    def _bus_outage(self):
+        """OUTAGE_CYCLES cycles lost before the drives: every axis fails longer than the
+        telegram failure limit (the master copy after the limit's cycle shows it), and every
+        drive raises ECatTErr at its third missed cycle."""
+        ncs = self.session.ncs
+        recoveries = [nc.recoveries for nc in ncs]
+        self.session.outage_cycles.add(self.k() + TELEGRAM_FAILURE_LIMIT + 1)
+        yield from self._outage(LOST, OUTAGE_CYCLES)
+        yield from self.until(lambda: all(nc.recoveries > r for nc, r in zip(ncs, recoveries)))
 
     def _overtemperature(self):
         """The motor temperature climbs HEATING_C_PER_S (message code 4; SSW.TempWarning over
@@ -1519,6 +1541,7 @@ class Session:
         self.bus = None  # the running bus injection's script
         self.directive = None  # this cycle's frame: None, DROP or LOST
         self.wkc = None  # this cycle's returned WKC, if not the expected one
+        self.outage_cycles = set()  # --incident bus-outage: cycles whose master copy shows one
         self.expect = expect
         self.monitor = Monitor(self, args.ready_mode) if self_check else None
 
@@ -1601,6 +1624,9 @@ def generate(args, out, truth_out, expect=None, incidents=None):
         if want_master and directive != DROP:
             writer.write(t_ns, builder.frame(False, index, out_bytes, echoed, 0, nb_out=nb_out,
                                              nb_in=nb_echoed))
+            if incidents is not None and k in session.outage_cycles:
+                incidents.append({"kind": "bus-outage", "axis": None, "frame": writer.count,
+                                  "cause": "communication-loss"})
             if truth:
                 truth.write(t_ns, "master", out_bytes, None)
             if expect:
