@@ -50,7 +50,7 @@ for name in sim gen bundled; do
   "$NCSERVO" validate --format json --fail-on never "$capture" >"$WORK/$name.json" ||
     fail "$name: validate exit $?"
   "$NCSERVO" decode --format csv "$capture" >"$WORK/$name.csv" || fail "$name: decode exit $?"
-  "$TSHARK" "$PLUGIN" -r "$capture" -T fields -E occurrence=a -E aggregator=, \
+  "$TSHARK" "$PLUGIN" -2 -r "$capture" -T fields -E occurrence=a -E aggregator=, \
     -Y 'ncservo.transition == "FAULT REACTION ACTIVE" || ncservo.transition == "FAULT"' \
     -e frame.number -e ncservo.transition >"$WORK/$name.fault-frames" 2>"$WORK/tshark.err" ||
     fail "$name: tshark exit $?: $(cat "$WORK/tshark.err")"
@@ -147,7 +147,7 @@ done
 for name in sim gen bundled; do
   python3 "$CHECK_INCIDENTS" "$WORK/$name.incidents.json" --report "$WORK/$name.json" ||
     fail "$name: validate's incidents differ from the truth (exit $?; 2: no incident detector)"
-  "$TSHARK" "$PLUGIN" -r "$WORK/$name.pcap" -Y ncservo.incident -T fields -E occurrence=a \
+  "$TSHARK" "$PLUGIN" -2 -r "$WORK/$name.pcap" -Y ncservo.incident -T fields -E occurrence=a \
     -E 'aggregator=|' -e frame.number -e ncservo.axis -e ncservo.incident \
     >"$WORK/$name.tshark" 2>"$WORK/tshark.err" || fail "$name: tshark exit $?: $(cat "$WORK/tshark.err")"
   [ ! -s "$WORK/tshark.err" ] || fail "$name: tshark: $(head -3 "$WORK/tshark.err")"
