@@ -8,7 +8,8 @@
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 readme="$SRC/captures/README.md"
-for name in sim-commissioning-4axis.pcap sim-faults-4axis.pcap sim-io-interleaved.pcapng; do
+for name in sim-commissioning-4axis.pcap sim-faults-4axis.pcap sim-io-interleaved.pcapng \
+  sim-incidents-4axis.pcap; do
   stem=${name%.*}
   row=$(grep "^| \`$name\`" "$readme") || fail "no row for $name in captures/README.md"
   cmd=$(grep -o "build/validator/ncservo simulate [^\`]*-o captures/$name[^\`]*" <<<"$row")
@@ -17,6 +18,10 @@ for name in sim-commissioning-4axis.pcap sim-faults-4axis.pcap sim-io-interleave
   cmd=${cmd/build\/validator\/ncservo/$NCSERVO}
   eval "$cmd" 2>"$WORK/sim.err" || fail "$name: simulate exit $?: $(cat "$WORK/sim.err")"
   cmp "$SRC/captures/$name" "$WORK/$name" || fail "$name differs from its regeneration"
+  if [ -f "$SRC/captures/$stem.incidents.json" ]; then
+    cmp "$SRC/captures/$stem.incidents.json" "$WORK/$stem.incidents.json" ||
+      fail "$stem.incidents.json differs from its regeneration"
+  fi
   if [ -f "$SRC/captures/$stem.toml" ]; then
     cmp "$SRC/captures/$stem.toml" "$WORK/$stem.toml" || fail "$stem.toml differs from its regeneration"
     # The layout file gives the findings the start-up's learned layout gives: the same rules on

@@ -22,6 +22,9 @@ cases=(
   "2|the run is too short for a fault; use --duration 2.5|simulate --duration 1.2 --fault SE-001 -o $WORK/x.pcap"
   "2|--scenario faults needs at least 4 axes|simulate --scenario faults --axes 3 -o $WORK/x.pcap"
   "2|--jitter-us 300: from 0 to a fifth of the cycle (200)|simulate --jitter-us 300 -o $WORK/x.pcap"
+  "2|--incidents-truth needs --scenario incidents|simulate --incidents-truth $WORK/t.json -o $WORK/x.pcap"
+  "2|--scenario incidents takes no --fault|simulate --scenario incidents --fault SE-001 -o $WORK/x.pcap"
+  "2|--scenario incidents needs --duration 6 or more|simulate --scenario incidents --duration 5 -o $WORK/x.pcap"
   "3|$WORK/no/such/dir/x.pcap: cannot write|simulate -o $WORK/no/such/dir/x.pcap"
   "0|wrote 3004 frames to $WORK/ok.pcap|simulate --duration 1.5 -o $WORK/ok.pcap"
 )

@@ -96,6 +96,30 @@ It is also the oracle for the rule engine (`ncservo validate`):
     to two cycles after the first frame more than drive_response after its returned copy.
     companions lists, per injected rule, other rules it necessarily causes as well (see
     COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
+--incident KIND[@SECONDS][:AXIS]   (repeatable)
+    a drive fault after the chain of evidence its incident cause needs (`validate`'s incidents),
+    run like an injection; the defaults place each on its own axis and time:
+      communication-loss          2 cycles lost before the drives (COM-004; under the telegram
+                                  failure limit, so no ECatTErr), then ECatWatchDog 3 cycles
+                                  later (default 20 % of the session, axis 2)
+      overtemperature             the motor temperature (message code 4, extra data 4) climbs at
+                                  200 °C/s, SSW.TempWarning above 80 °C, I2t_Endat at 96 °C; the
+                                  motor cools after it (30 %, axis 3)
+      following-error-after-step  the NC steps the speed set point by 2000 rpm in one cycle;
+                                  FollowerErr 25 ms later (40 %, axis 0)
+      bus-outage                  8 cycles lost before the drives (no :AXIS): every axis fails
+                                  longer than the telegram failure limit (3), and every drive
+                                  raises ECatTErr (65 %)
+    The NC clears each fault (ErrorClear/ErrClearAck) and enables the axis again.
+--incidents FILE
+    write every drive fault of the capture as JSON, the truth `ncservo validate` must list:
+      {"incidents": [{"kind": "drive-fault", "axis": 2, "frame": N, "cause": "..."}, ...]}
+    frame: the returned copy in which the axis's SEW.ServoErrors first reads 1 (1-based, every
+    record counted); cause: the chain's kind, "following-error" for the session's own fault
+    (axis 1, at a steady set point), "communication-loss" for ECatTErr after lost frames; a bus
+    outage is {"kind": "bus-outage", "axis": null, "frame": N, "cause": "communication-loss"}
+    on the master copy of the cycle after the limit's (where COM-005 is reported).
+    Not with --inject or --loss, and only with both copies.
 --self-check
     assert, cycle by cycle, that every axis not under an injection conforms (reserved bits,
     SE edges, SEW summary, ServoRDY table, message codes, and every handshake answered within
@@ -136,6 +160,7 @@ SSW_N_ZERO = 1 << 5
 SSW_N_SETPOINT = 1 << 6
 SSW_PULSE_ENABLED = 1 << 7
 SSW_PRMTBL_SHIFT = 8
+SSW_TEMP_WARNING = 1 << 11  # motor temperature over 80 °C
 SSW_EXT_PRMTBL_SHIFT = 12
 
 SCW_RESERVED = 0x7FFFE000  # bits 13..30
@@ -150,6 +175,7 @@ SEW_ECAT_TIMEOUT = 1 << 15
 SEW_PDPINT = 1 << 16
 SEW_FOLLOWING = 1 << 19
 SEW_OVERLOAD = 1 << 20
+SEW_ECAT_WATCHDOG = 1 << 22
 SEW_CAUSES = 0x01FFFFEE  # bits 1..3, 5..24
 SEW_RESERVED = 0xFE000010  # bit 4, bits 25..31
 
@@ -193,6 +219,8 @@ RATED_CURRENT_A = 8.0
 TORQUE_CONSTANT = 1.6  # Nm/A
 BUS_VOLTAGE = 560.0
 AMBIENT_C = 38.0
+TEMP_WARNING_C = 80.0
+COOLING_S = 1.0  # after an overtemperature fault the motor cools with this time constant
 
 RX_KEYS = ("ssp", "scw", "ext_code")
 TX_KEYS = ("actpos", "ssw", "sew", "msg_code", "msg_data",
@@ -266,6 +294,7 @@ class Nc:
         self.sew = 0
         self.k = 0
         self.recovering = False
+        self.recoveries = 0  # fault resets done
         self.done = False
         self.scripts = [self._session()]
         # set by injections only (--inject): extra SCW bits, the running injection, and a
@@ -392,6 +421,7 @@ class Nc:
         yield from self._enable()
         self.target = resume_target
         self.recovering = False
+        self.recoveries += 1
 
     def _emergency_stop(self):
         """EMGON 0: the drive brakes; once at standstill the NC disables the drive."""
@@ -444,6 +474,12 @@ class Drive:
         self.overlay = {}  # "sew" / "ssw" bits ORed in, "rdy" inverts ServoRDY, "msg" code
         self.mute_ecat_timeout = False  # does not raise ECatTErr when frames stop coming
         self.clear_ack_cycle = None
+        # --incident: why the drive last faulted (a cause id), a climbing motor temperature
+        # (degrees per cycle, trip) and the cooling after it tripped
+        self.cycle_s = cycle_us * 1e-6
+        self.cause_id = None
+        self.heating = None
+        self.cooling = False
 
     @staticmethod
     def _start_position(axis, rng):
@@ -479,9 +515,11 @@ class Drive:
             ssp, scw = self.last_ssp, self.scw
             self.missed += 1
             if self.missed == 3 and not self.mute_ecat_timeout:
-                self.fault(SEW_ECAT_TIMEOUT)
+                self.fault(SEW_ECAT_TIMEOUT, "communication-loss")
         if self.timers:
             self._fire_timers()
+        if self.heating or self.cooling:
+            self._temperature_chain()
         if scw != self.scw:
             self._on_scw_change(self.scw, scw)
             self.scw = scw
@@ -563,11 +601,26 @@ class Drive:
         self.table = ((scw >> SCW_PRMTBL_SHIFT) & 3) | (((scw >> SCW_EXT_PRMTBL_SHIFT) & 1) << 2)
 
     def _timer_fault(self):
-        self.fault(SEW_FOLLOWING)
+        self.fault(SEW_FOLLOWING, "following-error")  # the set point is steady then
 
-    def fault(self, causes):
+    def _temperature_chain(self):
+        """--incident overtemperature: the motor heats until it trips I2t_Endat, then cools."""
+        if self.heating:
+            per_cycle, trip = self.heating
+            self.temp += per_cycle
+            if self.temp >= trip:
+                self.heating = None
+                self.cooling = True
+                self.fault(SEW_I2T_ENDAT, "overtemperature")
+            return
+        self.temp += (AMBIENT_C - self.temp) * min(1.0, self.cycle_s / COOLING_S)
+        self.cooling = self.temp > AMBIENT_C + 1
+
+    def fault(self, causes, cause_id=None):
         """A drive fault: summary and cause bits together, ServoRDY drops at once (mode 0),
-        the power stage a few cycles later."""
+        the power stage a few cycles later.  cause_id: the incident cause it must get."""
+        if not self.sew & SEW_SERVO_ERRORS:
+            self.cause_id = cause_id
         self.sew |= causes | SEW_SERVO_ERRORS
         self.timers.pop("enable", None)
         self._after("disable", 1, 3)
@@ -612,6 +665,7 @@ class Drive:
                 | (SSW_ERR_CLEAR_ACK if self.err_clear_ack else 0)
                 | (SSW_N_ZERO if abs(speed) < N_ZERO_LIMIT else 0)
                 | (SSW_N_SETPOINT if in_tolerance else 0)
+                | (SSW_TEMP_WARNING if self.temp > TEMP_WARNING_C else 0)
                 | ((self.table & 3) << SSW_PRMTBL_SHIFT)
                 | ((self.table >> 2) << SSW_EXT_PRMTBL_SHIFT))
 
@@ -697,6 +751,53 @@ COMPANIONS = {
 }
 SLACK_CYCLES = 2  # a timed finding's window ends this many cycles after the frame it is due on
 FIRST_INJECTION_CYCLE = 10  # after the 8 intervals COM-002 needs to know the cycle time
+
+
+# --incident KIND[@SECONDS][:AXIS]: a drive fault with the chain of evidence its cause needs
+# (INTERFACES.md "Incidents"), run like an injection (an axis's or, for a bus chain, alone).
+# kind -> (default start as a fraction of the session, default axis).  The session's own planned
+# fault (axis 1, a following error at a steady set point) is an incident too.
+CHAINS = {
+    "communication-loss": (0.20, 2),
+    "overtemperature": (0.30, 3),
+    "following-error-after-step": (0.40, 0),
+    "bus-outage": (0.65, None),
+}
+BUS_CHAINS = frozenset(("communication-loss", "bus-outage"))
+OUTAGE_CYCLES = 8  # the bus outage: frames lost before the drives
+TELEGRAM_FAILURE_LIMIT = 3  # COM-005's default: an outage is every axis failing longer
+STEP_UNITS = 200_000  # the set-point step: 2000 rpm in one cycle
+HEATING_C_PER_S, TRIP_C = 200.0, 96.0  # the overtemperature chain's climb and I2t_Endat trip
+FOLLOWING_AFTER_STEP_NS = 25_000_000  # FollowerErr this long after the step
+
+
+def parse_chain(text, order, args, error):
+    """KIND[@SECONDS][:AXIS] -> Injection running that chain."""
+    kind, _, axis_text = text.partition(":")
+    kind, _, time_text = kind.partition("@")
+    kind = kind.strip().lower()
+    if kind not in CHAINS:
+        error(f"--incident {text}: no chain {kind!r}; one of {', '.join(sorted(CHAINS))}")
+    fraction, default_axis = CHAINS[kind]
+    cycle_s = args.cycle_us * 1e-6
+    try:
+        seconds = float(time_text) if time_text else fraction * args.cycles * cycle_s
+        axis = int(axis_text) if axis_text else default_axis
+        if axis is not None:
+            axis %= args.axes
+    except ValueError:
+        error(f"--incident {text}: expected KIND[@SECONDS][:AXIS], e.g. overtemperature@0.6:3")
+    start_cycle = max(FIRST_INJECTION_CYCLE, math.ceil(seconds / cycle_s - 1e-9))
+    if not 0 <= seconds or start_cycle >= args.cycles:
+        error(f"--incident {text}: {seconds} s is outside the capture "
+              f"({args.cycles * cycle_s:g} s)")
+    if (axis is None) != (kind == "bus-outage"):
+        error(f"--incident {text}: the bus outage has no axis, every other chain one")
+    if axis is not None and not 0 <= axis < args.axes:
+        error(f"--incident {text}: axis {axis} does not exist (--axes {args.axes})")
+    chain = Injection(kind, axis, start_cycle, order)
+    chain.bus = kind in BUS_CHAINS
+    return chain
 
 
 class Injection:
@@ -1041,6 +1142,50 @@ class Injector:
         nc.table = table  # back, followed in time
         yield from self.until(lambda: nc.active_table() == nc.table)
 
+    # --- incident chains (--incident) ---
+    def _until_fault_recovered(self, nc, recoveries):
+        """The drive's fault reaches the NC, which clears it and enables the axis again (its
+        recovery runs on top of an axis chain, which resumes after it)."""
+        yield from self.until(lambda: nc.recoveries > recoveries)
+
+    def _communication_loss(self):
+        """2 cycles lost before the drives (under the telegram failure limit: no ECatTErr),
+        then the axis's drive raises ECatWatchDog 3 cycles after."""
+        axis = self.inj.axis
+        recoveries = self.session.ncs[axis].recoveries
+        yield from self._outage(LOST, 2)
+        yield from self.hold(3)
+        self.session.drives[axis].fault(SEW_ECAT_WATCHDOG, "communication-loss")
+        yield from self._until_fault_recovered(self.session.ncs[axis], recoveries)
+
+    def _bus_outage(self):
+        """OUTAGE_CYCLES cycles lost before the drives: every axis fails longer than the
+        telegram failure limit (the master copy after the limit's cycle shows it), and every
+        drive raises ECatTErr at its third missed cycle."""
+        ncs = self.session.ncs
+        recoveries = [nc.recoveries for nc in ncs]
+        self.session.outage_cycles.add(self.k() + TELEGRAM_FAILURE_LIMIT + 1)
+        yield from self._outage(LOST, OUTAGE_CYCLES)
+        yield from self.until(lambda: all(nc.recoveries > r for nc, r in zip(ncs, recoveries)))
+
+    def _overtemperature(self):
+        """The motor temperature climbs HEATING_C_PER_S (message code 4; SSW.TempWarning over
+        80 °C) until the drive trips I2t_Endat at TRIP_C."""
+        recoveries = self.nc.recoveries
+        self.drive.heating = (HEATING_C_PER_S * self.cycle_ns * 1e-9, TRIP_C)
+        yield from self._until_fault_recovered(self.nc, recoveries)
+
+    def _following_error_after_step(self):
+        """The NC steps the speed set point by STEP_UNITS in one cycle; the drive raises
+        FollowerErr FOLLOWING_AFTER_STEP_NS later."""
+        nc = self.nc
+        recoveries = nc.recoveries
+        step = STEP_UNITS if nc.ssp >= 0 else -STEP_UNITS
+        nc.target = nc.ssp = nc.ssp + step
+        yield from self.hold(self.cycles_over(FOLLOWING_AFTER_STEP_NS))
+        self.drive.fault(SEW_FOLLOWING, "following-error-after-step")
+        yield from self._until_fault_recovered(nc, recoveries)
+
     # --- bus scripts ---
     def run_bus(self):
         session = self.session
@@ -1301,10 +1446,12 @@ class PcapWriter:
         self.out = out
         self.divisor = 1 if nanosecond else 1000
         self.record = struct.Struct("<IIII")
+        self.count = 0  # frames written
         magic = 0xA1B23C4D if nanosecond else 0xA1B2C3D4
         out.write(struct.pack("<IHHiIII", magic, 2, 4, 0, 0, 65535, 1))
 
     def write(self, t_ns, data):
+        self.count += 1
         sec, frac = divmod(t_ns, 10**9)
         self.out.write(self.record.pack(sec, frac // self.divisor, len(data), len(data)))
         self.out.write(data)
@@ -1314,6 +1461,7 @@ class PcapngWriter:
     def __init__(self, out):
         self.out = out
         self.epb = struct.Struct("<IIIIIII")
+        self.count = 0  # frames written
         shb_body = struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1)
         self._block(0x0A0D0D0A, shb_body)
         tsresol = struct.pack("<HHB3x", 9, 1, 9)  # if_tsresol = 10^-9
@@ -1325,6 +1473,7 @@ class PcapngWriter:
         self.out.write(struct.pack("<II", block_type, total) + body + struct.pack("<I", total))
 
     def write(self, t_ns, data):
+        self.count += 1
         pad = -len(data) % 4
         total = 32 + len(data) + pad
         self.out.write(self.epb.pack(6, total, 0, t_ns >> 32, t_ns & 0xFFFFFFFF,
@@ -1392,6 +1541,7 @@ class Session:
         self.bus = None  # the running bus injection's script
         self.directive = None  # this cycle's frame: None, DROP or LOST
         self.wkc = None  # this cycle's returned WKC, if not the expected one
+        self.outage_cycles = set()  # --incident bus-outage: cycles whose master copy shows one
         self.expect = expect
         self.monitor = Monitor(self, args.ready_mode) if self_check else None
 
@@ -1447,7 +1597,7 @@ class Session:
         return all(nc.done for nc in self.ncs)
 
 
-def generate(args, out, truth_out, expect=None):
+def generate(args, out, truth_out, expect=None, incidents=None):
     neighbours = Neighbours(args.io_terminals, args.cia402, args.seed)
     builder = FrameBuilder(args.axes, args.encap, neighbours)
     io_task = IoTask(args.io_task_cycles, args.seed) if args.io_task_cycles else None
@@ -1456,7 +1606,8 @@ def generate(args, out, truth_out, expect=None):
     nb_echoed = bytes(neighbours.in_size)
     writer = PcapngWriter(out) if args.format == "pcapng" else PcapWriter(out, args.nanosecond)
     truth = TruthWriter(truth_out, builder) if truth_out else None
-    session = Session(args, args.inject, expect, args.self_check)
+    session = Session(args, args.inject + args.incident, expect, args.self_check)
+    sew_error = [False] * args.axes  # per axis, in the last returned copy written
     loss_rng = random.Random(f"{args.seed}/loss")
     cycle_ns, delay_ns = args.cycle_us * 1000, args.return_delay_us * 1000
     dc_start = T0_NS - DC_EPOCH_OFFSET_NS + 1234  # reference clock slightly off the host clock
@@ -1473,6 +1624,9 @@ def generate(args, out, truth_out, expect=None):
         if want_master and directive != DROP:
             writer.write(t_ns, builder.frame(False, index, out_bytes, echoed, 0, nb_out=nb_out,
                                              nb_in=nb_echoed))
+            if incidents is not None and k in session.outage_cycles:
+                incidents.append({"kind": "bus-outage", "axis": None, "frame": writer.count,
+                                  "cause": "communication-loss"})
             if truth:
                 truth.write(t_ns, "master", out_bytes, None)
             if expect:
@@ -1489,6 +1643,8 @@ def generate(args, out, truth_out, expect=None):
             frame = builder.frame(True, index, out_bytes, in_bytes, dc_start + t_ret - T0_NS,
                                   session.wkc, nb_out, nb_in)
             writer.write(t_ret, frame)
+            if incidents is not None:
+                note_drive_faults(incidents, sew_error, inputs, session.drives, writer.count)
             if truth:
                 truth.write(t_ret, "returned", out_bytes, in_bytes)
             if expect:
@@ -1499,6 +1655,21 @@ def generate(args, out, truth_out, expect=None):
         print("gen_capture: injections not done before the last cycle (more --cycles, or "
               "earlier @SECONDS): " + ", ".join(unfinished), file=sys.stderr)
     return session.complete() and not unfinished
+
+
+def note_drive_faults(incidents, sew_error, inputs, drives, frame):
+    """--incidents: a drive fault is the returned copy in which its SEW.ServoErrors first
+    reads 1; its cause is the one the drive was given when it faulted."""
+    for axis, values in enumerate(inputs):
+        error = bool(values[2] & SEW_SERVO_ERRORS)
+        if error and not sew_error[axis]:
+            cause = drives[axis].cause_id
+            if cause is None:
+                raise SystemExit(f"gen_capture: axis {axis} faulted at frame {frame} for no "
+                                 "cause the incident truth knows")
+            incidents.append({"kind": "drive-fault", "axis": axis, "frame": frame,
+                              "cause": cause})
+        sew_error[axis] = error
 
 
 def write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect):
@@ -1538,6 +1709,13 @@ def parse_args(argv):
                    help="the drives' Servo_Ready_Mode (default 0)")
     p.add_argument("--inject", action="append", default=[], metavar="RULE[@SECONDS][:AXIS]",
                    help="inject a violation of RULE (repeatable; see the module docstring)")
+    p.add_argument("--incident", action="append", default=[],
+                   metavar="KIND[@SECONDS][:AXIS]",
+                   help="a drive fault with the chain its incident cause needs: "
+                        + ", ".join(sorted(CHAINS)) + " (repeatable; see the module docstring)")
+    p.add_argument("--incidents", metavar="FILE",
+                   help="JSON file of the incidents (drive faults, their frames and causes) "
+                        "`ncservo validate` must list")
     p.add_argument("--findings", metavar="FILE",
                    help="JSON file of the findings the injections must produce")
     p.add_argument("--self-check", action="store_true",
@@ -1593,9 +1771,14 @@ def parse_args(argv):
     if args.io_task_cycles and any(rule.partition("@")[0].partition(":")[0].upper() in BUS_RULES
                                    for rule in args.inject):
         p.error("--io-task-cycles: no bus (COM-*) injections beside the second task")
+    if args.incidents and (args.inject or args.loss or args.copies != "both"):
+        p.error("--incidents: no --inject or --loss, and both copies (its truth knows the "
+                "causes of its own chains only)")
     if args.findings:
         args.self_check = True
     args.inject = [parse_injection(text, i, args, p.error) for i, text in enumerate(args.inject)]
+    args.incident = [parse_chain(text, len(args.inject) + i, args, p.error)
+                     for i, text in enumerate(args.incident)]
     if args.encap == "udp" and args.axes > 28:
         print("gen_capture: warning: frames of more than 28 axes in UDP exceed the Ethernet MTU",
               file=sys.stderr)
@@ -1613,12 +1796,17 @@ def main(argv=None):
     truth_out = open(args.truth, "w", encoding="ascii", buffering=1 << 20) if args.truth else None
     expect = Expectations(args.cycle_us * 1000, args.return_delay_us * 1000) \
         if args.findings else None
+    incidents = [] if args.incidents else None
     try:
         with open(args.output, "wb", buffering=1 << 20) as out:
-            complete = generate(args, out, truth_out, expect)
+            complete = generate(args, out, truth_out, expect, incidents)
     finally:
         if truth_out:
             truth_out.close()
+    if incidents is not None:
+        with open(args.incidents, "w", encoding="ascii") as f:
+            json.dump({"incidents": incidents}, f, indent=1)
+            f.write("\n")
     if not complete:
         print("gen_capture: the session did not finish in --cycles cycles", file=sys.stderr)
         return 1

@@ -353,7 +353,38 @@ INSTANTIATE_TEST_SUITE_P(
                      o.duration_s = 5;
                      o.faults = {fault("SE-001@1.0")};
                    },
-                   "outside the quiet part"}),
+                   "outside the quiet part"},
+        ResolveRow{"incidents", [](SimOptions& o) { o.scenario = Scenario::Incidents; }, ""},
+        ResolveRow{"incidents_3_axes",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Incidents;
+                     o.axes = 3;
+                   },
+                   "--scenario incidents needs at least 4 axes"},
+        ResolveRow{"incidents_too_short",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Incidents;
+                     o.duration_s = 5.9;
+                   },
+                   "--scenario incidents needs --duration 6 or more"},
+        ResolveRow{"incidents_with_a_fault",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Incidents;
+                     o.faults = {fault("SE-001")};
+                   },
+                   "takes no --fault"},
+        ResolveRow{"incidents_with_loss",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Incidents;
+                     o.loss = 0.01;
+                   },
+                   "takes no --fault, --loss"},
+        ResolveRow{"incidents_idle",
+                   [](SimOptions& o) {
+                     o.scenario = Scenario::Incidents;
+                     o.idle_s = 1;
+                   },
+                   "--idle: not with --scenario incidents"}),
     [](const ::testing::TestParamInfo<ResolveRow>& row) { return std::string(row.param.name); });
 
 bool incrementalAxis(int axis) {
@@ -1291,6 +1322,75 @@ TEST(FaultsScenario, FiresEveryRule) {
     if (rule.by_default == ByDefault::On) all.insert(rule.code);
   }
   EXPECT_EQ(fired, all) << findingsText(v.findings);
+}
+
+// --- the incidents scenario (docs/simulate.md#incidents) ---
+
+// Its truth: one incident per cause row, on the frames the drives' SEW.ServoErrors first reads
+// 1 in a returned copy, COM-005's frame for the outage and ESM-003's for the fall from OP.
+TEST(IncidentsScenario, TruthOnTheFramesTheCaptureShows) {
+  SimOptions o = options(Scenario::Incidents, 4, 6);
+  o.cycle_us = 2000;
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
+  Simulator simulator(o);
+  std::vector<Frame> frames;
+  ASSERT_TRUE(simulator.run([&](const SimFrame& f) {
+    frames.push_back({f.time_ns, Bytes(f.data, f.data + f.size)});
+    return true;
+  }));
+  const Result<std::vector<IncidentTruth>> truth = simulator.incidents();
+  ASSERT_TRUE(truth.has_value()) << truth.error().text();
+  std::multiset<std::string> causes;
+  std::uint64_t last = 0;
+  for (const IncidentTruth& i : *truth) {
+    if (i.kind == "drive-fault") causes.insert(i.cause);
+    EXPECT_GE(i.frame, last) << "in capture order";
+    EXPECT_LE(i.frame, frames.size());
+    last = i.frame;
+  }
+  // one drive fault per cause row, and the outage's four
+  EXPECT_EQ(causes,
+            (std::multiset<std::string>{
+                "following-error", "following-error-after-step", "overcurrent",
+                "communication-loss", "bus-voltage", "encoder", "overspeed", "configuration",
+                "nc-command", "unknown", "overtemperature", "communication-loss",
+                "communication-loss", "communication-loss", "communication-loss"}));
+
+  const Validated v = validate(o, true);
+  auto finding = [&](const char* rule, std::uint64_t frame) {
+    return std::count_if(v.findings.begin(), v.findings.end(), [&](const Finding& f) {
+      return std::string(ruleDef(f.rule).code) == rule && f.at.frame == frame;
+    });
+  };
+  for (const IncidentTruth& i : *truth) {
+    if (i.kind == "bus-outage") {
+      EXPECT_FALSE(i.axis.has_value());
+      EXPECT_EQ(finding("COM-005", i.frame), 4) << "COM-005 of every axis at frame " << i.frame;
+    } else if (i.kind == "esm") {
+      EXPECT_EQ(finding("ESM-003", i.frame), 1) << "ESM-003 at frame " << i.frame;
+    } else {
+      ASSERT_TRUE(i.axis.has_value());
+      ASSERT_GE(i.frame, 2u);
+      ASSERT_TRUE(returnedMac(frames[i.frame - 1].bytes)) << i.frame << " is a returned copy";
+    }
+  }
+  EXPECT_EQ(incidentsJson({{"bus-outage", std::nullopt, 7, "communication-loss"},
+                           {"drive-fault", 2, 9, "overtemperature"}}),
+            "{\n \"incidents\": [\n  {\n   \"kind\": \"bus-outage\",\n   \"axis\": null,\n   "
+            "\"frame\": 7,\n   \"cause\": \"communication-loss\"\n  },\n  {\n   \"kind\": "
+            "\"drive-fault\",\n   \"axis\": 2,\n   \"frame\": 9,\n   \"cause\": "
+            "\"overtemperature\"\n  }\n ]\n}\n");
+}
+
+// Other scenarios plan no incident truth: the list is empty, not an error.
+TEST(IncidentsScenario, NoneInOtherScenarios) {
+  SimOptions o = options(Scenario::Commissioning, 2, 3);
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
+  Simulator simulator(o);
+  ASSERT_TRUE(simulator.run([](const SimFrame&) { return true; }));
+  const Result<std::vector<IncidentTruth>> truth = simulator.incidents();
+  ASSERT_TRUE(truth.has_value());
+  EXPECT_TRUE(truth->empty());
 }
 
 // --- capture writer ---

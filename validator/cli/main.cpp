@@ -930,6 +930,7 @@ struct SimulateArgs {
   std::vector<std::string> lost_cycles;
   std::string layout_config;
   std::string eni;
+  std::string incidents_truth;
   std::string io_inputs = "slow";
   std::string idle;      // SECONDS or all; empty: none
   std::string start_in;  // empty: the capture starts with the session
@@ -1005,6 +1006,10 @@ int runSimulate(SimulateArgs& args) {
       into->push_back(std::move(*parsed));
     }
   }
+  if (!args.incidents_truth.empty() && o.scenario != sim::Scenario::Incidents) {
+    fmt::print(stderr, "ncservo simulate: --incidents-truth needs --scenario incidents\n");
+    return kExitUsage;
+  }
   if (Status resolved = sim::resolveOptions(o); !resolved) {
     fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
     return kExitUsage;
@@ -1050,6 +1055,20 @@ int runSimulate(SimulateArgs& args) {
   if (args.options.capture_loss > 0) {
     fmt::print(stderr, "ncservo simulate: {} master copies left out of the capture\n",
                simulator.masterCopiesDropped());
+  }
+  if (!args.incidents_truth.empty()) {
+    const Result<std::vector<sim::IncidentTruth>> incidents = simulator.incidents();
+    if (!incidents) {
+      fmt::print(stderr, "ncservo simulate: {}\n", incidents.error().text());
+      return kExitCapture;
+    }
+    std::ofstream out(args.incidents_truth);
+    out << sim::incidentsJson(*incidents);
+    if (!out.flush()) {
+      fmt::print(stderr, "ncservo simulate: {}: cannot write the incidents\n",
+                 args.incidents_truth);
+      return kExitUsage;
+    }
   }
   return kExitOk;
 }
@@ -1154,8 +1173,8 @@ Handler simulateCommand(CLI::App& command) {
   auto args = std::make_shared<SimulateArgs>();
   SimulateArgs& sa = *args;
   command.add_option("-o,--output", sa.output, "capture to write, - for standard output");
-  command.add_option("--scenario", sa.scenario, "commissioning, faults or soak")
-      ->check(CLI::IsMember({"commissioning", "faults", "soak"}));
+  command.add_option("--scenario", sa.scenario, "commissioning, faults, soak or incidents")
+      ->check(CLI::IsMember({"commissioning", "faults", "soak", "incidents"}));
   command.add_option("--axes", sa.options.axes, "servo axes, 1 to 32 (default 4)");
   command.add_option("--io-slaves", sa.options.io_slaves,
                      "other slaves sharing the process image, 0 to 32 (default: soem and "
@@ -1163,7 +1182,7 @@ Handler simulateCommand(CLI::App& command) {
                      "drives of other sizes)");
   command.add_option("--cycle-us", sa.options.cycle_us, "cycle time, 125 to 10000 (default 1000)");
   command.add_option("--duration", sa.options.duration_s,
-                     "seconds (default: commissioning 3, faults 4.3, soak 60)");
+                     "seconds (default: commissioning 3, faults 4.3, soak 60, incidents 20)");
   command.add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
   std::vector<std::string> styles, aliases;
   std::string style_help = "the master's process image (docs/simulate.md; default soem):";
@@ -1236,6 +1255,9 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option(
       "--eni", sa.eni,
       "also write the set-up as an ENI file (EtherCATConfig.xml) for validate --eni");
+  command.add_option("--incidents-truth", sa.incidents_truth,
+                     "with --scenario incidents: also write the incidents `validate` must list, "
+                     "as JSON (kind, axis, frame, cause)");
   command.add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
   return [args] { return runSimulate(*args); };
 }

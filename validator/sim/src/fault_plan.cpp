@@ -27,6 +27,10 @@ void FaultPlan::scheduleDriveFault(std::int64_t at_ns, int axis, std::uint32_t c
   drive_faults_.push_back({at_ns, axis, cause});
 }
 
+void FaultPlan::scheduleBusFault(std::int64_t at_ns, int axis, BusFault fault) {
+  bus_faults_.push_back({fault, at_ns, axis});
+}
+
 void FaultPlan::nc(std::int64_t offset_ns, NcAction action, double value) {
   ncs_[axisIndex()].schedule({at_ns_ + offset_ns, action, value});
 }

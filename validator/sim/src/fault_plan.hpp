@@ -24,6 +24,8 @@ class FaultPlan final : public FaultActions {
   void injectScenario();
   // A drive fault of a scenario's plan (not a rule's fault).
   void scheduleDriveFault(std::int64_t at_ns, int axis, std::uint32_t cause);
+  // A bus fault of a scenario's plan, on an axis (-1: the whole bus).
+  void scheduleBusFault(std::int64_t at_ns, int axis, BusFault fault);
 
   // Once per cycle, before it: raises the drive faults and starts the bus faults now due.
   void raiseDriveFaults(std::int64_t now_ns);

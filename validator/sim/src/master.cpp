@@ -49,6 +49,7 @@ Master::Master(Segment& segment)
       return_delay_ns_((2 + static_cast<std::int64_t>(segment.escs.size()) / 4) * kUs),
       sent_(ethernetFraming(false)),
       returned_(ethernetFraming(true)),
+      input_frames_(segment.servo_slave.size(), 0),
       images_(segment.groups.size()),
       cyclic_frames_(segment.groups.size()) {
   for (std::size_t g = 0; g < segment.groups.size(); ++g) {
@@ -336,6 +337,7 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
       PdoValues values;
       readPdoOf<Pdo::Tx>(ByteReader(image.data(), image.size()), at->offset, values);
       inputs[static_cast<std::size_t>(esc.axis)] = txPdoOf(values);
+      input_frames_[static_cast<std::size_t>(esc.axis)] = frames_;
     }
   }
   return true;

@@ -50,6 +50,8 @@ class Master {
   bool alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns);
 
   std::uint64_t frames() const { return frames_; }
+  // The number (from 1) of the returned frame the axis's inputs last came in.
+  std::uint64_t inputFrame(int axis) const { return input_frames_[static_cast<std::size_t>(axis)]; }
 
  private:
   RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
@@ -71,6 +73,7 @@ class Master {
   std::uint8_t datagram_index_ = 0;
   std::vector<std::uint8_t> bytes_;
   std::uint64_t frames_ = 0;
+  std::vector<std::uint64_t> input_frames_;  // per axis
   // Per frame group, reused every cycle: a long run allocates nothing.
   std::vector<std::vector<std::vector<std::uint8_t>>> images_;  // per datagram of each group
   std::vector<std::vector<RingDatagram>> cyclic_frames_;

@@ -53,6 +53,11 @@ constexpr std::uint32_t kReservedStatusBit = 1U << 13;
 constexpr std::uint32_t kReservedControlBit = 1U << 20;
 constexpr std::int32_t kUndefinedMessageCode = 7;
 constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: 3 cycles, no data (docs/protocol.md §4)
+constexpr double kTempWarningC = 80;      // SSW.TempWarning (docs/protocol.md §3)
+// How fast a drift settles once it tripped its fault: the motor cools in seconds, the bus
+// voltage and the current fall within a few milliseconds.
+constexpr double kCoolingS = 1.0;
+constexpr double kSettleElectricalS = 0.005;
 
 }  // namespace
 
@@ -183,7 +188,40 @@ void DriveModel::step(const RxPdo* outputs, std::int64_t now_ns) {
   updateEnable(last_rx_, now_ns);
   updateHandshakes(last_rx_, now_ns);
   updateMotion(last_rx_, dt);
+  updateDrift(now_ns, dt);
   buildInputs(last_rx_, now_ns);
+}
+
+void DriveModel::updateDrift(std::int64_t now_ns, double dt) {
+  if (!drift_ || now_ns < drift_->from_ns) return;
+  const Drift& d = *drift_;
+  using Quantity = Drift::Quantity;
+  const bool heat = d.quantity == Quantity::MotorTemperature;
+  double& value = heat                                 ? temperature_c_
+                  : d.quantity == Quantity::BusVoltage ? extra_bus_v_
+                                                       : extra_current_a_;
+  const double base = heat ? 0.0 : d.quantity == Quantity::BusVoltage ? kBusVoltage : current_a_;
+  if (!drift_tripped_) {
+    value += d.per_second * dt;
+    if (base + value >= d.trip) {
+      drift_tripped_ = true;
+      pending_faults_ |= d.cause;
+    }
+    return;
+  }
+  bool settled = false;
+  if (heat) {
+    value += (kAmbientC - value) * std::min(1.0, dt / kCoolingS);
+    settled = value < kAmbientC + 1;
+  } else {
+    value -= value * std::min(1.0, dt / kSettleElectricalS);
+    settled = std::abs(value) < 0.5;
+    if (settled) value = 0;
+  }
+  if (settled) {
+    drift_.reset();
+    drift_tripped_ = false;
+  }
 }
 
 void DriveModel::updateEnable(const RxPdo& rx, std::int64_t now_ns) {
@@ -394,6 +432,7 @@ void DriveModel::buildInputs(const RxPdo& rx, std::int64_t now_ns) {
       (zp_ack_ || zp_spurious_until_ns_ >= 0 ? bits::kZPulseAck : 0) |
       (clear_ack_ || clear_spurious_until_ns_ >= 0 ? bits::kErrClearAck : 0) |
       (std::abs(speed_rpm_) < kStandstillRpm ? bits::kNZero : 0) |
+      (temperature_c_ > kTempWarningC ? bits::kTempWarning : 0) |
       (std::abs(set_rpm - speed_rpm_) <= std::max(kStandstillRpm, std::abs(set_rpm) * kTolerance)
            ? bits::kNSetpoint
            : 0) |
@@ -405,7 +444,7 @@ void DriveModel::buildInputs(const RxPdo& rx, std::int64_t now_ns) {
   // Message codes 0..5 in turn (docs/protocol.md §5), with plausible values.
   const double noise = rng_.uniform() - 0.5;
   const double rpm = speed_rpm_ + (speed_rpm_ != 0 ? noise * 0.2 : 0.0);
-  const double current = current_a_ + (enabled_ ? noise * 0.05 : 0.0);
+  const double current = current_a_ + extra_current_a_ + (enabled_ ? noise * 0.05 : 0.0);
   const double torque = current * kTorquePerAmp;
   in.msg_code = static_cast<std::int32_t>((cycle_ + static_cast<std::uint64_t>(setup_.axis)) % 6);
   double data = 0;
@@ -420,7 +459,7 @@ void DriveModel::buildInputs(const RxPdo& rx, std::int64_t now_ns) {
       data = std::abs(current) / kRatedCurrentA * 100;
       break;
     case 3:
-      data = kBusVoltage + noise * 4 - 0.3 * std::abs(current);
+      data = kBusVoltage + extra_bus_v_ + noise * 4 - 0.3 * std::abs(current);
       break;
     case 4:
       data = temperature_c_;
@@ -490,6 +529,10 @@ void NcAxis::runEvents(std::int64_t now_ns) {
       case NcAction::Speed:
         target_rpm_ = e.value;
         break;
+      case NcAction::SpeedStep:
+        target_rpm_ = e.value;
+        ssp_rpm_ = e.value;
+        break;
       case NcAction::ZeroPulse:
         if (incremental_) {
           zp_request_ = true;
@@ -513,6 +556,15 @@ void NcAxis::runEvents(std::int64_t now_ns) {
         reserved_cycles_ = static_cast<int>(e.value);
         break;
     }
+  }
+}
+
+void NcAxis::fellFromOp() {
+  operational_ = false;
+  ssp_rpm_ = 0;
+  se_ = 0;
+  if (phase_ == Phase::Prepare || phase_ == Phase::Enabling || phase_ == Phase::On) {
+    enter(Phase::Prepare, last_ns_);
   }
 }
 

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <string>
 
+#include "incident_plan.hpp"
 #include "ncservo/base/number.hpp"
 #include "ncservo/sim/faults.hpp"
 
@@ -17,6 +18,7 @@ std::optional<Scenario> scenarioFromName(std::string_view name) {
   if (name == "commissioning") return Scenario::Commissioning;
   if (name == "faults") return Scenario::Faults;
   if (name == "soak") return Scenario::Soak;
+  if (name == "incidents") return Scenario::Incidents;
   return std::nullopt;
 }
 const char* scenarioName(Scenario scenario) {
@@ -27,6 +29,8 @@ const char* scenarioName(Scenario scenario) {
       return "faults";
     case Scenario::Soak:
       return "soak";
+    case Scenario::Incidents:
+      return "incidents";
   }
   return "?";
 }
@@ -77,6 +81,8 @@ double defaultDuration(Scenario scenario) {
       return 4.3;
     case Scenario::Soak:
       return 60.0;
+    case Scenario::Incidents:
+      return 20.0;
   }
   return 3.0;
 }
@@ -157,6 +163,9 @@ Status checkShapeOptions(const SimOptions& o) {
   if (!(o.idle_s >= 0)) return fail(fmt::format("--idle {}: seconds, or all", o.idle_s));
   const bool idle = o.idle_all || o.idle_s > 0;
   if (idle && o.scenario == Scenario::Faults) return fail("--idle: not with --scenario faults");
+  if (idle && o.scenario == Scenario::Incidents) {
+    return fail("--idle: not with --scenario incidents");
+  }
   if (o.idle_all && !o.faults.empty()) {
     return fail("--idle all: nothing is enabled, so no --fault can happen");
   }
@@ -219,6 +228,20 @@ Status checkDuration(SimOptions& o) {
     if (duration < defaultDuration(Scenario::Faults)) {
       return fail(fmt::format("--scenario faults needs --duration {} or more",
                               defaultDuration(Scenario::Faults)));
+    }
+  }
+  if (o.scenario == Scenario::Incidents) {
+    if (o.axes < 4) return fail("--scenario incidents needs at least 4 axes");
+    if (duration < kIncidentsMinDuration) {
+      return fail(
+          fmt::format("--scenario incidents needs --duration {:g} or more", kIncidentsMinDuration));
+    }
+    // Its truth (--incidents-truth) lists the scenario's own incidents: nothing may add or hide
+    // one.
+    if (!o.faults.empty() || o.loss > 0 || o.capture_loss > 0 || !o.lost_cycles.empty()) {
+      return fail(
+          "--scenario incidents takes no --fault, --loss, --capture-loss or --lost-cycles "
+          "(its truth lists its own incidents only)");
     }
   }
   return {};

@@ -240,6 +240,14 @@ void Esc::powerUpError() {
   publishAlStatus();
 }
 
+void Esc::fallFromOp(std::uint16_t code) {
+  state = kSafeOp;
+  pending_ = 0;
+  error_ = true;
+  code_ = code;
+  publishAlStatus();
+}
+
 void Esc::startInOp(std::uint16_t station_address) {
   state = kOp;
   publishAlStatus();

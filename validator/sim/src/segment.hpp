@@ -87,6 +87,8 @@ class Esc {
   void publishAlStatus();
   // ESM-004: the slave comes up with an AL error left from its power-up.
   void powerUpError();
+  // The slave leaves OP on its own for SAFE-OP with an AL error (the incidents scenario).
+  void fallFromOp(std::uint16_t code);
   // In OP with the station address and FMMUs the master's start-up would have written (a
   // capture that begins with the segment running).
   void startInOp(std::uint16_t station);

@@ -5,12 +5,15 @@
 #include "ncservo/sim/simulator.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "esl_probe.hpp"
 #include "fault_plan.hpp"
+#include "incident_plan.hpp"
 #include "master.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/sim/eni_writer.hpp"
@@ -21,7 +24,30 @@ namespace ncservo::sim {
 
 namespace {
 constexpr std::int64_t kSoakPeriodNs = 10 * kSecond;
+// The incidents scenario's master reads every slave's AL status this often (docs/simulate.md).
+constexpr std::int64_t kStatusPollNs = 10 * kMs;
+// An incident the plan says must happen, matched with what the capture shows.
+struct PlannedIncident {
+  IncidentKind kind;
+  int axis;  // -1: the bus
+  const char* cause;
+  std::int64_t at_ns;
+  bool seen = false;
+};
+// A planned incident is seen this long after its time at the latest (a drift trips around it).
+constexpr std::int64_t kIncidentSlackNs = 250 * kMs;
 }  // namespace
+
+std::string incidentsJson(const std::vector<IncidentTruth>& incidents) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const IncidentTruth& i : incidents) {
+    list.push_back({{"kind", i.kind},
+                    {"axis", i.axis ? nlohmann::ordered_json(*i.axis) : nlohmann::ordered_json()},
+                    {"frame", i.frame},
+                    {"cause", i.cause}});
+  }
+  return nlohmann::ordered_json{{"incidents", list}}.dump(1) + "\n";
+}
 
 struct Simulator::Impl {
   SimOptions o;
@@ -42,6 +68,23 @@ struct Simulator::Impl {
   Rng capture_loss_rng{o.seed ^ 0xC0FFEE5EEDULL};
   std::uint64_t master_copies_dropped = 0;
   std::uint64_t frames_cut = 0;  // before --start-in's moment
+  // The incidents scenario: its plan, what the capture shows of it, the slaves' falls from OP
+  // and the master's AL status checks.
+  struct Fall {
+    std::int64_t at_ns;
+    int axis;
+    std::uint16_t code;
+    bool done = false;
+  };
+  std::vector<PlannedIncident> planned;
+  std::vector<IncidentTruth> seen;
+  std::vector<std::string> unplanned;
+  std::vector<bool> sew_error;  // per axis, in the last inputs returned
+  std::vector<Fall> falls;
+  std::vector<int> fallen_axes;  // out of OP until the status check's walk ends
+  AlWalk status_check;
+  int failed_cycles = 0;  // consecutive cycles every axis failed
+  bool outage_due = false;
 
   explicit Impl(const SimOptions& options)
       : o(options),
@@ -91,7 +134,7 @@ struct Simulator::Impl {
       const double rpm = (a % 2 ? -1.0 : 1.0) * (600 + 300 * (a % 4));
       nc.schedule({at(base + 0.05 + 0.01 * (a % 8)), NcAction::Enable});
       nc.schedule({at(base + 0.15), NcAction::Speed, rpm});
-      if (o.scenario == Scenario::Faults) continue;
+      if (o.scenario == Scenario::Faults || o.scenario == Scenario::Incidents) continue;
       if (isIncrementalAxis(a)) nc.schedule({at(base + 0.30), NcAction::ZeroPulse});
       nc.schedule({at(base + 0.55), NcAction::Table, static_cast<double>(a % 3 + 2)});
       nc.schedule({late(0.53), NcAction::Emergency, 150});
@@ -102,6 +145,113 @@ struct Simulator::Impl {
     if (o.scenario == Scenario::Commissioning) {
       faults.scheduleDriveFault(at(base + 0.8), 1 % o.axes, bits::kFollowing);
     }
+    if (o.scenario == Scenario::Incidents) planIncidents();
+  }
+
+  // The incidents scenario: each row's chain at its time (a cycle slot, so that an offset of a
+  // nanosecond is the next cycle), and the incidents it must give.
+  class Chain final : public IncidentActions {
+   public:
+    Chain(Impl& impl, std::int64_t at_ns, int axis) : impl_(impl), at_ns_(at_ns), axis_(axis) {}
+    void nc(std::int64_t offset_ns, NcAction action, double value) override {
+      impl_.ncs[index()].schedule({at_ns_ + offset_ns, action, value});
+    }
+    void driveFault(std::int64_t offset_ns, std::uint32_t cause) override {
+      impl_.faults.scheduleDriveFault(at_ns_ + offset_ns, axis_, cause);
+    }
+    void drift(std::int64_t offset_ns, Drift drift) override {
+      drift.from_ns = at_ns_ + offset_ns;
+      impl_.drives[index()].drift(drift);
+    }
+    void bus(std::int64_t offset_ns, BusFault fault) override {
+      impl_.faults.scheduleBusFault(at_ns_ + offset_ns, axis_, fault);
+    }
+    void fallFromOp(std::int64_t offset_ns, std::uint16_t code) override {
+      impl_.falls.push_back({at_ns_ + offset_ns, axis_, code});
+    }
+
+   private:
+    std::size_t index() const { return static_cast<std::size_t>(axis_); }
+    Impl& impl_;
+    std::int64_t at_ns_;
+    int axis_;
+  };
+
+  void planIncidents() {
+    const std::vector<IncidentRow>& rows = incidentRows();
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      const IncidentRow& row = rows[r];
+      const std::int64_t t = at(incidentTime(r, *o.duration_s));
+      const std::int64_t slot = (t + cycle_ns - 1) / cycle_ns * cycle_ns;
+      Chain chain(*this, slot, row.axis);
+      row.apply(chain);
+      planned.push_back({row.kind, row.axis, row.cause, slot});
+      if (row.kind == IncidentKind::BusOutage) {  // and every drive's ECatTErr
+        for (int a = 0; a < o.axes; ++a) {
+          planned.push_back({IncidentKind::DriveFault, a, "communication-loss", slot});
+        }
+      }
+    }
+    sew_error.assign(static_cast<std::size_t>(o.axes), false);
+  }
+
+  // An incident the capture shows at `frame`, now: the cause its plan gave it.
+  void incident(IncidentKind kind, int axis, std::uint64_t frame, std::int64_t now_ns) {
+    for (PlannedIncident& p : planned) {
+      if (p.seen || p.kind != kind || p.axis != axis || p.at_ns > now_ns ||
+          now_ns > p.at_ns + kIncidentSlackNs) {
+        continue;
+      }
+      p.seen = true;
+      seen.push_back({incidentKindName(kind), axis < 0 ? std::nullopt : std::optional<int>(axis),
+                      frame, p.cause});
+      return;
+    }
+    unplanned.push_back(
+        fmt::format("{} on axis {} at frame {}", incidentKindName(kind), axis, frame));
+  }
+
+  // After a cycle's exchange: the drive faults its returned copies show first (SEW.ServoErrors
+  // rising: the axis enters "fault reaction active", or "error" when the drive was already off;
+  // docs/protocol.md §6).
+  void watchDriveFaults(std::int64_t slot) {
+    for (int a = 0; a < o.axes; ++a) {
+      const auto& in = latest_inputs[static_cast<std::size_t>(a)];
+      if (!in) continue;
+      const bool error = (in->sew & bits::kServoErrors) != 0;
+      if (error && !sew_error[static_cast<std::size_t>(a)]) {
+        incident(IncidentKind::DriveFault, a, master.inputFrame(a), slot);
+      }
+      sew_error[static_cast<std::size_t>(a)] = error;
+    }
+  }
+
+  // The master reads every slave's AL status every kStatusPollNs (between two cycles, as its
+  // start-up's walk does); a slave out of OP is acknowledged and walked back, and its axis's NC
+  // sends neutral outputs until then.
+  bool checkAlStatus(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot) {
+    const std::int64_t at_ns = slot + cycle_ns / 2;
+    if (status_check.active) {
+      if (!master.alFrame(sink, status_check, at_ns)) return false;
+      if (!status_check.active) {
+        for (int a : fallen_axes) ncs[static_cast<std::size_t>(a)].setOperational(true);
+        fallen_axes.clear();
+      }
+      return true;
+    }
+    const auto every =
+        static_cast<std::uint64_t>(std::max<std::int64_t>(1, kStatusPollNs / cycle_ns));
+    if (cycle % every != 0) return true;
+    status_check.start(ecat::kAlOp, segment.escs.size(), false);
+    if (!master.alFrame(sink, status_check, at_ns)) return false;
+    for (std::size_t s = 0; s < segment.escs.size(); ++s) {
+      const int axis = segment.escs[s].axis;
+      if (!status_check.need_ack[s] || axis < 0) continue;
+      incident(IncidentKind::Esm, axis, master.frames(), slot);
+      ncs[static_cast<std::size_t>(axis)].fellFromOp();
+      fallen_axes.push_back(axis);
+    }
+    return true;
   }
 
   // Soak: a 10 s pattern repeated, planned a period ahead (constant memory).
@@ -224,10 +374,21 @@ struct Simulator::Impl {
       }
       for (Esc& esc : segment.escs) esc.outputs_taken = false;
       std::fill(latest_inputs.begin(), latest_inputs.end(), std::nullopt);
+      for (Fall& f : falls) {
+        if (f.done || slot < f.at_ns) continue;
+        segment.servo(f.axis).fallFromOp(f.code);
+        f.done = true;
+      }
+      bool failed = true;  // every axis: the cycle's frames lost or not sent
       if (!faults.takeSkippedCycle() && !lost) {
         const bool lost_before = faults.takeLossBeforeSlaves();
         const bool lost_after =
             faults.takeLossAfterSlaves() || (o.loss > 0 && rng.uniform() < o.loss);
+        failed = lost_before || lost_after;
+        if (outage_due) {  // the limit was exceeded: this cycle's master copy shows it
+          incident(IncidentKind::BusOutage, -1, master.frames() + 1, slot);
+          outage_due = false;
+        }
         // The capture, not the bus, misses the master copies of a cycle whose returned copies
         // it holds (docs/simulate.md); never the first cycle's, which starts each frame's clock.
         const bool drop_master = o.capture_loss > 0 && cycle > 0 && !lost_before && !lost_after &&
@@ -243,6 +404,12 @@ struct Simulator::Impl {
         }
       }
       stepDrives(slot);
+      if (o.scenario == Scenario::Incidents) {
+        watchDriveFaults(slot);
+        failed_cycles = failed ? failed_cycles + 1 : 0;
+        if (failed_cycles == kTelegramFailureLimit + 1) outage_due = true;
+        if (operational && !failed && !checkAlStatus(sink, cycle, slot)) return std::nullopt;
+      }
       if (!operational) {
         if (!walk.active && cycle + 1 == safe_op_cycles) {
           walk.start(ecat::kAlOp, segment.escs.size(), true);
@@ -264,6 +431,21 @@ Simulator::~Simulator() = default;
 
 std::uint64_t Simulator::masterCopiesDropped() const {
   return impl_->master_copies_dropped;
+}
+
+Result<std::vector<IncidentTruth>> Simulator::incidents() const {
+  const Impl& impl = *impl_;
+  if (!impl.unplanned.empty()) {
+    return fail("incidents the plan did not say: " +
+                fmt::format("{}", fmt::join(impl.unplanned, "; ")));
+  }
+  for (const PlannedIncident& p : impl.planned) {
+    if (!p.seen) {
+      return fail(fmt::format("a planned {} on axis {} ({}) did not happen",
+                              incidentKindName(p.kind), p.axis, p.cause));
+    }
+  }
+  return impl.seen;
 }
 
 const std::vector<AxisConfig>& Simulator::layout() const {

@@ -68,6 +68,17 @@ RxPdo decodeRx(const std::uint8_t* in);              // kRxPdoSize bytes
 // them.
 namespace bits {
 using namespace ncservo::bits;
+// The other bits the simulator's drives raise or show (docs/protocol.md §3-4).
+inline constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
+inline constexpr std::uint32_t kEncoderErr = mask32("ncservo.sew.encoder");
+inline constexpr std::uint32_t kI2tEndat = mask32("ncservo.sew.i2t_endat");
+inline constexpr std::uint32_t kBusVoltageErr = mask32("ncservo.sew.bus_voltage");
+inline constexpr std::uint32_t kCurrentErr = mask32("ncservo.sew.current");
+inline constexpr std::uint32_t kServoRuntime = mask32("ncservo.sew.servo_runtime");
+inline constexpr std::uint32_t kPdpint = mask32("ncservo.sew.pdpint");
+inline constexpr std::uint32_t kParamChecksum = mask32("ncservo.sew.param_checksum");
+inline constexpr std::uint32_t kEcatWatchdog = mask32("ncservo.sew.ecat_watchdog");
+inline constexpr std::uint32_t kOverspeed = mask32("ncservo.sew.overspeed");
 
 // Parameter table number 1..8 <-> the SCW/SSW bits (table = ExtPRMTBL·4 + PRMTBL + 1).
 std::uint32_t scwTable(int table);
@@ -99,6 +110,21 @@ enum class DriveQuirk : std::uint8_t {
   SilentTimeout,        // COM-003: no ECatTErr after lost cycles
 };
 
+// A quantity the drive reports that climbs (docs/simulate.md, the incidents scenario) until it
+// trips the drive's fault, then settles back.
+struct Drift {
+  enum class Quantity : std::uint8_t {
+    MotorTemperature,  // message code 4 and extra data 4; SSW.TempWarning above 80 °C
+    BusVoltage,        // message code 3
+    MotorCurrent,      // message codes 1 and 2, extra data 3 (reported only: no heat)
+  };
+  Quantity quantity = Quantity::MotorTemperature;
+  std::int64_t from_ns = 0;
+  double per_second = 0;    // the climb
+  double trip = 0;          // the value at which the drive faults
+  std::uint32_t cause = 0;  // the SEW cause bit it raises then
+};
+
 struct DriveSetup {
   int axis = 0;
   bool incremental = false;  // incremental encoder (zero-pulse search), else absolute
@@ -122,6 +148,8 @@ class DriveModel {
   // A drive fault: the cause bit rises now (orderly reaction follows).
   void raiseFault(std::uint32_t cause_bit) { pending_faults_ |= cause_bit; }
   void arm(DriveQuirk quirk, std::int64_t from_ns);
+  // A quantity that climbs from its time until it trips a fault (one at a time).
+  void drift(const Drift& drift) { drift_ = drift; }
 
   bool enabled() const { return enabled_; }
   double speedRpm() const { return speed_rpm_; }
@@ -140,6 +168,7 @@ class DriveModel {
   void updateHandshakes(const RxPdo& rx, std::int64_t now_ns);
   void updateMotion(const RxPdo& rx, double dt);
   void buildInputs(const RxPdo& rx, std::int64_t now_ns);
+  void updateDrift(std::int64_t now_ns, double dt);
 
   DriveSetup setup_;
   Rng rng_;
@@ -193,6 +222,11 @@ class DriveModel {
   double accel_ = 0;     // rpm/s, for the current
   double current_a_ = 0;
   double temperature_c_ = 35.0;
+  // the drift under way (the incidents scenario), and what it adds to the reported values
+  std::optional<Drift> drift_;
+  bool drift_tripped_ = false;
+  double extra_bus_v_ = 0;
+  double extra_current_a_ = 0;
   TxPdo inputs_;
 };
 
@@ -201,6 +235,7 @@ enum class NcAction : std::uint8_t {
   Enable,     // SE 0x0 -> 0x1 -> 0x2, wait for ServoEn
   Disable,    // SE 0x2 -> 0x1 -> 0x0
   Speed,      // new speed target (value: rpm)
+  SpeedStep,  // new speed target (value: rpm), set at once instead of ramped
   ZeroPulse,  // zero-pulse search (incremental encoder)
   Table,      // parameter table (value: 1..8)
   Emergency,  // EMGON 0 for value milliseconds, speed to zero
@@ -227,6 +262,9 @@ class NcAxis {
   // Outside OP the NC sends neutral outputs (SE 0), unless told to misbehave (ESM-002).
   void setOperational(bool op) { operational_ = op; }
   void setEnableBeforeOp(bool on) { enable_before_op_ = on; }
+  // The axis's slave fell out of OP (the master read it): neutral outputs until setOperational,
+  // then a legal enable again if the plan wants the axis on.
+  void fellFromOp();
   std::size_t pendingEvents() const { return events_.size(); }
 
  private:

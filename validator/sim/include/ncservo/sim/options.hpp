@@ -15,7 +15,7 @@
 
 namespace ncservo::sim {
 
-enum class Scenario : std::uint8_t { Commissioning, Faults, Soak };
+enum class Scenario : std::uint8_t { Commissioning, Faults, Soak, Incidents };
 // How the master lays out the process image (docs/protocol.md §9.4).
 enum class ImageStyle : std::uint8_t {
   Soem,      // one LRW per frame: all outputs, then all inputs, in ring order

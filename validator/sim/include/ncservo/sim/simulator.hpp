@@ -18,10 +18,22 @@
 #include <string_view>
 #include <vector>
 
+#include "ncservo/base/error.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/sim/options.hpp"
 
 namespace ncservo::sim {
+
+// An incident of the `incidents` scenario as `validate` must list it (docs/simulate.md#incidents):
+// the frame is the one the simulator wrote, counted from 1 in the capture.
+struct IncidentTruth {
+  std::string kind;         // drive-fault, bus-outage or esm
+  std::optional<int> axis;  // none for a bus outage
+  std::uint64_t frame = 0;
+  std::string cause;  // the cause id
+};
+// `{"incidents": [{"kind", "axis", "frame", "cause"}, ...]}`, for --incidents-truth.
+std::string incidentsJson(const std::vector<IncidentTruth>& incidents);
 
 class Simulator {
  public:
@@ -42,6 +54,9 @@ class Simulator {
   std::optional<std::uint64_t> run(const FrameSink& sink);
   // The master copies --capture-loss left out of the capture: its truth.
   std::uint64_t masterCopiesDropped() const;
+  // After run, in the `incidents` scenario: every incident it wrote, in capture order; an error
+  // when an incident happened that its plan did not say, or one it planned did not happen.
+  Result<std::vector<IncidentTruth>> incidents() const;
 
  private:
   struct Impl;
