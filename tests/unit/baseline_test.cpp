@@ -30,8 +30,13 @@ Fingerprint parsed(const std::string& text) {
 }
 
 ReportedCapture captureOf(const std::vector<const char*>& fingerprints) {
-  ReportedCapture capture{"base.pcap"};
-  for (const char* f : fingerprints) capture.findings.push_back({parsed(f)});
+  ReportedCapture capture;
+  capture.path = "base.pcap";
+  for (const char* f : fingerprints) {
+    ReportedFinding finding;
+    finding.fingerprint = parsed(f);
+    capture.findings.push_back(finding);
+  }
   return capture;
 }
 
@@ -187,7 +192,10 @@ class BaselineCaptureFor : public ::testing::TestWithParam<CaptureForRow> {};
 TEST_P(BaselineCaptureFor, ByFileNameOrTheOneOfEach) {
   const CaptureForRow& row = GetParam();
   ReportFile file{"base.json", {}};
-  for (const char* path : row.baseline) file.captures.push_back({path});
+  for (const char* path : row.baseline) {
+    file.captures.emplace_back();
+    file.captures.back().path = path;
+  }
   const ReportedCapture* found = baselineCaptureFor(file, row.capture, row.run_captures);
   EXPECT_EQ(found == nullptr ? -1 : static_cast<int>(found - file.captures.data()), row.expected);
 }
@@ -290,6 +298,20 @@ TEST_P(SegmentOrdinals, TheSameRecordingMatchesWhereverItIs) {
   EXPECT_EQ(report.baseline_absent.size(), row.absent);
   EXPECT_EQ(describeBaseline(report),
             fmt::format("{} new, {} unchanged, {} absent", row.added, row.unchanged, row.absent));
+}
+
+// The recording twice over in one file: the second copy is a segment of its own, whose findings
+// have the first copy's fingerprints (docs/baselines.md#fingerprints).
+TEST(SegmentOrdinalsRestart, TheSecondCopyHasTheFirstsFingerprints) {
+  const std::vector<Frame> base = simulate(3, kFaults);
+  const CaptureReport report = judge({&base, &base}, nullptr);
+  EXPECT_EQ(report.segment_count, 2u);
+  ASSERT_EQ(report.findings.size(), 6u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(report.findings[i].ordinal, 1u);
+    EXPECT_EQ(fingerprintText(report.fingerprintOf(report.findings[i])),
+              fingerprintText(report.fingerprintOf(report.findings[i + 3])));
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(
