@@ -9,14 +9,16 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "ncservo/base/number.hpp"
-#include "report_format.hpp"
 
 namespace ncservo::cli {
 
-using detail::Json;
+using Json = nlohmann::ordered_json;
 
 std::string fingerprintText(const Fingerprint& f) {
   return fmt::format("{} {} #{}", f.rule, f.axis ? *f.axis : std::string("bus"), f.ordinal);
@@ -229,11 +231,6 @@ std::vector<ReportedFinding> BaselineMatcher::absent() const {
     if (!taken_[i]) left.push_back(capture_->findings[i]);
   }
   return left;
-}
-
-ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict) {
-  // The one reading of a capture's JSON: a capture validated now is what its report would hold.
-  return captureOf(detail::captureJson(report, verdict), report.path);
 }
 
 namespace {

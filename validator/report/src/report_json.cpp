@@ -340,6 +340,27 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   return c;
 }
 
+}  // namespace ncservo::cli::detail
+
+namespace ncservo::cli {
+
+ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict) {
+  // The one reading of a capture's JSON: a capture validated now is what its report would hold.
+  const detail::Json document{
+      {"captures", detail::Json::array({detail::captureJson(report, verdict)})}};
+  Result<ReportFile> read = parseReportFile(document.dump(), report.path);
+  if (!read || read->captures.empty()) {
+    ReportedCapture unread;
+    unread.path = report.path;
+    return unread;
+  }
+  return std::move(read->captures.front());
+}
+
+}  // namespace ncservo::cli
+
+namespace ncservo::cli::detail {
+
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json j;
   j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
