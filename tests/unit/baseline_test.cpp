@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -210,6 +211,118 @@ INSTANTIATE_TEST_SUITE_P(
         CaptureForRow{"one in the baseline, several run", {"a.pcap"}, "c.pcap", 2, -1},
         CaptureForRow{"two of that name", {"x/a.pcap", "y/a.pcap"}, "a.pcap", 1, -1}),
     test::rowName<CaptureForRow>);
+
+// ---- diff: findings by rule and axis, incidents, the exit status ----
+
+// "drive-fault axis1 communication-loss": kind, axis ("bus": none), cause ("-": none).
+ReportedIncident incident(const std::string& text) {
+  std::istringstream words(text);
+  std::string kind, axis, cause;
+  words >> kind >> axis >> cause;
+  ReportedIncident i;
+  i.kind = kind;
+  if (axis != "bus") i.axis = axis;
+  if (cause != "-") i.cause = cause;
+  return i;
+}
+
+struct DiffRow {
+  const char* name;
+  std::vector<const char*> base, next;  // findings' fingerprints; those with "warn" are warnings
+  std::vector<const char*> base_incidents, next_incidents;
+  std::size_t added, absent, unchanged;
+  std::size_t incidents_added, incidents_absent, incidents_unchanged;
+  bool fails;  // at --fail-on error
+};
+
+class Diff : public ::testing::TestWithParam<DiffRow> {};
+
+TEST_P(Diff, CountsAndTheExitStatus) {
+  const DiffRow& row = GetParam();
+  auto side = [](const std::vector<const char*>& findings,
+                 const std::vector<const char*>& incidents) {
+    ReportedCapture c = captureOf(findings);
+    for (std::size_t k = 0; k < findings.size(); ++k) {
+      c.findings[k].severity =
+          c.findings[k].fingerprint.rule == "COM-002" ? Severity::Warning : Severity::Error;
+    }
+    for (const char* i : incidents) c.incidents.push_back(incident(i));
+    return c;
+  };
+  const CaptureDiff d =
+      diffCaptures(side(row.base, row.base_incidents), side(row.next, row.next_incidents));
+  EXPECT_EQ(d.added.size(), row.added);
+  EXPECT_EQ(d.absent.size(), row.absent);
+  EXPECT_EQ(d.unchanged, row.unchanged);
+  EXPECT_EQ(d.incidents_added.size(), row.incidents_added);
+  EXPECT_EQ(d.incidents_absent.size(), row.incidents_absent);
+  EXPECT_EQ(d.incidents_unchanged, row.incidents_unchanged);
+  std::size_t by_group = 0;
+  for (const DiffGroup& g : d.groups) {
+    EXPECT_EQ(g.next, g.added + g.unchanged) << g.rule;
+    EXPECT_EQ(g.base, g.absent + g.unchanged) << g.rule;
+    by_group += g.added;
+  }
+  EXPECT_EQ(by_group, row.added);
+  EXPECT_EQ(diffFails(d, Severity::Error, false), row.fails);
+  EXPECT_FALSE(diffFails(d, Severity::Error, true));  // --fail-on never
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rows, Diff,
+    ::testing::Values(
+        DiffRow{"same", {"SE-001 axis0 1"}, {"SE-001 axis0 1"}, {}, {}, 0, 0, 1, 0, 0, 0, false},
+        DiffRow{"one more error",
+                {"SE-001 axis0 1"},
+                {"SE-001 axis0 1", "SEW-001 axis1 1"},
+                {},
+                {},
+                1,
+                0,
+                1,
+                0,
+                0,
+                0,
+                true},
+        DiffRow{"one more warning", {}, {"COM-002 bus 1"}, {}, {}, 1, 0, 0, 0, 0, 0, false},
+        DiffRow{"one fewer",
+                {"SE-001 axis0 1", "SEW-001 axis1 1"},
+                {"SE-001 axis0 1"},
+                {},
+                {},
+                0,
+                1,
+                1,
+                0,
+                0,
+                0,
+                false},
+        DiffRow{"incidents by kind, axis and cause",
+                {},
+                {},
+                {"drive-fault axis1 communication-loss", "bus-outage bus -"},
+                {"drive-fault axis1 overtemperature", "bus-outage bus -",
+                 "drive-fault axis1 communication-loss"},
+                0,
+                0,
+                0,
+                1,
+                0,
+                2,
+                false},
+        DiffRow{"an incident gone",
+                {},
+                {},
+                {"esm axis2 -", "drive-fault axis0 encoder"},
+                {"drive-fault axis0 encoder"},
+                0,
+                0,
+                0,
+                0,
+                1,
+                1,
+                false}),
+    test::rowName<DiffRow>);
 
 // ---- The ordinals the validator gives, through simulated recordings ----
 

@@ -243,8 +243,8 @@ DiffGroup& groupOf(std::vector<DiffGroup>& groups, const Fingerprint& f) {
   return groups.back();
 }
 
-// Incidents are matched as findings are, by kind, axis and cause: the k-th of a kind on an axis
-// with a cause takes the k-th of BASE.
+// Incidents are matched as findings are, by kind, axis and cause id
+// (docs/baselines.md#ncservo-diff).
 using IncidentKey = std::tuple<std::string, std::optional<std::string>, std::optional<std::string>>;
 IncidentKey keyOf(const ReportedIncident& i) {
   return {i.kind, i.axis, i.cause};
@@ -269,25 +269,20 @@ CaptureDiff diffCaptures(ReportedCapture base, ReportedCapture next) {
   }
   diff.absent = matcher.absent();
   for (const ReportedFinding& f : diff.absent) ++groupOf(diff.groups, f.fingerprint).absent;
-  std::map<IncidentKey, std::size_t> waiting;
-  for (const ReportedIncident& i : base.incidents) ++waiting[keyOf(i)];
+  // Each of NEW's incidents takes the first of BASE's of its key not yet taken.
+  std::vector<bool> taken(base.incidents.size(), false);
   for (const ReportedIncident& i : next.incidents) {
-    std::size_t& left = waiting[keyOf(i)];
-    if (left == 0) {
+    std::size_t j = 0;
+    while (j < taken.size() && (taken[j] || keyOf(base.incidents[j]) != keyOf(i))) ++j;
+    if (j == taken.size()) {
       diff.incidents_added.push_back(i);
     } else {
-      --left;
+      taken[j] = true;
       ++diff.incidents_unchanged;
     }
   }
-  // BASE's incidents not taken: the last of each key, as the matching takes the first.
-  std::map<IncidentKey, std::size_t> seen;
-  for (const ReportedIncident& i : base.incidents) {
-    const IncidentKey key = keyOf(i);
-    const std::size_t total =
-        std::count_if(base.incidents.begin(), base.incidents.end(),
-                      [&](const ReportedIncident& other) { return keyOf(other) == key; });
-    if (++seen[key] > total - waiting[key]) diff.incidents_absent.push_back(i);
+  for (std::size_t j = 0; j < taken.size(); ++j) {
+    if (!taken[j]) diff.incidents_absent.push_back(base.incidents[j]);
   }
   diff.base = std::move(base);
   diff.next = std::move(next);
