@@ -113,7 +113,7 @@ layout_help() {  # layout_help COMMAND: its help's lines for --config, --no-defa
 }
 layout_help decode >"$WORK/layout-decode.txt"
 [ "$(wc -l <"$WORK/layout-decode.txt")" -eq 3 ] || fail "decode --help: $(cat "$WORK/layout-decode.txt")"
-for command in validate annotate monitor; do
+for command in validate annotate monitor diff; do
   layout_help "$command" | diff "$WORK/layout-decode.txt" - >/dev/null ||
     fail "$command --help: the layout options differ from decode's"
 done

@@ -102,7 +102,7 @@ assert c["summary"] == {"error": 1, "warning": 1, "info": 0}, c["summary"]
 want = sorted((f["rule"], f["axis"], f["frame"]) for f in c["findings"])
 for f in c["findings"]:
     assert set(f) == {"rule", "slug", "severity", "axis", "axis_name", "frame", "since_frame", "time",
-                      "time_utc", "message"}, f
+                      "time_utc", "message", "fingerprint"}, f
     assert f["message"]
 for a in c["axes"]:
     assert {"index", "name", "state", "state_timeline", "error_history", "telegram_failures"} <= set(a)

@@ -456,19 +456,53 @@ int runDecode(const DecodeArgs& args) {
 
 // ---- validate ----
 
-struct ValidateArgs : cli::RuleArgs {
-  std::vector<std::string> captures;
+// What judges a capture, for validate and diff alike: the layout, the rules, the clock, the window.
+struct CheckArgs : cli::RuleArgs {
   LayoutArgs layout;
+  std::string timestamps = "auto";
+  WindowArgs window;
+};
+
+struct ValidateArgs : CheckArgs {
+  std::vector<std::string> captures;
   std::string format = cli::reportFormatNames().front();
   std::string output;
   std::string fail_on = "error";
-  std::string timestamps = "auto";
   bool allow_empty = false;
   bool verbose = false;
   std::optional<unsigned> jobs;      // default: the cores
   std::vector<std::string> reports;  // FORMAT:FILE
-  WindowArgs window;
+  std::string baseline;              // a JSON report (docs/baselines.md)
 };
+
+// CheckArgs made ready: the files loaded, the settings built, the window checked.
+struct CheckSetup {
+  LayoutFiles files;
+  RuleSettings settings;
+  TimeWindow window;
+  TimestampMode timestamps = TimestampMode::Auto;
+  DecoderOptions layout;
+  // The ENI's tasks, whose cycle times the capture is held against
+  // (docs/layout.md#eni-cycle-times).
+  std::vector<EniCyclicFrame> eni_frames;
+};
+
+// A usage error (exit 2) when a file or an option is wrong.
+Result<CheckSetup> prepareCheck(const CheckArgs& o) {
+  CheckSetup setup;
+  Result<LayoutFiles> files = loadLayoutFiles(o.layout);
+  if (!files) return fail(files.error());
+  setup.files = std::move(*files);
+  if (Status built = buildSettings(o, setup.files.config, setup.settings); !built)
+    return fail(built.error());
+  const Result<TimeWindow> time_window = timeWindowOf(o.window.from_s, o.window.to_s);
+  if (!time_window) return fail(time_window.error());
+  setup.window = *time_window;
+  setup.timestamps = *timestampModeFromName(o.timestamps);
+  setup.layout = decoderOptions(setup.files, o.layout);
+  if (setup.files.eni) setup.eni_frames = setup.files.eni->frames;
+  return setup;
+}
 
 // Where one capture's report goes while it is made: to the writer as it comes (one capture at
 // a time), or, with `live` null, kept whole with its messages for the writer (captures in
@@ -479,11 +513,11 @@ struct CaptureOutput {
 };
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
-int validateCapture(const std::string& path, const DecoderOptions& decoder_options,
-                    const std::vector<EniCyclicFrame>& eni_frames, const RuleSettings& settings,
-                    TimestampMode timestamps, const TimeWindow& time_window,
+int validateCapture(const std::string& path, const CheckSetup& setup,
                     const cli::ReportWriter& writer, const CaptureOutput& output,
                     cli::CaptureReport& report) {
+  const RuleSettings& settings = setup.settings;
+  const TimeWindow& time_window = setup.window;
   report.path = path;
   if (output.live != nullptr) output.live->beginCapture(report);
   auto opened = CaptureReader::open(path);
@@ -495,8 +529,8 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   }
   const std::unique_ptr<CaptureReader> reader = std::move(*opened);
   report.timestamp_digits = reader->timestampDigits();
-  CapturePipeline pipeline({decoder_options, settings, time_window, timestamps});
-  pipeline.holdEniCycles(eni_frames);
+  CapturePipeline pipeline({setup.layout, settings, time_window, setup.timestamps});
+  pipeline.holdEniCycles(setup.eni_frames);
   std::optional<cli::TimelineRecorder> timelines;
   if (writer.drawsTimelines()) timelines.emplace(settings);
   const auto start = [&](const DecoderOptions&) {
@@ -509,10 +543,13 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
   };
   const auto keepFindings = [&](const std::vector<Finding>& findings) {
     for (const Finding& f : findings) {
-      report.tally(f);
-      if (output.live == nullptr || writer.keepsFindings()) report.findings.push_back(f);
+      const cli::BaselineState state = report.tally(f);
+      if (output.live == nullptr || writer.keepsFindings()) {
+        report.findings.push_back(f);
+        if (report.baseline) report.baseline_states.push_back(state);
+      }
       if (timelines) timelines->finding(f);
-      if (output.live != nullptr) output.live->finding(report, f);
+      if (output.live != nullptr) output.live->finding(report, f, state);
     }
   };
   pipeline.setSinks({start, validate, nullptr, keepFindings});
@@ -559,6 +596,7 @@ int validateCapture(const std::string& path, const DecoderOptions& decoder_optio
                  located.error().text());
     }
   }
+  report.closeBaseline();
   if (output.live != nullptr) output.live->endCapture(report);
   switch (writer.verdict(report)) {
     case cli::Verdict::Unreadable:
@@ -579,9 +617,15 @@ void presentCapture(cli::ReportWriter& writer, const std::string& messages,
                     cli::CaptureReport& report) {
   std::fputs(messages.c_str(), stderr);
   writer.beginCapture(report);
-  for (const Finding& f : report.findings) writer.finding(report, f);
+  for (std::size_t i = 0; i < report.findings.size(); ++i) {
+    writer.finding(report, report.findings[i],
+                   report.baseline ? report.baseline_states[i] : cli::BaselineState::None);
+  }
   writer.endCapture(report);
-  if (!writer.keepsFindings()) std::vector<Finding>().swap(report.findings);
+  if (!writer.keepsFindings()) {
+    std::vector<Finding>().swap(report.findings);
+    std::vector<cli::BaselineState>().swap(report.baseline_states);
+  }
 }
 
 // docs/cli.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
@@ -644,20 +688,20 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: standard input (-) can be read only once\n");
     return kExitUsage;
   }
-  const Result<LayoutFiles> files = loadLayoutFiles(o.layout);
-  if (!files) {
-    fmt::print(stderr, "ncservo: {}\n", files.error().text());
+  const Result<CheckSetup> setup = prepareCheck(o);
+  if (!setup) {
+    fmt::print(stderr, "ncservo: {}\n", setup.error().text());
     return kExitUsage;
   }
-  RuleSettings settings;
-  if (Status built = buildSettings(o, files->config, settings); !built) {
-    fmt::print(stderr, "ncservo: {}\n", built.error().text());
-    return kExitUsage;
-  }
-  const Result<TimeWindow> time_window = timeWindowOf(o.window.from_s, o.window.to_s);
-  if (!time_window) {
-    fmt::print(stderr, "ncservo: {}\n", time_window.error().text());
-    return kExitUsage;
+  // docs/baselines.md: a baseline that cannot be read is a usage error, as a bad --config is.
+  std::optional<cli::ReportFile> baseline;
+  if (!o.baseline.empty()) {
+    Result<cli::ReportFile> loaded = cli::loadReportFile(o.baseline);
+    if (!loaded) {
+      fmt::print(stderr, "ncservo: --baseline {}\n", loaded.error().text());
+      return kExitUsage;
+    }
+    baseline = std::move(*loaded);
   }
   const Result<std::vector<cli::ReportTarget>> targets = reportTargets(o);
   if (!targets) {
@@ -668,26 +712,33 @@ int runValidate(const ValidateArgs& o) {
   cli::setFailOn(o.fail_on, policy);
   policy.allow_empty = o.allow_empty;
   policy.verbose = o.verbose;
-  policy.enabled = settings.enabled;
+  policy.enabled = setup->settings.enabled;
   auto writer = cli::ReportWriter::open(*targets, policy);
   if (!writer) {
     fmt::print(stderr, "ncservo: {}\n", writer.error().text());
     return kExitUsage;
   }
-  const TimestampMode timestamps = *timestampModeFromName(o.timestamps);
-  const DecoderOptions layout = decoderOptions(*files, o.layout);
-  // The ENI's tasks, whose cycle times the capture is held against
-  // (docs/layout.md#eni-cycle-times).
-  const std::vector<EniCyclicFrame> eni_frames =
-      files->eni ? files->eni->frames : std::vector<EniCyclicFrame>{};
   std::vector<cli::CaptureReport> reports(o.captures.size());
+  if (baseline) {
+    for (std::size_t i = 0; i < o.captures.size(); ++i) {
+      const cli::ReportedCapture* matched =
+          cli::baselineCaptureFor(*baseline, o.captures[i], o.captures.size());
+      if (matched == nullptr) {
+        fmt::print(stderr,
+                   "ncservo: {}: no capture of this file name in the baseline {}: each of its "
+                   "findings is new\n",
+                   o.captures[i], o.baseline);
+      }
+      reports[i].baseline.emplace(matched);
+      reports[i].baseline_path = o.baseline;
+    }
+  }
   int rc = kExitOk;
   const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
   if (jobs <= 1 || o.captures.size() <= 1) {
     for (std::size_t i = 0; i < o.captures.size(); ++i) {
-      rc =
-          combine(rc, validateCapture(o.captures[i], layout, eni_frames, settings, timestamps,
-                                      *time_window, **writer, {writer->get(), stderr}, reports[i]));
+      rc = combine(rc, validateCapture(o.captures[i], *setup, **writer, {writer->get(), stderr},
+                                       reports[i]));
     }
   } else {
     struct Validated {
@@ -698,8 +749,8 @@ int runValidate(const ValidateArgs& o) {
       char* buffer = nullptr;
       std::size_t size = 0;
       std::FILE* messages = open_memstream(&buffer, &size);
-      const int status = validateCapture(o.captures[i], layout, eni_frames, settings, timestamps,
-                                         *time_window, **writer, {nullptr, messages}, reports[i]);
+      const int status =
+          validateCapture(o.captures[i], *setup, **writer, {nullptr, messages}, reports[i]);
       std::fclose(messages);
       Validated validated{status, std::string(buffer, size)};
       std::free(buffer);
@@ -714,6 +765,83 @@ int runValidate(const ValidateArgs& o) {
   }
   if (Status written = (*writer)->finish(reports); !written) {
     fmt::print(stderr, "ncservo: {}\n", written.error().text());
+    return kExitUsage;
+  }
+  return rc;
+}
+
+// ---- diff ----
+
+struct DiffArgs {
+  std::string base, next;
+  std::string format = cli::diffFormatNames().front();
+  std::string output;
+  std::string fail_on = "error";
+  CheckArgs check;
+};
+
+// One side of a diff: a JSON report of validate (its one capture), or a capture validated as
+// validate does. Exit status 3 when it cannot be read, 2 when a report holds several captures.
+struct DiffSide {
+  int rc = kExitOk;
+  cli::ReportedCapture capture;
+};
+DiffSide diffSide(const std::string& path, const CheckSetup& setup, const cli::ReportWriter& writer,
+                  const cli::ReportPolicy& policy) {
+  if (cli::looksLikeJsonReport(path)) {
+    Result<cli::ReportFile> report = cli::loadReportFile(path);
+    if (!report) {
+      fmt::print(stderr, "ncservo diff: {}\n", report.error().text());
+      return {kExitCapture, {}};
+    }
+    if (report->captures.size() != 1) {
+      fmt::print(stderr, "ncservo diff: {}: holds {} captures; diff compares one with one\n", path,
+                 report->captures.size());
+      return {kExitUsage, {}};
+    }
+    return {kExitOk, std::move(report->captures.front())};
+  }
+  cli::CaptureReport report;
+  const int rc = validateCapture(path, setup, writer, {nullptr, stderr}, report);
+  if (rc == kExitCapture) return {rc, {}};
+  return {kExitOk, cli::reportedCaptureOf(report, cli::verdictOf(policy, report))};
+}
+
+int runDiff(const DiffArgs& o) {
+  if (o.base == "-" && o.next == "-") {
+    fmt::print(stderr, "ncservo diff: standard input (-) can be read only once\n");
+    return kExitUsage;
+  }
+  const Result<CheckSetup> setup = prepareCheck(o.check);
+  if (!setup) {
+    fmt::print(stderr, "ncservo diff: {}\n", setup.error().text());
+    return kExitUsage;
+  }
+  cli::ReportPolicy policy;
+  cli::setFailOn(o.fail_on, policy);
+  policy.enabled = setup->settings.enabled;
+  Result<std::FILE*> out = openOutput(o.output, {o.base, o.next});
+  if (!out) {
+    fmt::print(stderr, "ncservo diff: {}\n", out.error().text());
+    return kExitUsage;
+  }
+  // No report is written: the captures' findings are kept for the comparison.
+  auto writer = cli::ReportWriter::open({}, policy);
+  DiffSide base = diffSide(o.base, *setup, **writer, policy);
+  DiffSide next = base.rc == kExitOk ? diffSide(o.next, *setup, **writer, policy) : DiffSide{};
+  int rc = base.rc != kExitOk ? base.rc : next.rc;
+  if (rc == kExitOk) {
+    cli::CaptureDiff diff = cli::diffCaptures(std::move(base.capture), std::move(next.capture));
+    diff.base_source = o.base;
+    diff.next_source = o.next;
+    cli::writeDiff(*out, o.format, diff);
+    rc = cli::diffFails(diff, policy.fail_on, policy.never) ? kExitFindings : kExitOk;
+  }
+  const bool written = std::fflush(*out) == 0;
+  if (*out != stdout) std::fclose(*out);
+  if (!written) {
+    fmt::print(stderr, "ncservo diff: {}: cannot write\n",
+               o.output.empty() ? "standard output" : o.output);
     return kExitUsage;
   }
   return rc;
@@ -1116,6 +1244,9 @@ Handler validateCommand(CLI::App& command) {
   command.add_flag("-v,--verbose", args->verbose,
                    "text: every finding, not one line per rule and axis");
   cli::addFailOnOption(command, args->fail_on);
+  command.add_option("--baseline", args->baseline,
+                     "REPORT.json: a JSON report of an earlier run; each finding is new or "
+                     "unchanged against it, and --fail-on counts the new ones (docs/baselines.md)");
   cli::addRuleOptions(command, *args);
   addTimestampsOption(command, args->timestamps);
   addWindowOptions(command, args->window);
@@ -1127,6 +1258,21 @@ Handler validateCommand(CLI::App& command) {
                   "in argument order, as with 1")
       ->check(CLI::Range(1u, 1024u));
   return [args] { return runValidate(*args); };
+}
+
+Handler diffCommand(CLI::App& command) {
+  auto args = std::make_shared<DiffArgs>();
+  command.add_option("BASE", args->base, "the capture or JSON report compared against")->required();
+  command.add_option("NEW", args->next, "the capture or JSON report compared")->required();
+  addFormatOption(command, args->format, cli::diffFormatNames());
+  command.add_option("-o,--output", args->output, "write here (default: standard output)");
+  cli::addFailOnOption(command, args->fail_on);
+  // A capture is validated as `validate` would, with the same options.
+  addLayoutOptions(command, args->check.layout);
+  cli::addRuleOptions(command, args->check);
+  addTimestampsOption(command, args->check.timestamps);
+  addWindowOptions(command, args->check.window);
+  return [args] { return runDiff(*args); };
 }
 
 Handler rulesCommand(CLI::App& command) {
@@ -1271,6 +1417,9 @@ struct Subcommand {
 const Subcommand kSubcommands[] = {
     {"decode", "print the decoded process data, one row per axis and cycle", decodeCommand},
     {"validate", "check captures against the rules (docs/rules.md)", validateCommand},
+    {"diff",
+     "compare two captures or JSON reports: findings, incidents, timing (docs/baselines.md)",
+     diffCommand},
     {"rules", "list the rules: ID, slug, severity, party, summary", rulesCommand},
     {"fields", "list every decoded field (generated from the field table)", fieldsCommand},
     {"simulate", "write a capture of simulated NC and drives (scenarios, faults)", simulateCommand},

@@ -351,9 +351,9 @@ struct MonitorOutput {
 void reportFindings(const std::vector<Finding>& findings, const CapturePipeline& pipeline,
                     ReportWriter& writer, CaptureReport& report, MonitorOutput& output) {
   for (const Finding& f : findings) {
-    report.tally(f);
+    const BaselineState state = report.tally(f);
     output.board.clear();
-    writer.finding(report, f);
+    writer.finding(report, f, state);
     std::fflush(stdout);
     if (f.axis) {
       output.last_finding[*f.axis] =

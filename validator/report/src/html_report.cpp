@@ -118,6 +118,9 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
           {"layout_source", layoutSourceName(r.layout_source)},
           {"findings", std::move(findings)},
           {"findings_total", r.findings.size()},
+          {"baseline", r.baseline ? Json(fmt::format("against the baseline {}: {}", r.baseline_path,
+                                                     describeBaseline(r)))
+                                  : Json(nullptr)},
           {"timelines", std::move(timelines)},
           {"timelines_omitted", r.timelines.omitted},
           {"axes", std::move(axes)},
@@ -313,6 +316,7 @@ function captureSection(capture, index) {
   const c = capture.counts;
   verdict.appendChild(document.createTextNode(` ${c.error} errors, ${c.warning} warnings, ${c.info} info; ${capture.frames} frames, ${capture.cycles} cycles; layout: ${capture.layout_source}`));
   section.appendChild(verdict);
+  if (capture.baseline) section.appendChild(el('p', {class: 'baseline'}, capture.baseline));
   if (capture.reason) section.appendChild(el('p', {}, 'No servo: ' + capture.reason));
   if (capture.error) section.appendChild(el('p', {class: 'sev-error'}, capture.error));
   section.appendChild(el('h3', {}, 'Findings'));
@@ -368,6 +372,10 @@ function captureSection(capture, index) {
 data.captures.forEach(captureSection);
 )js";
 }  // namespace
+
+const char* detail::htmlStyle() {
+  return kStyle;
+}
 
 void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json states = Json::array();

@@ -78,9 +78,23 @@ Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, cons
 
 bool CaptureReport::reaches(Severity level) const {
   for (std::size_t s = static_cast<std::size_t>(level); s < counts.size(); ++s) {
-    if (counts[s] > 0) return true;
+    if (counted(static_cast<Severity>(s)) > 0) return true;
   }
   return false;
+}
+
+Fingerprint CaptureReport::fingerprintOf(const Finding& f) const {
+  return {ruleDef(f.rule).code, f.axis ? std::optional(axisLabel(*this, f.axis)) : std::nullopt,
+          f.ordinal};
+}
+
+void CaptureReport::closeBaseline() {
+  if (baseline) baseline_absent = baseline->absent();
+}
+
+std::string describeBaseline(const CaptureReport& r) {
+  return fmt::format("{} new, {} unchanged, {} absent", r.newCount(), r.unchanged,
+                     r.baseline_absent.size());
 }
 
 void summarise(const Validator& validator, CaptureReport& report) {
@@ -125,16 +139,22 @@ Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& r) {
   return Verdict::Pass;
 }
 
-void CaptureReport::tally(const Finding& f) {
+BaselineState CaptureReport::tally(const Finding& f) {
   ++counts[static_cast<std::size_t>(f.severity)];
+  const BaselineState state = baseline ? baseline->match(fingerprintOf(f)) : BaselineState::None;
+  const bool added = state == BaselineState::New;
+  if (added) ++new_counts[static_cast<std::size_t>(f.severity)];
+  if (state == BaselineState::Unchanged) ++unchanged;
   for (FindingGroup& g : groups) {
     if (g.rule == f.rule && g.axis == f.axis) {
       ++g.count;
+      g.added += added ? 1 : 0;
       g.last = f.at;
-      return;
+      return state;
     }
   }
-  groups.push_back({f.rule, f.severity, f.axis, 1, f.at, f.at, f.message});
+  groups.push_back({f.rule, f.severity, f.axis, 1, added ? 1u : 0u, f.at, f.at, f.message});
+  return state;
 }
 
 Status locateFindings(CaptureReport& report) {
@@ -265,9 +285,9 @@ void ReportWriter::beginCapture(const CaptureReport& report) {
   }
 }
 
-void ReportWriter::finding(const CaptureReport& report, const Finding& f) {
+void ReportWriter::finding(const CaptureReport& report, const Finding& f, BaselineState state) {
   for (const Output& o : outputs_) {
-    if (o.format->finding != nullptr) o.format->finding({o.out, policy_}, report, f);
+    if (o.format->finding != nullptr) o.format->finding({o.out, policy_}, report, f, state);
   }
 }
 

@@ -25,8 +25,14 @@ std::string axisName(const CaptureReport& r, std::uint16_t axis);
 double seconds(const CaptureReport& r, const Stamp& at);
 std::string utcOf(const CaptureReport& r, const Stamp& at);
 
-// The JSON of one finding, one capture, and the parts JSON Lines repeats (report_json.cpp).
-Json findingJson(const CaptureReport& r, const Finding& f);
+// The JSON of one finding (with its state against a baseline, where there is one), one capture,
+// and the parts JSON Lines repeats (report_json.cpp).
+Json findingJson(const CaptureReport& r, const Finding& f, BaselineState state);
+// A finding of a report read back (docs/baselines.md), as the report had it, with its `baseline`
+// state ("absent", "new").
+Json reportedFindingJson(const ReportedFinding& f, const char* state);
+// `baseline` of a capture: the report, the capture matched and the counts.
+Json baselineJson(const CaptureReport& r);
 Json notJudgedJson(const CaptureReport& r);
 Json truncationJson(const Truncation& t);
 Json segmentsJson(const CaptureReport& r);
@@ -35,17 +41,21 @@ Json captureJson(const CaptureReport& r, Verdict verdict);
 
 // The writers of the format table, by file: report_text.cpp
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r);
-void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);
+void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
+                      BaselineState state);
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r);
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 // report_json.cpp
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 // report_jsonl.cpp
-void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);
+void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
+                       BaselineState state);
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r);
 // report_junit.cpp
 void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 // report_sarif.cpp
 void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& reports);
+// html_report.cpp: the page's style, which `diff --format html` shares.
+const char* htmlStyle();
 
 }  // namespace ncservo::cli::detail

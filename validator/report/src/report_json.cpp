@@ -135,7 +135,7 @@ Json dcJson(const CaptureReport& r) {
 
 }  // namespace
 
-Json findingJson(const CaptureReport& r, const Finding& f) {
+Json findingJson(const CaptureReport& r, const Finding& f, BaselineState state) {
   const RuleDef& rule = ruleDef(f.rule);
   Json j;
   j["rule"] = rule.code;
@@ -148,7 +148,34 @@ Json findingJson(const CaptureReport& r, const Finding& f) {
   j["time"] = seconds(r, f.at);
   j["time_utc"] = utcOf(r, f.at);
   j["message"] = f.message;
+  j["fingerprint"] = fingerprintText(r.fingerprintOf(f));  // docs/baselines.md#fingerprints
+  if (state != BaselineState::None) j["baseline"] = baselineStateName(state);
   return j;
+}
+
+Json reportedFindingJson(const ReportedFinding& f, const char* state) {
+  return {{"rule", f.fingerprint.rule},
+          {"slug", f.slug},
+          {"severity", severityName(f.severity)},
+          {"axis", f.axis ? Json(*f.axis) : Json(nullptr)},
+          {"axis_name", f.fingerprint.axis ? Json(*f.fingerprint.axis) : Json(nullptr)},
+          {"frame", f.frame},
+          {"since_frame", f.since_frame},
+          {"time", f.time},
+          {"message", f.message},
+          {"fingerprint", fingerprintText(f.fingerprint)},
+          {"baseline", state}};
+}
+
+Json baselineJson(const CaptureReport& r) {
+  const ReportedCapture* matched = r.baseline->capture();
+  return {{"report", r.baseline_path},
+          {"capture", matched != nullptr ? Json(matched->path) : Json(nullptr)},
+          {"new", r.newCount()},
+          {"unchanged", r.unchanged},
+          {"absent", r.baseline_absent.size()},
+          {"new_summary",
+           {{"error", r.new_counts[2]}, {"warning", r.new_counts[1]}, {"info", r.new_counts[0]}}}};
 }
 
 Json notJudgedJson(const CaptureReport& r) {
@@ -264,8 +291,19 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     }
   }
   Json findings = Json::array();
-  for (const Finding& f : r.findings) findings.push_back(findingJson(r, f));
+  for (std::size_t i = 0; i < r.findings.size(); ++i) {
+    findings.push_back(
+        findingJson(r, r.findings[i],
+                    i < r.baseline_states.size() ? r.baseline_states[i] : BaselineState::None));
+  }
   c["findings"] = std::move(findings);
+  if (r.baseline) {
+    c["baseline"] = baselineJson(r);
+    Json absent = Json::array();
+    for (const ReportedFinding& f : r.baseline_absent)
+      absent.push_back(reportedFindingJson(f, "absent"));
+    c["baseline_absent"] = std::move(absent);
+  }
   Json axes = Json::array();
   for (const AxisReport& a : r.axes) {
     Json timeline = Json::array();
@@ -301,6 +339,27 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   if (r.error) c["error"] = *r.error;
   return c;
 }
+
+}  // namespace ncservo::cli::detail
+
+namespace ncservo::cli {
+
+ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict) {
+  // The one reading of a capture's JSON: a capture validated now is what its report would hold.
+  const detail::Json document{
+      {"captures", detail::Json::array({detail::captureJson(report, verdict)})}};
+  Result<ReportFile> read = parseReportFile(document.dump(), report.path);
+  if (!read || read->captures.empty()) {
+    ReportedCapture unread;
+    unread.path = report.path;
+    return unread;
+  }
+  return std::move(read->captures.front());
+}
+
+}  // namespace ncservo::cli
+
+namespace ncservo::cli::detail {
 
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json j;

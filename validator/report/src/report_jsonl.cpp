@@ -7,10 +7,11 @@
 
 namespace ncservo::cli::detail {
 
-void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
+                       BaselineState state) {
   Json j;
   j["capture"] = r.path;
-  j.update(findingJson(r, f));
+  j.update(findingJson(r, f, state));
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
@@ -18,6 +19,16 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 // where it does not fit; one where not every axis was checked with a line that says so, and so
 // does one with several segments.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
+  // Against a baseline: a line per finding of it not seen again, then one with the counts.
+  if (r.baseline) {
+    for (const ReportedFinding& f : r.baseline_absent) {
+      Json j{{"capture", r.path}};
+      j.update(reportedFindingJson(f, "absent"));
+      std::fputs((j.dump() + "\n").c_str(), sink.out);
+    }
+    std::fputs((Json{{"capture", r.path}, {"baseline", baselineJson(r)}}.dump() + "\n").c_str(),
+               sink.out);
+  }
   // A layout that does not fit, as JSON's `layout.warnings` (docs/layout.md).
   if (!r.layout_warnings.empty()) {
     const Json j{{"capture", r.path}, {"layout", {{"warnings", r.layout_warnings}}}};

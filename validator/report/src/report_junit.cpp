@@ -22,6 +22,13 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
   for (const CaptureReport& r : reports) {
     auto suite = suites.append_child("testsuite");
     suite.append_attribute("name") = r.path.c_str();
+    if (r.baseline) {
+      // docs/baselines.md: only new findings fail a test case.
+      auto property = suite.append_child("properties").append_child("property");
+      property.append_attribute("name") = "baseline";
+      property.append_attribute("value") =
+          fmt::format("{} ({})", describeBaseline(r), r.baseline_path).c_str();
+    }
     std::size_t failures = 0;
     std::size_t skipped = 0;
     for (const RuleDef& rule : kRules) {
@@ -30,8 +37,11 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       testcase.append_attribute("name") = fmt::format("{} {}", rule.code, rule.slug).c_str();
       testcase.append_attribute("time") = "0";
       std::vector<const Finding*> fired;
-      for (const Finding& f : r.findings) {
-        if (f.rule == rule.id) fired.push_back(&f);
+      std::vector<BaselineState> states;
+      for (std::size_t i = 0; i < r.findings.size(); ++i) {
+        if (r.findings[i].rule != rule.id) continue;
+        fired.push_back(&r.findings[i]);
+        states.push_back(i < r.baseline_states.size() ? r.baseline_states[i] : BaselineState::None);
       }
       // Not judged is not a pass: a disabled rule, a capture that could not be read, and (for a
       // rule that did not fire) a capture where not every configured servo was decoded.
@@ -55,18 +65,28 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
       // A finding below --fail-on is listed, but does not fail the test case.
       bool failing = false;
       std::string body;
-      for (const Finding* f : fired) {
-        failing = failing || (!sink.policy.never && f->severity >= sink.policy.fail_on);
-        body += fmt::format("frame {} (since {}) t={:.6f}s {} {} [{}]: {}\n", f->at.frame,
-                            f->since.frame, seconds(r, f->at), utcOf(r, f->at),
-                            axisLabel(r, f->axis), severityName(f->severity), f->message);
+      std::size_t added = 0;
+      for (std::size_t i = 0; i < fired.size(); ++i) {
+        const Finding* f = fired[i];
+        const bool counts = states[i] != BaselineState::Unchanged;
+        added += states[i] == BaselineState::New ? 1 : 0;
+        failing = failing || (counts && !sink.policy.never && f->severity >= sink.policy.fail_on);
+        body += fmt::format(
+            "frame {} (since {}) t={:.6f}s {} {} [{}]{}: {}\n", f->at.frame, f->since.frame,
+            seconds(r, f->at), utcOf(r, f->at), axisLabel(r, f->axis), severityName(f->severity),
+            states[i] == BaselineState::None ? std::string()
+                                             : fmt::format(" [{}]", baselineStateName(states[i])),
+            f->message);
       }
       auto node = testcase.append_child(failing ? "failure" : "system-out");
       if (failing) {
         ++failures;
         node.append_attribute("message") =
-            fmt::format("{} finding{} of {} {}", fired.size(), fired.size() == 1 ? "" : "s",
-                        rule.code, rule.slug)
+            fmt::format("{} finding{} of {} {}{}", fired.size(), fired.size() == 1 ? "" : "s",
+                        rule.code, rule.slug,
+                        r.baseline
+                            ? fmt::format(" ({} new, {} unchanged)", added, fired.size() - added)
+                            : std::string())
                 .c_str();
         node.append_attribute("type") = rule.code;
       }

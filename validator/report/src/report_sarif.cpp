@@ -91,7 +91,8 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
     artifacts.push_back({{"location", {{"uri", r.path}}}});
     addNotifications(sink, r, c, notifications);
     all_read = all_read && !r.error;
-    for (const Finding& f : r.findings) {
+    for (std::size_t i = 0; i < r.findings.size(); ++i) {
+      const Finding& f = r.findings[i];
       const RuleDef& rule = ruleDef(f.rule);
       const std::string axis = axisLabel(r, f.axis);
       results.push_back(
@@ -108,7 +109,30 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
              {"time", seconds(r, f.at)},
              {"time_utc", utcOf(r, f.at)},
              {"axis", f.axis ? Json(*f.axis) : Json(nullptr)},
-             {"axis_name", f.axis ? Json(axis) : Json(nullptr)}}}});
+             {"axis_name", f.axis ? Json(axis) : Json(nullptr)},
+             {"fingerprint", fingerprintText(r.fingerprintOf(f))}}}});
+      // SARIF 2.1.0 §3.27.24 (docs/baselines.md).
+      if (i < r.baseline_states.size() && r.baseline_states[i] != BaselineState::None)
+        results.back()["baselineState"] = baselineStateName(r.baseline_states[i]);
+    }
+    // The baseline's findings not seen again: results whose baselineState is "absent", of level
+    // "none" (no longer a problem), with the capture as their place.
+    for (const ReportedFinding& f : r.baseline_absent) {
+      const Result<const RuleDef*> rule = findRule(f.fingerprint.rule);
+      Json result{{"ruleId", f.fingerprint.rule}};
+      if (rule) result["ruleIndex"] = static_cast<std::size_t>(*rule - kRules.data());
+      result["kind"] = "pass";
+      result["level"] = "none";
+      result["message"] = {
+          {"text", fmt::format("{} baseline frame {}: {}", f.fingerprint.axis.value_or("bus"),
+                               f.frame, f.message)}};
+      result["locations"] = {
+          {{"physicalLocation", {{"artifactLocation", {{"uri", r.path}, {"index", c}}}}}}};
+      result["baselineState"] = "absent";
+      result["properties"] = {{"baseline_frame", f.frame},
+                              {"baseline_severity", severityName(f.severity)},
+                              {"fingerprint", fingerprintText(f.fingerprint)}};
+      results.push_back(std::move(result));
     }
   }
   // executionSuccessful (§3.20.14): false where a capture could not be read (exit status 3).

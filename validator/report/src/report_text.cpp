@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <array>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -33,8 +34,9 @@ const char* verdictHeadline(Verdict v) {
 void writeTextGroups(const ReportSink& sink, const CaptureReport& r) {
   for (const FindingGroup& g : r.groups) {
     const std::string first = fmt::format("{} ({:.6f} s)", g.first.frame, seconds(r, g.first));
-    fmt::print(sink.out, "{:<7} {:<7} {} {} finding{}, {}: {}\n", severityName(g.severity),
+    fmt::print(sink.out, "{:<7} {:<7} {} {} finding{}{}, {}: {}\n", severityName(g.severity),
                ruleDef(g.rule).code, axisLabel(r, g.axis), g.count, g.count == 1 ? "" : "s",
+               r.baseline ? fmt::format(" ({} new)", g.added) : std::string(),
                g.count == 1 ? "frame " + first
                             : fmt::format("frames {} to {} ({:.6f} s), first", first, g.last.frame,
                                           seconds(r, g.last)),
@@ -152,13 +154,40 @@ void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
   fmt::print(sink.out, "== {}\n", r.path);
 }
 
-void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f) {
+void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
+                      BaselineState state) {
   if (!sink.policy.verbose) return;
-  fmt::print(sink.out, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}\n", severityName(f.severity),
+  fmt::print(sink.out, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}{}\n", severityName(f.severity),
              ruleDef(f.rule).code, axisLabel(r, f.axis), f.at.frame, seconds(r, f.at),
              f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
-             f.message);
+             f.message,
+             state == BaselineState::None ? "" : fmt::format(" [{}]", baselineStateName(state)));
 }
+
+namespace {
+
+// Against a baseline (docs/baselines.md): its findings not seen again, then the counts.
+void writeTextBaseline(std::FILE* out, const CaptureReport& r) {
+  if (!r.baseline) return;
+  for (const ReportedFinding& f : r.baseline_absent) {
+    fmt::print(out, "absent  {} (baseline frame {}): {}\n", fingerprintText(f.fingerprint), f.frame,
+               f.message);
+  }
+  const ReportedCapture* matched = r.baseline->capture();
+  fmt::print(out, "baseline: {} against {}{}\n", describeBaseline(r), r.baseline_path,
+             matched != nullptr ? fmt::format(" ({})", matched->path)
+                                : std::string(" (no capture of this name in it)"));
+}
+
+// "2 errors, 1 warning, 0 info", of the findings that count; with a baseline "2 new errors, …".
+std::string countedText(const std::array<std::size_t, 3>& counts, bool baseline) {
+  const char* adjective = baseline ? "new " : "";
+  return fmt::format("{} {}error{}, {} {}warning{}, {} {}info", counts[2], adjective,
+                     counts[2] == 1 ? "" : "s", counts[1], adjective, counts[1] == 1 ? "" : "s",
+                     counts[0], adjective);
+}
+
+}  // namespace
 
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   std::FILE* out = sink.out;
@@ -202,24 +231,29 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   writeNotJudged(out, r);
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
+  writeTextBaseline(out, r);
   const std::string dropped =
       r.capture_drops && r.capture_drops->dropped() > 0
           ? fmt::format("; the capture dropped {} frames", r.capture_drops->dropped())
           : std::string();
-  fmt::print(out, "capture verdict: {} - {} error{}, {} warning{}, {} info ({}{})\n",
-             verdictHeadline(verdictOf(sink.policy, r)), r.count(Severity::Error),
-             r.count(Severity::Error) == 1 ? "" : "s", r.count(Severity::Warning),
-             r.count(Severity::Warning) == 1 ? "" : "s", r.count(Severity::Info), r.path, dropped);
+  fmt::print(out, "capture verdict: {} - {} ({}{})\n", verdictHeadline(verdictOf(sink.policy, r)),
+             countedText(r.baseline ? r.new_counts : r.counts, r.baseline.has_value()), r.path,
+             dropped);
 }
 
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
-  std::size_t counts[3] = {0, 0, 0};
+  std::array<std::size_t, 3> counts{};
+  std::size_t added = 0, unchanged = 0, absent = 0;  // against a baseline
+  const bool baseline = !reports.empty() && reports.front().baseline.has_value();
   std::size_t unread = 0;     // captures that could not be read to their end
   std::size_t unchecked = 0;  // captures where not every axis was checked
   bool failed = false;
   bool no_servo = false;
   for (const CaptureReport& r : reports) {
-    for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counts[s];
+    for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counted(static_cast<Severity>(s));
+    added += r.newCount();
+    unchanged += r.unchanged;
+    absent += r.baseline_absent.size();
     unread += r.error.has_value() ? 1 : 0;
     unchecked += r.coverage.complete() ? 0 : 1;
     const Verdict v = verdictOf(sink.policy, r);
@@ -232,13 +266,16 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
     notes += fmt::format(", {} with no servo checked{}", unchecked,
                          sink.policy.allow_empty ? " (--allow-empty)" : "");
   }
-  fmt::print(sink.out,
-             "verdict: {} - {} error{}, {} warning{}, {} info ({} capture{}{}, fail on {})\n",
+  // docs/baselines.md: with a baseline the words and counts are about the new findings.
+  if (baseline) {
+    notes += fmt::format(", against the baseline: {} new, {} unchanged, {} absent", added,
+                         unchanged, absent);
+  }
+  fmt::print(sink.out, "verdict: {} - {} ({} capture{}{}, fail on {})\n",
              failed     ? "FAIL"
              : no_servo ? "NO SERVO"
                         : "PASS",
-             counts[2], counts[2] == 1 ? "" : "s", counts[1], counts[1] == 1 ? "" : "s", counts[0],
-             reports.size(), reports.size() == 1 ? "" : "s", notes,
+             countedText(counts, baseline), reports.size(), reports.size() == 1 ? "" : "s", notes,
              sink.policy.never ? "never" : severityName(sink.policy.fail_on));
 }
 

@@ -88,8 +88,10 @@ CycleTimeSummary Validator::cycleTime() const {
 void Validator::report(RuleId rule, std::optional<std::uint16_t> axis, const Stamp& since,
                        std::string message) {
   if (!settings_.isEnabled(rule)) return;
+  const std::uint32_t ordinal = ++ordinals_[{rule, axis ? *axis : kNoAxisKey}];
   findings_.push_back(Finding{rule, settings_.severityOf(rule), axis,
-                              Stamp{now_.frame, frame_time_ns_}, since, std::move(message)});
+                              Stamp{now_.frame, frame_time_ns_}, since, std::move(message),
+                              ordinal});
 }
 
 Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
@@ -211,6 +213,8 @@ void Validator::startSegment() {
     s.pending = 0;
     s.evaluated_revision.reset();
   }
+  // After the events that closed the segment before: they count in it.
+  ordinals_.clear();
 }
 
 // The AL state of the axis's slave, where its station is known (ESM-002), and its entries into

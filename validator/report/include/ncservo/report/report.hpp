@@ -16,6 +16,7 @@
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/timing.hpp"
+#include "ncservo/report/baseline.hpp"
 #include "ncservo/report/report_charts.hpp"
 #include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/finding.hpp"
@@ -44,6 +45,7 @@ struct FindingGroup {
   Severity severity{};
   std::optional<std::uint16_t> axis;
   std::uint64_t count = 0;
+  std::uint64_t added = 0;  // of them new against the baseline (--baseline)
   Stamp first;
   Stamp last;
   std::string first_message;
@@ -110,14 +112,39 @@ struct CaptureReport {
   std::optional<CaptureDrops> capture_drops;
   std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
   std::int64_t dc_settled_ns = 0;
+  // Against a baseline (--baseline, docs/baselines.md): the matcher (none without a baseline),
+  // the state of each kept finding (beside `findings`), the new findings by severity, how many
+  // were unchanged, and the baseline's findings not seen again (after closeBaseline()).
+  std::optional<BaselineMatcher> baseline;
+  std::string baseline_path;
+  std::vector<BaselineState> baseline_states;
+  std::array<std::size_t, 3> new_counts{};
+  std::size_t unchanged = 0;
+  std::vector<ReportedFinding> baseline_absent;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
-  // Counts a finding, by severity and in its group.
-  void tally(const Finding& finding);
+  // The findings that count for the verdict and the exit status: all of them, or with a
+  // baseline the new ones.
+  std::size_t counted(Severity severity) const {
+    return (baseline ? new_counts : counts)[static_cast<std::size_t>(severity)];
+  }
+  std::size_t newCount() const { return new_counts[0] + new_counts[1] + new_counts[2]; }
+  // Counts a finding, by severity and in its group; against a baseline, matches it.
+  BaselineState tally(const Finding& finding);
+  // The fingerprint of a finding of this capture.
+  Fingerprint fingerprintOf(const Finding& finding) const;
+  // The capture's findings have all come: the baseline's not seen again are absent.
+  void closeBaseline();
   // The capture could not be read at all: nothing in it was checked.
   bool unopened() const { return error.has_value() && frames == 0; }
-  // Whether any finding is at or above `level`.
+  // Whether any finding that counts is at or above `level`.
   bool reaches(Severity level) const;
 };
+
+// "3 new, 12 unchanged, 1 absent": a capture against its baseline (docs/baselines.md).
+std::string describeBaseline(const CaptureReport& report);
+
+// What a JSON report would hold of the capture, as baselines and `ncservo diff` read it.
+ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict);
 
 // "fail", "pass", "no servo", "unreadable": as the JSON report names a verdict.
 const char* verdictName(Verdict verdict);
@@ -168,7 +195,8 @@ struct ReportFormat {
   // The format draws the bits around findings (CaptureReport::timelines, fed by the frames).
   bool draws_timelines;
   void (*begin_capture)(const ReportSink& sink, const CaptureReport& report);
-  void (*finding)(const ReportSink& sink, const CaptureReport& report, const Finding& finding);
+  void (*finding)(const ReportSink& sink, const CaptureReport& report, const Finding& finding,
+                  BaselineState state);
   void (*end_capture)(const ReportSink& sink, const CaptureReport& report);
   void (*finish)(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 };
@@ -201,7 +229,7 @@ class ReportWriter {
   ReportWriter& operator=(const ReportWriter&) = delete;
 
   void beginCapture(const CaptureReport& report);
-  void finding(const CaptureReport& report, const Finding& finding);
+  void finding(const CaptureReport& report, const Finding& finding, BaselineState state);
   void endCapture(const CaptureReport& report);
   Status finish(const std::vector<CaptureReport>& reports);
   bool keepsFindings() const;

@@ -17,6 +17,9 @@ struct Finding {
   Stamp at;                           // the frame it is reported on
   Stamp since;                        // where the condition began
   std::string message;                // what was seen, and what was expected
+  // Its number among its rule's findings on its axis (or the bus) in its capture segment, from 1:
+  // with the rule and the axis, what a baseline matches it by (docs/baselines.md).
+  std::uint32_t ordinal = 0;
 };
 
 }  // namespace ncservo

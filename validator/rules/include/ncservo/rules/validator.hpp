@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -136,6 +137,10 @@ class Validator {
   Stamp now_;                       // this frame, on its segment's clock (the timers')
   std::int64_t frame_time_ns_ = 0;  // this frame's own timestamp
   std::vector<Finding> findings_;
+  // Findings so far in this segment, by rule and axis (kNoAxisKey: the bus): each finding's
+  // ordinal (docs/baselines.md#fingerprints).
+  static constexpr std::uint32_t kNoAxisKey = 0x10000;
+  std::map<std::pair<RuleId, std::uint32_t>, std::uint32_t> ordinals_;
 };
 
 }  // namespace ncservo
