@@ -22,7 +22,13 @@ namespace {
 // may run (between ReportWriter::open and finish).
 const std::vector<std::string>* g_temporaries = nullptr;
 
+// docs/cli.md#interrupted: set by the first Ctrl-C once a run asked for it (stopOnInterrupt).
+std::atomic<bool> g_interrupted{false};
+std::atomic<bool> g_stop_on_interrupt{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "set in a signal handler");
+
 extern "C" void removeTemporaries(int signal) {
+  if (signal == SIGINT && g_stop_on_interrupt.load() && !g_interrupted.exchange(true)) return;
   if (g_temporaries != nullptr) {
     for (const std::string& path : *g_temporaries) ::unlink(path.c_str());
   }
@@ -118,11 +124,64 @@ void summarise(const Validator& validator, CaptureReport& report) {
   }
 }
 
-Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& r) {
-  if (r.error) return Verdict::Unreadable;
-  if (!policy.never && r.reaches(policy.fail_on)) return Verdict::Fail;
-  if (!r.coverage.complete() && !policy.allow_empty) return Verdict::NoServo;
-  return Verdict::Pass;
+CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& r) {
+  // The findings the verdict is about, by severity (Info, Warning, Error).
+  const std::array<std::size_t, 3>& counts = r.counts;
+  const auto reaches = [&](Severity level) {
+    for (std::size_t s = static_cast<std::size_t>(level); s < counts.size(); ++s) {
+      if (counts[s] > 0) return true;
+    }
+    return false;
+  };
+  const bool gate = !policy.never && reaches(policy.fail_on);  // what --fail-on fails
+  const bool checked = r.coverage.complete();
+  if (r.error) return {Verdict::Unreadable, kExitCapture};
+  const int status = gate                              ? kExitFindings
+                     : !checked && !policy.allow_empty ? kExitNoServo
+                                                       : kExitOk;
+  // The words describe the capture (docs/cli.md#verdicts): an error is a FAIL whatever --fail-on
+  // says, and so is a finding that fails the gate when --fail-on is stricter.
+  if (gate || reaches(Severity::Error)) return {Verdict::Fail, status};
+  if (!checked) return {Verdict::NoServo, status};
+  if (reaches(Severity::Warning)) return {Verdict::Warn, status};
+  return {Verdict::Pass, status};
+}
+
+int moreSerious(int a, int b) {
+  constexpr int kOrder[] = {kExitInterrupted, kExitUsage,   kExitCapture,
+                            kExitFindings,    kExitNoServo, kExitOk};
+  auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
+  return rank(a) <= rank(b) ? a : b;
+}
+
+std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports,
+                       int exit_status) {
+  const std::string fail_on = policy.never ? "never" : severityName(policy.fail_on);
+  switch (exit_status) {
+    case kExitCapture:
+      return "a capture could not be read to its end";
+    case kExitFindings:
+      return fmt::format("findings at or above --fail-on {}", fail_on);
+    case kExitNoServo:
+      return "no servo checked";
+    case kExitOk:
+      break;
+    default:
+      return "";
+  }
+  bool findings = false;
+  bool unchecked = false;
+  for (const CaptureReport& r : reports) {
+    findings = findings || r.reaches(Severity::Info);
+    unchecked = unchecked || (!r.unopened() && !r.coverage.complete());
+  }
+  std::vector<std::string> why;
+  if (findings) {
+    why.push_back(policy.never ? std::string("--fail-on never")
+                               : fmt::format("nothing at or above --fail-on {}", fail_on));
+  }
+  if (unchecked && policy.allow_empty) why.emplace_back("--allow-empty");
+  return fmt::format("{}", fmt::join(why, ", "));
 }
 
 void CaptureReport::tally(const Finding& f) {
@@ -232,7 +291,17 @@ Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<Repor
   return writer;
 }
 
+void ReportWriter::stopOnInterrupt() {
+  g_interrupted = false;
+  g_stop_on_interrupt = true;
+}
+
+const std::atomic<bool>& ReportWriter::interrupted() {
+  return g_interrupted;
+}
+
 ReportWriter::~ReportWriter() {
+  g_stop_on_interrupt = false;
   for (std::size_t i = 0; i < std::size(kInterrupts); ++i) {
     if (g_previous[i] != SIG_ERR) std::signal(kInterrupts[i], g_previous[i]);
   }
