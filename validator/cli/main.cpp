@@ -746,7 +746,8 @@ int runValidate(const ValidateArgs& o) {
     } else if (reports[i].path.empty()) {
       unstarted.push_back(o.captures[i]);
     } else {
-      fmt::print(stderr, "ncservo: interrupted at {}, frame {}\n", o.captures[i],
+      fmt::print(stderr, "ncservo: interrupted at {}, frame {}\n",
+                 o.captures[i] == "-" ? std::string("standard input") : o.captures[i],
                  reports[i].frames);
       rc = kExitInterrupted;
     }

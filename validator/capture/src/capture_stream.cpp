@@ -12,6 +12,11 @@ Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamSto
     }
     pipeline.onRecord(reader.link(), record);
   }
+  // A read that Ctrl-C cut short (standard input waiting for more) is no damage of the capture.
+  if (!status && stop != nullptr && stop->requested != nullptr && stop->requested->load()) {
+    stop->stopped = true;
+    return {};
+  }
   pipeline.finish();
   if (!status) return fail(status.error());
   return {};

@@ -27,8 +27,15 @@ std::atomic<bool> g_interrupted{false};
 std::atomic<bool> g_stop_on_interrupt{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "set in a signal handler");
 
+// After the first Ctrl-C, system calls restart again: only a read waiting when it came (standard
+// input) is cut short, not the reports' writes.
+void catchInterrupt(int flags);
+
 extern "C" void removeTemporaries(int signal) {
-  if (signal == SIGINT && g_stop_on_interrupt.load() && !g_interrupted.exchange(true)) return;
+  if (signal == SIGINT && g_stop_on_interrupt.load() && !g_interrupted.exchange(true)) {
+    catchInterrupt(SA_RESTART);
+    return;
+  }
   if (g_temporaries != nullptr) {
     for (const std::string& path : *g_temporaries) ::unlink(path.c_str());
   }
@@ -39,6 +46,13 @@ extern "C" void removeTemporaries(int signal) {
 constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
 // What each was before: a signal the caller ignores (nohup, a background job) stays ignored.
 void (*g_previous[std::size(kInterrupts)])(int) = {};
+void catchInterrupt(int flags) {
+  struct sigaction action {};
+  action.sa_handler = removeTemporaries;
+  action.sa_flags = flags;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+}
 }  // namespace
 
 std::string describeLateLayout(const LateLayout& late) {
@@ -294,6 +308,9 @@ Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<Repor
 void ReportWriter::stopOnInterrupt() {
   g_interrupted = false;
   g_stop_on_interrupt = true;
+  // Without SA_RESTART, so that a read waiting for standard input returns at the first Ctrl-C; a
+  // Ctrl-C the caller ignores stays ignored.
+  if (g_previous[0] != SIG_IGN) catchInterrupt(0);
 }
 
 const std::atomic<bool>& ReportWriter::interrupted() {
