@@ -3,7 +3,8 @@
 # Over real EtherCAT captures from other people's hardware (none holds a servo of this protocol),
 # tshark with the plugin exits 0, prints nothing on stderr and shows no axis field, the only
 # NC-Servo items are the bus findings `ncservo validate` reports on the same frames, validate
-# ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis and says so.
+# ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis, says so and
+# exits 4 too.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 require_path "$REAL_CAPTURES" "real captures"
@@ -40,7 +41,9 @@ frames = sorted({f["frame"] for f in c["findings"]})
 shown = sorted({int(l) for l in open(sys.argv[2]) if l.strip()})
 assert frames == shown, (frames, shown)
 PY
-  "$NCSERVO" decode "$WORK/capture" >"$WORK/decode.csv" 2>"$WORK/decode.err" || fail "decode exit $?"
+  rc=0
+  "$NCSERVO" decode "$WORK/capture" >"$WORK/decode.csv" 2>"$WORK/decode.err" || rc=$?
+  [ $rc = 4 ] || fail "decode exit $rc, expected 4 (no servo, as validate)"
   [ "$(wc -l <"$WORK/decode.csv")" = 1 ] || fail "$(basename "$capture"): decode found rows"
   grep -q "no servo of this protocol found" "$WORK/decode.err" || fail "no plain message"
   echo "ok $(basename "$capture")"

@@ -65,13 +65,14 @@ assert any(f["rule"] == "SE-001" for f in c["findings"]), "findings before the d
 PY
 # The text verdict says a capture was not read to its end, beside what was found before it.
 run 3 "$WORK/cut.pcap" "$WORK/clean.pcap"
-grep -qE "^verdict: FAIL - [1-9][0-9]* errors?, .* \(2 captures, 1 not read to the end, fail on error\)$" \
+grep -qE "^verdict: FAIL - [1-9][0-9]* errors?, .* in 2 captures, 1 not read to the end \(exit 3: a capture could not be read to its end\)$" \
   "$WORK/out" || fail "cut capture verdict: $(tail -1 "$WORK/out")"
 
 # Several captures: the most serious status in the order 2, 3, 1, 0.
 run 3 "$WORK/faults.pcap" "$WORK/missing.pcap" "$WORK/clean.pcap"
 run 1 "$WORK/clean.pcap" "$WORK/faults.pcap"
-grep -q "(2 captures, fail on error)" "$WORK/out" || fail "two captures: $(tail -1 "$WORK/out")"
+grep -q " in 2 captures (exit 1: findings at or above --fail-on error)$" "$WORK/out" ||
+  fail "two captures: $(tail -1 "$WORK/out")"
 
 # Standard input, and --output.
 "$NCSERVO" validate --format jsonl - <"$WORK/faults.pcap" >"$WORK/stdin.jsonl" && fail "stdin: expected exit 1"

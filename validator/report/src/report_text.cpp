@@ -33,13 +33,14 @@ const char* verdictHeadline(Verdict v) {
   return "PASS";
 }
 
-// The run's word: its most serious capture's, in this order.
+// The run's word: its most serious capture's, in this order; an error found before a capture's
+// damage fails the run as well.
 Verdict runVerdict(const ReportPolicy& policy, const std::vector<CaptureReport>& reports) {
   constexpr Verdict kOrder[] = {Verdict::Fail, Verdict::Unreadable, Verdict::NoServo, Verdict::Warn,
                                 Verdict::Pass};
   std::size_t worst = std::size(kOrder) - 1;
   for (const CaptureReport& r : reports) {
-    const Verdict v = verdictOf(policy, r);
+    const Verdict v = r.count(Severity::Error) > 0 ? Verdict::Fail : verdictOf(policy, r);
     worst = std::min<std::size_t>(
         worst, std::find(std::begin(kOrder), std::end(kOrder), v) - std::begin(kOrder));
   }
