@@ -33,11 +33,15 @@ def interrupted(argv, stdin, ready):
     out, err = p.communicate(timeout=60)
     return p.returncode, out.decode(), err.decode()
 
+started = time.time()
 def waits_on_pipe(pid):  # every byte of standard input read, waiting for more
     try:
-        return "pipe" in open(f"/proc/{pid}/wchan").read()
+        wchan = open(f"/proc/{pid}/wchan").read()
     except OSError:
         return False
+    if wchan in ("", "0"):  # a kernel that hides it: the tail capture is read well within 5 s
+        return time.time() - started > 5
+    return "pipe" in wchan
 
 def check(rc, out, err, finished, cut, json_path):
     assert rc == 130, (rc, err)
