@@ -2,7 +2,8 @@
 # cli_usage.sh SRC BUILD: the command line and the configuration as a user types them:
 # rule IDs in any case, "did you mean" for mistyped commands, options, keys and IDs,
 # standard input given twice, --version of a subcommand, an [[axis]] missing an address, names
-# that need CSV quoting, and `rules --explain`.
+# that need CSV quoting, `rules --explain`, and the exit statuses the commands share (an
+# unwritable output 2, no servo 4).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
@@ -117,4 +118,57 @@ for command in validate annotate monitor diff; do
   layout_help "$command" | diff "$WORK/layout-decode.txt" - >/dev/null ||
     fail "$command --help: the layout options differ from decode's"
 done
-echo "cli_usage: IDs in any case, did-you-mean, stdin once, --version, axis addresses, CSV, --explain, layout options"
+# Every enumerated option says the choices and the closest one (commands.hpp oneOf).
+expect 2 validate --fail-on warn "$WORK/clean.pcap"
+says err "--fail-on: warn is not one of {error,warning,info,never}; did you mean 'warning'?"
+expect 2 validate --format jsn "$WORK/clean.pcap"
+says err "did you mean 'json'?"
+expect 2 decode --timestamps prob "$WORK/clean.pcap"
+says err "did you mean 'probe'?"
+expect 2 simulate --scenario fault -o "$WORK/x.pcap"
+says err "did you mean 'faults'?"
+
+# When each rule is reported, as the code does it: COM-002 one cycle after the gap (docs/rules.md).
+expect 0 rules --explain COM-002
+says out "reported:    at the next master copy after the gap, one cycle after it"
+expect 0 rules --explain SE-001
+says out "reported:    on the frame where the condition begins"
+# MSG-001 and the layout inference share one range (docs/protocol.md §5): 6-9 listed, no meaning.
+expect 0 rules --explain MSG-001
+says out "a message code outside 0-5 (6-9 are listed without a meaning)"
+
+# decode --axis naming no axis: the usage error alone, no CSV header before it.
+expect 2 decode --axis 7 "$WORK/clean.pcap"
+says err "--axis 7: no such axis"
+[ ! -s "$WORK/out" ] || fail "decode --axis 7 wrote: $(head -2 "$WORK/out")"
+expect 0 decode --axis 1 "$WORK/clean.pcap"
+head -1 "$WORK/out" | grep -q "^frame,time,axis,name," || fail "decode --axis 1: no header"
+
+# No servo in a capture (EtherCAT-free frames): decode and annotate exit 4 as validate does, and
+# annotate says so.
+python3 - "$WORK/none.pcap" <<'PY'
+import struct, sys
+frame = bytes.fromhex("ffffffffffff0002030405060806") + bytes(46)  # an ARP-sized frame, no EtherCAT
+with open(sys.argv[1], "wb") as f:
+    f.write(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1))
+    for i in range(3):
+        f.write(struct.pack("<IIII", 1, i * 1000, len(frame), len(frame)) + frame)
+PY
+expect 4 validate "$WORK/none.pcap"
+expect 4 decode "$WORK/none.pcap"
+says err "no servo"
+expect 4 annotate "$WORK/none.pcap" "$WORK/none-annotated.pcapng"
+says err "NO SERVO:"
+[ -s "$WORK/none-annotated.pcapng" ] || fail "annotate wrote no copy"
+expect 0 annotate "$WORK/clean.pcap" "$WORK/clean-annotated.pcapng"
+
+# An output that cannot be written is a usage error in every command (docs/cli.md#exit-status).
+nowhere="$WORK/no/such/dir"
+expect 2 validate -o "$nowhere/r.txt" "$WORK/clean.pcap"
+expect 2 decode -o "$nowhere/r.csv" "$WORK/clean.pcap"
+expect 2 annotate "$WORK/clean.pcap" "$nowhere/a.pcapng"
+says err "cannot write"
+expect 2 simulate --duration 1 -o "$nowhere/s.pcap"
+says err "cannot write"
+expect 3 annotate "$WORK/missing.pcap" "$WORK/a.pcapng"
+echo "cli_usage: IDs in any case, did-you-mean, stdin once, --version, axis addresses, CSV, --explain, layout options, exit statuses that agree"

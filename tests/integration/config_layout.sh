@@ -22,7 +22,9 @@ python3 "$CHECK" --fields "$(fields_csv)" "$WORK/truth.jsonl" "$WORK/tshark.tsv"
 # The same capture with the default layout switched off and no configuration: nothing decoded.
 "$TSHARK" "$PLUGIN" -r "$WORK/capture" -o ncservo.default_layout:FALSE -Y ncservo >"$WORK/none.txt"
 [ ! -s "$WORK/none.txt" ] || fail "default_layout FALSE still decoded frames"
-"$NCSERVO" decode --no-default-layout "$WORK/capture" >"$WORK/none.csv" 2>"$WORK/none.err"
+rc=0
+"$NCSERVO" decode --no-default-layout "$WORK/capture" >"$WORK/none.csv" 2>"$WORK/none.err" || rc=$?
+[ $rc = 4 ] || fail "--no-default-layout: exit $rc, expected 4 (no servo decoded)"
 [ "$(wc -l <"$WORK/none.csv")" = 1 ] || fail "--no-default-layout still decoded rows"
 grep -q "no servo of this protocol found" "$WORK/none.err" || fail "no plain 'no servo' message"
 echo "config_layout: explicit layout decodes; default layout can be switched off"

@@ -52,10 +52,13 @@ echo "ok every format"
 
 # --allow-empty: 0, and the report still says why.
 status 0 --allow-empty "$empty"
-grep -q "^verdict: PASS .*1 with no servo checked (--allow-empty)" "$WORK/out" || fail "allow-empty text"
+# The words still say what the capture is: nothing checked is no pass (docs/cli.md#verdicts).
+grep -q "^verdict: NO SERVO .*1 with no servo checked (exit 0: .*--allow-empty)$" "$WORK/out" ||
+  fail "allow-empty text: $(tail -1 "$WORK/out")"
+! grep -q PASS "$WORK/out" || fail "allow-empty: PASS in the text"
 grep -q "^NO SERVO: " "$WORK/out" || fail "allow-empty: reason gone"
 status 0 --allow-empty --format json "$empty"
-python3 -c 'import json,sys; c=json.load(open(sys.argv[1]))["captures"][0]; assert c["verdict"] == "pass" and c["reason"], c' \
+python3 -c 'import json,sys; c=json.load(open(sys.argv[1]))["captures"][0]; assert c["verdict"] == "no servo" and c["reason"], c' \
   "$WORK/out" || fail "allow-empty json"
 status 0 --allow-empty --format sarif "$empty"
 grep -q '"level": "note"' "$WORK/out" || fail "allow-empty sarif: not a note"

@@ -3,7 +3,8 @@
 # Over real EtherCAT captures from other people's hardware (none holds a servo of this protocol),
 # tshark with the plugin exits 0, prints nothing on stderr and shows no axis field, the only
 # NC-Servo items are the bus findings `ncservo validate` reports on the same frames, validate
-# ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis and says so.
+# ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis, says so and
+# exits 4 too.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 require_path "$REAL_CAPTURES" "real captures"
@@ -34,13 +35,18 @@ for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   python3 - "$WORK/report.json" "$WORK/plugin.txt" <<'PY' || fail "$(basename "$capture"): plugin and validator disagree"
 import json, sys
 c = json.load(open(sys.argv[1]))["captures"][0]
-assert c["verdict"] == "no servo" and "no servo of this protocol" in c["reason"], c["verdict"]
+# The verdict describes the capture (docs/cli.md#verdicts): a bus error found is a FAIL.
+errors = any(f["severity"] == "error" for f in c["findings"])
+assert c["verdict"] == ("fail" if errors else "no servo"), c["verdict"]
+assert "no servo of this protocol" in c["reason"], c["reason"]
 assert all(f["rule"].split("-")[0] in ("ESM", "COM") and f["axis"] is None for f in c["findings"]), c["findings"]
 frames = sorted({f["frame"] for f in c["findings"]})
 shown = sorted({int(l) for l in open(sys.argv[2]) if l.strip()})
 assert frames == shown, (frames, shown)
 PY
-  "$NCSERVO" decode "$WORK/capture" >"$WORK/decode.csv" 2>"$WORK/decode.err" || fail "decode exit $?"
+  rc=0
+  "$NCSERVO" decode "$WORK/capture" >"$WORK/decode.csv" 2>"$WORK/decode.err" || rc=$?
+  [ $rc = 4 ] || fail "decode exit $rc, expected 4 (no servo, as validate)"
   [ "$(wc -l <"$WORK/decode.csv")" = 1 ] || fail "$(basename "$capture"): decode found rows"
   grep -q "no servo of this protocol found" "$WORK/decode.err" || fail "no plain message"
   echo "ok $(basename "$capture")"

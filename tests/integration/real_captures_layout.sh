@@ -24,7 +24,9 @@ for row in "${cases[@]}"; do
     >"$WORK/stock.json" 2>/dev/null || fail "$name: tshark exit $?"
   python3 "$SRC/tests/tools/stock_layout.py" "$WORK/stock.json" >"$WORK/stock.txt"
   [ -s "$WORK/stock.txt" ] || fail "$name: the stock dissector shows no SM/FMMU write"
-  "$NCSERVO" decode --layout "$capture" >"$WORK/layout.txt" 2>"$WORK/err.txt" || fail "$name: decode exit $?"
+  rc=0
+  "$NCSERVO" decode --layout "$capture" >"$WORK/layout.txt" 2>"$WORK/err.txt" || rc=$?
+  [ $rc = 4 ] || fail "$name: decode exit $rc, expected 4 (no servo)"
   grep -q "^# layout source: none, 0 axes" "$WORK/layout.txt" || fail "$name: $(head -1 "$WORK/layout.txt")"
   # our slave lines, without ring position, SM control bytes and "(off)" of disabled SMs, and
   # without the slaves the start-up configured nothing on
@@ -57,6 +59,6 @@ PY
   echo "ok $name: $(wc -l <"$WORK/learned.txt") slaves' SMs and FMMUs as the stock dissector shows them; $(grep -c 'CoE PDOs' "$WORK/layout.txt") with CoE PDO sizes"
 done
 # The AKD's assignment and mapping, read back over CoE, give the 17 + 17 bytes of its SMs.
-"$NCSERVO" decode --layout "$real/soem-akd-servo-pdo-mapping.pcapng" 2>/dev/null |
+{ "$NCSERVO" decode --layout "$real/soem-akd-servo-pdo-mapping.pcapng" 2>/dev/null || true; } |
   grep -q "SM2 0x1100+17 .*CoE PDOs 136 bits out, 136 bits in" || fail "the AKD's CoE PDO mapping was not learned"
 echo "ok: the AKD's CoE PDO assignment and mapping give its 17 + 17 bytes"

@@ -2,7 +2,8 @@
 # report_schemas.sh SRC BUILD: every kind of JUnit and SARIF report `validate` writes (findings,
 # disabled rules, NO SERVO, a layout that does not fit, unreadable and compressed captures, several
 # captures) is valid against the schema its readers use: Jenkins' JUnit XSD (xmllint) and the OASIS
-# SARIF 2.1.0 JSON schema (python3-jsonschema). The schemas are fetched from npm packages into the
+# SARIF 2.1.0 JSON schema (python3-jsonschema; its formats too, as URIs, with python3-rfc3987).
+# The schemas are fetched from npm packages into the
 # build tree (tests/tools/fetch_schemas.sh, run by .ci/setup), never kept in the repository.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
@@ -63,4 +64,40 @@ PY
   fi
   n=$((n + 1))
 done
-echo "report_schemas: $n runs' JUnit and SARIF valid against Jenkins' XSD and SARIF 2.1.0"
+# SARIF with its formats checked (uri, uri-reference: rfc3987, Debian's python3-rfc3987 for
+# Debian's python3): captures named by a relative path holding a space and a non-ASCII letter, and
+# by an absolute one, give percent-encoded URI references, the relative ones under a uriBaseId.
+debian_python=/usr/bin/python3
+"$debian_python" -c "import jsonschema, rfc3987" 2>/dev/null ||
+  skip "Debian's python3-jsonschema or python3-rfc3987 missing (.ci/setup installs them)"
+mkdir -p "$WORK/Prüfstand 1"
+cp "$WORK/faults.pcap" "$WORK/Prüfstand 1/x.pcap"
+(cd "$WORK" && "$NCSERVO" validate --format sarif -o formats.sarif "Prüfstand 1/x.pcap" \
+  "$WORK/Prüfstand 1/x.pcap" text.pcap >/dev/null 2>&1) || [ $? = 3 ] || fail "validate exited $?"
+"$debian_python" - "$schemas/sarif-schema-2.1.0.json" "$WORK/formats.sarif" "$WORK" <<'PY' ||
+import json, sys, urllib.parse, jsonschema
+schema, sarif, work = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), sys.argv[3]
+checker = jsonschema.FormatChecker()
+# The check is real: the formats are known, and a raw path with a space fails it.
+assert {"uri", "uri-reference"} <= set(checker.checkers), sorted(checker.checkers)
+assert not checker.conforms("Prüfstand 1/x.pcap", "uri-reference")
+cls = jsonschema.validators.validator_for(schema)
+errors = sorted(cls(schema, format_checker=checker).iter_errors(sarif), key=lambda e: list(e.path))
+for e in errors[:5]:
+    print(list(e.path), e.message[:300], file=sys.stderr)
+assert not errors
+run = sarif["runs"][0]
+locations = [a["location"] for a in run["artifacts"]]
+assert locations[0] == {"uri": "Pr%C3%BCfstand%201/x.pcap", "uriBaseId": "SRCROOT"}, locations[0]
+base = run["originalUriBaseIds"]["SRCROOT"]["uri"]
+assert base.startswith("file:///") and base.endswith("/"), base
+absolute = urllib.parse.unquote(urllib.parse.urlparse(base).path) + "Prüfstand 1/x.pcap"
+assert urllib.parse.unquote(urllib.parse.urlparse(locations[1]["uri"]).path) == absolute, locations[1]
+assert absolute == f"{work}/Prüfstand 1/x.pcap", absolute
+assert locations[2] == {"uri": "text.pcap", "uriBaseId": "SRCROOT"}, locations[2]
+for r in run["results"]:
+    where = r["locations"][0]["physicalLocation"]["artifactLocation"]
+    assert where["uri"] == locations[where["index"]]["uri"], r
+PY
+  fail "SARIF with a space and an umlaut in a path: not valid with its formats checked"
+echo "report_schemas: $n runs' JUnit and SARIF valid against Jenkins' XSD and SARIF 2.1.0; URIs valid with formats checked"

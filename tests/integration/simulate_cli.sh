@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # simulate_cli.sh SRC BUILD
 # `ncservo simulate` as users meet it: bad options end with exit 2 and a message that says what
-# is wrong; an unwritable output with exit 3; the output is a pure function of the options;
+# is wrong; an unwritable output with exit 2 (a usage error, as in every command); the output is a pure function of the options;
 # `-o -` streams into `validate -`; pcapng carries nanosecond timestamps.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
@@ -25,7 +25,7 @@ cases=(
   "2|--incidents-truth needs --scenario incidents|simulate --incidents-truth $WORK/t.json -o $WORK/x.pcap"
   "2|--scenario incidents takes no --fault|simulate --scenario incidents --fault SE-001 -o $WORK/x.pcap"
   "2|--scenario incidents needs --duration 6 or more|simulate --scenario incidents --duration 5 -o $WORK/x.pcap"
-  "3|$WORK/no/such/dir/x.pcap: cannot write|simulate -o $WORK/no/such/dir/x.pcap"
+  "2|$WORK/no/such/dir/x.pcap: cannot write|simulate -o $WORK/no/such/dir/x.pcap"
   "0|wrote 3004 frames to $WORK/ok.pcap|simulate --duration 1.5 -o $WORK/ok.pcap"
 )
 for row in "${cases[@]}"; do

@@ -65,13 +65,14 @@ assert any(f["rule"] == "SE-001" for f in c["findings"]), "findings before the d
 PY
 # The text verdict says a capture was not read to its end, beside what was found before it.
 run 3 "$WORK/cut.pcap" "$WORK/clean.pcap"
-grep -qE "^verdict: FAIL - [1-9][0-9]* errors?, .* \(2 captures, 1 not read to the end, fail on error\)$" \
+grep -qE "^verdict: FAIL - [1-9][0-9]* errors?, .* in 2 captures, 1 not read to the end \(exit 3: a capture could not be read to its end\)$" \
   "$WORK/out" || fail "cut capture verdict: $(tail -1 "$WORK/out")"
 
 # Several captures: the most serious status in the order 2, 3, 1, 0.
 run 3 "$WORK/faults.pcap" "$WORK/missing.pcap" "$WORK/clean.pcap"
 run 1 "$WORK/clean.pcap" "$WORK/faults.pcap"
-grep -q "(2 captures, fail on error)" "$WORK/out" || fail "two captures: $(tail -1 "$WORK/out")"
+grep -q " in 2 captures (exit 1: findings at or above --fail-on error)$" "$WORK/out" ||
+  fail "two captures: $(tail -1 "$WORK/out")"
 
 # Standard input, and --output.
 "$NCSERVO" validate --format jsonl - <"$WORK/faults.pcap" >"$WORK/stdin.jsonl" && fail "stdin: expected exit 1"
@@ -146,4 +147,56 @@ for output in "$WORK/input.pcap" "$WORK/./input.pcap" "$WORK/alias.pcap"; do
   [ "$(sha256sum <"$WORK/input.pcap")" = "$before" ] || fail "validate -o $output wrote over its input"
 done
 
-echo "validate_cli: exit codes, formats, several captures, stdin, overrides"
+# Verdict words describe the capture (docs/cli.md#verdicts): --fail-on never over errors exits 0,
+# and neither the text nor the HTML says PASS; the last line says why the status is 0.
+faults4="$SRC/captures/faults-4axis.pcap"
+run 0 --fail-on never --report html:"$WORK/never.html" --report json:"$WORK/never.json" "$faults4"
+! grep -q PASS "$WORK/out" || fail "--fail-on never: PASS in the text: $(grep PASS "$WORK/out")"
+! grep -q PASS "$WORK/never.html" || fail "--fail-on never: PASS in the HTML"
+grep -q '"verdict":"fail"' "$WORK/never.html" || fail "--fail-on never: the HTML's verdict is not fail"
+grep -q "^capture verdict: FAIL - 5 errors" "$WORK/out" || fail "capture verdict: $(grep 'capture verdict' "$WORK/out")"
+tail -1 "$WORK/out" | grep -q "^verdict: FAIL - 5 errors, .* (exit 0: --fail-on never)$" ||
+  fail "last line: $(tail -1 "$WORK/out")"
+# Warnings only: WARN, exit 0 under the default --fail-on, FAIL with --fail-on warning (stricter).
+run 0 "$WORK/clean.pcap" --severity SE-001=warning "$WORK/faults.pcap"
+grep -q "^capture verdict: WARN - 0 errors, 2 warnings, 0 info ($WORK/faults.pcap)$" "$WORK/out" ||
+  fail "warnings only: $(grep 'capture verdict' "$WORK/out")"
+tail -1 "$WORK/out" | grep -q "^verdict: WARN - .*(exit 0: nothing at or above --fail-on error)$" ||
+  fail "warnings only, last line: $(tail -1 "$WORK/out")"
+run 1 --fail-on warning --severity SE-001=warning "$WORK/faults.pcap"
+grep -q "^capture verdict: FAIL - 0 errors, 2 warnings" "$WORK/out" || fail "--fail-on warning: $(tail -2 "$WORK/out")"
+tail -1 "$WORK/out" | grep -q "(exit 1: findings at or above --fail-on warning)$" || fail "$(tail -1 "$WORK/out")"
+run 0 --format json --severity SE-001=warning "$WORK/faults.pcap"
+grep -q '"verdict": "warn"' "$WORK/out" || fail "JSON verdict of warnings: $(grep verdict "$WORK/out")"
+
+# Error codes are named (the field table's bit names): "E19 I2t_Endat" in text, JSON and HTML.
+run 0 --fail-on never "$faults4"
+grep -q "^    error E19 I2t_Endat (0x4200) at frame 2402" "$WORK/out" || fail "text: no named error code"
+python3 - "$WORK/never.json" <<'PY' || fail "JSON: error codes not named"
+import json, sys
+history = [e for a in json.load(open(sys.argv[1]))["captures"][0]["axes"] for e in a["error_history"]]
+assert {(e["code"], e["name"], e["canopen"]) for e in history} >= {("E19", "I2t_Endat", "0x4200"),
+                                                                   ("E09", "FollowerErr", "0x8611")}, history
+PY
+grep -q '"E19 I2t_Endat"' "$WORK/never.html" || fail "HTML: error codes not named"
+
+# A capture that cannot be read at all: one UNREADABLE line with the reason and nothing else, the
+# run's line counts it once, JSON and JSON Lines give the reason.
+mkdir "$WORK/directory"
+: >"$WORK/empty.pcap"
+for bad in missing.pcap directory empty.pcap; do
+  run 3 "$WORK/$bad"
+  [ "$(grep -vc '^== ' "$WORK/out")" = 2 ] || fail "$bad: more than its verdict lines: $(cat "$WORK/out")"
+  grep -q "^capture verdict: UNREADABLE - $WORK/$bad: cannot read capture: " "$WORK/out" ||
+    fail "$bad: $(cat "$WORK/out")"
+  tail -1 "$WORK/out" | grep -q " in 1 capture, 1 unreadable (exit 3: " || fail "$bad: $(tail -1 "$WORK/out")"
+  ! grep -q "NO SERVO\|0 frames\|no servo" "$WORK/out" || fail "$bad: half a report: $(cat "$WORK/out")"
+  run 3 --format json "$WORK/$bad"
+  python3 -c 'import json,sys; c=json.load(open(sys.argv[1]))["captures"][0]; assert c["verdict"] == "unreadable" and c["reason"] and "layout" not in c, c' \
+    "$WORK/out" || fail "$bad: JSON"
+  run 3 --format jsonl "$WORK/$bad"
+  [ "$(wc -l <"$WORK/out")" = 1 ] && grep -q '"verdict":"unreadable","reason":"' "$WORK/out" ||
+    fail "$bad: JSON Lines: $(cat "$WORK/out")"
+done
+
+echo "validate_cli: exit codes, formats, several captures, stdin, overrides, verdict words, named error codes, unreadable captures"

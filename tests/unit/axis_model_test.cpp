@@ -59,31 +59,32 @@ struct CauseRow {
   unsigned bit;
   const char* display;
   std::uint16_t canopen;
+  const char* text;  // as the reports name it: the E-number and the bit's name
 };
 constexpr CauseRow kCauseRows[] = {
-    {"ncservo.sew.encoder", 1, "E01", 0x7305},
-    {"ncservo.sew.i2t_endat", 2, "E19", 0x4200},
-    {"ncservo.sew.ecat_config", 3, "E14", 0x8100},
-    {"ncservo.sew.bus_voltage", 5, "E05", 0x3100},
-    {"ncservo.sew.current", 6, "E06", 0x2300},
-    {"ncservo.sew.current_offset", 7, "E07", 0x2300},
-    {"ncservo.sew.hall", 8, "E08", 0x7306},
-    {"ncservo.sew.hall_sequence", 9, "HallSErr", 0x7306},
-    {"ncservo.sew.servo_runtime", 10, "SRTErr", 0x6010},
-    {"ncservo.sew.can1_timeout", 11, "CAN1TErr", 0x8130},
-    {"ncservo.sew.can2_timeout", 12, "CAN2TErr", 0x8130},
-    {"ncservo.sew.can1_hw", 13, "CAN1HErr", 0x8100},
-    {"ncservo.sew.can2_hw", 14, "CAN2HErr", 0x8100},
-    {"ncservo.sew.ecat_timeout", 15, "E15", 0x8130},
-    {"ncservo.sew.pdpint", 16, "E16", 0x2300},
-    {"ncservo.sew.param_checksum", 17, "E30", 0x6320},
-    {"ncservo.sew.program_checksum", 18, "PRGCHKSErr", 0x6100},
-    {"ncservo.sew.following", 19, "E09", 0x8611},
-    {"ncservo.sew.overload", 20, "E20", 0x2300},
-    {"ncservo.sew.flash", 21, "E32", 0x7600},
-    {"ncservo.sew.ecat_watchdog", 22, "E31", 0x8100},
-    {"ncservo.sew.overspeed", 23, "E11", 0x8400},
-    {"ncservo.sew.current_symmetry", 24, "E12", 0x2300},
+    {"ncservo.sew.encoder", 1, "E01", 0x7305, "E01 EncoderErr"},
+    {"ncservo.sew.i2t_endat", 2, "E19", 0x4200, "E19 I2t_Endat"},
+    {"ncservo.sew.ecat_config", 3, "E14", 0x8100, "E14 ECatConfigError"},
+    {"ncservo.sew.bus_voltage", 5, "E05", 0x3100, "E05 BVErr"},
+    {"ncservo.sew.current", 6, "E06", 0x2300, "E06 CurrErr"},
+    {"ncservo.sew.current_offset", 7, "E07", 0x2300, "E07 CURROErr"},
+    {"ncservo.sew.hall", 8, "E08", 0x7306, "E08 HallErr"},
+    {"ncservo.sew.hall_sequence", 9, "HallSErr", 0x7306, "HallSErr"},
+    {"ncservo.sew.servo_runtime", 10, "SRTErr", 0x6010, "SRTErr"},
+    {"ncservo.sew.can1_timeout", 11, "CAN1TErr", 0x8130, "CAN1TErr"},
+    {"ncservo.sew.can2_timeout", 12, "CAN2TErr", 0x8130, "CAN2TErr"},
+    {"ncservo.sew.can1_hw", 13, "CAN1HErr", 0x8100, "CAN1HErr"},
+    {"ncservo.sew.can2_hw", 14, "CAN2HErr", 0x8100, "CAN2HErr"},
+    {"ncservo.sew.ecat_timeout", 15, "E15", 0x8130, "E15 ECatTErr"},
+    {"ncservo.sew.pdpint", 16, "E16", 0x2300, "E16 PDPINT"},
+    {"ncservo.sew.param_checksum", 17, "E30", 0x6320, "E30 PTBLCHKSErr"},
+    {"ncservo.sew.program_checksum", 18, "PRGCHKSErr", 0x6100, "PRGCHKSErr"},
+    {"ncservo.sew.following", 19, "E09", 0x8611, "E09 FollowerErr"},
+    {"ncservo.sew.overload", 20, "E20", 0x2300, "E20 OverLoad"},
+    {"ncservo.sew.flash", 21, "E32", 0x7600, "E32 SFlashErr"},
+    {"ncservo.sew.ecat_watchdog", 22, "E31", 0x8100, "E31 ECatWatchDog"},
+    {"ncservo.sew.overspeed", 23, "E11", 0x8400, "E11 OverSpeed"},
+    {"ncservo.sew.current_symmetry", 24, "E12", 0x2300, "E12 CurrDiffErr"},
 };
 
 TEST(AxisModelErrorHistory, EachCauseBitGivesItsCodes) {
@@ -102,6 +103,7 @@ TEST(AxisModelErrorHistory, EachCauseBitGivesItsCodes) {
     EXPECT_EQ(entry.cause->mask, 1u << row.bit);
     EXPECT_STREQ(entry.cause->display, row.display);
     EXPECT_EQ(entry.cause->canopen, row.canopen);
+    EXPECT_EQ(sewCauseText(*entry.cause), row.text);
     EXPECT_EQ(entry.at.frame, 2u);
     EXPECT_EQ(entry.at.time_ns, stamp(2).time_ns);
   }

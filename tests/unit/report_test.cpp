@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -136,6 +137,64 @@ TEST(RuleAnchors, AreTheLowerCaseIdsAndUniqueAndHelpUrisPointIntoTheRuleReferenc
   EXPECT_EQ(ruleAnchor(ruleDef(RuleId::Se001)), "se-001");
   std::sort(anchors.begin(), anchors.end());
   EXPECT_EQ(std::unique(anchors.begin(), anchors.end()), anchors.end());
+}
+
+// docs/cli.md#verdicts: the words describe the capture, --fail-on only the exit status.
+struct VerdictRow {
+  const char* name;
+  std::array<std::size_t, 3> counts;  // info, warning, error
+  bool servo;                         // every axis checked
+  bool unreadable;
+  const char* fail_on;  // error, warning, info or never
+  bool allow_empty;
+  Verdict verdict;
+  int exit_status;
+};
+
+class Verdicts : public ::testing::TestWithParam<VerdictRow> {};
+
+TEST_P(Verdicts, DescribeTheCaptureWhateverTheGate) {
+  const VerdictRow& row = GetParam();
+  CaptureReport report;
+  report.counts = row.counts;
+  report.coverage.any_axis = row.servo;
+  report.frames = 10;
+  if (row.unreadable) report.error = "cut short";
+  ReportPolicy policy;
+  policy.never = std::string(row.fail_on) == "never";
+  if (!policy.never) policy.fail_on = *severityFromName(row.fail_on);
+  policy.allow_empty = row.allow_empty;
+  const CaptureVerdict judged = judgeCapture(policy, report);
+  EXPECT_EQ(judged.verdict, row.verdict);
+  EXPECT_EQ(judged.exit_status, row.exit_status);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rows, Verdicts,
+    ::testing::Values(
+        VerdictRow{"clean", {0, 0, 0}, true, false, "error", false, Verdict::Pass, 0},
+        VerdictRow{"info_only", {3, 0, 0}, true, false, "error", false, Verdict::Pass, 0},
+        VerdictRow{"warnings", {0, 2, 0}, true, false, "error", false, Verdict::Warn, 0},
+        VerdictRow{
+            "warnings_fail_on_warning", {0, 2, 0}, true, false, "warning", false, Verdict::Fail, 1},
+        VerdictRow{"info_fail_on_info", {1, 0, 0}, true, false, "info", false, Verdict::Fail, 1},
+        VerdictRow{"errors", {0, 0, 5}, true, false, "error", false, Verdict::Fail, 1},
+        VerdictRow{"errors_never", {0, 5, 5}, true, false, "never", false, Verdict::Fail, 0},
+        VerdictRow{"warnings_never", {0, 5, 0}, true, false, "never", false, Verdict::Warn, 0},
+        VerdictRow{"no_servo", {0, 0, 0}, false, false, "error", false, Verdict::NoServo, 4},
+        VerdictRow{"no_servo_allowed", {0, 0, 0}, false, false, "error", true, Verdict::NoServo, 0},
+        VerdictRow{"no_servo_bus_error", {0, 0, 1}, false, false, "error", false, Verdict::Fail, 1},
+        VerdictRow{
+            "no_servo_bus_error_never", {0, 0, 1}, false, false, "never", false, Verdict::Fail, 4},
+        VerdictRow{"unreadable", {0, 0, 2}, true, true, "error", false, Verdict::Unreadable, 3}),
+    test::rowName<VerdictRow>);
+
+TEST(Verdicts, TheMostSeriousStatusWins) {
+  EXPECT_EQ(moreSerious(0, 4), 4);
+  EXPECT_EQ(moreSerious(4, 1), 1);
+  EXPECT_EQ(moreSerious(1, 3), 3);
+  EXPECT_EQ(moreSerious(3, 2), 2);
+  EXPECT_EQ(moreSerious(2, 130), 130);
 }
 
 }  // namespace

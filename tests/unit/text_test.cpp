@@ -15,6 +15,9 @@ const std::vector<std::string> kRuleIds{"SE-001", "SE-002", "MSG-001", "COM-005"
 const std::vector<std::string> kOptions{"--format",   "--fail-on", "--disable",
                                         "--severity", "--timeout", "--output"};
 
+const std::vector<std::string> kLevels{"error", "warning", "info", "never"};
+const std::vector<std::string> kFieldish{"fields", "fieldset", "fields-list"};
+
 struct ClosestCase {
   const char* typed;
   const std::vector<std::string>* candidates;
@@ -38,6 +41,11 @@ const ClosestCase kClosestCases[] = {
     {"--disble", &kOptions, "--disable"},
     {"--timeouts", &kOptions, "--timeout"},
     {"--fail", &kOptions, "--fail-on"},
+    {"warn", &kLevels, "warning"},  // cut short: the one name it begins
+    {"WARN", &kLevels, "warning"},
+    {"e", &kLevels, std::nullopt},  // one letter is too little to go on
+    {"wa", &kLevels, "warning"},
+    {"fields", &kFieldish, std::nullopt},  // begins two names: neither
     {"--colour", &kOptions, std::nullopt},
 };
 
@@ -90,6 +98,35 @@ const CsvCase kCsvCases[] = {
 
 TEST(Text, CsvField) {
   for (const CsvCase& c : kCsvCases) EXPECT_EQ(csvField(c.text, c.always), c.field) << c.name;
+}
+
+// RFC 3986: a path as a URI reference's path, and an absolute path as a file: URI.
+struct UriCase {
+  const char* name;
+  const char* path;
+  const char* uri_path;
+  const char* file_uri;  // of the path made absolute under /data
+};
+const UriCase kUriCases[] = {
+    {"plain", "x.pcap", "x.pcap", "file:///data/x.pcap"},
+    {"unreserved kept", "a-b_c.d~e/F9.pcapng", "a-b_c.d~e/F9.pcapng",
+     "file:///data/a-b_c.d~e/F9.pcapng"},
+    {"space", "Pr 1/x.pcap", "Pr%201/x.pcap", "file:///data/Pr%201/x.pcap"},
+    {"non-ASCII as UTF-8 bytes", "Pr\u00fcfstand 1/x.pcap", "Pr%C3%BCfstand%201/x.pcap",
+     "file:///data/Pr%C3%BCfstand%201/x.pcap"},
+    {"colon: no scheme", "c:x.pcap", "c%3Ax.pcap", "file:///data/c%3Ax.pcap"},
+    {"reserved and percent", "a#b?c%d[e]@f+g,h;i=j&k!l$m'n(o)p*q",
+     "a%23b%3Fc%25d%5Be%5D%40f%2Bg%2Ch%3Bi%3Dj%26k%21l%24m%27n%28o%29p%2Aq",
+     "file:///data/a%23b%3Fc%25d%5Be%5D%40f%2Bg%2Ch%3Bi%3Dj%26k%21l%24m%27n%28o%29p%2Aq"},
+    {"dot segments stay", "../up/./x.pcap", "../up/./x.pcap", "file:///data/../up/./x.pcap"},
+    {"control byte", "a\tb", "a%09b", "file:///data/a%09b"},
+};
+
+TEST(Text, UriPath) {
+  for (const UriCase& c : kUriCases) {
+    EXPECT_EQ(uriPath(c.path), c.uri_path) << c.name;
+    EXPECT_EQ(fileUri(std::string("/data/") + c.path), c.file_uri) << c.name;
+  }
 }
 
 }  // namespace

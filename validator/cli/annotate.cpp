@@ -17,6 +17,7 @@
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/capture/capture_stream.hpp"
 #include "ncservo/pipeline/capture_pipeline.hpp"
+#include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/frame_clock.hpp"
 
@@ -33,6 +34,7 @@ struct AnnotateArgs : RuleArgs {
 
 struct Judged {
   FrameComments comments;
+  Coverage coverage;  // whether every axis was checked (no servo: nothing was)
   std::vector<std::int64_t> finding_times_ns;  // of each finding's frame, in capture order
   std::size_t findings = 0;
 };
@@ -55,6 +57,7 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
   };
   pipeline.setSinks({nullptr, nullptr, nullptr, keep});
   if (Status status = streamCapture(**opened, pipeline); !status) return fail(status.error());
+  judged.coverage = coverageOf(*pipeline.validator());
   return judged;
 }
 
@@ -111,12 +114,19 @@ int runAnnotate(const AnnotateArgs& args) {
   const FrameFilter keep = args.snippets_s ? snippetFilter(*judged, *args.snippets_s) : nullptr;
   if (Status written = annotateCapture(args.input, args.output, judged->comments, keep); !written) {
     fmt::print(stderr, "ncservo annotate: {}\n", written.error().text());
-    return kExitCapture;
+    // docs/cli.md#exit-status: an output that cannot be written is a usage error, as in every
+    // command; the input's damage is 3.
+    return written.error().path == args.output ? kExitUsage : kExitCapture;
   }
   if (args.output != "-") {
     fmt::print(stderr, "ncservo annotate: {} finding{} as comments on {} frame{} in {}\n",
                judged->findings, judged->findings == 1 ? "" : "s", judged->comments.size(),
                judged->comments.size() == 1 ? "" : "s", args.output);
+  }
+  // The copy is written all the same; nothing of the protocol was checked in it (as validate).
+  if (!judged->coverage.complete()) {
+    fmt::print(stderr, "ncservo annotate: {}: NO SERVO: {}\n", args.input, judged->coverage.reason);
+    return kExitNoServo;
   }
   return kExitOk;
 }

@@ -1,27 +1,40 @@
 #include "commands.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string_view>
 
 #include "ncservo/base/number.hpp"
+#include "ncservo/base/text.hpp"
 
 namespace ncservo::cli {
+
+CLI::Validator oneOf(std::vector<std::string> names) {
+  const std::string choices = fmt::format("{{{}}}", fmt::join(names, ","));
+  return CLI::Validator(
+      [names = std::move(names), choices](std::string& value) -> std::string {
+        if (std::find(names.begin(), names.end(), value) != names.end()) return {};
+        return fmt::format("{} is not one of {}{}", value, choices, didYouMean(value, names));
+      },
+      choices);
+}
 
 void addTimestampsOption(CLI::App& command, std::string& timestamps) {
   command
       .add_option("--timestamps", timestamps,
                   "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
                   "has one)")
-      ->check(CLI::IsMember({"capture", "probe", "auto"}));
+      ->check(oneOf({"capture", "probe", "auto"}));
 }
 
 void addFailOnOption(CLI::App& command, std::string& fail_on) {
   command
       .add_option("--fail-on", fail_on,
                   "exit 1 on findings at or above: error, warning, info, never")
-      ->check(CLI::IsMember({"error", "warning", "info", "never"}));
+      ->check(oneOf({"error", "warning", "info", "never"}));
 }
 
 void setFailOn(const std::string& fail_on, ReportPolicy& policy) {

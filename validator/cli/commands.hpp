@@ -19,14 +19,9 @@
 
 namespace ncservo::cli {
 
-// The exit statuses (docs/cli.md#exit-status).
-enum ExitCode {
-  kExitOk = 0,
-  kExitFindings = 1,
-  kExitUsage = 2,
-  kExitCapture = 3,
-  kExitNoServo = 4
-};
+// The check of an option that takes one of `names` (every enumerated option, docs/cli.md): a value
+// that is none of them is an error naming the choices and the closest one ("did you mean").
+CLI::Validator oneOf(std::vector<std::string> names);
 
 // What runs a subcommand once its options are parsed.
 using Handler = std::function<int()>;

@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -60,6 +61,7 @@ using cli::refuseInputAsOutput;
 
 using cli::kExitCapture;
 using cli::kExitFindings;
+using cli::kExitInterrupted;
 using cli::kExitNoServo;
 using cli::kExitOk;
 using cli::kExitUsage;
@@ -94,7 +96,7 @@ std::string choiceList(const std::vector<std::string>& names) {
 // --format, one of `names`; its help lists them, then `note`.
 void addFormatOption(CLI::App& command, std::string& format, const std::vector<std::string>& names,
                      const std::string& note = "") {
-  command.add_option("--format", format, choiceList(names) + note)->check(CLI::IsMember(names));
+  command.add_option("--format", format, choiceList(names) + note)->check(cli::oneOf(names));
 }
 
 // ---- decode ----
@@ -285,11 +287,27 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   CapturePipeline pipeline(std::move(options));
   std::optional<Session> session;
   const DecodeFormat& format = rowNamed(kDecodeFormats, args.format);
-  if (!args.layout_only && format.header != nullptr) format.header(out);
+  // The header comes with the first rows, once the layout can tell whether --axis names its axes:
+  // an --axis it does not have is a usage error with nothing written (docs/cli.md#exit-status).
+  bool header_due = !args.layout_only && format.header != nullptr;
+  Status selected;
+  bool checked = args.axes.empty();
   CycleRows cycles;
   std::vector<CycleRow> rows;
   CutRegions cut;
   auto write = [&] {
+    if (!checked && !rows.empty()) {
+      selected = cli::checkAxisSelection(args.axes, session->decoder().axes());
+      checked = true;
+    }
+    if (!selected) {
+      rows.clear();
+      return;
+    }
+    if (header_due && !rows.empty()) {
+      format.header(out);
+      header_due = false;
+    }
     for (const CycleRow& row : rows) {
       const AxisInfo& axis = session->decoder().axes().at(row.axis);
       if (!cli::axisSelected(args.axes, axis)) continue;
@@ -315,6 +333,8 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   const FrameClock& clock = pipeline.clock();
   cycles.finish(rows);
   write();
+  if (selected) selected = cli::checkAxisSelection(args.axes, session->decoder().axes());
+  if (header_due && selected) format.header(out);  // no rows: the header alone
   std::fflush(out);
   warnIfTruncated(reader->path(), cli::truncationOf(run.snapped, run.first_snapped, cut,
                                                     session->decoder().axes()));
@@ -338,13 +358,12 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
                           timestampResolutionNs(clock.source(), reader->timestampDigits())));
     std::fputs(dcText(timing->dc().stations(), timing->dc().settledNs()).c_str(), stderr);
   }
-  if (Status selected = cli::checkAxisSelection(args.axes, session->decoder().axes()); !selected) {
+  if (!selected) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());
     return kExitUsage;
   }
-  // The inference refused (docs/layout.md): the layout written holds no axis.
-  const std::optional<InferenceResult>& inferred = pipeline.inference();
-  if (args.layout_only && inferred && inferred->axes.empty()) return kExitNoServo;
+  // No servo decoded (noteDecoded said why), as validate has it (docs/cli.md#exit-status).
+  if (session->decoder().axes().empty()) return kExitNoServo;
   return kExitOk;
 }
 
@@ -408,6 +427,8 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
                        std::filesystem::absolute(save).string(), waveforms.scopes());
     std::fclose(file);
   }
+  // No servo decoded (noteDecoded said why), as validate has it (docs/cli.md#exit-status).
+  if (validator.decoder().axes().empty()) return kExitNoServo;
   return kExitOk;
 }
 
@@ -512,7 +533,8 @@ struct CaptureOutput {
   std::FILE* messages;  // standard error, or the capture's own buffer
 };
 
-// Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4).
+// Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4), or
+// 130 when Ctrl-C stopped it (its report unfinished, `frames` the frames read).
 int validateCapture(const std::string& path, const CheckSetup& setup,
                     const cli::ReportWriter& writer, const CaptureOutput& output,
                     cli::CaptureReport& report) {
@@ -553,9 +575,14 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
     }
   };
   pipeline.setSinks({start, validate, nullptr, keepFindings});
-  const Status status = streamCapture(*reader, pipeline);
+  StreamStop stop{&cli::ReportWriter::interrupted()};
+  const Status status = streamCapture(*reader, pipeline, &stop);
   const Validator& validator = *pipeline.validator();
   const CaptureRun& run = pipeline.run();
+  if (stop.stopped) {  // Ctrl-C: not a report, only where it stopped (docs/cli.md#interrupted)
+    report.frames = run.records;
+    return kExitInterrupted;
+  }
   const FrameClock& clock = pipeline.clock();
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
@@ -598,17 +625,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   }
   report.closeBaseline();
   if (output.live != nullptr) output.live->endCapture(report);
-  switch (writer.verdict(report)) {
-    case cli::Verdict::Unreadable:
-      return kExitCapture;
-    case cli::Verdict::Fail:
-      return kExitFindings;
-    case cli::Verdict::NoServo:
-      return kExitNoServo;
-    case cli::Verdict::Pass:
-      break;
-  }
-  return kExitOk;
+  return writer.exitStatus(report);
 }
 
 // A capture validated apart (CaptureOutput without `live`) given to the writer as if it had
@@ -630,9 +647,7 @@ void presentCapture(cli::ReportWriter& writer, const std::string& messages,
 
 // docs/cli.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
 int combine(int a, int b) {
-  constexpr int kOrder[] = {kExitUsage, kExitCapture, kExitFindings, kExitNoServo, kExitOk};
-  auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
-  return rank(a) <= rank(b) ? a : b;
+  return cli::moreSerious(a, b);
 }
 
 // Whether two paths name one file, however spelt (links, "./"), whether or not it exists yet.
@@ -733,12 +748,17 @@ int runValidate(const ValidateArgs& o) {
       reports[i].baseline_path = o.baseline;
     }
   }
+  // docs/cli.md#interrupted: each capture's status; kExitInterrupted for one Ctrl-C stopped or kept
+  // from starting (`reports[i].frames` then says how far it got).
+  std::vector<int> statuses(o.captures.size(), kExitInterrupted);
+  (*writer)->stopOnInterrupt();
+  const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
   int rc = kExitOk;
   const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
   if (jobs <= 1 || o.captures.size() <= 1) {
-    for (std::size_t i = 0; i < o.captures.size(); ++i) {
-      rc = combine(rc, validateCapture(o.captures[i], *setup, **writer, {writer->get(), stderr},
-                                       reports[i]));
+    for (std::size_t i = 0; i < o.captures.size() && !interrupted; ++i) {
+      statuses[i] =
+          validateCapture(o.captures[i], *setup, **writer, {writer->get(), stderr}, reports[i]);
     }
   } else {
     struct Validated {
@@ -746,6 +766,7 @@ int runValidate(const ValidateArgs& o) {
       std::string messages;
     };
     const std::function<Validated(std::size_t)> validate = [&](std::size_t i) {
+      if (interrupted) return Validated{kExitInterrupted, {}};
       char* buffer = nullptr;
       std::size_t size = 0;
       std::FILE* messages = open_memstream(&buffer, &size);
@@ -758,12 +779,36 @@ int runValidate(const ValidateArgs& o) {
     };
     const std::function<void(std::size_t, Validated&)> present = [&](std::size_t i,
                                                                      Validated& validated) {
+      statuses[i] = validated.rc;
+      if (validated.rc == kExitInterrupted) {
+        std::fputs(validated.messages.c_str(), stderr);
+        return;
+      }
       presentCapture(**writer, validated.messages, reports[i]);
-      rc = combine(rc, validated.rc);
     };
     cli::runInOrder(o.captures.size(), jobs, validate, present);
   }
-  if (Status written = (*writer)->finish(reports); !written) {
+  // Only finished captures are reported; where Ctrl-C stopped the others is said on stderr.
+  std::vector<cli::CaptureReport> finished;
+  std::vector<std::string> unstarted;
+  for (std::size_t i = 0; i < o.captures.size(); ++i) {
+    if (statuses[i] != kExitInterrupted) {
+      rc = combine(rc, statuses[i]);
+      finished.push_back(std::move(reports[i]));
+    } else if (reports[i].path.empty()) {
+      unstarted.push_back(o.captures[i]);
+    } else {
+      fmt::print(stderr, "ncservo: interrupted at {}, frame {}\n",
+                 o.captures[i] == "-" ? std::string("standard input") : o.captures[i],
+                 reports[i].frames);
+      rc = kExitInterrupted;
+    }
+  }
+  if (interrupted) rc = kExitInterrupted;  // before the reports were written, as the text says
+  if (!unstarted.empty()) {
+    fmt::print(stderr, "ncservo: interrupted before {}\n", fmt::join(unstarted, ", "));
+  }
+  if (Status written = (*writer)->finish(finished); !written) {
     fmt::print(stderr, "ncservo: {}\n", written.error().text());
     return kExitUsage;
   }
@@ -946,9 +991,11 @@ void explainRule(const RuleDef& rule) {
     fmt::print("  timeout:     {}, default {} ms (--timeout {}=MS, [timeouts] {})\n", t.name,
                t.default_ms, t.name, t.name);
   }
-  fmt::print("  reported:    {}\n", rule.delayed
-                                        ? "once the condition has held longer than the timeout"
-                                        : "when the condition begins");
+  fmt::print("  reported:    {}\n",
+             rule.delayed                  ? "once the condition has held longer than the timeout"
+             : rule.reported != nullptr    ? rule.reported
+             : rule.kind == RuleKind::Axis ? "on the frame where the condition begins"
+                                           : "on the frame of the event");
   fmt::print("  reads:       {}\n", describeReads(rule.reads));
   fmt::print("  clause:      {}\n", rule.clause);
   fmt::print("  filter:      {}\n", ruleFilterName(rule));
@@ -1164,9 +1211,10 @@ int runSimulate(SimulateArgs& args) {
                                       : rowNamed(kCompressions, args.compress).compression;
   Result<std::unique_ptr<CaptureWriter>> writer =
       CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), compression);
+  // An output that cannot be written is a usage error, as for every command (docs/cli.md).
   if (!writer) {
     fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
-    return kExitCapture;
+    return kExitUsage;
   }
   const auto frames = simulator.run([&](const sim::SimFrame& frame) {
     return (*writer)->write(frame.time_ns, frame.data, frame.size);
@@ -1175,7 +1223,7 @@ int runSimulate(SimulateArgs& args) {
   if (!closed || !frames) {
     fmt::print(stderr, "ncservo simulate: {}\n",
                closed ? args.output + ": write failed" : closed.error().text());
-    return kExitCapture;
+    return kExitUsage;
   }
   if (args.output != "-") {
     fmt::print(stderr, "ncservo simulate: wrote {} frames to {}\n", *frames, args.output);
@@ -1320,7 +1368,7 @@ Handler simulateCommand(CLI::App& command) {
   SimulateArgs& sa = *args;
   command.add_option("-o,--output", sa.output, "capture to write, - for standard output");
   command.add_option("--scenario", sa.scenario, "commissioning, faults, soak or incidents")
-      ->check(CLI::IsMember({"commissioning", "faults", "soak", "incidents"}));
+      ->check(cli::oneOf({"commissioning", "faults", "soak", "incidents"}));
   command.add_option("--axes", sa.options.axes, "servo axes, 1 to 32 (default 4)");
   command.add_option("--io-slaves", sa.options.io_slaves,
                      "other slaves sharing the process image, 0 to 32 (default: soem and "
@@ -1339,15 +1387,15 @@ Handler simulateCommand(CLI::App& command) {
   }
   style_help.back() = '.';
   CLI::Option* image =
-      command.add_option("--image", sa.image, style_help)->check(CLI::IsMember(styles));
+      command.add_option("--image", sa.image, style_help)->check(cli::oneOf(styles));
   command.add_option("--layout", sa.layout, "older names: default = soem, interleaved = etherlab")
-      ->check(CLI::IsMember(aliases))
+      ->check(cli::oneOf(aliases))
       ->excludes(image);
   command
       .add_option("--probe", sa.probe,
                   "none, or esl: an ET2000 probe's capture (each frame behind an ESL header "
                   "with the exact time; the capture's own timestamps late by up to 300 us)")
-      ->check(CLI::IsMember(namesOf(kProbes)));
+      ->check(cli::oneOf(namesOf(kProbes)));
   command.add_flag("--no-startup", sa.no_startup,
                    "begin with the slaves already in OP (no start-up traffic)");
   addFormatOption(command, sa.format, namesOf(kCaptureFormats),
@@ -1355,7 +1403,7 @@ Handler simulateCommand(CLI::App& command) {
   command
       .add_option("--compress", sa.compress,
                   "none, gzip or zstd (default: from the file name: .gz gzip, .zst zstd)")
-      ->check(CLI::IsMember(namesOf(kCompressions)));
+      ->check(cli::oneOf(namesOf(kCompressions)));
   command.add_option("--fault", sa.faults,
                      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
   command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");
@@ -1380,7 +1428,7 @@ Handler simulateCommand(CLI::App& command) {
   }
   inputs_help.back() = '.';
   command.add_option("--io-inputs", sa.io_inputs, inputs_help)
-      ->check(CLI::IsMember(namesOf(sim::kTerminalInputs)));
+      ->check(cli::oneOf(namesOf(sim::kTerminalInputs)));
   command.add_option("--cia402", sa.options.cia402_drives,
                      "CiA 402 drives with a servo's 10/40-byte PDOs beside the servos, 0 to 32");
   command.add_option("--idle", sa.idle,
@@ -1392,7 +1440,7 @@ Handler simulateCommand(CLI::App& command) {
   }
   start_help.back() = '.';
   command.add_option("--start-in", sa.start_in, start_help)
-      ->check(CLI::IsMember(namesOf(sim::kMidStarts)));
+      ->check(cli::oneOf(namesOf(sim::kMidStarts)));
   command.add_option("--io-task-us", sa.options.io_task_us,
                      "a second task: the terminals in a frame of their own at this cycle time, a "
                      "multiple of --cycle-us");

@@ -467,17 +467,7 @@ int endReport(const std::string& interface, const CapturePipeline& pipeline,
     fmt::print(stderr, "ncservo monitor: {}\n", written.error().text());
     return kExitUsage;
   }
-  switch (writer.verdict(report)) {
-    case Verdict::Unreadable:
-      return kExitCapture;
-    case Verdict::Fail:
-      return kExitFindings;
-    case Verdict::NoServo:
-      return kExitNoServo;
-    case Verdict::Pass:
-      break;
-  }
-  return kExitOk;
+  return writer.exitStatus(report);
 }
 
 int runMonitor(const MonitorArgs& args) {
@@ -542,7 +532,7 @@ Handler monitorCommand(CLI::App& command) {
   command.add_option("-i,--interface", args->interface, "the network interface to capture on")
       ->required();
   command.add_option("--format", args->format, "text or jsonl: findings as they happen")
-      ->check(CLI::IsMember({"text", "jsonl"}));
+      ->check(oneOf({"text", "jsonl"}));
   command.add_option("--duration", args->duration_s,
                      "stop after SECONDS (default: at Ctrl-C), then report");
   addFailOnOption(command, args->fail_on);
@@ -553,7 +543,7 @@ Handler monitorCommand(CLI::App& command) {
   command
       .add_option("--record-severity", args->record_severity,
                   "record findings at or above: error, warning or info (default warning)")
-      ->check(CLI::IsMember({"error", "warning", "info"}));
+      ->check(oneOf({"error", "warning", "info"}));
   command.add_option("--record-limit", args->record_limit_mb,
                      "MiB of recordings kept on disk, the oldest removed first (default 1024)");
   addLayoutOptions(command, args->layout);

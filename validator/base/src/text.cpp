@@ -51,6 +51,15 @@ std::optional<std::string> closestName(std::string_view typed,
       best_distance = distance;
     }
   }
+  if (best || typed.size() < 2) return best;
+  // A name cut short ("warn" for "warning") is what the user meant when it begins one name only.
+  for (const std::string& candidate : candidates) {
+    if (candidate.size() <= typed.size() ||
+        !equalsIgnoringCase(typed, std::string_view(candidate).substr(0, typed.size())))
+      continue;
+    if (best) return std::nullopt;
+    best = candidate;
+  }
   return best;
 }
 
@@ -67,6 +76,27 @@ std::string csvField(std::string_view text, bool always) {
     quoted += c;
   }
   return quoted + "\"";
+}
+
+std::string uriPath(std::string_view path) {
+  std::string uri;
+  uri.reserve(path.size());
+  for (const char c : path) {
+    const bool unreserved = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                            (c >= '0' && c <= '9') || c == '-' || c == '.' || c == '_' || c == '~';
+    if (unreserved || c == '/') {
+      uri += c;
+      continue;
+    }
+    constexpr char kHex[] = "0123456789ABCDEF";
+    const auto byte = static_cast<unsigned char>(c);
+    uri += {'%', kHex[byte >> 4], kHex[byte & 0xF]};
+  }
+  return uri;
+}
+
+std::string fileUri(std::string_view absolute_path) {
+  return "file://" + uriPath(absolute_path);
 }
 
 }  // namespace ncservo

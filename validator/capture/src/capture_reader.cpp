@@ -263,6 +263,7 @@ class DecompressedStream {
 
  private:
   static constexpr std::size_t kInputSize = 1 << 17;
+  int read_errno_ = 0;  // of the last read
   static constexpr std::size_t kOutputSize = 1 << 17;
 
   ssize_t read(char* out, std::size_t size) {
@@ -297,10 +298,16 @@ class DecompressedStream {
   // More compressed input; false at the end of the file (after checking nothing was cut).
   bool refill() {
     input_pos_ = 0;
-    input_end_ = std::fread(input_.get(), 1, kInputSize, raw_);
+    input_end_ = 0;
+    // A read that failed after giving some bytes (one Ctrl-C cut short) is not tried again.
+    if (!std::ferror(raw_)) {
+      errno = 0;
+      input_end_ = std::fread(input_.get(), 1, kInputSize, raw_);
+      read_errno_ = errno;
+    }
     if (input_end_ > 0) return true;
     if (std::ferror(raw_)) {
-      error_ = fmt::format("read error: {}", std::strerror(errno));
+      error_ = fmt::format("read error: {}", std::strerror(read_errno_));
     } else if (inside_frame_) {
       error_ = fmt::format("the {} stream is cut short (truncated compressed file)",
                            compressionName(compression_));

@@ -2,10 +2,21 @@
 
 namespace ncservo {
 
-Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline) {
+Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop) {
   CaptureRecord record;
   Result<bool> status;
-  while ((status = reader.next(record)) && *status) pipeline.onRecord(reader.link(), record);
+  while ((status = reader.next(record)) && *status) {
+    if (stop != nullptr && stop->requested != nullptr && stop->requested->load()) {
+      stop->stopped = true;
+      return {};
+    }
+    pipeline.onRecord(reader.link(), record);
+  }
+  // A read that Ctrl-C cut short (standard input waiting for more) is no damage of the capture.
+  if (!status && stop != nullptr && stop->requested != nullptr && stop->requested->load()) {
+    stop->stopped = true;
+    return {};
+  }
   pipeline.finish();
   if (!status) return fail(status.error());
   return {};

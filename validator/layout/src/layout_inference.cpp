@@ -35,7 +35,8 @@ constexpr std::uint32_t kSswZPulseAck = mask32("ncservo.ssw.zpulse_ack");
 constexpr std::uint32_t kSewReserved = mask32("ncservo.sew.reserved");
 constexpr std::uint32_t kSewSummary = kSewSummaryMask;
 constexpr std::uint32_t kSewCauses = kSewCauseMask;
-constexpr std::int32_t kMaxMessageCode = 9;  // §5: codes 0..9 are listed
+// §5: the codes listed, with a meaning or not (MSG-001 warns of those without).
+constexpr auto kMaxMessageCode = static_cast<std::int32_t>(kLastListedMessageCode);
 // The largest magnitude of the message datum a drive plausibly sends for each code with a meaning
 // (§5: rpm, A, %, V, °C, kW); an undefined code's datum only has to be finite.
 constexpr float kMessageDataBound[] = {1e5f, 1e4f, 1e4f, 1e4f, 1e3f, 1e4f};

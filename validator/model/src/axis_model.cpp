@@ -78,6 +78,16 @@ const std::array<SewCause, popcount64(kSewCauseMask)> kSewCauses{{
 }};
 // clang-format on
 
+std::string_view sewCauseName(const SewCause& cause) {
+  const FieldDef* row = sewCauseField(cause.mask);
+  return row != nullptr ? causeName(*row) : std::string_view(cause.display);
+}
+
+std::string sewCauseText(const SewCause& cause) {
+  const std::string_view name = sewCauseName(cause);
+  return name == cause.display ? std::string(name) : fmt::format("{} {}", cause.display, name);
+}
+
 void Signal::observe(std::uint32_t v, const Stamp& now) {
   rose = known && value == 0 && v != 0;
   fell = known && value != 0 && v == 0;

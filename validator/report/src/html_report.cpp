@@ -82,7 +82,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     }
     Json errors = Json::array();
     for (const ErrorHistoryEntry& e : a.error_history) {
-      errors.push_back({seconds(r, e.at), e.cause->display,
+      errors.push_back({seconds(r, e.at), sewCauseText(*e.cause),
                         fmt::format("0x{:04X}", e.cause->canopen), e.at.frame});
     }
     axes.push_back({{"name", a.name},
@@ -101,31 +101,32 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     return bins;
   };
   auto number = [](const std::optional<double>& v) { return v ? Json(*v) : Json(nullptr); };
-  return {{"path", r.path},
-          {"verdict", verdictName(verdict)},
-          {"reason", r.coverage.complete() ? Json(nullptr) : Json(r.coverage.reason)},
-          {"error", r.error ? Json(*r.error) : Json(nullptr)},
-          {"counts",
-           {{"error", r.count(Severity::Error)},
-            {"warning", r.count(Severity::Warning)},
-            {"info", r.count(Severity::Info)}}},
-          {"frames", r.frames},
-          {"cycles", r.cycles},
-          {"cycle_time_us",
-           {{"median", number(r.cycle_time.median_us)},
-            {"p99", number(r.cycle_time.p99_us)},
-            {"max", number(r.cycle_time.max_us)}}},
-          {"layout_source", layoutSourceName(r.layout_source)},
-          {"findings", std::move(findings)},
-          {"findings_total", r.findings.size()},
-          {"baseline", r.baseline ? Json(fmt::format("against the baseline {}: {}", r.baseline_path,
-                                                     describeBaseline(r)))
-                                  : Json(nullptr)},
-          {"timelines", std::move(timelines)},
-          {"timelines_omitted", r.timelines.omitted},
-          {"axes", std::move(axes)},
-          {"cycle_histogram", histogram(r.timing.cycle)},
-          {"latency_histogram", histogram(r.timing.latency)}};
+  return {
+      {"path", r.path},
+      {"verdict", verdictName(verdict)},
+      {"reason", r.coverage.complete() || r.unopened() ? Json(nullptr) : Json(r.coverage.reason)},
+      {"error", r.error ? Json(*r.error) : Json(nullptr)},
+      {"counts",
+       {{"error", r.count(Severity::Error)},
+        {"warning", r.count(Severity::Warning)},
+        {"info", r.count(Severity::Info)}}},
+      {"frames", r.frames},
+      {"cycles", r.cycles},
+      {"cycle_time_us",
+       {{"median", number(r.cycle_time.median_us)},
+        {"p99", number(r.cycle_time.p99_us)},
+        {"max", number(r.cycle_time.max_us)}}},
+      {"layout_source", layoutSourceName(r.layout_source)},
+      {"findings", std::move(findings)},
+      {"findings_total", r.findings.size()},
+      {"baseline", r.baseline ? Json(fmt::format("against the baseline {}: {}", r.baseline_path,
+                                                 describeBaseline(r)))
+                              : Json(nullptr)},
+      {"timelines", std::move(timelines)},
+      {"timelines_omitted", r.timelines.omitted},
+      {"axes", std::move(axes)},
+      {"cycle_histogram", histogram(r.timing.cycle)},
+      {"latency_histogram", histogram(r.timing.latency)}};
 }
 
 // The page's data, safe inside a <script> element: no "<" at all ("</script>" cannot end it).
@@ -146,7 +147,7 @@ constexpr const char* kStyle = R"css(
 body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222}
 h1{font-size:1.4em}h2{font-size:1.2em;margin-top:1.6em}h3{font-size:1.05em}
 .verdict{display:inline-block;padding:.2em .6em;border-radius:4px;color:#fff;font-weight:bold}
-.v-fail,.v-unreadable{background:#c62828}.v-pass{background:#2e7d32}.v-no.servo{background:#6d6d6d}
+.v-fail,.v-unreadable{background:#c62828}.v-warn{background:#b26a00}.v-pass{background:#2e7d32}.v-no.servo{background:#6d6d6d}
 .sev-error{color:#c62828;font-weight:bold}.sev-warning{color:#b26a00}.sev-info{color:#1565c0}
 table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left;vertical-align:top}
 th.sortable{cursor:pointer;background:#f3f3f3}th.sortable:hover{background:#e6e6e6}

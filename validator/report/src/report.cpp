@@ -22,7 +22,20 @@ namespace {
 // may run (between ReportWriter::open and finish).
 const std::vector<std::string>* g_temporaries = nullptr;
 
+// docs/cli.md#interrupted: set by the first Ctrl-C once a run asked for it (stopOnInterrupt).
+std::atomic<bool> g_interrupted{false};
+std::atomic<bool> g_stop_on_interrupt{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "set in a signal handler");
+
+// After the first Ctrl-C, system calls restart again: only a read waiting when it came (standard
+// input) is cut short, not the reports' writes.
+void catchInterrupt(int flags);
+
 extern "C" void removeTemporaries(int signal) {
+  if (signal == SIGINT && g_stop_on_interrupt.load() && !g_interrupted.exchange(true)) {
+    catchInterrupt(SA_RESTART);
+    return;
+  }
   if (g_temporaries != nullptr) {
     for (const std::string& path : *g_temporaries) ::unlink(path.c_str());
   }
@@ -33,6 +46,13 @@ extern "C" void removeTemporaries(int signal) {
 constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
 // What each was before: a signal the caller ignores (nohup, a background job) stays ignored.
 void (*g_previous[std::size(kInterrupts)])(int) = {};
+void catchInterrupt(int flags) {
+  struct sigaction action {};
+  action.sa_handler = removeTemporaries;
+  action.sa_flags = flags;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+}
 }  // namespace
 
 std::string describeLateLayout(const LateLayout& late) {
@@ -132,11 +152,59 @@ void summarise(const Validator& validator, CaptureReport& report) {
   }
 }
 
-Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& r) {
-  if (r.error) return Verdict::Unreadable;
-  if (!policy.never && r.reaches(policy.fail_on)) return Verdict::Fail;
-  if (!r.coverage.complete() && !policy.allow_empty) return Verdict::NoServo;
-  return Verdict::Pass;
+CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& r) {
+  // The findings the verdict is about: all of them, or the new ones against a baseline
+  // (docs/baselines.md).
+  const auto reaches = [&](Severity level) { return r.reaches(level); };
+  const bool gate = !policy.never && reaches(policy.fail_on);  // what --fail-on fails
+  const bool checked = r.coverage.complete();
+  if (r.error) return {Verdict::Unreadable, kExitCapture};
+  const int status = gate                              ? kExitFindings
+                     : !checked && !policy.allow_empty ? kExitNoServo
+                                                       : kExitOk;
+  // The words describe the capture (docs/cli.md#verdicts): an error is a FAIL whatever --fail-on
+  // says, and so is a finding that fails the gate when --fail-on is stricter.
+  if (gate || reaches(Severity::Error)) return {Verdict::Fail, status};
+  if (!checked) return {Verdict::NoServo, status};
+  if (reaches(Severity::Warning)) return {Verdict::Warn, status};
+  return {Verdict::Pass, status};
+}
+
+int moreSerious(int a, int b) {
+  constexpr int kOrder[] = {kExitInterrupted, kExitUsage,   kExitCapture,
+                            kExitFindings,    kExitNoServo, kExitOk};
+  auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
+  return rank(a) <= rank(b) ? a : b;
+}
+
+std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports,
+                       int exit_status) {
+  const std::string fail_on = policy.never ? "never" : severityName(policy.fail_on);
+  switch (exit_status) {
+    case kExitCapture:
+      return "a capture could not be read to its end";
+    case kExitFindings:
+      return fmt::format("findings at or above --fail-on {}", fail_on);
+    case kExitNoServo:
+      return "no servo checked";
+    case kExitOk:
+      break;
+    default:
+      return "";
+  }
+  bool findings = false;
+  bool unchecked = false;
+  for (const CaptureReport& r : reports) {
+    findings = findings || r.reaches(Severity::Info);
+    unchecked = unchecked || (!r.unopened() && !r.coverage.complete());
+  }
+  std::vector<std::string> why;
+  if (findings) {
+    why.push_back(policy.never ? std::string("--fail-on never")
+                               : fmt::format("nothing at or above --fail-on {}", fail_on));
+  }
+  if (unchecked && policy.allow_empty) why.emplace_back("--allow-empty");
+  return fmt::format("{}", fmt::join(why, ", "));
 }
 
 BaselineState CaptureReport::tally(const Finding& f) {
@@ -252,7 +320,20 @@ Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<Repor
   return writer;
 }
 
+void ReportWriter::stopOnInterrupt() {
+  g_interrupted = false;
+  g_stop_on_interrupt = true;
+  // Without SA_RESTART, so that a read waiting for standard input returns at the first Ctrl-C; a
+  // Ctrl-C the caller ignores stays ignored.
+  if (g_previous[0] != SIG_IGN) catchInterrupt(0);
+}
+
+const std::atomic<bool>& ReportWriter::interrupted() {
+  return g_interrupted;
+}
+
 ReportWriter::~ReportWriter() {
+  g_stop_on_interrupt = false;
   for (std::size_t i = 0; i < std::size(kInterrupts); ++i) {
     if (g_previous[i] != SIG_ERR) std::signal(kInterrupts[i], g_previous[i]);
   }

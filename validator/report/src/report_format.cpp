@@ -43,6 +43,8 @@ const char* verdictName(Verdict v) {
       return "fail";
     case Verdict::NoServo:
       return "no servo";
+    case Verdict::Warn:
+      return "warn";
     case Verdict::Pass:
       return "pass";
   }

@@ -246,6 +246,16 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json c;
   c["path"] = r.path;
   c["verdict"] = verdictName(verdict);
+  // Nothing was read (docs/cli.md#verdicts): the verdict and why, with the empty parts a reader of
+  // every capture expects, and no layout, timing or axes to speak of.
+  if (r.unopened()) {
+    c["reason"] = *r.error;
+    c["frames"] = 0;
+    c["findings"] = Json::array();
+    c["summary"] = {{"error", 0}, {"warning", 0}, {"info", 0}};
+    c["error"] = *r.error;
+    return c;
+  }
   if (!r.coverage.complete()) c["reason"] = r.coverage.reason;
   if (!r.coverage.missing.empty()) c["missing_axes"] = r.coverage.missing;
   c["frames"] = r.frames;
@@ -317,6 +327,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     Json history = Json::array();
     for (const ErrorHistoryEntry& e : a.error_history) {
       history.push_back({{"code", e.cause->display},
+                         {"name", sewCauseName(*e.cause)},
                          {"canopen", hex16(e.cause->canopen)},
                          {"frame", e.at.frame},
                          {"time", seconds(r, e.at)},

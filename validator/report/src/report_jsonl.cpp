@@ -19,6 +19,14 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 // where it does not fit; one where not every axis was checked with a line that says so, and so
 // does one with several segments.
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
+  // Nothing was read: one line, its verdict and why (docs/cli.md#verdicts).
+  if (r.unopened()) {
+    const Json j{{"capture", r.path},
+                 {"verdict", verdictName(verdictOf(sink.policy, r))},
+                 {"reason", *r.error}};
+    std::fputs((j.dump() + "\n").c_str(), sink.out);
+    return;
+  }
   // Against a baseline: a line per finding of it not seen again, then one with the counts.
   if (r.baseline) {
     for (const ReportedFinding& f : r.baseline_absent) {

@@ -2,11 +2,37 @@
 // capture not read to its end or not fully checked and per axis whose layout does not fit.
 #include <fmt/format.h>
 
+#include <filesystem>
+#include <system_error>
+
+#include "ncservo/base/text.hpp"
 #include "report_format.hpp"
 
 namespace ncservo::cli::detail {
 
 namespace {
+
+// The base a capture named by a relative path is relative to: the directory validate ran in, which
+// the run's originalUriBaseIds gives as an absolute file: URI (SARIF 2.1.0 §3.4.4, §3.14.14).
+constexpr const char* kCaptureBase = "SRCROOT";
+
+// Where a capture is, as SARIF's artifactLocation has it: a URI reference (RFC 3986), percent-
+// encoded; relative to kCaptureBase when the capture was named by a relative path, a file: URI
+// when by an absolute one, and only a description for standard input.
+Json artifactLocation(const std::string& path) {
+  if (path == "-") return {{"description", {{"text", "standard input"}}}};
+  if (!path.empty() && path.front() == '/') return {{"uri", fileUri(path)}};
+  return {{"uri", uriPath(path)}, {"uriBaseId", kCaptureBase}};
+}
+
+// The absolute URI of kCaptureBase, ending in "/" as §3.14.14 asks.
+Json originalUriBaseIds() {
+  std::error_code ec;
+  std::string directory = std::filesystem::current_path(ec).string();
+  if (ec) return nullptr;
+  if (directory.empty() || directory.back() != '/') directory += '/';
+  return {{kCaptureBase, {{"uri", fileUri(directory)}}}};
+}
 
 const char* sarifLevel(Severity s) {
   switch (s) {
@@ -25,8 +51,9 @@ const char* sarifLevel(Severity s) {
 // shown to be right.
 void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_t artifact,
                       Json& notifications) {
-  const Json where = {
-      {{"physicalLocation", {{"artifactLocation", {{"uri", r.path}, {"index", artifact}}}}}}};
+  Json location = artifactLocation(r.path);
+  location["index"] = artifact;
+  const Json where = {{{"physicalLocation", {{"artifactLocation", std::move(location)}}}}};
   if (r.error) {
     notifications.push_back({{"descriptor", {{"id", "UNREADABLE"}}},
                              {"level", "error"},
@@ -42,10 +69,10 @@ void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_
          {"message", {{"text", fmt::format("{}: layout does not fit: {}", r.path, warning)}}},
          {"locations", where}});
   }
-  if (!r.coverage.complete()) {
+  if (!r.unopened() && !r.coverage.complete()) {
     notifications.push_back(
         {{"descriptor", {{"id", "NO-SERVO"}}},
-         {"level", verdictOf(sink.policy, r) == Verdict::NoServo ? "error" : "note"},
+         {"level", exitStatusOf(sink.policy, r) == kExitNoServo ? "error" : "note"},
          {"message", {{"text", fmt::format("{}: NO SERVO: {}", r.path, r.coverage.reason)}}},
          {"locations", where}});
   }
@@ -54,7 +81,9 @@ void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_
 // A finding's place: the capture, the region of the file that stores its frame where that is
 // known (a pcap has no lines), and the frame as a logical location (an element of the capture).
 Json sarifLocation(const CaptureReport& r, std::size_t artifact, const Finding& f) {
-  Json physical{{"artifactLocation", {{"uri", r.path}, {"index", artifact}}}};
+  Json location = artifactLocation(r.path);
+  location["index"] = artifact;
+  Json physical{{"artifactLocation", std::move(location)}};
   const auto stored = std::lower_bound(r.frame_spans.begin(), r.frame_spans.end(), f.at.frame,
                                        [](const std::pair<std::uint64_t, RecordSpan>& s,
                                           std::uint64_t frame) { return s.first < frame; });
@@ -86,9 +115,11 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
   Json artifacts = Json::array();
   Json notifications = Json::array();
   bool all_read = true;
+  bool relative = false;  // a capture named by a relative path
   for (std::size_t c = 0; c < reports.size(); ++c) {
     const CaptureReport& r = reports[c];
-    artifacts.push_back({{"location", {{"uri", r.path}}}});
+    artifacts.push_back({{"location", artifactLocation(r.path)}});
+    relative = relative || artifacts.back()["location"].contains("uriBaseId");
     addNotifications(sink, r, c, notifications);
     all_read = all_read && !r.error;
     for (std::size_t i = 0; i < r.findings.size(); ++i) {
@@ -138,18 +169,21 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
   // executionSuccessful (§3.20.14): false where a capture could not be read (exit status 3).
   Json invocation{{"executionSuccessful", all_read}};
   if (!notifications.empty()) invocation["toolExecutionNotifications"] = std::move(notifications);
+  Json run{{"tool",
+            {{"driver",
+              {{"name", "ncservo"},
+               {"version", NCSERVO_VERSION},
+               {"informationUri", kRepositoryUri},
+               {"rules", std::move(rules)}}}}},
+           {"invocations", {std::move(invocation)}}};
+  if (Json bases = originalUriBaseIds(); relative && !bases.is_null()) {
+    run["originalUriBaseIds"] = std::move(bases);
+  }
+  run["artifacts"] = std::move(artifacts);
+  run["results"] = std::move(results);
   Json sarif{{"$schema", "https://json.schemastore.org/sarif-2.1.0.json"},
              {"version", "2.1.0"},
-             {"runs",
-              {{{"tool",
-                 {{"driver",
-                   {{"name", "ncservo"},
-                    {"version", NCSERVO_VERSION},
-                    {"informationUri", kRepositoryUri},
-                    {"rules", std::move(rules)}}}}},
-                {"invocations", {std::move(invocation)}},
-                {"artifacts", std::move(artifacts)},
-                {"results", std::move(results)}}}}};
+             {"runs", {std::move(run)}}};
   std::fputs((sarif.dump(2) + "\n").c_str(), sink.out);
 }
 

@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -24,10 +26,26 @@ const char* verdictHeadline(Verdict v) {
       return "FAIL";
     case Verdict::NoServo:
       return "NO SERVO";
+    case Verdict::Warn:
+      return "WARN";
     case Verdict::Pass:
       break;
   }
   return "PASS";
+}
+
+// The run's word: its most serious capture's, in this order; an error found before a capture's
+// damage fails the run as well.
+Verdict runVerdict(const ReportPolicy& policy, const std::vector<CaptureReport>& reports) {
+  constexpr Verdict kOrder[] = {Verdict::Fail, Verdict::Unreadable, Verdict::NoServo, Verdict::Warn,
+                                Verdict::Pass};
+  std::size_t worst = std::size(kOrder) - 1;
+  for (const CaptureReport& r : reports) {
+    const Verdict v = r.count(Severity::Error) > 0 ? Verdict::Fail : verdictOf(policy, r);
+    worst = std::min<std::size_t>(
+        worst, std::find(std::begin(kOrder), std::end(kOrder), v) - std::begin(kOrder));
+  }
+  return kOrder[worst];
 }
 
 // One line per rule and axis: how many findings, the first and last frame, the first message.
@@ -109,7 +127,7 @@ void writeTextAxes(std::FILE* out, const CaptureReport& r) {
     if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);
     fmt::print(out, "\n");
     for (const ErrorHistoryEntry& e : a.error_history) {
-      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", e.cause->display,
+      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", sewCauseText(*e.cause),
                  e.cause->canopen, e.at.frame, seconds(r, e.at));
     }
   }
@@ -191,6 +209,11 @@ std::string countedText(const std::array<std::size_t, 3>& counts, bool baseline)
 
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   std::FILE* out = sink.out;
+  // Nothing was read: its verdict and why, nothing else (no frames, no layout to speak of).
+  if (r.unopened()) {
+    fmt::print(out, "capture verdict: UNREADABLE - {}\n", *r.error);
+    return;
+  }
   // Before the findings: a layout that does not fit explains them.
   for (const std::string& warning : r.layout_warnings) {
     fmt::print(out, "warning: layout does not fit: {}\n", warning);
@@ -245,38 +268,38 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
   std::array<std::size_t, 3> counts{};
   std::size_t added = 0, unchanged = 0, absent = 0;  // against a baseline
   const bool baseline = !reports.empty() && reports.front().baseline.has_value();
-  std::size_t unread = 0;     // captures that could not be read to their end
-  std::size_t unchecked = 0;  // captures where not every axis was checked
-  bool failed = false;
-  bool no_servo = false;
+  std::size_t unopened = 0;   // captures of which nothing could be read
+  std::size_t unread = 0;     // captures read in part: not to their end
+  std::size_t unchecked = 0;  // captures read where not every axis was checked
+  int status = kExitOk;
   for (const CaptureReport& r : reports) {
     for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counted(static_cast<Severity>(s));
     added += r.newCount();
     unchanged += r.unchanged;
     absent += r.baseline_absent.size();
-    unread += r.error.has_value() ? 1 : 0;
-    unchecked += r.coverage.complete() ? 0 : 1;
-    const Verdict v = verdictOf(sink.policy, r);
-    failed = failed || v == Verdict::Fail || v == Verdict::Unreadable;
-    no_servo = no_servo || v == Verdict::NoServo;
+    unopened += r.unopened() ? 1 : 0;
+    unread += r.error && !r.unopened() ? 1 : 0;
+    unchecked += r.unopened() || r.coverage.complete() ? 0 : 1;
+    status = moreSerious(status, exitStatusOf(sink.policy, r));
   }
+  if (ReportWriter::interrupted()) status = kExitInterrupted;
   std::string notes;
+  if (unopened > 0) notes += fmt::format(", {} unreadable", unopened);
   if (unread > 0) notes += fmt::format(", {} not read to the end", unread);
-  if (unchecked > 0) {
-    notes += fmt::format(", {} with no servo checked{}", unchecked,
-                         sink.policy.allow_empty ? " (--allow-empty)" : "");
-  }
+  if (unchecked > 0) notes += fmt::format(", {} with no servo checked", unchecked);
   // docs/baselines.md: with a baseline the words and counts are about the new findings.
   if (baseline) {
     notes += fmt::format(", against the baseline: {} new, {} unchanged, {} absent", added,
                          unchanged, absent);
   }
-  fmt::print(sink.out, "verdict: {} - {} ({} capture{}{}, fail on {})\n",
-             failed     ? "FAIL"
-             : no_servo ? "NO SERVO"
-                        : "PASS",
-             countedText(counts, baseline), reports.size(), reports.size() == 1 ? "" : "s", notes,
-             sink.policy.never ? "never" : severityName(sink.policy.fail_on));
+  const bool interrupted = status == kExitInterrupted;
+  const std::string reason = interrupted ? std::string("Ctrl-C; only the captures finished")
+                                         : exitReason(sink.policy, reports, status);
+  // docs/cli.md#verdicts: the word describes the captures; the exit status and why close the line.
+  fmt::print(sink.out, "verdict: {} - {} in {} capture{}{}{} (exit {}{}{})\n",
+             interrupted ? "INTERRUPTED" : verdictHeadline(runVerdict(sink.policy, reports)),
+             countedText(counts, baseline), reports.size(), reports.size() == 1 ? "" : "s",
+             interrupted ? " finished" : "", notes, status, reason.empty() ? "" : ": ", reason);
 }
 
 }  // namespace ncservo::cli::detail

@@ -241,9 +241,13 @@ bool msg001(const AxisModel& a, const RuleSettings&) {
   return a.knowsInputs() && !messageCodeDefined(code);
 }
 std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
-  return fmt::format("message code {} is undefined; defined codes are 0-{}", a.latest().msgCode(),
-                     kLastDefinedMessageCode);
+  const std::int32_t code = a.latest().msgCode();
+  const bool listed = code >= 0 && static_cast<std::uint32_t>(code) <= kLastListedMessageCode;
+  return fmt::format("message code {} is {}; defined codes are 0-{}", code,
+                     listed ? "listed without a meaning" : "undefined", kLastDefinedMessageCode);
 }
+// MSG-001's summary names the ranges of fields.hpp.
+static_assert(kLastDefinedMessageCode == 5 && kLastListedMessageCode == 9);
 
 // --- Bus, per axis ---
 // docs/protocol.md §4: the drive raises ECatTErr after this many cycles without data.
@@ -689,7 +693,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .clause = "docs/protocol.md §5",
      .reads = readsThrough("ncservo.msg_code", definedMessageCode),
      NCSERVO_AXIS(msg001),
-     .summary = "a message code outside 0-5"},
+     .summary = "a message code outside 0-5 (6-9 are listed without a meaning)"},
     {.id = RuleId::Com001,
      .code = "COM-001",
      .slug = "working-counter",
@@ -706,6 +710,9 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .party = Party::Bus,
      .kind = RuleKind::Bus,
      .clause = "docs/protocol.md §8; docs/rules.md timeouts",
+     // docs/rules.md: the interval after a gap tells a late cycle from lost ones.
+     .reported = "at the next master copy after the gap, one cycle after it (since: the master "
+                 "copy before the gap); at a segment's or the capture's end when none follows",
      NCSERVO_EVENT(CycleGapEvent, com002, com002Text),
      .summary = "cycles late or missing between two master frames"},
     {.id = RuleId::Com003,

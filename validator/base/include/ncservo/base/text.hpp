@@ -1,5 +1,6 @@
 // Small text helpers the command line, the configuration and the rule table share: matching a
-// name typed by a user (case-insensitive IDs, "did you mean") and quoting a CSV field.
+// name typed by a user (case-insensitive IDs, "did you mean"), quoting a CSV field and writing a
+// path as a URI.
 #pragma once
 
 #include <optional>
@@ -26,5 +27,12 @@ std::string didYouMean(std::string_view typed, const std::vector<std::string>& c
 // One field of RFC 4180 CSV: as it is, or in double quotes with each quote doubled when it holds
 // a comma, a quote, a CR or an LF (`always` quotes it in any case).
 std::string csvField(std::string_view text, bool always = false);
+
+// A path as the path of a URI reference (RFC 3986 §2.1, §3.3): every byte but an unreserved
+// character (letters, digits, "-._~") and "/" percent-encoded, so a space is "%20" and "ü" (UTF-8)
+// "%C3%BC". Encoding ":" too keeps a relative path's first segment from reading as a scheme.
+std::string uriPath(std::string_view path);
+// The file: URI of an absolute path ("file:///data/Pr%C3%BCfstand%201/x.pcap").
+std::string fileUri(std::string_view absolute_path);
 
 }  // namespace ncservo

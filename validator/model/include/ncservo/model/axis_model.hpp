@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ncservo/base/stamp.hpp"
@@ -38,6 +39,10 @@ struct SewCause {
   std::uint16_t canopen;
 };
 extern const std::array<SewCause, popcount64(kSewCauseMask)> kSewCauses;
+// The bit's name from the field table ("OverSpeed"), and how the reports name a cause: "E11
+// OverSpeed", or the name alone where the definition gives no E-number ("HallSErr").
+std::string_view sewCauseName(const SewCause& cause);
+std::string sewCauseText(const SewCause& cause);
 
 struct ErrorHistoryEntry {
   const SewCause* cause = nullptr;

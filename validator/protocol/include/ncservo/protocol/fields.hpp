@@ -703,6 +703,21 @@ inline constexpr std::uint32_t kSewSummaryMask = mask32("ncservo.sew.servo_error
 inline constexpr std::uint32_t kSewCauseMask = static_cast<std::uint32_t>(causeMask(Word::Sew));
 static_assert(kSewCauseMask == 0x01FFFFEE, "docs/protocol.md §4: cause bits 1-3 and 5-24");
 
+// docs/protocol.md §4: the name the interface definition gives a cause bit ("OverSpeed"), its
+// row's label before the E-number; the reports show it beside the E-number (docs/cli.md).
+constexpr std::string_view causeName(const FieldDef& f) {
+  const std::string_view label(f.label);
+  return label.substr(0, label.find(" ("));
+}
+// The cause row of a SEW bit; null for a bit that is no cause.
+constexpr const FieldDef* sewCauseField(std::uint32_t mask) {
+  for (const FieldDef& f : kFields) {
+    if (f.word == Word::Sew && f.view == FieldView::Cause && f.mask == mask) return &f;
+  }
+  return nullptr;
+}
+static_assert(causeName(*sewCauseField(mask32("ncservo.sew.overspeed"))) == "OverSpeed");
+
 // docs/protocol.md §5: the message codes with a meaning are the value names of ncservo.msg_code.
 inline constexpr const FieldDef& kMessageCodeField = field("ncservo.msg_code");
 inline constexpr std::uint64_t kDefinedMessageCodes = [] {  // bit n: code n has a meaning
@@ -724,6 +739,11 @@ inline constexpr std::uint32_t kLastDefinedMessageCode = [] {
   }
   return last;
 }();
+// docs/protocol.md §5: the interface definition lists the codes 0..9, but gives only those named
+// above (0..5) a meaning. A drive sending one of the others is still a drive of this protocol: the
+// layout inference takes it (docs/layout.md), and MSG-001 warns of it (docs/rules.md).
+inline constexpr std::uint32_t kLastListedMessageCode = 9;
+static_assert(kLastListedMessageCode >= kLastDefinedMessageCode);
 
 // docs/protocol.md §2–3: parameter table = ExtPRMTBL·4 + PRMTBL + 1, commanded in the SCW,
 // active in the SSW.

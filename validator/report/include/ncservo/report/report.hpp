@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -25,8 +26,19 @@
 
 namespace ncservo::cli {
 
-// A capture's outcome, as its exit status has it (docs/cli.md#exit-status: 3, 1, 4, 0).
-enum class Verdict { Unreadable, Fail, NoServo, Pass };
+// The exit statuses of every command (docs/cli.md#exit-status).
+enum ExitCode {
+  kExitOk = 0,
+  kExitFindings = 1,
+  kExitUsage = 2,
+  kExitCapture = 3,
+  kExitNoServo = 4,
+  kExitInterrupted = 130,  // 128 + SIGINT, as a shell reports a run Ctrl-C ended
+};
+
+// What a capture is, as a person reads it (docs/cli.md#verdicts): it describes the capture, not
+// the gate --fail-on sets, which only decides the exit status.
+enum class Verdict { Unreadable, Fail, NoServo, Warn, Pass };
 
 struct AxisReport {
   std::uint16_t index = 0;
@@ -146,7 +158,7 @@ std::string describeBaseline(const CaptureReport& report);
 // What a JSON report would hold of the capture, as baselines and `ncservo diff` read it.
 ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict);
 
-// "fail", "pass", "no servo", "unreadable": as the JSON report names a verdict.
+// "fail", "warn", "pass", "no servo", "unreadable": as the JSON report names a verdict.
 const char* verdictName(Verdict verdict);
 // An axis's configured name ("axis3" when it has none), "bus" for none.
 std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
@@ -175,7 +187,26 @@ struct ReportPolicy {
   bool verbose = false;  // text: every finding, not one line per rule and axis
   std::array<bool, kRuleCount> enabled{};
 };
-Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& report);
+// A capture's verdict and its exit status (docs/cli.md#exit-status: 3, 1, 4 or 0), both from
+// the findings counted here: the one place that decides them.
+struct CaptureVerdict {
+  Verdict verdict;
+  int exit_status;
+};
+CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& report);
+inline Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& report) {
+  return judgeCapture(policy, report).verdict;
+}
+inline int exitStatusOf(const ReportPolicy& policy, const CaptureReport& report) {
+  return judgeCapture(policy, report).exit_status;
+}
+// docs/cli.md#exit-status: with several captures the status is the most serious, in the order
+// 2, 3, 1, 4, 0 (130, an interrupted run, before them all).
+int moreSerious(int a, int b);
+// Why a run's exit status is what it is, for the text report's last line: "--fail-on never",
+// "findings at or above --fail-on warning", …
+std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports,
+                       int exit_status);
 
 // Where a report goes, and its policy.
 struct ReportSink {
@@ -236,6 +267,13 @@ class ReportWriter {
   bool locatesFrames() const;
   bool drawsTimelines() const;
   Verdict verdict(const CaptureReport& report) const { return verdictOf(policy_, report); }
+  int exitStatus(const CaptureReport& report) const { return exitStatusOf(policy_, report); }
+
+  // docs/cli.md#interrupted: from here on the first Ctrl-C (SIGINT) only asks the run to stop
+  // (interrupted() turns true), so that the reports of the captures finished can still be
+  // written; a second one ends the run at once, its temporary reports removed.
+  void stopOnInterrupt();
+  static const std::atomic<bool>& interrupted();
 
  private:
   struct Output {

@@ -193,6 +193,9 @@ struct RuleDef {
   const char* clause;                             // where the protocol says so
   std::optional<Timeout> timeout = std::nullopt;  // the timeout the rule uses (docs/rules.md)
   bool delayed = false;  // reported when the condition outlasts the timeout
+  // When the finding is reported, where that is not on the frame where the condition begins (an
+  // axis rule's) or of the event (a bus or slave rule's); `rules --explain` says it.
+  const char* reported = nullptr;
   ByDefault by_default = ByDefault::On;
   Reads reads{};                 // axis rules: what check and describe read of the axis
   std::size_t event = kNoEvent;  // bus and slave rules: the BusEventData alternative judged
