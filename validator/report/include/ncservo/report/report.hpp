@@ -13,6 +13,7 @@
 
 #include "ncservo/base/error.hpp"
 #include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/incidents/incident.hpp"
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/timing.hpp"
@@ -109,6 +110,8 @@ struct CaptureReport {
   // What the capture file says it dropped (pcapng interface statistics), if it says.
   std::optional<CaptureDrops> capture_drops;
   std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
+  std::vector<Incident> incidents;  // docs/incidents.md, in frame order
+  std::uint64_t incidents_omitted = 0;
   std::int64_t dc_settled_ns = 0;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // Counts a finding, by severity and in its group.
