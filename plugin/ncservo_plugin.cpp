@@ -29,8 +29,8 @@
 
 #include "item_texts.hpp"
 #include "ncservo/base/text.hpp"
-#include "ncservo/incidents/causes.hpp"
 #include "ncservo/config/config.hpp"
+#include "ncservo/incidents/causes.hpp"
 #include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/model/timing_text.hpp"
@@ -168,9 +168,9 @@ struct FindingRecord {
 };
 // An incident beginning in a frame (docs/incidents.md), as the first pass found it.
 struct IncidentRecord {
-  guint16 axis;            // kBusAxis for the bus or a slave that is no axis
+  guint16 axis;  // kBusAxis for the bus or a slave that is no axis
   guint16 evidence_count;
-  const char* text;        // "communication-loss: 12 cycles lost ...", in file scope
+  const char* text;         // "communication-loss: 12 cycles lost ...", in file scope
   const guint32* evidence;  // evidence_count frame numbers, in file scope
 };
 // Which timing values a frame has (FrameTiming).
@@ -651,9 +651,10 @@ void keepIncidents(FrameRecord& record) {
     r.axis = incident.axis ? *incident.axis : kBusAxis;
     r.text = wmem_strdup_printf(wmem_file_scope(), "%s: %s", causeDef(incident.cause).name,
                                 incident.cause_text.c_str());
-    r.evidence_count = static_cast<guint16>(std::min<std::size_t>(incident.evidence.size(), 0xFFFF));
-    auto* frames = static_cast<guint32*>(
-        wmem_alloc0(wmem_file_scope(), std::max<std::size_t>(r.evidence_count, 1) * sizeof(guint32)));
+    r.evidence_count =
+        static_cast<guint16>(std::min<std::size_t>(incident.evidence.size(), 0xFFFF));
+    auto* frames = static_cast<guint32*>(wmem_alloc0(
+        wmem_file_scope(), std::max<std::size_t>(r.evidence_count, 1) * sizeof(guint32)));
     for (guint16 e = 0; e < r.evidence_count; ++e) {
       frames[e] = static_cast<guint32>(incident.evidence[e].at.frame);
     }

@@ -50,67 +50,70 @@ struct CauseRow {
 std::vector<CauseRow> causeRows() {
   return {
       {"watchdog bit", faultScript(kEcatWatchdog), "communication-loss", "ECatWatchDog (E31)"},
-      {"lost cycles 10 ms before", faultScript(kFollowerErr, [](Script& s) { s.missing(289, 292); }),
-       "communication-loss", "cycles lost"},
+      {"lost cycles 10 ms before",
+       faultScript(kFollowerErr, [](Script& s) { s.missing(289, 292); }), "communication-loss",
+       "cycles lost"},
       {"wrong WKC 20 ms before", faultScript(kFollowerErr, [](Script& s) { s.wkc(280, 281, 1); }),
        "communication-loss", "with a wrong WKC"},
-      {"lost cycles 150 ms before: near miss", faultScript(kFollowerErr, [](Script& s) {
-         s.missing(149, 152);
-       }),
-       "following-error", "FollowerErr (E09)"},
+      {"lost cycles 150 ms before: near miss",
+       faultScript(kFollowerErr, [](Script& s) { s.missing(149, 152); }), "following-error",
+       "FollowerErr (E09)"},
       {"I2t_Endat", faultScript(kI2t), "overtemperature", "I2t_Endat (E19)"},
-      {"TempWarning 50 ms before", faultScript(kFollowerErr, [](Script& s) {
-         s.ssw(250, kFault + 60, kSswRunning | kTempWarning);
-       }),
+      {"TempWarning 50 ms before",
+       faultScript(kFollowerErr,
+                   [](Script& s) { s.ssw(250, kFault + 60, kSswRunning | kTempWarning); }),
        "overtemperature", "SSW.TempWarning from frame"},
-      {"temperature 41 to 96 C", faultScript(kCurrErr, [](Script& s) {
-         s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 96.0F);
-       }),
+      {"temperature 41 to 96 C",
+       faultScript(
+           kCurrErr,
+           [](Script& s) {
+             s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 96.0F);
+           }),
        "overtemperature", "motor temperature 41 \u2192 96 \u00b0C over"},
-      {"temperature up 5 C: near miss", faultScript(kCurrErr, [](Script& s) {
-         s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 46.0F);
-       }),
+      {"temperature up 5 C: near miss",
+       faultScript(
+           kCurrErr,
+           [](Script& s) {
+             s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 46.0F);
+           }),
        "overcurrent", "CurrErr (E06)"},
-      {"step 50 ms before FollowerErr", faultScript(kFollowerErr, [](Script& s) {
-         s.ssp(0, 250, 1000).ssp(250, kFault + 60, 50000);
-       }),
+      {"step 50 ms before FollowerErr",
+       faultScript(kFollowerErr,
+                   [](Script& s) { s.ssp(0, 250, 1000).ssp(250, kFault + 60, 50000); }),
        "following-error-after-step", "after an SSP step 1000 \u2192 50000"},
-      {"step 150 ms before FollowerErr: near miss", faultScript(kFollowerErr, [](Script& s) {
-         s.ssp(0, 150, 1000).ssp(150, kFault + 60, 50000);
-       }),
+      {"step 150 ms before FollowerErr: near miss",
+       faultScript(kFollowerErr,
+                   [](Script& s) { s.ssp(0, 150, 1000).ssp(150, kFault + 60, 50000); }),
        "following-error", "no set-point step"},
-      {"ramp start 50 ms before: near miss", faultScript(kFollowerErr, [](Script& s) {
-         s.ssp(0, 250, 0);
-         for (std::int64_t k = 250; k < kFault + 60; ++k) {
-           s.ssp(k, k + 1, static_cast<std::int32_t>(1000 * (k - 249)));
-         }
-       }),
+      {"ramp start 50 ms before: near miss",
+       faultScript(kFollowerErr,
+                   [](Script& s) {
+                     s.ssp(0, 250, 0);
+                     for (std::int64_t k = 250; k < kFault + 60; ++k) {
+                       s.ssp(k, k + 1, static_cast<std::int32_t>(1000 * (k - 249)));
+                     }
+                   }),
        "following-error", "no set-point step"},
       {"FollowerErr", faultScript(kFollowerErr), "following-error", "FollowerErr (E09)"},
-      {"CurrErr with current", faultScript(kCurrErr, [](Script& s) {
-         s.msg(0, kFault + 60, 1).msgData(0, kFault + 60, 12.5F);
-       }),
+      {"CurrErr with current",
+       faultScript(kCurrErr,
+                   [](Script& s) { s.msg(0, kFault + 60, 1).msgData(0, kFault + 60, 12.5F); }),
        "overcurrent", "motor current 12.5 A before"},
       {"BVErr", faultScript(kBvErr), "bus-voltage", "BVErr (E05)"},
       {"EncoderErr", faultScript(kEncoderErr), "encoder", "EncoderErr (E01)"},
-      {"NoEncoder 20 ms before", faultScript(kPdpint, [](Script& s) {
-         s.ssw(280, kFault + 60, kSswRunning | kNoEncoder);
-       }),
+      {"NoEncoder 20 ms before",
+       faultScript(kPdpint, [](Script& s) { s.ssw(280, kFault + 60, kSswRunning | kNoEncoder); }),
        "encoder", "SSW.NoEncoder from frame"},
-      {"NoEncoder 150 ms before: near miss", faultScript(kPdpint, [](Script& s) {
-         s.ssw(150, kFault + 60, kSswRunning | kNoEncoder);
-       }),
+      {"NoEncoder 150 ms before: near miss",
+       faultScript(kPdpint, [](Script& s) { s.ssw(150, kFault + 60, kSswRunning | kNoEncoder); }),
        "unknown", "PDPINT (E16)"},
       {"OverSpeed", faultScript(kOverSpeed), "overspeed", "OverSpeed (E11)"},
       {"PTBLCHKSErr", faultScript(kParamChecksum), "configuration", "PTBLCHKSErr (E30)"},
-      {"SE-001 15 ms before", faultScript(kPdpint, [](Script& s) {
-         s.scw(280, 285, kScwOff);
-       }),
+      {"SE-001 15 ms before", faultScript(kPdpint, [](Script& s) { s.scw(280, 285, kScwOff); }),
        "nc-command", "SE-001 illegal-enable-edge at frame"},
-      {"SE-001 150 ms before: near miss", faultScript(kPdpint, [](Script& s) {
-         s.scw(145, 150, kScwOff);
-       }),
-       "unknown", "PDPINT (E16)"},
+      {"SE-001 150 ms before: near miss",
+       faultScript(kPdpint, [](Script& s) { s.scw(145, 150, kScwOff); }), "unknown",
+       "PDPINT (E16)"},
       {"PDPINT", faultScript(kPdpint), "unknown", "PDPINT (E16)"},
   };
 }
@@ -125,7 +128,8 @@ TEST(Incidents, EachCauseRowFiresAndNearMissesFallThrough) {
     EXPECT_EQ(incident.kind, IncidentKind::DriveFault) << row.name;
     EXPECT_EQ(incident.axis, std::optional<std::uint16_t>(0)) << row.name;
     EXPECT_EQ(incident.at.frame, driver.frameOf(R(kFault))) << row.name;
-    EXPECT_STREQ(causeDef(incident.cause).name, row.cause) << row.name << ": " << incident.cause_text;
+    EXPECT_STREQ(causeDef(incident.cause).name, row.cause)
+        << row.name << ": " << incident.cause_text;
     EXPECT_NE(incident.cause_text.find(row.text), std::string::npos)
         << row.name << ": " << incident.cause_text;
   }

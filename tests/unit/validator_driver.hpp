@@ -91,7 +91,7 @@ class Script {
     return *this;
   }
   Script& base(std::uint32_t scw, std::uint32_t ssw, std::uint32_t sew = 0) {
-    base_ = AxisCycle{scw, ssw, sew, 0};
+    base_ = AxisCycle{scw, ssw, sew, 0, std::nullopt, 0};
     return *this;
   }
   // Cycles [from, to) of one axis.

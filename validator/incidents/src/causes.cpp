@@ -20,8 +20,7 @@ constexpr std::uint32_t kCurrentBits =
     mask32("ncservo.sew.current") | mask32("ncservo.sew.current_offset") |
     mask32("ncservo.sew.current_symmetry") | mask32("ncservo.sew.overload");
 constexpr std::uint32_t kBusVoltage = mask32("ncservo.sew.bus_voltage");
-constexpr std::uint32_t kEncoderBits = mask32("ncservo.sew.encoder") |
-                                       mask32("ncservo.sew.hall") |
+constexpr std::uint32_t kEncoderBits = mask32("ncservo.sew.encoder") | mask32("ncservo.sew.hall") |
                                        mask32("ncservo.sew.hall_sequence");
 constexpr std::uint32_t kOverspeed = mask32("ncservo.sew.overspeed");
 constexpr std::uint32_t kConfigurationBits =
@@ -142,7 +141,8 @@ bool overtemperature(const CauseContext& c, CauseMatch& m) {
 
 // Where FollowerErr rose for this incident: where the detector saw it rise, else at the incident.
 Mark followingRose(const CauseContext& c) {
-  if (c.axis != nullptr && c.axis->following_rose && within(*c.axis->following_rose, c.at, kMinuteNs))
+  if (c.axis != nullptr && c.axis->following_rose &&
+      within(*c.axis->following_rose, c.at, kMinuteNs))
     return *c.axis->following_rose;
   return c.at;
 }
@@ -223,8 +223,9 @@ bool ncCommand(const CauseContext& c, CauseMatch& m) {
 
 bool unknown(const CauseContext& c, CauseMatch& m) {
   const std::uint32_t causes = c.sew & kSewCauseMask;
-  const std::string seen =
-      causes != 0 ? sewLabels(causes) : !c.what.empty() ? c.what : std::string("no cause bit set");
+  const std::string seen = causes != 0       ? sewLabels(causes)
+                           : !c.what.empty() ? c.what
+                                             : std::string("no cause bit set");
   m.text = fmt::format("{}; no cause row's evidence in the windows before", seen);
   return true;
 }
@@ -254,8 +255,8 @@ const std::array<CauseDef, kCauseCount> kCauses{{
     {CauseId::Overspeed, "overspeed", "OverSpeed set", 0, overspeed},
     {CauseId::Configuration, "configuration",
      "ECatConfigError, PTBLCHKSErr, PRGCHKSErr or SFlashErr set", 0, configuration},
-    {CauseId::NcCommand, "nc-command",
-     "a rule of party NC fired on the axis within 100 ms before", kShortWindowNs, ncCommand},
+    {CauseId::NcCommand, "nc-command", "a rule of party NC fired on the axis within 100 ms before",
+     kShortWindowNs, ncCommand},
     {CauseId::Unknown, "unknown", "none of the rows above", 0, unknown},
 }};
 

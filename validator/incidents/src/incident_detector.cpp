@@ -113,8 +113,9 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis, std::uint32
   incident.cause_text = std::move(match.text);
   incident.evidence = std::move(match.evidence);
   std::vector<const FindingMark*> findings;
-  for (const Ring<FindingMark, 16>* ring : {axis != nullptr ? &axis->findings : nullptr,
-                                            &bus_->findings}) {
+  const Ring<FindingMark, 16>* rings[] = {axis != nullptr ? &axis->findings : nullptr,
+                                          &bus_->findings};
+  for (const Ring<FindingMark, 16>* ring : rings) {
     if (ring == nullptr) continue;
     for (std::size_t i = 0; i < ring->size(); ++i) {
       if (within((*ring)[i].at, at, kEvidenceWindowNs)) findings.push_back(&(*ring)[i]);
@@ -124,10 +125,9 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis, std::uint32
             [](const FindingMark* a, const FindingMark* b) { return a->at.frame > b->at.frame; });
   if (findings.size() > kMaxFindingEvidence) findings.resize(kMaxFindingEvidence);
   for (const FindingMark* f : findings) {
-    const bool known = std::any_of(incident.evidence.begin(), incident.evidence.end(),
-                                   [&](const IncidentEvidence& e) {
-                                     return e.at.frame == f->at.frame && e.what == f->what;
-                                   });
+    const bool known = std::any_of(
+        incident.evidence.begin(), incident.evidence.end(),
+        [&](const IncidentEvidence& e) { return e.at.frame == f->at.frame && e.what == f->what; });
     if (!known) incident.evidence.push_back(IncidentEvidence{f->at.stamp(), f->what});
   }
   std::stable_sort(
@@ -154,7 +154,8 @@ void IncidentDetector::onFrame(const Validator& validator, const ValidatedFrame&
     if (account.outcome == AxisAccount::Outcome::Good) continue;
     AxisTrack& a = track(account.axis);
     const bool lost = account.outcome == AxisAccount::Outcome::Lost;
-    if (a.failures.size() == 0 || a.failures.newest().last.clock_ns + kFailureMergeNs < at.clock_ns) {
+    if (a.failures.size() == 0 ||
+        a.failures.newest().last.clock_ns + kFailureMergeNs < at.clock_ns) {
       a.failures.push(FailureRun{at, at, 0, 0});
     }
     FailureRun& run = a.failures.newest();
@@ -193,8 +194,8 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
         const auto change = static_cast<std::uint64_t>(std::llabs(std::int64_t{ssp} - a.ssp));
         if (a.candidate) {
           // Confirmed when the cycle after it changes far less (a ramp's start is no step).
-          if (change * kStepFactor <= static_cast<std::uint64_t>(
-                                          std::llabs(a.candidate->to - a.candidate->from))) {
+          if (change * kStepFactor <=
+              static_cast<std::uint64_t>(std::llabs(a.candidate->to - a.candidate->from))) {
             a.steps.push(*a.candidate);
           }
           a.candidate.reset();
@@ -272,9 +273,9 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
         a.temperature_last = data;
         a.temperature_last_at = at;
         const std::int64_t second = at.clock_ns / 1'000'000'000;
-        TemperatureBucket& b = a.temperature[static_cast<std::size_t>(
-            ((second % std::int64_t{a.temperature.size()}) + std::int64_t{a.temperature.size()}) %
-            std::int64_t{a.temperature.size()})];
+        constexpr auto kBuckets = static_cast<std::int64_t>(kTemperatureWindowS + 1);
+        TemperatureBucket& b =
+            a.temperature[static_cast<std::size_t>(((second % kBuckets) + kBuckets) % kBuckets)];
         if (b.second != second) {
           b = TemperatureBucket{second, data, at};
         } else if (data < b.lowest) {
@@ -358,11 +359,11 @@ void IncidentDetector::takeAlChanges(const Validator& validator) {
     incident.station = change.slave.station;
     incident.position = change.slave.position;
     incident.at = last_;
-    incident.what = fmt::format("{} \u2192 {} (AL status 0x{:04X}{})", alStateName(change.from),
-                                alStateName(change.to), change.raw,
-                                change.status_code
-                                    ? fmt::format(", status code 0x{:04X}", *change.status_code)
-                                    : std::string());
+    incident.what =
+        fmt::format("{} \u2192 {} (AL status 0x{:04X}{})", alStateName(change.from),
+                    alStateName(change.to), change.raw,
+                    change.status_code ? fmt::format(", status code 0x{:04X}", *change.status_code)
+                                       : std::string());
     add(std::move(incident), axis ? &track(*axis) : nullptr, 0);
   }
 }

@@ -172,8 +172,8 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
   const std::optional<std::uint8_t> previous = slave.state;
   setState(slave, state);
   if (previous && isState(state) && (*previous == kAlOp) != (state == kAlOp)) {
-    op_changes_.push_back(AlOpChange{SlaveRef{entry.station, entry.position}, *previous, state,
-                                     raw, slave.status_code});
+    op_changes_.push_back(AlOpChange{SlaveRef{entry.station, entry.position}, *previous, state, raw,
+                                     slave.status_code});
   }
   if (!error) {
     slave.error_reported = false;

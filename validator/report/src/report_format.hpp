@@ -35,6 +35,12 @@ Json captureJson(const CaptureReport& r, Verdict verdict);
 // One incident (docs/incidents.md, INTERFACES.md "Incidents"), as JSON and JSON Lines write it.
 Json incidentJson(const CaptureReport& r, const Incident& incident);
 
+// html_incidents.cpp: the HTML page's incident cards — their data, style and script
+// (incidentCards(capture, section, index)).
+Json incidentsHtmlJson(const CaptureReport& r);
+extern const char* const kIncidentStyle;
+extern const char* const kIncidentScript;
+
 // The writers of the format table, by file: report_text.cpp
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r);
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f);

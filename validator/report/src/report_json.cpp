@@ -166,8 +166,9 @@ Json incidentJson(const CaptureReport& r, const Incident& incident) {
   j["end_frame"] = incident.end.frame;
   Json errors = Json::array();
   for (const SewCause* cause : incident.errors) {
-    errors.push_back(
-        {{"bit", sewBitName(*cause)}, {"code", cause->display}, {"canopen", hex16(cause->canopen)}});
+    errors.push_back({{"bit", sewBitName(*cause)},
+                      {"code", cause->display},
+                      {"canopen", hex16(cause->canopen)}});
   }
   j["errors"] = std::move(errors);
   j["cause"] = {{"id", causeDef(incident.cause).name}, {"text", incident.cause_text}};
@@ -182,7 +183,9 @@ Json incidentJson(const CaptureReport& r, const Incident& incident) {
     if (incident.before[i]) before[kBefore[i].key] = std::round(*incident.before[i] * 1000) / 1000;
   }
   j["before"] = std::move(before);
-  auto frameOf = [](const std::optional<Stamp>& at) { return at ? Json(at->frame) : Json(nullptr); };
+  auto frameOf = [](const std::optional<Stamp>& at) {
+    return at ? Json(at->frame) : Json(nullptr);
+  };
   j["recovery"] = {{"error_clear_frame", frameOf(incident.error_clear)},
                    {"reenabled_frame", frameOf(incident.reenabled)}};
   return j;

@@ -185,9 +185,10 @@ void writeTextIncidents(std::FILE* out, const CaptureReport& r) {
         recovery.push_back(fmt::format("errors cleared at frame {}", incident.error_clear->frame));
       if (incident.reenabled) {
         recovery.push_back(fmt::format("{} at frame {}",
-                                       incident.kind == IncidentKind::Esm       ? "back in OP"
-                                       : incident.kind == IncidentKind::BusOutage ? "cycles run again"
-                                                                                  : "enabled again",
+                                       incident.kind == IncidentKind::Esm ? "back in OP"
+                                       : incident.kind == IncidentKind::BusOutage
+                                           ? "cycles run again"
+                                           : "enabled again",
                                        incident.reenabled->frame));
       }
       fmt::print(out, "      recovery: {}\n",

@@ -24,8 +24,8 @@ using CauseTest = bool (*)(const CauseContext& context, CauseMatch& match);
 
 struct CauseDef {
   CauseId id;
-  const char* name;  // the public id, e.g. "communication-loss"
-  const char* when;  // the evidence it needs, one line (docs/incidents.md)
+  const char* name;        // the public id, e.g. "communication-loss"
+  const char* when;        // the evidence it needs, one line (docs/incidents.md)
   std::int64_t window_ns;  // how far before the incident it looks (0: at the incident only)
   CauseTest test;
 };

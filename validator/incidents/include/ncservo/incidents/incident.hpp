@@ -55,21 +55,21 @@ struct IncidentEvidence {
 
 struct Incident {
   IncidentKind kind = IncidentKind::DriveFault;
-  std::optional<std::uint16_t> axis;     // none: the bus, or a slave that is no axis
-  std::optional<std::uint16_t> station;  // ESM: the slave's station address, where known
+  std::optional<std::uint16_t> axis;      // none: the bus, or a slave that is no axis
+  std::optional<std::uint16_t> station;   // ESM: the slave's station address, where known
   std::optional<std::uint16_t> position;  // ESM: its ring position, where known
   Stamp at;                               // the incident's frame
-  Stamp end;             // its recovery, or the capture's last frame
+  Stamp end;                              // its recovery, or the capture's last frame
   bool recovered = false;
-  bool ended = false;  // recovered, or followed by another fault of its axis first
-  std::string what;  // ESM: "OP → SAFE-OP (AL status 0x0014)"
+  bool ended = false;                   // recovered, or followed by another fault of its axis first
+  std::string what;                     // ESM: "OP → SAFE-OP (AL status 0x0014)"
   std::vector<const SewCause*> errors;  // the SEW cause bits set at the fault, in bit order
   CauseId cause = CauseId::Unknown;
   std::string cause_text;
-  std::vector<IncidentEvidence> evidence;  // in frame order
+  std::vector<IncidentEvidence> evidence;                      // in frame order
   std::array<std::optional<double>, kBefore.size()> before{};  // by kBefore row
-  std::optional<Stamp> error_clear;  // SEW.ServoErrors fell; ESM: none
-  std::optional<Stamp> reenabled;    // enabled again (ESM: back in OP)
+  std::optional<Stamp> error_clear;                            // SEW.ServoErrors fell; ESM: none
+  std::optional<Stamp> reenabled;                              // enabled again (ESM: back in OP)
 };
 
 // The SEW bit's filter name without "ncservo.sew." ("ecat_watchdog"), and its label with the

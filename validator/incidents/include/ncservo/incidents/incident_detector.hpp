@@ -42,8 +42,7 @@ class IncidentDetector {
  private:
   AxisTrack& track(std::uint16_t axis);
   void add(Incident incident, const AxisTrack* axis, std::uint32_t sew);
-  void takeValues(const Validator& validator, const ValidatedFrame& view,
-                  const ByteReader& bytes);
+  void takeValues(const Validator& validator, const ValidatedFrame& view, const ByteReader& bytes);
   void checkOutage(const Validator& validator);
   void takeAlChanges(const Validator& validator);
   void resetWindows();

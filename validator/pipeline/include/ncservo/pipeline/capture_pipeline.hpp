@@ -153,7 +153,7 @@ class CapturePipeline {
   LayoutWindow window_;
   std::optional<Validator> validator_;
   std::optional<IncidentDetector> incidents_;  // beside the validator
-  std::optional<LayoutFit> fit_;  // a configured or ENI layout, judged
+  std::optional<LayoutFit> fit_;               // a configured or ENI layout, judged
   std::vector<EniCyclicFrame> eni_frames_;
   std::vector<std::string> layout_warnings_;
   Sinks sinks_;

@@ -109,7 +109,7 @@ struct CaptureReport {
   std::uint64_t returned_copies_missing = 0;      // never came back (COM-004)
   // What the capture file says it dropped (pcapng interface statistics), if it says.
   std::optional<CaptureDrops> capture_drops;
-  std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
+  std::vector<DcStation> dc;        // distributed clocks (docs/timing.md)
   std::vector<Incident> incidents;  // docs/incidents.md, in frame order
   std::uint64_t incidents_omitted = 0;
   std::int64_t dc_settled_ns = 0;
