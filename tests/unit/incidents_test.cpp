@@ -3,6 +3,7 @@
 // documented cause table.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <functional>
 #include <sstream>

@@ -192,9 +192,10 @@ void writeTextIncidents(std::FILE* out, const CaptureReport& r) {
                                        incident.reenabled->frame));
       }
       fmt::print(out, "      recovery: {}\n",
-                 recovery.empty()
-                     ? fmt::format("none before the capture ends (frame {})", incident.end.frame)
-                     : fmt::format("{}", fmt::join(recovery, ", ")));
+                 !recovery.empty() ? fmt::format("{}", fmt::join(recovery, ", "))
+                 : incident.ended
+                     ? fmt::format("none before the next fault (frame {})", incident.end.frame)
+                     : fmt::format("none before the capture ends (frame {})", incident.end.frame));
     }
   }
 }
