@@ -331,7 +331,8 @@ void IncidentDetector::checkOutage(const Validator& validator) {
   add(std::move(incident), worst, 0);
 }
 
-// docs/incidents.md#esm: a slave's AL state read falling from OP; back in OP ends it.
+// docs/incidents.md#esm: a slave's AL state read falling from OP that the master did not request
+// (its last AL control request was OP, or none was seen); back in OP ends it.
 void IncidentDetector::takeAlChanges(const Validator& validator) {
   for (const AlOpChange& change : validator.al().opChanges()) {
     std::optional<std::uint16_t> axis;
@@ -353,6 +354,8 @@ void IncidentDetector::takeAlChanges(const Validator& validator) {
       }
       continue;
     }
+    // A state the master asked for (a shutdown, a restart) is no incident.
+    if (change.requested && *change.requested != ecat::kAlOp) continue;
     Incident incident;
     incident.kind = IncidentKind::Esm;
     incident.axis = axis;

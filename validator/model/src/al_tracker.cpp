@@ -173,7 +173,7 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
   setState(slave, state);
   if (previous && isState(state) && (*previous == kAlOp) != (state == kAlOp)) {
     op_changes_.push_back(AlOpChange{SlaveRef{entry.station, entry.position}, *previous, state, raw,
-                                     slave.status_code});
+                                     slave.status_code, slave.requested});
   }
   if (!error) {
     slave.error_reported = false;

@@ -38,6 +38,7 @@ struct AlOpChange {
   std::uint8_t to = 0;
   std::uint16_t raw = 0;  // the AL status read
   std::optional<std::uint16_t> status_code;
+  std::optional<std::uint8_t> requested;  // the last AL control request to it or to all
 };
 
 class AlTracker {
