@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "incident_tracks.hpp"
+#include "ncservo/base/little_endian.hpp"
 #include "ncservo/model/al_tracker.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo.hpp"
@@ -19,6 +21,15 @@ namespace {
 constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
 constexpr std::int64_t kEvidenceWindowNs = 100 * kMsNs;
 constexpr std::size_t kMaxFindingEvidence = 8;
+// The words read every cycle, each 4 bytes (docs/protocol.md §1).
+constexpr std::size_t kSspOffset = wordOffset(Word::Ssp);
+constexpr std::size_t kSswOffset = wordOffset(Word::Ssw);
+constexpr std::size_t kSewOffset = wordOffset(Word::Sew);
+constexpr std::size_t kMsgCodeOffset = wordOffset(Word::MsgCode);
+constexpr std::size_t kMsgDataOffset = wordOffset(Word::MsgData);
+static_assert(wordDef(Word::Ssp).size == 4 && wordDef(Word::Ssw).size == 4 &&
+              wordDef(Word::Sew).size == 4 && wordDef(Word::MsgCode).size == 4 &&
+              wordDef(Word::MsgData).size == 4);
 
 const FieldDef* sewField(const SewCause& cause) {
   for (const FieldDef& f : kFields) {
@@ -189,7 +200,8 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
     const AxisPlacement& p = decode.axes[i];
     AxisTrack& a = track(p.axis);
     if (outputs_cycle && p.has_rx && bytes.has(p.rx_offset, kRxPdoSize)) {
-      const auto ssp = static_cast<std::int32_t>(loadWordAt(bytes.data() + p.rx_offset, Word::Ssp));
+      const auto ssp =
+          static_cast<std::int32_t>(loadLe<4>(bytes.data() + p.rx_offset + kSspOffset));
       if (a.ssp_known) {
         const auto change = static_cast<std::uint64_t>(std::llabs(std::int64_t{ssp} - a.ssp));
         if (a.candidate) {
@@ -216,12 +228,13 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
     }
     if (!p.has_tx || !bytes.has(p.tx_offset, kTxPdoSize)) continue;
     const std::uint8_t* tx = bytes.data() + p.tx_offset;
-    const auto ssw = static_cast<std::uint32_t>(loadWordAt(tx, Word::Ssw));
-    const auto sew = static_cast<std::uint32_t>(loadWordAt(tx, Word::Sew));
-    const auto code = static_cast<std::int32_t>(loadWordAt(tx, Word::MsgCode));
-    PdoValues message;
-    message.set(Word::MsgData, loadWordAt(tx, Word::MsgData));
-    const double data = message.msgData();
+    const std::uint32_t ssw = static_cast<std::uint32_t>(loadLe<4>(tx + kSswOffset));
+    const std::uint32_t sew = static_cast<std::uint32_t>(loadLe<4>(tx + kSewOffset));
+    const auto code = static_cast<std::int32_t>(loadLe<4>(tx + kMsgCodeOffset));
+    const std::uint32_t data_bits = static_cast<std::uint32_t>(loadLe<4>(tx + kMsgDataOffset));
+    float data_float;
+    std::memcpy(&data_float, &data_bits, sizeof data_float);
+    const double data = data_float;
     if (a.tx_known) {
       const std::uint32_t ssw_rose = ssw & ~a.ssw;
       const std::uint32_t sew_rose = sew & ~a.sew;
