@@ -246,9 +246,9 @@ TEST(Incidents, DocumentedCauseTableIsTheLibrarys) {
   std::vector<std::string> expected;
   for (const CauseDef& cause : kCauses) {
     const std::string window = cause.window_ns == 0 ? "at the fault"
-                               : cause.window_ns % (1000 * kMsNs) == 0
-                                   ? std::to_string(cause.window_ns / (1000 * kMsNs)) + " s"
-                                   : std::to_string(cause.window_ns / kMsNs) + " ms";
+                               : cause.window_ns % (1000 * kMs) == 0
+                                   ? std::to_string(cause.window_ns / (1000 * kMs)) + " s"
+                                   : std::to_string(cause.window_ns / kMs) + " ms";
     expected.push_back("| `" + std::string(cause.name) + "` | " + cause.when + " | " + window +
                        " |");
   }

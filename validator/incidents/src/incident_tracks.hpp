@@ -10,10 +10,23 @@
 #include <string>
 
 #include "ncservo/base/stamp.hpp"
-#include "ncservo/incidents/causes.hpp"
+#include "ncservo/incidents/incident.hpp"
 #include "ncservo/rules/rules.hpp"
 
 namespace ncservo {
+
+inline constexpr std::int64_t kMsNs = 1'000'000;
+
+// docs/incidents.md#following-error-after-step: a set-point step is an SSP change of at least
+// kStepMinimum in one cycle that is at least kStepFactor times every change of the kStepHistory
+// cycles before it and of the cycle after it (at least kStepHistoryMinimum of them seen).
+inline constexpr std::uint32_t kStepFactor = 8;
+inline constexpr std::size_t kStepHistory = 16;
+inline constexpr std::size_t kStepHistoryMinimum = 4;
+inline constexpr std::int64_t kStepMinimum = 100;
+// docs/incidents.md#overtemperature: the motor temperature rose by at least this much from the
+// lowest reading of the minute before to the last one.
+inline constexpr double kTemperatureRiseC = 10.0;
 
 // Where something was seen: its frame, the segment's clock (which the windows are measured on,
 // docs/timing.md#rule-time) and the frame's own capture time (which reports show).
@@ -72,7 +85,7 @@ struct TemperatureBucket {
 };
 inline constexpr std::int64_t kTemperatureWindowS = 60;
 
-// An SSP step (causes.hpp kStepFactor).
+// An SSP step (kStepFactor above).
 struct Step {
   Mark at;
   std::int64_t from = 0;

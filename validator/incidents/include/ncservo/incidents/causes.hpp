@@ -11,8 +11,6 @@
 
 namespace ncservo {
 
-inline constexpr std::int64_t kMsNs = 1'000'000;
-
 // What a row looks at (incident_tracks.hpp): the incident's axis, the bus, the fault's SEW.
 struct CauseContext;
 // What a matching row says: a concrete text, and the frames it read.
@@ -33,16 +31,5 @@ struct CauseDef {
 // Defined in causes.cpp, next to the tests the table names.
 extern const std::array<CauseDef, kCauseCount> kCauses;
 const CauseDef& causeDef(CauseId id);
-
-// docs/incidents.md#following-error-after-step: a set-point step is an SSP change of at least
-// kStepMinimum in one cycle that is at least kStepFactor times every change of the kStepHistory
-// cycles before it and of the cycle after it (at least kStepHistoryMinimum of them seen).
-inline constexpr std::uint32_t kStepFactor = 8;
-inline constexpr std::size_t kStepHistory = 16;
-inline constexpr std::size_t kStepHistoryMinimum = 4;
-inline constexpr std::int64_t kStepMinimum = 100;
-// docs/incidents.md#overtemperature: the motor temperature rose by at least this much from the
-// lowest reading of the minute before to the last one.
-inline constexpr double kTemperatureRiseC = 10.0;
 
 }  // namespace ncservo
