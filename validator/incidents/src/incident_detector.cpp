@@ -8,6 +8,7 @@
 
 #include "incident_tracks.hpp"
 #include "ncservo/base/little_endian.hpp"
+#include "ncservo/incidents/causes.hpp"
 #include "ncservo/model/al_tracker.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo.hpp"
