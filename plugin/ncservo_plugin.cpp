@@ -30,6 +30,7 @@
 #include "item_texts.hpp"
 #include "ncservo/base/text.hpp"
 #include "ncservo/config/config.hpp"
+#include "ncservo/incidents/causes.hpp"
 #include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/model/timing_text.hpp"
@@ -166,6 +167,13 @@ struct FindingRecord {
   guint32 since;     // frame where the condition began
   const char* text;  // "SE-001 illegal-enable-edge: axis0: ...", in file scope
 };
+// An incident beginning in a frame (docs/incidents.md), as the first pass found it.
+struct IncidentRecord {
+  guint16 axis;  // kBusAxis for the bus or a slave that is no axis
+  guint16 evidence_count;
+  const char* text;         // "communication-loss: 12 cycles lost ...", in file scope
+  const guint32* evidence;  // evidence_count frame numbers, in file scope
+};
 // Which timing values a frame has (FrameTiming).
 enum TimingFlags : guint8 {
   kHasInterval = 1,
@@ -175,9 +183,11 @@ enum TimingFlags : guint8 {
 struct FrameRecord {
   const AxisRecord* axes;  // axis_count entries, in file scope; frames alike share one array
   const FindingRecord* findings;
+  const IncidentRecord* incidents;
   const char* info;  // the Info column's text, in file scope; null: nothing decoded in the frame
   guint16 axis_count;
   guint16 finding_count;
+  guint16 incident_count;
   guint8 copy;
   guint8 timing;  // TimingFlags
   // Held in the learning window when the first pass saw it: in a single pass, shown before the
@@ -193,6 +203,8 @@ std::vector<FrameRecord> g_frames;
 // By axis: the first frame that decodes an axis whose layout came from the PDO structure alone
 // (0: none). That frame and those with the axis's findings carry the note, not every frame.
 std::vector<guint32> g_structure_only_first;
+// The incidents of the pipeline already kept in a frame's record.
+std::size_t g_incidents_kept = 0;
 // The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
 // traffic most frames carry the same axes in the same states at the same offsets, alternating
 // between a few such arrays (the master copy and the returned one, frames of a split image).
@@ -422,6 +434,7 @@ void initCapture() {
   g_held_info = nullptr;
   g_frames.clear();
   g_structure_only_first.clear();
+  g_incidents_kept = 0;
   g_shared_axes = {};
   g_next_shared = 0;
   g_timestamp_digits.reset();
@@ -625,13 +638,42 @@ void keepFindings(FrameRecord& record, const Validator& by, bool (*keep)(const F
   record.finding_count = static_cast<guint16>(std::min<std::size_t>(kept, 0xFFFF));
 }
 
+// The incidents that began in the frame, kept with their texts and evidence in file scope.
+void keepIncidents(FrameRecord& record) {
+  const IncidentDetector* detector = g_pipeline->incidents();
+  const std::vector<Incident>& all = detector->incidents();
+  if (g_incidents_kept >= all.size()) return;
+  const std::size_t count = all.size() - g_incidents_kept;
+  auto* out =
+      static_cast<IncidentRecord*>(wmem_alloc0(wmem_file_scope(), count * sizeof(IncidentRecord)));
+  for (std::size_t i = 0; i < count; ++i) {
+    const Incident& incident = all[g_incidents_kept + i];
+    IncidentRecord& r = out[i];
+    r.axis = incident.axis ? *incident.axis : kBusAxis;
+    r.text = wmem_strdup_printf(wmem_file_scope(), "%s: %s", causeDef(incident.cause).name,
+                                incident.cause_text.c_str());
+    r.evidence_count =
+        static_cast<guint16>(std::min<std::size_t>(incident.evidence.size(), 0xFFFF));
+    auto* frames = static_cast<guint32*>(wmem_alloc0(
+        wmem_file_scope(), std::max<std::size_t>(r.evidence_count, 1) * sizeof(guint32)));
+    for (guint16 e = 0; e < r.evidence_count; ++e) {
+      frames[e] = static_cast<guint32>(incident.evidence[e].at.frame);
+    }
+    r.evidence = frames;
+  }
+  g_incidents_kept = all.size();
+  record.incidents = out;
+  record.incident_count = static_cast<guint16>(std::min<std::size_t>(count, 0xFFFF));
+}
+
 // Keeps what the validator found in one frame, by frame number.
 void validateFrame(const PipelineFrame& delivered) {
   const std::uint64_t number = delivered.number;
   const ValidatedFrame& view = *delivered.judged;
   const FrameDecode& decode = view.decode;
   const bool any_findings = !validator()->findings().empty();
-  if (decode.axis_count == 0 && !any_findings) {
+  const bool any_incidents = g_pipeline->incidents()->incidents().size() > g_incidents_kept;
+  if (decode.axis_count == 0 && !any_findings && !any_incidents) {
     if (number < g_frames.size()) g_frames[number] = FrameRecord{};
     return;
   }
@@ -648,6 +690,7 @@ void validateFrame(const PipelineFrame& delivered) {
   record.deviation_ns = timing.deviation_ns.value_or(0);
   record.latency_ns = timing.latency_ns.value_or(0);
   keepFindings(record, *validator(), nullptr);
+  keepIncidents(record);
   if (shared == nullptr || any_findings) {
     record.info = infoText(record);
   } else {
@@ -909,6 +952,20 @@ void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint ancho
   expert_add_info(pinfo, item, &ei_rule[f.rule]);
 }
 
+// docs/incidents.md: the incident's cause, with a link to each frame of its chain.
+void addIncident(proto_tree* tree, tvbuff_t* tvb, guint anchor, const IncidentRecord& incident) {
+  if (!wanted(tree, Derived::Incident) && !wanted(tree, Derived::IncidentEvidence)) return;
+  proto_item* item =
+      proto_tree_add_string(tree, derivedHf(Derived::Incident), tvb, anchor, 0, incident.text);
+  proto_item_set_generated(item);
+  if (incident.evidence_count == 0 || !wanted(tree, Derived::IncidentEvidence)) return;
+  proto_tree* chain = proto_item_add_subtree(item, ett_finding);
+  for (guint e = 0; e < incident.evidence_count; ++e) {
+    proto_item_set_generated(proto_tree_add_uint(chain, derivedHf(Derived::IncidentEvidence), tvb,
+                                                 anchor, 0, incident.evidence[e]));
+  }
+}
+
 // What the frame dissector hands each axis's layer.
 struct LayerData {
   const FrameRecord* record;
@@ -917,11 +974,11 @@ struct LayerData {
   const ReferencedRows* referenced;  // when the tree is not shown
 };
 
-// Findings about the bus, or about an axis this frame does not carry.
-bool frameLevel(const FrameRecord& record, const FindingRecord& f) {
-  if (f.axis == kBusAxis) return true;
+// Findings and incidents about the bus, or about an axis this frame does not carry.
+bool frameLevel(const FrameRecord& record, guint16 axis) {
+  if (axis == kBusAxis) return true;
   for (guint a = 0; a < record.axis_count; ++a) {
-    if (record.axes[a].axis == f.axis) return false;
+    if (record.axes[a].axis == axis) return false;
   }
   return true;
 }
@@ -1078,8 +1135,15 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
   for (guint i = 0; i < record.finding_count; ++i) {
     const FindingRecord& f = record.findings[i];
     const bool here = layer.axis != nullptr && f.axis == layer.axis->axis;
-    if (here || (layer.first && frameLevel(record, f))) {
+    if (here || (layer.first && frameLevel(record, f.axis))) {
       addFinding(layer_tree, tvb, pinfo, start, f);
+    }
+  }
+  for (guint i = 0; i < record.incident_count; ++i) {
+    const IncidentRecord& incident = record.incidents[i];
+    const bool here = layer.axis != nullptr && incident.axis == layer.axis->axis;
+    if (here || (layer.first && frameLevel(record, incident.axis))) {
+      addIncident(layer_tree, tvb, start, incident);
     }
   }
   return static_cast<int>(tvb_captured_length(tvb));

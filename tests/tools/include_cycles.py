@@ -18,6 +18,7 @@ RANKS = {
     "validator/model": 4,
     "validator/rules": 5,
     "validator/config": 6,
+    "validator/incidents": 6,
     "validator/pipeline": 7,
     "validator/capture": 8,
     "validator/report": 9,

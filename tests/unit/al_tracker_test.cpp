@@ -625,5 +625,40 @@ TEST(AlTracker, MemoryIsBounded) {
   EXPECT_TRUE(out.empty()) << describe(out);
 }
 
+// docs/incidents.md#esm: a status read of one slave leaving or entering OP is an OP change, with
+// the master's last request (an incident only when that was OP or unknown).
+struct OpChangeCase {
+  const char* name;
+  std::optional<std::uint16_t> request_after_op;  // an AL control write once the slave is in OP
+  std::uint16_t status;                           // the read after it
+  bool change;
+  std::optional<std::uint8_t> requested;
+};
+
+TEST(AlTracker, OpChangesCarryTheRequest) {
+  const OpChangeCase cases[] = {
+      {"falls to SAFE-OP + error, OP requested", std::nullopt, 0x14, true, kOp},
+      {"falls to SAFE-OP, SAFE-OP requested", kSafeOp, kSafeOp, true, kSafeOp},
+      {"stays in OP", std::nullopt, kOp, false, std::nullopt},
+  };
+  for (const OpChangeCase& c : cases) {
+    Harness h;
+    h.assignStations(1);
+    h.status(kStation0, kSafeOp);
+    h.request(kStation0, kOp);
+    h.status(kStation0, kOp);
+    EXPECT_EQ(h.tracker.opChanges().size(), 1u) << c.name << ": entering OP is a change";
+    if (c.request_after_op) h.request(kStation0, *c.request_after_op);
+    h.status(kStation0, c.status);
+    const std::vector<AlOpChange>& changes = h.tracker.opChanges();
+    ASSERT_EQ(changes.size(), c.change ? 1u : 0u) << c.name;
+    if (!c.change) continue;
+    EXPECT_EQ(changes[0].from, kOp) << c.name;
+    EXPECT_EQ(changes[0].to, kSafeOp) << c.name;
+    EXPECT_EQ(changes[0].slave.station, std::optional<std::uint16_t>(kStation0)) << c.name;
+    EXPECT_EQ(changes[0].requested, c.requested) << c.name;
+  }
+}
+
 }  // namespace
 }  // namespace ncservo

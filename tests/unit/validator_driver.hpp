@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <utility>
@@ -13,6 +14,7 @@
 
 #include "default_layout.hpp"
 #include "frame_builder.hpp"
+#include "ncservo/incidents/incident_detector.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -55,6 +57,8 @@ struct AxisCycle {
   std::uint32_t ssw = kSswRunning;
   std::uint32_t sew = 0;
   std::int32_t msg = 0;
+  std::optional<std::int32_t> ssp;  // 100 + the axis's index when none
+  float msg_data = 0;
 };
 
 enum class Copy : std::uint8_t { Master, Returned };
@@ -87,7 +91,7 @@ class Script {
     return *this;
   }
   Script& base(std::uint32_t scw, std::uint32_t ssw, std::uint32_t sew = 0) {
-    base_ = AxisCycle{scw, ssw, sew, 0};
+    base_ = AxisCycle{scw, ssw, sew, 0, std::nullopt, 0};
     return *this;
   }
   // Cycles [from, to) of one axis.
@@ -102,6 +106,15 @@ class Script {
   }
   Script& msg(std::int64_t from, std::int64_t to, std::int32_t v, std::size_t axis = 0) {
     return span(from, to, Field::Msg, static_cast<std::uint32_t>(v), axis);
+  }
+  // Cycles [from, to): the message data, and the set point.
+  Script& msgData(std::int64_t from, std::int64_t to, float v, std::size_t axis = 0) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    return span(from, to, Field::MsgData, bits, axis);
+  }
+  Script& ssp(std::int64_t from, std::int64_t to, std::int32_t v, std::size_t axis = 0) {
+    return span(from, to, Field::Ssp, static_cast<std::uint32_t>(v), axis);
   }
   // Cycles [from, to): the returned copy's WKC.
   Script& wkc(std::int64_t from, std::int64_t to, std::uint16_t v) {
@@ -163,6 +176,12 @@ class Script {
         case Field::Msg:
           v.msg = static_cast<std::int32_t>(s.value);
           break;
+        case Field::MsgData:
+          std::memcpy(&v.msg_data, &s.value, sizeof v.msg_data);
+          break;
+        case Field::Ssp:
+          v.ssp = static_cast<std::int32_t>(s.value);
+          break;
         default:
           break;
       }
@@ -194,7 +213,7 @@ class Script {
   }
 
  private:
-  enum class Field : std::uint8_t { Scw, Ssw, Sew, Msg, Wkc, NoMaster, NoReturned };
+  enum class Field : std::uint8_t { Scw, Ssw, Sew, Msg, MsgData, Ssp, Wkc, NoMaster, NoReturned };
   struct Span {
     std::int64_t from, to;
     Field field;
@@ -226,11 +245,11 @@ inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std:
                          std::uint8_t index = 0x80) {
   Bytes data;
   for (std::size_t k = 0; k < axes.size(); ++k) {
-    const Bytes rx = rxPdo(static_cast<std::int32_t>(100 + k), axes[k].scw);
+    const Bytes rx = rxPdo(axes[k].ssp.value_or(static_cast<std::int32_t>(100 + k)), axes[k].scw);
     data.insert(data.end(), rx.begin(), rx.end());
   }
   for (const AxisCycle& a : axes) {
-    const Bytes tx = returned ? txPdo(TxValues(0, a.ssw, a.sew, a.msg)) : Bytes(40, 0);
+    const Bytes tx = returned ? txPdo(TxValues(0, a.ssw, a.sew, a.msg, a.msg_data)) : Bytes(40, 0);
     data.insert(data.end(), tx.begin(), tx.end());
   }
   FrameBuilder builder;
@@ -256,8 +275,10 @@ class ValidatorDriver {
         options_ = defaultLayoutOf(*w.frame, options_);
       }
       validator_.emplace(options_, settings_);
+      incidents_.emplace(settings_);
     }
-    validator_->onFrame(++frame_, time_ns, *w.frame, w.reader());
+    const ValidatedFrame& view = validator_->onFrame(++frame_, time_ns, *w.frame, w.reader());
+    incidents_->onFrame(*validator_, view, frame_, time_ns, w.reader());
     all_.insert(all_.end(), validator_->findings().begin(), validator_->findings().end());
     return validator_->findings();
   }
@@ -281,6 +302,7 @@ class ValidatorDriver {
   // The capture ends; returns the findings reported on its last frame then.
   const std::vector<Finding>& finish() {
     validator_->finish();
+    incidents_->finish();
     all_.insert(all_.end(), validator_->findings().begin(), validator_->findings().end());
     return validator_->findings();
   }
@@ -295,12 +317,15 @@ class ValidatorDriver {
 
   const std::vector<Finding>& findings() const { return all_; }
   const Validator& validator() const { return *validator_; }
+  // The incidents found beside the validator (docs/incidents.md).
+  const IncidentDetector& incidents() const { return *incidents_; }
   std::uint64_t frames() const { return frame_; }
 
  private:
   RuleSettings settings_;
   DecoderOptions options_;
   std::optional<Validator> validator_;
+  std::optional<IncidentDetector> incidents_;
   std::uint64_t frame_ = 0;
   std::vector<Finding> all_;
   std::vector<std::pair<At, std::uint64_t>> frames_;

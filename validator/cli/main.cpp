@@ -593,6 +593,10 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   }
   if (timelines) report.timelines = timelines->finish();
   cli::summarise(validator, report);
+  if (const IncidentDetector* incidents = pipeline.incidents()) {
+    report.incidents = incidents->incidents();
+    report.incidents_omitted = incidents->omitted();
+  }
   if (pipeline.inference() && report.layout_source == LayoutSource::Inferred) {
     for (const InferredAxis& axis : pipeline.inference()->axes) {
       report.inferred.push_back(axis.evidence);

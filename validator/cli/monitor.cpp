@@ -451,6 +451,8 @@ int endReport(const std::string& interface, const CapturePipeline& pipeline,
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
   summarise(validator, report);
+  report.incidents = pipeline.incidents()->incidents();
+  report.incidents_omitted = pipeline.incidents()->omitted();
   report.coverage = coverageOf(validator);
   report.truncation = truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
                                    validator.decoder().axes());

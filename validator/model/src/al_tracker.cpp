@@ -171,6 +171,10 @@ void AlTracker::onStatusRead(const SlaveAddress& address, std::uint16_t raw, con
   AlData& slave = entry.data;
   const std::optional<std::uint8_t> previous = slave.state;
   setState(slave, state);
+  if (previous && isState(state) && (*previous == kAlOp) != (state == kAlOp)) {
+    op_changes_.push_back(AlOpChange{SlaveRef{entry.station, entry.position}, *previous, state, raw,
+                                     slave.status_code, slave.requested});
+  }
   if (!error) {
     slave.error_reported = false;
     return;
@@ -195,6 +199,7 @@ void AlTracker::startSegment() {
 
 void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                         const Stamp& now, std::vector<BusEvent>& out) {
+  if (!op_changes_.empty()) op_changes_.clear();
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   const std::size_t count = walked ? frame.count : 0;
   if (walked) directory_.beginFrame(frame, returned);

@@ -43,7 +43,10 @@ CapturePipeline::CapturePipeline(PipelineOptions options, WindowLimits limits)
       time_window_(options.window),
       clock_(options.timestamps),
       window_(std::move(options.layout), limits) {
-  if (!window_.learning() && rules_) validator_.emplace(window_.options(), *rules_);
+  if (!window_.learning() && rules_) {
+    validator_.emplace(window_.options(), *rules_);
+    incidents_.emplace(*rules_);
+  }
   const LayoutSource source = window_.options().explicit_source;
   if (validator_ && !window_.options().axes.empty() &&
       (source == LayoutSource::Config || source == LayoutSource::Eni)) {
@@ -59,7 +62,10 @@ void CapturePipeline::started() {
 
 // The window decided the layout: the validator starts with it, then the held frames follow.
 void CapturePipeline::decided() {
-  if (rules_) validator_.emplace(window_.options(), *rules_);
+  if (rules_) {
+    validator_.emplace(window_.options(), *rules_);
+    incidents_.emplace(*rules_);
+  }
   started();
   window_.replay(
       [this](std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
@@ -74,6 +80,8 @@ void CapturePipeline::deliver(std::uint64_t number, std::int64_t time_ns, const 
   const ValidatedFrame* judged =
       validator_ ? &validator_->onFrame(number, time_ns, frame, bytes) : nullptr;
   if (fit_ && judged != nullptr) fit_->onFrame(judged->decode, bytes);
+  if (incidents_ && judged != nullptr)
+    incidents_->onFrame(*validator_, *judged, number, time_ns, bytes);
   if (sinks_.frame) sinks_.frame(PipelineFrame{number, time_ns, frame, bytes, judged});
   if (validator_ && sinks_.findings && !validator_->findings().empty()) {
     sinks_.findings(validator_->findings());
@@ -163,6 +171,7 @@ void CapturePipeline::finish() {
     layout_warnings_.push_back(std::move(warning));
   }
   validator_->finish();
+  if (incidents_) incidents_->finish();
   if (sinks_.findings && !validator_->findings().empty()) sinks_.findings(validator_->findings());
 }
 

@@ -125,6 +125,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
       {"timelines", std::move(timelines)},
       {"timelines_omitted", r.timelines.omitted},
       {"axes", std::move(axes)},
+      {"incidents", detail::incidentsHtmlJson(r)},
       {"cycle_histogram", histogram(r.timing.cycle)},
       {"latency_histogram", histogram(r.timing.latency)}};
 }
@@ -322,6 +323,7 @@ function captureSection(capture, index) {
   if (capture.error) section.appendChild(el('p', {class: 'sev-error'}, capture.error));
   section.appendChild(el('h3', {}, 'Findings'));
   findingsTable(capture, section, index);
+  incidentCards(capture, section, index);
   section.appendChild(el('h3', {}, 'Finding timelines'));
   section.appendChild(el('p', {class: 'note'}, `The bits each rule reads (docs/rules.md), from ${data.frames_around} frames before the condition began to ${data.frames_around} after the finding (dashed black line: the finding's frame); green: the window the rule's timeout allowed. A rule that reads no bits (the bus rules, COM-005) gets none. Drawn: the first ${data.per_rule_and_axis} findings of each rule and axis, at most ${data.max_timelines} in all` + (capture.timelines_omitted ? `; ${capture.timelines_omitted} axis findings not drawn.` : '.')));
   const timelines = el('div', {class: 'timelines'});
@@ -401,18 +403,19 @@ void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports
   fmt::print(sink.out,
              "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
              "<title>ncservo validate: {} error{}, {} warning{}, {} info</title>\n"
-             "<style>{}</style>\n</head>\n<body>\n"
+             "<style>{}{}</style>\n</head>\n<body>\n"
              "<h1>ncservo validate report</h1>\n"
              "<p class=\"note\">ncservo {}; rules: docs/rules.md; this page: docs/html-report.md. "
              "It needs no network: Chart.js is inside it.</p>\n"
              "<div id=\"captures\"></div>\n",
              total[2], total[2] == 1 ? "" : "s", total[1], total[1] == 1 ? "" : "s", total[0],
-             kStyle, NCSERVO_VERSION);
+             kStyle, detail::kIncidentStyle, NCSERVO_VERSION);
   fmt::print(sink.out, "<script type=\"application/json\" id=\"ncservo-data\">{}</script>\n",
              scriptSafe(data.dump()));
   std::fputs("<script>\n", sink.out);
   std::fwrite(kChartJs, 1, kChartJsSize, sink.out);
-  fmt::print(sink.out, "\n</script>\n<script>{}</script>\n</body>\n</html>\n", kScript);
+  fmt::print(sink.out, "\n</script>\n<script>{}{}</script>\n</body>\n</html>\n", kScript,
+             detail::kIncidentScript);
 }
 
 }  // namespace ncservo::cli

@@ -38,12 +38,22 @@ Json truncationJson(const Truncation& t);
 Json segmentsJson(const CaptureReport& r);
 Json timingJson(const CaptureReport& r);
 Json captureJson(const CaptureReport& r, Verdict verdict);
+// One incident (docs/incidents.md, INTERFACES.md "Incidents"), as JSON and JSON Lines write it.
+Json incidentJson(const CaptureReport& r, const Incident& incident);
+
+// html_incidents.cpp: the HTML page's incident cards — their data, style and script
+// (incidentCards(capture, section, index)).
+Json incidentsHtmlJson(const CaptureReport& r);
+extern const char* const kIncidentStyle;
+extern const char* const kIncidentScript;
 
 // The writers of the format table, by file: report_text.cpp
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r);
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
                       BaselineState state);
 void writeTextSummary(const ReportSink& sink, const CaptureReport& r);
+// The incidents, a block per axis (docs/incidents.md#the-text-report); nothing when none.
+void writeTextIncidents(std::FILE* out, const CaptureReport& r);
 void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& reports);
 // report_json.cpp
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports);

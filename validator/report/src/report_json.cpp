@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "ncservo/incidents/causes.hpp"
 #include "report_format.hpp"
 
 namespace ncservo::cli::detail {
@@ -178,6 +179,45 @@ Json baselineJson(const CaptureReport& r) {
            {{"error", r.new_counts[2]}, {"warning", r.new_counts[1]}, {"info", r.new_counts[0]}}}};
 }
 
+Json incidentJson(const CaptureReport& r, const Incident& incident) {
+  Json j;
+  j["kind"] = incidentKindName(incident.kind);
+  j["axis"] = incident.axis ? Json(*incident.axis) : Json(nullptr);
+  j["axis_name"] = incident.axis ? Json(axisName(r, *incident.axis)) : Json(nullptr);
+  if (incident.kind == IncidentKind::Esm) {
+    j["station"] = incident.station ? Json(hex16(*incident.station)) : Json(nullptr);
+  }
+  j["frame"] = incident.at.frame;
+  j["time"] = seconds(r, incident.at);
+  j["time_utc"] = utcOf(r, incident.at);
+  j["end_frame"] = incident.end.frame;
+  Json errors = Json::array();
+  for (const SewCause* cause : incident.errors) {
+    errors.push_back({{"bit", sewBitName(*cause)},
+                      {"code", cause->display},
+                      {"canopen", hex16(cause->canopen)}});
+  }
+  j["errors"] = std::move(errors);
+  j["cause"] = {{"id", causeDef(incident.cause).name}, {"text", incident.cause_text}};
+  Json evidence = Json::array();
+  for (const IncidentEvidence& e : incident.evidence) {
+    evidence.push_back({{"frame", e.at.frame}, {"what", e.what}});
+  }
+  j["evidence"] = std::move(evidence);
+  Json before = Json::object();
+  for (std::size_t i = 0; i < kBefore.size(); ++i) {
+    // To the thousandth: message data is a float32.
+    if (incident.before[i]) before[kBefore[i].key] = std::round(*incident.before[i] * 1000) / 1000;
+  }
+  j["before"] = std::move(before);
+  auto frameOf = [](const std::optional<Stamp>& at) {
+    return at ? Json(at->frame) : Json(nullptr);
+  };
+  j["recovery"] = {{"error_clear_frame", frameOf(incident.error_clear)},
+                   {"reenabled_frame", frameOf(incident.reenabled)}};
+  return j;
+}
+
 Json notJudgedJson(const CaptureReport& r) {
   Json list = Json::array();
   for (const NotJudged& n : r.coverage.not_judged) {
@@ -314,6 +354,10 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
       absent.push_back(reportedFindingJson(f, "absent"));
     c["baseline_absent"] = std::move(absent);
   }
+  Json incidents = Json::array();
+  for (const Incident& incident : r.incidents) incidents.push_back(incidentJson(r, incident));
+  c["incidents"] = std::move(incidents);
+  if (r.incidents_omitted > 0) c["incidents_omitted"] = r.incidents_omitted;
   Json axes = Json::array();
   for (const AxisReport& a : r.axes) {
     Json timeline = Json::array();

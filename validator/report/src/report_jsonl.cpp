@@ -42,6 +42,11 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
     const Json j{{"capture", r.path}, {"layout", {{"warnings", r.layout_warnings}}}};
     std::fputs((j.dump() + "\n").c_str(), sink.out);
   }
+  // docs/incidents.md: one line per incident, once the capture has ended them.
+  for (const Incident& incident : r.incidents) {
+    const Json j{{"capture", r.path}, {"incident", incidentJson(r, incident)}};
+    std::fputs((j.dump() + "\n").c_str(), sink.out);
+  }
   std::fputs((Json{{"capture", r.path}, {"timing", timingJson(r)}}.dump() + "\n").c_str(),
              sink.out);
   if (r.coverage.complete() && r.segment_count <= 1 && r.coverage.not_judged.empty() &&

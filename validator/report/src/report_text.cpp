@@ -7,9 +7,11 @@
 #include <array>
 #include <cstdio>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "ncservo/incidents/causes.hpp"
 #include "ncservo/model/timing_text.hpp"
 #include "report_format.hpp"
 
@@ -168,6 +170,55 @@ void writeNotJudged(std::FILE* out, const CaptureReport& r) {
 
 }  // namespace
 
+// docs/incidents.md#the-text-report: per axis (then the bus and slaves that are no axis), each
+// incident's line with its cause, its evidence and its recovery.
+void writeTextIncidents(std::FILE* out, const CaptureReport& r) {
+  if (r.incidents.empty()) return;
+  fmt::print(out, "incidents: {}{}\n", r.incidents.size(),
+             r.incidents_omitted > 0 ? fmt::format(" ({} more not kept)", r.incidents_omitted)
+                                     : std::string());
+  std::vector<std::optional<std::uint16_t>> groups;
+  for (const Incident& incident : r.incidents) {
+    if (std::find(groups.begin(), groups.end(), incident.axis) == groups.end())
+      groups.push_back(incident.axis);
+  }
+  std::sort(groups.begin(), groups.end(), [](const auto& a, const auto& b) {
+    return a && b ? *a < *b : a.has_value();  // the bus last
+  });
+  for (const std::optional<std::uint16_t>& group : groups) {
+    fmt::print(out, "  {}:\n", axisLabel(r, group));
+    for (std::size_t n = 0; n < r.incidents.size(); ++n) {
+      const Incident& incident = r.incidents[n];
+      if (incident.axis != group) continue;
+      fmt::print(out, "    incident {}: {} at frame {}, {:.3f} s \u2014 {}: {}\n", n + 1,
+                 incidentHeadline(incident, axisLabel(r, incident.axis)), incident.at.frame,
+                 seconds(r, incident.at), causeDef(incident.cause).name, incident.cause_text);
+      if (!incident.evidence.empty()) {
+        std::vector<std::string> items;
+        for (const IncidentEvidence& e : incident.evidence)
+          items.push_back(fmt::format("frame {} {}", e.at.frame, e.what));
+        fmt::print(out, "      evidence: {}\n", fmt::join(items, "; "));
+      }
+      std::vector<std::string> recovery;
+      if (incident.error_clear)
+        recovery.push_back(fmt::format("errors cleared at frame {}", incident.error_clear->frame));
+      if (incident.reenabled) {
+        recovery.push_back(fmt::format("{} at frame {}",
+                                       incident.kind == IncidentKind::Esm ? "back in OP"
+                                       : incident.kind == IncidentKind::BusOutage
+                                           ? "cycles run again"
+                                           : "enabled again",
+                                       incident.reenabled->frame));
+      }
+      fmt::print(out, "      recovery: {}\n",
+                 !recovery.empty() ? fmt::format("{}", fmt::join(recovery, ", "))
+                 : incident.ended
+                     ? fmt::format("none before the next fault (frame {})", incident.end.frame)
+                     : fmt::format("none before the capture ends (frame {})", incident.end.frame));
+    }
+  }
+}
+
 void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
   fmt::print(sink.out, "== {}\n", r.path);
 }
@@ -231,6 +282,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   }
   if (r.late_layout.certain_at > 0) fmt::print(out, "  {}\n", describeLateLayout(r.late_layout));
   writeTextAxes(out, r);
+  writeTextIncidents(out, r);
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
   std::fputs(timingText(r.timing, timestampSourceName(r.timestamps),
                         timestampResolutionNs(r.timestamps, r.timestamp_digits))

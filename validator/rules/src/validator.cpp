@@ -105,6 +105,7 @@ Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
 const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
                                          const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
+  accounts_.clear();
   // docs/timing.md#rule-time: timestamps that go back a little do not move timers back; a
   // discontinuity starts a segment with timers of its own.
   const bool new_segment = segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs());

@@ -30,6 +30,17 @@ bool alStateAboveInit(std::uint8_t state);  // a state, and not INIT
 // "station 0x1001 (ring position 0)", "ring position 2", "all slaves (broadcast)".
 std::string slaveName(const SlaveRef& slave);
 
+// A slave's AL state moving into or out of OP, seen in an AL status read of that slave
+// (docs/incidents.md: an ESM incident begins where it leaves OP and ends where it is back).
+struct AlOpChange {
+  SlaveRef slave;
+  std::uint8_t from = 0;
+  std::uint8_t to = 0;
+  std::uint16_t raw = 0;  // the AL status read
+  std::optional<std::uint16_t> status_code;
+  std::optional<std::uint8_t> requested;  // the last AL control request to it or to all
+};
+
 class AlTracker {
  public:
   static constexpr std::size_t kMaxSlaves = SlaveDirectory<int>::kMaxSlaves;
@@ -55,6 +66,9 @@ class AlTracker {
   std::uint32_t opEntries(std::uint16_t station) const;
   // Whether the last frame given reached AL registers: only such a frame changes a state.
   bool lastFrameReachedRegisters() const { return last_frame_registers_; }
+  // The slaves whose read state left or entered OP in the last frame given (reads of one slave
+  // only: a broadcast's OR names none).
+  const std::vector<AlOpChange>& opChanges() const { return op_changes_; }
 
  private:
   // What the capture showed of one slave's state machine.
@@ -82,6 +96,7 @@ class AlTracker {
   std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
   std::uint32_t op_entries_all_ = 0;           // times state_all_ became OP
   bool last_frame_registers_ = false;
+  std::vector<AlOpChange> op_changes_;  // the last frame's
 };
 
 }  // namespace ncservo

@@ -15,6 +15,7 @@
 
 #include "ncservo/base/byte_reader.hpp"
 #include "ncservo/base/error.hpp"
+#include "ncservo/incidents/incident_detector.hpp"
 #include "ncservo/layout/decoder.hpp"
 #include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_fit.hpp"
@@ -132,6 +133,8 @@ class CapturePipeline {
   const LateLayout& lateLayout() const { return window_.late(); }
   // Null until the layout is decided, and without rules.
   const Validator* validator() const { return validator_ ? &*validator_ : nullptr; }
+  // The incidents found so far (docs/incidents.md); null as validator().
+  const IncidentDetector* incidents() const { return incidents_ ? &*incidents_ : nullptr; }
   const FrameClock& clock() const { return clock_; }
   const CaptureRun& run() const { return run_; }
   const TimeWindow& timeWindow() const { return time_window_; }
@@ -149,7 +152,8 @@ class CapturePipeline {
   FrameClock clock_;
   LayoutWindow window_;
   std::optional<Validator> validator_;
-  std::optional<LayoutFit> fit_;  // a configured or ENI layout, judged
+  std::optional<IncidentDetector> incidents_;  // beside the validator
+  std::optional<LayoutFit> fit_;               // a configured or ENI layout, judged
   std::vector<EniCyclicFrame> eni_frames_;
   std::vector<std::string> layout_warnings_;
   Sinks sinks_;

@@ -802,6 +802,8 @@ enum class Derived : std::uint8_t {
   CycleInterval,
   CycleDeviation,
   Latency,
+  Incident,
+  IncidentEvidence,
 };
 // What a derived field holds, which gives its type in a registration.
 enum class DerivedKind : std::uint8_t {
@@ -885,6 +887,17 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
      .blurb = "Time from the master copy to this returned copy at the capture point, in us "
               "(docs/timing.md)",
      .kind = DerivedKind::Microseconds},
+    {.id = Derived::Incident,
+     .label = "Incident",
+     .filter = "ncservo.incident",
+     .blurb = "A drive fault, bus outage or fall from OP beginning in this frame: its cause id and "
+              "what showed it (docs/incidents.md)"},
+    {.id = Derived::IncidentEvidence,
+     .label = "Incident evidence",
+     .filter = "ncservo.incident.evidence",
+     .blurb = "A frame of the incident's chain: a finding or a bus event before it, or what its "
+              "cause read (docs/incidents.md)",
+     .kind = DerivedKind::FrameNumber},
 };
 static_assert(
     [] {

@@ -14,6 +14,7 @@
 
 #include "ncservo/base/error.hpp"
 #include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/incidents/incident.hpp"
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/timing.hpp"
@@ -122,7 +123,9 @@ struct CaptureReport {
   std::uint64_t returned_copies_missing = 0;      // never came back (COM-004)
   // What the capture file says it dropped (pcapng interface statistics), if it says.
   std::optional<CaptureDrops> capture_drops;
-  std::vector<DcStation> dc;  // distributed clocks (docs/timing.md)
+  std::vector<DcStation> dc;        // distributed clocks (docs/timing.md)
+  std::vector<Incident> incidents;  // docs/incidents.md, in frame order
+  std::uint64_t incidents_omitted = 0;
   std::int64_t dc_settled_ns = 0;
   // Against a baseline (--baseline, docs/baselines.md): the matcher (none without a baseline),
   // the state of each kept finding (beside `findings`), the new findings by severity, how many

@@ -67,6 +67,11 @@ class Validator {
   // statistics; all empty when it added none.
   const FrameTiming& frameTiming() const;
   const DcClock& dc() const { return dc_; }
+  // The slaves' state machines; opChanges() holds the last frame's.
+  const AlTracker& al() const { return al_; }
+  // The telegram accounting of the last frame given to onFrame (or of finish()): the axes whose
+  // cycles failed or were lost, and those whose cycles ran again (docs/rules.md#com-003).
+  const std::vector<AxisAccount>& frameAccounts() const { return accounts_; }
   // The placed PDO regions the capture cut short (a snap length).
   const CutRegions& cutRegions() const { return cut_; }
 

@@ -1,0 +1,261 @@
+// The incident detector (docs/incidents.md): one row per cause row of the table firing, and the
+// near misses that must fall to a later row; the bus outage; what came before; the recovery; the
+// documented cause table.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ncservo/incidents/causes.hpp"
+#include "ncservo/incidents/incident_detector.hpp"
+#include "validator_driver.hpp"
+
+namespace ncservo::test {
+namespace {
+
+// SEW bits (docs/protocol.md §4) and SSW bits (§3) the rows set.
+constexpr std::uint32_t kFollowerErr = 0x80000;
+constexpr std::uint32_t kEcatWatchdog = 0x400000;
+constexpr std::uint32_t kI2t = 0x4;
+constexpr std::uint32_t kCurrErr = 0x40;
+constexpr std::uint32_t kBvErr = 0x20;
+constexpr std::uint32_t kOverSpeed = 0x800000;
+constexpr std::uint32_t kParamChecksum = 0x20000;
+constexpr std::uint32_t kPdpint = 0x10000;  // a cause no row names
+constexpr std::uint32_t kTempWarning = 0x800;
+
+constexpr std::int64_t kFault = 300;  // the cycle whose returned copy shows the fault
+constexpr std::int64_t kCleared = 320;
+
+// One running axis that faults at kFault with `sew` (the summary bit added) and is cleared at
+// kCleared, still enabled; `chain` adds what comes before.
+Script faultScript(std::uint32_t sew, const std::function<void(Script&)>& chain = nullptr,
+                   std::int64_t fault = kFault) {
+  Script s(fault + 60);
+  s.sew(fault, fault + (kCleared - kFault), kSummary | sew);
+  if (chain) chain(s);
+  return s;
+}
+
+struct CauseRow {
+  const char* name;
+  Script script;
+  const char* cause;
+  const char* text;  // a part of the cause's text
+};
+
+std::vector<CauseRow> causeRows() {
+  return {
+      {"watchdog bit", faultScript(kEcatWatchdog), "communication-loss", "ECatWatchDog (E31)"},
+      {"lost cycles 10 ms before",
+       faultScript(kFollowerErr, [](Script& s) { s.missing(289, 292); }), "communication-loss",
+       "cycles lost"},
+      {"wrong WKC 20 ms before", faultScript(kFollowerErr, [](Script& s) { s.wkc(280, 281, 1); }),
+       "communication-loss", "with a wrong WKC"},
+      {"lost cycles 150 ms before: near miss",
+       faultScript(kFollowerErr, [](Script& s) { s.missing(149, 152); }), "following-error",
+       "FollowerErr (E09)"},
+      {"I2t_Endat", faultScript(kI2t), "overtemperature", "I2t_Endat (E19)"},
+      {"TempWarning 50 ms before",
+       faultScript(kFollowerErr,
+                   [](Script& s) { s.ssw(250, kFault + 60, kSswRunning | kTempWarning); }),
+       "overtemperature", "SSW.TempWarning from frame"},
+      {"temperature 41 to 96 C",
+       faultScript(
+           kCurrErr,
+           [](Script& s) {
+             s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 96.0F);
+           }),
+       "overtemperature", "motor temperature 41 \u2192 96 \u00b0C over"},
+      {"temperature up 5 C: near miss",
+       faultScript(
+           kCurrErr,
+           [](Script& s) {
+             s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 46.0F);
+           }),
+       "overcurrent", "CurrErr (E06)"},
+      {"step 50 ms before FollowerErr",
+       faultScript(kFollowerErr,
+                   [](Script& s) { s.ssp(0, 250, 1000).ssp(250, kFault + 60, 50000); }),
+       "following-error-after-step", "after an SSP step 1000 \u2192 50000"},
+      {"step 150 ms before FollowerErr: near miss",
+       faultScript(kFollowerErr,
+                   [](Script& s) { s.ssp(0, 150, 1000).ssp(150, kFault + 60, 50000); }),
+       "following-error", "no set-point step"},
+      {"ramp start 50 ms before: near miss",
+       faultScript(kFollowerErr,
+                   [](Script& s) {
+                     s.ssp(0, 250, 0);
+                     for (std::int64_t k = 250; k < kFault + 60; ++k) {
+                       s.ssp(k, k + 1, static_cast<std::int32_t>(1000 * (k - 249)));
+                     }
+                   }),
+       "following-error", "no set-point step"},
+      {"FollowerErr", faultScript(kFollowerErr), "following-error", "FollowerErr (E09)"},
+      {"CurrErr with current",
+       faultScript(kCurrErr,
+                   [](Script& s) { s.msg(0, kFault + 60, 1).msgData(0, kFault + 60, 12.5F); }),
+       "overcurrent", "motor current 12.5 A before"},
+      {"BVErr", faultScript(kBvErr), "bus-voltage", "BVErr (E05)"},
+      {"EncoderErr", faultScript(kEncoderErr), "encoder", "EncoderErr (E01)"},
+      {"NoEncoder 20 ms before",
+       faultScript(kPdpint, [](Script& s) { s.ssw(280, kFault + 60, kSswRunning | kNoEncoder); }),
+       "encoder", "SSW.NoEncoder from frame"},
+      {"NoEncoder 150 ms before: near miss",
+       faultScript(kPdpint, [](Script& s) { s.ssw(150, kFault + 60, kSswRunning | kNoEncoder); }),
+       "unknown", "PDPINT (E16)"},
+      {"OverSpeed", faultScript(kOverSpeed), "overspeed", "OverSpeed (E11)"},
+      {"PTBLCHKSErr", faultScript(kParamChecksum), "configuration", "PTBLCHKSErr (E30)"},
+      {"SE-001 15 ms before", faultScript(kPdpint, [](Script& s) { s.scw(280, 285, kScwOff); }),
+       "nc-command", "SE-001 illegal-enable-edge at frame"},
+      {"SE-001 150 ms before: near miss",
+       faultScript(kPdpint, [](Script& s) { s.scw(145, 150, kScwOff); }), "unknown",
+       "PDPINT (E16)"},
+      {"PDPINT", faultScript(kPdpint), "unknown", "PDPINT (E16)"},
+  };
+}
+
+TEST(Incidents, EachCauseRowFiresAndNearMissesFallThrough) {
+  for (const CauseRow& row : causeRows()) {
+    ValidatorDriver driver;
+    driver.run(row.script);
+    const std::vector<Incident>& incidents = driver.incidents().incidents();
+    ASSERT_EQ(incidents.size(), 1u) << row.name;
+    const Incident& incident = incidents.front();
+    EXPECT_EQ(incident.kind, IncidentKind::DriveFault) << row.name;
+    EXPECT_EQ(incident.axis, std::optional<std::uint16_t>(0)) << row.name;
+    EXPECT_EQ(incident.at.frame, driver.frameOf(R(kFault))) << row.name;
+    EXPECT_STREQ(causeDef(incident.cause).name, row.cause)
+        << row.name << ": " << incident.cause_text;
+    EXPECT_NE(incident.cause_text.find(row.text), std::string::npos)
+        << row.name << ": " << incident.cause_text;
+  }
+}
+
+// Every row of the table is reached by some row above.
+TEST(Incidents, EveryCauseRowIsTested) {
+  std::vector<std::string> tested;
+  for (const CauseRow& row : causeRows()) tested.push_back(row.cause);
+  for (const CauseDef& cause : kCauses) {
+    EXPECT_NE(std::find(tested.begin(), tested.end(), cause.name), tested.end()) << cause.name;
+  }
+}
+
+TEST(Incidents, ChainEvidenceRecoveryAndBefore) {
+  Script s(kFault + 80);
+  s.msg(0, 100, 1).msgData(0, 100, 4.1F);
+  s.msg(100, 200, 4).msgData(100, 200, 41.5F);
+  s.msg(200, 250, 3).msgData(200, 250, 560.0F);
+  s.msg(250, kFault + 80, 0).msgData(250, kFault + 80, 300.0F);
+  s.missing(291, 294);  // 3 cycles: within telegram_failure_limit, no outage
+  s.sew(kFault, kCleared, kSummary | kEcatWatchdog);
+  s.ssw(kFault, kCleared + 20, kSswReady);  // disabled by the fault, enabled again later
+  ValidatorDriver driver;
+  driver.run(s);
+  const std::vector<Incident>& incidents = driver.incidents().incidents();
+  ASSERT_EQ(incidents.size(), 1u);
+  const Incident& incident = incidents.front();
+  EXPECT_EQ(incident.cause, CauseId::CommunicationLoss);
+  EXPECT_NE(incident.cause_text.find("cycles lost (frame"), std::string::npos)
+      << incident.cause_text;
+  EXPECT_NE(incident.cause_text.find("then ECatWatchDog (E31)"), std::string::npos)
+      << incident.cause_text;
+  ASSERT_EQ(incident.errors.size(), 1u);
+  EXPECT_EQ(sewBitName(*incident.errors[0]), "ecat_watchdog");
+  EXPECT_STREQ(incident.errors[0]->display, "E31");
+  EXPECT_EQ(incident.errors[0]->canopen, 0x8100);
+  ASSERT_TRUE(incident.before[0] && incident.before[1] && incident.before[2] && incident.before[3]);
+  EXPECT_NEAR(*incident.before[0], 4.1, 1e-5);    // motor current
+  EXPECT_NEAR(*incident.before[1], 41.5, 1e-5);   // temperature
+  EXPECT_NEAR(*incident.before[2], 560.0, 1e-5);  // bus voltage
+  EXPECT_NEAR(*incident.before[3], 300.0, 1e-5);  // speed
+  bool com002 = false;
+  for (const IncidentEvidence& e : incident.evidence) {
+    EXPECT_LE(e.at.frame, incident.at.frame) << e.what;
+    com002 = com002 || e.what.rfind("COM-002", 0) == 0;
+  }
+  EXPECT_TRUE(com002) << "the COM-002 finding is evidence";
+  ASSERT_TRUE(incident.error_clear && incident.reenabled);
+  EXPECT_EQ(incident.error_clear->frame, driver.frameOf(R(kCleared)));
+  EXPECT_EQ(incident.reenabled->frame, driver.frameOf(R(kCleared + 20)));
+  EXPECT_EQ(incident.end.frame, incident.reenabled->frame);
+}
+
+TEST(Incidents, NoRecoveryEndsAtTheCapturesLastFrame) {
+  Script s(kFault + 40);
+  s.sew(kFault, kFault + 40, kSummary | kFollowerErr);
+  ValidatorDriver driver;
+  driver.run(s);
+  ASSERT_EQ(driver.incidents().incidents().size(), 1u);
+  const Incident& incident = driver.incidents().incidents().front();
+  EXPECT_FALSE(incident.error_clear);
+  EXPECT_FALSE(incident.reenabled);
+  EXPECT_EQ(incident.end.frame, driver.frames());
+}
+
+TEST(Incidents, NoFaultNoIncident) {
+  ValidatorDriver driver;
+  driver.run(Script(400).missing(200, 202));
+  EXPECT_TRUE(driver.incidents().incidents().empty());
+}
+
+struct OutageRow {
+  const char* name;
+  std::int64_t missing;  // cycles of every axis
+  bool outage;
+};
+
+TEST(Incidents, BusOutageWhenEveryAxisFailsBeyondTheLimit) {
+  for (const OutageRow& row : {OutageRow{"10 cycles lost", 10, true},
+                               OutageRow{"2 cycles lost: within the limit", 2, false}}) {
+    Script s(300);
+    s.axes(2).missing(200, 200 + row.missing);
+    ValidatorDriver driver;
+    driver.run(s);
+    const std::vector<Incident>& incidents = driver.incidents().incidents();
+    if (!row.outage) {
+      EXPECT_TRUE(incidents.empty()) << row.name;
+      continue;
+    }
+    ASSERT_EQ(incidents.size(), 1u) << row.name;
+    const Incident& incident = incidents.front();
+    EXPECT_EQ(incident.kind, IncidentKind::BusOutage) << row.name;
+    EXPECT_FALSE(incident.axis) << row.name;
+    EXPECT_EQ(incident.at.frame, driver.frameOf(M(200 + row.missing))) << row.name;
+    EXPECT_EQ(incident.cause, CauseId::CommunicationLoss) << row.name;
+    EXPECT_NE(incident.cause_text.find("every axis failing: 10 cycles lost"), std::string::npos)
+        << incident.cause_text;
+    EXPECT_TRUE(incident.recovered) << row.name;
+    EXPECT_GT(incident.end.frame, incident.at.frame) << row.name;
+  }
+}
+
+// docs/incidents.md holds the cause table as the library has it: the same rows in the same order.
+TEST(Incidents, DocumentedCauseTableIsTheLibrarys) {
+  std::ifstream doc(std::string(NCSERVO_DOCS_DIR) + "/incidents.md");
+  ASSERT_TRUE(doc) << "docs/incidents.md";
+  std::vector<std::string> documented;
+  std::string line;
+  bool causes = false;  // in the section "## Causes"
+  while (std::getline(doc, line)) {
+    if (line.rfind("## ", 0) == 0) causes = line == "## Causes";
+    if (causes && line.rfind("| `", 0) == 0) documented.push_back(line);
+  }
+  std::vector<std::string> expected;
+  for (const CauseDef& cause : kCauses) {
+    const std::string window = cause.window_ns == 0 ? "at the fault"
+                               : cause.window_ns % (1000 * kMs) == 0
+                                   ? std::to_string(cause.window_ns / (1000 * kMs)) + " s"
+                                   : std::to_string(cause.window_ns / kMs) + " ms";
+    expected.push_back("| `" + std::string(cause.name) + "` | " + cause.when + " | " + window +
+                       " |");
+  }
+  EXPECT_EQ(documented, expected);
+}
+
+}  // namespace
+}  // namespace ncservo::test

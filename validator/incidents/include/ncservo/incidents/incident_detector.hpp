@@ -1,0 +1,61 @@
+// Finds the incidents of one capture frame by frame, after the validator judged each frame
+// (docs/incidents.md). Memory is bounded: per axis, rolling windows of the minute before for the
+// motor temperature and of the 100 ms before for everything else, and at most kMaxIncidents.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "ncservo/base/byte_reader.hpp"
+#include "ncservo/incidents/incident.hpp"
+#include "ncservo/rules/rules.hpp"
+#include "ncservo/rules/validator.hpp"
+
+namespace ncservo {
+
+struct AxisTrack;
+struct BusTrack;
+
+class IncidentDetector {
+ public:
+  static constexpr std::size_t kMaxIncidents = 1000;
+
+  explicit IncidentDetector(const RuleSettings& settings);
+  ~IncidentDetector();
+  IncidentDetector(const IncidentDetector&) = delete;
+  IncidentDetector& operator=(const IncidentDetector&) = delete;
+
+  // One frame the validator has just judged (its findings, accounting and AL changes are the
+  // frame's); `bytes` are the frame's, `time_ns` its capture time.
+  void onFrame(const Validator& validator, const ValidatedFrame& view, std::uint64_t frame,
+               std::int64_t time_ns, const ByteReader& bytes);
+  // The capture ended: the incidents not recovered end on its last frame.
+  void finish();
+
+  // In the order they began (frame order); the cause of each is final when it is added.
+  const std::vector<Incident>& incidents() const { return incidents_; }
+  // Incidents beyond kMaxIncidents, counted only.
+  std::uint64_t omitted() const { return omitted_; }
+
+ private:
+  AxisTrack& track(std::uint16_t axis);
+  void add(Incident incident, const AxisTrack* axis, std::uint32_t sew);
+  void takeValues(const Validator& validator, const ValidatedFrame& view, const ByteReader& bytes);
+  void checkOutage(const Validator& validator);
+  void takeAlChanges(const Validator& validator);
+  void resetWindows();
+
+  std::uint32_t failure_limit_;  // telegram_failure_limit (COM-005)
+  Stamp last_;                   // the last frame given
+  std::int64_t clock_ns_ = 0;    // its time on the segment's clock
+  bool outage_ = false;          // every axis failing: a bus outage is open
+  std::vector<std::unique_ptr<AxisTrack>> axes_;
+  std::unique_ptr<BusTrack> bus_;
+  std::vector<Incident> incidents_;
+  std::uint64_t omitted_ = 0;
+  std::uint64_t segments_ = 0;
+};
+
+}  // namespace ncservo

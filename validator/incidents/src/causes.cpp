@@ -1,0 +1,267 @@
+#include "ncservo/incidents/causes.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "incident_tracks.hpp"
+#include "ncservo/protocol/fields.hpp"
+
+namespace ncservo {
+
+namespace {
+
+constexpr std::uint32_t kEcatBits =
+    mask32("ncservo.sew.ecat_watchdog") | mask32("ncservo.sew.ecat_timeout");
+constexpr std::uint32_t kI2t = mask32("ncservo.sew.i2t_endat");
+constexpr std::uint32_t kFollowing = mask32("ncservo.sew.following");
+constexpr std::uint32_t kCurrentBits =
+    mask32("ncservo.sew.current") | mask32("ncservo.sew.current_offset") |
+    mask32("ncservo.sew.current_symmetry") | mask32("ncservo.sew.overload");
+constexpr std::uint32_t kBusVoltage = mask32("ncservo.sew.bus_voltage");
+constexpr std::uint32_t kEncoderBits = mask32("ncservo.sew.encoder") | mask32("ncservo.sew.hall") |
+                                       mask32("ncservo.sew.hall_sequence");
+constexpr std::uint32_t kOverspeed = mask32("ncservo.sew.overspeed");
+constexpr std::uint32_t kConfigurationBits =
+    mask32("ncservo.sew.ecat_config") | mask32("ncservo.sew.param_checksum") |
+    mask32("ncservo.sew.program_checksum") | mask32("ncservo.sew.flash");
+constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
+
+constexpr std::int64_t kShortWindowNs = 100 * kMsNs;
+constexpr std::int64_t kMinuteNs = 60'000 * kMsNs;
+
+// "FollowerErr (E09), OverLoad (E20)": the labels of the SEW bits in `bits`, in bit order.
+std::string sewLabels(std::uint32_t bits) {
+  std::string out;
+  for (const FieldDef& f : kFields) {
+    if (f.word != Word::Sew || f.view != FieldView::Cause || (bits & f.mask) == 0) continue;
+    out += fmt::format("{}{}", out.empty() ? "" : ", ", f.label);
+  }
+  return out;
+}
+
+// "300 ms", "2.5 s".
+std::string duration(std::int64_t ns) {
+  if (ns < 1000 * kMsNs) return fmt::format("{} ms", (ns + kMsNs / 2) / kMsNs);
+  return fmt::format("{:.1f} s", static_cast<double>(ns) / 1e9);
+}
+
+void evidence(CauseMatch& m, const Mark& at, std::string what) {
+  m.evidence.push_back(IncidentEvidence{at.stamp(), std::move(what)});
+}
+
+std::optional<double> before(const AxisTrack* axis, std::int32_t code) {
+  if (axis == nullptr) return std::nullopt;
+  for (std::size_t i = 0; i < kBefore.size(); ++i) {
+    if (kBefore[i].message_code == code) return axis->before[i];
+  }
+  return std::nullopt;
+}
+
+// The SEW bits of `bits` set at the incident, with the message value before it, where seen.
+bool bitsWithValue(const CauseContext& c, CauseMatch& m, std::uint32_t bits, std::int32_t code) {
+  if ((c.sew & bits) == 0) return false;
+  m.text = sewLabels(c.sew & bits);
+  if (const std::optional<double> value = before(c.axis, code)) {
+    const ValueName* meaning = valueName(kMessageCodeField, static_cast<std::uint64_t>(code));
+    m.text += fmt::format(", {} {:.1f} {} before", meaning->name, *value, meaning->unit);
+  }
+  return true;
+}
+
+bool communicationLoss(const CauseContext& c, CauseMatch& m) {
+  std::string text;
+  if (c.axis != nullptr) {
+    std::uint64_t lost = 0, failed = 0, first = 0, last = 0;
+    for (std::size_t i = 0; i < c.axis->failures.size(); ++i) {
+      const FailureRun& run = c.axis->failures[i];
+      if (!within(run.last, c.at, kShortWindowNs)) continue;
+      lost += run.lost;
+      failed += run.failed;
+      first = run.first.frame;
+      if (last == 0) last = run.last.frame;
+      evidence(m, run.first,
+               run.lost > 0 ? fmt::format("{} cycle{} lost", run.lost, run.lost == 1 ? "" : "s")
+                            : fmt::format("{} cycle{} with a wrong WKC", run.failed,
+                                          run.failed == 1 ? "" : "s"));
+    }
+    if (lost + failed > 0) {
+      if (lost > 0) text = fmt::format("{} cycle{} lost", lost, lost == 1 ? "" : "s");
+      if (failed > 0) {
+        text += fmt::format("{}{} cycle{} with a wrong WKC", text.empty() ? "" : ", ", failed,
+                            failed == 1 ? "" : "s");
+      }
+      text += first == last ? fmt::format(" (frame {})", first)
+                            : fmt::format(" (frames {}-{})", first, last);
+    }
+  }
+  if ((c.sew & kEcatBits) != 0) {
+    text += fmt::format("{}{}", text.empty() ? "" : ", then ", sewLabels(c.sew & kEcatBits));
+  }
+  if (text.empty()) return false;
+  m.text = c.kind == IncidentKind::BusOutage ? "every axis failing: " + text : text;
+  return true;
+}
+
+bool overtemperature(const CauseContext& c, CauseMatch& m) {
+  std::string text;
+  if ((c.sew & kI2t) != 0) text = sewLabels(kI2t);
+  const AxisTrack* a = c.axis;
+  if (a != nullptr) {
+    if (a->temp_warning_rose && within(*a->temp_warning_rose, c.at, kMinuteNs)) {
+      text += fmt::format("{}SSW.TempWarning from frame {}", text.empty() ? "" : ", ",
+                          a->temp_warning_rose->frame);
+      evidence(m, *a->temp_warning_rose, "SSW.TempWarning \u2191");
+    } else if (a->tx_known && (a->ssw & kTempWarning) != 0) {
+      text += fmt::format("{}SSW.TempWarning set", text.empty() ? "" : ", ");
+    }
+    if (a->temperature_last_at && within(*a->temperature_last_at, c.at, kMinuteNs)) {
+      const std::int64_t second = a->temperature_last_at->clock_ns / 1'000'000'000;
+      const TemperatureBucket* lowest = nullptr;
+      for (const TemperatureBucket& b : a->temperature) {
+        if (b.second < second - kTemperatureWindowS || b.second > second) continue;
+        if (!within(b.at, c.at, kMinuteNs)) continue;
+        if (lowest == nullptr || b.lowest < lowest->lowest) lowest = &b;
+      }
+      if (lowest != nullptr && a->temperature_last - lowest->lowest >= kTemperatureRiseC) {
+        text += fmt::format("{}motor temperature {:.0f} \u2192 {:.0f} \u00b0C over {}",
+                            text.empty() ? "" : ", ", lowest->lowest, a->temperature_last,
+                            duration(a->temperature_last_at->clock_ns - lowest->at.clock_ns));
+        evidence(m, lowest->at, fmt::format("motor temperature {:.1f} \u00b0C", lowest->lowest));
+        evidence(m, *a->temperature_last_at,
+                 fmt::format("motor temperature {:.1f} \u00b0C", a->temperature_last));
+      }
+    }
+  }
+  if (text.empty()) return false;
+  m.text = text;
+  return true;
+}
+
+// Where FollowerErr rose for this incident: where the detector saw it rise, else at the incident.
+Mark followingRose(const CauseContext& c) {
+  if (c.axis != nullptr && c.axis->following_rose &&
+      within(*c.axis->following_rose, c.at, kMinuteNs))
+    return *c.axis->following_rose;
+  return c.at;
+}
+
+bool followingErrorAfterStep(const CauseContext& c, CauseMatch& m) {
+  if ((c.sew & kFollowing) == 0 || c.axis == nullptr) return false;
+  const Mark rose = followingRose(c);
+  const Step* step = nullptr;
+  if (c.axis->candidate && within(c.axis->candidate->at, rose, kShortWindowNs)) {
+    step = &*c.axis->candidate;
+  }
+  for (std::size_t i = 0; step == nullptr && i < c.axis->steps.size(); ++i) {
+    if (within(c.axis->steps[i].at, rose, kShortWindowNs)) step = &c.axis->steps[i];
+  }
+  if (step == nullptr) return false;
+  m.text = fmt::format(
+      "{} {} after an SSP step {} \u2192 {} at frame {} (the {} cycles before changed by at "
+      "most {})",
+      sewLabels(kFollowing), duration(rose.clock_ns - step->at.clock_ns), step->from, step->to,
+      step->at.frame, kStepHistory, step->before_max);
+  evidence(m, step->at, fmt::format("SSP step {} \u2192 {}", step->from, step->to));
+  if (rose.frame != c.at.frame) evidence(m, rose, "SEW.FollowerErr \u2191");
+  return true;
+}
+
+bool followingError(const CauseContext& c, CauseMatch& m) {
+  if ((c.sew & kFollowing) == 0) return false;
+  m.text = fmt::format("{}, no set-point step in the 100 ms before", sewLabels(kFollowing));
+  const Mark rose = followingRose(c);
+  if (rose.frame != c.at.frame) evidence(m, rose, "SEW.FollowerErr \u2191");
+  return true;
+}
+
+bool overcurrent(const CauseContext& c, CauseMatch& m) {
+  return bitsWithValue(c, m, kCurrentBits, 1);
+}
+
+bool busVoltage(const CauseContext& c, CauseMatch& m) {
+  return bitsWithValue(c, m, kBusVoltage, 3);
+}
+
+bool encoder(const CauseContext& c, CauseMatch& m) {
+  std::string text = sewLabels(c.sew & kEncoderBits);
+  if (c.axis != nullptr && c.axis->no_encoder_rose &&
+      within(*c.axis->no_encoder_rose, c.at, kShortWindowNs)) {
+    text += fmt::format("{}SSW.NoEncoder from frame {}", text.empty() ? "" : ", ",
+                        c.axis->no_encoder_rose->frame);
+    evidence(m, *c.axis->no_encoder_rose, "SSW.NoEncoder \u2191");
+  }
+  if (text.empty()) return false;
+  m.text = text;
+  return true;
+}
+
+bool overspeed(const CauseContext& c, CauseMatch& m) {
+  return bitsWithValue(c, m, kOverspeed, 0);
+}
+
+bool configuration(const CauseContext& c, CauseMatch& m) {
+  if ((c.sew & kConfigurationBits) == 0) return false;
+  m.text = sewLabels(c.sew & kConfigurationBits);
+  return true;
+}
+
+bool ncCommand(const CauseContext& c, CauseMatch& m) {
+  if (c.axis == nullptr) return false;
+  for (std::size_t i = 0; i < c.axis->findings.size(); ++i) {
+    const FindingMark& f = c.axis->findings[i];
+    const RuleDef& rule = ruleDef(f.rule);
+    if (rule.party != Party::Nc || !within(f.at, c.at, kShortWindowNs)) continue;
+    m.text = fmt::format("{} {} at frame {}, {} before", rule.code, rule.slug, f.at.frame,
+                         duration(c.at.clock_ns - f.at.clock_ns));
+    evidence(m, f.at, f.what);
+    return true;
+  }
+  return false;
+}
+
+bool unknown(const CauseContext& c, CauseMatch& m) {
+  const std::uint32_t causes = c.sew & kSewCauseMask;
+  const std::string seen = causes != 0       ? sewLabels(causes)
+                           : !c.what.empty() ? c.what
+                                             : std::string("no cause bit set");
+  m.text = fmt::format("{}; no cause row's evidence in the windows before", seen);
+  return true;
+}
+
+}  // namespace
+
+// docs/incidents.md#causes; INTERFACES.md "Incidents" fixes the ids and their order.
+const std::array<CauseDef, kCauseCount> kCauses{{
+    {CauseId::CommunicationLoss, "communication-loss",
+     "ECatWatchDog or ECatTErr set at the fault, or cycles lost or returned with a wrong WKC on "
+     "the axis within 100 ms before",
+     kShortWindowNs, communicationLoss},
+    {CauseId::Overtemperature, "overtemperature",
+     "I2t_Endat set at the fault, or SSW.TempWarning rising (or set), or the motor temperature "
+     "(message code 4) rising by 10 °C or more, in the minute before",
+     kMinuteNs, overtemperature},
+    {CauseId::FollowingErrorAfterStep, "following-error-after-step",
+     "FollowerErr set, having risen within 100 ms after a set-point step", kShortWindowNs,
+     followingErrorAfterStep},
+    {CauseId::FollowingError, "following-error", "FollowerErr set otherwise", 0, followingError},
+    {CauseId::Overcurrent, "overcurrent", "CurrErr, CURROErr, CurrDiffErr or OverLoad set", 0,
+     overcurrent},
+    {CauseId::BusVoltage, "bus-voltage", "BVErr set", 0, busVoltage},
+    {CauseId::Encoder, "encoder",
+     "EncoderErr, HallErr or HallSErr set, or SSW.NoEncoder rising within 100 ms before",
+     kShortWindowNs, encoder},
+    {CauseId::Overspeed, "overspeed", "OverSpeed set", 0, overspeed},
+    {CauseId::Configuration, "configuration",
+     "ECatConfigError, PTBLCHKSErr, PRGCHKSErr or SFlashErr set", 0, configuration},
+    {CauseId::NcCommand, "nc-command", "a rule of party NC fired on the axis within 100 ms before",
+     kShortWindowNs, ncCommand},
+    {CauseId::Unknown, "unknown", "none of the rows above", 0, unknown},
+}};
+
+const CauseDef& causeDef(CauseId id) {
+  return kCauses[static_cast<std::size_t>(id)];
+}
+
+}  // namespace ncservo

@@ -1,0 +1,394 @@
+#include "ncservo/incidents/incident_detector.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "incident_tracks.hpp"
+#include "ncservo/base/little_endian.hpp"
+#include "ncservo/incidents/causes.hpp"
+#include "ncservo/model/al_tracker.hpp"
+#include "ncservo/protocol/fields.hpp"
+#include "ncservo/protocol/pdo.hpp"
+#include "ncservo/protocol/word_bits.hpp"
+#include "ncservo/wire/ecat_wire.hpp"
+
+namespace ncservo {
+
+namespace {
+
+constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
+constexpr std::int64_t kEvidenceWindowNs = 100 * kMsNs;
+constexpr std::size_t kMaxFindingEvidence = 8;
+// The words read every cycle, each 4 bytes (docs/protocol.md §1).
+constexpr std::size_t kSspOffset = wordOffset(Word::Ssp);
+constexpr std::size_t kSswOffset = wordOffset(Word::Ssw);
+constexpr std::size_t kSewOffset = wordOffset(Word::Sew);
+constexpr std::size_t kMsgCodeOffset = wordOffset(Word::MsgCode);
+constexpr std::size_t kMsgDataOffset = wordOffset(Word::MsgData);
+static_assert(wordDef(Word::Ssp).size == 4 && wordDef(Word::Ssw).size == 4 &&
+              wordDef(Word::Sew).size == 4 && wordDef(Word::MsgCode).size == 4 &&
+              wordDef(Word::MsgData).size == 4);
+
+const FieldDef* sewField(const SewCause& cause) {
+  for (const FieldDef& f : kFields) {
+    if (f.word == Word::Sew && f.view == FieldView::Cause && f.mask == cause.mask) return &f;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+const char* incidentKindName(IncidentKind kind) {
+  switch (kind) {
+    case IncidentKind::DriveFault:
+      return "drive-fault";
+    case IncidentKind::BusOutage:
+      return "bus-outage";
+    case IncidentKind::Esm:
+      return "esm";
+  }
+  return "?";
+}
+
+std::string sewBitName(const SewCause& cause) {
+  const FieldDef* f = sewField(cause);
+  if (f == nullptr) return cause.display;
+  constexpr std::string_view kPrefix = "ncservo.sew.";
+  return std::string(std::string_view(f->filter).substr(kPrefix.size()));
+}
+
+const char* sewBitLabel(const SewCause& cause) {
+  const FieldDef* f = sewField(cause);
+  return f != nullptr ? f->label : cause.display;
+}
+
+std::string incidentHeadline(const Incident& incident, const std::string& axis_name) {
+  switch (incident.kind) {
+    case IncidentKind::DriveFault: {
+      std::string codes;
+      for (const SewCause* cause : incident.errors) {
+        codes += fmt::format("{}{}", codes.empty() ? " " : "+", cause->display);
+      }
+      return fmt::format("{} fault{}", axis_name, codes);
+    }
+    case IncidentKind::BusOutage:
+      return "bus outage";
+    case IncidentKind::Esm: {
+      std::string who = incident.axis ? axis_name
+                        : incident.station
+                            ? fmt::format("station 0x{:04X}", *incident.station)
+                            : fmt::format("ring position {}", incident.position.value_or(0));
+      return fmt::format("{} ESM {}", who, incident.what);
+    }
+  }
+  return "?";
+}
+
+IncidentDetector::IncidentDetector(const RuleSettings& settings)
+    : failure_limit_(settings.telegram_failure_limit), bus_(std::make_unique<BusTrack>()) {}
+
+IncidentDetector::~IncidentDetector() = default;
+
+AxisTrack& IncidentDetector::track(std::uint16_t axis) {
+  if (axis >= axes_.size()) axes_.resize(axis + 1u);
+  if (!axes_[axis]) axes_[axis] = std::make_unique<AxisTrack>();
+  return *axes_[axis];
+}
+
+void IncidentDetector::resetWindows() {
+  for (auto& a : axes_) {
+    if (a) a->resetWindows();
+  }
+  bus_->findings.clear();
+}
+
+// The incident's cause from the first matching row, its evidence (the row's and the findings of
+// the 100 ms before), and what the drive reported before it.
+void IncidentDetector::add(Incident incident, const AxisTrack* axis, std::uint32_t sew) {
+  if (incidents_.size() >= kMaxIncidents) {
+    ++omitted_;
+    return;
+  }
+  const Mark at{incident.at.frame, clock_ns_, incident.at.time_ns};
+  CauseContext context{incident.kind, axis, bus_.get(), sew, at, incident.what};
+  CauseMatch match;
+  for (const CauseDef& row : kCauses) {
+    match = CauseMatch{};
+    if (row.test(context, match)) {
+      incident.cause = row.id;
+      break;
+    }
+  }
+  incident.cause_text = std::move(match.text);
+  incident.evidence = std::move(match.evidence);
+  std::vector<const FindingMark*> findings;
+  const Ring<FindingMark, 16>* rings[] = {axis != nullptr ? &axis->findings : nullptr,
+                                          &bus_->findings};
+  for (const Ring<FindingMark, 16>* ring : rings) {
+    if (ring == nullptr) continue;
+    for (std::size_t i = 0; i < ring->size(); ++i) {
+      if (within((*ring)[i].at, at, kEvidenceWindowNs)) findings.push_back(&(*ring)[i]);
+    }
+  }
+  std::sort(findings.begin(), findings.end(),
+            [](const FindingMark* a, const FindingMark* b) { return a->at.frame > b->at.frame; });
+  if (findings.size() > kMaxFindingEvidence) findings.resize(kMaxFindingEvidence);
+  for (const FindingMark* f : findings) {
+    const bool known = std::any_of(
+        incident.evidence.begin(), incident.evidence.end(),
+        [&](const IncidentEvidence& e) { return e.at.frame == f->at.frame && e.what == f->what; });
+    if (!known) incident.evidence.push_back(IncidentEvidence{f->at.stamp(), f->what});
+  }
+  std::stable_sort(
+      incident.evidence.begin(), incident.evidence.end(),
+      [](const IncidentEvidence& a, const IncidentEvidence& b) { return a.at.frame < b.at.frame; });
+  if (axis != nullptr) incident.before = axis->before;
+  incident.end = incident.at;
+  incidents_.push_back(std::move(incident));
+}
+
+void IncidentDetector::onFrame(const Validator& validator, const ValidatedFrame& view,
+                               std::uint64_t frame, std::int64_t time_ns, const ByteReader& bytes) {
+  // docs/timing.md#rule-time: the windows are measured on the segment's clock, and a new
+  // segment starts them afresh.
+  if (validator.segments().count() != segments_) {
+    if (segments_ != 0) resetWindows();
+    segments_ = validator.segments().count();
+  }
+  clock_ns_ = validator.segments().now();
+  last_ = Stamp{frame, time_ns};
+  const Mark at{frame, clock_ns_, time_ns};
+
+  for (const AxisAccount& account : validator.frameAccounts()) {
+    if (account.outcome == AxisAccount::Outcome::Good) continue;
+    AxisTrack& a = track(account.axis);
+    const bool lost = account.outcome == AxisAccount::Outcome::Lost;
+    if (a.failures.size() == 0 ||
+        a.failures.newest().last.clock_ns + kFailureMergeNs < at.clock_ns) {
+      a.failures.push(FailureRun{at, at, 0, 0});
+    }
+    FailureRun& run = a.failures.newest();
+    run.last = at;
+    (lost ? run.lost : run.failed) += account.cycles;
+  }
+  for (const Finding& f : validator.findings()) {
+    const RuleDef& rule = ruleDef(f.rule);
+    FindingMark mark{at, f.rule, fmt::format("{} {}", rule.code, f.message)};
+    if (f.axis) {
+      track(*f.axis).findings.push(std::move(mark));
+    } else {
+      bus_->findings.push(std::move(mark));
+    }
+  }
+  takeValues(validator, view, bytes);
+  checkOutage(validator);
+  takeAlChanges(validator);
+}
+
+// Each placed axis's words of this frame: the set point of a master copy; the status, errors and
+// message data of a returned copy. A drive fault begins where SEW.ServoErrors rises.
+void IncidentDetector::takeValues(const Validator& validator, const ValidatedFrame& view,
+                                  const ByteReader& bytes) {
+  using namespace bits;
+  const FrameDecode& decode = view.decode;
+  const Mark at{last_.frame, clock_ns_, last_.time_ns};
+  // A returned copy right after its master copy carries the same outputs: one sample per cycle.
+  const bool outputs_cycle = !(decode.copy == CopyKind::Returned && decode.paired);
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
+    const AxisPlacement& p = decode.axes[i];
+    AxisTrack& a = track(p.axis);
+    if (outputs_cycle && p.has_rx && bytes.has(p.rx_offset, kRxPdoSize)) {
+      const auto ssp =
+          static_cast<std::int32_t>(loadLe<4>(bytes.data() + p.rx_offset + kSspOffset));
+      if (a.ssp_known) {
+        const auto change = static_cast<std::uint64_t>(std::llabs(std::int64_t{ssp} - a.ssp));
+        if (a.candidate) {
+          // Confirmed when the cycle after it changes far less (a ramp's start is no step).
+          if (change * kStepFactor <=
+              static_cast<std::uint64_t>(std::llabs(a.candidate->to - a.candidate->from))) {
+            a.steps.push(*a.candidate);
+          }
+          a.candidate.reset();
+        }
+        std::uint64_t before_max = 0;
+        const std::size_t seen = std::min(a.change_count, kStepHistory);
+        for (std::size_t k = 0; k < seen; ++k) before_max = std::max(before_max, a.changes[k]);
+        if (seen >= kStepHistoryMinimum && change >= static_cast<std::uint64_t>(kStepMinimum) &&
+            change >= kStepFactor * before_max) {
+          a.candidate = Step{at, a.ssp, ssp, before_max};
+        }
+        a.changes[a.change_next] = change;
+        a.change_next = (a.change_next + 1) % kStepHistory;
+        ++a.change_count;
+      }
+      a.ssp = ssp;
+      a.ssp_known = true;
+    }
+    if (!p.has_tx || !bytes.has(p.tx_offset, kTxPdoSize)) continue;
+    const std::uint8_t* tx = bytes.data() + p.tx_offset;
+    const std::uint32_t ssw = static_cast<std::uint32_t>(loadLe<4>(tx + kSswOffset));
+    const std::uint32_t sew = static_cast<std::uint32_t>(loadLe<4>(tx + kSewOffset));
+    const auto code = static_cast<std::int32_t>(loadLe<4>(tx + kMsgCodeOffset));
+    const std::uint32_t data_bits = static_cast<std::uint32_t>(loadLe<4>(tx + kMsgDataOffset));
+    float data_float;
+    std::memcpy(&data_float, &data_bits, sizeof data_float);
+    const double data = data_float;
+    if (a.tx_known) {
+      const std::uint32_t ssw_rose = ssw & ~a.ssw;
+      const std::uint32_t sew_rose = sew & ~a.sew;
+      if (ssw_rose & kTempWarning) a.temp_warning_rose = at;
+      if (ssw_rose & kNoEncoder) a.no_encoder_rose = at;
+      if (sew_rose & kFollowing) a.following_rose = at;
+      if (sew_rose & kServoErrors) {
+        if (a.open) {
+          incidents_[*a.open].end = last_;  // a new fault before the last one recovered
+          incidents_[*a.open].ended = true;
+          a.open.reset();
+        }
+        Incident incident;
+        incident.kind = IncidentKind::DriveFault;
+        incident.axis = p.axis;
+        incident.at = last_;
+        for (const SewCause& cause : kSewCauses) {
+          if (sew & cause.mask) incident.errors.push_back(&cause);
+        }
+        std::sort(incident.errors.begin(), incident.errors.end(),
+                  [](const SewCause* x, const SewCause* y) { return x->mask < y->mask; });
+        a.ssw = ssw;  // the rows read the status at the fault
+        add(std::move(incident), &a, sew);
+        if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
+            incidents_.back().axis == p.axis) {
+          a.open = incidents_.size() - 1;
+        }
+      }
+    }
+    // docs/incidents.md#recovery: the errors cleared (ServoErrors fell), then enabled again.
+    if (a.open) {
+      Incident& open = incidents_[*a.open];
+      if (!open.error_clear && (sew & kServoErrors) == 0) open.error_clear = last_;
+      if (open.error_clear && (ssw & kServoEn) != 0 && (sew & kServoErrors) == 0) {
+        open.reenabled = last_;
+        open.end = last_;
+        open.recovered = open.ended = true;
+        a.open.reset();
+      }
+    }
+    a.ssw = ssw;
+    a.sew = sew;
+    a.tx_known = true;
+    if (std::isfinite(data)) {
+      for (std::size_t k = 0; k < kBefore.size(); ++k) {
+        if (kBefore[k].message_code == code) a.before[k] = data;
+      }
+      if (code == 4) {
+        a.temperature_last = data;
+        a.temperature_last_at = at;
+        const std::int64_t second = at.clock_ns / 1'000'000'000;
+        constexpr auto kBuckets = static_cast<std::int64_t>(kTemperatureWindowS + 1);
+        TemperatureBucket& b =
+            a.temperature[static_cast<std::size_t>(((second % kBuckets) + kBuckets) % kBuckets)];
+        if (b.second != second) {
+          b = TemperatureBucket{second, data, at};
+        } else if (data < b.lowest) {
+          b.lowest = data;
+          b.at = at;
+        }
+      }
+    }
+  }
+  (void)validator;
+}
+
+// docs/incidents.md#bus-outage: every axis seen so far failing for more than
+// telegram_failure_limit consecutive cycles; it ends where one axis's cycle runs again.
+void IncidentDetector::checkOutage(const Validator& validator) {
+  if (!outage_ && validator.frameAccounts().empty()) return;
+  bool every = true;
+  bool any_ok = false;
+  std::size_t axes = 0;
+  const AxisTrack* worst = nullptr;
+  std::uint64_t worst_lost = 0;
+  for (std::size_t i = 0; i < validator.axisCount(); ++i) {
+    const AxisModel* model = validator.axis(i);
+    if (model == nullptr) continue;
+    ++axes;
+    every = every && model->consecutiveFailed() > failure_limit_;
+    any_ok = any_ok || model->consecutiveFailed() == 0;
+    if (i < axes_.size() && axes_[i] && axes_[i]->failures.size() > 0) {
+      const FailureRun& run = axes_[i]->failures[0];
+      if (worst == nullptr || run.lost + run.failed > worst_lost) {
+        worst = axes_[i].get();
+        worst_lost = run.lost + run.failed;
+      }
+    }
+  }
+  if (outage_) {
+    if (!any_ok) return;
+    outage_ = false;
+    for (auto it = incidents_.rbegin(); it != incidents_.rend(); ++it) {
+      if (it->kind != IncidentKind::BusOutage) continue;
+      it->end = last_;
+      it->reenabled = last_;
+      it->recovered = it->ended = true;
+      break;
+    }
+    return;
+  }
+  if (axes == 0 || !every) return;
+  outage_ = true;
+  Incident incident;
+  incident.kind = IncidentKind::BusOutage;
+  incident.at = last_;
+  add(std::move(incident), worst, 0);
+}
+
+// docs/incidents.md#esm: a slave's AL state read falling from OP that the master did not request
+// (its last AL control request was OP, or none was seen); back in OP ends it.
+void IncidentDetector::takeAlChanges(const Validator& validator) {
+  for (const AlOpChange& change : validator.al().opChanges()) {
+    std::optional<std::uint16_t> axis;
+    if (change.slave.station) {
+      for (const AxisInfo& info : validator.decoder().axes()) {
+        if (info.has_station && info.station == *change.slave.station) axis = info.index;
+      }
+    }
+    if (change.to == ecat::kAlOp) {
+      for (auto it = incidents_.rbegin(); it != incidents_.rend(); ++it) {
+        if (it->kind != IncidentKind::Esm || it->ended || it->station != change.slave.station ||
+            it->position != change.slave.position) {
+          continue;
+        }
+        it->end = last_;
+        it->reenabled = last_;
+        it->recovered = it->ended = true;
+        break;
+      }
+      continue;
+    }
+    // A state the master asked for (a shutdown, a restart) is no incident.
+    if (change.requested && *change.requested != ecat::kAlOp) continue;
+    Incident incident;
+    incident.kind = IncidentKind::Esm;
+    incident.axis = axis;
+    incident.station = change.slave.station;
+    incident.position = change.slave.position;
+    incident.at = last_;
+    incident.what =
+        fmt::format("{} \u2192 {} (AL status 0x{:04X}{})", alStateName(change.from),
+                    alStateName(change.to), change.raw,
+                    change.status_code ? fmt::format(", status code 0x{:04X}", *change.status_code)
+                                       : std::string());
+    add(std::move(incident), axis ? &track(*axis) : nullptr, 0);
+  }
+}
+
+void IncidentDetector::finish() {
+  for (Incident& incident : incidents_) {
+    if (!incident.ended) incident.end = last_;
+  }
+}
+
+}  // namespace ncservo
