@@ -43,7 +43,7 @@ Verdict runVerdict(const ReportPolicy& policy, const std::vector<CaptureReport>&
                                 Verdict::Pass};
   std::size_t worst = std::size(kOrder) - 1;
   for (const CaptureReport& r : reports) {
-    const Verdict v = r.count(Severity::Error) > 0 ? Verdict::Fail : verdictOf(policy, r);
+    const Verdict v = r.counted(Severity::Error) > 0 ? Verdict::Fail : verdictOf(policy, r);
     worst = std::min<std::size_t>(
         worst, std::find(std::begin(kOrder), std::end(kOrder), v) - std::begin(kOrder));
   }

@@ -13,29 +13,17 @@ constexpr double kAfterLastIncidentS = 0.6;
 constexpr std::uint16_t kAlCodeSyncError = 0x001A;
 }  // namespace
 
-const char* incidentKindName(IncidentKind kind) {
-  switch (kind) {
-    case IncidentKind::DriveFault:
-      return "drive-fault";
-    case IncidentKind::BusOutage:
-      return "bus-outage";
-    case IncidentKind::Esm:
-      return "esm";
-  }
-  return "?";
-}
-
 // Each chain stays clear of the other rows' evidence: no set-point step, NC violation, lost
 // cycle or temperature rise within the windows of another incident; the overtemperature comes
 // last on its axis, so that no later fault there has a warm motor in its minute.
 const std::vector<IncidentRow>& incidentRows() {
   static const std::vector<IncidentRow> table = {
-      {.cause = "following-error",
+      {.cause = CauseId::FollowingError,
        .kind = IncidentKind::DriveFault,
        .axis = 0,
        .description = "FollowerErr (E09) at a steady speed set point",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kFollowing); }},
-      {.cause = "following-error-after-step",
+      {.cause = CauseId::FollowingErrorAfterStep,
        .kind = IncidentKind::DriveFault,
        .axis = 1,
        .description = "the NC steps the speed set point to 3000 rpm in one cycle; FollowerErr "
@@ -45,7 +33,7 @@ const std::vector<IncidentRow>& incidentRows() {
              a.nc(0, NcAction::SpeedStep, 3000);
              a.driveFault(25 * kMs, bits::kFollowing);
            }},
-      {.cause = "overcurrent",
+      {.cause = CauseId::Overcurrent,
        .kind = IncidentKind::DriveFault,
        .axis = 2,
        .description = "the motor current climbs at 2000 A/s to 24 A (message codes 1 and 2); "
@@ -57,7 +45,7 @@ const std::vector<IncidentRow>& incidentRows() {
                          .trip = 24,
                          .cause = bits::kCurrentErr});
            }},
-      {.cause = "communication-loss",
+      {.cause = CauseId::CommunicationLoss,
        .kind = IncidentKind::DriveFault,
        .axis = 3,
        .description = "the axis's slave misses the LRW of 2 cycles (WKC 3 short, COM-001); "
@@ -68,7 +56,7 @@ const std::vector<IncidentRow>& incidentRows() {
              a.bus(1, {Bus::SkipAxisLrw});  // the next cycle (offsets below a cycle round up)
              a.driveFault(3 * kMs, bits::kEcatWatchdog);
            }},
-      {.cause = "bus-voltage",
+      {.cause = CauseId::BusVoltage,
        .kind = IncidentKind::DriveFault,
        .axis = 0,
        .description = "the axis brakes to standstill and the DC bus climbs at 2400 V/s to 800 V "
@@ -82,17 +70,17 @@ const std::vector<IncidentRow>& incidentRows() {
                                   .cause = bits::kBusVoltageErr});
              a.nc(250 * kMs, NcAction::Speed, 600);
            }},
-      {.cause = "encoder",
+      {.cause = CauseId::Encoder,
        .kind = IncidentKind::DriveFault,
        .axis = 1,
        .description = "EncoderErr (E01)",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kEncoderErr); }},
-      {.cause = "overspeed",
+      {.cause = CauseId::Overspeed,
        .kind = IncidentKind::DriveFault,
        .axis = 2,
        .description = "OverSpeed (E11)",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kOverspeed); }},
-      {.cause = "configuration",
+      {.cause = CauseId::Configuration,
        .kind = IncidentKind::DriveFault,
        .axis = 3,
        .description = "the NC selects parameter table 5; PTBLCHKSErr (E30) 20 ms later",
@@ -101,7 +89,7 @@ const std::vector<IncidentRow>& incidentRows() {
              a.nc(-20 * kMs, NcAction::Table, 5);
              a.driveFault(0, bits::kParamChecksum);
            }},
-      {.cause = "nc-command",
+      {.cause = CauseId::NcCommand,
        .kind = IncidentKind::DriveFault,
        .axis = 0,
        .description = "the NC sets reserved SCW bit 20 for 5 cycles (SCW-001); SRTErr 10 ms "
@@ -111,19 +99,19 @@ const std::vector<IncidentRow>& incidentRows() {
              a.nc(-10 * kMs, NcAction::ReservedBit, 5);
              a.driveFault(0, bits::kServoRuntime);
            }},
-      {.cause = "unknown",
+      {.cause = CauseId::Unknown,
        .kind = IncidentKind::DriveFault,
        .axis = 1,
        .description = "PDPINT (E16), a power stage fault with nothing before it",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kPdpint); }},
-      {.cause = "unknown",
+      {.cause = CauseId::Unknown,
        .kind = IncidentKind::Esm,
        .axis = 2,
        .description = "the axis's slave falls from OP to SAFE-OP with AL status code 0x001A; the "
                       "master's AL status poll (every 10 ms) sees it, acknowledges it and "
                       "requests OP; the NC enables the axis again",
        .apply = [](IncidentActions& a) { a.fallFromOp(0, kAlCodeSyncError); }},
-      {.cause = "communication-loss",
+      {.cause = CauseId::CommunicationLoss,
        .kind = IncidentKind::BusOutage,
        .axis = -1,
        .description = "12 cycles are lost before the slaves (COM-004, COM-005); every drive "
@@ -132,7 +120,7 @@ const std::vector<IncidentRow>& incidentRows() {
            [](IncidentActions& a) {
              a.bus(0, {Bus::LoseBeforeSlaves, 12});
            }},
-      {.cause = "overtemperature",
+      {.cause = CauseId::Overtemperature,
        .kind = IncidentKind::DriveFault,
        .axis = 3,
        .description = "the motor temperature climbs at 200 °C/s (message code 4), "

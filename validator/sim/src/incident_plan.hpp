@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "ncservo/incidents/incident.hpp"
 #include "ncservo/sim/faults.hpp"
 #include "ncservo/sim/models.hpp"
 
@@ -25,16 +26,12 @@ class IncidentActions {
   ~IncidentActions() = default;
 };
 
-enum class IncidentKind : std::uint8_t {
-  DriveFault,  // SEW.ServoErrors rises on the row's axis
-  BusOutage,   // every axis fails longer than the telegram failure limit; each drive then
-               // raises ECatTErr (drive faults with cause communication-loss)
-  Esm,         // the row's axis's slave falls from OP
-};
-const char* incidentKindName(IncidentKind kind);
+// The kinds and cause ids are the detector's own (docs/incidents.md): a drive fault is
+// SEW.ServoErrors rising on the row's axis; the bus outage makes every drive raise ECatTErr
+// afterwards (drive faults with cause communication-loss); an ESM row's axis's slave falls from OP.
 
 struct IncidentRow {
-  const char* cause;  // the cause id the incident must get (INTERFACES.md "Incidents")
+  CauseId cause;  // the cause the incident must get
   IncidentKind kind;
   int axis;                 // -1: the whole bus
   const char* description;  // the chain, for docs/simulate.md
