@@ -64,9 +64,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       fuzz::feedFrame(validator, reader->link(), record.frame, record.time_ns, record.data,
                       record.captured, frame);
       for (const Finding& f : validator.findings()) {
-        report.tally(f);
+        const cli::BaselineState state = report.tally(f);
         if (writer.keepsFindings()) report.findings.push_back(f);
-        writer.finding(report, f);
+        writer.finding(report, f, state);
       }
     }
     cli::summarise(validator, report);
