@@ -57,3 +57,15 @@ fields_csv() {
   local IFS=,
   echo "${ALL_FIELDS[*]}"
 }
+
+# veth_pair PREFIX: a veth pair, `$host` here and `$peer` in the network namespace `$ns` (names
+# from PREFIX and this shell's pid), both up; removed with $WORK when the script exits.
+veth_pair() {
+  ns=ncservo-$1-$$
+  host=$1$$a peer=$1$$b
+  trap 'ip netns del "$ns" 2>/dev/null || true; ip link del "$host" 2>/dev/null || true; rm -rf "$WORK"' EXIT
+  ip netns add "$ns"
+  ip link add "$host" type veth peer name "$peer" netns "$ns"
+  ip link set "$host" up
+  ip -n "$ns" link set "$peer" up
+}

@@ -14,14 +14,7 @@ source "$SRC/tests/integration/lib.sh"
 [ "$(id -u)" = 0 ] || skip "needs root (veth pair, network namespace)"
 require_program tcpreplay ip
 
-ns=ncservo-test-$$
-host=ncsm$$a peer=ncsm$$b
-cleanup() { ip netns del "$ns" 2>/dev/null || true; ip link del "$host" 2>/dev/null || true; rm -rf "$WORK"; }
-trap cleanup EXIT
-ip netns add "$ns"
-ip link add "$host" type veth peer name "$peer" netns "$ns"
-ip link set "$host" up
-ip -n "$ns" link set "$peer" up
+veth_pair ncsm
 
 cd "$WORK"
 # 4 ms cycles: a replay a few milliseconds late is not a lost cycle.

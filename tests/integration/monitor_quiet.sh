@@ -10,14 +10,7 @@ source "$SRC/tests/integration/lib.sh"
 [ "$(id -u)" = 0 ] || skip "needs root (veth pair, network namespace)"
 require_program ip
 
-ns=ncservo-quiet-$$
-host=ncsq$$a peer=ncsq$$b
-cleanup() { ip netns del "$ns" 2>/dev/null || true; ip link del "$host" 2>/dev/null || true; rm -rf "$WORK"; }
-trap cleanup EXIT
-ip netns add "$ns"
-ip link add "$host" type veth peer name "$peer" netns "$ns"
-ip link set "$host" up
-ip -n "$ns" link set "$peer" up
+veth_pair ncsq
 cd "$WORK"
 
 # --duration on a quiet link: the run ends by itself; `timeout` only guards the test.
