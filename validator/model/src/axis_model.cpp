@@ -37,6 +37,15 @@ constexpr std::array<std::uint16_t, kEdgeFieldCount> kEdgeFields = [] {
   }
   return rows;
 }();
+// Per word, the bits of those fields: a frame that moved none of them has no edge.
+constexpr std::array<std::uint64_t, kWordCount> kEdgeBits = [] {
+  std::array<std::uint64_t, kWordCount> bits{};
+  for (const std::uint16_t row : kEdgeFields) {
+    const auto word = static_cast<std::size_t>(kFields[row].word);
+    bits[word] |= kFields[row].mask & AxisModel::kReads.bits[word];
+  }
+  return bits;
+}();
 
 const char* transitionName(std::optional<DriveState> from, DriveState to, const AxisModel& axis) {
   if (!from) return nullptr;
@@ -144,6 +153,10 @@ void AxisModel::observe(const PdoValues& values, const Stamp& now) {
 // the first, as Signal's edges).
 void AxisModel::takeEdges(const PdoValues& before) {
   edges_.clear();
+  std::uint64_t moved = 0;
+  for (std::size_t word = 0; word < kWordCount; ++word)
+    moved |= (before.raw[word] ^ latest_.raw[word]) & kEdgeBits[word];
+  if (moved == 0) return;
   for (const std::uint16_t row : kEdgeFields) {
     const FieldDef& f = kFields[row];
     const std::size_t word = static_cast<std::size_t>(f.word);

@@ -273,12 +273,11 @@ std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) 
 
 // --- EtherCAT state machine, per axis (docs/protocol.md §8) ---
 using ecat::kAlOp;
-using ecat::kAlSafeOp;
 bool esm002(const AxisModel& a, const RuleSettings&) {
   if (!a.alState()) return false;
   const std::uint8_t state = *a.alState();
   const bool enabling = a.knowsOutputs() && a.se().value != 0 && state != kAlOp;
-  const bool inputs = a.inputsInAlState() && state != kAlOp && state != kAlSafeOp;
+  const bool inputs = a.inputsInAlState() && !ecat::exchangesInputs(state);
   return enabling || inputs;
 }
 std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {

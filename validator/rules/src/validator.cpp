@@ -42,7 +42,9 @@ Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath f
 // frame does not carry (or that is cut short) changes nothing, as readFrameValues reads it absent.
 bool Validator::unchanged(const AxisPlacement& placement, const ByteReader& bytes,
                           const AxisModel& model) const {
-  if (judged_.al_state && model.alState()) return false;  // which PDOs a frame carries counts
+  // Outside OP and SAFE-OP, which PDOs a frame carries counts (Reads::al_state); a change of the
+  // AL state itself changes the model's revision.
+  if (judged_.al_state && model.alState() && !ecat::exchangesInputs(*model.alState())) return false;
   const PdoValues& latest = model.latest();
   auto same = [&](const JudgedPdo& judged, bool has, std::size_t offset, std::size_t size,
                   bool had) {

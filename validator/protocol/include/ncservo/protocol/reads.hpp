@@ -23,7 +23,9 @@ struct Reads {
   // Per word, a class the value is read through (MSG-001: defined or not): a change of value
   // within its class changes nothing. Two different classes of one word read the whole word.
   std::array<WordClass, kWordCount> classes{};
-  bool al_state = false;  // the slave's AL state, and which PDOs each frame carries
+  // The slave's AL state, and outside the states that exchange inputs (ecat::exchangesInputs)
+  // which PDOs each frame carries.
+  bool al_state = false;
 
   constexpr Reads operator|(const Reads& other) const {
     Reads out = *this;

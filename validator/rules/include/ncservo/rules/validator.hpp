@@ -105,7 +105,7 @@ class Validator {
   };
   struct Judged {
     JudgedPdo rx, tx;
-    bool al_state = false;  // an enabled rule reads the AL state: no fast path while it is known
+    bool al_state = false;  // an enabled rule reads the AL state (Reads::al_state)
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
   void applyAccounts();

@@ -166,6 +166,10 @@ enum AlState : std::uint8_t {
 inline constexpr std::array<std::uint8_t, 5> kAlStates{kAlInit, kAlPreOp, kAlBoot, kAlSafeOp,
                                                        kAlOp};
 inline constexpr std::uint8_t kAlStateMask = 0x0F;
+// The AL states in which a slave exchanges inputs (docs/protocol.md §8).
+inline constexpr bool exchangesInputs(std::uint8_t al_state) {
+  return al_state == kAlOp || al_state == kAlSafeOp;
+}
 // Error indicator in AL status, error acknowledge in AL control.
 inline constexpr std::uint8_t kAlErrorBit = 0x10;
 // AL status codes (ETG.1000.6).
