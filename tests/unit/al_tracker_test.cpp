@@ -660,5 +660,74 @@ TEST(AlTracker, OpChangesCarryTheRequest) {
   }
 }
 
+// One frame's slave addressing (slave_directory.hpp FrameAddressing), which the AL tracker and the
+// DC clock share: a returned copy's auto-increment address is the master copy's just before it.
+struct AddressingCase {
+  std::string name;
+  std::optional<Dg> master;  // the frame before, a master copy
+  Dg dg;                     // the frame addressed
+  bool returned;
+  bool paired;
+  SlaveTarget target;
+  std::uint16_t value;
+  bool writes;  // takesWrites()
+  bool read;    // takesRead(dg)
+};
+class FrameAddressingRows : public ::testing::TestWithParam<AddressingCase> {};
+TEST_P(FrameAddressingRows, Addresses) {
+  const AddressingCase& c = GetParam();
+  FrameAddressing addressing;
+  std::vector<Bytes> kept;  // the walked frames' bytes outlive their walks
+  auto frameOf = [&kept](const Dg& dg) {
+    FrameBuilder builder;
+    builder.add(dg);
+    kept.push_back(builder.bytes());
+    return test::walk(kept.back());
+  };
+  if (c.master) {
+    const test::Walked w = frameOf(*c.master);
+    addressing.beginFrame(*w.frame, false, false);
+  }
+  const test::Walked w = frameOf(c.dg);
+  addressing.beginFrame(*w.frame, c.returned, c.paired);
+  const SlaveAddress address = addressing.addressOf(w.frame->datagrams[0], 0);
+  EXPECT_EQ(address.target, c.target);
+  EXPECT_EQ(address.value, c.value);
+  EXPECT_EQ(addressing.takesWrites(), c.writes);
+  EXPECT_EQ(addressing.takesRead(w.frame->datagrams[0]), c.read);
+}
+INSTANTIATE_TEST_SUITE_P(
+    AlTracker, FrameAddressingRows,
+    ::testing::Values(
+        AddressingCase{"configured address", std::nullopt,
+                       Dg{ecat::kFprd, 0, physical(kStation0, kRegStatus), le16(0), 0}, false,
+                       false, SlaveTarget::Station, kStation0, true, false},
+        AddressingCase{"broadcast", std::nullopt,
+                       Dg{ecat::kBrd, 0, physical(0, kRegStatus), le16(0), 0}, false, false,
+                       SlaveTarget::All, 0, true, false},
+        AddressingCase{"master copy's auto-increment address", std::nullopt,
+                       Dg{ecat::kAprd, 0, physical(0xFFFE, kRegStatus), le16(0), 0}, false, false,
+                       SlaveTarget::Position, 2, true, false},
+        AddressingCase{"paired returned copy takes the master copy's ADP",
+                       Dg{ecat::kAprd, 0, physical(0xFFFE, kRegStatus), le16(0), 0},
+                       Dg{ecat::kAprd, 0, physical(0x0001, kRegStatus), le16(kOp), 1}, true, true,
+                       SlaveTarget::Position, 2, false, true},
+        AddressingCase{"returned copy without its master copy names no position",
+                       Dg{ecat::kAprd, 0, physical(0xFFFE, kRegStatus), le16(0), 0},
+                       Dg{ecat::kAprd, 0, physical(0x0001, kRegStatus), le16(kOp), 1}, true, false,
+                       SlaveTarget::None, 0, true, true},
+        AddressingCase{"master copy of another command names no position",
+                       Dg{ecat::kApwr, 0, physical(0xFFFE, kRegControl), le16(kOp), 0},
+                       Dg{ecat::kAprd, 0, physical(0x0001, kRegStatus), le16(kOp), 1}, true, true,
+                       SlaveTarget::None, 0, false, true},
+        AddressingCase{"read no slave answered is not taken",
+                       Dg{ecat::kFprd, 0, physical(kStation1, kRegStatus), le16(0), 0},
+                       Dg{ecat::kFprd, 0, physical(kStation1, kRegStatus), le16(0), 0}, true, true,
+                       SlaveTarget::Station, kStation1, false, false},
+        AddressingCase{"logical command addresses no slave", std::nullopt,
+                       Dg{ecat::kLrw, 0, 0x10000, Bytes(4, 0), 3}, true, false, SlaveTarget::None,
+                       0, true, false}),
+    test::rowName<AddressingCase>);
+
 }  // namespace
 }  // namespace ncservo

@@ -294,5 +294,20 @@ TEST(DcClock, TruncatedFramesNeverReadPastTheEnd) {
   }
 }
 
+// docs/protocol.md §8: a returned copy's auto-increment address is its master copy's, the frame
+// just before, whatever registers that master copy reached (a master copy holds no read data
+// itself).
+TEST(DcClock, ReturnedCopyTakesThePositionOfTheMasterCopyJustBefore) {
+  Harness h;
+  h.feed({Dg{ecat::kAprd, 0, physical(apAdp(3), ecat::kRegDcSystemTime), Bytes(8, 0), 0}}, false,
+         false, 1'000'000);
+  h.feed({Dg{ecat::kAprd, 0, physical(apAdp(3) + 4, ecat::kRegDcSystemTime), le(5'000, 8), 1}},
+         true, true, 1'020'000);
+  const std::vector<DcStation> stations = h.clock.stations();
+  ASSERT_EQ(stations.size(), 1u);
+  EXPECT_EQ(stations[0].slave.position, std::optional<std::uint16_t>(3));
+  EXPECT_EQ(stations[0].time_reads, 1u);
+}
+
 }  // namespace
 }  // namespace ncservo

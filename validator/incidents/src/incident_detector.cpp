@@ -197,9 +197,13 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
   const Mark at{last_.frame, clock_ns_, last_.time_ns};
   // A returned copy right after its master copy carries the same outputs: one sample per cycle.
   const bool outputs_cycle = !(decode.copy == CopyKind::Returned && decode.paired);
+  // The placements are in axis order: the tracks grow once, then each is one index away.
+  if (decode.axis_count > 0) track(decode.axes[decode.axis_count - 1].axis);
   for (std::size_t i = 0; i < decode.axis_count; ++i) {
     const AxisPlacement& p = decode.axes[i];
-    AxisTrack& a = track(p.axis);
+    std::unique_ptr<AxisTrack>& held = axes_[p.axis];
+    if (!held) held = std::make_unique<AxisTrack>();
+    AxisTrack& a = *held;
     if (outputs_cycle && p.has_rx && bytes.has(p.rx_offset, kRxPdoSize)) {
       const auto ssp =
           static_cast<std::int32_t>(loadLe<4>(bytes.data() + p.rx_offset + kSspOffset));
@@ -213,12 +217,17 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
           }
           a.candidate.reset();
         }
-        std::uint64_t before_max = 0;
         const std::size_t seen = std::min(a.change_count, kStepHistory);
-        for (std::size_t k = 0; k < seen; ++k) before_max = std::max(before_max, a.changes[k]);
-        if (seen >= kStepHistoryMinimum && change >= static_cast<std::uint64_t>(kStepMinimum) &&
-            change >= kStepFactor * before_max) {
-          a.candidate = Step{at, a.ssp, ssp, before_max};
+        if (seen >= kStepHistoryMinimum && change >= static_cast<std::uint64_t>(kStepMinimum)) {
+          // A step is kStepFactor times every change before it: the first that is not ends the
+          // look (a moving set point's does at once).
+          std::uint64_t before_max = 0;
+          bool step = true;
+          for (std::size_t k = 0; k < seen && step; ++k) {
+            step = kStepFactor * a.changes[k] <= change;
+            before_max = std::max(before_max, a.changes[k]);
+          }
+          if (step) a.candidate = Step{at, a.ssp, ssp, before_max};
         }
         a.changes[a.change_next] = change;
         a.change_next = (a.change_next + 1) % kStepHistory;

@@ -199,35 +199,51 @@ void AlTracker::startSegment() {
 
 void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                         const Stamp& now, std::vector<BusEvent>& out) {
-  if (!op_changes_.empty()) op_changes_.clear();
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
-  const std::size_t count = walked ? frame.count : 0;
-  if (walked) directory_.beginFrame(frame, returned);
-  // A frame whose datagrams reach none of these registers (the cyclic process data, the DC
-  // time) has nothing for the state machines.
-  bool registers = false;
-  for (std::size_t i = 0; i < count && !registers; ++i)
-    registers = reachesAlRegisters(frame.datagrams[i]);
-  last_frame_registers_ = registers;
-  if (!registers) return;
+  if (!walked) {
+    if (!op_changes_.empty()) op_changes_.clear();
+    last_frame_registers_ = false;
+    return;
+  }
+  addressing_.beginFrame(frame, returned, paired);
+  onFrame(frame, bytes, addressing_, now, out);
+}
 
+void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
+                        const FrameAddressing& addressing, const Stamp& now,
+                        std::vector<BusEvent>& out) {
+  if (!op_changes_.empty()) op_changes_.clear();
+  const std::size_t count = frame.count;
   // Writes from the master's copy, or from a returned copy whose master copy was not captured;
-  // reads from a returned copy, of datagrams that some slave answered.
-  const bool take_writes = !returned || !paired;
-  auto takeRead = [returned](const Datagram& dg) {
-    return returned && ecat::readsRegisters(dg.command) && dg.has_wkc && dg.wkc > 0;
-  };
+  // reads from a returned copy, of datagrams that some slave answered. A frame whose datagrams
+  // reach none of these registers (the cyclic process data, the DC time) has nothing for the
+  // state machines, nor has one that reaches them with neither: a master copy's reads, say.
+  const bool take_writes = addressing.takesWrites();
+  bool registers = false;
+  bool taken = false;
+  for (std::size_t i = 0; i < count; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    if (!reachesAlRegisters(dg)) continue;
+    registers = true;
+    if ((take_writes && ecat::writesRegisters(dg.command)) || addressing.takesRead(dg)) {
+      taken = true;
+      break;
+    }
+  }
+  last_frame_registers_ = registers;
+  if (!taken) return;
 
   // First station addresses and AL status codes, so that the rest of the frame can use them.
   for (std::size_t i = 0; i < count; ++i) {
     const Datagram& dg = frame.datagrams[i];
-    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    const SlaveAddress address = addressing.addressOf(dg, i);
+    const bool read = addressing.takesRead(dg);
     if (take_writes && ecat::writesRegisters(dg.command)) {
       directory_.noteStationWrite(dg, bytes, address, [this](AlData& data) { fresh(data); });
       directory_.noteAlias(dg, bytes, address);
     }
-    if (takeRead(dg)) directory_.noteAlias(dg, bytes, address);
-    if (takeRead(dg) &&
+    if (read) directory_.noteAlias(dg, bytes, address);
+    if (read &&
         (address.target == SlaveTarget::Station || address.target == SlaveTarget::Position)) {
       if (auto at = registerAt(dg, kRegAlStatusCode, 2)) {
         auto code = bytes.le16(*at);
@@ -242,14 +258,14 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   // Then AL control writes and AL status reads, in the order of the datagrams.
   for (std::size_t i = 0; i < count; ++i) {
     const Datagram& dg = frame.datagrams[i];
-    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    const SlaveAddress address = addressing.addressOf(dg, i);
     if (address.target == SlaveTarget::None) continue;
     if (take_writes && ecat::writesRegisters(dg.command)) {
       if (auto raw = readStateRegister(dg, bytes, kRegAlControl)) {
         onControlWrite(address, *raw & ecat::kAlStateMask, *raw, now, out);
       }
     }
-    if (takeRead(dg)) {
+    if (addressing.takesRead(dg)) {
       if (auto raw = readStateRegister(dg, bytes, kRegAlStatus)) {
         onStatusRead(address, *raw, now, out);
       }

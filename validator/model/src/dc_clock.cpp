@@ -15,11 +15,16 @@ constexpr bool distributesTime(std::uint8_t cmd) {
   return cmd == ecat::kFrmw || cmd == ecat::kArmw;
 }
 
-// The station address (assigned to ring positions) and the DC registers this module reads.
+// What this module takes of a datagram: a write of the station address (assigned to ring
+// positions) or of the system time offset; a read of the DC registers it follows.
 constexpr std::uint16_t kEndOfDcRegisters = kRegDcSystemTimeDifference + 4;
-bool reachesFollowedRegisters(const Datagram& dg) {
-  return reachesRegisters(dg, ecat::kRegStationAddress, ecat::kRegStationAddress + 2) ||
-         reachesRegisters(dg, kRegDcSystemTime, kEndOfDcRegisters);
+bool followed(const Datagram& dg, const FrameAddressing& addressing) {
+  if (addressing.takesWrites() && ecat::writesRegisters(dg.command) &&
+      (reachesRegisters(dg, ecat::kRegStationAddress, ecat::kRegStationAddress + 2) ||
+       registerAt(dg, kRegDcSystemTimeOffset, 4))) {
+    return true;
+  }
+  return addressing.takesRead(dg) && reachesRegisters(dg, kRegDcSystemTime, kEndOfDcRegisters);
 }
 
 constexpr double kNsPerPpmSecond = 1000.0;  // 1 ppm of a second
@@ -144,19 +149,26 @@ void DcClock::onDifference(DcData& slave, std::uint32_t raw, std::uint64_t frame
 void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                       std::uint64_t frame_number, std::int64_t time_ns) {
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
-  // Most frames (the cyclic process data) reach none of the registers followed here.
-  bool followed = false;
-  for (std::size_t i = 0; i < frame.count && !followed; ++i)
-    followed = reachesFollowedRegisters(frame.datagrams[i]);
-  if (!followed) return;
-  directory_.beginFrame(frame, returned);
+  addressing_.beginFrame(frame, returned, paired);
+  onFrame(frame, bytes, addressing_, frame_number, time_ns);
+}
+
+void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes,
+                      const FrameAddressing& addressing, std::uint64_t frame_number,
+                      std::int64_t time_ns) {
+  // Most frames (the cyclic process data, a master copy of the DC time's read) hold nothing
+  // followed here.
+  bool any = false;
+  for (std::size_t i = 0; i < frame.count && !any; ++i)
+    any = followed(frame.datagrams[i], addressing);
+  if (!any) return;
 
   // As the AL tracker takes them: writes from the master's copy (or a returned copy whose master
   // copy was not captured), reads from a returned copy some slave answered.
-  const bool take_writes = !returned || !paired;
+  const bool take_writes = addressing.takesWrites();
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];
-    const SlaveAddress address = directory_.addressOf(dg, i, returned, paired);
+    const SlaveAddress address = addressing.addressOf(dg, i);
     if (take_writes && ecat::writesRegisters(dg.command)) {
       directory_.noteStationWrite(dg, bytes, address);
       // A new system time offset moves the slave's system time: its drift is fitted again.
@@ -173,7 +185,7 @@ void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool retu
         }
       }
     }
-    if (!returned || !ecat::readsRegisters(dg.command) || !dg.has_wkc || dg.wkc == 0) continue;
+    if (!addressing.takesRead(dg)) continue;
     if (address.target != SlaveTarget::Station && address.target != SlaveTarget::Position) continue;
     const std::optional<std::size_t> time64 = registerAt(dg, kRegDcSystemTime, 8);
     const std::optional<std::size_t> time32 = time64 ? time64 : registerAt(dg, kRegDcSystemTime, 4);

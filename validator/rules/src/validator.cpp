@@ -118,9 +118,12 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   FrameDecode& decode = view_.decode;
   decoder_.placeAxes(frame, bytes, decode);
   if (decode.any_malformed) cut_.add(frame_number, decode);
-  observeAl(frame, bytes);
-  dc_.onFrame(frame, bytes, decode.copy == CopyKind::Returned, decode.paired, frame_number,
-              time_ns);
+  // The slave trackers address the frame's datagrams alike: worked out once for both.
+  if (frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated) {
+    addressing_.beginFrame(frame, decode.copy == CopyKind::Returned, decode.paired);
+    observeAl(frame, bytes);
+    dc_.onFrame(frame, bytes, addressing_, frame_number, time_ns);
+  }
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;
   const std::size_t axis_count = decode.axis_count;
@@ -263,10 +266,8 @@ void Validator::evaluateAxis(AxisSlot& s) {
 }
 
 void Validator::observeAl(const EcatFrame& frame, const ByteReader& bytes) {
-  if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
   events_.clear();
-  al_.onFrame(frame, bytes, view_.decode.copy == CopyKind::Returned, view_.decode.paired, now_,
-              events_);
+  al_.onFrame(frame, bytes, addressing_, now_, events_);
   reportEvents();
 }
 

@@ -51,6 +51,10 @@ class AlTracker {
   // whose master copy was not captured; reads from returned copies whose WKC is above zero.
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                const Stamp& now, std::vector<BusEvent>& out);
+  // The same, with the frame's addressing worked out once for every tracker (Ok or Truncated
+  // frames only, `addressing.beginFrame` called for each of them).
+  void onFrame(const EcatFrame& frame, const ByteReader& bytes, const FrameAddressing& addressing,
+               const Stamp& now, std::vector<BusEvent>& out);
 
   // A capture segment starts (capture_segments.hpp): what was requested of the slaves and the
   // states they showed are not known any more, as in a capture that began mid-operation; their
@@ -92,6 +96,7 @@ class AlTracker {
   void setState(AlData& slave, std::uint8_t state);
 
   SlaveDirectory<AlData> directory_;
+  FrameAddressing addressing_;                 // for frames given with `returned` and `paired`
   std::optional<std::uint8_t> requested_all_;  // last broadcast AL control request
   std::optional<std::uint8_t> state_all_;      // last BRD of AL status that was a state
   std::uint32_t op_entries_all_ = 0;           // times state_all_ became OP

@@ -88,6 +88,10 @@ class DcClock {
   // AlTracker::onFrame takes it.
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                std::uint64_t frame_number, std::int64_t time_ns);
+  // The same, with the frame's addressing worked out once for every tracker (Ok or Truncated
+  // frames only, `addressing.beginFrame` called for each of them).
+  void onFrame(const EcatFrame& frame, const ByteReader& bytes, const FrameAddressing& addressing,
+               std::uint64_t frame_number, std::int64_t time_ns);
   // A capture segment starts (capture_segments.hpp): the drift fits start again; the system
   // time differences, which need no clock of the capture, carry on.
   void startSegment();
@@ -113,6 +117,7 @@ class DcClock {
 
   std::int64_t settled_ns_;
   SlaveDirectory<DcData> directory_;
+  FrameAddressing addressing_;  // for frames given with `returned` and `paired`
 };
 
 }  // namespace ncservo

@@ -116,7 +116,7 @@ class Validator {
               std::string message);
   AxisSlot& slot(std::uint16_t axis);
   void evaluateAxis(AxisSlot& axis);
-  void observeAl(const EcatFrame& frame, const ByteReader& bytes);
+  void observeAl(const EcatFrame& frame, const ByteReader& bytes);  // addressing_ begun
   void reportEvents();
   void syncAlState(const AxisPlacement& placement, AxisSlot& slot);
   void startSegment();
@@ -126,6 +126,7 @@ class Validator {
   RuleSettings settings_;
   Judged judged_;
   bool fast_path_;
+  FrameAddressing addressing_;  // this frame's, read by al_ and dc_ (a walked frame's)
   AlTracker al_;
   DcClock dc_;
   BusModel bus_;

@@ -5,6 +5,8 @@
 // (which provides `void absorb(const T& other)` to merge what two records of one slave knew).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -41,6 +43,58 @@ inline bool reachesRegisters(const Datagram& dg, std::uint16_t from, std::uint16
   return ado < to && ado + dg.data_captured > from;
 }
 
+// One frame's slave addressing, worked out once per frame and read by every tracker that follows
+// the slaves through it (the AL state tracker and the DC clock share one): which copy it is,
+// and the master copy's auto-increment addresses, since a returned copy's ADP was incremented by
+// every slave (docs/protocol.md §8).
+class FrameAddressing {
+ public:
+  // Call once per walked frame, in capture order, before addressing its datagrams. `paired`: a
+  // returned copy whose master's copy was the frame just before.
+  void beginFrame(const EcatFrame& frame, bool returned, bool paired) {
+    returned_ = returned;
+    paired_ = returned && paired;
+    if (returned) return;
+    master_count_ = std::min(frame.count, master_.size());
+    for (std::size_t i = 0; i < master_count_; ++i) {
+      master_[i] = {frame.datagrams[i].command, frame.datagrams[i].adp()};
+    }
+  }
+
+  bool returned() const { return returned_; }
+  bool paired() const { return paired_; }
+  // Writes are taken from a master copy, and from a returned copy whose master copy was not
+  // captured (a paired returned copy carries the same writes again).
+  bool takesWrites() const { return !returned_ || !paired_; }
+  // Reads are taken from a returned copy, of datagrams some slave answered: only a returned copy
+  // holds what the slaves wrote into it.
+  bool takesRead(const Datagram& dg) const {
+    return returned_ && ecat::readsRegisters(dg.command) && dg.has_wkc && dg.wkc > 0;
+  }
+
+  SlaveAddress addressOf(const Datagram& dg, std::size_t index) const {
+    if (ecat::isConfiguredAddress(dg.command)) return {SlaveTarget::Station, dg.adp()};
+    if (ecat::isBroadcast(dg.command)) return {SlaveTarget::All, 0};
+    if (!ecat::isAutoIncrement(dg.command)) return {};
+    std::uint16_t adp = dg.adp();
+    if (returned_) {
+      if (!paired_ || index >= master_count_ || master_[index].command != dg.command) return {};
+      adp = master_[index].adp;
+    }
+    return {SlaveTarget::Position, static_cast<std::uint16_t>((0x10000u - adp) & 0xFFFFu)};
+  }
+
+ private:
+  struct MasterDatagram {
+    std::uint8_t command = 0;
+    std::uint16_t adp = 0;
+  };
+  bool returned_ = false;
+  bool paired_ = false;
+  std::array<MasterDatagram, ecat::kMaxDatagrams> master_{};
+  std::size_t master_count_ = 0;
+};
+
 template <typename T>
 class SlaveDirectory {
  public:
@@ -54,26 +108,13 @@ class SlaveDirectory {
     T data{};
   };
 
-  // Call once per frame, before addressing its datagrams: a master copy's auto-increment
-  // addresses are remembered, since a returned copy's ADP was incremented by every slave.
+  // For a tracker that addresses frames itself (FrameAddressing::beginFrame).
   void beginFrame(const EcatFrame& frame, bool returned) {
-    if (returned) return;
-    master_.clear();
-    for (std::size_t i = 0; i < frame.count; ++i) {
-      master_.push_back({frame.datagrams[i].command, frame.datagrams[i].adp()});
-    }
+    addressing_.beginFrame(frame, returned, true);
   }
-
   SlaveAddress addressOf(const Datagram& dg, std::size_t index, bool returned, bool paired) const {
-    if (ecat::isConfiguredAddress(dg.command)) return {SlaveTarget::Station, dg.adp()};
-    if (ecat::isBroadcast(dg.command)) return {SlaveTarget::All, 0};
-    if (!ecat::isAutoIncrement(dg.command)) return {};
-    std::uint16_t adp = dg.adp();
-    if (returned) {
-      if (!paired || index >= master_.size() || master_[index].command != dg.command) return {};
-      adp = master_[index].adp;
-    }
-    return {SlaveTarget::Position, static_cast<std::uint16_t>((0x10000u - adp) & 0xFFFFu)};
+    if (returned && !paired && ecat::isAutoIncrement(dg.command)) return {};
+    return addressing_.addressOf(dg, index);
   }
 
   // The station address an APWR/APRW of 0x0010 assigns (taken from the write's data).
@@ -138,10 +179,6 @@ class SlaveDirectory {
   const std::vector<Slave>& slaves() const { return slaves_; }
 
  private:
-  struct MasterDatagram {
-    std::uint8_t command = 0;
-    std::uint16_t adp = 0;
-  };
   template <typename Fresh>
   std::size_t add(Fresh fresh) {
     if (slaves_.size() >= kMaxSlaves) return kNone;
@@ -176,7 +213,7 @@ class SlaveDirectory {
   }
 
   std::vector<Slave> slaves_;
-  std::vector<MasterDatagram> master_;
+  FrameAddressing addressing_;
 };
 
 }  // namespace ncservo
