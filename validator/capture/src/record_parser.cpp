@@ -72,7 +72,14 @@ RecordParser::RecordParser(CaptureBytes& bytes, const RecordFormat& format,
       format_(format),
       statistics_(std::move(statistics)),
       at_(format.pcapng ? 0 : kPcapFileHeader),
-      big_(format.big_endian) {}
+      big_(format.big_endian) {
+  // Versions before 2.3 wrote the two lengths the other way round; 2.3 did either (sf-pcap.c).
+  if (format.version_major == 543 || (format.version_major == 2 && format.version_minor < 3)) {
+    lengths_ = Lengths::Swapped;
+  } else if (format.version_major == 2 && format.version_minor == 3) {
+    lengths_ = Lengths::MaybeSwapped;
+  }
+}
 
 RecordParser::Outcome RecordParser::failed(std::string why) {
   error_ = std::move(why);
@@ -113,12 +120,9 @@ RecordParser::Outcome RecordParser::nextPcap(CaptureRecord& record) {
   std::uint32_t captured = load32(head + 8, big);
   std::uint32_t original = load32(head + 12, big);
   if (!format_.nanoseconds) fraction *= 1000;
-  // Versions before 2.3 wrote the two lengths the other way round; 2.3 did either.
-  const bool swapped_lengths =
-      format_.version_major == 543 ||
-      (format_.version_major == 2 &&
-       (format_.version_minor < 3 || (format_.version_minor == 3 && captured > original)));
-  if (swapped_lengths) std::swap(captured, original);
+  if (lengths_ == Lengths::Swapped || (lengths_ == Lengths::MaybeSwapped && captured > original)) {
+    std::swap(captured, original);
+  }
   const std::uint32_t snapshot = format_.snapshot;
   if (captured > kMaxSnaplen) {
     if (captured > snapshot) {

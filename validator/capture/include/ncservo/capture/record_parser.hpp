@@ -99,6 +99,7 @@ class RecordParser {
   StatisticsSink statistics_;
   std::uint64_t at_ = 0;  // the next record's (block's) offset
   bool big_ = false;
+  enum class Lengths : std::uint8_t { Kept, Swapped, MaybeSwapped } lengths_ = Lengths::Kept;
   bool first_interface_ = true;        // the next interface description is the capture's first
   std::vector<Interface> interfaces_;  // of the current section
   // Statistics blocks passed since the last record: counted once a record or the end follows
