@@ -500,7 +500,7 @@ class MappedBytes final : public CaptureBytes {
   // The pages before `offset` leave the process (its resident memory stays flat over a long
   // file); they are still the file's, read again from the page cache if touched.
   void releaseBefore(std::uint64_t offset) {
-    constexpr std::uint64_t kStep = 8 << 20;
+    constexpr std::uint64_t kStep = 1 << 20;
     if (offset < released_ + 2 * kStep) return;
     const std::uint64_t until = (offset - kStep) & ~(kStep - 1);
     madvise(const_cast<std::uint8_t*>(data_) + released_, until - released_, MADV_DONTNEED);
