@@ -319,6 +319,12 @@ std::vector<ParserRow> rows() {
                {{0, 60, 60}, {0, 60, 60}},
                nullptr,
                {12, 15}});
+  r.push_back(
+      {"pcapng_oversized_statistics_block_passed_over",
+       PcapngFile(false).interface().block(5, Bytes(70000, 0)).enhanced(0, 0, 60, 60, 60).w.out,
+       pcapngFormat(false),
+       {{0, 60, 60}},
+       nullptr});
   r.push_back({"pcapng_new_section_new_interfaces",
                PcapngFile(false)
                    .interface()

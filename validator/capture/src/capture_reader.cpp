@@ -452,7 +452,8 @@ class StreamBytes final : public CaptureBytes {
 
  protected:
   void extend(std::uint64_t offset, std::size_t n) override {
-    if (offset > base_) {  // what is before `offset` was read: keep only the rest
+    if (offset < base_) return;  // gone (the parser only reads forward)
+    if (offset > base_) {        // what is before `offset` was read: keep only the rest
       const auto drop = static_cast<std::size_t>(std::min<std::uint64_t>(offset - base_, size_));
       std::memmove(buffer_.data(), buffer_.data() + drop, size_ - drop);
       size_ -= drop;

@@ -44,6 +44,8 @@ constexpr std::size_t kBlockHeader = 8, kBlockTrailer = 4;
 constexpr std::uint32_t kMaxBlock =
     std::max<std::uint32_t>(16 * 1024 * 1024, 8 + 20 + kMaxSnaplen + 131072 + 4);
 constexpr std::uint64_t kNanosecond = 1000000000;
+constexpr std::size_t kMaxStatistics = 1 << 16;
+constexpr std::size_t kMaxPending = 1 << 20;
 
 // pcap's and libpcap's time to nanoseconds as CaptureReader's libpcap path computes it from the
 // pcap_pkthdr (seconds clamped to pcap's unsigned 32-bit range; tv_usec holds nanoseconds).
@@ -259,7 +261,10 @@ RecordParser::Outcome RecordParser::nextPcapng(CaptureRecord& record) {
         continue;
       }
       case kStatisticsBlock: {
-        // Kept with its length and byte order in front, for flushStatistics.
+        // Kept with its length and byte order in front, for flushStatistics. A statistics block is
+        // small: larger ones are passed over, and many between two records are counted at once.
+        if (length > kMaxStatistics) continue;
+        if (pending_statistics_.size() > kMaxPending) flushStatistics();
         const std::size_t was = pending_statistics_.size();
         pending_statistics_.resize(was + 8 + length);
         const std::uint32_t kept = length;
