@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
 # How fast and how small `ncservo validate` is: on a generated 8-axis capture, its frame rate
 # against a bare libpcap loop that only reads the same file (a tiny C program built here) and
-# against stock tshark (no plugin) extracting `ecat.cmd`, all in one run; and its peak memory
-# on a 500,000-frame and a 2,000,000-frame capture.
-# Goals: at least 0.5x the bare loop's frame rate; at least 30x tshark's frame rate;
-#        peak RSS under 32 MiB for 500,000 frames and for 2,000,000 frames alike.
+# against stock tshark (no plugin) extracting `ecat.cmd`, all in one run; the same against the bare
+# loop on the same capture written as pcapng (libpcap reads both); and its peak memory on a
+# 500,000-frame and a 2,000,000-frame capture.
+# Goals: at least 1.0x the bare loop's frame rate, for pcap and for pcapng; at least 30x tshark's
+#        frame rate; peak RSS under 32 MiB for 500,000 frames and for 2,000,000 frames alike.
 #
 # Usage: tests/bench/validate_ratio.sh [BUILD_DIR]     (default: the repository's build/)
 # Env:   NCSERVO_BENCH_CYCLES        cycles of the main capture (default 250000 = 500,000 frames)
 #        NCSERVO_BENCH_LARGE         0 skips the large capture (default 1)
+#        NCSERVO_BENCH_PCAPNG        0 skips the pcapng capture (default 1)
+#        NCSERVO_CAPTURE_READER      libpcap: ncservo reads every record through libpcap, as before
+#                                    its in-place reader (docs/benchmarks.md "Reading captures")
 #        NCSERVO_BENCH_LARGE_CYCLES  cycles of the large capture (default 1000000 = 2,000,000 frames)
 #        NCSERVO_BENCH_TSHARK_FRAMES tshark reads only this many first frames, 0 = all (default 0);
 #                                    its rate then includes its start-up (about 0.3 s) over fewer frames
@@ -31,13 +35,14 @@ source "$(dirname "$0")/lib.sh"
 
 cycles=${NCSERVO_BENCH_CYCLES:-250000}
 large=${NCSERVO_BENCH_LARGE:-1}
+pcapng=${NCSERVO_BENCH_PCAPNG:-1}
 large_cycles=${NCSERVO_BENCH_LARGE_CYCLES:-1000000}
 tshark_frames=${NCSERVO_BENCH_TSHARK_FRAMES:-0}
 runs=${NCSERVO_BENCH_RUNS:-3}
 default_cmd="validate --format json --output /dev/null"
 read -r -a ncservo_args <<<"${NCSERVO_BENCH_CMD:-$default_cmd}"
 runner=$root/tests/tools/tshark-with-plugin.sh
-goal_bare=0.5 goal_tshark=30 goal_rss_mib=32
+goal_bare=1.0 goal_tshark=30 goal_rss_mib=32
 
 fail() { echo "validate_ratio: $*" >&2; exit 1; }
 
@@ -205,15 +210,15 @@ bench() {
   for _ in $(seq "$runs"); do once "$name" "$ok" "$@"; done
   row "$name" "$frames"
 }
-# against_bare CAPTURE FRAMES: the bare loop and ncservo take turns, so that a change in the
-# machine's load falls on both alike
+# against_bare CAPTURE FRAMES [SUFFIX]: the bare loop and ncservo take turns, so that a change in
+# the machine's load falls on both alike; SUFFIX tells the rows of another file format apart
 against_bare() {
   for _ in $(seq "$runs"); do
-    once "$bare_name" 0 "$tmp/bare_loop" "$1"
-    once "$ncservo_name" "$ncservo_ok" "$ncservo" "${ncservo_args[@]}" "$1"
+    once "$bare_name${3:-}" 0 "$tmp/bare_loop" "$1"
+    once "$ncservo_name${3:-}" "$ncservo_ok" "$ncservo" "${ncservo_args[@]}" "$1"
   done
-  row "$bare_name" "$2"
-  row "$ncservo_name" "$2"
+  row "$bare_name${3:-}" "$2"
+  row "$ncservo_name${3:-}" "$2"
 }
 
 # rate NAME FRAMES: frames per second of that row
@@ -224,16 +229,16 @@ rss_mib() {
   awk -F'\t' -v n="$1" -v f="$2" '$1 == n && $2 == f { printf "%.1f", $4 / 1024 }' "$tmp/table"
 }
 
-# capture CYCLES FILE: generates it, prints its size
+# capture CYCLES FILE [FORMAT]: generates it (pcap, or FORMAT), prints its size
 capture() {
   local start end enable_by=$(($1 / 10 < 2048 ? $1 / 10 : 2048))
   start=$(date +%s)
   python3 "$root/tests/tools/gen_capture.py" --axes 8 --cycles "$1" --seed 3 --enable-by "$enable_by" \
-    -o "$2" ||
+    --format "${3:-pcap}" -o "$2" ||
     fail "gen_capture.py --cycles $1 failed"
   chmod a+r "$2"
   end=$(date +%s)
-  echo "capture: $((2 * $1)) frames, 8 axes, $(($(stat -c %s "$2") / 1000000)) MB," \
+  echo "capture: $((2 * $1)) frames, 8 axes, ${3:-pcap}, $(($(stat -c %s "$2") / 1000000)) MB," \
     "generated in $((end - start)) s"
 }
 
@@ -268,6 +273,14 @@ else
 fi
 rm -f "$cap"
 
+if [ "$pcapng" != 0 ]; then
+  cap=$tmp/main.pcapng
+  capture "$cycles" "$cap" pcapng
+  check_count "$cap" "$frames"
+  against_bare "$cap" "$frames" " (pcapng)"
+  rm -f "$cap"
+fi
+
 if [ "$large" != 0 ]; then
   large_frames=$((2 * large_cycles))
   cap=$tmp/large.pcap
@@ -290,11 +303,11 @@ echo "goals ($ncservo_name):"
 verdict() { # verdict CONDITION(awk) -> PASS or MISS
   if awk "BEGIN { exit !($1) }"; then echo PASS; else echo MISS; fi
 }
-# paired_line LABEL FRAMES GOAL: the bare loop's time over ncservo's, run pair by run pair (they
-# took turns), the median of those ratios, with the lowest and highest
+# paired_line LABEL FRAMES GOAL [SUFFIX]: the bare loop's time over ncservo's, run pair by run pair
+# (they took turns), the median of those ratios, with the lowest and highest
 paired_line() {
   local r
-  r=$(awk -F'\t' -v f="$2" -v bare="$bare_name" -v nc="$ncservo_name" '
+  r=$(awk -F'\t' -v f="$2" -v bare="$bare_name${4:-}" -v nc="$ncservo_name${4:-}" '
     $2 == f && $1 == bare { nb = split($5, b, " ") }
     $2 == f && $1 == nc { split($5, n, " ") }
     END {
@@ -320,6 +333,10 @@ rss_line() { # rss_line FRAMES
     "$(verdict "$m < $goal_rss_mib")"
 }
 paired_line "frame rate / bare loop's, $frames frames (median)" "$frames" "$goal_bare"
+if [ "$pcapng" != 0 ]; then
+  paired_line "frame rate / bare loop's, pcapng, $frames frames (median)" "$frames" "$goal_bare" \
+    " (pcapng)"
+fi
 if [ "$large" != 0 ]; then
   paired_line "frame rate / bare loop's, $large_frames frames (median)" "$large_frames" \
     "$goal_bare"

@@ -3,20 +3,24 @@
 #include <arpa/inet.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <isa-l/igzip_lib.h>
 #include <pcap/pcap.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <optional>
 #include <vector>
+
+#include "ncservo/capture/record_parser.hpp"
 
 namespace ncservo {
 
@@ -220,14 +224,13 @@ class DecompressedStream {
     std::memcpy(input_.get(), head, head_size);
     input_end_ = head_size;
     if (compression_ == Compression::Gzip) {
-      // 16 + MAX_WBITS: a gzip wrapper, not zlib's (zlib.h, inflateInit2).
-      zlib_ready_ = inflateInit2(&zlib_, 16 + MAX_WBITS) == Z_OK;
+      // ISA-L's igzip inflates gzip twice as fast as zlib (docs/benchmarks.md "Reading captures").
+      gzip_ = std::make_unique<inflate_state>();
     } else if (compression_ == Compression::Zstd) {
       zstd_ = ZSTD_createDStream();
     }
   }
   ~DecompressedStream() {
-    if (zlib_ready_) inflateEnd(&zlib_);
     if (zstd_ != nullptr) ZSTD_freeDStream(zstd_);
   }
   DecompressedStream(const DecompressedStream&) = delete;
@@ -252,6 +255,18 @@ class DecompressedStream {
     const ssize_t got = decodeInto(ahead_.data(), size);
     ahead_.resize(got > 0 ? static_cast<std::size_t>(got) : 0);
     return ahead_;
+  }
+
+  // The stream's next bytes, decoded into `out` (at most `size`); 0 at the end, -1 on damage.
+  ssize_t readInto(std::uint8_t* out, std::size_t size) {
+    return read(reinterpret_cast<char*>(out), size);
+  }
+
+  // Bytes already read from here that reads give again first (the in-place reader's window,
+  // when the capture goes to libpcap after all).
+  void unread(const std::uint8_t* data, std::size_t size) {
+    ahead_.assign(reinterpret_cast<const char*>(data), size);
+    ahead_pos_ = 0;
   }
 
   // What went wrong, if reading stopped before the end of the compressed data.
@@ -336,26 +351,44 @@ class DecompressedStream {
 
   std::size_t inflateSome(const std::uint8_t* in, std::size_t available, std::uint8_t* out,
                           std::size_t size) {
-    if (!zlib_ready_) {
-      error_ = "cannot start the gzip decoder";
-      return 0;
+    // A gzip file may hold several members: each begins with a fresh state.
+    if (!inside_frame_) {
+      isal_inflate_init(gzip_.get());
+      gzip_->crc_flag = ISAL_GZIP;
     }
-    if (!inside_frame_) inflateReset(&zlib_);  // a gzip file may hold several members
-    zlib_.next_in = const_cast<Bytef*>(in);
-    zlib_.avail_in = static_cast<uInt>(available);
-    zlib_.next_out = out;
-    zlib_.avail_out = static_cast<uInt>(std::min<std::size_t>(size, 1u << 30));
-    const int rc = inflate(&zlib_, Z_NO_FLUSH);
-    input_pos_ += available - zlib_.avail_in;
-    const std::size_t written = static_cast<std::size_t>(zlib_.next_out - out);
-    if (rc == Z_STREAM_END) {
-      inside_frame_ = false;
-    } else if (rc == Z_OK || rc == Z_BUF_ERROR) {
-      inside_frame_ = true;
+    gzip_->next_in = const_cast<std::uint8_t*>(in);
+    gzip_->avail_in = static_cast<std::uint32_t>(std::min<std::size_t>(available, 1u << 30));
+    gzip_->next_out = out;
+    gzip_->avail_out = static_cast<std::uint32_t>(std::min<std::size_t>(size, 1u << 30));
+    const int rc = isal_inflate(gzip_.get());
+    input_pos_ += static_cast<std::size_t>(gzip_->next_in - in);
+    const std::size_t written = static_cast<std::size_t>(gzip_->next_out - out);
+    if (rc < 0) {
+      error_ = fmt::format("corrupt gzip data ({})", isalError(rc));
     } else {
-      error_ = fmt::format("corrupt gzip data ({})", zlib_.msg != nullptr ? zlib_.msg : zError(rc));
+      inside_frame_ = gzip_->block_state != ISAL_BLOCK_FINISH;
     }
     return written;
+  }
+
+  // ISA-L's errors in zlib's words (igzip_lib.h).
+  static const char* isalError(int rc) {
+    switch (rc) {
+      case ISAL_INVALID_BLOCK:
+        return "invalid block type";
+      case ISAL_INVALID_SYMBOL:
+        return "invalid code";
+      case ISAL_INVALID_LOOKBACK:
+        return "invalid distance too far back";
+      case ISAL_INVALID_WRAPPER:
+        return "incorrect header check";
+      case ISAL_UNSUPPORTED_METHOD:
+        return "unknown compression method";
+      case ISAL_INCORRECT_CHECKSUM:
+        return "incorrect data check";
+      default:
+        return "data error";
+    }
   }
 
   std::size_t zstdSome(const std::uint8_t* in, std::size_t available, std::uint8_t* out,
@@ -382,9 +415,8 @@ class DecompressedStream {
   std::unique_ptr<char[]> output_;  // the FILE's buffer
   std::size_t input_pos_ = 0;
   std::size_t input_end_ = 0;
-  bool inside_frame_ = false;  // a compressed frame or member is begun and not ended
-  z_stream zlib_{};
-  bool zlib_ready_ = false;
+  bool inside_frame_ = false;            // a compressed frame or member is begun and not ended
+  std::unique_ptr<inflate_state> gzip_;  // ISA-L's, large (about 40 KiB): on the heap
   ZSTD_DStream* zstd_ = nullptr;
   std::optional<std::string> error_;
   std::string ahead_;  // peek()'s bytes
@@ -392,9 +424,141 @@ class DecompressedStream {
   std::optional<PcapngBlockWalker> walker_;
 };
 
+namespace {
+
+// NCSERVO_CAPTURE_READER=libpcap: every record through libpcap, the reference the in-place reader
+// is checked against (docs/benchmarks.md "Reading captures").
+bool libpcapForced() {
+  const char* value = std::getenv("NCSERVO_CAPTURE_READER");
+  return value != nullptr && std::strcmp(value, "libpcap") == 0;
+}
+
+// A decompressed (or piped) capture in one large buffer that moves forward as it is read: the
+// record parser reads records in it, and a record's bytes stay until the next one is asked for.
+class StreamBytes final : public CaptureBytes {
+ public:
+  // 256 KiB: large enough that each call into the decoder does much work, small enough that the
+  // bytes decoded are still in the core's cache when they are parsed.
+  static constexpr std::size_t kWindowSize = 1 << 18;
+
+  explicit StreamBytes(DecompressedStream& stream) : stream_(stream), buffer_(kWindowSize) {
+    data_ = buffer_.data();
+  }
+
+  // The window from the capture's start, filled as far as the stream gives.
+  void fill() { extend(0, buffer_.size()); }
+  const std::uint8_t* data() const { return data_; }
+  std::size_t size() const { return size_; }
+
+ protected:
+  void extend(std::uint64_t offset, std::size_t n) override {
+    if (offset < base_) return;  // gone (the parser only reads forward)
+    if (offset > base_) {        // what is before `offset` was read: keep only the rest
+      const auto drop = static_cast<std::size_t>(std::min<std::uint64_t>(offset - base_, size_));
+      std::memmove(buffer_.data(), buffer_.data() + drop, size_ - drop);
+      size_ -= drop;
+      base_ += drop;
+    }
+    const std::size_t want = static_cast<std::size_t>(offset - base_) + n;
+    // A block larger than the window (pcapng allows up to 16 MiB, the parser checks first).
+    if (want > buffer_.size()) buffer_.resize(want);
+    data_ = buffer_.data();
+    while (size_ < want && !ended_) {
+      const ssize_t got = stream_.readInto(buffer_.data() + size_, buffer_.size() - size_);
+      if (got <= 0) {
+        ended_ = true;
+      } else {
+        size_ += static_cast<std::size_t>(got);
+      }
+    }
+  }
+
+ private:
+  DecompressedStream& stream_;
+  std::vector<std::uint8_t> buffer_;
+  bool ended_ = false;
+};
+
+}  // namespace
+
+// A plain capture file mapped into memory: records are read where they lie.
+class MappedBytes final : public CaptureBytes {
+ public:
+  static std::unique_ptr<MappedBytes> map(int fd) {
+    struct stat info {};
+    if (fstat(fd, &info) != 0 || !S_ISREG(info.st_mode) || info.st_size <= 0) return nullptr;
+    const auto size = static_cast<std::size_t>(info.st_size);
+    void* at = mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (at == MAP_FAILED) return nullptr;
+    madvise(at, size, MADV_SEQUENTIAL);
+    return std::unique_ptr<MappedBytes>(
+        new MappedBytes(static_cast<const std::uint8_t*>(at), size));
+  }
+  ~MappedBytes() override { munmap(const_cast<std::uint8_t*>(data_), size_); }
+  MappedBytes(const MappedBytes&) = delete;
+  MappedBytes& operator=(const MappedBytes&) = delete;
+
+  // The pages before `offset` leave the process (its resident memory stays flat over a long
+  // file); they are still the file's, read again from the page cache if touched.
+  void releaseBefore(std::uint64_t offset) {
+    constexpr std::uint64_t kStep = 1 << 20;
+    if (offset < released_ + 2 * kStep) return;
+    const std::uint64_t until = (offset - kStep) & ~(kStep - 1);
+    madvise(const_cast<std::uint8_t*>(data_) + released_, until - released_, MADV_DONTNEED);
+    released_ = until;
+  }
+
+ protected:
+  void extend(std::uint64_t /*offset*/, std::size_t /*n*/) override {}
+
+ private:
+  MappedBytes(const std::uint8_t* data, std::size_t size) {
+    data_ = data;
+    size_ = size;
+  }
+  std::uint64_t released_ = 0;
+};
+
+namespace {
+
+// What libpcap read of the file header, for the record parser; nullopt for what it does not
+// read (the patched-pcap magics' longer record header; a byte-swapped Linux cooked capture,
+// whose CAN headers libpcap swaps).
+std::optional<RecordFormat> inPlaceFormat(::pcap* handle, const std::uint8_t* head,
+                                          std::size_t size) {
+  RecordFormat format;
+  format.pcapng = size >= 4 && load32(head, false) == kSectionHeaderBlock;
+  const bool swapped = pcap_is_swapped(handle) == 1;
+  format.big_endian = (htonl(1) == 1) != swapped;
+  format.dlt = pcap_datalink(handle);
+  format.snapshot = static_cast<std::uint32_t>(pcap_snapshot(handle));
+  format.version_major = pcap_major_version(handle);
+  format.version_minor = pcap_minor_version(handle);
+  if (swapped && format.dlt != DLT_EN10MB) return std::nullopt;
+  if (!format.pcapng) {
+    if (size < 4) return std::nullopt;
+    const std::uint32_t magic = load32(head, format.big_endian);
+    if (magic != kPcapMicroMagic && magic != kPcapNanoMagic) return std::nullopt;
+    format.nanoseconds = magic == kPcapNanoMagic;
+  }
+  return format;
+}
+
+}  // namespace
+
 CaptureReader::~CaptureReader() {
+  parser_.reset();
+  bytes_.reset();
   if (handle_ != nullptr) pcap_close(handle_);
   if (source_ != nullptr && source_ != stdin) std::fclose(source_);
+}
+
+void CaptureReader::readInPlace(std::unique_ptr<CaptureBytes> bytes, const RecordFormat& format) {
+  bytes_ = std::move(bytes);
+  parser_ = std::make_unique<RecordParser>(
+      *bytes_, format, [this](const std::uint8_t* block, std::size_t length, bool big) {
+        readStatistics(block, length, big);
+      });
 }
 
 Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& path) {
@@ -431,46 +595,95 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
   std::uint8_t head[kHeadSize] = {};
   const std::size_t head_size = std::fread(head, 1, sizeof head, file);
   reader->compression_ = sniff(head, head_size);
+  const bool in_place = !libpcapForced();
   std::FILE* pcap_file = file;
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
   // A plain file goes to libpcap as it is; anything else (compressed, or a pipe that cannot
   // be rewound past the bytes just read) through a DecompressedStream.
   if (reader->compression_ != Compression::None || std::fseek(file, 0, SEEK_SET) != 0) {
     reader->stream_ =
         std::make_unique<DecompressedStream>(file, reader->compression_, head, head_size);
-    const std::string& ahead = reader->stream_->peek(kHeadSize);
-    reader->timestamp_digits_ =
-        ncservo::timestampDigits(reinterpret_cast<const std::uint8_t*>(ahead.data()), ahead.size());
-    reader->pcapng_ = false;  // records are not located in a stream
-    reader->pcapng_format_ =
-        ahead.size() >= 4 &&
-        load32(reinterpret_cast<const std::uint8_t*>(ahead.data()), false) == kSectionHeaderBlock;
-    // Its interface statistics as they pass, read as a plain file's are (docs/timing.md).
-    if (reader->pcapng_format_) {
-      CaptureReader* self = reader.get();
-      reader->stream_->followBlocks([self](const std::uint8_t* block, std::size_t length,
-                                           bool big) { self->readStatistics(block, length, big); });
+    std::unique_ptr<StreamBytes> window;
+    const std::uint8_t* ahead = nullptr;
+    std::size_t ahead_size = 0;
+    if (in_place) {
+      window = std::make_unique<StreamBytes>(*reader->stream_);
+      window->fill();
+      ahead = window->data();
+      ahead_size = window->size();
+    } else {
+      const std::string& peeked = reader->stream_->peek(kHeadSize);
+      ahead = reinterpret_cast<const std::uint8_t*>(peeked.data());
+      ahead_size = peeked.size();
     }
-    pcap_file = reader->stream_->file();
-    if (pcap_file == nullptr) return cannot(std::strerror(errno));
+    reader->timestamp_digits_ = ncservo::timestampDigits(ahead, ahead_size);
+    reader->pcapng_ = false;  // records are not located in a stream
+    reader->pcapng_format_ = ahead_size >= 4 && load32(ahead, false) == kSectionHeaderBlock;
+    if (window) {
+      // libpcap reads the file header from the window's first bytes; the records are read in
+      // the window. Anything it cannot open there goes to libpcap whole, below, for its words.
+      std::FILE* header = window->size() > 0 ? fmemopen(const_cast<std::uint8_t*>(window->data()),
+                                                        window->size(), "rb")
+                                             : nullptr;
+      ::pcap* checked = header != nullptr ? pcap_fopen_offline_with_tstamp_precision(
+                                                header, PCAP_TSTAMP_PRECISION_NANO, errbuf)
+                                          : nullptr;
+      std::optional<RecordFormat> format;
+      if (checked != nullptr) {
+        format = inPlaceFormat(checked, window->data(), window->size());
+        reader->dlt_ = pcap_datalink(checked);
+        pcap_close(checked);  // and its FILE
+      } else if (header != nullptr) {
+        std::fclose(header);
+      }
+      if (format) {
+        reader->readInPlace(std::move(window), *format);
+      } else {
+        reader->stream_->unread(window->data(), window->size());
+      }
+    }
+    if (!reader->parser_) {
+      // Its interface statistics as they pass, read as a plain file's are (docs/timing.md).
+      if (reader->pcapng_format_) {
+        CaptureReader* self = reader.get();
+        reader->stream_->followBlocks(
+            [self](const std::uint8_t* block, std::size_t length, bool big) {
+              self->readStatistics(block, length, big);
+            });
+      }
+      pcap_file = reader->stream_->file();
+      if (pcap_file == nullptr) return cannot(std::strerror(errno));
+    }
   } else {
     reader->timestamp_digits_ = ncservo::timestampDigits(head, head_size);
     reader->pcapng_ = head_size >= 4 && load32(head, false) == kSectionHeaderBlock;
     reader->pcapng_format_ = reader->pcapng_;
     reader->source_ = nullptr;  // libpcap closes it with its handle
   }
-  char errbuf[PCAP_ERRBUF_SIZE] = {};
-  reader->handle_ =
-      pcap_fopen_offline_with_tstamp_precision(pcap_file, PCAP_TSTAMP_PRECISION_NANO, errbuf);
-  if (reader->handle_ == nullptr) {
-    if (pcap_file != stdin) std::fclose(pcap_file);  // the raw file under a stream: by source_
-    if (reader->stream_ && reader->stream_->error()) return cannot(*reader->stream_->error());
-    if (reader->compression_ != Compression::None) {
-      return cannot(fmt::format("{} (after {} decompression)", errbuf,
-                                compressionName(reader->compression_)));
+  if (!reader->parser_) {
+    reader->handle_ =
+        pcap_fopen_offline_with_tstamp_precision(pcap_file, PCAP_TSTAMP_PRECISION_NANO, errbuf);
+    if (reader->handle_ == nullptr) {
+      if (pcap_file != stdin) std::fclose(pcap_file);  // the raw file under a stream: by source_
+      if (reader->stream_ && reader->stream_->error()) return cannot(*reader->stream_->error());
+      if (reader->compression_ != Compression::None) {
+        return cannot(fmt::format("{} (after {} decompression)", errbuf,
+                                  compressionName(reader->compression_)));
+      }
+      return cannot(errbuf);
     }
-    return cannot(errbuf);
+    reader->dlt_ = pcap_datalink(reader->handle_);
+    // A plain file libpcap opened: its records are read where they lie, in the mapped file.
+    if (in_place && !reader->stream_) {
+      std::optional<RecordFormat> format = inPlaceFormat(reader->handle_, head, head_size);
+      std::unique_ptr<MappedBytes> mapped;
+      if (format) mapped = MappedBytes::map(fileno(pcap_file));
+      if (mapped) {
+        reader->mapped_ = mapped.get();
+        reader->readInPlace(std::move(mapped), *format);
+      }
+    }
   }
-  reader->dlt_ = pcap_datalink(reader->handle_);
   reader->link_ = linkTypeFromDlt(reader->dlt_);
   if (reader->link_ == LinkType::Unsupported) {
     const char* dlt_name = pcap_datalink_val_to_name(reader->dlt_);
@@ -589,7 +802,27 @@ std::optional<RecordSpan> CaptureReader::storedSpan() {
   return RecordSpan{at - length, length};
 }
 
+Result<bool> CaptureReader::nextInPlace(CaptureRecord& record) {
+  switch (parser_->next(record)) {
+    case RecordParser::Outcome::Record:
+      record.frame = ++frames_;
+      if (stream_) {
+        record.stored.reset();
+      } else if (mapped_ != nullptr) {
+        mapped_->releaseBefore(record.stored->offset);
+      }
+      return true;
+    case RecordParser::Outcome::End:
+      if (stream_ && stream_->error()) return fail(failure(frames_ + 1, ""));
+      return false;
+    case RecordParser::Outcome::Failed:
+      break;
+  }
+  return fail(failure(frames_ + 1, parser_->error().c_str()));
+}
+
 Result<bool> CaptureReader::next(CaptureRecord& record) {
+  if (parser_) return nextInPlace(record);
   pcap_pkthdr* header = nullptr;
   const u_char* data = nullptr;
   const int rc = pcap_next_ex(handle_, &header, &data);

@@ -39,6 +39,10 @@ struct CaptureDrops {
 std::string describeCaptureDrops(const CaptureDrops& drops);
 
 class DecompressedStream;  // the decompressing source libpcap reads through (capture_reader.cpp)
+class CaptureBytes;
+class MappedBytes;
+class RecordParser;
+struct RecordFormat;
 
 class CaptureReader {
  public:
@@ -52,6 +56,9 @@ class CaptureReader {
   // Fills `record` with the next record and returns true; false at the end of the capture.
   // An error names the file and the frame that could not be read; the records before it
   // were good.
+  // The record's bytes stay valid until the next call. A plain file's records are read in place
+  // in the mapped file (docs/benchmarks.md "Reading captures"): their bytes stay valid as long
+  // as the reader (pages released behind the reading are read again from the file if touched).
   Result<bool> next(CaptureRecord& record);
 
   LinkType link() const { return link_; }
@@ -74,7 +81,14 @@ class CaptureReader {
   // One interface statistics block, whole, in its section's byte order.
   void readStatistics(const std::uint8_t* block, std::size_t length, bool big);
 
+  Result<bool> nextInPlace(CaptureRecord& record);
+  void readInPlace(std::unique_ptr<CaptureBytes> bytes, const RecordFormat& format);
+
   static constexpr std::size_t kReadBufferSize = 1 << 16;
+  // In place (without libpcap's copies): the capture's bytes and the parser reading them.
+  std::unique_ptr<CaptureBytes> bytes_;
+  std::unique_ptr<RecordParser> parser_;
+  MappedBytes* mapped_ = nullptr;               // bytes_, when it is the mapped file
   std::unique_ptr<char[]> buffer_;              // the FILE's buffer: outlives the handle
   std::unique_ptr<DecompressedStream> stream_;  // outlives the handle that reads it
   std::FILE* source_ = nullptr;                 // the file opened here, closed here
