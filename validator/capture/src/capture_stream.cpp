@@ -2,7 +2,16 @@
 
 namespace ncservo {
 
-Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop) {
+Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop,
+                     CaptureThreads threads) {
+  if (threads == CaptureThreads::Two) {
+    return streamOnTwoThreads(
+        [&reader](CaptureRecord& record, LinkType& link) {
+          link = reader.link();
+          return reader.next(record);
+        },
+        pipeline, stop);
+  }
   CaptureRecord record;
   Result<bool> status;
   while ((status = reader.next(record)) && *status) {
