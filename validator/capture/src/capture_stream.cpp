@@ -7,8 +7,9 @@ Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamSto
   if (threads == CaptureThreads::Two) {
     return streamOnTwoThreads(
         [&reader](CaptureRecord& record, LinkType& link) {
-          link = reader.link();
-          return reader.next(record);
+          Result<bool> read = reader.next(record);
+          link = reader.link();  // as the loop below asks it, after the record
+          return read;
         },
         pipeline, stop);
   }
