@@ -5,7 +5,7 @@
 # standard error and the exit status; decode's CSV and diff alike. Over the bundled captures, the
 # real ones (when present), hostile files (tests/tools/hostile_captures.py), a long capture of
 # many batches, compressed, cut mid-record (the read error after the frames before it), standard
-# input, a time window, and several captures with --jobs.
+# input, a time window, and several captures with --jobs; decode's VCD, --layout and --timing.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 cd "$WORK"
@@ -79,8 +79,12 @@ for mode in off on; do
   "$NCSERVO" diff --read-thread "$mode" "$SRC/captures/faults-4axis.pcap" long.pcapng \
     >"diff.$mode.out" 2>"diff.$mode.err" || rc=$?
   echo "$rc" >"diff.$mode.rc"
+  "$NCSERVO" decode --read-thread "$mode" --format vcd long.pcapng >"vcd.$mode.out" 2>"vcd.$mode.err"
+  "$NCSERVO" decode --read-thread "$mode" --layout long.pcapng >"layout.$mode.out" 2>"layout.$mode.err"
+  "$NCSERVO" decode --read-thread "$mode" --timing --from 1 long.pcapng >"timing.$mode.out" \
+    2>"timing.$mode.err"
 done
-for name in stdin window jobs1 jobs2 diff; do same "$name"; done
+for name in stdin window jobs1 jobs2 diff vcd layout timing; do same "$name"; done
 for f in jobs1.off.*; do
   cmp -s "$f" "${f/jobs1/jobs2}" || fail "--jobs 2 differs from --jobs 1: ${f#jobs1.off.}"
 done
