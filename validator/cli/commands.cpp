@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <string_view>
+#include <thread>
 
 #include "ncservo/base/number.hpp"
 #include "ncservo/base/text.hpp"
@@ -28,6 +29,21 @@ void addTimestampsOption(CLI::App& command, std::string& timestamps) {
                   "capture, probe or auto (auto: an ESL probe's when the first EtherCAT frame "
                   "has one)")
       ->check(oneOf({"capture", "probe", "auto"}));
+}
+
+void addReadThreadOption(CLI::App& command, std::string& read_thread) {
+  command
+      .add_option("--read-thread", read_thread,
+                  "on, off or auto: read and walk the frames on a thread of their own while "
+                  "another judges them (auto: when a core is free for it; docs/cli.md#two-threads)")
+      ->check(oneOf({"auto", "on", "off"}));
+}
+
+CaptureThreads captureThreads(const std::string& read_thread, unsigned captures, unsigned busy) {
+  if (read_thread == "on") return CaptureThreads::Two;
+  if (read_thread == "off") return CaptureThreads::One;
+  const unsigned cores = std::thread::hardware_concurrency();  // 0: unknown, taken as one
+  return captures * (busy + 1) <= cores ? CaptureThreads::Two : CaptureThreads::One;
 }
 
 void addFailOnOption(CLI::App& command, std::string& fail_on) {

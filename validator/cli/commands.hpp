@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ncservo/base/error.hpp"
+#include "ncservo/capture/capture_stream.hpp"
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/decoder.hpp"
 #include "ncservo/layout/eni.hpp"
@@ -28,6 +29,13 @@ using Handler = std::function<int()>;
 
 // --timestamps (docs/protocol.md §8: a probe's clock or the capturing PC's).
 void addTimestampsOption(CLI::App& command, std::string& timestamps);
+
+// --read-thread on|off|auto (docs/cli.md#two-threads): whether a capture is read and walked on a
+// thread of its own while another judges it.
+void addReadThreadOption(CLI::App& command, std::string& read_thread);
+// The threads of each of `captures` captures read at once, each keeping `busy` threads busy
+// without the reading thread: auto adds it when the cores hold one more thread per capture.
+CaptureThreads captureThreads(const std::string& read_thread, unsigned captures, unsigned busy = 1);
 
 // --fail-on (docs/cli.md#exit-status): the least severity whose findings make the exit status 1,
 // or never; and what it sets in the report's policy.

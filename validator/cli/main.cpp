@@ -256,6 +256,7 @@ struct DecodeArgs {
   std::string timestamps = "auto";
   WindowArgs window;
   bool timing = false;  // the timing block on standard error at the end
+  std::string read_thread = "auto";
 };
 
 // What every decode format reads and writes.
@@ -328,7 +329,8 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     session->onLayoutOnlyFrame(f.frame, f.bytes);
   };
   pipeline.setSinks({start, decode, layout_only, nullptr});
-  const Status status = streamCapture(*reader, pipeline);
+  const Status status =
+      streamCapture(*reader, pipeline, nullptr, cli::captureThreads(args.read_thread, 1));
   const CaptureRun& run = pipeline.run();
   const FrameClock& clock = pipeline.clock();
   cycles.finish(rows);
@@ -395,7 +397,9 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
     if (written) written = waveforms.findings(frame_ns, found);
   };
   pipeline.setSinks({nullptr, decode, nullptr, findings});
-  const Status status = streamCapture(reader, pipeline);
+  // The VCD's text writer keeps a second thread busy already.
+  const Status status =
+      streamCapture(reader, pipeline, nullptr, cli::captureThreads(args.read_thread, 1, 2));
   const Validator& validator = *pipeline.validator();
   const CaptureRun& run = pipeline.run();
   if (written) written = waveforms.finish(end_ns, validator.decoder());
@@ -482,6 +486,7 @@ struct CheckArgs : cli::RuleArgs {
   LayoutArgs layout;
   std::string timestamps = "auto";
   WindowArgs window;
+  std::string read_thread = "auto";
 };
 
 struct ValidateArgs : CheckArgs {
@@ -537,7 +542,7 @@ struct CaptureOutput {
 // 130 when Ctrl-C stopped it (its report unfinished, `frames` the frames read).
 int validateCapture(const std::string& path, const CheckSetup& setup,
                     const cli::ReportWriter& writer, const CaptureOutput& output,
-                    cli::CaptureReport& report) {
+                    cli::CaptureReport& report, CaptureThreads threads) {
   const RuleSettings& settings = setup.settings;
   const TimeWindow& time_window = setup.window;
   report.path = path;
@@ -576,7 +581,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   };
   pipeline.setSinks({start, validate, nullptr, keepFindings});
   StreamStop stop{&cli::ReportWriter::interrupted()};
-  const Status status = streamCapture(*reader, pipeline, &stop);
+  const Status status = streamCapture(*reader, pipeline, &stop, threads);
   const Validator& validator = *pipeline.validator();
   const CaptureRun& run = pipeline.run();
   if (stop.stopped) {  // Ctrl-C: not a report, only where it stopped (docs/cli.md#interrupted)
@@ -759,10 +764,15 @@ int runValidate(const ValidateArgs& o) {
   const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
   int rc = kExitOk;
   const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
-  if (jobs <= 1 || o.captures.size() <= 1) {
+  const bool one_at_a_time = jobs <= 1 || o.captures.size() <= 1;
+  // docs/cli.md#two-threads: the reading threads and --jobs share the cores.
+  const CaptureThreads threads = cli::captureThreads(
+      o.read_thread,
+      one_at_a_time ? 1u : static_cast<unsigned>(std::min<std::size_t>(jobs, o.captures.size())));
+  if (one_at_a_time) {
     for (std::size_t i = 0; i < o.captures.size() && !interrupted; ++i) {
-      statuses[i] =
-          validateCapture(o.captures[i], *setup, **writer, {writer->get(), stderr}, reports[i]);
+      statuses[i] = validateCapture(o.captures[i], *setup, **writer, {writer->get(), stderr},
+                                    reports[i], threads);
     }
   } else {
     struct Validated {
@@ -774,8 +784,8 @@ int runValidate(const ValidateArgs& o) {
       char* buffer = nullptr;
       std::size_t size = 0;
       std::FILE* messages = open_memstream(&buffer, &size);
-      const int status =
-          validateCapture(o.captures[i], *setup, **writer, {nullptr, messages}, reports[i]);
+      const int status = validateCapture(o.captures[i], *setup, **writer, {nullptr, messages},
+                                         reports[i], threads);
       std::fclose(messages);
       Validated validated{status, std::string(buffer, size)};
       std::free(buffer);
@@ -836,7 +846,7 @@ struct DiffSide {
   cli::ReportedCapture capture;
 };
 DiffSide diffSide(const std::string& path, const CheckSetup& setup, const cli::ReportWriter& writer,
-                  const cli::ReportPolicy& policy) {
+                  const cli::ReportPolicy& policy, CaptureThreads threads) {
   if (cli::looksLikeJsonReport(path)) {
     Result<cli::ReportFile> report = cli::loadReportFile(path);
     if (!report) {
@@ -851,7 +861,7 @@ DiffSide diffSide(const std::string& path, const CheckSetup& setup, const cli::R
     return {kExitOk, std::move(report->captures.front())};
   }
   cli::CaptureReport report;
-  const int rc = validateCapture(path, setup, writer, {nullptr, stderr}, report);
+  const int rc = validateCapture(path, setup, writer, {nullptr, stderr}, report, threads);
   if (rc == kExitCapture) return {rc, {}};
   return {kExitOk, cli::reportedCaptureOf(report, cli::verdictOf(policy, report))};
 }
@@ -876,8 +886,10 @@ int runDiff(const DiffArgs& o) {
   }
   // No report is written: the captures' findings are kept for the comparison.
   auto writer = cli::ReportWriter::open({}, policy);
-  DiffSide base = diffSide(o.base, *setup, **writer, policy);
-  DiffSide next = base.rc == kExitOk ? diffSide(o.next, *setup, **writer, policy) : DiffSide{};
+  const CaptureThreads threads = cli::captureThreads(o.check.read_thread, 1);
+  DiffSide base = diffSide(o.base, *setup, **writer, policy, threads);
+  DiffSide next =
+      base.rc == kExitOk ? diffSide(o.next, *setup, **writer, policy, threads) : DiffSide{};
   int rc = base.rc != kExitOk ? base.rc : next.rc;
   if (rc == kExitOk) {
     cli::CaptureDiff diff = cli::diffCaptures(std::move(base.capture), std::move(next.capture));
@@ -1278,6 +1290,7 @@ Handler decodeCommand(CLI::App& command) {
                    "configured, instead of the process data");
   addTimestampsOption(command, args->timestamps);
   addWindowOptions(command, args->window);
+  cli::addReadThreadOption(command, args->read_thread);
   return [args] { return runDecode(*args); };
 }
 
@@ -1309,6 +1322,7 @@ Handler validateCommand(CLI::App& command) {
                   "validate this many captures at once (default: the cores); the output is "
                   "in argument order, as with 1")
       ->check(CLI::Range(1u, 1024u));
+  cli::addReadThreadOption(command, args->read_thread);
   return [args] { return runValidate(*args); };
 }
 
@@ -1324,6 +1338,7 @@ Handler diffCommand(CLI::App& command) {
   cli::addRuleOptions(command, args->check);
   addTimestampsOption(command, args->check.timestamps);
   addWindowOptions(command, args->check.window);
+  cli::addReadThreadOption(command, args->check.read_thread);
   return [args] { return runDiff(*args); };
 }
 

@@ -2,7 +2,17 @@
 
 namespace ncservo {
 
-Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop) {
+Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop,
+                     CaptureThreads threads) {
+  if (threads == CaptureThreads::Two) {
+    return streamOnTwoThreads(
+        [&reader](CaptureRecord& record, LinkType& link) {
+          Result<bool> read = reader.next(record);
+          link = reader.link();  // as the loop below asks it, after the record
+          return read;
+        },
+        pipeline, stop);
+  }
   CaptureRecord record;
   Result<bool> status;
   while ((status = reader.next(record)) && *status) {

@@ -96,17 +96,27 @@ void CapturePipeline::deliverLayoutOnly(std::uint64_t number, std::int64_t time_
 }
 
 void CapturePipeline::onRecord(LinkType link, const CaptureRecord& record) {
+  if (const std::optional<WalkedRecord> walked = walk(link, record, frame_)) {
+    const ByteReader bytes(record.data, record.captured);
+    onWalkedFrame(record.frame, walked->time_ns, link, bytes, frame_, walked->judged);
+  }
+}
+
+std::optional<WalkedRecord> CapturePipeline::walk(LinkType link, const CaptureRecord& record,
+                                                  EcatFrame& frame) {
   if (!run_.first_time_ns) run_.first_time_ns = record.time_ns;
   run_.records = record.frame;
   if (record.captured < record.original && run_.snapped++ == 0) run_.first_snapped = record.frame;
   const ByteReader bytes(record.data, record.captured);
-  walkPacket(link, bytes, frame_);
-  if (frame_.status == WalkStatus::NotEtherCat) return;
-  const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame_.probe);
+  walkPacket(link, bytes, frame);
+  if (frame.status == WalkStatus::NotEtherCat) return std::nullopt;
+  const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame.probe);
   const bool judged = time_window_.contains(time_ns - *run_.first_time_ns);
   run_.in_window += judged ? 1 : 0;
-  if (frame_.status == WalkStatus::NotDatagrams || frame_.status == WalkStatus::BusFault) return;
-  onWalkedFrame(record.frame, time_ns, link, bytes, frame_, judged);
+  if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) {
+    return std::nullopt;
+  }
+  return WalkedRecord{time_ns, judged};
 }
 
 void CapturePipeline::onWalkedFrame(std::uint64_t number, std::int64_t time_ns, LinkType link,

@@ -80,6 +80,13 @@ struct PipelineFrame {
   const ValidatedFrame* judged;  // the validator's placements and states; null without rules
 };
 
+// A record walk() found an EtherCAT frame of process data in: its time by the frame clock, and
+// whether it lies inside the time window.
+struct WalkedRecord {
+  std::int64_t time_ns;
+  bool judged;
+};
+
 class CapturePipeline {
  public:
   struct Sinks {
@@ -101,8 +108,14 @@ class CapturePipeline {
   // Given before the first record or frame.
   void setSinks(Sinks sinks) { sinks_ = std::move(sinks); }
 
-  // One record as read: walked, timed, held in the learning window or delivered.
+  // One record as read: walked, timed, held in the learning window or delivered. The same as
+  // walk(), then onWalkedFrame over the record's bytes when it returned a frame.
   void onRecord(LinkType link, const CaptureRecord& record);
+  // onRecord's first half, which a reading thread runs ahead of the rest (docs/cli.md#two-threads):
+  // the record counted in run(), walked into `frame` and timed by clock(). None when the frame
+  // goes no further (not EtherCAT, not process data, a probe's bus fault). The two halves share
+  // no state but run().first_time_ns, set by the first record, before any frame is delivered.
+  std::optional<WalkedRecord> walk(LinkType link, const CaptureRecord& record, EcatFrame& frame);
   // One frame already walked over `bytes` (any status but NotEtherCat, NotDatagrams and
   // BusFault) and timed, as the plugin's first pass sees it: held or delivered. `judged`:
   // inside the time window.
