@@ -46,7 +46,7 @@ constexpr int kSnapLength = 262144;
 // no immediate mode, so that libpcap takes TPACKET_V3, whose blocks hold the frames packed (in
 // immediate mode, TPACKET_V2 gives every frame a slot of the snap length, and 64 MiB held 255
 // frames); the kernel hands a block over when it is full or kReadTimeoutMs after its first frame.
-constexpr int kKernelBuffer = 20 << 20;  // bytes: 0.7 s of a 32-axis bus at 8 kHz
+constexpr int kKernelBuffer = 16 << 20;  // bytes: 0.55 s of a 32-axis bus at 8 kHz
 constexpr int kReadTimeoutMs = 100;      // the longest a finding waits, and the quiet link's poll
 constexpr auto kStatusPeriod = std::chrono::milliseconds(250);
 constexpr std::size_t kRecorderMemory = 256u << 20;  // bytes of frames the recorder keeps at most

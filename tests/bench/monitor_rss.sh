@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# How much memory `ncservo monitor` holds over a long run: a 4 kHz 8-axis bus (a simulated 10 s
+# soak without a start-up, 8,000 frames/s) replayed in a loop by tcpreplay into one end of a veth
+# pair while the monitor listens on the other, its VmRSS (/proc/PID/status) sampled every
+# NCSERVO_BENCH_INTERVAL seconds. Prints each sample, the peak (VmHWM, which counts the kernel's
+# capture ring mapped into the process) and the growth from a tenth of the run to its end.
+# Goals: peak RSS under 32 MiB; growth over the last nine tenths (9 minutes of 10) under 1 MiB.
+#
+# Usage: tests/bench/monitor_rss.sh [BUILD_DIR]     (default: the repository's build/)
+# Env:   NCSERVO_BENCH_DURATION  seconds of the run (default 600), a multiple of 10
+#        NCSERVO_BENCH_INTERVAL  seconds between samples (default 10)
+# Needs root (veth pair, network namespace), ip and tcpreplay. The replay is paced with
+# `--pps 8000` (tcpreplay's own timing of the capture's time stamps falls behind on a busy
+# machine): the frames evenly spaced, two a cycle, so the cycle is the capture's 250 µs. The
+# goals are reported PASS or MISS; the exit status is 0 whatever they are, 1 when a tool fails.
+set -euo pipefail
+source "$(dirname "$0")/lib.sh"
+
+duration=${NCSERVO_BENCH_DURATION:-600}
+interval=${NCSERVO_BENCH_INTERVAL:-10}
+goal_peak_kib=$((32 * 1024)) goal_growth_kib=1024
+
+fail() { echo "monitor_rss: $*" >&2; exit 1; }
+[ -x "$ncservo" ] || fail "no $ncservo (build the ncservo_cli target first)"
+[ "$(id -u)" = 0 ] || fail "needs root (veth pair, network namespace)"
+command -v tcpreplay >/dev/null || fail "tcpreplay is not installed"
+[ $((duration % 10)) = 0 ] && [ "$duration" -ge 10 ] || fail "NCSERVO_BENCH_DURATION: a multiple of 10"
+
+work=$(mktemp -d)
+ns=ncservo-rss-$$ host=nrss$$a peer=nrss$$b
+cleanup() {
+  [ -n "${monitor:-}" ] && kill "$monitor" 2>/dev/null
+  [ -n "${replay:-}" ] && kill "$replay" 2>/dev/null
+  ip netns del "$ns" 2>/dev/null || true
+  ip link del "$host" 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+ip netns add "$ns"
+ip link add "$host" type veth peer name "$peer" netns "$ns"
+ip link set "$host" up
+ip -n "$ns" link set "$peer" up
+
+"$ncservo" simulate --scenario soak --no-startup --axes 8 --cycle-us 250 --duration 10 --seed 1 \
+  -o "$work/bus.pcap" 2>/dev/null || fail "simulate failed"
+frames=$("$ncservo" validate --fail-on never "$work/bus.pcap" |
+  sed -n 's/^[^:]*: \([0-9]*\) frames.*/\1/p' | head -1)
+loops=$((duration / 10))
+
+"$ncservo" monitor -i "$host" --format jsonl --fail-on never >"$work/live.jsonl" 2>"$work/live.err" &
+monitor=$!
+sleep 1
+ip netns exec "$ns" tcpreplay -q --preload-pcap --pps 8000 --loop "$loops" -i "$peer" \
+  "$work/bus.pcap" >"$work/replay.txt" 2>&1 &
+replay=$!
+
+printf "monitor on a veth pair, %s loops of %s frames (10 s of a 4 kHz 8-axis bus) at 8,000 frames/s (load %s)\n" \
+  "$loops" "$frames" "$(cut -d' ' -f1-3 /proc/loadavg)"
+kib() { sed -n "s/^$1:[[:space:]]*\([0-9]*\) kB/\1/p" "/proc/$monitor/status"; }
+start=$(date +%s)
+samples=()
+while kill -0 "$replay" 2>/dev/null; do
+  sleep "$interval"
+  kill -0 "$monitor" 2>/dev/null || fail "the monitor ended early: $(cat "$work/live.err")"
+  rss=$(kib VmRSS)
+  samples+=("$(($(date +%s) - start)) $rss")
+  printf "%4d s  VmRSS %6d KiB\n" $(($(date +%s) - start)) "$rss"
+done
+peak=$(kib VmHWM)
+wait "$replay" || fail "tcpreplay failed: $(cat "$work/replay.txt")"
+sleep 1
+kill -INT "$monitor"
+wait "$monitor" || true
+monitor=""
+sent=$(sed -n 's/.*Actual: \([0-9]*\) packets.*/\1/p' "$work/replay.txt")
+grep "frames captured" "$work/live.err" | sed 's/^ncservo monitor: //'
+echo "tcpreplay sent $sent frames: $(grep -o 'sent in [0-9.]* seconds' "$work/replay.txt")"
+
+# The growth from the first sample at or after a tenth of the run to the last sample.
+tenth=$((duration / 10))
+from=""
+for s in "${samples[@]}"; do
+  read -r t r <<<"$s"
+  [ -z "$from" ] && [ "$t" -ge "$tenth" ] && from=$r from_t=$t
+done
+[ -n "$from" ] || fail "no sample after ${tenth} s"
+read -r last_t last <<<"${samples[-1]}"
+growth=$((last - from))
+goal() { [ "$1" = 1 ] && echo PASS || echo MISS; }
+printf "peak RSS %d KiB (%.1f MiB): under 32 MiB: %s\n" "$peak" \
+  "$(awk -v k="$peak" 'BEGIN{print k/1024}')" "$(goal $((peak < goal_peak_kib ? 1 : 0)))"
+printf "growth %+d KiB from %d s to %d s: under 1 MiB: %s\n" "$growth" "$from_t" "$last_t" \
+  "$(goal $((growth < goal_growth_kib ? 1 : 0)))"
