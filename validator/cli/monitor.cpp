@@ -42,7 +42,7 @@ namespace {
 constexpr const char* kCaptureFilter =
     "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";
 constexpr int kSnapLength = 262144;
-// The kernel's ring (docs/field.md#monitor), mapped into the process and so part of its memory:
+// The kernel's ring (docs/field.md#how-fast), mapped into the process and so part of its memory:
 // no immediate mode, so that libpcap takes TPACKET_V3, whose blocks hold the frames packed (in
 // immediate mode, TPACKET_V2 gives every frame a slot of the snap length, and 64 MiB held 255
 // frames); the kernel hands a block over when it is full or kReadTimeoutMs after its first frame.
