@@ -81,7 +81,7 @@ monitor=""
 sent=$(sed -n 's/.*Actual: \([0-9]*\) packets.*/\1/p' "$work/replay.txt")
 grep "frames captured" "$work/live.err" | sed 's/^ncservo monitor: //'
 echo "tcpreplay sent $sent frames: $(grep -o 'sent in [0-9.]* seconds' "$work/replay.txt")"
-echo "findings: $(grep -c '"rule"' "$work/live.jsonl" || true) (load $(cut -d' ' -f1-3 /proc/loadavg))"
+echo "findings: $(grep -c '"rule"' "$work/live.jsonl" || true), incidents: $(grep -c '"incident"' "$work/live.jsonl" || true) (load $(cut -d' ' -f1-3 /proc/loadavg))"
 
 # The growth from the first sample at or after a tenth of the run to the last sample.
 tenth=$((duration / 10))
