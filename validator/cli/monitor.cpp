@@ -42,8 +42,12 @@ namespace {
 constexpr const char* kCaptureFilter =
     "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";
 constexpr int kSnapLength = 262144;
-constexpr int kKernelBuffer = 64 << 20;  // bytes: seconds of a busy bus while we are descheduled
-constexpr int kReadTimeoutMs = 100;      // the kernel's buffer hand-over, for a quiet link
+// The kernel's ring (docs/field.md#how-fast), mapped into the process and so part of its memory:
+// no immediate mode, so that libpcap takes TPACKET_V3, whose blocks hold the frames packed (in
+// immediate mode, TPACKET_V2 gives every frame a slot of the snap length, and 64 MiB held 255
+// frames); the kernel hands a block over when it is full or kReadTimeoutMs after its first frame.
+constexpr int kKernelBuffer = 16 << 20;  // bytes: 0.55 s of a 32-axis bus at 8 kHz
+constexpr int kReadTimeoutMs = 100;      // the longest a finding waits, and the quiet link's poll
 constexpr auto kStatusPeriod = std::chrono::milliseconds(250);
 constexpr std::size_t kRecorderMemory = 256u << 20;  // bytes of frames the recorder keeps at most
 
@@ -67,8 +71,8 @@ struct PcapCloser {
 };
 using LiveHandle = std::unique_ptr<pcap_t, PcapCloser>;
 
-// The interface opened for EtherCAT (immediate mode, a large buffer, the capture filter); an
-// error says what to do.
+// The interface opened for EtherCAT (the kernel's ring, the capture filter); an error says what
+// to do.
 Result<LiveHandle> openLive(const std::string& interface) {
   char errbuf[PCAP_ERRBUF_SIZE] = {};
   LiveHandle handle(pcap_create(interface.c_str(), errbuf));
@@ -76,7 +80,7 @@ Result<LiveHandle> openLive(const std::string& interface) {
   // These fail only on a handle already activated (newer libpcap insists they are checked).
   for (const int status :
        {pcap_set_snaplen(handle.get(), kSnapLength), pcap_set_promisc(handle.get(), 1),
-        pcap_set_immediate_mode(handle.get(), 1), pcap_set_buffer_size(handle.get(), kKernelBuffer),
+        pcap_set_buffer_size(handle.get(), kKernelBuffer),
         pcap_set_timeout(handle.get(), kReadTimeoutMs)}) {
     if (status != 0) {
       return fail(fmt::format("{}: cannot capture: {}", interface, pcap_statustostr(status)));
@@ -262,6 +266,7 @@ class FlightRecorder {
 class StatusBoard {
  public:
   explicit StatusBoard(bool on) : on_(on) {}
+  bool on() const { return on_; }
   void clear() {
     if (lines_ > 0) fmt::print(stderr, "\033[{}A\033[J", lines_);
     lines_ = 0;
@@ -353,9 +358,8 @@ void reportFindings(const std::vector<Finding>& findings, const CapturePipeline&
   for (const Finding& f : findings) {
     const BaselineState state = report.tally(f);
     output.board.clear();
-    writer.finding(report, f, state);
-    std::fflush(stdout);
-    if (f.axis) {
+    writer.finding(report, f, state);  // flushed when the kernel's buffer is drained
+    if (f.axis && output.board.on()) {
       output.last_finding[*f.axis] =
           fmt::format("{} at {:.3f} s", ruleDef(f.rule).code,
                       (f.at.time_ns - *pipeline.run().first_time_ns) / 1e9);
@@ -397,6 +401,10 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
     pcap_pkthdr* header = nullptr;
     const u_char* data = nullptr;
     const int got = pcap_next_ex(handle, &header, &data);
+    // The findings of what the kernel had handed over, written at once rather than one write
+    // each: a storm of them (a replay's gaps are lost cycles to the rules) must not slow the
+    // capture down.
+    if (got == 0) std::fflush(stdout);
     if (got == 0 && selectable >= 0) {
       auto wake = std::min(next_status, Clock::now() + std::chrono::milliseconds(kReadTimeoutMs));
       if (deadline) wake = std::min(wake, *deadline);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include "ncservo/base/little_endian.hpp"
@@ -24,6 +25,22 @@ Error writeError(const std::string& path, std::string message) {
   return Error{path, 0, 0, {}, std::move(message)};
 }
 
+// The file's stdio buffer, kWriteBuffer bytes, owned by its writer until the file is closed:
+// glibc ignores setvbuf's size when it is given no buffer, and writes in blocks of st_blksize
+// (4 KiB to a pipe, a write and a wake-up of the reader each). Standard output, never closed,
+// gets one for the process.
+std::unique_ptr<char[]> bufferFile(std::FILE* file) {
+  if (file == stdout) {
+    static char* const kStdoutBuffer = new char[kWriteBuffer];
+    std::fflush(stdout);
+    std::setvbuf(stdout, kStdoutBuffer, _IOFBF, kWriteBuffer);
+    return nullptr;
+  }
+  auto buffer = std::make_unique<char[]>(kWriteBuffer);
+  std::setvbuf(file, buffer.get(), _IOFBF, kWriteBuffer);
+  return buffer;
+}
+
 Result<std::FILE*> openFile(const std::string& path) {
   if (path == "-") return stdout;
   std::FILE* file = std::fopen(path.c_str(), "wb");
@@ -35,8 +52,13 @@ Result<std::FILE*> openFile(const std::string& path) {
 
 class PcapWriter final : public CaptureWriter {
  public:
-  PcapWriter(std::string path, std::FILE* file, pcap_t* dead, pcap_dumper_t* dumper)
-      : path_(std::move(path)), file_(file), dead_(dead), dumper_(dumper) {}
+  PcapWriter(std::string path, std::FILE* file, std::unique_ptr<char[]> buffer, pcap_t* dead,
+             pcap_dumper_t* dumper)
+      : path_(std::move(path)),
+        file_(file),
+        buffer_(std::move(buffer)),
+        dead_(dead),
+        dumper_(dumper) {}
   ~PcapWriter() override { (void)close(); }
   bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
     if (dumper_ == nullptr) return false;
@@ -82,6 +104,7 @@ class PcapWriter final : public CaptureWriter {
 
   std::string path_;
   std::FILE* file_;
+  std::unique_ptr<char[]> buffer_;  // file_'s, freed after it is closed
   pcap_t* dead_;
   pcap_dumper_t* dumper_;
   bool failed_ = false;
@@ -92,8 +115,9 @@ class PcapWriter final : public CaptureWriter {
 // 10^-9 s), then one Enhanced Packet Block per frame (pcapng specification, §4).
 class PcapngWriter final : public CaptureWriter {
  public:
-  PcapngWriter(std::string path, std::FILE* file, const PcapngInterface& interface)
-      : path_(std::move(path)), file_(file) {
+  PcapngWriter(std::string path, std::FILE* file, std::unique_ptr<char[]> buffer,
+               const PcapngInterface& interface)
+      : path_(std::move(path)), file_(file), buffer_(std::move(buffer)) {
     for (int i = 0; i < interface.timestamp_digits; ++i) ticks_per_second_ *= 10;
     block_.reserve(2048);
     begin(0x0A0D0D0A);  // SHB
@@ -176,6 +200,7 @@ class PcapngWriter final : public CaptureWriter {
 
   std::string path_;
   std::FILE* file_;
+  std::unique_ptr<char[]> buffer_;  // file_'s, freed after it is closed
   std::vector<std::uint8_t> block_;
   std::uint64_t ticks_per_second_ = 1;
   bool failed_ = false;
@@ -200,9 +225,9 @@ Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& pa
     }
     file = *compressed;
   }
-  std::setvbuf(file, nullptr, _IOFBF, kWriteBuffer);
+  std::unique_ptr<char[]> buffer = bufferFile(file);
   if (format == CaptureFormat::Pcapng) {
-    return std::make_unique<PcapngWriter>(path, file, PcapngInterface{});
+    return std::make_unique<PcapngWriter>(path, file, std::move(buffer), PcapngInterface{});
   }
   pcap_t* dead =
       pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kSnapLength, PCAP_TSTAMP_PRECISION_MICRO);
@@ -215,15 +240,15 @@ Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& pa
     if (file != stdout) std::fclose(file);
     return fail(std::move(error));
   }
-  return std::make_unique<PcapWriter>(path, file, dead, dumper);
+  return std::make_unique<PcapWriter>(path, file, std::move(buffer), dead, dumper);
 }
 
 Result<std::unique_ptr<CaptureWriter>> CaptureWriter::openPcapng(const std::string& path,
                                                                  const PcapngInterface& interface) {
   const Result<std::FILE*> opened = openFile(path);
   if (!opened) return fail(opened.error());
-  std::setvbuf(*opened, nullptr, _IOFBF, kWriteBuffer);
-  return std::make_unique<PcapngWriter>(path, *opened, interface);
+  std::unique_ptr<char[]> buffer = bufferFile(*opened);
+  return std::make_unique<PcapngWriter>(path, *opened, std::move(buffer), interface);
 }
 
 }  // namespace ncservo
