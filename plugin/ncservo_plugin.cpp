@@ -218,6 +218,7 @@ std::vector<guint32> g_structure_only_first;
 // By axis: whether its layout came from the PDO structure alone, kept once the layout is decided
 // (it does not change after), so that no frame asks the pipeline for each axis.
 std::vector<guint8> g_structure_only;
+bool g_any_structure_only = false;  // some axis's layout came from the structure alone
 // The incidents of the pipeline already kept in a frame's record.
 std::size_t g_incidents_kept = 0;
 // The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
@@ -446,6 +447,7 @@ void keepLayout(const DecoderOptions& layout) {
   g_structure_only.assign(layout.axes.size(), 0);
   for (std::size_t axis = 0; axis < layout.axes.size(); ++axis) {
     g_structure_only[axis] = g_pipeline->structureOnly(static_cast<std::uint16_t>(axis));
+    g_any_structure_only = g_any_structure_only || g_structure_only[axis] != 0;
   }
 }
 
@@ -461,6 +463,7 @@ void initCapture() {
   g_frames.clear();
   g_structure_only_first.clear();
   g_structure_only.clear();
+  g_any_structure_only = false;
   g_incidents_kept = 0;
   g_shared_axes = {};
   g_next_shared = 0;
@@ -482,6 +485,7 @@ void cleanupCapture() {
   std::vector<std::unique_ptr<FrameRecord[]>>().swap(g_frames);
   std::vector<guint32>().swap(g_structure_only_first);
   std::vector<guint8>().swap(g_structure_only);
+  g_any_structure_only = false;
   g_shared_axes = {};
   g_capture_open = false;
 }
@@ -1230,7 +1234,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   if (record.held) expert_add_info(pinfo, nullptr, &ei_layout_learning);
-  for (guint a = 0; a < record.axis_count; ++a) {
+  for (guint a = 0; g_any_structure_only && a < record.axis_count; ++a) {
     if (structureOnlyNoted(record, record.axes[a], pinfo->num))
       expert_add_info(pinfo, nullptr, &ei_structure_only);
   }
