@@ -22,6 +22,7 @@
 #include <array>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -69,6 +70,7 @@ int hf_derived[kDerivedCount];
 const header_field_info* hfi_field[kFieldCount];
 const header_field_info* hfi_derived[kDerivedCount];
 const header_field_info* hfi_protocol = nullptr;
+protocol_t* protocol_ncservo = nullptr;  // kept at hand-off: whether it is enabled, per frame
 int ett_ncservo = -1;
 int ett_axis = -1;
 int ett_finding = -1;
@@ -199,10 +201,24 @@ struct FrameRecord {
 };
 // By frame number: frames are numbered from 1 without gaps, so an index finds a frame's record
 // for less than a hash map, whose growth and scattered inserts cost the packet list measurably.
-std::vector<FrameRecord> g_frames;
+// The records are kept in blocks that never move as the capture grows: a growing array would
+// copy every record kept so far each time it doubles.
+constexpr std::size_t kFrameBlockBits = 12;
+constexpr std::size_t kFrameBlock = std::size_t{1} << kFrameBlockBits;
+std::vector<std::unique_ptr<FrameRecord[]>> g_frames;
+// The record of frame `number`; null when no record was kept in its block.
+FrameRecord* frameSlot(std::uint64_t number) {
+  const std::uint64_t block = number >> kFrameBlockBits;
+  if (block >= g_frames.size() || !g_frames[block]) return nullptr;
+  return &g_frames[block][number & (kFrameBlock - 1)];
+}
 // By axis: the first frame that decodes an axis whose layout came from the PDO structure alone
 // (0: none). That frame and those with the axis's findings carry the note, not every frame.
 std::vector<guint32> g_structure_only_first;
+// By axis: whether its layout came from the PDO structure alone, kept once the layout is decided
+// (it does not change after), so that no frame asks the pipeline for each axis.
+std::vector<guint8> g_structure_only;
+bool g_any_structure_only = false;  // some axis's layout came from the structure alone
 // The incidents of the pipeline already kept in a frame's record.
 std::size_t g_incidents_kept = 0;
 // The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
@@ -215,6 +231,9 @@ struct SharedAxes {
 };
 std::array<SharedAxes, 8> g_shared_axes;
 std::size_t g_next_shared = 0;  // the slot replaced next
+// The slots the last two frames shared: cyclic traffic alternates between a few arrays (the
+// master copy and the returned one), so a frame most often matches the one before the last.
+std::size_t g_recent_shared[2] = {};
 // The digits of a second the capture's timestamps hold (its first EtherCAT frame's), for the
 // timing statistics' resolution.
 std::optional<int> g_timestamp_digits;
@@ -423,6 +442,15 @@ const Validator* validator() {
 
 void validateFrame(const PipelineFrame& delivered);
 
+// The layout is decided: which axes came from the PDO structure alone.
+void keepLayout(const DecoderOptions& layout) {
+  g_structure_only.assign(layout.axes.size(), 0);
+  for (std::size_t axis = 0; axis < layout.axes.size(); ++axis) {
+    g_structure_only[axis] = g_pipeline->structureOnly(static_cast<std::uint16_t>(axis));
+    g_any_structure_only = g_any_structure_only || g_structure_only[axis] != 0;
+  }
+}
+
 void stopHeldJudging() {
   delete g_held_validator;
   g_held_validator = nullptr;
@@ -434,9 +462,12 @@ void initCapture() {
   g_held_info = nullptr;
   g_frames.clear();
   g_structure_only_first.clear();
+  g_structure_only.clear();
+  g_any_structure_only = false;
   g_incidents_kept = 0;
   g_shared_axes = {};
   g_next_shared = 0;
+  std::fill(std::begin(g_recent_shared), std::end(g_recent_shared), 0);
   g_timestamp_digits.reset();
   g_capture_open = true;
   delete g_pipeline;
@@ -444,15 +475,17 @@ void initCapture() {
   g_pipeline = new CapturePipeline({g_options != nullptr ? *g_options : DecoderOptions{},
                                     g_settings != nullptr ? *g_settings : RuleSettings{},
                                     TimeWindow{}, TimestampMode::Capture});
-  g_pipeline->setSinks({nullptr, validateFrame, nullptr, nullptr});
+  g_pipeline->setSinks({keepLayout, validateFrame, nullptr, nullptr});
 }
 
 void cleanupCapture() {
   stopHeldJudging();
   delete g_pipeline;
   g_pipeline = nullptr;
-  std::vector<FrameRecord>().swap(g_frames);
+  std::vector<std::unique_ptr<FrameRecord[]>>().swap(g_frames);
   std::vector<guint32>().swap(g_structure_only_first);
+  std::vector<guint8>().swap(g_structure_only);
+  g_any_structure_only = false;
   g_shared_axes = {};
   g_capture_open = false;
 }
@@ -551,7 +584,7 @@ const char* infoText(const FrameRecord& record) {
 }
 
 // The frame's axes as the first pass found them, in an array shared with recent frames alike.
-SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
+SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view, const Validator& by) {
   const FrameDecode& decode = view.decode;
   static AxisRecord axes[kMaxAxesPerFrame];  // dissection is single-threaded
   // Zeroed whole, padding included, for the comparison below.
@@ -561,11 +594,13 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
     const std::optional<DriveState>& state = view.states[i];
     AxisRecord& r = axes[i];
     r.axis = placement.axis;
+    const bool structure_only =
+        placement.axis < g_structure_only.size() && g_structure_only[placement.axis];
     r.flags = static_cast<guint8>(
         (placement.has_rx ? kHasRx : 0) | (placement.has_tx ? kHasTx : 0) |
         (placement.rx_malformed ? kRxMalformed : 0) | (placement.tx_malformed ? kTxMalformed : 0) |
-        (state ? kHasState : 0) | (g_pipeline->structureOnly(placement.axis) ? kStructureOnly : 0));
-    if (r.flags & kStructureOnly) {
+        (state ? kHasState : 0) | (structure_only ? kStructureOnly : 0));
+    if (structure_only) {
       if (g_structure_only_first.size() <= r.axis) g_structure_only_first.resize(r.axis + 1u, 0);
       if (g_structure_only_first[r.axis] == 0)
         g_structure_only_first[r.axis] = static_cast<guint32>(number);
@@ -573,7 +608,7 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
     r.state = state ? static_cast<guint8>(*state) : 0;
     r.rx_offset = static_cast<guint32>(placement.rx_offset);
     r.tx_offset = static_cast<guint32>(placement.tx_offset);
-    const AxisModel* model = validator()->axis(placement.axis);
+    const AxisModel* model = by.axis(placement.axis);
     if (model == nullptr) continue;
     const std::vector<FieldEdge>& edges = model->edgesIn(number);
     if (!edges.empty()) {
@@ -587,25 +622,42 @@ SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view) {
     }
   }
   const std::size_t size = decode.axis_count * sizeof(AxisRecord);
-  for (SharedAxes& shared : g_shared_axes) {
-    if (shared.axes != nullptr && shared.count == decode.axis_count &&
-        std::memcmp(shared.axes, axes, size) == 0) {
-      return shared;
+  auto alike = [&](const SharedAxes& shared) {
+    return shared.axes != nullptr && shared.count == decode.axis_count &&
+           std::memcmp(shared.axes, axes, size) == 0;
+  };
+  // The slot of the frame before the last first, then that of the last, then the others.
+  const std::size_t recent = g_recent_shared[0];
+  std::size_t found = g_shared_axes.size();
+  if (alike(g_shared_axes[recent])) {
+    found = recent;
+  } else {
+    for (std::size_t k = 0; k < g_shared_axes.size(); ++k) {
+      if (k != recent && alike(g_shared_axes[k])) {
+        found = k;
+        break;
+      }
     }
   }
-  SharedAxes& slot = g_shared_axes[g_next_shared];
-  g_next_shared = (g_next_shared + 1) % g_shared_axes.size();
-  slot.axes = static_cast<const AxisRecord*>(wmem_memdup(wmem_file_scope(), axes, size));
-  slot.count = decode.axis_count;
-  slot.info = nullptr;
-  return slot;
+  if (found == g_shared_axes.size()) {
+    found = g_next_shared;
+    g_next_shared = (g_next_shared + 1) % g_shared_axes.size();
+    SharedAxes& slot = g_shared_axes[found];
+    slot.axes = static_cast<const AxisRecord*>(wmem_memdup(wmem_file_scope(), axes, size));
+    slot.count = decode.axis_count;
+    slot.info = nullptr;
+  }
+  g_recent_shared[0] = g_recent_shared[1];
+  g_recent_shared[1] = found;
+  return g_shared_axes[found];
 }
 
 // The record of a frame, emptied: the window's replay keeps anew what the first pass held.
 FrameRecord& freshRecord(std::uint64_t number) {
-  if (number >= g_frames.size())
-    g_frames.resize(std::max<std::size_t>(number + 1, 2 * g_frames.size()));
-  return g_frames[number] = FrameRecord{};
+  const std::uint64_t block = number >> kFrameBlockBits;
+  if (block >= g_frames.size()) g_frames.resize(block + 1);
+  if (!g_frames[block]) g_frames[block].reset(new FrameRecord[kFrameBlock]());
+  return g_frames[block][number & (kFrameBlock - 1)] = FrameRecord{};
 }
 
 // Whether a finding stands whatever layout the window decides: the rules on the slaves' state
@@ -671,25 +723,26 @@ void validateFrame(const PipelineFrame& delivered) {
   const std::uint64_t number = delivered.number;
   const ValidatedFrame& view = *delivered.judged;
   const FrameDecode& decode = view.decode;
-  const bool any_findings = !validator()->findings().empty();
+  const Validator& by = *validator();
+  const bool any_findings = !by.findings().empty();
   const bool any_incidents = g_pipeline->incidents()->incidents().size() > g_incidents_kept;
   if (decode.axis_count == 0 && !any_findings && !any_incidents) {
-    if (number < g_frames.size()) g_frames[number] = FrameRecord{};
+    if (FrameRecord* kept = frameSlot(number)) *kept = FrameRecord{};
     return;
   }
   FrameRecord& record = freshRecord(number);
   record.copy = static_cast<guint8>(decode.copy);
   record.axis_count = static_cast<guint16>(decode.axis_count);
-  SharedAxes* shared = decode.axis_count > 0 ? &keepAxes(number, view) : nullptr;
+  SharedAxes* shared = decode.axis_count > 0 ? &keepAxes(number, view, by) : nullptr;
   record.axes = shared != nullptr ? shared->axes : nullptr;
-  const FrameTiming& timing = validator()->frameTiming();
+  const FrameTiming& timing = by.frameTiming();
   record.timing = static_cast<guint8>((timing.interval_ns ? kHasInterval : 0) |
                                       (timing.deviation_ns ? kHasDeviation : 0) |
                                       (timing.latency_ns ? kHasLatency : 0));
   record.interval_ns = timing.interval_ns.value_or(0);
   record.deviation_ns = timing.deviation_ns.value_or(0);
   record.latency_ns = timing.latency_ns.value_or(0);
-  keepFindings(record, *validator(), nullptr);
+  keepFindings(record, by, nullptr);
   keepIncidents(record);
   if (shared == nullptr || any_findings) {
     record.info = infoText(record);
@@ -738,8 +791,8 @@ void keepHeldFrame(std::uint64_t number, std::int64_t time_ns, const ByteReader&
 }
 
 const FrameRecord* recordOf(const packet_info* pinfo) {
-  if (pinfo->num >= g_frames.size() || g_frames[pinfo->num].info == nullptr) return nullptr;
-  return &g_frames[pinfo->num];
+  const FrameRecord* record = frameSlot(pinfo->num);
+  return record != nullptr && record->info != nullptr ? record : nullptr;
 }
 
 // First pass: run the frame through the capture pipeline (or hold it in the learning window).
@@ -769,9 +822,6 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
 // (as proto_field_is_referenced, read from the registration kept at hand-off).
 bool wanted(proto_tree* tree, const header_field_info* field) {
   return tree != nullptr && (PTREE_DATA(tree)->visible || field->ref_type != HF_REF_TYPE_NONE);
-}
-bool wanted(proto_tree* tree, Derived id) {
-  return wanted(tree, hfi_derived[static_cast<std::size_t>(id)]);
 }
 // Whether the tree is shown (-V, -O, the GUI's details), where labels are read.
 bool shown(proto_tree* tree) {
@@ -852,21 +902,41 @@ void addBitsShown(proto_tree* word_tree, tvbuff_t* tvb, guint offset, const Word
   }
 }
 
-// The rows of kFields that a filter, column or tap references, by PDO: gathered once per frame
-// for a tree that is not shown, where only those items are built.
-struct ReferencedRows {
-  std::size_t count[2] = {};  // [Pdo::Rx], [Pdo::Tx]
+// What the layers of a frame add, decided once per frame for all of them (the tree and the
+// fields' references do not change within a frame): in a shown tree everything; in a tree that
+// is not shown, only the items a filter, column or tap references, and only the PDOs they read.
+struct FrameWants {
+  bool shown;     // shown(tree)
+  bool protocol;  // protocolWanted(tree)
+  bool derived[kDerivedCount];
+  bool read[2];  // the PDOs to read: [Pdo::Rx], [Pdo::Tx]
+  // The rows of kFields referenced, by PDO; when the tree is not shown.
+  std::size_t count[2];
   std::uint16_t rows[2][kFieldCount];
+  bool is(Derived id) const { return derived[static_cast<std::size_t>(id)]; }
 };
 static_assert(kFieldCount <= 0xFFFF);
 
-void gatherReferenced(ReferencedRows& referenced) {
-  referenced.count[0] = referenced.count[1] = 0;
-  for (std::size_t i = 0; i < kFieldCount; ++i) {
-    if (hfi_field[i]->ref_type == HF_REF_TYPE_NONE) continue;
-    const auto pdo = static_cast<std::size_t>(wordDef(kFields[i].word).pdo);
-    referenced.rows[pdo][referenced.count[pdo]++] = static_cast<std::uint16_t>(i);
+void gatherWants(proto_tree* tree, FrameWants& wants) {
+  wants.shown = shown(tree);
+  wants.protocol = protocolWanted(tree);
+  for (std::size_t i = 0; i < kDerivedCount; ++i) wants.derived[i] = wanted(tree, hfi_derived[i]);
+  wants.count[0] = wants.count[1] = 0;
+  // A part shown only when the status word says so (FieldWhen) reads the TxPDO too.
+  bool conditional = false;
+  if (!wants.shown) {
+    for (std::size_t i = 0; i < kFieldCount; ++i) {
+      if (hfi_field[i]->ref_type == HF_REF_TYPE_NONE) continue;
+      const auto pdo = static_cast<std::size_t>(wordDef(kFields[i].word).pdo);
+      wants.rows[pdo][wants.count[pdo]++] = static_cast<std::uint16_t>(i);
+      conditional = conditional || kFields[i].when != FieldWhen::Always;
+    }
   }
+  constexpr auto kRx = static_cast<std::size_t>(Pdo::Rx);
+  constexpr auto kTx = static_cast<std::size_t>(Pdo::Tx);
+  wants.read[kRx] = wants.shown || wants.count[kRx] > 0;
+  wants.read[kTx] =
+      wants.shown || wants.count[kTx] > 0 || conditional || wants.is(Derived::Message);
 }
 
 // One referenced item, from its word's value: no subtree, no bitmask call adding every bit.
@@ -898,11 +968,11 @@ void addReferencedItem(proto_tree* tree, tvbuff_t* tvb, guint offset, std::size_
 // Adds the words of one PDO, each bit field under its word, as the field table defines them.
 // In a tree that is not shown, only the referenced items.
 void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoValues& values,
-            const ReferencedRows& referenced) {
-  if (!shown(tree)) {
+            const FrameWants& wants) {
+  if (!wants.shown) {
     const auto p = static_cast<std::size_t>(pdo);
-    for (std::size_t k = 0; k < referenced.count[p]; ++k) {
-      addReferencedItem(tree, tvb, offset, referenced.rows[p][k], values);
+    for (std::size_t k = 0; k < wants.count[p]; ++k) {
+      addReferencedItem(tree, tvb, offset, wants.rows[p][k], values);
     }
     return;
   }
@@ -940,11 +1010,11 @@ void addPdo(proto_tree* tree, tvbuff_t* tvb, Pdo pdo, guint offset, const PdoVal
 // A finding as an item with its details, carrying the expert info of its rule. The expert
 // summary is the rule's alone, so that Expert Information groups a rule's findings in one row.
 void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint anchor,
-                const FindingRecord& f) {
+                const FindingRecord& f, const FrameWants& wants) {
   proto_item* item =
       proto_tree_add_string(tree, derivedHf(Derived::Finding), tvb, anchor, 0, f.text);
   proto_item_set_generated(item);
-  if (f.since != 0 && wanted(tree, Derived::SinceFrame)) {
+  if (f.since != 0 && wants.is(Derived::SinceFrame)) {
     proto_tree* details = proto_item_add_subtree(item, ett_finding);
     proto_item_set_generated(
         proto_tree_add_uint(details, derivedHf(Derived::SinceFrame), tvb, anchor, 0, f.since));
@@ -953,12 +1023,13 @@ void addFinding(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, guint ancho
 }
 
 // docs/incidents.md: the incident's cause, with a link to each frame of its chain.
-void addIncident(proto_tree* tree, tvbuff_t* tvb, guint anchor, const IncidentRecord& incident) {
-  if (!wanted(tree, Derived::Incident) && !wanted(tree, Derived::IncidentEvidence)) return;
+void addIncident(proto_tree* tree, tvbuff_t* tvb, guint anchor, const IncidentRecord& incident,
+                 const FrameWants& wants) {
+  if (!wants.is(Derived::Incident) && !wants.is(Derived::IncidentEvidence)) return;
   proto_item* item =
       proto_tree_add_string(tree, derivedHf(Derived::Incident), tvb, anchor, 0, incident.text);
   proto_item_set_generated(item);
-  if (incident.evidence_count == 0 || !wanted(tree, Derived::IncidentEvidence)) return;
+  if (incident.evidence_count == 0 || !wants.is(Derived::IncidentEvidence)) return;
   proto_tree* chain = proto_item_add_subtree(item, ett_finding);
   for (guint e = 0; e < incident.evidence_count; ++e) {
     proto_item_set_generated(proto_tree_add_uint(chain, derivedHf(Derived::IncidentEvidence), tvb,
@@ -969,9 +1040,10 @@ void addIncident(proto_tree* tree, tvbuff_t* tvb, guint anchor, const IncidentRe
 // What the frame dissector hands each axis's layer.
 struct LayerData {
   const FrameRecord* record;
-  const AxisRecord* axis;            // null: a layer only for findings about the bus
-  bool first;                        // the frame's first layer, which carries the bus's findings
-  const ReferencedRows* referenced;  // when the tree is not shown
+  const AxisRecord* axis;  // null: a layer only for findings about the bus
+  bool first;              // the frame's first layer, which carries the bus's findings
+  const FrameWants* wants;
+  ByteReader bytes;  // the frame's captured bytes
 };
 
 // Findings and incidents about the bus, or about an axis this frame does not carry.
@@ -984,31 +1056,30 @@ bool frameLevel(const FrameRecord& record, guint16 axis) {
 }
 
 void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, const AxisRecord& r,
-                  guint start, const char* name, const char* state,
-                  const ReferencedRows& referenced) {
-  if (wanted(tree, Derived::Copy)) {
+                  guint start, const char* name, const char* state, const LayerData& layer) {
+  const FrameWants& wants = *layer.wants;
+  if (wants.is(Derived::Copy)) {
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::Copy), tvb, start, 0,
                               copyKindName(static_cast<CopyKind>(record.copy))));
   }
-  if (wanted(tree, Derived::Axis)) {
+  if (wants.is(Derived::Axis)) {
     proto_tree_add_uint(tree, derivedHf(Derived::Axis), tvb, start, 0, r.axis);
   }
-  if (wanted(tree, Derived::AxisName)) {
+  if (wants.is(Derived::AxisName)) {
     proto_tree_add_string(tree, derivedHf(Derived::AxisName), tvb, start, 0, name);
   }
-  const bool message_wanted = (r.flags & kHasTx) && wanted(tree, Derived::Message);
+  const bool message_wanted = (r.flags & kHasTx) && wants.is(Derived::Message);
   PdoValues values;
-  const bool pdo_wanted = shown(tree) || referenced.count[0] + referenced.count[1] > 0;
-  if (message_wanted || pdo_wanted) {
-    const guint length = tvb_captured_length(tvb);
-    const ByteReader bytes(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length);
-    if (r.flags & kHasRx) readPdo(Pdo::Rx, bytes, r.rx_offset, values);
-    if (r.flags & kHasTx) readPdo(Pdo::Tx, bytes, r.tx_offset, values);
-    if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values, referenced);
-    if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values, referenced);
+  if ((r.flags & kHasRx) && wants.read[static_cast<std::size_t>(Pdo::Rx)]) {
+    readPdo(Pdo::Rx, layer.bytes, r.rx_offset, values);
   }
-  if (state != nullptr && wanted(tree, Derived::State)) {
+  if ((r.flags & kHasTx) && wants.read[static_cast<std::size_t>(Pdo::Tx)]) {
+    readPdo(Pdo::Tx, layer.bytes, r.tx_offset, values);
+  }
+  if (values.has_rx) addPdo(tree, tvb, Pdo::Rx, r.rx_offset, values, wants);
+  if (values.has_tx) addPdo(tree, tvb, Pdo::Tx, r.tx_offset, values, wants);
+  if (state != nullptr && wants.is(Derived::State)) {
     proto_item_set_generated(
         proto_tree_add_string(tree, derivedHf(Derived::State), tvb, start, 0, state));
   }
@@ -1021,8 +1092,8 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
   // The transition's own axis under it: a frame's layers are all `ncservo`, so `-e ncservo.axis`
   // on a transition filter lists every axis of the frame (docs/plugin.md).
   const bool transition_axis_wanted =
-      wanted(tree, Derived::TransitionAxis) || wanted(tree, Derived::TransitionAxisName);
-  if (r.change != nullptr && (wanted(tree, Derived::Transition) || transition_axis_wanted)) {
+      wants.is(Derived::TransitionAxis) || wants.is(Derived::TransitionAxisName);
+  if (r.change != nullptr && (wants.is(Derived::Transition) || transition_axis_wanted)) {
     char transition[96];
     plugin::transitionText(*r.change, transition, sizeof transition);
     proto_item* item =
@@ -1036,7 +1107,7 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
           proto_tree_add_string(sub, derivedHf(Derived::TransitionAxisName), tvb, start, 0, name));
     }
   }
-  if (r.edge_count > 0 && wanted(tree, Derived::Edge)) {
+  if (r.edge_count > 0 && wants.is(Derived::Edge)) {
     for (guint e = 0; e < r.edge_count; ++e) {
       char edge[64];
       plugin::edgeText(r.edges[e], edge, sizeof edge);
@@ -1048,7 +1119,8 @@ void addAxisItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, co
 
 // The frame's cycle interval, its deviation from nominal and its return latency, in µs; a shown
 // tree gives them their unit, with the decimals the timestamps resolve (as the CLI's text).
-void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, guint anchor) {
+void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, guint anchor,
+                    const FrameWants& wants) {
   const int decimals =
       timestampResolutionNs(TimestampSource::Capture, g_timestamp_digits.value_or(6)) >= 1000 ? 1
                                                                                               : 3;
@@ -1060,10 +1132,10 @@ void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, 
                {Derived::CycleDeviation, kHasDeviation, record.deviation_ns},
                {Derived::Latency, kHasLatency, record.latency_ns}};
   for (const auto& item : items) {
-    if ((record.timing & item.flag) == 0 || !wanted(tree, item.id)) continue;
+    if ((record.timing & item.flag) == 0 || !wants.is(item.id)) continue;
     const double us = static_cast<double>(item.ns) / 1000.0;
     proto_item_set_generated(
-        shown(tree) ? proto_tree_add_double_format_value(tree, derivedHf(item.id), tvb, anchor, 0,
+        wants.shown ? proto_tree_add_double_format_value(tree, derivedHf(item.id), tvb, anchor, 0,
                                                          us, "%.*f \u00b5s", decimals, us)
                     : proto_tree_add_double(tree, derivedHf(item.id), tvb, anchor, 0, us));
   }
@@ -1091,7 +1163,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
   const bool structure_only_note =
       layer.axis != nullptr && structureOnlyNoted(record, *layer.axis, pinfo->num);
   const bool protocol_item =
-      protocolWanted(tree) ||
+      layer.wants->protocol ||
       (tree != nullptr && layer.axis != nullptr &&
        ((layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0 || structure_only_note)) ||
       (tree != nullptr && record.held);
@@ -1103,9 +1175,15 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     // Anchor the axis at its first PDO that was captured; an item past the captured bytes
     // would raise an exception.
     start = (r.flags & kHasRx) ? r.rx_offset : (r.flags & kHasTx) ? r.tx_offset : 0;
-    const char* name = axisName(r.axis);
-    const char* state =
-        (r.flags & kHasState) ? driveStateName(static_cast<DriveState>(r.state)) : nullptr;
+    // The name and state only where an item shows them.
+    const FrameWants& wants = *layer.wants;
+    const char* name =
+        protocol_item || wants.is(Derived::AxisName) || wants.is(Derived::TransitionAxisName)
+            ? axisName(r.axis)
+            : nullptr;
+    const char* state = (r.flags & kHasState) && (protocol_item || wants.is(Derived::State))
+                            ? driveStateName(static_cast<DriveState>(r.state))
+                            : nullptr;
     if (protocol_item) {
       const std::optional<DriveState> known_state =
           (r.flags & kHasState) ? std::optional(static_cast<DriveState>(r.state)) : std::nullopt;
@@ -1115,9 +1193,12 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
       root = proto_tree_add_protocol_format(tree, proto_ncservo, tvb, start, 0, "%s", texts.label);
       layer_tree = proto_item_add_subtree(root, ett_axis);
     }
-    addAxisItems(layer_tree, tvb, record, r, start, name, state, *layer.referenced);
-    if (layer.first && record.timing != 0) addTimingItems(layer_tree, tvb, record, start);
+    addAxisItems(layer_tree, tvb, record, r, start, name, state, layer);
+    if (layer.first && record.timing != 0) {
+      addTimingItems(layer_tree, tvb, record, start, *layer.wants);
+    }
     for (const bool rx : {true, false}) {
+      if (!(r.flags & (kRxMalformed | kTxMalformed))) break;
       if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
       expert_add_info_format(pinfo, root, &ei_region_malformed,
                              "Axis %u: the %s (%u bytes at frame offset %u) is cut short or lies "
@@ -1136,24 +1217,24 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     const FindingRecord& f = record.findings[i];
     const bool here = layer.axis != nullptr && f.axis == layer.axis->axis;
     if (here || (layer.first && frameLevel(record, f.axis))) {
-      addFinding(layer_tree, tvb, pinfo, start, f);
+      addFinding(layer_tree, tvb, pinfo, start, f, *layer.wants);
     }
   }
   for (guint i = 0; i < record.incident_count; ++i) {
     const IncidentRecord& incident = record.incidents[i];
     const bool here = layer.axis != nullptr && incident.axis == layer.axis->axis;
     if (here || (layer.first && frameLevel(record, incident.axis))) {
-      addIncident(layer_tree, tvb, start, incident);
+      addIncident(layer_tree, tvb, start, incident, *layer.wants);
     }
   }
-  return static_cast<int>(tvb_captured_length(tvb));
+  return static_cast<int>(layer.bytes.size());
 }
 
 // Without a tree (the packet list) only the findings' expert info and the Info column are
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   if (record.held) expert_add_info(pinfo, nullptr, &ei_layout_learning);
-  for (guint a = 0; a < record.axis_count; ++a) {
+  for (guint a = 0; g_any_structure_only && a < record.axis_count; ++a) {
     if (structureOnlyNoted(record, record.axes[a], pinfo->num))
       expert_add_info(pinfo, nullptr, &ei_structure_only);
   }
@@ -1163,7 +1244,7 @@ void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
-  if (!g_capture_open || !proto_is_protocol_enabled(find_protocol_by_id(proto_ncservo))) {
+  if (!g_capture_open || !proto_is_protocol_enabled(protocol_ncservo)) {
     return 0;
   }
   if (!PINFO_FD_VISITED(pinfo)) {
@@ -1178,14 +1259,18 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   if (record == nullptr) return 0;
   // The postdissector has no protocol of its own: expert info added here names this one.
   pinfo->current_proto = "NCSERVO";
-  col_append_str(pinfo->cinfo, COL_INFO, record->info);
+  // col_append_lstr finds the column's end with strlen, where col_append_str's g_strlcat walks
+  // it byte by byte in Wireshark 4.0: the same text for less.
+  col_append_lstr(pinfo->cinfo, COL_INFO, record->info, COL_ADD_LSTR_TERMINATOR);
   if (tree == nullptr) {
     addExpertOnly(pinfo, *record);
     return static_cast<int>(tvb_captured_length(tvb));
   }
-  static ReferencedRows referenced;  // dissection is single-threaded
-  if (!shown(tree)) gatherReferenced(referenced);
-  LayerData layer{record, nullptr, true, &referenced};
+  static FrameWants wants;  // dissection is single-threaded
+  gatherWants(tree, wants);
+  const guint length = tvb_captured_length(tvb);
+  LayerData layer{record, nullptr, true, &wants,
+                  ByteReader(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length)};
   if (record->axis_count == 0) {
     call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
   }
@@ -1311,6 +1396,7 @@ void keepRegistrations() {
     hfi_derived[i] = proto_registrar_get_nth(hf_derived[i]);
   }
   hfi_protocol = proto_registrar_get_nth(proto_ncservo);
+  protocol_ncservo = find_protocol_by_id(proto_ncservo);
 }
 
 void registerHandoff() {

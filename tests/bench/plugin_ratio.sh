@@ -9,15 +9,15 @@
 # spends on them.
 # Usage: tests/bench/plugin_ratio.sh [BUILD_DIR]          (default: build)
 # Env:   NCSERVO_BENCH_CYCLES  cycles in the capture (default 25000 = 50,000 frames)
-#        NCSERVO_BENCH_RUNS    runs of each side; the median counts (default 3)
-#        NCSERVO_BENCH_GOALS   "OPEN FILTER FIELDS" highest ratios (default "1.15 1.30 1.10")
+#        NCSERVO_BENCH_RUNS    runs of each side; the median counts (default 7)
+#        NCSERVO_BENCH_GOALS   "OPEN FILTER FIELDS" highest ratios (default "1.10 1.20 1.10")
 # Exit 1 when a ratio is above its goal, 2 when a run fails.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 
 cycles=${NCSERVO_BENCH_CYCLES:-25000}
-runs=${NCSERVO_BENCH_RUNS:-3}
-read -r goal_open goal_filter goal_fields <<<"${NCSERVO_BENCH_GOALS:-1.15 1.30 1.10}"
+runs=${NCSERVO_BENCH_RUNS:-7}
+read -r goal_open goal_filter goal_fields <<<"${NCSERVO_BENCH_GOALS:-1.10 1.20 1.10}"
 runner=$root/tests/tools/tshark-with-plugin.sh
 plugin=$(realpath "$build/plugin/ncservo.so" 2>/dev/null || true)
 if [ -z "$plugin" ] || [ ! -f "$plugin" ]; then
