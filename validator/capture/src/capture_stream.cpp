@@ -16,20 +16,11 @@ Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamSto
   CaptureRecord record;
   Result<bool> status;
   while ((status = reader.next(record)) && *status) {
-    if (stop != nullptr && stop->requested != nullptr && stop->requested->load()) {
-      stop->stopped = true;
-      return {};
-    }
+    if (stopRequested(stop)) return endStream(status, true, pipeline, stop);
     pipeline.onRecord(reader.link(), record);
   }
   // A read that Ctrl-C cut short (standard input waiting for more) is no damage of the capture.
-  if (!status && stop != nullptr && stop->requested != nullptr && stop->requested->load()) {
-    stop->stopped = true;
-    return {};
-  }
-  pipeline.finish();
-  if (!status) return fail(status.error());
-  return {};
+  return endStream(status, !status && stopRequested(stop), pipeline, stop);
 }
 
 }  // namespace ncservo

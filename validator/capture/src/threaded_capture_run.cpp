@@ -83,10 +83,6 @@ void blockProcessSignals() {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 }
 
-bool stopRequested(const StreamStop* stop) {
-  return stop != nullptr && stop->requested != nullptr && stop->requested->load();
-}
-
 }  // namespace
 
 Status streamOnTwoThreads(const NextRecord& next, CapturePipeline& pipeline, StreamStop* stop,
@@ -150,6 +146,11 @@ Status streamOnTwoThreads(const NextRecord& next, CapturePipeline& pipeline, Str
   }
   join(!stopped);
   if (judging_failed) std::rethrow_exception(judging_failed);
+  return endStream(status, stopped, pipeline, stop);
+}
+
+Status endStream(const Result<bool>& status, bool stopped, CapturePipeline& pipeline,
+                 StreamStop* stop) {
   if (stopped) {
     stop->stopped = true;
     return {};

@@ -21,6 +21,15 @@ struct StreamStop {
   const std::atomic<bool>* requested = nullptr;
   bool stopped = false;  // set when the stream ended for it, the pipeline unfinished
 };
+inline bool stopRequested(const StreamStop* stop) {
+  return stop != nullptr && stop->requested != nullptr && stop->requested->load();
+}
+
+// A stream's end, on one thread or two, once its records are read (`status`: the last read) or the
+// reading `stopped` for `stop`: stopped, the pipeline is left unfinished; otherwise it finishes,
+// and a read error is the stream's.
+Status endStream(const Result<bool>& status, bool stopped, CapturePipeline& pipeline,
+                 StreamStop* stop);
 
 // The records of a capture in order: fills `record` (its bytes valid until the next call) and
 // `link`, and returns true; false at the end; an error when a record cannot be read (the records

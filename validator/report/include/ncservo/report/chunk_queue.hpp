@@ -3,13 +3,13 @@
 // `capacity` chunks wait; the producer waits while they do, so memory stays bounded.
 #pragma once
 
-#include <condition_variable>
 #include <cstddef>
-#include <deque>
 #include <mutex>
 #include <optional>
+#include <utility>
 #include <vector>
 
+#include "ncservo/base/bounded_queue.hpp"
 #include "ncservo/base/error.hpp"
 
 namespace ncservo::cli {
@@ -22,7 +22,8 @@ class ChunkQueue {
     std::size_t used = 0;
   };
 
-  ChunkQueue(std::size_t capacity, std::size_t chunk_bytes);
+  ChunkQueue(std::size_t capacity, std::size_t chunk_bytes)
+      : queue_(capacity), chunk_bytes_(chunk_bytes) {}
 
   // Producer: hands a chunk over, waiting while `capacity` chunks wait. Fails with the consumer's
   // error once it has stopped (the chunk is dropped).
@@ -30,26 +31,22 @@ class ChunkQueue {
   // Producer: an empty chunk of `chunk_bytes` to fill, one the consumer is done with when there is.
   Chunk spare();
   // Producer: no more chunks. The consumer still gets those waiting.
-  void close();
+  void close() { queue_.close(); }
 
   // Consumer: the next chunk, in the order pushed, waiting for one; none once closed and drained,
   // or stopped.
-  std::optional<Chunk> pop();
+  std::optional<Chunk> pop() { return queue_.pop(); }
   // Consumer: a chunk written out, for spare() to hand back.
-  void recycle(Chunk chunk);
+  void recycle(Chunk chunk) { queue_.recycle(std::move(chunk)); }
   // Consumer: it cannot go on (a failed write). Waiting chunks are dropped and push fails with
   // `error` from now on.
   void stop(Error error);
 
  private:
-  const std::size_t capacity_;
+  BoundedQueue<Chunk> queue_;
   const std::size_t chunk_bytes_;
-  std::mutex mutex_;
-  std::condition_variable not_full_, not_empty_;
-  std::deque<Chunk> waiting_;
-  std::vector<Chunk> spares_;
-  bool closed_ = false;
-  std::optional<Error> stopped_;
+  std::mutex error_mutex_;
+  std::optional<Error> error_;  // why the consumer stopped
 };
 
 }  // namespace ncservo::cli
