@@ -6,7 +6,8 @@
 # instructions of its entry point a frame: the difference of the two runs over the N frames
 # between them (what a run pays once, such as the learning window's inference, stays out), and
 # the longer run's whole count over its frames. Instruction counts do not move with the load of
-# a shared machine.
+# a shared machine. One thread (`--read-thread off`), so that the stages add up to the frame: a
+# second thread adds the batches' copy and hand-over (docs/benchmarks.md "Two threads").
 #
 # Usage: tests/bench/frame_cost.sh [BUILD_DIR]     (default: the repository's build/)
 # Env:   NCSERVO_BENCH_FRAMES  N, frames of the shorter capture (default 50000; even)
@@ -26,7 +27,7 @@ for n in "$frames" "$((2 * frames))"; do
   python3 "$root/tests/tools/gen_capture.py" --axes 8 --cycles "$((n / 2))" --seed 3 \
     --enable-by "$enable_by" -o "$work/$n.pcap"
   valgrind --tool=callgrind --callgrind-out-file="$work/$n.out" \
-    "$ncservo" validate --format json --output /dev/null "$work/$n.pcap" 2>"$work/valgrind.err" ||
+    "$ncservo" validate --read-thread off --format json --output /dev/null "$work/$n.pcap" 2>"$work/valgrind.err" ||
     [ $? = 1 ] || { cat "$work/valgrind.err" >&2; exit 1; }  # 1: validate found something
   callgrind_annotate --inclusive=yes --threshold=100 "$work/$n.out" >"$work/$n.txt"
 done
