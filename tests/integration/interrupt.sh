@@ -4,7 +4,8 @@
 # report file renamed into place whole), standard error says "interrupted at CAPTURE, frame N",
 # and the exit status is 130. One capture at a time with the last one on standard input, cut
 # while it waits for more, and with --jobs 2 on files, the last
-# one long.
+# one long. Each with the capture read on the judging thread and on a thread of its own
+# (--read-thread off and on: docs/cli.md#two-threads).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 "$NCSERVO" simulate --duration 1.5 -o "$WORK/a.pcap" 2>/dev/null
@@ -14,14 +15,17 @@ source "$SRC/tests/integration/lib.sh"
 tail_frames=$("$NCSERVO" validate --format json "$WORK/tail.pcap" |
   python3 -c 'import json,sys; print(json.load(sys.stdin)["captures"][0]["frames"])')
 
-python3 - "$NCSERVO" "$WORK" "$tail_frames" <<'PY' || fail "Ctrl-C while validate reads its last capture"
+for mode in off on; do
+python3 - "$NCSERVO" "$WORK" "$tail_frames" "$mode" <<'PY' || fail "--read-thread $mode: Ctrl-C while validate reads its last capture"
 import json, os, signal, subprocess, sys, time
-ncservo, work, tail_frames = sys.argv[1], sys.argv[2], int(sys.argv[3])
+ncservo, work, tail_frames, mode = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+if os.path.exists(f"{work}/r.json"):
+    os.remove(f"{work}/r.json")
 # A shell running this in the background ignores SIGINT, and a child keeps it ignored.
 default_sigint = lambda: signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 def interrupted(argv, stdin, ready):
-    p = subprocess.Popen([ncservo, "validate", "--fail-on", "never", *argv], stdin=stdin,
+    p = subprocess.Popen([ncservo, "validate", "--read-thread", mode, "--fail-on", "never", *argv], stdin=stdin,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=work,
                          preexec_fn=default_sigint)
     deadline = time.time() + 60
@@ -90,4 +94,5 @@ unstarted = [n for l in err.splitlines() if "interrupted before " in l
 finished = [c for c in ["a.pcap", "b.pcap", "long.pcap"] if c not in cut + unstarted]
 check(rc, out, err, finished, cut, f"{work}/r.json")
 PY
+done
 echo "interrupt: Ctrl-C writes the captures finished, says where it stopped, exits 130"

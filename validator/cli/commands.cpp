@@ -34,8 +34,9 @@ void addTimestampsOption(CLI::App& command, std::string& timestamps) {
 void addReadThreadOption(CLI::App& command, std::string& read_thread) {
   command
       .add_option("--read-thread", read_thread,
-                  "on, off or auto: read and walk the frames on a thread of their own while "
-                  "another judges them (auto: when a core is free for it; docs/cli.md#two-threads)")
+                  "off (default), on or auto: read and walk the frames on a thread of their own "
+                  "while another judges them (auto: when the cores hold it; "
+                  "docs/cli.md#two-threads)")
       ->check(oneOf({"auto", "on", "off"}));
 }
 
