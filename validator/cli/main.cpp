@@ -582,12 +582,13 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   pipeline.setSinks({start, validate, nullptr, keepFindings});
   StreamStop stop{&cli::ReportWriter::interrupted()};
   const Status status = streamCapture(*reader, pipeline, &stop, threads);
-  const Validator& validator = *pipeline.validator();
   const CaptureRun& run = pipeline.run();
   if (stop.stopped) {  // Ctrl-C: not a report, only where it stopped (docs/cli.md#interrupted)
     report.frames = run.records;
     return kExitInterrupted;
   }
+  // Stopped inside the learning window, no validator exists yet; finished, there is one.
+  const Validator& validator = *pipeline.validator();
   const FrameClock& clock = pipeline.clock();
   report.first_time_ns = run.first_time_ns.value_or(0);
   report.frames = run.records;
