@@ -82,7 +82,9 @@ void DriftFit::add(std::int64_t frame_ns, std::uint64_t clock_ns) {
   }
   used_blocks_ = std::max(used_blocks_, block + 1);
   const auto clock_since_ns = static_cast<std::int64_t>(clock_ns - first_clock_ns_);
-  const double offset_ns = static_cast<double>(clock_since_ns - (frame_ns - first_frame_ns_));
+  // In double: a hostile clock may sit near the int64 range, where the difference overflows.
+  const double offset_ns =
+      static_cast<double>(clock_since_ns) - static_cast<double>(frame_ns - first_frame_ns_);
   blocks_[block].add(static_cast<double>(frame_ns - first_frame_ns_) / 1e9, offset_ns);
 }
 
