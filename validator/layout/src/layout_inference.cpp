@@ -10,6 +10,7 @@
 #include <cstring>
 #include <iterator>
 #include <limits>
+#include <numeric>
 #include <optional>
 
 #include "ncservo/base/little_endian.hpp"
@@ -176,6 +177,10 @@ bool dead(std::uint32_t seen, std::uint32_t violations) {
   return violations > 2 + seen / kToleranceDivisor;
 }
 
+bool dead(const RxCandidate& c) {
+  return dead(c.seen, c.violations);
+}
+
 // Not a TxPDO of this protocol: several checks failing at once in more than the tolerated
 // cycles, or one check failing in most of them (a drive's fault fails one check now and then).
 bool dead(const TxCandidate& c) {
@@ -192,15 +197,19 @@ struct Stream {
   std::uint32_t seen = 0;
   std::vector<RxCandidate> rx;  // by offset, when the master writes its data
   std::vector<TxCandidate> tx;  // by offset, when slaves write into it
+  // The offsets of the candidates still alive, in order: a dead candidate is never observed
+  // again, so it cannot come back, and most offsets die within the first cycles.
+  std::vector<std::uint16_t> rx_alive;
+  std::vector<std::uint16_t> tx_alive;
   // The master's copy of the current cycle, until its returned copy comes; a byte the returned
   // copy changed was written by a slave, so no RxPDO holds it (docs/protocol.md §8).
   std::vector<std::uint8_t> master_copy;
   bool master_pending = false;
-  std::vector<bool> slave_written;  // by byte, when the master writes data too
+  std::vector<std::uint8_t> slave_written;  // 1 by byte, when the master writes data too
 
   bool slaveWrote(std::size_t offset, std::size_t size) const {
     for (std::size_t i = offset; i < offset + size && i < slave_written.size(); ++i) {
-      if (slave_written[i]) return true;
+      if (slave_written[i] != 0) return true;
     }
     return false;
   }
@@ -285,13 +294,18 @@ struct LayoutInference::State {
     s.length = dg.length;
     if (ecat::writesSlaves(dg.command) && dg.length >= kRxPdoSize) {
       s.rx.resize(dg.length - kRxPdoSize + 1);
-      s.slave_written.resize(dg.length, false);
-      bytes += dg.length + dg.length / 8;
+      s.slave_written.resize(dg.length, 0);
+      bytes += 2 * std::size_t{dg.length};
     }
     if (ecat::readsSlaves(dg.command) && dg.length >= kTxPdoSize) {
       s.tx.resize(dg.length - kTxPdoSize + 1);
     }
-    bytes += s.rx.size() * sizeof(RxCandidate) + s.tx.size() * sizeof(TxCandidate);
+    s.rx_alive.resize(s.rx.size());
+    std::iota(s.rx_alive.begin(), s.rx_alive.end(), std::uint16_t{0});
+    s.tx_alive.resize(s.tx.size());
+    std::iota(s.tx_alive.begin(), s.tx_alive.end(), std::uint16_t{0});
+    bytes += s.rx.size() * (sizeof(RxCandidate) + sizeof(std::uint16_t)) +
+             s.tx.size() * (sizeof(TxCandidate) + sizeof(std::uint16_t));
     streams.push_back(std::move(s));
     return &streams.back();
   }
@@ -411,8 +425,9 @@ struct LayoutInference::State {
   static void compareWithMaster(Stream& s, const std::uint8_t* data) {
     if (!s.master_pending) return;
     s.master_pending = false;
+    // Bytes, not bits, so that the loop runs many bytes an instruction.
     for (std::size_t i = 0; i < s.master_copy.size(); ++i) {
-      if (s.master_copy[i] != data[i]) s.slave_written[i] = true;
+      s.slave_written[i] |= static_cast<std::uint8_t>(s.master_copy[i] != data[i]);
     }
   }
 
@@ -420,14 +435,25 @@ struct LayoutInference::State {
     if (&s == &streams.front()) ++cycles;
     ++s.seen;
     const std::uint32_t cycle = cycles == 0 ? 0 : cycles - 1;
-    for (std::size_t o = 0; o < s.rx.size(); ++o) {
-      RxCandidate& c = s.rx[o];
-      if (!dead(c.seen, c.violations)) observeRx(c, data + o, cycle);
+    observeAlive(s.rx, s.rx_alive, [&](RxCandidate& c, std::size_t o) {
+      observeRx(c, data + o, cycle);
+    });
+    observeAlive(s.tx, s.tx_alive, [&](TxCandidate& c, std::size_t o) {
+      observeTx(c, data + o, cycle);
+    });
+  }
+
+  // Observes each candidate still alive, in offset order, and forgets those that died.
+  template <class Candidate, class Observe>
+  static void observeAlive(std::vector<Candidate>& all, std::vector<std::uint16_t>& alive,
+                           Observe observe) {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < alive.size(); ++i) {
+      const std::uint16_t o = alive[i];
+      observe(all[o], o);
+      if (!dead(all[o])) alive[kept++] = o;
     }
-    for (std::size_t o = 0; o < s.tx.size(); ++o) {
-      TxCandidate& c = s.tx[o];
-      if (!dead(c)) observeTx(c, data + o, cycle);
-    }
+    alive.resize(kept);
   }
 };
 

@@ -56,14 +56,21 @@ constexpr const WordDef& wordDef(Word w) {
   return kWords[static_cast<std::size_t>(w)];
 }
 
-// Byte offset of a word inside its PDO: the sum of the sizes of the words before it.
-constexpr std::size_t wordOffset(Word w) {
-  std::size_t offset = 0;
+// Byte offset of each word inside its PDO: the sum of the sizes of the words before it, worked
+// out once, so that a word's offset is a load even where a loop over words hides its constant.
+inline constexpr std::array<std::size_t, kWordCount> kWordOffsets = [] {
+  std::array<std::size_t, kWordCount> offsets{};
+  std::array<std::size_t, 2> next{};  // by Pdo
   for (const auto& def : kWords) {
-    if (def.word == w) return offset;
-    if (def.pdo == wordDef(w).pdo) offset += def.size;
+    std::size_t& at = next[def.pdo == Pdo::Rx ? 0 : 1];
+    offsets[static_cast<std::size_t>(def.word)] = at;
+    at += def.size;
   }
-  return offset;
+  return offsets;
+}();
+
+constexpr std::size_t wordOffset(Word w) {
+  return kWordOffsets[static_cast<std::size_t>(w)];
 }
 
 constexpr std::size_t pdoSize(Pdo pdo) {
