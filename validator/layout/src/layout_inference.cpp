@@ -435,12 +435,10 @@ struct LayoutInference::State {
     if (&s == &streams.front()) ++cycles;
     ++s.seen;
     const std::uint32_t cycle = cycles == 0 ? 0 : cycles - 1;
-    observeAlive(s.rx, s.rx_alive, [&](RxCandidate& c, std::size_t o) {
-      observeRx(c, data + o, cycle);
-    });
-    observeAlive(s.tx, s.tx_alive, [&](TxCandidate& c, std::size_t o) {
-      observeTx(c, data + o, cycle);
-    });
+    observeAlive(s.rx, s.rx_alive,
+                 [&](RxCandidate& c, std::size_t o) { observeRx(c, data + o, cycle); });
+    observeAlive(s.tx, s.tx_alive,
+                 [&](TxCandidate& c, std::size_t o) { observeTx(c, data + o, cycle); });
   }
 
   // Observes each candidate still alive, in offset order, and forgets those that died.
