@@ -34,9 +34,10 @@ void addTimestampsOption(CLI::App& command, std::string& timestamps) {
 void addReadThreadOption(CLI::App& command, std::string& read_thread) {
   command
       .add_option("--read-thread", read_thread,
-                  "off (default), on or auto: read and walk the frames on a thread of their own "
-                  "while another judges them (auto: when the cores hold it; "
-                  "docs/cli.md#two-threads)")
+                  fmt::format("off, on or auto (default {}): read and walk the frames on a thread "
+                              "of their own while another judges them (auto: when the cores hold "
+                              "it; docs/cli.md#two-threads)",
+                              kReadThreadDefault))
       ->check(oneOf({"auto", "on", "off"}));
 }
 

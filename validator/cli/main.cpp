@@ -256,7 +256,7 @@ struct DecodeArgs {
   std::string timestamps = "auto";
   WindowArgs window;
   bool timing = false;  // the timing block on standard error at the end
-  std::string read_thread = "off";
+  std::string read_thread = cli::kReadThreadDefault;
 };
 
 // What every decode format reads and writes.
@@ -486,7 +486,7 @@ struct CheckArgs : cli::RuleArgs {
   LayoutArgs layout;
   std::string timestamps = "auto";
   WindowArgs window;
-  std::string read_thread = "off";
+  std::string read_thread = cli::kReadThreadDefault;
 };
 
 struct ValidateArgs : CheckArgs {
