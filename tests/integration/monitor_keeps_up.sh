@@ -9,8 +9,7 @@
 # all the same), or a monitor that lost frames after waiting for a CPU 100 ms or more of the replay
 # (the kernel's ring holds 150 ms of it) or while a hypervisor took 50 ms or more of the CPUs;
 # each tried three times, the monitor then with a real-time policy as docs/field.md advises on a
-# busy PC. Frames lost by a monitor that waited
-# less fail the test.
+# busy PC. Frames lost by a monitor that waited less fail the test.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 

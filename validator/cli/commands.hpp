@@ -30,10 +30,10 @@ using Handler = std::function<int()>;
 // --timestamps (docs/protocol.md §8: a probe's clock or the capturing PC's).
 void addTimestampsOption(CLI::App& command, std::string& timestamps);
 
-// --read-thread on|off|auto (docs/cli.md#two-threads): whether a capture is read and walked on a
-// thread of its own while another judges it.
 // --read-thread when not given: one thread (docs/cli.md#two-threads measures why).
 inline constexpr const char* kReadThreadDefault = "off";
+// --read-thread on|off|auto (docs/cli.md#two-threads): whether a capture is read and walked on a
+// thread of its own while another judges it.
 void addReadThreadOption(CLI::App& command, std::string& read_thread);
 // The threads of each of `captures` captures read at once, each keeping `busy` threads busy
 // without the reading thread: auto adds it when the cores hold one more thread per capture.

@@ -62,7 +62,7 @@ inline constexpr std::array<std::size_t, kWordCount> kWordOffsets = [] {
   std::array<std::size_t, kWordCount> offsets{};
   std::array<std::size_t, 2> next{};  // by Pdo
   for (const auto& def : kWords) {
-    std::size_t& at = next[def.pdo == Pdo::Rx ? 0 : 1];
+    std::size_t& at = next[static_cast<std::size_t>(def.pdo)];
     offsets[static_cast<std::size_t>(def.word)] = at;
     at += def.size;
   }
