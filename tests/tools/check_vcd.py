@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""check_vcd.py WAVES.vcd DECODE.jsonl FINDINGS.jsonl
+"""check_vcd.py WAVES.vcd DECODE.jsonl FINDINGS.jsonl [MORE.vcd...]
 
-Checks `ncservo decode --format vcd` against `decode --format jsonl` and `validate --format
+Checks `ncservo decode --format vcd` (and each further VCD of the same capture, such as one read
+back from FST) against `decode --format jsonl` and `validate --format
 jsonl` of the same capture:
 - every jsonl row: at its time, each field of its axis and its drive state in the VCD equal it;
 - every value change of a field in the VCD equals the first jsonl row of that axis at or after
@@ -88,15 +89,8 @@ def ns(seconds):
 
 
 def main():
-    vcd_path, decode_path, findings_path = sys.argv[1:4]
-    variables, changes = parse_vcd(vcd_path)
-    # Per axis scope: field key ("scw.se", "ssp", "state") -> identifier.
-    signals = defaultdict(dict)
-    for ident, (scope, name, kind, width) in variables.items():
-        axis = scope[0]
-        field = name if len(scope) == 1 or scope[-1] == name else f"{scope[-1]}.{name}"
-        signals[axis][field] = ident
-
+    decode_path, findings_path = sys.argv[2:4]
+    vcd_paths = [sys.argv[1]] + sys.argv[4:]
     with open(decode_path, encoding="utf-8") as f:
         rows = [json.loads(line) for line in f]
     with open(findings_path, encoding="utf-8") as f:
@@ -112,25 +106,49 @@ def main():
         latest = max(latest, ns((rows if kind == 0 else findings)[i]["time"]))
         times[(kind, i)] = latest
 
-    def value_at(ident, time):
-        history = changes.get(ident, [])
-        k = bisect.bisect_right(history, (time, chr(0x10FFFF))) - 1
-        if k < 0:
-            return None
-        kind, width = variables[ident][2], variables[ident][3]
-        return vcd_value(kind, width, history[k][1])
-
     scope_of = {}
     for r in rows:
         scope_of.setdefault(r["axis"], r["name"])
-    errors = []
-    checked = 0
     # The last row of each axis at each time is what the VCD shows then.
     last_rows = {}
     for i, r in enumerate(rows):
         last_rows[(r["axis"], times[(0, i)])] = r
+    ordered_rows = sorted(last_rows.items(), key=lambda kv: kv[0][1])
+    # Findings: the same (scope, time, rule) in both, with as many of each.
+    expected = defaultdict(int)
+    for i, x in enumerate(findings):
+        scope = BUS if x["axis"] is None else scope_of.get(x["axis"], f"axis{x['axis']}")
+        expected[(scope, times[(1, i)], x["rule"])] += 1
+    status = 0
+    for vcd_path in vcd_paths:
+        status |= check(vcd_path, ordered_rows, scope_of, expected)
+    return status
+
+
+def check(vcd_path, ordered_rows, scope_of, expected):
+    """Checks one VCD against the rows in time order and the findings expected; 1 if it differs."""
+    variables, changes = parse_vcd(vcd_path)
+    # Per axis scope: field key ("scw.se", "ssp", "state") -> identifier.
+    signals = defaultdict(dict)
+    for ident, (scope, name, kind, width) in variables.items():
+        axis = scope[0]
+        field = name if len(scope) == 1 or scope[-1] == name else f"{scope[-1]}.{name}"
+        signals[axis][field] = ident
+
+    # Each signal's change times and the jsonl values they stand for, decoded once.
+    decoded = {}
+    for ident, history in changes.items():
+        kind, width = variables[ident][2], variables[ident][3]
+        decoded[ident] = ([t for t, _ in history], [vcd_value(kind, width, v) for _, v in history])
+
+    errors = []
+    checked = 0
     rows_by_axis = defaultdict(list)
-    for (axis, time), r in sorted(last_rows.items(), key=lambda kv: kv[0][1]):
+    # Rows in time order, each signal's changes walked alongside: a signal whose VCD value and
+    # jsonl value are both as at the row before still agree, so only a change is compared.
+    cursor = {}  # identifier -> [index of its last change at or before the row, the row's value]
+    unset = object()
+    for (axis, time), r in ordered_rows:
         rows_by_axis[axis].append((time, r))
         scope = scope_of[axis]
         if scope not in signals:
@@ -139,16 +157,22 @@ def main():
         for key, value in r.items():
             if key in ("frame", "time", "axis", "name", "message"):
                 continue
-            field = key if key != "state" else "state"
-            ident = signals[scope].get(field)
+            ident = signals[scope].get(key)
             if ident is None:
                 errors.append(f"field {key} has no signal in {scope}")
                 continue
-            got = value_at(ident, time)
+            change_times, values = decoded.get(ident, ((), ()))
+            at = cursor.setdefault(ident, [-1, unset])
+            k = at[0]
+            while k + 1 < len(change_times) and change_times[k + 1] <= time:
+                k += 1
             checked += 1
-            if got != jsonl_value(value):
-                errors.append(f"{scope}.{key} at {time} ns (frame {r['frame']}): "
-                              f"VCD {got!r}, jsonl {value!r}")
+            if k != at[0] or value != at[1] or at[1] is unset:
+                got = values[k] if k >= 0 else None
+                if got != jsonl_value(value):
+                    errors.append(f"{scope}.{key} at {time} ns (frame {r['frame']}): "
+                                  f"VCD {got!r}, jsonl {value!r}")
+            at[0], at[1] = k, value
 
     # Each change of a field equals the first row at or after it.
     for axis, axis_rows in rows_by_axis.items():
@@ -157,8 +181,7 @@ def main():
         for field, ident in signals[scope].items():
             if field in ("state", "findings"):
                 continue
-            for time, text in changes.get(ident, []):
-                value = vcd_value(variables[ident][2], variables[ident][3], text)
+            for time, value in zip(*decoded.get(ident, ((), ()))):
                 if value is None:
                     continue
                 k = bisect.bisect_left(row_times, time)
@@ -171,11 +194,6 @@ def main():
                                   f"row (frame {row['frame']}) has {row[field]!r}")
                 checked += 1
 
-    # Findings: the same (scope, time, rule) in both, with as many of each.
-    expected = defaultdict(int)
-    for i, x in enumerate(findings):
-        scope = BUS if x["axis"] is None else scope_of.get(x["axis"], f"axis{x['axis']}")
-        expected[(scope, times[(1, i)], x["rule"])] += 1
     shown = defaultdict(int)
     for ident, (scope, name, kind, width) in variables.items():
         if name != "findings":
@@ -197,8 +215,8 @@ def main():
 
     if errors:
         for e in errors[:20]:
-            print("FAIL:", e, file=sys.stderr)
-        print(f"{len(errors)} differences", file=sys.stderr)
+            print(f"FAIL: {vcd_path}: {e}", file=sys.stderr)
+        print(f"{vcd_path}: {len(errors)} differences", file=sys.stderr)
         return 1
     print(f"{vcd_path}: {checked} values and {sum(expected.values())} findings agree")
     return 0
