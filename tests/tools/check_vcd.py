@@ -167,7 +167,7 @@ def check(vcd_path, ordered_rows, scope_of, expected):
             while k + 1 < len(change_times) and change_times[k + 1] <= time:
                 k += 1
             checked += 1
-            if k != at[0] or value != at[1] or at[1] is unset:
+            if k != at[0] or value != at[1]:
                 got = values[k] if k >= 0 else None
                 if got != jsonl_value(value):
                     errors.append(f"{scope}.{key} at {time} ns (frame {r['frame']}): "
