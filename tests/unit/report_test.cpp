@@ -2,6 +2,7 @@
 // timestamp precision from its header, findings counted by rule and axis, the rules' anchors.
 #include "ncservo/report/report.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -41,6 +42,43 @@ INSTANTIATE_TEST_SUITE_P(
         IsoRow{"end_of_pcap_range", 4294967295000000000, 6, "2106-02-07T06:28:15.000000Z"},
         IsoRow{"digits_clamped", 1500000000, 12, "1970-01-01T00:00:01.500000000Z"}),
     test::rowName<IsoRow>);
+
+// writeSeconds against fmt's "{:.6f}" of ns / 1e9, which the text report wrote before: the same
+// digits, halfway cases (ns ending in 500), the limit of exact doubles and negative times included.
+struct SecondsRow {
+  const char* name;
+  std::int64_t first_ns;
+  std::int64_t count;  // consecutive values from first_ns
+  std::int64_t step;
+};
+
+class WriteSeconds : public ::testing::TestWithParam<SecondsRow> {};
+
+TEST_P(WriteSeconds, WritesTheDigitsOfFixedSixDecimals) {
+  const SecondsRow& row = GetParam();
+  for (std::int64_t k = 0; k < row.count; ++k) {
+    const std::int64_t ns = row.first_ns + k * row.step;
+    char text[kSecondsTextSize];
+    const std::string written(text, writeSeconds(ns, text));
+    ASSERT_EQ(written, fmt::format("{:.6f}", static_cast<double>(ns) / 1e9)) << "ns = " << ns;
+  }
+}
+
+constexpr std::int64_t kTwoTo53 = std::int64_t{1} << 53;
+
+INSTANTIATE_TEST_SUITE_P(
+    Rows, WriteSeconds,
+    ::testing::Values(
+        SecondsRow{"zero_to_3000", 0, 3001, 1}, SecondsRow{"halfway_small", 500, 2000, 1000},
+        SecondsRow{"around_one_second", 999998000, 4001, 1},
+        SecondsRow{"hour_halfway", 3600000000500, 1000, 1000},
+        SecondsRow{"day_steps", 86399999999000, 2001, 1},
+        SecondsRow{"year_halfway", 31536000000000500, 1000, 1000},
+        SecondsRow{"below_exact_limit", kTwoTo53 - 2000, 2000, 1},
+        SecondsRow{"exact_limit_and_above", kTwoTo53, 2000, 1},
+        SecondsRow{"negative", -3000, 3000, 1}, SecondsRow{"spread", 1, 100000, 90071992547},
+        SecondsRow{"int64_max", INT64_MAX, 1, 0}, SecondsRow{"int64_min", INT64_MIN, 1, 0}),
+    test::rowName<SecondsRow>);
 
 struct DigitsRow {
   const char* name;

@@ -1,5 +1,6 @@
 #include "ncservo/report/report.hpp"
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <stdlib.h>
@@ -264,6 +265,18 @@ std::string isoUtc(std::int64_t time_ns, int digits) {
     text += fmt::format(".{:0{}}", fraction, digits);
   }
   return text + "Z";
+}
+
+char* writeSeconds(std::int64_t ns, char* out) {
+  // Whole microseconds give {:.6f}'s digits wherever ns is not halfway between two: ns / 1e9 is
+  // then at least 1e-9 s from a rounding boundary, and below 2^53 ns the double it becomes is
+  // less than that from it. Halfway, the double's own rounding decides, so fmt does it.
+  constexpr std::int64_t kExactBelow = std::int64_t{1} << 53;
+  if (ns >= 0 && ns < kExactBelow && ns % 1000 != 500) {
+    const std::int64_t us = (ns + 500) / 1000;
+    return fmt::format_to(out, FMT_COMPILE("{}.{:06}"), us / 1000000, us % 1000000);
+  }
+  return fmt::format_to(out, "{:.6f}", static_cast<double>(ns) / 1e9);
 }
 
 Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<ReportTarget>& targets,

@@ -1,5 +1,6 @@
 // `validate --format text`: findings grouped per rule and axis (each one with --verbose), each
 // capture's summary, and the verdict line.
+#include <fmt/compile.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -226,11 +227,22 @@ void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
                       BaselineState state) {
   if (!sink.policy.verbose) return;
-  fmt::print(sink.out, "{:<7} {:<7} {} frame {} ({:.6f} s){}: {}{}\n", severityName(f.severity),
-             ruleDef(f.rule).code, axisLabel(r, f.axis), f.at.frame, seconds(r, f.at),
-             f.since.frame != f.at.frame ? fmt::format(", since frame {}", f.since.frame) : "",
-             f.message,
-             state == BaselineState::None ? "" : fmt::format(" [{}]", baselineStateName(state)));
+  // One buffer and compiled formats: a storm of findings writes thousands of these lines a
+  // second, and the monitor must keep up with the bus meanwhile (docs/benchmarks.md).
+  fmt::memory_buffer line;
+  auto out = std::back_inserter(line);
+  fmt::format_to(out, FMT_COMPILE("{:<7} {:<7} {} frame {} ("), severityName(f.severity),
+                 ruleDef(f.rule).code, axisLabel(r, f.axis), f.at.frame);
+  char time[kSecondsTextSize];
+  line.append(time, writeSeconds(f.at.time_ns - r.first_time_ns, time));
+  fmt::format_to(out, FMT_COMPILE(" s)"));
+  if (f.since.frame != f.at.frame)
+    fmt::format_to(out, FMT_COMPILE(", since frame {}"), f.since.frame);
+  fmt::format_to(out, FMT_COMPILE(": {}"), f.message);
+  if (state != BaselineState::None)
+    fmt::format_to(out, FMT_COMPILE(" [{}]"), baselineStateName(state));
+  line.push_back('\n');
+  std::fwrite(line.data(), 1, line.size(), sink.out);
 }
 
 namespace {

@@ -177,6 +177,12 @@ Status locateFindings(CaptureReport& report);
 // ("2024-05-01T12:00:00.123456Z").
 std::string isoUtc(std::int64_t time_ns, int digits);
 
+// Seconds with six decimals, the digits `fmt::format("{:.6f}", ns / 1e9)` gives, written into
+// `out` (at least kSecondsTextSize bytes); returns their end. A finding's line in the text report
+// writes one; a storm of findings writes thousands a second.
+inline constexpr std::size_t kSecondsTextSize = 32;
+char* writeSeconds(std::int64_t ns, char* out);
+
 // The anchor of a rule in docs/rules.md ("se-001"), and the address SARIF's helpUri gives it.
 std::string ruleAnchor(const RuleDef& rule);
 std::string ruleHelpUri(const RuleDef& rule);
