@@ -1,6 +1,7 @@
 #include "ncservo/rules/validator.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace ncservo {
 
@@ -167,11 +168,11 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
     const AxisPlacement& placement = decode.axes[i];
     AxisSlot& s = *frame_slots_[i];
     AxisModel& model = *s.model;
-    // Fast path: the bits the model and the rules read are unchanged and no timer runs, so no
-    // condition can have changed (rules report at beginnings and at timeouts only). Only
+    // Fast path: the bits the model and the rules read are unchanged and no timer runs out, so
+    // no condition can have changed (rules report at beginnings and at timeouts only). Only
     // those words are read; the whole PDOs are read when the model takes them.
-    if (!fast_path_ || s.pending != 0 || s.evaluated_revision != model.revision() ||
-        !unchanged(placement, bytes, model)) {
+    if (!fast_path_ || (s.pending != 0 && now_.time_ns > s.pending_until_ns) ||
+        s.evaluated_revision != model.revision() || !unchanged(placement, bytes, model)) {
       PdoValues values;
       readFrameValues(placement, bytes, values);
       model.observe(values, now_);
@@ -243,6 +244,7 @@ void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
 void Validator::evaluateAxis(AxisSlot& s) {
   const AxisModel& model = *s.model;
   const RuleSubject subject{&model, nullptr};
+  s.pending_until_ns = std::numeric_limits<std::int64_t>::max();
   for (const RuleDef& rule : kRules) {
     if (rule.kind != RuleKind::Axis || !settings_.isEnabled(rule.id)) continue;
     Episode& episode = s.episodes[static_cast<std::size_t>(rule.id)];
@@ -255,8 +257,11 @@ void Validator::evaluateAxis(AxisSlot& s) {
     if (!episode.active) episode = Episode{true, false, now_};
     if (episode.reported) continue;
     const std::int64_t held = now_.time_ns - episode.began.time_ns;
-    if (rule.delayed && held <= settings_.timeoutNs(*rule.timeout)) {
+    const std::int64_t timeout = rule.delayed ? settings_.timeoutNs(*rule.timeout) : 0;
+    if (rule.delayed && held <= timeout) {
       if (!was_pending) ++s.pending;
+      // held <= timeout: began + timeout does not overflow where now_ does not
+      s.pending_until_ns = std::min(s.pending_until_ns, now_.time_ns + (timeout - held));
       continue;
     }
     if (was_pending) --s.pending;

@@ -85,6 +85,9 @@ class Validator {
     std::optional<AxisModel> model;
     std::array<Episode, kRuleCount> episodes{};
     std::uint32_t pending = 0;  // delayed episodes running towards their timeout
+    // The earliest time one of them can report (its start plus its timeout): until then a
+    // frame that changes nothing the rules read changes no condition either.
+    std::int64_t pending_until_ns = 0;
     std::optional<std::uint64_t> evaluated_revision;
     std::uint64_t al_epoch = 0;  // al_epoch_ when the AL state was last taken (0: never)
     std::optional<std::uint16_t> al_station;  // the station it was taken from
