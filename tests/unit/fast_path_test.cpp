@@ -207,6 +207,25 @@ std::vector<SimRow> simRows() {
     rows.push_back(r);
   }
   {
+    // Communication lost again and again: drives fault (E15) and are cleared, delayed rules'
+    // timers run most of the time, and the fast path skips an axis until the first can run out.
+    SimRow r{"soak_lost_cycles_drives_faulting", opts(Scenario::Soak, 8, 4), true};
+    r.options.seed = 4;
+    for (int k = 1; k < 150; ++k) {
+      r.options.lost_cycles.push_back({0.5 + 0.02 * k, 3, "lost"});
+    }
+    // and the delayed rules' conditions held past their timeouts meanwhile
+    for (const RuleDef& rule : kRules) {
+      if (rule.kind != RuleKind::Axis || !rule.delayed) continue;
+      sim::FaultRequest fault;
+      fault.rule = rule.id;
+      fault.at_s = 0.7 + 0.2 * static_cast<double>(r.options.faults.size());
+      fault.text = rule.code;
+      r.options.faults.push_back(fault);
+    }
+    rows.push_back(r);
+  }
+  {
     // Without a start-up no AL state is known, so the fast path runs throughout: every fault the
     // simulator can inject there, one after another.
     SimRow r{"soak_no_startup_every_axis_fault", opts(Scenario::Soak, 8, 12), true};
