@@ -92,5 +92,5 @@ done
 rc=0
 "$NCSERVO" validate --read-thread sometimes long.pcapng >/dev/null 2>err || rc=$?
 [ "$rc" = 2 ] || fail "--read-thread sometimes: exit $rc"
-grep -q "sometimes is not one of {auto,on,off}" err || fail "--read-thread sometimes: $(cat err)"
+grep -q "sometimes is not one of {off,on,auto}" err || fail "--read-thread sometimes: $(cat err)"
 echo PASS

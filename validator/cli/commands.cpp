@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 #include "ncservo/base/number.hpp"
 #include "ncservo/base/text.hpp"
@@ -31,19 +33,34 @@ void addTimestampsOption(CLI::App& command, std::string& timestamps) {
       ->check(oneOf({"capture", "probe", "auto"}));
 }
 
+namespace {
+
+// The choices of --read-thread: how many threads each names (auto: none, the cores decide).
+struct ReadThreadChoice {
+  const char* name;
+  std::optional<CaptureThreads> threads;
+};
+constexpr ReadThreadChoice kReadThreadChoices[] = {
+    {"off", CaptureThreads::One}, {"on", CaptureThreads::Two}, {"auto", std::nullopt}};
+
+}  // namespace
+
 void addReadThreadOption(CLI::App& command, std::string& read_thread) {
+  std::vector<std::string> names;
+  for (const ReadThreadChoice& choice : kReadThreadChoices) names.emplace_back(choice.name);
   command
       .add_option("--read-thread", read_thread,
-                  fmt::format("off, on or auto (default {}): read and walk the frames on a thread "
-                              "of their own while another judges them (auto: when the cores hold "
-                              "it; docs/cli.md#two-threads)",
-                              kReadThreadDefault))
-      ->check(oneOf({"auto", "on", "off"}));
+                  fmt::format("{} (default {}): read and walk the frames on a thread of their own "
+                              "while another judges them (auto: when the cores hold it; "
+                              "docs/cli.md#two-threads)",
+                              fmt::join(names, ", "), kReadThreadDefault))
+      ->check(oneOf(names));
 }
 
 CaptureThreads captureThreads(const std::string& read_thread, unsigned captures, unsigned busy) {
-  if (read_thread == "on") return CaptureThreads::Two;
-  if (read_thread == "off") return CaptureThreads::One;
+  for (const ReadThreadChoice& choice : kReadThreadChoices) {
+    if (read_thread == choice.name && choice.threads) return *choice.threads;
+  }
   const unsigned cores = std::thread::hardware_concurrency();  // 0: unknown, taken as one
   return captures * (busy + 1) <= cores ? CaptureThreads::Two : CaptureThreads::One;
 }
