@@ -169,6 +169,21 @@ sim::SimOptions opts(sim::Scenario scenario, int axes, double duration_s) {
   return o;
 }
 
+// A fault of each axis rule `wanted` accepts, the first at `first_s`, then one every `every_s`.
+std::vector<sim::FaultRequest> faultsOneAfterAnother(double first_s, double every_s,
+                                                     bool (*wanted)(const RuleDef&)) {
+  std::vector<sim::FaultRequest> faults;
+  for (const RuleDef& rule : kRules) {
+    if (rule.kind != RuleKind::Axis || !wanted(rule)) continue;
+    sim::FaultRequest fault;
+    fault.rule = rule.id;
+    fault.at_s = first_s + every_s * static_cast<double>(faults.size());
+    fault.text = rule.code;
+    faults.push_back(fault);
+  }
+  return faults;
+}
+
 std::vector<SimRow> simRows() {
   using sim::Scenario;
   std::vector<SimRow> rows;
@@ -215,14 +230,8 @@ std::vector<SimRow> simRows() {
       r.options.lost_cycles.push_back({0.5 + 0.02 * k, 3, "lost"});
     }
     // and the delayed rules' conditions held past their timeouts meanwhile
-    for (const RuleDef& rule : kRules) {
-      if (rule.kind != RuleKind::Axis || !rule.delayed) continue;
-      sim::FaultRequest fault;
-      fault.rule = rule.id;
-      fault.at_s = 0.7 + 0.2 * static_cast<double>(r.options.faults.size());
-      fault.text = rule.code;
-      r.options.faults.push_back(fault);
-    }
+    r.options.faults =
+        faultsOneAfterAnother(0.7, 0.2, [](const RuleDef& rule) { return rule.delayed; });
     rows.push_back(r);
   }
   {
@@ -230,14 +239,8 @@ std::vector<SimRow> simRows() {
     // simulator can inject there, one after another.
     SimRow r{"soak_no_startup_every_axis_fault", opts(Scenario::Soak, 8, 12), true};
     r.options.startup = false;
-    for (const RuleDef& rule : kRules) {
-      if (rule.kind != RuleKind::Axis || rule.id == RuleId::Esm002) continue;
-      sim::FaultRequest fault;
-      fault.rule = rule.id;
-      fault.at_s = 1.0 + 0.5 * static_cast<double>(r.options.faults.size());
-      fault.text = rule.code;
-      r.options.faults.push_back(fault);
-    }
+    r.options.faults = faultsOneAfterAnother(
+        1.0, 0.5, [](const RuleDef& rule) { return rule.id != RuleId::Esm002; });
     rows.push_back(r);
   }
   return rows;
