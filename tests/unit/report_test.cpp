@@ -40,11 +40,29 @@ INSTANTIATE_TEST_SUITE_P(
         IsoRow{"millis", 1714564800007000000, 3, "2024-05-01T12:00:00.007Z"},
         IsoRow{"leap_day", 951782400000000000, 6, "2000-02-29T00:00:00.000000Z"},
         IsoRow{"end_of_pcap_range", 4294967295000000000, 6, "2106-02-07T06:28:15.000000Z"},
-        IsoRow{"digits_clamped", 1500000000, 12, "1970-01-01T00:00:01.500000000Z"}),
+        IsoRow{"digits_clamped", 1500000000, 12, "1970-01-01T00:00:01.500000000Z"},
+        IsoRow{"negative_digits_clamped", 1500000000, -3, "1970-01-01T00:00:01Z"},
+        IsoRow{"before_the_epoch", -1, 6, "1969-12-31T23:59:59.999999Z"},
+        IsoRow{"one_digit", 1714564800987654321, 1, "2024-05-01T12:00:00.9Z"},
+        IsoRow{"next_second", 1714564801000000001, 9, "2024-05-01T12:00:01.000000001Z"}),
     test::rowName<IsoRow>);
 
 // writeSeconds against fmt's "{:.6f}" of ns / 1e9, which the text report wrote before: the same
 // digits, halfway cases (ns ending in 500), the limit of exact doubles and negative times included.
+// isoUtc keeps the calendar text of the last second it was asked for: times in one second, then
+// in another, then in the first again, each as if asked alone.
+TEST(IsoUtcSequence, KeepsNoTextOfAnotherSecond) {
+  const std::vector<std::pair<std::int64_t, const char*>> asked{
+      {1714564800000000000, "2024-05-01T12:00:00.000000Z"},
+      {1714564800999999999, "2024-05-01T12:00:00.999999Z"},
+      {1714564801000000000, "2024-05-01T12:00:01.000000Z"},
+      {-1000000000, "1969-12-31T23:59:59.000000Z"},
+      {1714564800000000001, "2024-05-01T12:00:00.000000Z"},
+      {951782400000000000, "2000-02-29T00:00:00.000000Z"},
+  };
+  for (const auto& [time_ns, expected] : asked) EXPECT_EQ(isoUtc(time_ns, 6), expected) << time_ns;
+}
+
 struct SecondsRow {
   const char* name;
   std::int64_t first_ns;

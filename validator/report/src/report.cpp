@@ -14,6 +14,7 @@
 #include <ctime>
 #include <filesystem>
 #include <iterator>
+#include <limits>
 
 namespace ncservo::cli {
 
@@ -253,18 +254,32 @@ std::string isoUtc(std::int64_t time_ns, int digits) {
   const std::int64_t seconds =
       time_ns >= 0 ? time_ns / kNsPerSecond : -((-time_ns + kNsPerSecond - 1) / kNsPerSecond);
   const std::int64_t nanoseconds = time_ns - seconds * kNsPerSecond;
-  const std::time_t whole = static_cast<std::time_t>(seconds);
-  std::tm utc{};
-  gmtime_r(&whole, &utc);
-  std::string text = fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}", utc.tm_year + 1900,
-                                 utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec);
+  // A report asks for many times within one second (findings, state changes, incidents): the
+  // calendar part of the last second asked for is kept.
+  thread_local std::int64_t last_second = std::numeric_limits<std::int64_t>::min();
+  thread_local char calendar[64];
+  thread_local std::size_t calendar_size = 0;
+  if (seconds != last_second) {
+    const std::time_t whole = static_cast<std::time_t>(seconds);
+    std::tm utc{};
+    gmtime_r(&whole, &utc);
+    calendar_size =
+        fmt::format_to_n(calendar, sizeof calendar,
+                         FMT_COMPILE("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}"), utc.tm_year + 1900,
+                         utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec)
+            .size;
+    last_second = seconds;
+  }
+  std::string text(calendar, std::min(calendar_size, sizeof calendar));
   digits = std::clamp(digits, 0, 9);
   if (digits > 0) {
-    std::int64_t fraction = nanoseconds;
-    for (int d = digits; d < 9; ++d) fraction /= 10;
-    text += fmt::format(".{:0{}}", fraction, digits);
+    // The first `digits` of the nine: the fraction truncated, as the capture's precision has it.
+    char fraction[16];
+    fmt::format_to(fraction, FMT_COMPILE(".{:09}"), nanoseconds);
+    text.append(fraction, 1 + static_cast<std::size_t>(digits));
   }
-  return text + "Z";
+  text += 'Z';
+  return text;
 }
 
 char* writeSeconds(std::int64_t ns, char* out) {
