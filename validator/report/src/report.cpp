@@ -1,6 +1,5 @@
 #include "ncservo/report/report.hpp"
 
-#include <fmt/compile.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <stdlib.h>
@@ -264,9 +263,9 @@ std::string isoUtc(std::int64_t time_ns, int digits) {
     std::tm utc{};
     gmtime_r(&whole, &utc);
     calendar_size =
-        fmt::format_to_n(calendar, sizeof calendar,
-                         FMT_COMPILE("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}"), utc.tm_year + 1900,
-                         utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec)
+        fmt::format_to_n(calendar, sizeof calendar, "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}",
+                         utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min,
+                         utc.tm_sec)
             .size;
     last_second = seconds;
   }
@@ -275,7 +274,7 @@ std::string isoUtc(std::int64_t time_ns, int digits) {
   if (digits > 0) {
     // The first `digits` of the nine: the fraction truncated, as the capture's precision has it.
     char fraction[16];
-    fmt::format_to(fraction, FMT_COMPILE(".{:09}"), nanoseconds);
+    fmt::format_to(fraction, ".{:09}", nanoseconds);
     text.append(fraction, 1 + static_cast<std::size_t>(digits));
   }
   text += 'Z';
@@ -289,7 +288,7 @@ char* writeSeconds(std::int64_t ns, char* out) {
   constexpr std::int64_t kExactBelow = std::int64_t{1} << 53;
   if (ns >= 0 && ns < kExactBelow && ns % 1000 != 500) {
     const std::int64_t us = (ns + 500) / 1000;
-    return fmt::format_to(out, FMT_COMPILE("{}.{:06}"), us / 1000000, us % 1000000);
+    return fmt::format_to(out, "{}.{:06}", us / 1000000, us % 1000000);
   }
   return fmt::format_to(out, "{:.6f}", static_cast<double>(ns) / 1e9);
 }

@@ -1,6 +1,5 @@
 // `validate --format text`: findings grouped per rule and axis (each one with --verbose), each
 // capture's summary, and the verdict line.
-#include <fmt/compile.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -227,20 +226,18 @@ void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
                       BaselineState state) {
   if (!sink.policy.verbose) return;
-  // One buffer and compiled formats: a storm of findings writes thousands of these lines a
+  // One buffer, no temporary strings: a storm of findings writes thousands of these lines a
   // second, and the monitor must keep up with the bus meanwhile (docs/benchmarks.md).
   fmt::memory_buffer line;
   auto out = std::back_inserter(line);
-  fmt::format_to(out, FMT_COMPILE("{:<7} {:<7} {} frame {} ("), severityName(f.severity),
-                 ruleDef(f.rule).code, axisLabel(r, f.axis), f.at.frame);
+  fmt::format_to(out, "{:<7} {:<7} {} frame {} (", severityName(f.severity), ruleDef(f.rule).code,
+                 axisLabel(r, f.axis), f.at.frame);
   char time[kSecondsTextSize];
   line.append(time, writeSeconds(f.at.time_ns - r.first_time_ns, time));
-  fmt::format_to(out, FMT_COMPILE(" s)"));
-  if (f.since.frame != f.at.frame)
-    fmt::format_to(out, FMT_COMPILE(", since frame {}"), f.since.frame);
-  fmt::format_to(out, FMT_COMPILE(": {}"), f.message);
-  if (state != BaselineState::None)
-    fmt::format_to(out, FMT_COMPILE(" [{}]"), baselineStateName(state));
+  fmt::format_to(out, " s)");
+  if (f.since.frame != f.at.frame) fmt::format_to(out, ", since frame {}", f.since.frame);
+  fmt::format_to(out, ": {}", f.message);
+  if (state != BaselineState::None) fmt::format_to(out, " [{}]", baselineStateName(state));
   line.push_back('\n');
   std::fwrite(line.data(), 1, line.size(), sink.out);
 }

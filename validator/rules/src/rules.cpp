@@ -2,7 +2,6 @@
 // model's state only; the validator owns timing and the once-per-episode discipline.
 #include "ncservo/rules/rules.hpp"
 
-#include <fmt/compile.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -268,10 +267,8 @@ bool com005(const AxisModel& a, const RuleSettings& s) {
   return a.consecutiveFailed() > s.telegram_failure_limit;
 }
 std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
-  // Compiled: a bus that keeps failing reports this on every axis.
-  return fmt::format(
-      FMT_COMPILE("{} consecutive telegram failures exceed the limit of {} (total {})"),
-      a.consecutiveFailed(), s.telegram_failure_limit, a.totalFailures());
+  return fmt::format("{} consecutive telegram failures exceed the limit of {} (total {})",
+                     a.consecutiveFailed(), s.telegram_failure_limit, a.totalFailures());
 }
 
 // --- EtherCAT state machine, per axis (docs/protocol.md §8) ---
@@ -308,29 +305,27 @@ bool com002(const CycleGapEvent&, const RuleSettings&) {
 }
 std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&) {
   using Verdict = CycleGapEvent::Verdict;
-  // One buffer and compiled formats: a failing bus reports a gap every few cycles.
+  // One buffer: a failing bus reports a gap every few cycles.
   fmt::memory_buffer text;
   auto out = std::back_inserter(text);
   const bool late = e.verdict == Verdict::Late;
   if (late) {
-    fmt::format_to(out, FMT_COMPILE("late cycle: "));
+    fmt::format_to(out, "late cycle: ");
   } else {
-    fmt::format_to(out, FMT_COMPILE("{} cycle{} lost: "), e.missing, e.missing == 1 ? "" : "s");
+    fmt::format_to(out, "{} cycle{} lost: ", e.missing, e.missing == 1 ? "" : "s");
   }
-  fmt::format_to(out, FMT_COMPILE("{:.3f} ms from frame {} to frame {}"),
+  fmt::format_to(out, "{:.3f} ms from frame {} to frame {}",
                  static_cast<double>(e.interval_ns) / 1e6, e.previous_frame, e.next_frame);
   if (e.next_interval_ns) {
-    fmt::format_to(out, FMT_COMPILE(", then {:.3f} ms"),
-                   static_cast<double>(*e.next_interval_ns) / 1e6);
+    fmt::format_to(out, ", then {:.3f} ms", static_cast<double>(*e.next_interval_ns) / 1e6);
   }
-  if (late) fmt::format_to(out, FMT_COMPILE("; nothing missing"));
-  fmt::format_to(out, FMT_COMPILE(" ({:.3f} ms nominal)"), static_cast<double>(e.nominal_ns) / 1e6);
+  if (late) fmt::format_to(out, "; nothing missing");
+  fmt::format_to(out, " ({:.3f} ms nominal)", static_cast<double>(e.nominal_ns) / 1e6);
   if (e.verdict == Verdict::CaptureEnds) {
-    fmt::format_to(out, FMT_COMPILE("; the capture ends before the next cycle: late or lost "
-                                    "cannot be told"));
+    fmt::format_to(out, "; the capture ends before the next cycle: late or lost cannot be told");
   } else if (e.verdict == Verdict::SegmentEnds) {
-    fmt::format_to(out, FMT_COMPILE("; a capture segment starts before the next cycle: late or "
-                                    "lost cannot be told"));
+    fmt::format_to(out,
+                   "; a capture segment starts before the next cycle: late or lost cannot be told");
   }
   return fmt::to_string(text);
 }
@@ -373,21 +368,21 @@ bool com004(const NotReturnedEvent&, const RuleSettings&) {
   return true;
 }
 std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettings&) {
-  // One buffer and compiled formats: a lossy ring reports this every few cycles.
+  // One buffer: a lossy ring reports this every few cycles.
   fmt::memory_buffer text;
   auto out = std::back_inserter(text);
-  fmt::format_to(out, FMT_COMPILE("the master frame {} ("), e.master_frame);
+  fmt::format_to(out, "the master frame {} (", e.master_frame);
   if (e.axes) {
-    fmt::format_to(out, FMT_COMPILE("axes {}-{}"), e.axes->first, e.axes->last);
+    fmt::format_to(out, "axes {}-{}", e.axes->first, e.axes->last);
   } else {
-    fmt::format_to(out, FMT_COMPILE("{} at 0x{:08X}, {} byte{}"), ecat::commandName(e.command),
-                   e.address, e.length, e.length == 1 ? "" : "s");
+    fmt::format_to(out, "{} at 0x{:08X}, {} byte{}", ecat::commandName(e.command), e.address,
+                   e.length, e.length == 1 ? "" : "s");
     const int more = e.datagrams - 1;
     if (more > 0) {
-      fmt::format_to(out, FMT_COMPILE(", and {} more datagram{}"), more, more == 1 ? "" : "s");
+      fmt::format_to(out, ", and {} more datagram{}", more, more == 1 ? "" : "s");
     }
   }
-  fmt::format_to(out, FMT_COMPILE(") was not returned before the next cycle's master frame"));
+  fmt::format_to(out, ") was not returned before the next cycle's master frame");
   return fmt::to_string(text);
 }
 
