@@ -584,7 +584,7 @@ const char* infoText(const FrameRecord& record) {
 }
 
 // The frame's axes as the first pass found them, in an array shared with recent frames alike.
-SharedAxes& keepAxes(std::uint64_t number, const ValidatedFrame& view, const Validator& by) {
+SharedAxes& keepAxes(std::uint64_t number, const Observation& view, const Validator& by) {
   const FrameDecode& decode = view.decode;
   static AxisRecord axes[kMaxAxesPerFrame];  // dissection is single-threaded
   // Zeroed whole, padding included, for the comparison below.
@@ -721,7 +721,7 @@ void keepIncidents(FrameRecord& record) {
 // Keeps what the validator found in one frame, by frame number.
 void validateFrame(const PipelineFrame& delivered) {
   const std::uint64_t number = delivered.number;
-  const ValidatedFrame& view = *delivered.judged;
+  const Observation& view = *delivered.judged;
   const FrameDecode& decode = view.decode;
   const Validator& by = *validator();
   const bool any_findings = !by.findings().empty();
@@ -752,20 +752,6 @@ void validateFrame(const PipelineFrame& delivered) {
   }
 }
 
-// Whether a frame may carry a servo's PDOs once the layout is known: a logical datagram, or one
-// addressed to a slave's process memory (above its registers), as a physical exchange is.
-bool mayCarryProcessData(const EcatFrame& frame) {
-  constexpr std::uint32_t kProcessMemory = 0x1000;
-  for (std::size_t i = 0; i < frame.count; ++i) {
-    const Datagram& dg = frame.datagrams[i];
-    if (ecat::isLogical(dg.command) ||
-        (ecat::isConfiguredAddress(dg.command) && dg.ado() >= kProcessMemory)) {
-      return true;
-    }
-  }
-  return false;
-}
-
 // A frame the learning window holds, on the first pass: judged in its turn for the findings that
 // need no layout; one that may carry process data says that its layout is being learned.
 void keepHeldFrame(std::uint64_t number, std::int64_t time_ns, const ByteReader& bytes,
@@ -776,7 +762,7 @@ void keepHeldFrame(std::uint64_t number, std::int64_t time_ns, const ByteReader&
   }
   g_held_validator->onFrame(number, time_ns, frame, bytes);
   const std::vector<Finding>& findings = g_held_validator->findings();
-  const bool held = mayCarryProcessData(frame);
+  const bool held = frame.mayCarryProcessData();
   const bool any_findings = std::any_of(findings.begin(), findings.end(), needsNoLayout);
   if (!held && !any_findings) return;
   FrameRecord& record = freshRecord(number);

@@ -62,7 +62,7 @@ inline std::size_t feedFrame(Validator& validator, LinkType link, std::uint64_t 
   const ByteReader bytes(data, size);
   walkPacket(link, bytes, frame);
   if (frame.status == WalkStatus::NotEtherCat || frame.status == WalkStatus::NotDatagrams) return 0;
-  const ValidatedFrame& view = validator.onFrame(number, time_ns, frame, bytes);
+  const Observation& view = validator.onFrame(number, time_ns, frame, bytes);
   std::size_t seen = view.decode.axis_count + validator.findings().size();
   for (std::size_t i = 0; i < view.decode.axis_count; ++i) {
     PdoValues values;  // as the plugin reads them at the placements

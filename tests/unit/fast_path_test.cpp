@@ -53,7 +53,7 @@ class Transcript {
   }
   void validate(std::uint64_t number, std::int64_t time_ns, const EcatFrame& walked,
                 const ByteReader& bytes) {
-    const ValidatedFrame& v = validator_->onFrame(number, time_ns, walked, bytes);
+    const Observation& v = validator_->onFrame(number, time_ns, walked, bytes);
     for (const Finding& f : validator_->findings()) {
       lines_.push_back(std::to_string(number) + " " + ruleDef(f.rule).code + " axis " +
                        (f.axis ? std::to_string(*f.axis) : "-") + " since " +

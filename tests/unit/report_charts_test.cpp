@@ -41,9 +41,9 @@ Recorded record(const test::Script& script) {
         validator.emplace(test::defaultLayoutOf(*w.frame, DecoderOptions{}), script.ruleSettings());
         first_ns = script.timeOf(at);
       }
-      const ValidatedFrame& frame =
+      const Observation& frame =
           validator->onFrame(++number, script.timeOf(at), *w.frame, w.reader());
-      recorder.frame(number, script.timeOf(at) - first_ns, frame, w.reader());
+      recorder.frame(number, script.timeOf(at) - first_ns, frame);
       for (const Finding& f : validator->findings()) {
         out.findings.push_back(f);
         recorder.finding(f);

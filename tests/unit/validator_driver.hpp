@@ -277,8 +277,8 @@ class ValidatorDriver {
       validator_.emplace(options_, settings_);
       incidents_.emplace(settings_);
     }
-    const ValidatedFrame& view = validator_->onFrame(++frame_, time_ns, *w.frame, w.reader());
-    incidents_->onFrame(*validator_, view, frame_, time_ns, w.reader());
+    const Observation& view = validator_->onFrame(++frame_, time_ns, *w.frame, w.reader());
+    incidents_->onFrame(*validator_, view, frame_, time_ns);
     all_.insert(all_.end(), validator_->findings().begin(), validator_->findings().end());
     return validator_->findings();
   }

@@ -1041,7 +1041,7 @@ TEST(ValidatorView, SameAsSessionFrameByFrame) {
     ASSERT_LT(row.cut, bytes.size());
     const test::Walked w = test::walk(bytes, bytes.size() - row.cut);
     ++frame;
-    const ValidatedFrame& got = validator.onFrame(
+    const Observation& got = validator.onFrame(
         frame, kEpochNs + static_cast<std::int64_t>(frame) * kMs, *w.frame, w.reader());
     const FrameView& want = session.onFrame(*w.frame, w.reader());
     EXPECT_EQ(got.decode.copy, want.copy);

@@ -391,7 +391,7 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
     if (!written) return;  // a failed write ends the work: the rest is read, not written
     frame_ns = f.time_ns - *pipeline.run().first_time_ns;
     end_ns = std::max(end_ns, frame_ns);
-    written = waveforms.frame(frame_ns, *f.judged, f.bytes, pipeline.validator()->decoder());
+    written = waveforms.frame(frame_ns, *f.judged, pipeline.validator()->decoder());
   };
   const auto findings = [&](const std::vector<Finding>& found) {
     if (written) written = waveforms.findings(frame_ns, found);
@@ -566,7 +566,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   const auto validate = [&](const PipelineFrame& f) {
     report.first_time_ns = *pipeline.run().first_time_ns;  // findings are written as they come
     report.last_time_ns = f.time_ns;
-    if (timelines) timelines->frame(f.number, f.time_ns - report.first_time_ns, *f.judged, f.bytes);
+    if (timelines) timelines->frame(f.number, f.time_ns - report.first_time_ns, *f.judged);
   };
   const auto keepFindings = [&](const std::vector<Finding>& findings) {
     for (const Finding& f : findings) {

@@ -51,10 +51,10 @@ void evidence(CauseMatch& m, const Mark& at, std::string what) {
   m.evidence.push_back(IncidentEvidence{at.stamp(), std::move(what)});
 }
 
-std::optional<double> before(const AxisTrack* axis, std::int32_t code) {
-  if (axis == nullptr) return std::nullopt;
+std::optional<double> before(const MessageHistory* messages, std::int32_t code) {
+  if (messages == nullptr) return std::nullopt;
   for (std::size_t i = 0; i < kBefore.size(); ++i) {
-    if (kBefore[i].message_code == code) return axis->before[i];
+    if (kBefore[i].message_code == code) return messages->before[i];
   }
   return std::nullopt;
 }
@@ -63,7 +63,7 @@ std::optional<double> before(const AxisTrack* axis, std::int32_t code) {
 bool bitsWithValue(const CauseContext& c, CauseMatch& m, std::uint32_t bits, std::int32_t code) {
   if ((c.sew & bits) == 0) return false;
   m.text = sewLabels(c.sew & bits);
-  if (const std::optional<double> value = before(c.axis, code)) {
+  if (const std::optional<double> value = before(c.messages, code)) {
     const ValueName* meaning = valueName(kMessageCodeField, static_cast<std::uint64_t>(code));
     m.text += fmt::format(", {} {:.1f} {} before", meaning->name, *value, meaning->unit);
   }
@@ -107,30 +107,31 @@ bool communicationLoss(const CauseContext& c, CauseMatch& m) {
 bool overtemperature(const CauseContext& c, CauseMatch& m) {
   std::string text;
   if ((c.sew & kI2t) != 0) text = sewLabels(kI2t);
-  const AxisTrack* a = c.axis;
+  const AxisMeasurements* a = c.signals;
   if (a != nullptr) {
-    if (a->temp_warning_rose && within(*a->temp_warning_rose, c.at, kMinuteNs)) {
+    if (a->tempWarningRose() && within(*a->tempWarningRose(), c.at, kMinuteNs)) {
       text += fmt::format("{}SSW.TempWarning from frame {}", text.empty() ? "" : ", ",
-                          a->temp_warning_rose->frame);
-      evidence(m, *a->temp_warning_rose, "SSW.TempWarning \u2191");
-    } else if (a->tx_known && (a->ssw & kTempWarning) != 0) {
+                          a->tempWarningRose()->frame);
+      evidence(m, *a->tempWarningRose(), "SSW.TempWarning \u2191");
+    } else if (a->inputsKnown() && (a->ssw() & kTempWarning) != 0) {
       text += fmt::format("{}SSW.TempWarning set", text.empty() ? "" : ", ");
     }
-    if (a->temperature_last_at && within(*a->temperature_last_at, c.at, kMinuteNs)) {
-      const std::int64_t second = a->temperature_last_at->clock_ns / 1'000'000'000;
+    const MessageHistory& t = *c.messages;
+    if (t.temperature_last_at && within(*t.temperature_last_at, c.at, kMinuteNs)) {
+      const std::int64_t second = t.temperature_last_at->clock_ns / 1'000'000'000;
       const TemperatureBucket* lowest = nullptr;
-      for (const TemperatureBucket& b : a->temperature) {
+      for (const TemperatureBucket& b : t.temperature) {
         if (b.second < second - kTemperatureWindowS || b.second > second) continue;
         if (!within(b.at, c.at, kMinuteNs)) continue;
         if (lowest == nullptr || b.lowest < lowest->lowest) lowest = &b;
       }
-      if (lowest != nullptr && a->temperature_last - lowest->lowest >= kTemperatureRiseC) {
+      if (lowest != nullptr && t.temperature_last - lowest->lowest >= kTemperatureRiseC) {
         text += fmt::format("{}motor temperature {:.0f} \u2192 {:.0f} \u00b0C over {}",
-                            text.empty() ? "" : ", ", lowest->lowest, a->temperature_last,
-                            duration(a->temperature_last_at->clock_ns - lowest->at.clock_ns));
+                            text.empty() ? "" : ", ", lowest->lowest, t.temperature_last,
+                            duration(t.temperature_last_at->clock_ns - lowest->at.clock_ns));
         evidence(m, lowest->at, fmt::format("motor temperature {:.1f} \u00b0C", lowest->lowest));
-        evidence(m, *a->temperature_last_at,
-                 fmt::format("motor temperature {:.1f} \u00b0C", a->temperature_last));
+        evidence(m, *t.temperature_last_at,
+                 fmt::format("motor temperature {:.1f} \u00b0C", t.temperature_last));
       }
     }
   }
@@ -141,21 +142,21 @@ bool overtemperature(const CauseContext& c, CauseMatch& m) {
 
 // Where FollowerErr rose for this incident: where the detector saw it rise, else at the incident.
 Mark followingRose(const CauseContext& c) {
-  if (c.axis != nullptr && c.axis->following_rose &&
-      within(*c.axis->following_rose, c.at, kMinuteNs))
-    return *c.axis->following_rose;
+  if (c.signals != nullptr && c.signals->followingRose() &&
+      within(*c.signals->followingRose(), c.at, kMinuteNs))
+    return *c.signals->followingRose();
   return c.at;
 }
 
 bool followingErrorAfterStep(const CauseContext& c, CauseMatch& m) {
-  if ((c.sew & kFollowing) == 0 || c.axis == nullptr) return false;
+  if ((c.sew & kFollowing) == 0 || c.signals == nullptr) return false;
   const Mark rose = followingRose(c);
   const Step* step = nullptr;
-  if (c.axis->candidate && within(c.axis->candidate->at, rose, kShortWindowNs)) {
-    step = &*c.axis->candidate;
-  }
-  for (std::size_t i = 0; step == nullptr && i < c.axis->steps.size(); ++i) {
-    if (within(c.axis->steps[i].at, rose, kShortWindowNs)) step = &c.axis->steps[i];
+  const std::optional<Step>& candidate = c.signals->stepCandidate();
+  if (candidate && within(candidate->at, rose, kShortWindowNs)) step = &*candidate;
+  const Ring<Step, 4>& steps = c.signals->steps();
+  for (std::size_t i = 0; step == nullptr && i < steps.size(); ++i) {
+    if (within(steps[i].at, rose, kShortWindowNs)) step = &steps[i];
   }
   if (step == nullptr) return false;
   m.text = fmt::format(
@@ -186,11 +187,10 @@ bool busVoltage(const CauseContext& c, CauseMatch& m) {
 
 bool encoder(const CauseContext& c, CauseMatch& m) {
   std::string text = sewLabels(c.sew & kEncoderBits);
-  if (c.axis != nullptr && c.axis->no_encoder_rose &&
-      within(*c.axis->no_encoder_rose, c.at, kShortWindowNs)) {
-    text += fmt::format("{}SSW.NoEncoder from frame {}", text.empty() ? "" : ", ",
-                        c.axis->no_encoder_rose->frame);
-    evidence(m, *c.axis->no_encoder_rose, "SSW.NoEncoder \u2191");
+  const std::optional<Mark> rose = c.signals != nullptr ? c.signals->noEncoderRose() : std::nullopt;
+  if (rose && within(*rose, c.at, kShortWindowNs)) {
+    text += fmt::format("{}SSW.NoEncoder from frame {}", text.empty() ? "" : ", ", rose->frame);
+    evidence(m, *rose, "SSW.NoEncoder \u2191");
   }
   if (text.empty()) return false;
   m.text = text;

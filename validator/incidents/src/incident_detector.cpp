@@ -4,10 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "incident_tracks.hpp"
-#include "ncservo/base/little_endian.hpp"
 #include "ncservo/incidents/causes.hpp"
 #include "ncservo/model/al_tracker.hpp"
 #include "ncservo/protocol/fields.hpp"
@@ -19,24 +17,22 @@ namespace ncservo {
 
 namespace {
 
-constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
 constexpr std::int64_t kEvidenceWindowNs = 100 * kMsNs;
 constexpr std::size_t kMaxFindingEvidence = 8;
-// The words read every cycle, each 4 bytes (docs/protocol.md §1).
-constexpr std::size_t kSspOffset = wordOffset(Word::Ssp);
-constexpr std::size_t kSswOffset = wordOffset(Word::Ssw);
-constexpr std::size_t kSewOffset = wordOffset(Word::Sew);
-constexpr std::size_t kMsgCodeOffset = wordOffset(Word::MsgCode);
-constexpr std::size_t kMsgDataOffset = wordOffset(Word::MsgData);
-static_assert(wordDef(Word::Ssp).size == 4 && wordDef(Word::Ssw).size == 4 &&
-              wordDef(Word::Sew).size == 4 && wordDef(Word::MsgCode).size == 4 &&
-              wordDef(Word::MsgData).size == 4);
 
 const FieldDef* sewField(const SewCause& cause) {
   for (const FieldDef& f : kFields) {
     if (f.word == Word::Sew && f.view == FieldView::Cause && f.mask == cause.mask) return &f;
   }
   return nullptr;
+}
+
+const AxisMeasurements* measurementsOf(const AxisModel* model) {
+  return model != nullptr ? &model->measurements() : nullptr;
+}
+
+const MessageHistory* messagesOf(const AxisModel* model) {
+  return model != nullptr ? &model->measurements().messages() : nullptr;
 }
 
 }  // namespace
@@ -106,14 +102,17 @@ void IncidentDetector::resetWindows() {
 }
 
 // The incident's cause from the first matching row, its evidence (the row's and the findings of
-// the 100 ms before), and what the drive reported before it.
-void IncidentDetector::add(Incident incident, const AxisTrack* axis, std::uint32_t sew) {
+// the 100 ms before), and what the drive reported before it: `signals` are the axis's model's
+// measurements (null where it has none), `messages` what the drive had said before.
+void IncidentDetector::add(Incident incident, const AxisTrack* axis,
+                           const AxisMeasurements* signals, const MessageHistory* messages,
+                           std::uint32_t sew) {
   if (incidents_.size() >= kMaxIncidents) {
     ++omitted_;
     return;
   }
   const Mark at{incident.at.frame, clock_ns_, incident.at.time_ns};
-  CauseContext context{incident.kind, axis, bus_.get(), sew, at, incident.what};
+  CauseContext context{incident.kind, axis, signals, messages, bus_.get(), sew, at, incident.what};
   CauseMatch match;
   for (const CauseDef& row : kCauses) {
     match = CauseMatch{};
@@ -145,13 +144,13 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis, std::uint32
   std::stable_sort(
       incident.evidence.begin(), incident.evidence.end(),
       [](const IncidentEvidence& a, const IncidentEvidence& b) { return a.at.frame < b.at.frame; });
-  if (axis != nullptr) incident.before = axis->before;
+  if (messages != nullptr) incident.before = messages->before;
   incident.end = incident.at;
   incidents_.push_back(std::move(incident));
 }
 
-void IncidentDetector::onFrame(const Validator& validator, const ValidatedFrame& view,
-                               std::uint64_t frame, std::int64_t time_ns, const ByteReader& bytes) {
+void IncidentDetector::onFrame(const Validator& validator, const Observation& observation,
+                               std::uint64_t frame, std::int64_t time_ns) {
   // docs/timing.md#rule-time: the windows are measured on the segment's clock, and a new
   // segment starts them afresh.
   if (validator.segments().count() != segments_) {
@@ -183,95 +182,46 @@ void IncidentDetector::onFrame(const Validator& validator, const ValidatedFrame&
       bus_->findings.push(std::move(mark));
     }
   }
-  takeValues(validator, view, bytes);
+  takeFaults(validator, observation);
   checkOutage(validator);
   takeAlChanges(validator);
 }
 
-// Each placed axis's words of this frame: the set point of a master copy; the status, errors and
-// message data of a returned copy. A drive fault begins where SEW.ServoErrors rises.
-void IncidentDetector::takeValues(const Validator& validator, const ValidatedFrame& view,
-                                  const ByteReader& bytes) {
+// Each placed axis's inputs of this frame, as its model measured them: a drive fault begins where
+// SEW.ServoErrors rises, and recovers when the errors cleared and the drive was enabled again.
+void IncidentDetector::takeFaults(const Validator& validator, const Observation& observation) {
   using namespace bits;
-  const FrameDecode& decode = view.decode;
-  const Mark at{last_.frame, clock_ns_, last_.time_ns};
-  // A returned copy right after its master copy carries the same outputs: one sample per cycle.
-  const bool outputs_cycle = !(decode.copy == CopyKind::Returned && decode.paired);
+  const FrameDecode& decode = observation.decode;
   // The placements are in axis order: the tracks grow once, then each is one index away.
   if (decode.axis_count > 0) track(decode.axes[decode.axis_count - 1].axis);
   for (std::size_t i = 0; i < decode.axis_count; ++i) {
-    const AxisPlacement& p = decode.axes[i];
-    std::unique_ptr<AxisTrack>& held = axes_[p.axis];
+    const std::uint16_t index = decode.axes[i].axis;
+    std::unique_ptr<AxisTrack>& held = axes_[index];
     if (!held) held = std::make_unique<AxisTrack>();
     AxisTrack& a = *held;
-    if (outputs_cycle && p.has_rx && bytes.has(p.rx_offset, kRxPdoSize)) {
-      const auto ssp =
-          static_cast<std::int32_t>(loadLe<4>(bytes.data() + p.rx_offset + kSspOffset));
-      if (a.ssp_known) {
-        const auto change = static_cast<std::uint64_t>(std::llabs(std::int64_t{ssp} - a.ssp));
-        if (a.candidate) {
-          // Confirmed when the cycle after it changes far less (a ramp's start is no step).
-          if (change * kStepFactor <=
-              static_cast<std::uint64_t>(std::llabs(a.candidate->to - a.candidate->from))) {
-            a.steps.push(*a.candidate);
-          }
-          a.candidate.reset();
-        }
-        const std::size_t seen = std::min(a.change_count, kStepHistory);
-        if (seen >= kStepHistoryMinimum && change >= static_cast<std::uint64_t>(kStepMinimum)) {
-          // A step is kStepFactor times every change before it: the first that is not ends the
-          // look (a moving set point's does at once).
-          std::uint64_t before_max = 0;
-          bool step = true;
-          for (std::size_t k = 0; k < seen && step; ++k) {
-            step = kStepFactor * a.changes[k] <= change;
-            before_max = std::max(before_max, a.changes[k]);
-          }
-          if (step) a.candidate = Step{at, a.ssp, ssp, before_max};
-        }
-        a.changes[a.change_next] = change;
-        a.change_next = (a.change_next + 1) % kStepHistory;
-        ++a.change_count;
+    if (!observation.values[i].has_tx) continue;
+    const AxisMeasurements& signals = validator.axis(index)->measurements();
+    const std::uint32_t ssw = signals.ssw();
+    const std::uint32_t sew = signals.sew();
+    if (signals.sewRoseIn(last_.frame) & kServoErrors) {
+      if (a.open) {
+        incidents_[*a.open].end = last_;  // a new fault before the last one recovered
+        incidents_[*a.open].ended = true;
+        a.open.reset();
       }
-      a.ssp = ssp;
-      a.ssp_known = true;
-    }
-    if (!p.has_tx || !bytes.has(p.tx_offset, kTxPdoSize)) continue;
-    const std::uint8_t* tx = bytes.data() + p.tx_offset;
-    const std::uint32_t ssw = static_cast<std::uint32_t>(loadLe<4>(tx + kSswOffset));
-    const std::uint32_t sew = static_cast<std::uint32_t>(loadLe<4>(tx + kSewOffset));
-    const auto code = static_cast<std::int32_t>(loadLe<4>(tx + kMsgCodeOffset));
-    const std::uint32_t data_bits = static_cast<std::uint32_t>(loadLe<4>(tx + kMsgDataOffset));
-    float data_float;
-    std::memcpy(&data_float, &data_bits, sizeof data_float);
-    const double data = data_float;
-    if (a.tx_known) {
-      const std::uint32_t ssw_rose = ssw & ~a.ssw;
-      const std::uint32_t sew_rose = sew & ~a.sew;
-      if (ssw_rose & kTempWarning) a.temp_warning_rose = at;
-      if (ssw_rose & kNoEncoder) a.no_encoder_rose = at;
-      if (sew_rose & kFollowing) a.following_rose = at;
-      if (sew_rose & kServoErrors) {
-        if (a.open) {
-          incidents_[*a.open].end = last_;  // a new fault before the last one recovered
-          incidents_[*a.open].ended = true;
-          a.open.reset();
-        }
-        Incident incident;
-        incident.kind = IncidentKind::DriveFault;
-        incident.axis = p.axis;
-        incident.at = last_;
-        for (const SewCause& cause : kSewCauses) {
-          if (sew & cause.mask) incident.errors.push_back(&cause);
-        }
-        std::sort(incident.errors.begin(), incident.errors.end(),
-                  [](const SewCause* x, const SewCause* y) { return x->mask < y->mask; });
-        a.ssw = ssw;  // the rows read the status at the fault
-        add(std::move(incident), &a, sew);
-        if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
-            incidents_.back().axis == p.axis) {
-          a.open = incidents_.size() - 1;
-        }
+      Incident incident;
+      incident.kind = IncidentKind::DriveFault;
+      incident.axis = index;
+      incident.at = last_;
+      for (const SewCause& cause : kSewCauses) {
+        if (sew & cause.mask) incident.errors.push_back(&cause);
+      }
+      std::sort(incident.errors.begin(), incident.errors.end(),
+                [](const SewCause* x, const SewCause* y) { return x->mask < y->mask; });
+      add(std::move(incident), &a, &signals, &signals.messagesBefore(last_.frame), sew);
+      if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
+          incidents_.back().axis == index) {
+        a.open = incidents_.size() - 1;
       }
     }
     // docs/incidents.md#recovery: the errors cleared (ServoErrors fell), then enabled again.
@@ -285,30 +235,7 @@ void IncidentDetector::takeValues(const Validator& validator, const ValidatedFra
         a.open.reset();
       }
     }
-    a.ssw = ssw;
-    a.sew = sew;
-    a.tx_known = true;
-    if (std::isfinite(data)) {
-      for (std::size_t k = 0; k < kBefore.size(); ++k) {
-        if (kBefore[k].message_code == code) a.before[k] = data;
-      }
-      if (code == 4) {
-        a.temperature_last = data;
-        a.temperature_last_at = at;
-        const std::int64_t second = at.clock_ns / 1'000'000'000;
-        constexpr auto kBuckets = static_cast<std::int64_t>(kTemperatureWindowS + 1);
-        TemperatureBucket& b =
-            a.temperature[static_cast<std::size_t>(((second % kBuckets) + kBuckets) % kBuckets)];
-        if (b.second != second) {
-          b = TemperatureBucket{second, data, at};
-        } else if (data < b.lowest) {
-          b.lowest = data;
-          b.at = at;
-        }
-      }
-    }
   }
-  (void)validator;
 }
 
 // docs/incidents.md#bus-outage: every axis seen so far failing for more than
@@ -319,6 +246,7 @@ void IncidentDetector::checkOutage(const Validator& validator) {
   bool any_ok = false;
   std::size_t axes = 0;
   const AxisTrack* worst = nullptr;
+  const AxisModel* worst_model = nullptr;
   std::uint64_t worst_lost = 0;
   for (std::size_t i = 0; i < validator.axisCount(); ++i) {
     const AxisModel* model = validator.axis(i);
@@ -330,6 +258,7 @@ void IncidentDetector::checkOutage(const Validator& validator) {
       const FailureRun& run = axes_[i]->failures[0];
       if (worst == nullptr || run.lost + run.failed > worst_lost) {
         worst = axes_[i].get();
+        worst_model = model;
         worst_lost = run.lost + run.failed;
       }
     }
@@ -351,7 +280,7 @@ void IncidentDetector::checkOutage(const Validator& validator) {
   Incident incident;
   incident.kind = IncidentKind::BusOutage;
   incident.at = last_;
-  add(std::move(incident), worst, 0);
+  add(std::move(incident), worst, measurementsOf(worst_model), messagesOf(worst_model), 0);
 }
 
 // docs/incidents.md#esm: a slave's AL state read falling from OP that the master did not request
@@ -390,7 +319,9 @@ void IncidentDetector::takeAlChanges(const Validator& validator) {
                     alStateName(change.to), change.raw,
                     change.status_code ? fmt::format(", status code 0x{:04X}", *change.status_code)
                                        : std::string());
-    add(std::move(incident), axis ? &track(*axis) : nullptr, 0);
+    const AxisModel* model = axis ? validator.axis(*axis) : nullptr;
+    add(std::move(incident), axis ? &track(*axis) : nullptr, measurementsOf(model),
+        messagesOf(model), 0);
   }
 }
 

@@ -185,6 +185,7 @@ std::string transitionText(const StateChange& change) {
 
 void AxisModel::startSegment() {
   ++revision_;
+  measurements_.reset();
   for (Signal* s : {&se_, &emgon_, &brake_, &zpulse_request_, &error_clear_, &servo_en_,
                     &servo_rdy_, &zpulse_ack_, &err_clear_ack_, &servo_errors_, &ecat_timeout_}) {
     *s = Signal{};

@@ -77,11 +77,10 @@ void CapturePipeline::decided() {
 void CapturePipeline::deliver(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
                               const ByteReader& bytes) {
   started();
-  const ValidatedFrame* judged =
+  const Observation* judged =
       validator_ ? &validator_->onFrame(number, time_ns, frame, bytes) : nullptr;
   if (fit_ && judged != nullptr) fit_->onFrame(judged->decode, bytes);
-  if (incidents_ && judged != nullptr)
-    incidents_->onFrame(*validator_, *judged, number, time_ns, bytes);
+  if (incidents_ && judged != nullptr) incidents_->onFrame(*validator_, *judged, number, time_ns);
   if (sinks_.frame) sinks_.frame(PipelineFrame{number, time_ns, frame, bytes, judged});
   if (validator_ && sinks_.findings && !validator_->findings().empty()) {
     sinks_.findings(validator_->findings());

@@ -26,15 +26,13 @@ TimelineRecorder::AxisRing& TimelineRecorder::ring(std::uint16_t axis) {
   return r;
 }
 
-void TimelineRecorder::frame(std::uint64_t number, std::int64_t time_ns,
-                             const ValidatedFrame& frame, const ByteReader& bytes) {
+void TimelineRecorder::frame(std::uint64_t number, std::int64_t time_ns, const Observation& frame) {
   const FrameDecode& decode = frame.decode;
   for (std::size_t i = 0; i < decode.axis_count; ++i) {
     const AxisPlacement& placement = decode.axes[i];
     if (!placement.has_rx && !placement.has_tx) continue;
     AxisRing& r = ring(placement.axis);
-    PdoValues values;
-    readFrameValues(placement, bytes, values);
+    const PdoValues& values = frame.values[i];
     // docs/protocol.md §8: outputs from either copy, inputs from the returned copy.
     for (std::size_t w = 0; w < kWordCount; ++w) {
       if (values.has(kWords[w].word)) r.current[w] = values.raw[w];

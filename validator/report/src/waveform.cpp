@@ -575,8 +575,8 @@ void WaveformWriter::clearFindings(AxisSlot& slot) {
   put("\n");
 }
 
-Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
-                             const ByteReader& bytes, const Decoder& decoder) {
+Status WaveformWriter::frame(std::int64_t time_ns, const Observation& frame,
+                             const Decoder& decoder) {
   if (!header_written_ && frame.decode.axis_count == 0) return {};
   if (!header_written_) {
     if (Status written = writeHeader(decoder); !written) return written;
@@ -588,8 +588,7 @@ Status WaveformWriter::frame(std::int64_t time_ns, const ValidatedFrame& frame,
     const AxisPlacement& placement = decode.axes[i];
     if (placement.axis >= slot_of_.size() || slot_of_[placement.axis] < 0) continue;
     AxisSlot& slot = axes_[static_cast<std::size_t>(slot_of_[placement.axis])];
-    PdoValues values;
-    readFrameValues(placement, bytes, values);
+    const PdoValues& values = frame.values[i];
     if (!returned) {
       if (values.has_rx) writeWords(slot, values, Pdo::Rx);
       slot.outputs_from_master = values.has_rx;

@@ -39,25 +39,19 @@ Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath f
   return judged;
 }
 
-// Whether this frame's PDOs at the placement hold the judged bits the model last took. A PDO the
-// frame does not carry (or that is cut short) changes nothing, as readFrameValues reads it absent.
-bool Validator::unchanged(const AxisPlacement& placement, const ByteReader& bytes,
-                          const AxisModel& model) const {
+// Whether this frame's values hold the judged bits the model last took. A PDO the frame does not
+// carry (or that is cut short) changes nothing.
+bool Validator::unchanged(const PdoValues& values, const AxisModel& model) const {
   // Outside OP and SAFE-OP, which PDOs a frame carries counts (Reads::al_state); a change of the
   // AL state itself changes the model's revision.
   if (judged_.al_state && model.alState() && !ecat::exchangesInputs(*model.alState())) return false;
   const PdoValues& latest = model.latest();
-  auto same = [&](const JudgedPdo& judged, bool has, std::size_t offset, std::size_t size,
-                  bool had) {
-    if (!has || !bytes.has(offset, size)) return true;
+  auto same = [&](const JudgedPdo& judged, bool has, bool had) {
+    if (!has) return true;
     if (!had) return false;
-    const std::uint8_t* pdo = bytes.data() + offset;
     for (std::size_t i = 0; i < judged.count; ++i) {
       const JudgedWord& w = judged.words[i];
-      const std::uint8_t* at = pdo + w.offset;
-      const std::uint64_t now = w.size == 4   ? loadLe<4>(at)
-                                : w.size == 2 ? loadLe<2>(at)
-                                              : loadLe<8>(at);
+      const std::uint64_t now = values.raw[w.index];
       const std::uint64_t then = latest.raw[w.index];
       if (((now ^ then) & w.bits) != 0) return false;
       // equal words are of one class: the call is needed only when an unread bit moved
@@ -66,8 +60,8 @@ bool Validator::unchanged(const AxisPlacement& placement, const ByteReader& byte
     }
     return true;
   };
-  return same(judged_.rx, placement.has_rx, placement.rx_offset, kRxPdoSize, latest.has_rx) &&
-         same(judged_.tx, placement.has_tx, placement.tx_offset, kTxPdoSize, latest.has_tx);
+  return same(judged_.rx, values.has_rx, latest.has_rx) &&
+         same(judged_.tx, values.has_tx, latest.has_tx);
 }
 
 const AxisModel* Validator::axis(std::size_t index) const {
@@ -105,8 +99,8 @@ Validator::AxisSlot& Validator::slot(std::uint16_t axis) {
   return s;
 }
 
-const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
-                                         const EcatFrame& frame, const ByteReader& bytes) {
+const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t time_ns,
+                                      const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
   accounts_.clear();
   // docs/timing.md#rule-time: timestamps that go back a little do not move timers back; a
@@ -164,17 +158,19 @@ const ValidatedFrame& Validator::onFrame(std::uint64_t frame_number, std::int64_
   if (all_good) {
     for (std::size_t i = 0; i < axis_count; ++i) frame_slots_[i]->model->cycleOk(now_);
   }
+  // A returned copy right after its master copy carries the same outputs: one set point a cycle.
+  const bool outputs_cycle = !(decode.copy == CopyKind::Returned && decode.paired);
+  const Mark mark{frame_number, now_.time_ns, frame_time_ns_};
   for (std::size_t i = 0; i < axis_count; ++i) {
-    const AxisPlacement& placement = decode.axes[i];
     AxisSlot& s = *frame_slots_[i];
     AxisModel& model = *s.model;
+    PdoValues& values = view_.values[i];
+    readFrameValues(decode.axes[i], bytes, values);
+    model.measure(values, outputs_cycle, mark);
     // Fast path: the bits the model and the rules read are unchanged and no timer runs out, so
-    // no condition can have changed (rules report at beginnings and at timeouts only). Only
-    // those words are read; the whole PDOs are read when the model takes them.
+    // no condition can have changed (rules report at beginnings and at timeouts only).
     if (!fast_path_ || (s.pending != 0 && now_.time_ns > s.pending_until_ns) ||
-        s.evaluated_revision != model.revision() || !unchanged(placement, bytes, model)) {
-      PdoValues values;
-      readFrameValues(placement, bytes, values);
+        s.evaluated_revision != model.revision() || !unchanged(values, model)) {
       model.observe(values, now_);
       evaluateAxis(s);
       s.evaluated_revision = model.revision();

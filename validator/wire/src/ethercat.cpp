@@ -206,6 +206,17 @@ bool EcatFrame::sameDatagramList(const EcatFrame& other) const {
   return true;
 }
 
+bool EcatFrame::mayCarryProcessData() const {
+  for (std::size_t i = 0; i < count; ++i) {
+    const Datagram& dg = datagrams[i];
+    if (ecat::isLogical(dg.command) ||
+        (ecat::isConfiguredAddress(dg.command) && dg.ado() >= ecat::kProcessRam)) {
+      return true;
+    }
+  }
+  return false;
+}
+
 bool EcatFrame::anyWkcAboveZero() const {
   for (std::size_t i = 0; i < count; ++i) {
     if (datagrams[i].has_wkc && datagrams[i].wkc > 0) return true;

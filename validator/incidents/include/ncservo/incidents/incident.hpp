@@ -34,19 +34,6 @@ enum class CauseId : std::uint8_t {
 };
 inline constexpr std::size_t kCauseCount = 11;
 
-// What the drive reported just before (docs/protocol.md §5): one key per message code, from the
-// last cycle that carried it.
-struct BeforeDef {
-  std::int32_t message_code;
-  const char* key;  // the JSON key, public
-};
-inline constexpr std::array<BeforeDef, 4> kBefore{{
-    {1, "motor_current_a"},
-    {4, "motor_temperature_c"},
-    {3, "bus_voltage_v"},
-    {0, "speed_rpm"},
-}};
-
 // A frame the incident's chain passes through, with a short text.
 struct IncidentEvidence {
   Stamp at;  // the frame's own capture time

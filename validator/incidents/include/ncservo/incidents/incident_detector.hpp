@@ -8,7 +8,6 @@
 #include <memory>
 #include <vector>
 
-#include "ncservo/base/byte_reader.hpp"
 #include "ncservo/incidents/incident.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -28,9 +27,9 @@ class IncidentDetector {
   IncidentDetector& operator=(const IncidentDetector&) = delete;
 
   // One frame the validator has just judged (its findings, accounting and AL changes are the
-  // frame's); `bytes` are the frame's, `time_ns` its capture time.
-  void onFrame(const Validator& validator, const ValidatedFrame& view, std::uint64_t frame,
-               std::int64_t time_ns, const ByteReader& bytes);
+  // frame's, and its models measured the frame's values); `time_ns` is its capture time.
+  void onFrame(const Validator& validator, const Observation& observation, std::uint64_t frame,
+               std::int64_t time_ns);
   // The capture ended: the incidents not recovered end on its last frame.
   void finish();
 
@@ -41,8 +40,9 @@ class IncidentDetector {
 
  private:
   AxisTrack& track(std::uint16_t axis);
-  void add(Incident incident, const AxisTrack* axis, std::uint32_t sew);
-  void takeValues(const Validator& validator, const ValidatedFrame& view, const ByteReader& bytes);
+  void add(Incident incident, const AxisTrack* axis, const AxisMeasurements* signals,
+           const MessageHistory* messages, std::uint32_t sew);
+  void takeFaults(const Validator& validator, const Observation& observation);
   void checkOutage(const Validator& validator);
   void takeAlChanges(const Validator& validator);
   void resetWindows();

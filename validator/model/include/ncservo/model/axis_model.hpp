@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ncservo/base/stamp.hpp"
+#include "ncservo/model/axis_measurements.hpp"
 #include "ncservo/protocol/drive_state.hpp"
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/protocol/reads.hpp"
@@ -117,6 +118,14 @@ class AxisModel {
 
   // This frame's values of the axis (outputs and/or inputs), at `now`.
   void observe(const PdoValues& values, const Stamp& now);
+  // What the incidents' causes measure of this frame's values (axis_measurements.hpp): every
+  // frame, also one observe() is not given. `outputs_cycle`: the outputs are a cycle's set
+  // point (not a returned copy's repeat of its master's copy just before).
+  void measure(const PdoValues& values, bool outputs_cycle, const Mark& at) {
+    if (outputs_cycle && values.has_rx) measurements_.takeSetPoint(values.ssp(), at);
+    if (values.has_tx) measurements_.takeInputs(values, at);
+  }
+  const AxisMeasurements& measurements() const { return measurements_; }
   // A capture segment starts (capture_segments.hpp): the next observation is a first one, as in
   // a capture begun mid-operation (docs/timing.md#rule-time), and the telegram-failure run
   // restarts; the drive state, its timeline, the error history and Servo_Ready_Mode carry on.
@@ -225,6 +234,7 @@ class AxisModel {
   std::vector<StateChange> timeline_;
   std::uint64_t timeline_omitted_ = 0;
   std::vector<ErrorHistoryEntry> error_history_;
+  AxisMeasurements measurements_;
 };
 
 }  // namespace ncservo

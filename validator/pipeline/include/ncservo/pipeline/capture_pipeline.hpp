@@ -77,7 +77,7 @@ struct PipelineFrame {
   std::int64_t time_ns;
   const EcatFrame& frame;
   const ByteReader& bytes;
-  const ValidatedFrame* judged;  // the validator's placements and states; null without rules
+  const Observation* judged;  // the validator's placements and states; null without rules
 };
 
 // A record walk() found an EtherCAT frame of process data in: its time by the frame clock, and

@@ -40,6 +40,7 @@ struct PdoValues {
     std::memcpy(&value, &bits, sizeof value);
     return value;
   }
+  std::int32_t ssp() const { return static_cast<std::int32_t>(word(Word::Ssp)); }
   std::uint32_t scw() const { return static_cast<std::uint32_t>(word(Word::Scw)); }
   std::uint32_t ssw() const { return static_cast<std::uint32_t>(word(Word::Ssw)); }
   std::uint32_t sew() const { return static_cast<std::uint32_t>(word(Word::Sew)); }

@@ -55,8 +55,7 @@ class TimelineRecorder {
   explicit TimelineRecorder(const RuleSettings& settings) : settings_(settings) {}
 
   // One validated frame; `time_ns` since the capture's first frame.
-  void frame(std::uint64_t number, std::int64_t time_ns, const ValidatedFrame& frame,
-             const ByteReader& bytes);
+  void frame(std::uint64_t number, std::int64_t time_ns, const Observation& frame);
   // A finding reported on the last frame (every finding, in order: its index counts them).
   void finding(const Finding& finding);
   // The windows, the pending ones cut at the last frame seen.

@@ -70,8 +70,7 @@ class WaveformWriter {
   // whose time goes back is written at the latest time. Master copies give the outputs and
   // returned copies the inputs, each at its own time; a returned copy gives the outputs too where
   // no master copy of them was captured. Fails once a write has failed.
-  Status frame(std::int64_t time_ns, const ValidatedFrame& frame, const ByteReader& bytes,
-               const Decoder& decoder);
+  Status frame(std::int64_t time_ns, const Observation& frame, const Decoder& decoder);
   // The findings reported on the frame just written (or at the end of the capture), shown at
   // `time_ns` on their axis's findings signal or the bus's; those before the first axis was
   // placed are kept for the header.

@@ -20,11 +20,13 @@
 
 namespace ncservo {
 
-// What the validator gives back for one frame: where each axis's PDOs sit, and each placed
-// axis's drive state after the frame. The values are read from the bytes at the placements
-// (readFrameValues) by whoever shows them.
-struct ValidatedFrame {
-  FrameDecode decode;  // copy, pairing and placements, in axis order
+// What the validator saw in one frame: where each axis's PDOs sit, the values the frame carries
+// for each, read once through the PDO codec (readFrameValues), and each placed axis's drive state
+// after the frame. Each axis's edges and state change are its model's (AxisModel::edgesIn,
+// stateChangeIn). Whoever shows or measures a frame reads this, never the bytes again.
+struct Observation {
+  FrameDecode decode;                                // copy, pairing and placements, in axis order
+  std::array<PdoValues, kMaxAxesPerFrame> values{};  // by placement
   std::array<std::optional<DriveState>, kMaxAxesPerFrame> states{};  // by placement
 };
 
@@ -41,9 +43,9 @@ class Validator {
   Validator(DecoderOptions options, RuleSettings settings, FastPath fast_path = FastPath::On);
 
   // One walked EtherCAT frame (any status) with its 1-based frame number and capture time.
-  // Returns the frame's placements and states; findings() then holds what was reported on it.
-  const ValidatedFrame& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
-                                const EcatFrame& frame, const ByteReader& bytes);
+  // Returns what it saw of the frame; findings() then holds what was reported on it.
+  const Observation& onFrame(std::uint64_t frame_number, std::int64_t time_ns,
+                             const EcatFrame& frame, const ByteReader& bytes);
   const std::vector<Finding>& findings() const { return findings_; }
   // The capture ended: what could be judged only with the frames that did not come (a gap's
   // next interval, docs/rules.md#com-002), reported on the last frame; findings() then holds it.
@@ -112,8 +114,7 @@ class Validator {
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
   void applyAccounts();
-  bool unchanged(const AxisPlacement& placement, const ByteReader& bytes,
-                 const AxisModel& model) const;
+  bool unchanged(const PdoValues& values, const AxisModel& model) const;
 
   void report(RuleId rule, std::optional<std::uint16_t> axis, const Stamp& since,
               std::string message);
@@ -125,7 +126,7 @@ class Validator {
   void startSegment();
 
   Decoder decoder_;
-  ValidatedFrame view_;  // this frame's placements and states
+  Observation view_;  // this frame's
   RuleSettings settings_;
   Judged judged_;
   bool fast_path_;

@@ -138,6 +138,9 @@ struct EcatFrame {
   // Same datagram list: what pairs a master's frame with its returned copy (docs/protocol.md §8).
   bool sameDatagramList(const EcatFrame& other) const;
   bool anyWkcAboveZero() const;
+  // Whether the frame may carry a servo's PDOs once the layout is known: a logical datagram, or
+  // one addressed to a slave's process memory (above its registers), as a physical exchange is.
+  bool mayCarryProcessData() const;
 };
 
 // Link-layer framings the walker can start from.
