@@ -69,7 +69,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         writer.finding(report, f, state);
       }
     }
-    cli::summarise(validator, report);
+    takeValidator(validator, report);
     if (!status) {
       report.error = status.error().text();
       if (report.error->find(path) == std::string::npos) std::abort();

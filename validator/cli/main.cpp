@@ -198,7 +198,7 @@ void addWindowOptions(CLI::App& command, WindowArgs& window) {
 }
 
 // What a snap length cut, on one line (never one per frame).
-void warnIfTruncated(const std::string& capture, const cli::Truncation& truncation,
+void warnIfTruncated(const std::string& capture, const Truncation& truncation,
                      std::FILE* messages = stderr) {
   if (truncation.any()) {
     fmt::print(messages, "ncservo: {}: {}\n", capture, cli::describeTruncation(truncation));
@@ -206,11 +206,6 @@ void warnIfTruncated(const std::string& capture, const cli::Truncation& truncati
 }
 
 // No frame of the capture in the window is said as such.
-std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
-  if (!window.limited() || run.in_window > 0) return "";
-  return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
-}
-
 // Every line of `text` as a TOML comment.
 std::string commented(std::string_view text) {
   while (!text.empty() && text.back() == '\n') text.remove_suffix(1);
@@ -338,8 +333,8 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   if (selected) selected = cli::checkAxisSelection(args.axes, session->decoder().axes());
   if (header_due && selected) format.header(out);  // no rows: the header alone
   std::fflush(out);
-  warnIfTruncated(reader->path(), cli::truncationOf(run.snapped, run.first_snapped, cut,
-                                                    session->decoder().axes()));
+  warnIfTruncated(reader->path(),
+                  truncationOf(run.snapped, run.first_snapped, cut, session->decoder().axes()));
   if (const std::string empty = emptyWindowReason(input.window, run); !empty.empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), empty);
     return kExitNoServo;
@@ -404,9 +399,8 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   const CaptureRun& run = pipeline.run();
   if (written) written = waveforms.finish(end_ns, validator.decoder());
   std::fflush(input.out);
-  warnIfTruncated(reader.path(),
-                  cli::truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
-                                    validator.decoder().axes()));
+  warnIfTruncated(reader.path(), truncationOf(run.snapped, run.first_snapped,
+                                              validator.cutRegions(), validator.decoder().axes()));
   if (const std::string empty = emptyWindowReason(input.window, run); !empty.empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), empty);
     return kExitNoServo;
@@ -587,41 +581,16 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
     report.frames = run.records;
     return kExitInterrupted;
   }
-  // Stopped inside the learning window, no validator exists yet; finished, there is one.
-  const Validator& validator = *pipeline.validator();
-  const FrameClock& clock = pipeline.clock();
-  report.first_time_ns = run.first_time_ns.value_or(0);
-  report.frames = run.records;
-  report.late_layout = pipeline.lateLayout();
-  report.layout_warnings = pipeline.layoutWarnings();
+  static_cast<CaptureResult&>(report) = pipeline.result();
   for (const std::string& warning : report.layout_warnings) {
     fmt::print(output.messages, "ncservo: {}: layout does not fit: {}\n", path, warning);
   }
   if (timelines) report.timelines = timelines->finish();
-  cli::summarise(validator, report);
-  if (const IncidentDetector* incidents = pipeline.incidents()) {
-    report.incidents = incidents->incidents();
-    report.incidents_omitted = incidents->omitted();
-  }
-  if (pipeline.inference() && report.layout_source == LayoutSource::Inferred) {
-    for (const InferredAxis& axis : pipeline.inference()->axes) {
-      report.inferred.push_back(axis.evidence);
-    }
-  }
-  report.coverage = coverageOf(validator);
-  if (const std::string empty = emptyWindowReason(time_window, run); !empty.empty()) {
-    report.coverage.reason = empty;
-  }
-  report.truncation = cli::truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
-                                        validator.decoder().axes());
   warnIfTruncated(reader->path(), report.truncation, output.messages);
   if (report.startup_frames_cut > 0) {
     fmt::print(output.messages, "ncservo: {}: layout {}\n", reader->path(),
                cli::describeStartupCut(report.startup_frames_cut));
   }
-  report.timestamps = clock.source();
-  report.probe = clock.counts();
-  report.probe_note = clock.note();
   report.capture_drops = reader->drops();
   if (!status) {
     report.error = status.error().text() + " (the frames before it were analysed)";

@@ -454,19 +454,7 @@ void printDrops(const std::string& interface, pcap_t* handle, std::uint64_t fram
 // The report's end, as `validate` writes it, and the exit status.
 int endReport(const std::string& interface, const CapturePipeline& pipeline,
               const LiveCapture& live, ReportWriter& writer, CaptureReport& report) {
-  const Validator& validator = *pipeline.validator();
-  const CaptureRun& run = pipeline.run();
-  report.first_time_ns = run.first_time_ns.value_or(0);
-  report.frames = run.records;
-  summarise(validator, report);
-  report.incidents = pipeline.incidents()->incidents();
-  report.incidents_omitted = pipeline.incidents()->omitted();
-  report.coverage = coverageOf(validator);
-  report.truncation = truncationOf(run.snapped, run.first_snapped, validator.cutRegions(),
-                                   validator.decoder().axes());
-  report.timestamps = pipeline.clock().source();
-  report.probe = pipeline.clock().counts();
-  report.probe_note = pipeline.clock().note();
+  static_cast<CaptureResult&>(report) = pipeline.result();
   if (live.error) {
     report.error = *live.error + " (the frames before it were analysed)";
     fmt::print(stderr, "ncservo monitor: {}: {}\n", interface, *report.error);

@@ -191,6 +191,7 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
 // SEW.ServoErrors rises, and recovers when the errors cleared and the drive was enabled again.
 void IncidentDetector::takeFaults(const Validator& validator, const Observation& observation) {
   using namespace bits;
+  if (observation.servo_error_rises == 0 && open_faults_ == 0) return;
   const FrameDecode& decode = observation.decode;
   // The placements are in axis order: the tracks grow once, then each is one index away.
   if (decode.axis_count > 0) track(decode.axes[decode.axis_count - 1].axis);
@@ -208,6 +209,7 @@ void IncidentDetector::takeFaults(const Validator& validator, const Observation&
         incidents_[*a.open].end = last_;  // a new fault before the last one recovered
         incidents_[*a.open].ended = true;
         a.open.reset();
+        --open_faults_;
       }
       Incident incident;
       incident.kind = IncidentKind::DriveFault;
@@ -222,6 +224,7 @@ void IncidentDetector::takeFaults(const Validator& validator, const Observation&
       if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
           incidents_.back().axis == index) {
         a.open = incidents_.size() - 1;
+        ++open_faults_;
       }
     }
     // docs/incidents.md#recovery: the errors cleared (ServoErrors fell), then enabled again.
@@ -233,6 +236,7 @@ void IncidentDetector::takeFaults(const Validator& validator, const Observation&
         open.end = last_;
         open.recovered = open.ended = true;
         a.open.reset();
+        --open_faults_;
       }
     }
   }

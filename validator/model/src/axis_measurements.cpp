@@ -8,6 +8,10 @@
 
 namespace ncservo {
 
+namespace {
+constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
+}  // namespace
+
 void MessageHistory::take(std::int32_t code, double value, const Mark& at) {
   for (std::size_t k = 0; k < kBefore.size(); ++k) {
     if (kBefore[k].message_code == code) before[k] = value;
@@ -58,7 +62,7 @@ void AxisMeasurements::takeSetPoint(std::int32_t ssp, const Mark& at) {
   ssp_known_ = true;
 }
 
-void AxisMeasurements::takeInputs(const PdoValues& values, const Mark& at) {
+bool AxisMeasurements::takeInputs(const PdoValues& values, const Mark& at) {
   using namespace bits;
   const std::uint32_t ssw = values.ssw();
   const std::uint32_t sew = values.sew();
@@ -66,7 +70,7 @@ void AxisMeasurements::takeInputs(const PdoValues& values, const Mark& at) {
   if (inputs_known_) {
     const std::uint32_t ssw_rose = ssw & ~ssw_;
     sew_rose_ = sew & ~sew_;
-    if (ssw_rose & mask32("ncservo.ssw.temp_warning")) temp_warning_rose_ = at;
+    if (ssw_rose & kTempWarning) temp_warning_rose_ = at;
     if (ssw_rose & kNoEncoder) no_encoder_rose_ = at;
     if (sew_rose_ & kFollowing) following_rose_ = at;
     if (sew_rose_ & kServoErrors) {
@@ -80,6 +84,7 @@ void AxisMeasurements::takeInputs(const PdoValues& values, const Mark& at) {
   inputs_known_ = true;
   const double data = values.msgData();
   if (std::isfinite(data)) messages_.take(values.msgCode(), data, at);
+  return fault_frame_ == at.frame && (sew_rose_ & bits::kServoErrors) != 0;
 }
 
 void AxisMeasurements::reset() {

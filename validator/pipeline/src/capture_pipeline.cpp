@@ -136,6 +136,11 @@ void CapturePipeline::endLearning() {
   decided();
 }
 
+std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
+  if (!window.limited() || run.in_window > 0) return "";
+  return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
+}
+
 std::vector<std::string> eniCycleWarnings(const std::vector<EniCyclicFrame>& eni,
                                           const std::vector<CyclicFrameSummary>& seen) {
   std::vector<std::string> warnings;
@@ -169,6 +174,34 @@ bool CapturePipeline::structureOnly(std::uint16_t axis) const {
                  : layout().explicit_source == LayoutSource::Inferred && !layout().axes.empty();
   return layout_inferred && inferred && axis < inferred->axes.size() &&
          inferred->axes[axis].evidence.structure_only;
+}
+
+CaptureResult CapturePipeline::result() const {
+  CaptureResult r;
+  r.frames = run_.records;
+  r.first_time_ns = run_.first_time_ns.value_or(0);
+  r.timestamps = clock_.source();
+  r.probe = clock_.counts();
+  r.probe_note = clock_.note();
+  r.late_layout = lateLayout();
+  r.layout_warnings = layout_warnings_;
+  if (!validator_) return r;
+  const Validator& validator = *validator_;
+  takeValidator(validator, r);
+  if (incidents_) {
+    r.incidents = incidents_->incidents();
+    r.incidents_omitted = incidents_->omitted();
+  }
+  if (inference() && r.layout_source == LayoutSource::Inferred) {
+    for (const InferredAxis& axis : inference()->axes) r.inferred.push_back(axis.evidence);
+  }
+  r.coverage = coverageOf(validator);
+  if (std::string empty = emptyWindowReason(time_window_, run_); !empty.empty()) {
+    r.coverage.reason = std::move(empty);
+  }
+  r.truncation = truncationOf(run_.snapped, run_.first_snapped, validator.cutRegions(),
+                              validator.decoder().axes());
+  return r;
 }
 
 void CapturePipeline::finish() {

@@ -74,7 +74,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     if (t.finding < kHtmlMaxTableRows) timelines.push_back(timelineJson(t));
   }
   Json axes = Json::array();
-  for (const AxisReport& a : r.axes) {
+  for (const AxisSummary& a : r.axes) {
     Json states = Json::array();
     for (const StateChange& s : a.timeline) {
       states.push_back(

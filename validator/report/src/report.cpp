@@ -88,15 +88,6 @@ std::string describeTruncation(const Truncation& t) {
   return out;
 }
 
-Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
-                        const std::vector<AxisInfo>& axes) {
-  Truncation t{snapped, first_snapped, cut.frames(), cut.firstFrame(), {}};
-  for (std::uint16_t axis : cut.axes()) {
-    t.axes.push_back(axis < axes.size() ? axes[axis].name : fmt::format("axis{}", axis));
-  }
-  return t;
-}
-
 bool CaptureReport::reaches(Severity level) const {
   for (std::size_t s = static_cast<std::size_t>(level); s < counts.size(); ++s) {
     if (counted(static_cast<Severity>(s)) > 0) return true;
@@ -116,41 +107,6 @@ void CaptureReport::closeBaseline() {
 std::string describeBaseline(const CaptureReport& r) {
   return fmt::format("{} new, {} unchanged, {} absent", r.newCount(), r.unchanged,
                      r.baseline_absent.size());
-}
-
-void summarise(const Validator& validator, CaptureReport& report) {
-  report.timing = validator.bus().timing().summary();
-  report.cyclic_datagrams = validator.bus().cyclicDatagrams();
-  report.unfollowed_frames = validator.bus().unfollowedFrames();
-  report.cyclic_frames = validator.bus().cyclicFrames();
-  report.master_copies_missing = validator.bus().masterCopiesMissing();
-  report.returned_copies_missing = validator.bus().returnedCopiesMissing();
-  report.dc = validator.dc().stations();
-  report.dc_settled_ns = validator.dc().settledNs();
-  report.cycles = validator.cycles();
-  report.cycle_time = validator.cycleTime();
-  report.layout_source = validator.decoder().source();
-  report.layout = validator.decoder().axes();
-  if (report.layout_source == LayoutSource::Startup) {
-    report.startup_frames_cut = validator.decoder().learner().configurationFramesCut();
-  }
-  report.segments = validator.segments().segments();
-  report.segment_count = validator.segments().count();
-  report.axes.clear();
-  for (std::size_t i = 0; i < validator.axisCount(); ++i) {
-    const AxisModel* model = validator.axis(i);
-    if (model == nullptr) continue;
-    AxisReport a;
-    a.index = model->index();
-    a.name = axisLabel(report, model->index());
-    a.state = model->state();
-    a.timeline = model->timeline();
-    a.timeline_omitted = model->timelineOmitted();
-    a.error_history = model->errorHistory();
-    a.telegram_failures = model->totalFailures();
-    a.ready_mode = model->readyMode();
-    report.axes.push_back(std::move(a));
-  }
 }
 
 CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& r) {

@@ -359,7 +359,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   c["incidents"] = std::move(incidents);
   if (r.incidents_omitted > 0) c["incidents_omitted"] = r.incidents_omitted;
   Json axes = Json::array();
-  for (const AxisReport& a : r.axes) {
+  for (const AxisSummary& a : r.axes) {
     Json timeline = Json::array();
     for (const StateChange& s : a.timeline) {
       timeline.push_back({{"state", driveStateName(s.state)},

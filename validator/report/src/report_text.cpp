@@ -123,7 +123,7 @@ void writeTextAxes(std::FILE* out, const CaptureReport& r) {
     }
     if (i < r.inferred.size()) fmt::print(out, "    {}\n", describeInference(r.inferred[i]));
   }
-  for (const AxisReport& a : r.axes) {
+  for (const AxisSummary& a : r.axes) {
     fmt::print(out, "  {} (axis {}): {}; telegram failures {}", a.name, a.index,
                a.state ? driveStateName(*a.state) : "no inputs seen", a.telegram_failures);
     if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);

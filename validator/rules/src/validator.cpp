@@ -103,6 +103,7 @@ const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t t
                                       const EcatFrame& frame, const ByteReader& bytes) {
   findings_.clear();
   accounts_.clear();
+  view_.servo_error_rises = 0;
   // docs/timing.md#rule-time: timestamps that go back a little do not move timers back; a
   // discontinuity starts a segment with timers of its own.
   const bool new_segment = segments_.onFrame(frame_number, time_ns, bus_.nominalCycleNs());
@@ -166,7 +167,7 @@ const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t t
     AxisModel& model = *s.model;
     PdoValues& values = view_.values[i];
     readFrameValues(decode.axes[i], bytes, values);
-    model.measure(values, outputs_cycle, mark);
+    view_.servo_error_rises += model.measure(values, outputs_cycle, mark) ? 1 : 0;
     // Fast path: the bits the model and the rules read are unchanged and no timer runs out, so
     // no condition can have changed (rules report at beginnings and at timeouts only).
     if (!fast_path_ || (s.pending != 0 && now_.time_ns > s.pending_until_ns) ||

@@ -107,8 +107,8 @@ class AxisMeasurements {
   // A set point the NC sent, once per cycle (a master's copy, or a returned copy whose master's
   // copy was not captured).
   void takeSetPoint(std::int32_t ssp, const Mark& at);
-  // The inputs of a returned copy.
-  void takeInputs(const PdoValues& values, const Mark& at);
+  // The inputs of a returned copy; returns whether SEW.ServoErrors rose in them.
+  bool takeInputs(const PdoValues& values, const Mark& at);
   // A capture segment starts (docs/timing.md#rule-time): every window starts afresh.
   void reset();
 

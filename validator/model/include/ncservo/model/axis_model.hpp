@@ -120,10 +120,11 @@ class AxisModel {
   void observe(const PdoValues& values, const Stamp& now);
   // What the incidents' causes measure of this frame's values (axis_measurements.hpp): every
   // frame, also one observe() is not given. `outputs_cycle`: the outputs are a cycle's set
-  // point (not a returned copy's repeat of its master's copy just before).
-  void measure(const PdoValues& values, bool outputs_cycle, const Mark& at) {
+  // point (not a returned copy's repeat of its master's copy just before). Returns whether
+  // SEW.ServoErrors rose in them.
+  bool measure(const PdoValues& values, bool outputs_cycle, const Mark& at) {
     if (outputs_cycle && values.has_rx) measurements_.takeSetPoint(values.ssp(), at);
-    if (values.has_tx) measurements_.takeInputs(values, at);
+    return values.has_tx && measurements_.takeInputs(values, at);
   }
   const AxisMeasurements& measurements() const { return measurements_; }
   // A capture segment starts (capture_segments.hpp): the next observation is a first one, as in

@@ -21,6 +21,7 @@
 #include "ncservo/layout/layout_fit.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/bus_model.hpp"
+#include "ncservo/pipeline/capture_result.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -61,6 +62,10 @@ struct CaptureRun {
   std::uint64_t snapped = 0;                  // records cut by the capture's snap length
   std::uint64_t first_snapped = 0;            // the first of them (0: none)
 };
+
+// Why nothing was judged although the capture had frames: none in the time window; empty when
+// there were.
+std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run);
 
 struct PipelineOptions {
   DecoderOptions layout;
@@ -151,6 +156,9 @@ class CapturePipeline {
   const FrameClock& clock() const { return clock_; }
   const CaptureRun& run() const { return run_; }
   const TimeWindow& timeWindow() const { return time_window_; }
+  // What the run found, for every report of it; after finish(), or at any point after the
+  // layout was decided for what was found so far.
+  CaptureResult result() const;
 
  private:
   void decided();

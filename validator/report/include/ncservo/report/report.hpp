@@ -18,6 +18,7 @@
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/timing.hpp"
+#include "ncservo/pipeline/capture_result.hpp"
 #include "ncservo/report/baseline.hpp"
 #include "ncservo/report/report_charts.hpp"
 #include "ncservo/rules/coverage.hpp"
@@ -41,17 +42,6 @@ enum ExitCode {
 // the gate --fail-on sets, which only decides the exit status.
 enum class Verdict { Unreadable, Fail, NoServo, Warn, Pass };
 
-struct AxisReport {
-  std::uint16_t index = 0;
-  std::string name;
-  std::optional<DriveState> state;
-  std::vector<StateChange> timeline;
-  std::uint64_t timeline_omitted = 0;
-  std::vector<ErrorHistoryEntry> error_history;
-  std::uint32_t telegram_failures = 0;
-  std::optional<int> ready_mode;
-};
-
 // The findings of one rule on one axis (or the bus) in a capture: how many, the first and last.
 struct FindingGroup {
   RuleId rule{};
@@ -64,69 +54,28 @@ struct FindingGroup {
   std::string first_message;
 };
 
-// What a capture's snap length (or damage) cut off: the records cut short, and the frames where
-// placed PDO regions were cut short or lay outside their datagram, with those axes' names.
-struct Truncation {
-  std::uint64_t snapped = 0;
-  std::uint64_t first_snapped = 0;
-  std::uint64_t cut_frames = 0;
-  std::uint64_t first_cut = 0;
-  std::vector<std::string> axes;
-  bool any() const { return snapped > 0 || cut_frames > 0; }
-};
 // One line (stderr, the text report); empty when nothing was cut.
 std::string describeTruncation(const Truncation& truncation);
 // Where the layout became certain and the frames forgotten before it, never judged.
 std::string describeLateLayout(const LateLayout& late);
 // The layout learnt from a start-up the snap length cut: axes may be missing.
 std::string describeStartupCut(std::uint64_t frames);
-Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, const CutRegions& cut,
-                        const std::vector<AxisInfo>& axes);
-
-struct CaptureReport {
+// A capture's result (capture_result.hpp) with what the report adds: where the capture is, its
+// findings as counted and grouped, and what the report itself found out about the file.
+struct CaptureReport : CaptureResult {
   std::string path;
-  std::uint64_t frames = 0;
-  std::uint64_t cycles = 0;
-  std::int64_t first_time_ns = 0;
-  int timestamp_digits = 6;  // of a second, as the capture stores its timestamps
-  CycleTimeSummary cycle_time;
-  LayoutSource layout_source = LayoutSource::None;
-  std::vector<AxisInfo> layout;
-  // When the layout was inferred: the evidence of each axis of `layout`, in the same order.
-  std::vector<AxisEvidence> inferred;
+  int timestamp_digits = 6;             // of a second, as the capture stores its timestamps
   std::vector<Finding> findings;        // kept only for the formats written at the end
   std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
   std::vector<FindingGroup> groups;     // by (rule, axis), in the order of their first finding
   // Where the frames of the kept findings are stored in the file (sorted by frame), where known.
   std::vector<std::pair<std::uint64_t, RecordSpan>> frame_spans;
-  std::vector<AxisReport> axes;
   std::optional<std::string> error;  // the capture could not be read to its end
-  Coverage coverage;                 // whether every axis was checked
-  TimestampSource timestamps = TimestampSource::Capture;
-  ProbeCounts probe;
-  std::string probe_note;  // FrameClock::note()
-  Truncation truncation;
-  std::uint64_t startup_frames_cut = 0;  // layout from a start-up cut by the snap length
-  LateLayout late_layout;                // inference went on looking after its first window
-  // A configured or ENI layout whose data does not look like the protocol's PDOs, per axis.
-  std::vector<std::string> layout_warnings;
-  std::vector<CaptureSegment> segments;  // listed ones (SegmentTracker::kMaxListed)
-  std::uint64_t segment_count = 0;
-  std::int64_t last_time_ns = 0;  // the last frame's
+  std::int64_t last_time_ns = 0;     // the last frame's
   // What the HTML report draws around findings (when a format draws them).
   FindingTimelines timelines;
-  TimingSummary timing;
-  std::vector<CyclicDatagram> cyclic_datagrams;   // what the bus rules judged
-  std::uint64_t unfollowed_frames = 0;            // beyond BusModel::kMaxCyclicFrames
-  std::vector<CyclicFrameSummary> cyclic_frames;  // each with its own cycle
-  std::uint64_t master_copies_missing = 0;        // from the capture; their cycles ran
-  std::uint64_t returned_copies_missing = 0;      // never came back (COM-004)
   // What the capture file says it dropped (pcapng interface statistics), if it says.
   std::optional<CaptureDrops> capture_drops;
-  std::vector<DcStation> dc;        // distributed clocks (docs/timing.md)
-  std::vector<Incident> incidents;  // docs/incidents.md, in frame order
-  std::uint64_t incidents_omitted = 0;
-  std::int64_t dc_settled_ns = 0;
   // Against a baseline (--baseline, docs/baselines.md): the matcher (none without a baseline),
   // the state of each kept finding (beside `findings`), the new findings by severity, how many
   // were unchanged, and the baseline's findings not seen again (after closeBaseline()).
@@ -165,9 +114,6 @@ ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict);
 const char* verdictName(Verdict verdict);
 // An axis's configured name ("axis3" when it has none), "bus" for none.
 std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
-
-// Fills the end-of-capture parts of the report from the validator.
-void summarise(const Validator& validator, CaptureReport& report);
 
 // Reads the capture again for where the frames of its kept findings are stored (a plain file
 // only: the records of a compressed capture or of standard input have no place in a file).

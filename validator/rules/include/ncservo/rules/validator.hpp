@@ -28,6 +28,7 @@ struct Observation {
   FrameDecode decode;                                // copy, pairing and placements, in axis order
   std::array<PdoValues, kMaxAxesPerFrame> values{};  // by placement
   std::array<std::optional<DriveState>, kMaxAxesPerFrame> states{};  // by placement
+  std::size_t servo_error_rises = 0;  // placed axes whose SEW.ServoErrors rose in this frame
 };
 
 struct CycleTimeSummary {
