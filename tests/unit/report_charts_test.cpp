@@ -60,7 +60,8 @@ struct TimelineRow {
   const char* rule;
   std::vector<std::pair<const char*, std::vector<std::pair<std::int64_t, std::uint64_t>>>> traces;
   std::int64_t start_ns, end_ns;
-  std::optional<std::int64_t> since_ns, allowed_ns;
+  std::optional<std::int64_t> since_ns;
+  std::optional<std::pair<std::int64_t, std::int64_t>> allowed_ns;
 };
 
 class FindingTimelineRows : public ::testing::TestWithParam<TimelineRow> {};
@@ -116,7 +117,7 @@ INSTANTIATE_TEST_SUITE_P(
             -29 * kMs,
             8 * kMs,
             -21 * kMs,
-            -1 * kMs}),
+            std::pair{-21 * kMs, -1 * kMs}}),
     test::rowName<TimelineRow>);
 
 TEST(FindingTimelineCaps, FirstFindingsOfEachRuleAndAxisAreDrawnTheRestCounted) {
