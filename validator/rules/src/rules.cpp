@@ -248,12 +248,12 @@ std::string msg001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
 static_assert(kLastDefinedMessageCode == 5 && kLastListedMessageCode == 9);
 
 // --- Bus, per axis ---
-// docs/protocol.md §4: the drive raises ECatTErr after this many cycles without data.
-constexpr std::uint32_t kTimeoutReportCycles = 3;
 // Judged only on inputs the capture gave: ECatTErr may have risen in inputs it cut off.
 bool com003(const AxisModel& a, const RuleContext&) {
-  return a.unansweredOutageCycles() >= kTimeoutReportCycles && a.knowsInputs();
+  return a.unansweredOutageCycles() >= kEcatTimeoutCycles && a.knowsInputs();
 }
+// COM-003's summary names the count.
+static_assert(kEcatTimeoutCycles == 3);
 std::string com003Text(const AxisModel& a, const RuleContext& c, std::int64_t) {
   return fmt::format(
       "{} consecutive cycles failed, but SEW.ECatTErr did not rise within {} ms after traffic "
