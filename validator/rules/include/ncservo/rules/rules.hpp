@@ -1,5 +1,5 @@
-// The rule catalogue (docs/rules.md) as one table: ID, slug, severity, party, clause, timeout
-// and how the rule is checked. The validator, the CLI's `rules` listing, the plugin's expert
+// The rule catalogue (docs/rules.md) as one table: ID, slug, severity, party, clause, timeout,
+// limit and how the rule is checked. The validator, the CLI's `rules` listing, the plugin's expert
 // items and the report formats are all generated from it.
 #pragma once
 
