@@ -231,7 +231,7 @@ std::vector<SimRow> simRows() {
     }
     // and the delayed rules' conditions held past their timeouts meanwhile
     r.options.faults =
-        faultsOneAfterAnother(0.7, 0.2, [](const RuleDef& rule) { return rule.delayed; });
+        faultsOneAfterAnother(0.7, 0.2, [](const RuleDef& rule) { return rule.delayed(); });
     rows.push_back(r);
   }
   {

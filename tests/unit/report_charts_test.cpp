@@ -11,48 +11,15 @@
 #include <vector>
 
 #include "row_name.hpp"
-#include "validator_driver.hpp"
+#include "timeline_run.hpp"
 
 namespace ncservo::cli {
 namespace {
 
 using test::kMs;
 
-// Runs a script through a validator and the recorder; the findings and the windows.
-struct Recorded {
-  std::vector<Finding> findings;
-  FindingTimelines timelines;
-};
-Recorded record(const test::Script& script) {
-  std::optional<Validator> validator;
-  TimelineRecorder recorder(script.ruleSettings());
-  Recorded out;
-  std::uint64_t number = 0;
-  std::int64_t first_ns = 0;
-  for (std::int64_t k = 0; k < script.cycles(); ++k) {
-    std::vector<test::AxisCycle> values;
-    for (std::size_t a = 0; a < script.axisCount(); ++a) values.push_back(script.valuesOf(k, a));
-    for (test::Copy copy : {test::Copy::Master, test::Copy::Returned}) {
-      const test::At at{copy, k};
-      const test::Bytes bytes = test::cyclicFrame(values, copy == test::Copy::Returned,
-                                                  script.wkcOf(k), script.indexOf(k));
-      const test::Walked w = test::walk(bytes);
-      if (!validator) {
-        validator.emplace(test::defaultLayoutOf(*w.frame, DecoderOptions{}), script.ruleSettings());
-        first_ns = script.timeOf(at);
-      }
-      const Observation& frame =
-          validator->onFrame(++number, script.timeOf(at), *w.frame, w.reader());
-      recorder.frame(number, script.timeOf(at) - first_ns, frame);
-      for (const Finding& f : validator->findings()) {
-        out.findings.push_back(f);
-        recorder.finding(f);
-      }
-    }
-  }
-  out.timelines = recorder.finish();
-  return out;
-}
+using test::record;
+using test::Recorded;
 
 struct TimelineRow {
   const char* name;
@@ -60,7 +27,8 @@ struct TimelineRow {
   const char* rule;
   std::vector<std::pair<const char*, std::vector<std::pair<std::int64_t, std::uint64_t>>>> traces;
   std::int64_t start_ns, end_ns;
-  std::optional<std::int64_t> since_ns, allowed_ns;
+  std::optional<std::int64_t> since_ns;
+  std::optional<std::pair<std::int64_t, std::int64_t>> allowed_ns;
 };
 
 class FindingTimelineRows : public ::testing::TestWithParam<TimelineRow> {};
@@ -116,7 +84,7 @@ INSTANTIATE_TEST_SUITE_P(
             -29 * kMs,
             8 * kMs,
             -21 * kMs,
-            -1 * kMs}),
+            std::pair{-21 * kMs, -1 * kMs}}),
     test::rowName<TimelineRow>);
 
 TEST(FindingTimelineCaps, FirstFindingsOfEachRuleAndAxisAreDrawnTheRestCounted) {

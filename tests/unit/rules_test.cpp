@@ -31,52 +31,60 @@ constexpr auto BUSK = RuleKind::Bus;
 constexpr auto SLAVE = RuleKind::Slave;
 constexpr std::optional<Timeout> kNoTimeout{};
 constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
+constexpr auto NONE = TimeoutUse::None;
+constexpr auto DELAY = TimeoutUse::Delay;
+constexpr auto BACK = TimeoutUse::LookBack;
 
 struct SpecRow {
   const char* code;
   const char* slug;
   Severity severity;
   Party party;
-  std::optional<Timeout> timeout;        // the timeout its text names
-  bool delayed;                          // "longer than T": reported once the condition outlasts T
+  std::optional<Timeout> timeout;  // the timeout its text names
+  // DELAY: "longer than T", reported once the condition outlasts T; BACK: an edge with nothing
+  // answering it within T before
+  TimeoutUse use;
   RuleKind kind;                         // judged on an axis's model, the bus's events or a slave's
   ByDefault by_default = ByDefault::On;  // "off by default" in its text: run only when enabled
+  std::optional<Limit> limit{};          // the limit its text names
 };
 
 // The catalogue written by hand, table by table.
 // clang-format off
 const SpecRow kSpec[] = {
-    {"SE-001", "illegal-enable-edge", E, NC, kNoTimeout, false, AXIS},
-    {"SE-002", "enable-without-edge", E, DRIVE, kDrive, false, AXIS},
-    {"SE-003", "not-disabled", E, DRIVE, kDrive, true, AXIS},
-    {"SE-004", "enable-not-honoured", W, DRIVE, Timeout::EnableResponse, true, AXIS},
-    {"ZP-001", "zpulse-ack-not-cleared", E, DRIVE, kDrive, true, AXIS},
-    {"ZP-002", "zpulse-ack-without-request", E, DRIVE, kDrive, false, AXIS},
-    {"ZP-003", "zpulse-absolute-encoder", W, NC, kNoTimeout, false, AXIS},
-    {"EC-001", "clear-ack-without-request", E, DRIVE, kDrive, false, AXIS},
-    {"EC-002", "clear-request-held", W, NC, Timeout::NcRelease, true, AXIS},
-    {"EC-003", "clear-ack-not-cleared", E, DRIVE, kDrive, true, AXIS},
-    {"EC-004", "clear-not-acknowledged", W, DRIVE, Timeout::ClearResponse, true, AXIS},
-    {"SEW-001", "cause-without-summary", E, DRIVE, kNoTimeout, false, AXIS},
-    {"SEW-002", "summary-without-cause", W, DRIVE, kDrive, true, AXIS},
-    {"SEW-003", "reserved-error-bits", W, DRIVE, kNoTimeout, false, AXIS},
-    {"SSW-001", "reserved-status-bits", W, DRIVE, kNoTimeout, false, AXIS},
-    {"SCW-001", "reserved-control-bits", W, NC, kNoTimeout, false, AXIS},
-    {"RDY-001", "ready-mismatch", E, DRIVE, kDrive, true, AXIS},
-    {"FLT-001", "enabled-with-error", E, DRIVE, Timeout::FaultReaction, true, AXIS},
-    {"PT-001", "param-table-not-followed", W, DRIVE, Timeout::ParamTable, true, AXIS},
-    {"MSG-001", "undefined-message-code", W, DRIVE, kNoTimeout, false, AXIS},
-    {"COM-001", "working-counter", E, BUS, kNoTimeout, false, BUSK},
-    {"COM-002", "cycle-gap", W, BUS, kNoTimeout, false, BUSK},
-    {"COM-003", "timeout-not-reported", I, DRIVE, kDrive, true, AXIS},
-    {"COM-004", "frame-not-returned", W, BUS, kNoTimeout, false, BUSK},
-    {"COM-005", "telegram-failure-limit", E, BUS, kNoTimeout, false, AXIS},
-    {"COM-006", "cycle-jitter", W, BUS, kNoTimeout, false, BUSK, ByDefault::Off},
-    {"COM-007", "late-return", W, BUS, kNoTimeout, false, BUSK, ByDefault::Off},
-    {"ESM-001", "invalid-al-transition", E, NC, kNoTimeout, false, SLAVE},
-    {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, false, AXIS},
-    {"ESM-003", "al-error", E, DRIVE, kNoTimeout, false, SLAVE},
-    {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, false, SLAVE},
+    {"SE-001", "illegal-enable-edge", E, NC, kNoTimeout, NONE, AXIS},
+    {"SE-002", "enable-without-edge", E, DRIVE, kDrive, BACK, AXIS},
+    {"SE-003", "not-disabled", E, DRIVE, kDrive, DELAY, AXIS},
+    {"SE-004", "enable-not-honoured", W, DRIVE, Timeout::EnableResponse, DELAY, AXIS},
+    {"ZP-001", "zpulse-ack-not-cleared", E, DRIVE, kDrive, DELAY, AXIS},
+    {"ZP-002", "zpulse-ack-without-request", E, DRIVE, kDrive, BACK, AXIS},
+    {"ZP-003", "zpulse-absolute-encoder", W, NC, kNoTimeout, NONE, AXIS},
+    {"EC-001", "clear-ack-without-request", E, DRIVE, kDrive, BACK, AXIS},
+    {"EC-002", "clear-request-held", W, NC, Timeout::NcRelease, DELAY, AXIS},
+    {"EC-003", "clear-ack-not-cleared", E, DRIVE, kDrive, DELAY, AXIS},
+    {"EC-004", "clear-not-acknowledged", W, DRIVE, Timeout::ClearResponse, DELAY, AXIS},
+    {"SEW-001", "cause-without-summary", E, DRIVE, kNoTimeout, NONE, AXIS},
+    {"SEW-002", "summary-without-cause", W, DRIVE, kDrive, DELAY, AXIS},
+    {"SEW-003", "reserved-error-bits", W, DRIVE, kNoTimeout, NONE, AXIS},
+    {"SSW-001", "reserved-status-bits", W, DRIVE, kNoTimeout, NONE, AXIS},
+    {"SCW-001", "reserved-control-bits", W, NC, kNoTimeout, NONE, AXIS},
+    {"RDY-001", "ready-mismatch", E, DRIVE, kDrive, DELAY, AXIS},
+    {"FLT-001", "enabled-with-error", E, DRIVE, Timeout::FaultReaction, DELAY, AXIS},
+    {"PT-001", "param-table-not-followed", W, DRIVE, Timeout::ParamTable, DELAY, AXIS},
+    {"MSG-001", "undefined-message-code", W, DRIVE, kNoTimeout, NONE, AXIS},
+    {"COM-001", "working-counter", E, BUS, kNoTimeout, NONE, BUSK},
+    {"COM-002", "cycle-gap", W, BUS, kNoTimeout, NONE, BUSK},
+    {"COM-003", "timeout-not-reported", I, DRIVE, kDrive, DELAY, AXIS},
+    {"COM-004", "frame-not-returned", W, BUS, kNoTimeout, NONE, BUSK},
+    {"COM-005", "telegram-failure-limit", E, BUS, kNoTimeout, NONE, AXIS},
+    {"COM-006", "cycle-jitter", W, BUS, kNoTimeout, NONE, BUSK, ByDefault::Off,
+     Limit::CycleJitterPercent},
+    {"COM-007", "late-return", W, BUS, kNoTimeout, NONE, BUSK, ByDefault::Off,
+     Limit::ReturnLatencyUs},
+    {"ESM-001", "invalid-al-transition", E, NC, kNoTimeout, NONE, SLAVE},
+    {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, NONE, AXIS},
+    {"ESM-003", "al-error", E, DRIVE, kNoTimeout, NONE, SLAVE},
+    {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, NONE, SLAVE},
 };
 // clang-format on
 
@@ -94,7 +102,8 @@ TEST(RuleTable, MatchesRulesMdRowByRow) {
     EXPECT_EQ(rule.severity, spec.severity);
     EXPECT_EQ(rule.party, spec.party);
     EXPECT_EQ(rule.timeout, spec.timeout);
-    EXPECT_EQ(rule.delayed, spec.delayed);
+    EXPECT_EQ(rule.timeout_use, spec.use);
+    EXPECT_EQ(rule.limit, spec.limit);
     EXPECT_EQ(rule.kind, spec.kind);
     EXPECT_EQ(rule.by_default, spec.by_default);
     EXPECT_NE(rule.check, nullptr) << "every rule is a row with its check";
@@ -179,12 +188,14 @@ TEST(RuleTable, FilterNames) {
   }
 }
 
-TEST(RuleTable, DelayedRulesHaveATimeoutAxisRulesCheckAndDescribe) {
+TEST(RuleTable, TimedRulesSayWhatTheTimeoutIsAxisRulesCheckAndDescribe) {
   for (const RuleDef& rule : kRules) {
     SCOPED_TRACE(rule.code);
-    if (rule.delayed) {
-      EXPECT_TRUE(rule.timeout.has_value());
-      EXPECT_EQ(rule.kind, RuleKind::Axis) << "a delayed rule is timed per axis";
+    EXPECT_EQ(rule.timeout.has_value(), rule.timeout_use != TimeoutUse::None)
+        << "a row with a timeout says whether it delays the report or bounds a look back";
+    if (rule.timeout) {
+      EXPECT_NE(rule.timeout, Timeout::CapturePause) << "no rule's";
+      EXPECT_EQ(rule.kind, RuleKind::Axis) << "a timed rule is timed per axis";
     }
     EXPECT_NE(rule.check, nullptr);
     EXPECT_NE(rule.describe, nullptr);

@@ -932,8 +932,12 @@ void printRuleSettingsMarkdown() {
       "\n| limit | default | range | used by |\n"
       "|---|---|---|---|\n");
   for (const LimitDef& l : kLimits) {
+    std::vector<std::string> users;
+    for (const RuleDef& rule : kRules) {
+      if (rule.limit == l.id) users.emplace_back(rule.code);
+    }
     fmt::print("| `{}` | {} | {} to {} ({}) | {} |\n", l.name, l.default_value, l.min, l.max,
-               l.unit, ruleDef(l.rule).code);
+               l.unit, fmt::join(users, ", "));
   }
 }
 
@@ -964,8 +968,8 @@ void explainRule(const RuleDef& rule) {
   if (rule.by_default == ByDefault::Off) {
     fmt::print("  by default:  off (run it with --enable {} or [rules] enable)\n", rule.code);
   }
-  for (const LimitDef& l : kLimits) {
-    if (l.rule != rule.id) continue;
+  if (rule.limit) {
+    const LimitDef& l = kLimits[static_cast<std::size_t>(*rule.limit)];
     fmt::print(
         "  limit:       {}, default {} ({}) (--limit {}=VALUE, or {} in the configuration)\n",
         l.name, l.default_value, l.unit, l.name, l.name);
@@ -978,7 +982,7 @@ void explainRule(const RuleDef& rule) {
                t.default_ms, t.name, t.name);
   }
   fmt::print("  reported:    {}\n",
-             rule.delayed                  ? "once the condition has held longer than the timeout"
+             rule.delayed()                ? "once the condition has held longer than the timeout"
              : rule.reported != nullptr    ? rule.reported
              : rule.kind == RuleKind::Axis ? "on the frame where the condition begins"
                                            : "on the frame of the event");

@@ -56,7 +56,9 @@ Json timelineJson(const FindingTimeline& t) {
          {"start", milliseconds(t.start_ns)},
          {"end", milliseconds(t.end_ns)},
          {"since", t.since_ns ? Json(milliseconds(*t.since_ns)) : Json(nullptr)},
-         {"allowed", t.allowed_ns ? Json(milliseconds(*t.allowed_ns)) : Json(nullptr)},
+         {"allowed", t.allowed_ns ? Json::array({milliseconds(t.allowed_ns->first),
+                                                 milliseconds(t.allowed_ns->second)})
+                                  : Json(nullptr)},
          {"clipped", t.clipped},
          {"traces", std::move(traces)}};
   return j;
@@ -177,9 +179,9 @@ function windowPlugin(timeline) {
     beforeDatasetsDraw(chart) {
       const {ctx, chartArea: a, scales: {x}} = chart;
       ctx.save();
-      if (timeline.since !== null && timeline.allowed !== null) {
-        const from = Math.max(a.left, x.getPixelForValue(timeline.since));
-        const to = Math.min(a.right, x.getPixelForValue(timeline.allowed));
+      if (timeline.allowed !== null) {
+        const from = Math.max(a.left, x.getPixelForValue(timeline.allowed[0]));
+        const to = Math.min(a.right, x.getPixelForValue(timeline.allowed[1]));
         ctx.fillStyle = 'rgba(46,125,50,0.15)';
         ctx.fillRect(from, a.top, Math.max(to - from, 1), a.bottom - a.top);
       }

@@ -102,8 +102,9 @@ void TimelineRecorder::cut(AxisRing& r, const Pending& p) {
   timeline.clipped = clipped;
   if (!clipped) {
     timeline.since_ns = at(since_k).time_ns - origin;
-    const RuleDef& rule = ruleDef(p.rule);
-    if (rule.timeout) timeline.allowed_ns = *timeline.since_ns + settings_.timeoutNs(*rule.timeout);
+    if (const std::optional<AllowedWindow> w = allowedWindow(ruleDef(p.rule), settings_)) {
+      timeline.allowed_ns = {*timeline.since_ns + w->from_ns, *timeline.since_ns + w->to_ns};
+    }
   }
   const Reads& reads = ruleDef(p.rule).reads;
   for (const FieldRead& read : fieldsRead(reads)) {

@@ -19,9 +19,6 @@ namespace ncservo {
 namespace {
 using namespace bits;
 
-std::int64_t ms(const RuleSettings& s, Timeout t) {
-  return s.timeoutNs(t) / 1'000'000;
-}
 double heldMs(std::int64_t held_ns) {
   return static_cast<double>(held_ns) / 1e6;
 }
@@ -42,75 +39,76 @@ bool driveReady(const AxisModel& a) {
 }
 
 // --- Servo enable (docs/protocol.md §2) ---
-bool se001(const AxisModel& a, const RuleSettings&) {
+bool se001(const AxisModel& a, const RuleContext&) {
   return a.illegalEnableEdge();
 }
-std::string se001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string se001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format("SCW.SE went 0x{:X} -> 0x2; an enable is legal only from 0x1", a.previousSe());
 }
 
-bool recentlyEnabled(const AxisModel& a, const RuleSettings& s) {
+// A valid enable now, or one that ended within the row's timeout.
+bool recentlyEnabled(const AxisModel& a, const RuleContext& c) {
   if (a.validEnable()) return true;
   const auto& ended = a.validEnableEnded();
-  return ended && !longerThan(a, *ended, s.timeoutNs(Timeout::DriveResponse));
+  return ended && !longerThan(a, *ended, c.timeoutNs());
 }
-bool se002(const AxisModel& a, const RuleSettings& s) {
-  return a.servoEn().rose && !recentlyEnabled(a, s);
+bool se002(const AxisModel& a, const RuleContext& c) {
+  return a.servoEn().rose && !recentlyEnabled(a, c);
 }
-std::string se002Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+std::string se002Text(const AxisModel& a, const RuleContext& c, std::int64_t) {
   return fmt::format(
       "SSW.ServoEn rose with no valid enable within {} ms (SCW.SE is 0x{:X}); the drive may "
       "enable only after SE goes 0x1 -> 0x2",
-      ms(s, Timeout::DriveResponse), a.se().value);
+      c.timeoutMs(), a.se().value);
 }
 
-bool se003(const AxisModel& a, const RuleSettings&) {
+bool se003(const AxisModel& a, const RuleContext&) {
   return a.servoEn().on() && !a.validEnable();
 }
-std::string se003Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+std::string se003Text(const AxisModel& a, const RuleContext& c, std::int64_t held) {
   return fmt::format("SSW.ServoEn still 1 {:.3f} ms {} (SCW.SE is 0x{:X}); expected 0 within {} ms",
                      heldMs(held),
                      a.validEnableEnded() ? "after the enable ended" : "with no valid enable",
-                     a.se().value, ms(s, Timeout::DriveResponse));
+                     a.se().value, c.timeoutMs());
 }
 
-bool se004(const AxisModel& a, const RuleSettings&) {
+bool se004(const AxisModel& a, const RuleContext&) {
   return a.validEnable() && driveReady(a) && a.emgon().on() && a.brake().on() && a.servoEn().off();
 }
-std::string se004Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+std::string se004Text(const AxisModel&, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "valid enable held {:.3f} ms with the drive ready, EMGON 1 and Brake 1, but SSW.ServoEn "
       "stays 0; expected it within {} ms",
-      heldMs(held), ms(s, Timeout::EnableResponse));
+      heldMs(held), c.timeoutMs());
 }
 
 // --- Zero-pulse search ---
-bool zp001(const AxisModel& a, const RuleSettings&) {
+bool zp001(const AxisModel& a, const RuleContext&) {
   return a.zpulseRequest().off() && a.zpulseAck().on();
 }
-std::string zp001Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+std::string zp001Text(const AxisModel&, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "SSW.ZPulseAck still 1 {:.3f} ms after SCW.ZPulseRequest fell; expected 0 within {} ms",
-      heldMs(held), ms(s, Timeout::DriveResponse));
+      heldMs(held), c.timeoutMs());
 }
 
-bool zp002(const AxisModel& a, const RuleSettings& s) {
+bool zp002(const AxisModel& a, const RuleContext& c) {
   return a.zpulseAck().rose && a.zpulseRequest().off() &&
-         longerThan(a, a.zpulseRequest().since, s.timeoutNs(Timeout::DriveResponse));
+         longerThan(a, a.zpulseRequest().since, c.timeoutNs());
 }
-std::string zp002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string zp002Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format(
       "SSW.ZPulseAck rose while SCW.ZPulseRequest had been 0 for {:.3f} ms (since frame {}); "
       "an acknowledge answers a request",
       heldMs(a.now().time_ns - a.zpulseRequest().since.time_ns), a.zpulseRequest().since.frame);
 }
 
-bool zp003(const AxisModel& a, const RuleSettings&) {
+bool zp003(const AxisModel& a, const RuleContext&) {
   if (!a.zpulseRequest().on() || !a.knowsInputs()) return false;
   const std::uint32_t ssw = a.latest().ssw();
   return !(ssw & kIncremental) || (ssw & kNoEncoder);
 }
-std::string zp003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string zp003Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format(
       "SCW.ZPulseRequest is 1 but SSW says {}; a zero-pulse search needs an "
       "incremental encoder",
@@ -118,129 +116,129 @@ std::string zp003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
 }
 
 // --- Error clear ---
-bool ec001(const AxisModel& a, const RuleSettings& s) {
+bool ec001(const AxisModel& a, const RuleContext& c) {
   return a.errClearAck().rose && a.errorClear().off() &&
-         longerThan(a, a.errorClear().since, s.timeoutNs(Timeout::DriveResponse));
+         longerThan(a, a.errorClear().since, c.timeoutNs());
 }
-std::string ec001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string ec001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format(
       "SSW.ErrClearAck rose while SCW.ErrorClear had been 0 for {:.3f} ms (since frame {}); "
       "an acknowledge answers a request",
       heldMs(a.now().time_ns - a.errorClear().since.time_ns), a.errorClear().since.frame);
 }
 
-bool ec002(const AxisModel& a, const RuleSettings&) {
+bool ec002(const AxisModel& a, const RuleContext&) {
   return a.errorClear().on() && a.clearAcknowledged();
 }
-std::string ec002Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+std::string ec002Text(const AxisModel&, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "SCW.ErrorClear still 1 {:.3f} ms after SSW.ErrClearAck rose; the NC must drop it within "
       "{} ms",
-      heldMs(held), ms(s, Timeout::NcRelease));
+      heldMs(held), c.timeoutMs());
 }
 
-bool ec003(const AxisModel& a, const RuleSettings&) {
+bool ec003(const AxisModel& a, const RuleContext&) {
   return a.errClearAck().on() && a.errorClear().off();
 }
-std::string ec003Text(const AxisModel&, const RuleSettings& s, std::int64_t held) {
+std::string ec003Text(const AxisModel&, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "SSW.ErrClearAck still 1 {:.3f} ms after SCW.ErrorClear fell; expected 0 within {} ms",
-      heldMs(held), ms(s, Timeout::DriveResponse));
+      heldMs(held), c.timeoutMs());
 }
 
-bool ec004(const AxisModel& a, const RuleSettings&) {
+bool ec004(const AxisModel& a, const RuleContext&) {
   return a.errorClear().on() && a.servoErrors().on() && !a.clearAcknowledged();
 }
-std::string ec004Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+std::string ec004Text(const AxisModel& a, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "SCW.ErrorClear held {:.3f} ms with SEW 0x{:08X} and no SSW.ErrClearAck; expected the "
       "acknowledge within {} ms",
-      heldMs(held), a.latest().sew(), ms(s, Timeout::ClearResponse));
+      heldMs(held), a.latest().sew(), c.timeoutMs());
 }
 
 // --- Status and error words ---
-bool sew001(const AxisModel& a, const RuleSettings&) {
+bool sew001(const AxisModel& a, const RuleContext&) {
   const std::uint32_t sew = a.latest().sew();
   return a.knowsInputs() && (sew & kSewCauseMask) && !(sew & kServoErrors);
 }
-std::string sew001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string sew001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format("SEW 0x{:08X} has cause bits set but not the summary bit 0", a.latest().sew());
 }
 
-bool sew002(const AxisModel& a, const RuleSettings&) {
+bool sew002(const AxisModel& a, const RuleContext&) {
   const std::uint32_t sew = a.latest().sew();
   return a.knowsInputs() && (sew & kServoErrors) && !(sew & kSewCauseMask);
 }
-std::string sew002Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+std::string sew002Text(const AxisModel& a, const RuleContext& c, std::int64_t held) {
   return fmt::format("SEW 0x{:08X}: summary bit set with no cause bit for {:.3f} ms (limit {} ms)",
-                     a.latest().sew(), heldMs(held), ms(s, Timeout::DriveResponse));
+                     a.latest().sew(), heldMs(held), c.timeoutMs());
 }
 
-bool sew003(const AxisModel& a, const RuleSettings&) {
+bool sew003(const AxisModel& a, const RuleContext&) {
   return a.knowsInputs() && (a.latest().sew() & kSewReserved);
 }
-std::string sew003Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string sew003Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format("SEW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().sew(),
                      a.latest().sew() & kSewReserved);
 }
 
-bool ssw001(const AxisModel& a, const RuleSettings&) {
+bool ssw001(const AxisModel& a, const RuleContext&) {
   return a.knowsInputs() && (a.latest().ssw() & kSswReserved);
 }
-std::string ssw001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string ssw001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format("SSW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().ssw(),
                      a.latest().ssw() & kSswReserved);
 }
 
-bool scw001(const AxisModel& a, const RuleSettings&) {
+bool scw001(const AxisModel& a, const RuleContext&) {
   return a.knowsOutputs() && (a.latest().scw() & kScwReserved);
 }
-std::string scw001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string scw001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   return fmt::format("SCW 0x{:08X} sets reserved bits 0x{:08X}; they must be 0", a.latest().scw(),
                      a.latest().scw() & kScwReserved);
 }
 
-bool rdy001(const AxisModel& a, const RuleSettings&) {
+bool rdy001(const AxisModel& a, const RuleContext&) {
   const std::optional<bool> expected = a.expectedReady();
   return expected && a.servoRdy().on() != *expected;
 }
-std::string rdy001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+std::string rdy001Text(const AxisModel& a, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "SSW.ServoRDY is {} for {:.3f} ms with ServoEn {} and ServoErrors {}; Servo_Ready_Mode {} "
       "({}) requires {} (limit {} ms)",
       a.servoRdy().on() ? 1 : 0, heldMs(held), a.servoEn().on() ? 1 : 0,
       a.servoErrors().on() ? 1 : 0, a.readyMode().value_or(-1),
       a.readyModeConfigured() ? "configured" : "inferred",
-      a.expectedReady().value_or(false) ? 1 : 0, ms(s, Timeout::DriveResponse));
+      a.expectedReady().value_or(false) ? 1 : 0, c.timeoutMs());
 }
 
-bool flt001(const AxisModel& a, const RuleSettings&) {
+bool flt001(const AxisModel& a, const RuleContext&) {
   return a.servoEn().on() && a.servoErrors().on();
 }
-std::string flt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+std::string flt001Text(const AxisModel& a, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "drive still enabled {:.3f} ms after reporting an error (SEW 0x{:08X}); expected ServoEn 0 "
       "within {} ms",
-      heldMs(held), a.latest().sew(), ms(s, Timeout::FaultReaction));
+      heldMs(held), a.latest().sew(), c.timeoutMs());
 }
 
-bool pt001(const AxisModel& a, const RuleSettings&) {
+bool pt001(const AxisModel& a, const RuleContext&) {
   return a.knowsOutputs() && a.knowsInputs() && commandedTable(a) != activeTable(a);
 }
-std::string pt001Text(const AxisModel& a, const RuleSettings& s, std::int64_t held) {
+std::string pt001Text(const AxisModel& a, const RuleContext& c, std::int64_t held) {
   return fmt::format(
       "active parameter table {} differs from the commanded table {} for {:.3f} ms (limit {} ms)",
-      activeTable(a), commandedTable(a), heldMs(held), ms(s, Timeout::ParamTable));
+      activeTable(a), commandedTable(a), heldMs(held), c.timeoutMs());
 }
 
 bool definedMessageCode(std::uint64_t raw) {
   return messageCodeDefined(static_cast<std::int32_t>(raw));
 }
-bool msg001(const AxisModel& a, const RuleSettings&) {
+bool msg001(const AxisModel& a, const RuleContext&) {
   const std::int32_t code = a.latest().msgCode();
   return a.knowsInputs() && !messageCodeDefined(code);
 }
-std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string msg001Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   const std::int32_t code = a.latest().msgCode();
   const bool listed = code >= 0 && static_cast<std::uint32_t>(code) <= kLastListedMessageCode;
   return fmt::format("message code {} is {}; defined codes are 0-{}", code,
@@ -250,37 +248,37 @@ std::string msg001Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
 static_assert(kLastDefinedMessageCode == 5 && kLastListedMessageCode == 9);
 
 // --- Bus, per axis ---
-// docs/protocol.md §4: the drive raises ECatTErr after this many cycles without data.
-constexpr std::uint32_t kTimeoutReportCycles = 3;
 // Judged only on inputs the capture gave: ECatTErr may have risen in inputs it cut off.
-bool com003(const AxisModel& a, const RuleSettings&) {
-  return a.unansweredOutageCycles() >= kTimeoutReportCycles && a.knowsInputs();
+bool com003(const AxisModel& a, const RuleContext&) {
+  return a.unansweredOutageCycles() >= kEcatTimeoutCycles && a.knowsInputs();
 }
-std::string com003Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+// COM-003's summary names the count.
+static_assert(kEcatTimeoutCycles == 3);
+std::string com003Text(const AxisModel& a, const RuleContext& c, std::int64_t) {
   return fmt::format(
       "{} consecutive cycles failed, but SEW.ECatTErr did not rise within {} ms after traffic "
       "resumed",
-      a.unansweredOutageCycles(), ms(s, Timeout::DriveResponse));
+      a.unansweredOutageCycles(), c.timeoutMs());
 }
 
-bool com005(const AxisModel& a, const RuleSettings& s) {
-  return a.consecutiveFailed() > s.telegram_failure_limit;
+bool com005(const AxisModel& a, const RuleContext& c) {
+  return a.consecutiveFailed() > c.settings.telegram_failure_limit;
 }
-std::string com005Text(const AxisModel& a, const RuleSettings& s, std::int64_t) {
+std::string com005Text(const AxisModel& a, const RuleContext& c, std::int64_t) {
   return fmt::format("{} consecutive telegram failures exceed the limit of {} (total {})",
-                     a.consecutiveFailed(), s.telegram_failure_limit, a.totalFailures());
+                     a.consecutiveFailed(), c.settings.telegram_failure_limit, a.totalFailures());
 }
 
 // --- EtherCAT state machine, per axis (docs/protocol.md §8) ---
 using ecat::kAlOp;
-bool esm002(const AxisModel& a, const RuleSettings&) {
+bool esm002(const AxisModel& a, const RuleContext&) {
   if (!a.alState()) return false;
   const std::uint8_t state = *a.alState();
   const bool enabling = a.knowsOutputs() && a.se().value != 0 && state != kAlOp;
   const bool inputs = a.inputsInAlState() && !ecat::exchangesInputs(state);
   return enabling || inputs;
 }
-std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
+std::string esm002Text(const AxisModel& a, const RuleContext&, std::int64_t) {
   const std::uint8_t state = a.alState().value_or(0);
   if (a.knowsOutputs() && a.se().value != 0 && state != kAlOp) {
     return fmt::format("SCW.SE is 0x{:X} while the slave's AL state is {:#x}; enable only in OP",
@@ -291,19 +289,19 @@ std::string esm002Text(const AxisModel& a, const RuleSettings&, std::int64_t) {
 }
 
 // --- Bus (docs/protocol.md §8; docs/rules.md#com-001, COM-002, COM-004) ---
-bool com001(const WorkingCounterEvent& e, const RuleSettings&) {
+bool com001(const WorkingCounterEvent& e, const RuleContext&) {
   return e.wkc != e.expected;
 }
-std::string com001Text(const WorkingCounterEvent& e, const Stamp&, const RuleSettings&) {
+std::string com001Text(const WorkingCounterEvent& e, const Stamp&, const RuleContext&) {
   return fmt::format("{} at 0x{:08X} ({} bytes) returned with WKC {}, expected {}{}",
                      ecat::commandName(e.command), e.address, e.length, e.wkc, e.expected,
                      e.wkc == 0 ? " (no slave processed it)" : "; inputs may be stale");
 }
 
-bool com002(const CycleGapEvent&, const RuleSettings&) {
+bool com002(const CycleGapEvent&, const RuleContext&) {
   return true;  // the bus model reports an interval only when it is a gap
 }
-std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&) {
+std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleContext&) {
   using Verdict = CycleGapEvent::Verdict;
   // One buffer: a failing bus reports a gap every few cycles.
   fmt::memory_buffer text;
@@ -332,42 +330,41 @@ std::string com002Text(const CycleGapEvent& e, const Stamp&, const RuleSettings&
 
 // COM-006: one finding per run of deviating cycles. A gap deviates too but is COM-002's: it
 // starts a run without a finding, so a late cycle's short interval after it is not reported.
-bool com006(const CycleIntervalEvent& e, const RuleSettings& s, bool& in_run) {
+bool com006(const CycleIntervalEvent& e, const RuleContext& c, bool& in_run) {
   const std::int64_t deviation =
       e.interval_ns > e.nominal_ns ? e.interval_ns - e.nominal_ns : e.nominal_ns - e.interval_ns;
-  const bool deviates =
-      deviation * 100 > e.nominal_ns * std::int64_t{s.limitOf(Limit::CycleJitterPercent)};
+  const bool deviates = deviation * 100 > e.nominal_ns * std::int64_t{c.limit()};
   const bool begins = deviates && !e.gap && !in_run;
   in_run = deviates;
   return begins;
 }
-std::string com006Text(const CycleIntervalEvent& e, const Stamp&, const RuleSettings& s) {
+std::string com006Text(const CycleIntervalEvent& e, const Stamp&, const RuleContext& c) {
   const double deviation = static_cast<double>(e.interval_ns - e.nominal_ns) / 1e3;
   return fmt::format(
       "cycle of {:.3f} ms since frame {} deviates {:+.1f} us from the {:.3f} ms nominal, more "
       "than cycle_jitter_percent = {}",
       static_cast<double>(e.interval_ns) / 1e6, e.previous_frame, deviation,
-      static_cast<double>(e.nominal_ns) / 1e6, s.limitOf(Limit::CycleJitterPercent));
+      static_cast<double>(e.nominal_ns) / 1e6, c.limit());
 }
 
 // COM-007: one finding per run of late returns.
-bool com007(const ReturnLatencyEvent& e, const RuleSettings& s, bool& in_run) {
-  const bool late = e.latency_ns > std::int64_t{s.limitOf(Limit::ReturnLatencyUs)} * 1000;
+bool com007(const ReturnLatencyEvent& e, const RuleContext& c, bool& in_run) {
+  const bool late = e.latency_ns > std::int64_t{c.limit()} * 1000;
   const bool begins = late && !in_run;
   in_run = late;
   return begins;
 }
-std::string com007Text(const ReturnLatencyEvent& e, const Stamp&, const RuleSettings& s) {
+std::string com007Text(const ReturnLatencyEvent& e, const Stamp&, const RuleContext& c) {
   return fmt::format(
       "returned {:.1f} us after its master copy (frame {}), more than "
       "return_latency_us = {}",
-      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, s.limitOf(Limit::ReturnLatencyUs));
+      static_cast<double>(e.latency_ns) / 1e3, e.master_frame, c.limit());
 }
 
-bool com004(const NotReturnedEvent&, const RuleSettings&) {
+bool com004(const NotReturnedEvent&, const RuleContext&) {
   return true;
 }
-std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleSettings&) {
+std::string com004Text(const NotReturnedEvent& e, const Stamp&, const RuleContext&) {
   // One buffer: a lossy ring reports this every few cycles.
   fmt::memory_buffer text;
   auto out = std::back_inserter(text);
@@ -397,10 +394,10 @@ std::string allowedFrom(std::uint8_t from) {
   return out;
 }
 
-bool esm001(const AlControlEvent& e, const RuleSettings&) {
+bool esm001(const AlControlEvent& e, const RuleContext&) {
   return !alTransitionAllowed(e.known_state, e.requested);
 }
-std::string esm001Text(const AlControlEvent& e, const Stamp&, const RuleSettings&) {
+std::string esm001Text(const AlControlEvent& e, const Stamp&, const RuleContext&) {
   return fmt::format("{}: AL control 0x{:04X} requests {} from known state {}; allowed: {}",
                      slaveName(e.slave), e.raw, alStateName(e.requested),
                      alStateName(e.known_state), allowedFrom(e.known_state));
@@ -411,13 +408,13 @@ bool errorAboveInit(const AlErrorEvent& e) {
   const std::optional<std::uint8_t> reference = e.requested ? e.requested : e.previous;
   return reference && alStateAboveInit(*reference);
 }
-bool esm003(const AlErrorEvent& e, const RuleSettings&) {
+bool esm003(const AlErrorEvent& e, const RuleContext&) {
   return errorAboveInit(e);
 }
-bool esm004(const AlErrorEvent& e, const RuleSettings&) {
+bool esm004(const AlErrorEvent& e, const RuleContext&) {
   return !errorAboveInit(e);
 }
-std::string alErrorText(const AlErrorEvent& e, const Stamp& at, const RuleSettings&) {
+std::string alErrorText(const AlErrorEvent& e, const Stamp& at, const RuleContext&) {
   std::string context;
   if (e.requested) {
     context = fmt::format("while {} requested", alStateName(*e.requested));
@@ -438,28 +435,28 @@ std::string alErrorText(const AlErrorEvent& e, const Stamp& at, const RuleSettin
 }
 
 // The table's uniform check signature over the axis model or one kind of event.
-template <bool (*F)(const AxisModel&, const RuleSettings&)>
-bool onAxis(const RuleSubject& s, const RuleSettings& settings) {
-  return F(*s.axis, settings);
+template <bool (*F)(const AxisModel&, const RuleContext&)>
+bool onAxis(const RuleSubject& s, const RuleContext& context) {
+  return F(*s.axis, context);
 }
-template <std::string (*F)(const AxisModel&, const RuleSettings&, std::int64_t)>
-std::string describeAxis(const RuleSubject& s, const RuleSettings& settings, std::int64_t held) {
-  return F(*s.axis, settings, held);
+template <std::string (*F)(const AxisModel&, const RuleContext&, std::int64_t)>
+std::string describeAxis(const RuleSubject& s, const RuleContext& context, std::int64_t held) {
+  return F(*s.axis, context, held);
 }
-template <class Event, bool (*F)(const Event&, const RuleSettings&)>
-bool onEvent(const RuleSubject& s, const RuleSettings& settings) {
+template <class Event, bool (*F)(const Event&, const RuleContext&)>
+bool onEvent(const RuleSubject& s, const RuleContext& context) {
   const Event* e = std::get_if<Event>(&s.event->data);
-  return e != nullptr && F(*e, settings);
+  return e != nullptr && F(*e, context);
 }
 // A measurement continues its cyclic frame's run for the judging rule.
-template <class Event, bool (*F)(const Event&, const RuleSettings&, bool& in_run)>
-bool onMeasurement(const RuleSubject& s, const RuleSettings& settings) {
+template <class Event, bool (*F)(const Event&, const RuleContext&, bool& in_run)>
+bool onMeasurement(const RuleSubject& s, const RuleContext& context) {
   const Event* e = std::get_if<Event>(&s.event->data);
-  return e != nullptr && F(*e, settings, s.runs->inRun(s.rule, e->cyclic_frame));
+  return e != nullptr && F(*e, context, s.runs->inRun(context.rule.id, e->cyclic_frame));
 }
-template <class Event, std::string (*F)(const Event&, const Stamp&, const RuleSettings&)>
-std::string describeEvent(const RuleSubject& s, const RuleSettings& settings, std::int64_t) {
-  return F(std::get<Event>(s.event->data), s.event->since, settings);
+template <class Event, std::string (*F)(const Event&, const Stamp&, const RuleContext&)>
+std::string describeEvent(const RuleSubject& s, const RuleContext& context, std::int64_t) {
+  return F(std::get<Event>(s.event->data), s.event->since, context);
 }
 
 }  // namespace
@@ -489,6 +486,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 SE",
      .timeout = Timeout::DriveResponse,
+     .timeout_use = TimeoutUse::LookBack,
      .reads = readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}),
      NCSERVO_AXIS(se002),
      .summary = "SSW.ServoEn rises with no valid enable"},
@@ -500,7 +498,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 SE",
      .timeout = Timeout::DriveResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.scw.se", "ncservo.ssw.servo_en"}),
      NCSERVO_AXIS(se003),
      .summary = "SSW.ServoEn stays 1 after the valid enable ended, or without one"},
@@ -512,7 +510,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 SE, §5",
      .timeout = Timeout::EnableResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads =
          readsOf({"ncservo.scw.se", "ncservo.scw.emgon", "ncservo.scw.brake",
                   "ncservo.ssw.servo_en", "ncservo.ssw.servo_rdy", "ncservo.sew.servo_errors"}),
@@ -526,7 +524,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 ZPulseRequest, §3 ZPulseAck",
      .timeout = Timeout::DriveResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}),
      NCSERVO_AXIS(zp001),
      .summary = "ZPulseAck stays 1 after ZPulseRequest fell"},
@@ -538,6 +536,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §3 ZPulseAck",
      .timeout = Timeout::DriveResponse,
+     .timeout_use = TimeoutUse::LookBack,
      .reads = readsOf({"ncservo.scw.zpulse_request", "ncservo.ssw.zpulse_ack"}),
      NCSERVO_AXIS(zp002),
      .summary = "ZPulseAck rises with no ZPulseRequest"},
@@ -560,6 +559,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §3 ErrClearAck",
      .timeout = Timeout::DriveResponse,
+     .timeout_use = TimeoutUse::LookBack,
      .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}),
      NCSERVO_AXIS(ec001),
      .summary = "ErrClearAck rises with no ErrorClear"},
@@ -571,7 +571,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 ErrorClear",
      .timeout = Timeout::NcRelease,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}),
      NCSERVO_AXIS(ec002),
      .summary = "ErrorClear held after ErrClearAck rose"},
@@ -583,7 +583,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §3 ErrClearAck",
      .timeout = Timeout::DriveResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack"}),
      NCSERVO_AXIS(ec003),
      .summary = "ErrClearAck stays 1 after ErrorClear fell"},
@@ -595,7 +595,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 ErrorClear, §3 ErrClearAck",
      .timeout = Timeout::ClearResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.scw.error_clear", "ncservo.ssw.err_clear_ack", "ncservo.sew"}),
      NCSERVO_AXIS(ec004),
      .summary = "ErrorClear on a drive in error is not acknowledged"},
@@ -617,7 +617,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §4",
      .timeout = Timeout::DriveResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.sew"}),
      NCSERVO_AXIS(sew002),
      .summary = "SEW summary bit 0 with no cause bit"},
@@ -659,7 +659,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §5",
      .timeout = Timeout::DriveResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads =
          readsOf({"ncservo.ssw.servo_rdy", "ncservo.ssw.servo_en", "ncservo.sew.servo_errors"}),
      NCSERVO_AXIS(rdy001),
@@ -672,7 +672,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §4, §6",
      .timeout = Timeout::FaultReaction,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.ssw.servo_en", "ncservo.sew"}),
      NCSERVO_AXIS(flt001),
      .summary = "the drive stays enabled while reporting an error"},
@@ -684,7 +684,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §2 PRMTBL, §3 PRMTBL",
      .timeout = Timeout::ParamTable,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.scw.prmtbl", "ncservo.scw.ext_prmtbl", "ncservo.ssw.prmtbl",
                        "ncservo.ssw.ext_prmtbl"}),
      NCSERVO_AXIS(pt001),
@@ -728,7 +728,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .kind = RuleKind::Axis,
      .clause = "docs/protocol.md §4 ECatTErr",
      .timeout = Timeout::DriveResponse,
-     .delayed = true,
+     .timeout_use = TimeoutUse::Delay,
      .reads = readsOf({"ncservo.sew.ecat_timeout"}),
      NCSERVO_AXIS(com003),
      .summary = "3 or more failed cycles without SEW.ECatTErr"},
@@ -757,6 +757,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .party = Party::Bus,
      .kind = RuleKind::Bus,
      .clause = "docs/timing.md; docs/rules.md limits",
+     .limit = Limit::CycleJitterPercent,
      .by_default = ByDefault::Off,
      NCSERVO_MEASUREMENT(CycleIntervalEvent, com006, com006Text),
      .summary = "a master copy's interval deviates from the nominal cycle by more than "
@@ -768,6 +769,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .party = Party::Bus,
      .kind = RuleKind::Bus,
      .clause = "docs/timing.md; docs/rules.md limits",
+     .limit = Limit::ReturnLatencyUs,
      .by_default = ByDefault::Off,
      NCSERVO_MEASUREMENT(ReturnLatencyEvent, com007, com007Text),
      .summary = "a returned copy arrives more than return_latency_us after its master copy"},
@@ -933,16 +935,30 @@ bool& MeasurementRuns::inRun(RuleId rule, CyclicFrameId frame) {
 
 void judgeEvent(const BusEvent& event, const RuleSettings& settings, MeasurementRuns& runs,
                 std::vector<EventFinding>& out) {
-  RuleSubject subject{nullptr, &event, &runs};
+  const RuleSubject subject{nullptr, &event, &runs};
   for (const RuleDef& rule : kRules) {
     if (rule.event != event.data.index() || !settings.isEnabled(rule.id)) continue;
-    subject.rule = rule.id;
-    if (!rule.check(subject, settings)) continue;
+    const RuleContext context{rule, settings};
+    if (!rule.check(subject, context)) continue;
     SlaveRef slave;
     if (const auto* control = std::get_if<AlControlEvent>(&event.data)) slave = control->slave;
     if (const auto* error = std::get_if<AlErrorEvent>(&event.data)) slave = error->slave;
-    out.push_back(EventFinding{rule.id, slave, rule.describe(subject, settings, 0)});
+    out.push_back(EventFinding{rule.id, slave, rule.describe(subject, context, 0)});
   }
+}
+
+std::optional<AllowedWindow> allowedWindow(const RuleDef& rule, const RuleSettings& settings) {
+  if (!rule.timeout) return std::nullopt;
+  const std::int64_t timeout = settings.timeoutNs(*rule.timeout);
+  switch (rule.timeout_use) {
+    case TimeoutUse::Delay:
+      return AllowedWindow{0, timeout};
+    case TimeoutUse::LookBack:
+      return AllowedWindow{-timeout, 0};
+    case TimeoutUse::None:
+      break;
+  }
+  return std::nullopt;
 }
 
 std::string ruleFilterName(const RuleDef& rule) {

@@ -246,7 +246,8 @@ void Validator::evaluateAxis(AxisSlot& s) {
     if (rule.kind != RuleKind::Axis || !settings_.isEnabled(rule.id)) continue;
     Episode& episode = s.episodes[static_cast<std::size_t>(rule.id)];
     const bool was_pending = episode.active && !episode.reported;
-    if (!rule.check(subject, settings_)) {
+    const RuleContext context{rule, settings_};
+    if (!rule.check(subject, context)) {
       if (was_pending) --s.pending;
       episode.active = false;
       continue;
@@ -254,8 +255,8 @@ void Validator::evaluateAxis(AxisSlot& s) {
     if (!episode.active) episode = Episode{true, false, now_};
     if (episode.reported) continue;
     const std::int64_t held = now_.time_ns - episode.began.time_ns;
-    const std::int64_t timeout = rule.delayed ? settings_.timeoutNs(*rule.timeout) : 0;
-    if (rule.delayed && held <= timeout) {
+    const std::int64_t timeout = rule.delayed() ? context.timeoutNs() : 0;
+    if (rule.delayed() && held <= timeout) {
       if (!was_pending) ++s.pending;
       // held <= timeout: began + timeout does not overflow where now_ does not
       s.pending_until_ns = std::min(s.pending_until_ns, now_.time_ns + (timeout - held));
@@ -263,7 +264,7 @@ void Validator::evaluateAxis(AxisSlot& s) {
     }
     if (was_pending) --s.pending;
     episode.reported = true;
-    report(rule.id, model.index(), episode.began, rule.describe(subject, settings_, held));
+    report(rule.id, model.index(), episode.began, rule.describe(subject, context, held));
   }
 }
 

@@ -52,8 +52,9 @@ constexpr std::uint32_t kReservedErrorBit = 1U << 25;
 constexpr std::uint32_t kReservedStatusBit = 1U << 13;
 constexpr std::uint32_t kReservedControlBit = 1U << 20;
 constexpr std::int32_t kUndefinedMessageCode = 7;
-constexpr int kLostCyclesForTimeout = 3;  // SEW.ECatTErr: 3 cycles, no data (docs/protocol.md §4)
-constexpr double kTempWarningC = 80;      // SSW.TempWarning (docs/protocol.md §3)
+// SEW.ECatTErr after this many cycles with no data (docs/protocol.md §4)
+constexpr int kLostCyclesForTimeout = static_cast<int>(kEcatTimeoutCycles);
+constexpr double kTempWarningC = 80;  // SSW.TempWarning (docs/protocol.md §3)
 // How fast a drift settles once it tripped its fault: the motor cools in seconds, the bus
 // voltage and the current fall within a few milliseconds.
 constexpr double kCoolingS = 1.0;
@@ -170,7 +171,7 @@ void DriveModel::step(const RxPdo* outputs, std::int64_t now_ns) {
   ++cycle_;
   static const RxPdo kNeutral{0, bits::kEmgon | bits::kBrake, 0};
   if (outputs == nullptr) {
-    // EtherCAT timeout: no data for 3 cycles (docs/protocol.md §4, E15)
+    // EtherCAT timeout (docs/protocol.md §4, E15)
     if (operational_ && ++missed_cycles_ == kLostCyclesForTimeout &&
         !fire(DriveQuirk::SilentTimeout, now_ns, 0)) {
       pending_faults_ |= bits::kEcatTimeout;

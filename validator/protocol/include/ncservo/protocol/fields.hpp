@@ -702,6 +702,9 @@ constexpr std::uint64_t causeMask(Word word) {
 inline constexpr std::uint32_t kSewSummaryMask = mask32("ncservo.sew.servo_errors");
 inline constexpr std::uint32_t kSewCauseMask = static_cast<std::uint32_t>(causeMask(Word::Sew));
 static_assert(kSewCauseMask == 0x01FFFFEE, "docs/protocol.md §4: cause bits 1-3 and 5-24");
+// docs/protocol.md §4: a drive raises ECatTErr once this many cycles in a row brought it no data
+// (docs/rules.md#com-003 reports one that does not).
+inline constexpr std::uint32_t kEcatTimeoutCycles = 3;
 
 // docs/protocol.md §4: the name the interface definition gives a cause bit ("OverSpeed"), its
 // row's label before the E-number; the reports show it beside the E-number (docs/cli.md).

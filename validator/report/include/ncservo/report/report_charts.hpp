@@ -32,9 +32,10 @@ struct FindingTimeline {
   std::size_t finding = 0;  // index in the capture's findings
   std::int64_t start_ns = 0;
   std::int64_t end_ns = 0;
-  std::optional<std::int64_t> since_ns;    // where the condition began, when recorded
-  std::optional<std::int64_t> allowed_ns;  // the end of the window its timeout allowed
-  bool clipped = false;                    // the condition began before the oldest recorded cycle
+  std::optional<std::int64_t> since_ns;  // where the condition began, when recorded
+  // The window the rule's timeout allowed (from, to), placed by its row (allowedWindow).
+  std::optional<std::pair<std::int64_t, std::int64_t>> allowed_ns;
+  bool clipped = false;  // the condition began before the oldest recorded cycle
   std::vector<BitTrace> traces;
 };
 

@@ -1,5 +1,5 @@
-// The rule catalogue (docs/rules.md) as one table: ID, slug, severity, party, clause, timeout
-// and how the rule is checked. The validator, the CLI's `rules` listing, the plugin's expert
+// The rule catalogue (docs/rules.md) as one table: ID, slug, severity, party, clause, timeout,
+// limit and how the rule is checked. The validator, the CLI's `rules` listing, the plugin's expert
 // items and the report formats are all generated from it.
 #pragma once
 
@@ -97,6 +97,7 @@ enum class RuleId : std::uint8_t {
 inline constexpr std::size_t kRuleCount = 31;
 
 // docs/rules.md#com-006, COM-007: the limits of the rules whose right value depends on the machine.
+// A rule's row names the limit it uses (RuleDef::limit).
 enum class Limit : std::uint8_t { CycleJitterPercent, ReturnLatencyUs };
 struct LimitDef {
   Limit id;
@@ -104,7 +105,6 @@ struct LimitDef {
   std::uint32_t default_value;
   std::uint32_t min, max;
   const char* unit;
-  RuleId rule;
   const char* bounds;  // what it bounds, for docs and errors
 };
 inline constexpr std::array<LimitDef, 2> kLimits{{
@@ -114,7 +114,6 @@ inline constexpr std::array<LimitDef, 2> kLimits{{
      .min = 1,
      .max = 100,
      .unit = "% of the nominal cycle",
-     .rule = RuleId::Com006,
      .bounds = "how far a master copy's interval may deviate from the nominal cycle"},
     {.id = Limit::ReturnLatencyUs,
      .name = "return_latency_us",
@@ -122,7 +121,6 @@ inline constexpr std::array<LimitDef, 2> kLimits{{
      .min = 1,
      .max = 1'000'000,
      .unit = "µs",
-     .rule = RuleId::Com007,
      .bounds = "how long after its master copy a returned copy may arrive"},
 }};
 const LimitDef* limitByName(std::string_view name);
@@ -172,16 +170,32 @@ struct RuleSubject {
   const AxisModel* axis = nullptr;
   const BusEvent* event = nullptr;
   MeasurementRuns* runs = nullptr;
-  RuleId rule{};  // the rule judging, whose run it is
+};
+struct RuleDef;
+// The row of the rule judging, and the settings as that row reads them: a check and its text
+// take the timeout and the limit their row names, never another's (the row is the whole rule).
+struct RuleContext {
+  const RuleDef& rule;
+  const RuleSettings& settings;
+  std::int64_t timeoutNs() const;  // the row's timeout as set; the row must name one
+  std::int64_t timeoutMs() const;
+  std::uint32_t limit() const;  // the row's limit as set; the row must name one
 };
 // Whether the rule's condition holds. An axis condition is evaluated on every frame that changes
 // what it reads; it is reported when it begins or, for a delayed rule, once it has held longer
 // than its timeout. An event condition is reported on the frame of the event; for a measurement,
 // the condition is that a run beyond the limit begins.
-using RuleCheck = bool (*)(const RuleSubject& subject, const RuleSettings& settings);
+using RuleCheck = bool (*)(const RuleSubject& subject, const RuleContext& context);
 // What was seen and what was expected; `held_ns` is how long the condition has held.
-using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleSettings& settings,
+using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleContext& context,
                                      std::int64_t held_ns);
+
+// What a rule's timeout is to it (docs/timing.md#rule-time).
+enum class TimeoutUse : std::uint8_t {
+  None,      // the rule has no timeout
+  Delay,     // reported once the condition has held longer than the timeout
+  LookBack,  // the condition is an edge that nothing answered within the timeout before it
+};
 
 struct RuleDef {
   RuleId id;
@@ -192,7 +206,8 @@ struct RuleDef {
   RuleKind kind;
   const char* clause;                             // where the protocol says so
   std::optional<Timeout> timeout = std::nullopt;  // the timeout the rule uses (docs/rules.md)
-  bool delayed = false;  // reported when the condition outlasts the timeout
+  TimeoutUse timeout_use = TimeoutUse::None;      // what the timeout is to it
+  std::optional<Limit> limit = std::nullopt;      // the limit the rule uses (docs/rules.md)
   // When the finding is reported, where that is not on the frame where the condition begins (an
   // axis rule's) or of the event (a bus or slave rule's); `rules --explain` says it.
   const char* reported = nullptr;
@@ -202,6 +217,8 @@ struct RuleDef {
   RuleCheck check;
   RuleDescribe describe;
   const char* summary;  // one line, for `ncservo rules` and the expert item
+
+  bool delayed() const { return timeout_use == TimeoutUse::Delay; }
 };
 
 // Defined in rules.cpp, next to the checks the table names.
@@ -214,6 +231,14 @@ const RuleDef* ruleByCode(std::string_view code);
 Result<const RuleDef*> findRule(std::string_view code);
 // "ncservo.rule.illegal_enable_edge"
 std::string ruleFilterName(const RuleDef& rule);
+
+// The window a rule's timeout allows, in ns from where its condition began: the timeout after it
+// for a delay, before it for a look-back; none for a rule without a timeout.
+struct AllowedWindow {
+  std::int64_t from_ns;
+  std::int64_t to_ns;
+};
+std::optional<AllowedWindow> allowedWindow(const RuleDef& rule, const RuleSettings& settings);
 
 // A bus or slave rule's finding on an event, before the user's severities are applied.
 struct EventFinding {
@@ -253,5 +278,15 @@ struct RuleSettings {
   Status setSeverity(std::string_view code, std::string_view level);
   Status setTimeout(std::string_view name, std::int64_t ms);
 };
+
+inline std::int64_t RuleContext::timeoutNs() const {
+  return settings.timeoutNs(rule.timeout.value());
+}
+inline std::int64_t RuleContext::timeoutMs() const {
+  return timeoutNs() / 1'000'000;
+}
+inline std::uint32_t RuleContext::limit() const {
+  return settings.limitOf(rule.limit.value());
+}
 
 }  // namespace ncservo
