@@ -116,6 +116,89 @@ void printFaults() {
   }
 }
 
+// The options of the command line into the simulator's; false (with the message printed) when
+// one is malformed or they do not go together.
+bool simulationOptions(SimulateArgs& args) {
+  sim::SimOptions& o = args.options;
+  o.scenario = *sim::scenarioFromName(args.scenario);
+  const std::string& style = !args.image.empty() ? args.image : args.layout;
+  o.image = style.empty() ? sim::ImageStyle::Soem : *sim::imageStyleFromName(style);
+  o.probe = rowNamed(kProbes, args.probe).probe;
+  o.startup = !args.no_startup;
+  o.terminal_inputs = rowNamed(sim::kTerminalInputs, args.io_inputs).inputs;
+  if (!args.start_in.empty()) o.mid_start = *sim::midStartFromName(args.start_in);
+  if (!parseIdle(args.idle, o)) return false;
+  for (const std::string& text : args.faults) {
+    Result<sim::FaultRequest> fault = sim::parseFault(text);
+    if (!fault) {
+      fmt::print(stderr, "ncservo simulate: {}\n", fault.error().text());
+      return false;
+    }
+    o.faults.push_back(std::move(*fault));
+  }
+  for (auto [option, texts, into] :
+       {std::tuple{"--late-cycle", &args.late_cycles, &o.late_cycles},
+        std::tuple{"--lost-cycles", &args.lost_cycles, &o.lost_cycles}}) {
+    for (const std::string& text : *texts) {
+      Result<sim::CycleDisturbance> parsed = sim::parseCycleDisturbance(option, text);
+      if (!parsed) {
+        fmt::print(stderr, "ncservo simulate: {}\n", parsed.error().text());
+        return false;
+      }
+      into->push_back(std::move(*parsed));
+    }
+  }
+  if (!args.incidents_truth.empty() && o.scenario != sim::Scenario::Incidents) {
+    fmt::print(stderr, "ncservo simulate: --incidents-truth needs --scenario incidents\n");
+    return false;
+  }
+  if (Status resolved = sim::resolveOptions(o); !resolved) {
+    fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
+    return false;
+  }
+  return true;
+}
+
+// A file written beside the capture (--layout-config, --eni, --incidents-truth); false (with the
+// message printed) when it cannot be written.
+bool writeBesideCapture(const std::string& path, const std::string& text, const char* what) {
+  std::ofstream out(path);
+  out << text;
+  if (!out.flush()) {
+    fmt::print(stderr, "ncservo simulate: {}: cannot write the {}\n", path, what);
+    return false;
+  }
+  return true;
+}
+
+// The simulation run into the capture file; false (with the message printed) when it cannot be
+// written.
+bool writeCapture(const SimulateArgs& args, sim::Simulator& simulator) {
+  const Compression compression = args.compress.empty()
+                                      ? compressionForName(args.output)
+                                      : rowNamed(kCompressions, args.compress).compression;
+  Result<std::unique_ptr<CaptureWriter>> writer =
+      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), compression);
+  // An output that cannot be written is a usage error, as for every command (docs/cli.md).
+  if (!writer) {
+    fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
+    return false;
+  }
+  const auto frames = simulator.run([&](const sim::SimFrame& frame) {
+    return (*writer)->write(frame.time_ns, frame.data, frame.size);
+  });
+  const Status closed = (*writer)->close();
+  if (!closed || !frames) {
+    fmt::print(stderr, "ncservo simulate: {}\n",
+               closed ? args.output + ": write failed" : closed.error().text());
+    return false;
+  }
+  if (args.output != "-") {
+    fmt::print(stderr, "ncservo simulate: wrote {} frames to {}\n", *frames, args.output);
+  }
+  return true;
+}
+
 int runSimulate(SimulateArgs& args) {
   if (args.list_faults) {
     printFaults();
@@ -127,82 +210,16 @@ int runSimulate(SimulateArgs& args) {
         "ncservo simulate: give the capture to write with -o FILE (- for standard output)\n");
     return kExitUsage;
   }
-  sim::SimOptions& o = args.options;
-  o.scenario = *sim::scenarioFromName(args.scenario);
-  const std::string& style = !args.image.empty() ? args.image : args.layout;
-  o.image = style.empty() ? sim::ImageStyle::Soem : *sim::imageStyleFromName(style);
-  o.probe = rowNamed(kProbes, args.probe).probe;
-  o.startup = !args.no_startup;
-  o.terminal_inputs = rowNamed(sim::kTerminalInputs, args.io_inputs).inputs;
-  if (!args.start_in.empty()) o.mid_start = *sim::midStartFromName(args.start_in);
-  if (!parseIdle(args.idle, o)) return kExitUsage;
-  for (const std::string& text : args.faults) {
-    Result<sim::FaultRequest> fault = sim::parseFault(text);
-    if (!fault) {
-      fmt::print(stderr, "ncservo simulate: {}\n", fault.error().text());
-      return kExitUsage;
-    }
-    o.faults.push_back(std::move(*fault));
-  }
-  for (auto [option, texts, into] :
-       {std::tuple{"--late-cycle", &args.late_cycles, &o.late_cycles},
-        std::tuple{"--lost-cycles", &args.lost_cycles, &o.lost_cycles}}) {
-    for (const std::string& text : *texts) {
-      Result<sim::CycleDisturbance> parsed = sim::parseCycleDisturbance(option, text);
-      if (!parsed) {
-        fmt::print(stderr, "ncservo simulate: {}\n", parsed.error().text());
-        return kExitUsage;
-      }
-      into->push_back(std::move(*parsed));
-    }
-  }
-  if (!args.incidents_truth.empty() && o.scenario != sim::Scenario::Incidents) {
-    fmt::print(stderr, "ncservo simulate: --incidents-truth needs --scenario incidents\n");
+  if (!simulationOptions(args)) return kExitUsage;
+  sim::Simulator simulator(args.options);
+  if (!args.layout_config.empty() &&
+      !writeBesideCapture(args.layout_config, simulator.layoutConfig(), "layout")) {
     return kExitUsage;
   }
-  if (Status resolved = sim::resolveOptions(o); !resolved) {
-    fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
+  if (!args.eni.empty() && !writeBesideCapture(args.eni, simulator.eni(), "ENI file")) {
     return kExitUsage;
   }
-  sim::Simulator simulator(o);
-  if (!args.layout_config.empty()) {
-    std::ofstream out(args.layout_config);
-    out << simulator.layoutConfig();
-    if (!out.flush()) {
-      fmt::print(stderr, "ncservo simulate: {}: cannot write the layout\n", args.layout_config);
-      return kExitUsage;
-    }
-  }
-  if (!args.eni.empty()) {
-    std::ofstream out(args.eni);
-    out << simulator.eni();
-    if (!out.flush()) {
-      fmt::print(stderr, "ncservo simulate: {}: cannot write the ENI file\n", args.eni);
-      return kExitUsage;
-    }
-  }
-  const Compression compression = args.compress.empty()
-                                      ? compressionForName(args.output)
-                                      : rowNamed(kCompressions, args.compress).compression;
-  Result<std::unique_ptr<CaptureWriter>> writer =
-      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), compression);
-  // An output that cannot be written is a usage error, as for every command (docs/cli.md).
-  if (!writer) {
-    fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
-    return kExitUsage;
-  }
-  const auto frames = simulator.run([&](const sim::SimFrame& frame) {
-    return (*writer)->write(frame.time_ns, frame.data, frame.size);
-  });
-  const Status closed = (*writer)->close();
-  if (!closed || !frames) {
-    fmt::print(stderr, "ncservo simulate: {}\n",
-               closed ? args.output + ": write failed" : closed.error().text());
-    return kExitUsage;
-  }
-  if (args.output != "-") {
-    fmt::print(stderr, "ncservo simulate: wrote {} frames to {}\n", *frames, args.output);
-  }
+  if (!writeCapture(args, simulator)) return kExitUsage;
   if (args.options.capture_loss > 0) {
     fmt::print(stderr, "ncservo simulate: {} master copies left out of the capture\n",
                simulator.masterCopiesDropped());
@@ -213,11 +230,7 @@ int runSimulate(SimulateArgs& args) {
       fmt::print(stderr, "ncservo simulate: {}\n", incidents.error().text());
       return kExitCapture;
     }
-    std::ofstream out(args.incidents_truth);
-    out << sim::incidentsJson(*incidents);
-    if (!out.flush()) {
-      fmt::print(stderr, "ncservo simulate: {}: cannot write the incidents\n",
-                 args.incidents_truth);
+    if (!writeBesideCapture(args.incidents_truth, sim::incidentsJson(*incidents), "incidents")) {
       return kExitUsage;
     }
   }

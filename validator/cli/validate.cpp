@@ -106,6 +106,126 @@ Result<std::vector<cli::ReportTarget>> reportTargets(const ValidateArgs& o) {
   return targets;
 }
 
+// docs/baselines.md: a baseline that cannot be read is a usage error, as a bad --config is.
+Result<std::optional<cli::ReportFile>> loadBaseline(const ValidateArgs& o) {
+  if (o.baseline.empty()) return std::nullopt;
+  Result<cli::ReportFile> loaded = cli::loadReportFile(o.baseline);
+  if (!loaded) return fail(loaded.error());
+  return std::move(*loaded);
+}
+
+// The reports to fill, one per capture, each with its capture's part of the baseline.
+std::vector<cli::CaptureReport> emptyReports(const ValidateArgs& o,
+                                             const std::optional<cli::ReportFile>& baseline) {
+  std::vector<cli::CaptureReport> reports(o.captures.size());
+  if (baseline) {
+    for (std::size_t i = 0; i < o.captures.size(); ++i) {
+      const cli::ReportedCapture* matched =
+          cli::baselineCaptureFor(*baseline, o.captures[i], o.captures.size());
+      if (matched == nullptr) {
+        fmt::print(stderr,
+                   "ncservo: {}: no capture of this file name in the baseline {}: each of its "
+                   "findings is new\n",
+                   o.captures[i], o.baseline);
+      }
+      reports[i].baseline.emplace(matched);
+      reports[i].baseline_path = o.baseline;
+    }
+  }
+  return reports;
+}
+
+// Each capture validated in parallel, `jobs` at once, its messages kept with its report; each is
+// given to the writer in argument order as soon as the ones before it are.
+void validateInParallel(const ValidateArgs& o, const CheckSetup& setup, cli::ReportWriter& writer,
+                        unsigned jobs, CaptureThreads threads,
+                        std::vector<cli::CaptureReport>& reports, std::vector<int>& statuses) {
+  const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
+  struct Validated {
+    int rc;
+    std::string messages;
+  };
+  const std::function<Validated(std::size_t)> validate = [&](std::size_t i) {
+    if (interrupted) return Validated{kExitInterrupted, {}};
+    char* buffer = nullptr;
+    std::size_t size = 0;
+    std::FILE* messages = open_memstream(&buffer, &size);
+    const int status =
+        validateCapture(o.captures[i], setup, writer, {nullptr, messages}, reports[i], threads);
+    std::fclose(messages);
+    Validated validated{status, std::string(buffer, size)};
+    std::free(buffer);
+    return validated;
+  };
+  const std::function<void(std::size_t, Validated&)> present = [&](std::size_t i,
+                                                                   Validated& validated) {
+    statuses[i] = validated.rc;
+    if (validated.rc == kExitInterrupted) {
+      std::fputs(validated.messages.c_str(), stderr);
+      return;
+    }
+    presentCapture(writer, validated.messages, reports[i]);
+  };
+  cli::runInOrder(o.captures.size(), jobs, validate, present);
+}
+
+// docs/cli.md#interrupted: each capture's status; kExitInterrupted for one Ctrl-C stopped or kept
+// from starting (`reports[i].frames` then says how far it got).
+std::vector<int> validateCaptures(const ValidateArgs& o, const CheckSetup& setup,
+                                  cli::ReportWriter& writer,
+                                  std::vector<cli::CaptureReport>& reports) {
+  std::vector<int> statuses(o.captures.size(), kExitInterrupted);
+  writer.stopOnInterrupt();
+  const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
+  const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
+  const bool one_at_a_time = jobs <= 1 || o.captures.size() <= 1;
+  // docs/cli.md#two-threads: the reading threads and --jobs share the cores.
+  const CaptureThreads threads = cli::captureThreads(
+      o.read_thread,
+      one_at_a_time ? 1u : static_cast<unsigned>(std::min<std::size_t>(jobs, o.captures.size())));
+  if (one_at_a_time) {
+    for (std::size_t i = 0; i < o.captures.size() && !interrupted; ++i) {
+      statuses[i] =
+          validateCapture(o.captures[i], setup, writer, {&writer, stderr}, reports[i], threads);
+    }
+  } else {
+    validateInParallel(o, setup, writer, jobs, threads, reports, statuses);
+  }
+  return statuses;
+}
+
+// Only finished captures are reported; where Ctrl-C stopped the others is said on stderr.
+// Returns the exit status of them all.
+int finishReports(const ValidateArgs& o, const std::vector<int>& statuses,
+                  std::vector<cli::CaptureReport>& reports, cli::ReportWriter& writer) {
+  int rc = kExitOk;
+  std::vector<cli::CaptureReport> finished;
+  std::vector<std::string> unstarted;
+  for (std::size_t i = 0; i < o.captures.size(); ++i) {
+    if (statuses[i] != kExitInterrupted) {
+      rc = combine(rc, statuses[i]);
+      finished.push_back(std::move(reports[i]));
+    } else if (reports[i].path.empty()) {
+      unstarted.push_back(o.captures[i]);
+    } else {
+      fmt::print(stderr, "ncservo: interrupted at {}, frame {}\n",
+                 o.captures[i] == "-" ? std::string("standard input") : o.captures[i],
+                 reports[i].frames);
+      rc = kExitInterrupted;
+    }
+  }
+  // Before the reports were written, as the text says.
+  if (cli::ReportWriter::interrupted()) rc = kExitInterrupted;
+  if (!unstarted.empty()) {
+    fmt::print(stderr, "ncservo: interrupted before {}\n", fmt::join(unstarted, ", "));
+  }
+  if (Status written = writer.finish(finished); !written) {
+    fmt::print(stderr, "ncservo: {}\n", written.error().text());
+    return kExitUsage;
+  }
+  return rc;
+}
+
 int runValidate(const ValidateArgs& o) {
   if (std::count(o.captures.begin(), o.captures.end(), "-") > 1) {
     fmt::print(stderr, "ncservo: standard input (-) can be read only once\n");
@@ -116,15 +236,10 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: {}\n", setup.error().text());
     return kExitUsage;
   }
-  // docs/baselines.md: a baseline that cannot be read is a usage error, as a bad --config is.
-  std::optional<cli::ReportFile> baseline;
-  if (!o.baseline.empty()) {
-    Result<cli::ReportFile> loaded = cli::loadReportFile(o.baseline);
-    if (!loaded) {
-      fmt::print(stderr, "ncservo: --baseline {}\n", loaded.error().text());
-      return kExitUsage;
-    }
-    baseline = std::move(*loaded);
+  const Result<std::optional<cli::ReportFile>> baseline = loadBaseline(o);
+  if (!baseline) {
+    fmt::print(stderr, "ncservo: --baseline {}\n", baseline.error().text());
+    return kExitUsage;
   }
   const Result<std::vector<cli::ReportTarget>> targets = reportTargets(o);
   if (!targets) {
@@ -141,91 +256,9 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: {}\n", writer.error().text());
     return kExitUsage;
   }
-  std::vector<cli::CaptureReport> reports(o.captures.size());
-  if (baseline) {
-    for (std::size_t i = 0; i < o.captures.size(); ++i) {
-      const cli::ReportedCapture* matched =
-          cli::baselineCaptureFor(*baseline, o.captures[i], o.captures.size());
-      if (matched == nullptr) {
-        fmt::print(stderr,
-                   "ncservo: {}: no capture of this file name in the baseline {}: each of its "
-                   "findings is new\n",
-                   o.captures[i], o.baseline);
-      }
-      reports[i].baseline.emplace(matched);
-      reports[i].baseline_path = o.baseline;
-    }
-  }
-  // docs/cli.md#interrupted: each capture's status; kExitInterrupted for one Ctrl-C stopped or kept
-  // from starting (`reports[i].frames` then says how far it got).
-  std::vector<int> statuses(o.captures.size(), kExitInterrupted);
-  (*writer)->stopOnInterrupt();
-  const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
-  int rc = kExitOk;
-  const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
-  const bool one_at_a_time = jobs <= 1 || o.captures.size() <= 1;
-  // docs/cli.md#two-threads: the reading threads and --jobs share the cores.
-  const CaptureThreads threads = cli::captureThreads(
-      o.read_thread,
-      one_at_a_time ? 1u : static_cast<unsigned>(std::min<std::size_t>(jobs, o.captures.size())));
-  if (one_at_a_time) {
-    for (std::size_t i = 0; i < o.captures.size() && !interrupted; ++i) {
-      statuses[i] = validateCapture(o.captures[i], *setup, **writer, {writer->get(), stderr},
-                                    reports[i], threads);
-    }
-  } else {
-    struct Validated {
-      int rc;
-      std::string messages;
-    };
-    const std::function<Validated(std::size_t)> validate = [&](std::size_t i) {
-      if (interrupted) return Validated{kExitInterrupted, {}};
-      char* buffer = nullptr;
-      std::size_t size = 0;
-      std::FILE* messages = open_memstream(&buffer, &size);
-      const int status = validateCapture(o.captures[i], *setup, **writer, {nullptr, messages},
-                                         reports[i], threads);
-      std::fclose(messages);
-      Validated validated{status, std::string(buffer, size)};
-      std::free(buffer);
-      return validated;
-    };
-    const std::function<void(std::size_t, Validated&)> present = [&](std::size_t i,
-                                                                     Validated& validated) {
-      statuses[i] = validated.rc;
-      if (validated.rc == kExitInterrupted) {
-        std::fputs(validated.messages.c_str(), stderr);
-        return;
-      }
-      presentCapture(**writer, validated.messages, reports[i]);
-    };
-    cli::runInOrder(o.captures.size(), jobs, validate, present);
-  }
-  // Only finished captures are reported; where Ctrl-C stopped the others is said on stderr.
-  std::vector<cli::CaptureReport> finished;
-  std::vector<std::string> unstarted;
-  for (std::size_t i = 0; i < o.captures.size(); ++i) {
-    if (statuses[i] != kExitInterrupted) {
-      rc = combine(rc, statuses[i]);
-      finished.push_back(std::move(reports[i]));
-    } else if (reports[i].path.empty()) {
-      unstarted.push_back(o.captures[i]);
-    } else {
-      fmt::print(stderr, "ncservo: interrupted at {}, frame {}\n",
-                 o.captures[i] == "-" ? std::string("standard input") : o.captures[i],
-                 reports[i].frames);
-      rc = kExitInterrupted;
-    }
-  }
-  if (interrupted) rc = kExitInterrupted;  // before the reports were written, as the text says
-  if (!unstarted.empty()) {
-    fmt::print(stderr, "ncservo: interrupted before {}\n", fmt::join(unstarted, ", "));
-  }
-  if (Status written = (*writer)->finish(finished); !written) {
-    fmt::print(stderr, "ncservo: {}\n", written.error().text());
-    return kExitUsage;
-  }
-  return rc;
+  std::vector<cli::CaptureReport> reports = emptyReports(o, *baseline);
+  const std::vector<int> statuses = validateCaptures(o, *setup, **writer, reports);
+  return finishReports(o, statuses, reports, **writer);
 }
 
 }  // namespace
