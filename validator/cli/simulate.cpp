@@ -88,6 +88,14 @@ struct SimulateArgs {
   bool list_faults = false;
 };
 
+// An option's help: `intro`, then each row's name and summary ("intro: a (x), b (y).").
+template <typename Row, std::size_t N>
+std::string rowsHelp(std::string intro, const Row (&rows)[N]) {
+  for (const Row& row : rows) intro += fmt::format(" {} ({}),", row.name, row.summary);
+  intro.back() = '.';
+  return intro;
+}
+
 // --idle SECONDS|all into the options; false (with the message printed) when malformed.
 bool parseIdle(const std::string& text, sim::SimOptions& o) {
   if (text.empty()) return true;
@@ -254,16 +262,16 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--duration", sa.options.duration_s,
                      "seconds (default: commissioning 3, faults 4.3, soak 60, incidents 20)");
   command.add_option("--seed", sa.options.seed, "the same seed and options give the same bytes");
-  std::vector<std::string> styles, aliases;
-  std::string style_help = "the master's process image (docs/simulate.md; default soem):";
+  std::vector<std::string> aliases;
   for (const sim::ImageStyleName& row : sim::kImageStyles) {
-    styles.emplace_back(row.name);
-    style_help += fmt::format(" {} ({}),", row.name, row.summary);
     if (row.layout_alias != nullptr) aliases.emplace_back(row.layout_alias);
   }
-  style_help.back() = '.';
   CLI::Option* image =
-      command.add_option("--image", sa.image, style_help)->check(cli::oneOf(styles));
+      command
+          .add_option("--image", sa.image,
+                      rowsHelp("the master's process image (docs/simulate.md; default soem):",
+                               sim::kImageStyles))
+          ->check(cli::oneOf(namesOf(sim::kImageStyles)));
   command.add_option("--layout", sa.layout, "older names: default = soem, interleaved = etherlab")
       ->check(cli::oneOf(aliases))
       ->excludes(image);
@@ -298,24 +306,20 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--capture-loss", sa.options.capture_loss,
                      "probability that the capture misses a cycle's master copies, keeping "
                      "their returned copies (not the bus: no COM-002)");
-  std::string inputs_help = "how often the terminals' inputs change (default slow):";
-  for (const sim::TerminalInputsName& row : sim::kTerminalInputs) {
-    inputs_help += fmt::format(" {} ({}),", row.name, row.summary);
-  }
-  inputs_help.back() = '.';
-  command.add_option("--io-inputs", sa.io_inputs, inputs_help)
+  command
+      .add_option(
+          "--io-inputs", sa.io_inputs,
+          rowsHelp("how often the terminals' inputs change (default slow):", sim::kTerminalInputs))
       ->check(cli::oneOf(namesOf(sim::kTerminalInputs)));
   command.add_option("--cia402", sa.options.cia402_drives,
                      "CiA 402 drives with a servo's 10/40-byte PDOs beside the servos, 0 to 32");
   command.add_option("--idle", sa.idle,
                      "SECONDS or all: the drives ready and nothing enabled for that long after "
                      "the start-up, or for the whole capture");
-  std::string start_help = "the capture begins in the middle of the commissioning session:";
-  for (const sim::MidStartName& row : sim::kMidStarts) {
-    start_help += fmt::format(" {} ({}),", row.name, row.summary);
-  }
-  start_help.back() = '.';
-  command.add_option("--start-in", sa.start_in, start_help)
+  command
+      .add_option("--start-in", sa.start_in,
+                  rowsHelp("the capture begins in the middle of the commissioning session:",
+                           sim::kMidStarts))
       ->check(cli::oneOf(namesOf(sim::kMidStarts)));
   command.add_option("--io-task-us", sa.options.io_task_us,
                      "a second task: the terminals in a frame of their own at this cycle time, a "
