@@ -4,6 +4,8 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <string_view>
@@ -23,6 +25,19 @@ CLI::Validator oneOf(std::vector<std::string> names) {
         return fmt::format("{} is not one of {}{}", value, choices, didYouMean(value, names));
       },
       choices);
+}
+
+std::string choiceList(const std::vector<std::string>& names) {
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  }
+  return text;
+}
+
+void addFormatOption(CLI::App& command, std::string& format, const std::vector<std::string>& names,
+                     const std::string& note) {
+  command.add_option("--format", format, choiceList(names) + note)->check(oneOf(names));
 }
 
 void addTimestampsOption(CLI::App& command, std::string& timestamps) {
@@ -183,6 +198,20 @@ Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
   return {};
 }
 
+void addWindowOptions(CLI::App& command, WindowArgs& window) {
+  command.add_option("--from", window.from_s,
+                     "only frames at or after SECONDS since the capture's first frame");
+  command.add_option("--to", window.to_s,
+                     "only frames at or before SECONDS since the capture's first frame");
+}
+
+void warnIfTruncated(const std::string& capture, const Truncation& truncation,
+                     std::FILE* messages) {
+  if (truncation.any()) {
+    fmt::print(messages, "ncservo: {}: {}\n", capture, describeTruncation(truncation));
+  }
+}
+
 Status refuseInputAsOutput(const std::string& option, const std::string& output,
                            const std::vector<std::string>& captures) {
   for (const std::string& capture : captures) {
@@ -193,6 +222,16 @@ Status refuseInputAsOutput(const std::string& option, const std::string& output,
     }
   }
   return {};
+}
+
+Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::string>& captures) {
+  if (output.empty() || output == "-") return stdout;
+  if (Status refused = refuseInputAsOutput("--output", output, captures); !refused)
+    return fail(refused.error());
+  std::FILE* out = std::fopen(output.c_str(), "w");
+  if (out == nullptr)
+    return fail(fmt::format("{}: cannot write: {}", output, std::strerror(errno)));
+  return out;
 }
 
 // "SE-001 illegal-enable-edge axis X: what was seen", and where the condition began when that

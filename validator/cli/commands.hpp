@@ -1,9 +1,11 @@
-// What the subcommands share beyond main.cpp: the layout files, the rule settings from the
-// command line, the input-as-output check, and the setups of the subcommands kept in files of
-// their own (annotate.cpp, monitor.cpp).
+// What the subcommands share: the format tables' options, the layout files, the rule settings
+// and the time window from the command line, the input-as-output check, and each subcommand's
+// setup, which main.cpp's table lists (one file per subcommand).
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstddef>
+#include <cstdio>
 #include <functional>
 #include <optional>
 #include <string>
@@ -14,6 +16,7 @@
 #include "ncservo/config/config.hpp"
 #include "ncservo/layout/decoder.hpp"
 #include "ncservo/layout/eni.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/report/report.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
@@ -26,6 +29,31 @@ CLI::Validator oneOf(std::vector<std::string> names);
 
 // What runs a subcommand once its options are parsed.
 using Handler = std::function<int()>;
+
+// ---- Format tables and the --format option derived from them ----
+
+template <typename Row, std::size_t N>
+std::vector<std::string> namesOf(const Row (&rows)[N]) {
+  std::vector<std::string> names;
+  for (const Row& row : rows) names.emplace_back(row.name);
+  return names;
+}
+
+// The row `--format` chose; its check admits only the table's names.
+template <typename Row, std::size_t N>
+const Row& rowNamed(const Row (&rows)[N], const std::string& name) {
+  for (const Row& row : rows) {
+    if (name == row.name) return row;
+  }
+  return rows[0];
+}
+
+// "a, b or c".
+std::string choiceList(const std::vector<std::string>& names);
+
+// --format, one of `names`; its help lists them, then `note`.
+void addFormatOption(CLI::App& command, std::string& format, const std::vector<std::string>& names,
+                     const std::string& note = "");
 
 // --timestamps (docs/protocol.md §8: a probe's clock or the capturing PC's).
 void addTimestampsOption(CLI::App& command, std::string& timestamps);
@@ -74,15 +102,35 @@ void addRuleOptions(CLI::App& command, RuleArgs& rules);
 Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
                      RuleSettings& settings);
 
+// --from/--to (docs/cli.md), seconds since the capture's first frame.
+struct WindowArgs {
+  std::optional<double> from_s, to_s;
+};
+void addWindowOptions(CLI::App& command, WindowArgs& window);
+
+// What a snap length cut, on one line (never one per frame).
+void warnIfTruncated(const std::string& capture, const Truncation& truncation,
+                     std::FILE* messages = stderr);
+
 // docs/cli.md#exit-status: an output path that is one of the inputs, however named, is a usage
 // error, checked before anything is opened for writing.
 Status refuseInputAsOutput(const std::string& option, const std::string& output,
                            const std::vector<std::string>& captures);
 
+// `-o FILE`, or standard output for none or "-".
+Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::string>& captures);
+
 // A finding as a packet comment (annotate, the flight recorder): "SE-001 illegal-enable-edge
 // axis X: what was seen", and where the condition began when that is an earlier frame.
 std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes);
 
+// The subcommands' setups: each declares its options and returns what runs it.
+Handler decodeCommand(CLI::App& command);
+Handler validateCommand(CLI::App& command);
+Handler diffCommand(CLI::App& command);
+Handler rulesCommand(CLI::App& command);
+Handler fieldsCommand(CLI::App& command);
+Handler simulateCommand(CLI::App& command);
 Handler annotateCommand(CLI::App& command);
 Handler monitorCommand(CLI::App& command);
 

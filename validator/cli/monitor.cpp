@@ -31,16 +31,13 @@
 #include "ncservo/report/report.hpp"
 #include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/ecat_wire.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/frame_clock.hpp"
 
 namespace ncservo::cli {
 namespace {
 
-// docs/protocol.md §8: EtherCAT in Ethernet (EtherType 0x88A4) or in UDP to port 34980, also behind
-// VLAN tags.
-constexpr const char* kCaptureFilter =
-    "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";
 constexpr int kSnapLength = 262144;
 // The kernel's ring (docs/field.md#how-fast), mapped into the process and so part of its memory:
 // no immediate mode, so that libpcap takes TPACKET_V3, whose blocks hold the frames packed (in
@@ -110,7 +107,7 @@ Result<LiveHandle> openLive(const std::string& interface) {
                             pcap_datalink(handle.get())));
   }
   bpf_program program{};
-  if (pcap_compile(handle.get(), &program, kCaptureFilter, 1, PCAP_NETMASK_UNKNOWN) != 0 ||
+  if (pcap_compile(handle.get(), &program, ecat::kCaptureFilter, 1, PCAP_NETMASK_UNKNOWN) != 0 ||
       pcap_setfilter(handle.get(), &program) != 0) {
     fmt::print(stderr, "ncservo monitor: {}: capture filter not set ({}): every frame is read\n",
                interface, pcap_geterr(handle.get()));

@@ -561,6 +561,31 @@ void CaptureReader::readInPlace(std::unique_ptr<CaptureBytes> bytes, const Recor
       });
 }
 
+namespace {
+
+// libpcap's words for these ("truncated dump file; tried to read 4 file header bytes") do not say
+// what is wrong with the file; nullptr for a file that may be a capture.
+const char* notACapture(std::FILE* file) {
+  struct stat info {};
+  if (fstat(fileno(file), &info) != 0) return nullptr;
+  if (S_ISDIR(info.st_mode)) return "is a directory";
+  if (S_ISREG(info.st_mode) && info.st_size == 0) return "empty file";
+  return nullptr;
+}
+
+Error unsupportedLinkType(const std::string& name, int dlt) {
+  const char* dlt_name = pcap_datalink_val_to_name(dlt);
+  return Error{name,
+               0,
+               0,
+               {},
+               fmt::format("unsupported link type {} ({}); ncservo reads Ethernet and "
+                           "Linux cooked (SLL, SLL2) captures",
+                           dlt, dlt_name != nullptr ? dlt_name : "unknown")};
+}
+
+}  // namespace
+
 Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& path) {
   const std::string name = path == "-" ? "standard input" : path;
   auto cannot = [&](std::string why) {
@@ -571,13 +596,36 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
   std::FILE* file = path == "-" ? stdin : std::fopen(path.c_str(), "rb");
   if (file == nullptr) return cannot(std::strerror(errno));
   reader->source_ = file;
-  // libpcap's words for these ("truncated dump file; tried to read 4 file header bytes") do not
-  // say what is wrong with the file.
-  struct stat info {};
-  if (fstat(fileno(file), &info) == 0 &&
-      (S_ISDIR(info.st_mode) || (S_ISREG(info.st_mode) && info.st_size == 0))) {
-    return cannot(S_ISDIR(info.st_mode) ? "is a directory" : "empty file");
+  if (const char* why = notACapture(file)) return cannot(why);
+  reader->bufferSource(file);
+  std::uint8_t head[kHeadSize] = {};
+  const std::size_t head_size = std::fread(head, 1, sizeof head, file);
+  reader->compression_ = sniff(head, head_size);
+  const bool in_place = !libpcapForced();
+  std::FILE* pcap_file = file;
+  // A plain file goes to libpcap as it is; anything else (compressed, or a pipe that cannot
+  // be rewound past the bytes just read) through a DecompressedStream.
+  if (reader->compression_ != Compression::None || std::fseek(file, 0, SEEK_SET) != 0) {
+    const Result<std::FILE*> streamed = reader->openStream(file, head, head_size, in_place);
+    if (!streamed) return cannot(streamed.error().message);
+    pcap_file = *streamed;
+  } else {
+    reader->timestamp_digits_ = ncservo::timestampDigits(head, head_size);
+    reader->pcapng_ = head_size >= 4 && load32(head, false) == kSectionHeaderBlock;
+    reader->pcapng_format_ = reader->pcapng_;
+    reader->source_ = nullptr;  // libpcap closes it with its handle
   }
+  if (!reader->parser_) {
+    if (Status opened = reader->openWithLibpcap(pcap_file, head, head_size, in_place); !opened) {
+      return cannot(opened.error().message);
+    }
+  }
+  reader->link_ = linkTypeFromDlt(reader->dlt_);
+  if (reader->link_ == LinkType::Unsupported) return fail(unsupportedLinkType(name, reader->dlt_));
+  return reader;
+}
+
+void CaptureReader::bufferSource(std::FILE* file) {
   // A 64 KiB stdio buffer: 16 times fewer system calls than stdio's 4 KiB, and the bytes just
   // read are still in the core's cache when they are parsed. (A buffer the size of the L2
   // cache, 1 MiB, measured 15 % slower: each refill evicts what the next frames need.)
@@ -589,113 +637,91 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
         std::setvbuf(stdin, stdin_buffer, _IOFBF, kReadBufferSize) == 0;
     (void)stdin_buffered;
   } else {
-    reader->buffer_ = std::make_unique<char[]>(kReadBufferSize);
-    std::setvbuf(file, reader->buffer_.get(), _IOFBF, kReadBufferSize);
+    buffer_ = std::make_unique<char[]>(kReadBufferSize);
+    std::setvbuf(file, buffer_.get(), _IOFBF, kReadBufferSize);
   }
-  std::uint8_t head[kHeadSize] = {};
-  const std::size_t head_size = std::fread(head, 1, sizeof head, file);
-  reader->compression_ = sniff(head, head_size);
-  const bool in_place = !libpcapForced();
-  std::FILE* pcap_file = file;
-  char errbuf[PCAP_ERRBUF_SIZE] = {};
-  // A plain file goes to libpcap as it is; anything else (compressed, or a pipe that cannot
-  // be rewound past the bytes just read) through a DecompressedStream.
-  if (reader->compression_ != Compression::None || std::fseek(file, 0, SEEK_SET) != 0) {
-    reader->stream_ =
-        std::make_unique<DecompressedStream>(file, reader->compression_, head, head_size);
-    std::unique_ptr<StreamBytes> window;
-    const std::uint8_t* ahead = nullptr;
-    std::size_t ahead_size = 0;
-    if (in_place) {
-      window = std::make_unique<StreamBytes>(*reader->stream_);
-      window->fill();
-      ahead = window->data();
-      ahead_size = window->size();
-    } else {
-      const std::string& peeked = reader->stream_->peek(kHeadSize);
-      ahead = reinterpret_cast<const std::uint8_t*>(peeked.data());
-      ahead_size = peeked.size();
-    }
-    reader->timestamp_digits_ = ncservo::timestampDigits(ahead, ahead_size);
-    reader->pcapng_ = false;  // records are not located in a stream
-    reader->pcapng_format_ = ahead_size >= 4 && load32(ahead, false) == kSectionHeaderBlock;
-    if (window) {
-      // libpcap reads the file header from the window's first bytes; the records are read in
-      // the window. Anything it cannot open there goes to libpcap whole, below, for its words.
-      std::FILE* header = window->size() > 0 ? fmemopen(const_cast<std::uint8_t*>(window->data()),
-                                                        window->size(), "rb")
-                                             : nullptr;
-      ::pcap* checked = header != nullptr ? pcap_fopen_offline_with_tstamp_precision(
-                                                header, PCAP_TSTAMP_PRECISION_NANO, errbuf)
-                                          : nullptr;
-      std::optional<RecordFormat> format;
-      if (checked != nullptr) {
-        format = inPlaceFormat(checked, window->data(), window->size());
-        reader->dlt_ = pcap_datalink(checked);
-        pcap_close(checked);  // and its FILE
-      } else if (header != nullptr) {
-        std::fclose(header);
-      }
-      if (format) {
-        reader->readInPlace(std::move(window), *format);
-      } else {
-        reader->stream_->unread(window->data(), window->size());
-      }
-    }
-    if (!reader->parser_) {
-      // Its interface statistics as they pass, read as a plain file's are (docs/timing.md).
-      if (reader->pcapng_format_) {
-        CaptureReader* self = reader.get();
-        reader->stream_->followBlocks(
-            [self](const std::uint8_t* block, std::size_t length, bool big) {
-              self->readStatistics(block, length, big);
-            });
-      }
-      pcap_file = reader->stream_->file();
-      if (pcap_file == nullptr) return cannot(std::strerror(errno));
-    }
+}
+
+Result<std::FILE*> CaptureReader::openStream(std::FILE* file, const std::uint8_t* head,
+                                             std::size_t head_size, bool in_place) {
+  stream_ = std::make_unique<DecompressedStream>(file, compression_, head, head_size);
+  if (in_place) {
+    readStreamInPlace();
   } else {
-    reader->timestamp_digits_ = ncservo::timestampDigits(head, head_size);
-    reader->pcapng_ = head_size >= 4 && load32(head, false) == kSectionHeaderBlock;
-    reader->pcapng_format_ = reader->pcapng_;
-    reader->source_ = nullptr;  // libpcap closes it with its handle
+    const std::string& peeked = stream_->peek(kHeadSize);
+    noteStreamHead(reinterpret_cast<const std::uint8_t*>(peeked.data()), peeked.size());
   }
-  if (!reader->parser_) {
-    reader->handle_ =
-        pcap_fopen_offline_with_tstamp_precision(pcap_file, PCAP_TSTAMP_PRECISION_NANO, errbuf);
-    if (reader->handle_ == nullptr) {
-      if (pcap_file != stdin) std::fclose(pcap_file);  // the raw file under a stream: by source_
-      if (reader->stream_ && reader->stream_->error()) return cannot(*reader->stream_->error());
-      if (reader->compression_ != Compression::None) {
-        return cannot(fmt::format("{} (after {} decompression)", errbuf,
-                                  compressionName(reader->compression_)));
-      }
-      return cannot(errbuf);
+  if (parser_) return nullptr;
+  // Its interface statistics as they pass, read as a plain file's are (docs/timing.md).
+  if (pcapng_format_) {
+    stream_->followBlocks([this](const std::uint8_t* block, std::size_t length, bool big) {
+      readStatistics(block, length, big);
+    });
+  }
+  std::FILE* pcap_file = stream_->file();
+  if (pcap_file == nullptr) return fail(std::strerror(errno));
+  return pcap_file;
+}
+
+void CaptureReader::noteStreamHead(const std::uint8_t* ahead, std::size_t ahead_size) {
+  timestamp_digits_ = ncservo::timestampDigits(ahead, ahead_size);
+  pcapng_ = false;  // records are not located in a stream
+  pcapng_format_ = ahead_size >= 4 && load32(ahead, false) == kSectionHeaderBlock;
+}
+
+void CaptureReader::readStreamInPlace() {
+  auto window = std::make_unique<StreamBytes>(*stream_);
+  window->fill();
+  noteStreamHead(window->data(), window->size());
+  // libpcap reads the file header from the window's first bytes; the records are read in
+  // the window. Anything it cannot open there goes to libpcap whole, after, for its words.
+  std::FILE* header =
+      window->size() > 0 ? fmemopen(const_cast<std::uint8_t*>(window->data()), window->size(), "rb")
+                         : nullptr;
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  ::pcap* checked = header != nullptr ? pcap_fopen_offline_with_tstamp_precision(
+                                            header, PCAP_TSTAMP_PRECISION_NANO, errbuf)
+                                      : nullptr;
+  std::optional<RecordFormat> format;
+  if (checked != nullptr) {
+    format = inPlaceFormat(checked, window->data(), window->size());
+    dlt_ = pcap_datalink(checked);
+    pcap_close(checked);  // and its FILE
+  } else if (header != nullptr) {
+    std::fclose(header);
+  }
+  if (format) {
+    readInPlace(std::move(window), *format);
+  } else {
+    stream_->unread(window->data(), window->size());
+  }
+}
+
+Status CaptureReader::openWithLibpcap(std::FILE* pcap_file, const std::uint8_t* head,
+                                      std::size_t head_size, bool in_place) {
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  handle_ = pcap_fopen_offline_with_tstamp_precision(pcap_file, PCAP_TSTAMP_PRECISION_NANO, errbuf);
+  if (handle_ == nullptr) {
+    if (pcap_file != stdin) std::fclose(pcap_file);  // the raw file under a stream: by source_
+    if (stream_ && stream_->error()) return fail(*stream_->error());
+    if (compression_ != Compression::None) {
+      return fail(
+          fmt::format("{} (after {} decompression)", errbuf, compressionName(compression_)));
     }
-    reader->dlt_ = pcap_datalink(reader->handle_);
-    // A plain file libpcap opened: its records are read where they lie, in the mapped file.
-    if (in_place && !reader->stream_) {
-      std::optional<RecordFormat> format = inPlaceFormat(reader->handle_, head, head_size);
-      std::unique_ptr<MappedBytes> mapped;
-      if (format) mapped = MappedBytes::map(fileno(pcap_file));
-      if (mapped) {
-        reader->mapped_ = mapped.get();
-        reader->readInPlace(std::move(mapped), *format);
-      }
+    return fail(errbuf);
+  }
+  dlt_ = pcap_datalink(handle_);
+  // A plain file libpcap opened: its records are read where they lie, in the mapped file.
+  if (in_place && !stream_) {
+    std::optional<RecordFormat> format = inPlaceFormat(handle_, head, head_size);
+    std::unique_ptr<MappedBytes> mapped;
+    if (format) mapped = MappedBytes::map(fileno(pcap_file));
+    if (mapped) {
+      mapped_ = mapped.get();
+      readInPlace(std::move(mapped), *format);
     }
   }
-  reader->link_ = linkTypeFromDlt(reader->dlt_);
-  if (reader->link_ == LinkType::Unsupported) {
-    const char* dlt_name = pcap_datalink_val_to_name(reader->dlt_);
-    return fail(Error{name,
-                      0,
-                      0,
-                      {},
-                      fmt::format("unsupported link type {} ({}); ncservo reads Ethernet and "
-                                  "Linux cooked (SLL, SLL2) captures",
-                                  reader->dlt_, dlt_name != nullptr ? dlt_name : "unknown")});
-  }
-  return reader;
+  return {};
 }
 
 Error CaptureReader::failure(std::uint64_t frame, const char* pcap_message) const {

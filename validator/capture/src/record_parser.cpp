@@ -164,152 +164,192 @@ RecordParser::Outcome RecordParser::nextPcap(CaptureRecord& record) {
 // come; other blocks passed over by their length.
 RecordParser::Outcome RecordParser::nextPcapng(CaptureRecord& record) {
   for (;;) {
-    std::size_t got = 0;
-    const std::uint64_t start = at_;
-    const std::uint8_t* head = bytes_.at(start, kBlockHeader, got);
-    if (head == nullptr) {
-      if (got == 0) return Outcome::End;
-      return failed(fmt::format("truncated pcapng dump file; tried to read {} bytes, only got {}",
-                                kBlockHeader, got));
-    }
-    const std::uint32_t type = load32(head, big_);
-    const std::uint32_t length = load32(head + 4, big_);
-    if (length < kBlockHeader + kBlockTrailer) {
-      return failed(fmt::format("block in pcapng dump file has a length of {} < {}", length,
-                                kBlockHeader + kBlockTrailer));
-    }
-    if (length % 4 != 0) {
-      return failed(fmt::format(
-          "block in pcapng dump file has a length of {} that is not a multiple of 4", length));
-    }
-    if (length > kMaxBlock) {
-      return failed(fmt::format("pcapng block size {} > maximum {}", length, kMaxBlock));
-    }
-    const std::uint8_t* block = bytes_.at(start, length, got);
-    if (block == nullptr) {
-      return failed(fmt::format("truncated pcapng dump file; tried to read {} bytes, only got {}",
-                                length - kBlockHeader, got - kBlockHeader));
-    }
-    if (load32(block + length - kBlockTrailer, big_) != length) {
-      return failed("block total length in header and trailer don't match");
-    }
-    at_ = start + length;
-    const std::uint8_t* body = block + kBlockHeader;
-    const std::size_t size = length - kBlockHeader - kBlockTrailer;
-    const auto too_short = [&] {
-      return failed(fmt::format("block of type {} in pcapng dump file is too short", type));
-    };
-
-    std::uint32_t interface = 0;
-    std::uint64_t ticks = 0;
-    std::uint32_t captured = 0;
-    std::uint32_t original = 0;
-    std::size_t fixed = 0;  // the packet's bytes follow
-    switch (type) {
+    PcapngBlock block;
+    if (const Outcome read = readBlock(block); read != Outcome::Record) return read;
+    switch (block.type) {
       case kEnhancedPacketBlock:
       case kPacketBlock:
-        fixed = 20;
-        if (size < fixed) return too_short();
-        interface = type == kEnhancedPacketBlock ? load32(body, big_) : load16(body, big_);
-        ticks = std::uint64_t{load32(body + 4, big_)} << 32 | load32(body + 8, big_);
-        captured = load32(body + 12, big_);
-        original = load32(body + 16, big_);
-        break;
       case kSimplePacketBlock:
-        fixed = 4;
-        if (size < fixed) return too_short();
-        original = load32(body, big_);
-        captured = std::min(original, format_.snapshot);
-        break;
-      case kInterfaceBlock: {
-        if (size < 8) return too_short();
-        const std::uint16_t link = load16(body, big_);
-        const std::uint32_t snaplen = load32(body + 4, big_);
-        if (!first_interface_) {
-          if (static_cast<std::uint32_t>(format_.dlt) != link) {
-            return failed(fmt::format(
-                "an interface has a type {} different from the type of the first interface", link));
-          }
-          const std::uint32_t adjusted =
-              snaplen == 0 || snaplen > kMaxSnaplen ? kMaxSnaplen : snaplen;
-          if (adjusted != format_.snapshot) {
-            return failed(
-                fmt::format("an interface has a snapshot length {} different from the "
-                            "snapshot length of the first interface",
-                            snaplen));
-          }
-        }
-        first_interface_ = false;
-        if (!addInterface(body + 8, size - 8, type)) return Outcome::Failed;
+        return readPacket(block, record);
+      case kInterfaceBlock:
+        if (!readInterface(block)) return Outcome::Failed;
         continue;
-      }
-      case kSectionHeaderBlock: {
-        if (size < 16) return too_short();
-        // In the byte order of the section before: a new one may not change it.
-        const std::uint32_t magic = load32(body, big_);
-        if (magic == kByteOrderSwapped) {
-          return failed("the file has sections with different byte orders");
-        }
-        if (magic != kByteOrderMagic) {
-          return failed("the file has a section with a bad byte order magic field");
-        }
-        const std::uint16_t major = load16(body + 4, big_);
-        if (major != 1) {
-          return failed(fmt::format("unknown pcapng savefile major version number {}", major));
-        }
-        interfaces_.clear();
+      case kSectionHeaderBlock:
+        if (!readSectionHeader(block)) return Outcome::Failed;
         continue;
-      }
-      case kStatisticsBlock: {
-        // Kept with its length and byte order in front, for flushStatistics. A statistics block is
-        // small: larger ones are passed over, and many between two records are counted at once.
-        if (length > kMaxStatistics) continue;
-        if (pending_statistics_.size() > kMaxPending) flushStatistics();
-        const std::size_t was = pending_statistics_.size();
-        pending_statistics_.resize(was + 8 + length);
-        const std::uint32_t kept = length;
-        std::memcpy(&pending_statistics_[was], &kept, 4);
-        pending_statistics_[was + 4] = big_ ? 1 : 0;
-        std::copy(block, block + length, pending_statistics_.begin() + static_cast<long>(was) + 8);
+      case kStatisticsBlock:
+        keepStatistics(block);
         continue;
-      }
       default:
         continue;
     }
-
-    if (interface >= interfaces_.size()) {
-      return failed(
-          fmt::format("a packet arrived on interface {}, but there's no Interface "
-                      "Description Block for that interface",
-                      interface));
-    }
-    if (captured > format_.snapshot) {
-      return failed(fmt::format("invalid packet capture length {}, bigger than snaplen of {}",
-                                captured, static_cast<std::int32_t>(format_.snapshot)));
-    }
-    // libpcap's arithmetic: unsigned 64-bit, the fraction scaled to nanoseconds, then handed
-    // over as a time_t and an int.
-    const Interface& at = interfaces_[interface];
-    const std::uint64_t seconds = ticks / at.resolution + static_cast<std::uint64_t>(at.offset);
-    std::uint64_t fraction = ticks % at.resolution;
-    if (at.resolution != kNanosecond) {
-      if (at.binary) {
-        fraction = fraction * kNanosecond / at.resolution;
-      } else if (at.resolution > kNanosecond) {
-        fraction /= at.resolution / kNanosecond;
-      } else {
-        fraction *= kNanosecond / at.resolution;
-      }
-    }
-    if (size - fixed < captured) return too_short();
-    record.time_ns = nanoseconds(static_cast<std::int64_t>(seconds),
-                                 static_cast<std::int32_t>(static_cast<std::uint32_t>(fraction)));
-    record.data = body + fixed;
-    record.captured = captured;
-    record.original = original;
-    record.stored = RecordSpan{start, length};
-    return Outcome::Record;
   }
+}
+
+RecordParser::Outcome RecordParser::readBlock(PcapngBlock& block) {
+  std::size_t got = 0;
+  const std::uint64_t start = at_;
+  const std::uint8_t* head = bytes_.at(start, kBlockHeader, got);
+  if (head == nullptr) {
+    if (got == 0) return Outcome::End;
+    return failed(fmt::format("truncated pcapng dump file; tried to read {} bytes, only got {}",
+                              kBlockHeader, got));
+  }
+  const std::uint32_t type = load32(head, big_);
+  const std::uint32_t length = load32(head + 4, big_);
+  if (length < kBlockHeader + kBlockTrailer) {
+    return failed(fmt::format("block in pcapng dump file has a length of {} < {}", length,
+                              kBlockHeader + kBlockTrailer));
+  }
+  if (length % 4 != 0) {
+    return failed(fmt::format(
+        "block in pcapng dump file has a length of {} that is not a multiple of 4", length));
+  }
+  if (length > kMaxBlock) {
+    return failed(fmt::format("pcapng block size {} > maximum {}", length, kMaxBlock));
+  }
+  const std::uint8_t* bytes = bytes_.at(start, length, got);
+  if (bytes == nullptr) {
+    return failed(fmt::format("truncated pcapng dump file; tried to read {} bytes, only got {}",
+                              length - kBlockHeader, got - kBlockHeader));
+  }
+  if (load32(bytes + length - kBlockTrailer, big_) != length) {
+    return failed("block total length in header and trailer don't match");
+  }
+  at_ = start + length;
+  block = {.start = start,
+           .type = type,
+           .length = length,
+           .bytes = bytes,
+           .body = bytes + kBlockHeader,
+           .size = length - kBlockHeader - kBlockTrailer};
+  return Outcome::Record;
+}
+
+RecordParser::Outcome RecordParser::tooShort(const PcapngBlock& block) {
+  return failed(fmt::format("block of type {} in pcapng dump file is too short", block.type));
+}
+
+RecordParser::Outcome RecordParser::readPacket(const PcapngBlock& block, CaptureRecord& record) {
+  const std::uint8_t* body = block.body;
+  std::uint32_t interface = 0;
+  std::uint64_t ticks = 0;
+  std::uint32_t captured = 0;
+  std::uint32_t original = 0;
+  std::size_t fixed = 0;  // the packet's bytes follow
+  if (block.type == kSimplePacketBlock) {
+    fixed = 4;
+    if (block.size < fixed) return tooShort(block);
+    original = load32(body, big_);
+    captured = std::min(original, format_.snapshot);
+  } else {
+    fixed = 20;
+    if (block.size < fixed) return tooShort(block);
+    interface = block.type == kEnhancedPacketBlock ? load32(body, big_) : load16(body, big_);
+    ticks = std::uint64_t{load32(body + 4, big_)} << 32 | load32(body + 8, big_);
+    captured = load32(body + 12, big_);
+    original = load32(body + 16, big_);
+  }
+  if (interface >= interfaces_.size()) {
+    return failed(
+        fmt::format("a packet arrived on interface {}, but there's no Interface "
+                    "Description Block for that interface",
+                    interface));
+  }
+  if (captured > format_.snapshot) {
+    return failed(fmt::format("invalid packet capture length {}, bigger than snaplen of {}",
+                              captured, static_cast<std::int32_t>(format_.snapshot)));
+  }
+  const std::int64_t time_ns = packetTime(interfaces_[interface], ticks);
+  if (block.size - fixed < captured) return tooShort(block);
+  record.time_ns = time_ns;
+  record.data = body + fixed;
+  record.captured = captured;
+  record.original = original;
+  record.stored = RecordSpan{block.start, block.length};
+  return Outcome::Record;
+}
+
+// libpcap's arithmetic: unsigned 64-bit, the fraction scaled to nanoseconds, then handed over as
+// a time_t and an int.
+std::int64_t RecordParser::packetTime(const Interface& at, std::uint64_t ticks) {
+  const std::uint64_t seconds = ticks / at.resolution + static_cast<std::uint64_t>(at.offset);
+  std::uint64_t fraction = ticks % at.resolution;
+  if (at.resolution != kNanosecond) {
+    if (at.binary) {
+      fraction = fraction * kNanosecond / at.resolution;
+    } else if (at.resolution > kNanosecond) {
+      fraction /= at.resolution / kNanosecond;
+    } else {
+      fraction *= kNanosecond / at.resolution;
+    }
+  }
+  return nanoseconds(static_cast<std::int64_t>(seconds),
+                     static_cast<std::int32_t>(static_cast<std::uint32_t>(fraction)));
+}
+
+bool RecordParser::readInterface(const PcapngBlock& block) {
+  if (block.size < 8) {
+    tooShort(block);
+    return false;
+  }
+  const std::uint16_t link = load16(block.body, big_);
+  const std::uint32_t snaplen = load32(block.body + 4, big_);
+  if (!first_interface_) {
+    if (static_cast<std::uint32_t>(format_.dlt) != link) {
+      failed(fmt::format(
+          "an interface has a type {} different from the type of the first interface", link));
+      return false;
+    }
+    const std::uint32_t adjusted = snaplen == 0 || snaplen > kMaxSnaplen ? kMaxSnaplen : snaplen;
+    if (adjusted != format_.snapshot) {
+      failed(
+          fmt::format("an interface has a snapshot length {} different from the "
+                      "snapshot length of the first interface",
+                      snaplen));
+      return false;
+    }
+  }
+  first_interface_ = false;
+  return addInterface(block.body + 8, block.size - 8, block.type);
+}
+
+bool RecordParser::readSectionHeader(const PcapngBlock& block) {
+  if (block.size < 16) {
+    tooShort(block);
+    return false;
+  }
+  // In the byte order of the section before: a new one may not change it.
+  const std::uint32_t magic = load32(block.body, big_);
+  if (magic == kByteOrderSwapped) {
+    failed("the file has sections with different byte orders");
+    return false;
+  }
+  if (magic != kByteOrderMagic) {
+    failed("the file has a section with a bad byte order magic field");
+    return false;
+  }
+  const std::uint16_t major = load16(block.body + 4, big_);
+  if (major != 1) {
+    failed(fmt::format("unknown pcapng savefile major version number {}", major));
+    return false;
+  }
+  interfaces_.clear();
+  return true;
+}
+
+// Kept with its length and byte order in front, for flushStatistics. A statistics block is small:
+// larger ones are passed over, and many between two records are counted at once.
+void RecordParser::keepStatistics(const PcapngBlock& block) {
+  if (block.length > kMaxStatistics) return;
+  if (pending_statistics_.size() > kMaxPending) flushStatistics();
+  const std::size_t was = pending_statistics_.size();
+  pending_statistics_.resize(was + 8 + block.length);
+  const std::uint32_t kept = block.length;
+  std::memcpy(&pending_statistics_[was], &kept, 4);
+  pending_statistics_[was + 4] = big_ ? 1 : 0;
+  std::copy(block.bytes, block.bytes + block.length,
+            pending_statistics_.begin() + static_cast<long>(was) + 8);
 }
 
 // An interface description's options: if_tsresol and if_tsoffset say how to read its times;

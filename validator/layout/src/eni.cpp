@@ -97,22 +97,10 @@ class Reader {
   std::optional<Error> first_error_;
 };
 
-}  // namespace
-
-Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
-  EniLayout layout;
-  Reader reader(path, xml);
-  pugi::xml_document doc;
-  const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size());
-  if (!parsed) {
-    return fail(eniError(path, reader.lineAt(parsed.offset),
-                         fmt::format("not well-formed XML: {}", parsed.description())));
-  }
-  const pugi::xml_node config = doc.child("EtherCATConfig").child("Config");
-  if (!config) {
-    return fail(eniError(path, 0, "no <EtherCATConfig><Config>: not an ENI file (ETG.2100)"));
-  }
-
+// The cyclic commands of every task: each task's frames kept in `layout`, and the logical
+// commands returned, which place the slaves' process data.
+Result<std::vector<Command>> readCyclicCommands(const pugi::xml_node& config, Reader& reader,
+                                                EniLayout& layout) {
   std::vector<Command> commands;
   for (pugi::xml_node cyclic : config.children("Cyclic")) {
     const std::optional<std::int64_t> cycle_us = reader.number(cyclic, "CycleTime", false);
@@ -141,62 +129,101 @@ Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
       }
     }
   }
-  // The logical address of image byte `byte`, through the command whose range holds it.
-  auto logical = [&](std::int64_t byte, bool outputs) -> std::optional<std::uint32_t> {
-    for (const Command& c : commands) {
-      const bool carries = outputs ? ecat::writesSlaves(c.cmd) : ecat::readsSlaves(c.cmd);
-      const auto& offset = outputs ? c.output_offset : c.input_offset;
-      if (!carries || !offset || byte < *offset || byte >= *offset + c.length) continue;
-      return static_cast<std::uint32_t>(c.address + (byte - *offset));
-    }
-    return std::nullopt;
-  };
+  return commands;
+}
 
+// The logical address of image byte `byte`, through the command whose range holds it.
+std::optional<std::uint32_t> logicalAddress(const std::vector<Command>& commands, std::int64_t byte,
+                                            bool outputs) {
+  for (const Command& c : commands) {
+    const bool carries = outputs ? ecat::writesSlaves(c.cmd) : ecat::readsSlaves(c.cmd);
+    const auto& offset = outputs ? c.output_offset : c.input_offset;
+    if (!carries || !offset || byte < *offset || byte >= *offset + c.length) continue;
+    return static_cast<std::uint32_t>(c.address + (byte - *offset));
+  }
+  return std::nullopt;
+}
+
+// A slave's process data in one direction (<Send> outputs, <Recv> inputs): where it starts in the
+// image and how many bits it holds, summed over its entries.
+struct ImageBits {
+  std::optional<std::int64_t> start;
+  std::int64_t bits = 0;
+};
+Result<ImageBits> imageBits(const pugi::xml_node& process_data, const char* direction,
+                            Reader& reader) {
+  ImageBits image;
+  for (pugi::xml_node entry : process_data.children(direction)) {
+    auto start = reader.number(entry, "BitStart", true);
+    auto bits = reader.number(entry, "BitLength", true);
+    if (reader.failed()) return fail(reader.firstError());
+    if (!image.start) image.start = start;
+    image.bits += *bits;
+  }
+  return image;
+}
+
+// The slave's axis when its process data is a servo's (10-byte outputs, 40-byte inputs);
+// nullopt when it is another slave.
+Result<std::optional<AxisConfig>> servoAxis(const pugi::xml_node& slave, Reader& reader,
+                                            const std::vector<Command>& commands,
+                                            std::size_t axes_before) {
+  const pugi::xml_node info = slave.child("Info");
+  const std::string name = info.child("Name").child_value();
+  auto station = reader.number(info, "PhysAddr", false);
+  if (reader.failed()) return fail(reader.firstError());
+  // Sizes of the process data: the Send/Recv bit lengths, or the sync managers' sizes.
+  const pugi::xml_node pd = slave.child("ProcessData");
+  const Result<ImageBits> send = imageBits(pd, "Send", reader);
+  if (!send) return fail(send.error());
+  const Result<ImageBits> recv = imageBits(pd, "Recv", reader);
+  if (!recv) return fail(recv.error());
+  const bool servo = send->bits == 8 * static_cast<std::int64_t>(kRxPdoSize) &&
+                     recv->bits == 8 * static_cast<std::int64_t>(kTxPdoSize);
+  if (!servo) return std::nullopt;
+  if (*send->start % 8 != 0 || *recv->start % 8 != 0) {
+    return fail(reader.error(
+        pd, fmt::format("slave '{}': its process data does not start on a byte", name)));
+  }
+  AxisConfig axis;
+  axis.name = name.empty() ? fmt::format("axis{}", axes_before) : name;
+  auto outputs = logicalAddress(commands, *send->start / 8, true);
+  auto inputs = logicalAddress(commands, *recv->start / 8, false);
+  if (!outputs || !inputs) {
+    return fail(reader.error(pd, fmt::format("slave '{}': its {} (image bit {}) are in no "
+                                             "cyclic LRD/LWR/LRW command of <Cyclic>",
+                                             name, outputs ? "inputs" : "outputs",
+                                             outputs ? *recv->start : *send->start)));
+  }
+  axis.outputs = *outputs;
+  axis.inputs = *inputs;
+  if (station) axis.station = static_cast<std::uint16_t>(*station);
+  return axis;
+}
+
+}  // namespace
+
+Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
+  EniLayout layout;
+  Reader reader(path, xml);
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size());
+  if (!parsed) {
+    return fail(eniError(path, reader.lineAt(parsed.offset),
+                         fmt::format("not well-formed XML: {}", parsed.description())));
+  }
+  const pugi::xml_node config = doc.child("EtherCATConfig").child("Config");
+  if (!config) {
+    return fail(eniError(path, 0, "no <EtherCATConfig><Config>: not an ENI file (ETG.2100)"));
+  }
+  const Result<std::vector<Command>> commands = readCyclicCommands(config, reader, layout);
+  if (!commands) return fail(commands.error());
   for (pugi::xml_node slave : config.children("Slave")) {
     ++layout.slaves;
-    const pugi::xml_node info = slave.child("Info");
-    const std::string name = info.child("Name").child_value();
-    auto station = reader.number(info, "PhysAddr", false);
-    if (reader.failed()) return fail(reader.firstError());
-    // Sizes of the process data: the Send/Recv bit lengths, or the sync managers' sizes.
-    const pugi::xml_node pd = slave.child("ProcessData");
-    std::int64_t send_bits = 0, recv_bits = 0;
-    std::optional<std::int64_t> send_start, recv_start;
-    for (pugi::xml_node send : pd.children("Send")) {
-      auto start = reader.number(send, "BitStart", true);
-      auto bits = reader.number(send, "BitLength", true);
-      if (reader.failed()) return fail(reader.firstError());
-      if (!send_start) send_start = start;
-      send_bits += *bits;
-    }
-    for (pugi::xml_node recv : pd.children("Recv")) {
-      auto start = reader.number(recv, "BitStart", true);
-      auto bits = reader.number(recv, "BitLength", true);
-      if (reader.failed()) return fail(reader.firstError());
-      if (!recv_start) recv_start = start;
-      recv_bits += *bits;
-    }
-    const bool servo = send_bits == 8 * static_cast<std::int64_t>(kRxPdoSize) &&
-                       recv_bits == 8 * static_cast<std::int64_t>(kTxPdoSize);
-    if (!servo) continue;
-    if (*send_start % 8 != 0 || *recv_start % 8 != 0) {
-      return fail(reader.error(
-          pd, fmt::format("slave '{}': its process data does not start on a byte", name)));
-    }
-    AxisConfig axis;
-    axis.name = name.empty() ? fmt::format("axis{}", layout.axes.size()) : name;
-    auto outputs = logical(*send_start / 8, true);
-    auto inputs = logical(*recv_start / 8, false);
-    if (!outputs || !inputs) {
-      return fail(reader.error(pd, fmt::format("slave '{}': its {} (image bit {}) are in no "
-                                               "cyclic LRD/LWR/LRW command of <Cyclic>",
-                                               name, outputs ? "inputs" : "outputs",
-                                               outputs ? *recv_start : *send_start)));
-    }
-    axis.outputs = *outputs;
-    axis.inputs = *inputs;
-    if (station) axis.station = static_cast<std::uint16_t>(*station);
-    layout.axes.push_back(std::move(axis));
+    Result<std::optional<AxisConfig>> axis =
+        servoAxis(slave, reader, *commands, layout.axes.size());
+    if (!axis) return fail(axis.error());
+    if (*axis) layout.axes.push_back(std::move(**axis));
   }
   return layout;
 }

@@ -282,35 +282,16 @@ Json timingJson(const CaptureReport& r) {
   return timing;
 }
 
-Json captureJson(const CaptureReport& r, Verdict verdict) {
-  Json c;
-  c["path"] = r.path;
-  c["verdict"] = verdictName(verdict);
-  // Nothing was read (docs/cli.md#verdicts): the verdict and why, with the empty parts a reader of
-  // every capture expects, and no layout, timing or axes to speak of.
-  if (r.unopened()) {
-    c["reason"] = *r.error;
-    c["frames"] = 0;
-    c["findings"] = Json::array();
-    c["summary"] = {{"error", 0}, {"warning", 0}, {"info", 0}};
-    c["error"] = *r.error;
-    return c;
-  }
-  if (!r.coverage.complete()) c["reason"] = r.coverage.reason;
-  if (!r.coverage.missing.empty()) c["missing_axes"] = r.coverage.missing;
-  c["frames"] = r.frames;
-  c["cycles"] = r.cycles;
-  c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},
-                        {"p99", optionalNumber(r.cycle_time.p99_us)},
-                        {"max", optionalNumber(r.cycle_time.max_us)}};
-  // What the capture file says it dropped (docs/timing.md "Capture loss").
-  if (r.capture_drops) {
-    const CaptureDrops& d = *r.capture_drops;
-    c["capture_dropped"] = {
-        {"frames", d.dropped()},
-        {"interface", d.interface_dropped ? Json(*d.interface_dropped) : Json(nullptr)},
-        {"system", d.system_dropped ? Json(*d.system_dropped) : Json(nullptr)}};
-  }
+namespace {
+
+// What the capture file says it dropped (docs/timing.md "Capture loss").
+Json captureDroppedJson(const CaptureDrops& d) {
+  return {{"frames", d.dropped()},
+          {"interface", d.interface_dropped ? Json(*d.interface_dropped) : Json(nullptr)},
+          {"system", d.system_dropped ? Json(*d.system_dropped) : Json(nullptr)}};
+}
+
+Json layoutAxesJson(const CaptureReport& r) {
   Json layout_axes = Json::array();
   for (std::size_t i = 0; i < r.layout.size(); ++i) {
     const AxisInfo& info = r.layout[i];
@@ -321,73 +302,135 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
     if (i < r.inferred.size()) a["inferred"] = inferredJson(r.inferred[i]);
     layout_axes.push_back(std::move(a));
   }
-  c["timing"] = timingJson(r);
-  if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
-  if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
-  if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
-  c["layout"] = {{"source", layoutSourceName(r.layout_source)}, {"axes", std::move(layout_axes)}};
-  if (r.startup_frames_cut > 0) c["layout"]["startup_frames_cut"] = r.startup_frames_cut;
-  if (!r.layout_warnings.empty()) c["layout"]["warnings"] = r.layout_warnings;
+  return layout_axes;
+}
+
+// Where the axes are and where that came from (docs/layout.md).
+Json layoutJson(const CaptureReport& r) {
+  Json layout{{"source", layoutSourceName(r.layout_source)}, {"axes", layoutAxesJson(r)}};
+  if (r.startup_frames_cut > 0) layout["startup_frames_cut"] = r.startup_frames_cut;
+  if (!r.layout_warnings.empty()) layout["warnings"] = r.layout_warnings;
   if (r.late_layout.any()) {
     const LateLayout& late = r.late_layout;
-    c["layout"]["inference_windows"] = late.windows;
-    c["layout"]["inference_cycles"] = late.cycles;
+    layout["inference_windows"] = late.windows;
+    layout["inference_cycles"] = late.cycles;
     if (late.certain_at > 0) {
-      c["layout"]["certain_at_frame"] = late.certain_at;
+      layout["certain_at_frame"] = late.certain_at;
       // docs/layout.md#keep-looking: forgotten while the layout was not yet certain.
-      c["layout"]["unjudged_before_certain"] = {{"frames", late.unjudged_frames},
-                                                {"first_frame", late.first_unjudged},
-                                                {"last_frame", late.last_unjudged}};
+      layout["unjudged_before_certain"] = {{"frames", late.unjudged_frames},
+                                           {"first_frame", late.first_unjudged},
+                                           {"last_frame", late.last_unjudged}};
     }
   }
+  return layout;
+}
+
+Json findingsJson(const CaptureReport& r) {
   Json findings = Json::array();
   for (std::size_t i = 0; i < r.findings.size(); ++i) {
     findings.push_back(
         findingJson(r, r.findings[i],
                     i < r.baseline_states.size() ? r.baseline_states[i] : BaselineState::None));
   }
-  c["findings"] = std::move(findings);
-  if (r.baseline) {
-    c["baseline"] = baselineJson(r);
-    Json absent = Json::array();
-    for (const ReportedFinding& f : r.baseline_absent)
-      absent.push_back(reportedFindingJson(f, "absent"));
-    c["baseline_absent"] = std::move(absent);
-  }
+  return findings;
+}
+
+Json baselineAbsentJson(const CaptureReport& r) {
+  Json absent = Json::array();
+  for (const ReportedFinding& f : r.baseline_absent)
+    absent.push_back(reportedFindingJson(f, "absent"));
+  return absent;
+}
+
+Json incidentsJson(const CaptureReport& r) {
   Json incidents = Json::array();
   for (const Incident& incident : r.incidents) incidents.push_back(incidentJson(r, incident));
-  c["incidents"] = std::move(incidents);
-  if (r.incidents_omitted > 0) c["incidents_omitted"] = r.incidents_omitted;
+  return incidents;
+}
+
+Json stateTimelineJson(const CaptureReport& r, const AxisSummary& a) {
+  Json timeline = Json::array();
+  for (const StateChange& s : a.timeline) {
+    timeline.push_back({{"state", driveStateName(s.state)},
+                        {"transition", s.transition ? Json(s.transition) : Json(nullptr)},
+                        {"frame", s.at.frame},
+                        {"time", seconds(r, s.at)},
+                        {"time_utc", utcOf(r, s.at)}});
+  }
+  return timeline;
+}
+
+Json errorHistoryJson(const CaptureReport& r, const AxisSummary& a) {
+  Json history = Json::array();
+  for (const ErrorHistoryEntry& e : a.error_history) {
+    history.push_back({{"code", e.cause->display},
+                       {"name", sewCauseName(*e.cause)},
+                       {"canopen", hex16(e.cause->canopen)},
+                       {"frame", e.at.frame},
+                       {"time", seconds(r, e.at)},
+                       {"time_utc", utcOf(r, e.at)}});
+  }
+  return history;
+}
+
+// Each axis at the end of the capture: its state, how it got there, its errors and failures.
+Json axesJson(const CaptureReport& r) {
   Json axes = Json::array();
   for (const AxisSummary& a : r.axes) {
-    Json timeline = Json::array();
-    for (const StateChange& s : a.timeline) {
-      timeline.push_back({{"state", driveStateName(s.state)},
-                          {"transition", s.transition ? Json(s.transition) : Json(nullptr)},
-                          {"frame", s.at.frame},
-                          {"time", seconds(r, s.at)},
-                          {"time_utc", utcOf(r, s.at)}});
-    }
-    Json history = Json::array();
-    for (const ErrorHistoryEntry& e : a.error_history) {
-      history.push_back({{"code", e.cause->display},
-                         {"name", sewCauseName(*e.cause)},
-                         {"canopen", hex16(e.cause->canopen)},
-                         {"frame", e.at.frame},
-                         {"time", seconds(r, e.at)},
-                         {"time_utc", utcOf(r, e.at)}});
-    }
     Json axis{{"index", a.index},
               {"name", a.name},
               {"state", a.state ? Json(driveStateName(*a.state)) : Json(nullptr)},
-              {"state_timeline", std::move(timeline)}};
+              {"state_timeline", stateTimelineJson(r, a)}};
     if (a.timeline_omitted > 0) axis["state_timeline_omitted"] = a.timeline_omitted;
-    axis["error_history"] = std::move(history);
+    axis["error_history"] = errorHistoryJson(r, a);
     axis["telegram_failures"] = a.telegram_failures;
     axis["servo_ready_mode"] = a.ready_mode ? Json(*a.ready_mode) : Json(nullptr);
     axes.push_back(std::move(axis));
   }
-  c["axes"] = std::move(axes);
+  return axes;
+}
+
+// Nothing was read (docs/cli.md#verdicts): the verdict and why, with the empty parts a reader of
+// every capture expects, and no layout, timing or axes to speak of.
+void addUnopened(Json& c, const CaptureReport& r) {
+  c["reason"] = *r.error;
+  c["frames"] = 0;
+  c["findings"] = Json::array();
+  c["summary"] = {{"error", 0}, {"warning", 0}, {"info", 0}};
+  c["error"] = *r.error;
+}
+
+}  // namespace
+
+Json captureJson(const CaptureReport& r, Verdict verdict) {
+  Json c;
+  c["path"] = r.path;
+  c["verdict"] = verdictName(verdict);
+  if (r.unopened()) {
+    addUnopened(c, r);
+    return c;
+  }
+  if (!r.coverage.complete()) c["reason"] = r.coverage.reason;
+  if (!r.coverage.missing.empty()) c["missing_axes"] = r.coverage.missing;
+  c["frames"] = r.frames;
+  c["cycles"] = r.cycles;
+  c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},
+                        {"p99", optionalNumber(r.cycle_time.p99_us)},
+                        {"max", optionalNumber(r.cycle_time.max_us)}};
+  if (r.capture_drops) c["capture_dropped"] = captureDroppedJson(*r.capture_drops);
+  c["timing"] = timingJson(r);
+  if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
+  if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
+  if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);
+  c["layout"] = layoutJson(r);
+  c["findings"] = findingsJson(r);
+  if (r.baseline) {
+    c["baseline"] = baselineJson(r);
+    c["baseline_absent"] = baselineAbsentJson(r);
+  }
+  c["incidents"] = incidentsJson(r);
+  if (r.incidents_omitted > 0) c["incidents_omitted"] = r.incidents_omitted;
+  c["axes"] = axesJson(r);
   c["summary"] = {{"error", r.count(Severity::Error)},
                   {"warning", r.count(Severity::Warning)},
                   {"info", r.count(Severity::Info)}};

@@ -84,6 +84,22 @@ class CaptureReader {
   Result<bool> nextInPlace(CaptureRecord& record);
   void readInPlace(std::unique_ptr<CaptureBytes> bytes, const RecordFormat& format);
 
+  // open's steps. The FILE's buffer, set before its first read.
+  void bufferSource(std::FILE* file);
+  // A source that is compressed or cannot be rewound, read through a DecompressedStream: in
+  // place when libpcap reads its file header, else by libpcap. The FILE libpcap is to read
+  // (nullptr when in place), or why the stream cannot be read.
+  Result<std::FILE*> openStream(std::FILE* file, const std::uint8_t* head, std::size_t head_size,
+                                bool in_place);
+  // What the stream's first bytes say: the timestamps' digits, and whether it is a pcapng.
+  void noteStreamHead(const std::uint8_t* ahead, std::size_t ahead_size);
+  // The stream's first window to the record parser when libpcap reads its file header; else
+  // back into the stream.
+  void readStreamInPlace();
+  // libpcap's handle on `pcap_file`, then a plain file's records in place in the mapped file.
+  Status openWithLibpcap(std::FILE* pcap_file, const std::uint8_t* head, std::size_t head_size,
+                         bool in_place);
+
   static constexpr std::size_t kReadBufferSize = 1 << 16;
   // In place (without libpcap's copies): the capture's bytes and the parser reading them.
   std::unique_ptr<CaptureBytes> bytes_;

@@ -88,8 +88,27 @@ class RecordParser {
     bool binary = false;                 // resolution is a power of 2
   };
 
+  // A pcapng block, whole and checked: its place, type and length, its bytes and body.
+  struct PcapngBlock {
+    std::uint64_t start = 0;
+    std::uint32_t type = 0;
+    std::uint32_t length = 0;
+    const std::uint8_t* bytes = nullptr;
+    const std::uint8_t* body = nullptr;
+    std::size_t size = 0;  // of the body
+  };
+
   Outcome nextPcap(CaptureRecord& record);
   Outcome nextPcapng(CaptureRecord& record);
+  // The next block into `block` (Record), or the end, or why it cannot be read.
+  Outcome readBlock(PcapngBlock& block);
+  Outcome readPacket(const PcapngBlock& block, CaptureRecord& record);
+  static std::int64_t packetTime(const Interface& at, std::uint64_t ticks);
+  // The blocks that are no packet: false (error() says why) when one is malformed.
+  bool readInterface(const PcapngBlock& block);
+  bool readSectionHeader(const PcapngBlock& block);
+  void keepStatistics(const PcapngBlock& block);
+  Outcome tooShort(const PcapngBlock& block);
   Outcome failed(std::string why);
   bool addInterface(const std::uint8_t* options, std::size_t size, std::uint32_t type);
   void flushStatistics();

@@ -31,6 +31,11 @@ inline constexpr std::size_t kSll2HeaderSize = 20;  // Linux cooked v2, protocol
 inline constexpr int kDltEthernet = 1;              // tcpdump.org link types
 inline constexpr int kDltLinuxSll = 113;
 inline constexpr int kDltLinuxSll2 = 276;
+// The carriers above as a libpcap capture filter (live capture, docs/field.md): EtherCAT in
+// Ethernet or in UDP, also behind VLAN tags.
+inline constexpr const char* kCaptureFilter =
+    "ether proto 0x88a4 or udp port 34980 or (vlan and (ether proto 0x88a4 or udp port 34980))";
+static_assert(kEtherType == 0x88A4 && kUdpPort == 34980, "kCaptureFilter spells them out");
 
 // --- Frame header (2 bytes): chain length in bits 10..0, type in bits 15..12 ---
 inline constexpr std::size_t kFrameHeaderSize = 2;

@@ -1,0 +1,105 @@
+#include "capture_check.hpp"
+
+#include <fmt/format.h>
+
+#include <memory>
+#include <optional>
+
+#include "ncservo/capture/capture_reader.hpp"
+#include "ncservo/pipeline/capture_pipeline.hpp"
+#include "ncservo/rules/coverage.hpp"
+#include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/frame_clock.hpp"
+
+namespace ncservo::cli {
+
+Result<CheckSetup> prepareCheck(const CheckArgs& o) {
+  CheckSetup setup;
+  Result<LayoutFiles> files = loadLayoutFiles(o.layout);
+  if (!files) return fail(files.error());
+  setup.files = std::move(*files);
+  if (Status built = buildSettings(o, setup.files.config, setup.settings); !built)
+    return fail(built.error());
+  const Result<TimeWindow> time_window = timeWindowOf(o.window.from_s, o.window.to_s);
+  if (!time_window) return fail(time_window.error());
+  setup.window = *time_window;
+  setup.timestamps = *timestampModeFromName(o.timestamps);
+  setup.layout = decoderOptions(setup.files, o.layout);
+  if (setup.files.eni) setup.eni_frames = setup.files.eni->frames;
+  return setup;
+}
+
+int validateCapture(const std::string& path, const CheckSetup& setup,
+                    const cli::ReportWriter& writer, const CaptureOutput& output,
+                    cli::CaptureReport& report, CaptureThreads threads) {
+  const RuleSettings& settings = setup.settings;
+  const TimeWindow& time_window = setup.window;
+  report.path = path;
+  if (output.live != nullptr) output.live->beginCapture(report);
+  auto opened = CaptureReader::open(path);
+  if (!opened) {
+    report.error = opened.error().text();
+    fmt::print(output.messages, "ncservo: {}\n", *report.error);
+    if (output.live != nullptr) output.live->endCapture(report);
+    return kExitCapture;
+  }
+  const std::unique_ptr<CaptureReader> reader = std::move(*opened);
+  report.timestamp_digits = reader->timestampDigits();
+  CapturePipeline pipeline({setup.layout, settings, time_window, setup.timestamps});
+  pipeline.holdEniCycles(setup.eni_frames);
+  std::optional<cli::TimelineRecorder> timelines;
+  if (writer.drawsTimelines()) timelines.emplace(settings);
+  const auto start = [&](const DecoderOptions&) {
+    report.layout = pipeline.validator()->decoder().axes();  // names for findings as they come
+  };
+  const auto validate = [&](const PipelineFrame& f) {
+    report.first_time_ns = *pipeline.run().first_time_ns;  // findings are written as they come
+    report.last_time_ns = f.time_ns;
+    if (timelines) timelines->frame(f.number, f.time_ns - report.first_time_ns, *f.judged);
+  };
+  const auto keepFindings = [&](const std::vector<Finding>& findings) {
+    for (const Finding& f : findings) {
+      const cli::BaselineState state = report.tally(f);
+      if (output.live == nullptr || writer.keepsFindings()) {
+        report.findings.push_back(f);
+        if (report.baseline) report.baseline_states.push_back(state);
+      }
+      if (timelines) timelines->finding(f);
+      if (output.live != nullptr) output.live->finding(report, f, state);
+    }
+  };
+  pipeline.setSinks({start, validate, nullptr, keepFindings});
+  StreamStop stop{&cli::ReportWriter::interrupted()};
+  const Status status = streamCapture(*reader, pipeline, &stop, threads);
+  const CaptureRun& run = pipeline.run();
+  if (stop.stopped) {  // Ctrl-C: not a report, only where it stopped (docs/cli.md#interrupted)
+    report.frames = run.records;
+    return kExitInterrupted;
+  }
+  static_cast<CaptureResult&>(report) = pipeline.result();
+  for (const std::string& warning : report.layout_warnings) {
+    fmt::print(output.messages, "ncservo: {}: layout does not fit: {}\n", path, warning);
+  }
+  if (timelines) report.timelines = timelines->finish();
+  warnIfTruncated(reader->path(), report.truncation, output.messages);
+  if (report.startup_frames_cut > 0) {
+    fmt::print(output.messages, "ncservo: {}: layout {}\n", reader->path(),
+               cli::describeStartupCut(report.startup_frames_cut));
+  }
+  report.capture_drops = reader->drops();
+  if (!status) {
+    report.error = status.error().text() + " (the frames before it were analysed)";
+    fmt::print(output.messages, "ncservo: {}\n", *report.error);
+  }
+  if (writer.locatesFrames()) {
+    if (Status located = cli::locateFindings(report); !located) {
+      fmt::print(output.messages, "ncservo: {}: frames not located in the file: {}\n", path,
+                 located.error().text());
+    }
+  }
+  report.closeBaseline();
+  if (output.live != nullptr) output.live->endCapture(report);
+  return writer.exitStatus(report);
+}
+
+}  // namespace ncservo::cli
