@@ -47,12 +47,14 @@ STAGES = [
     ("  AL-state tracker", "AlTracker::onFrame("),
     ("  DC clock", "DcClock::onFrame("),
     ("  bus model", "BusModel::onCyclicFrame("),
+    ("  measurements: inputs", "AxisMeasurements::takeInputs("),
+    ("  measurements: set points", "AxisMeasurements::takeSetPoint("),
     ("  fast path", "Validator::unchanged("),
     ("  axis models", "AxisModel::observe("),
     ("  axis rules", "Validator::evaluateAxis("),
     ("  bus and slave rules", "Validator::reportEvents("),
     ("incident detector", "IncidentDetector::onFrame("),
-    ("  its look at each axis's words", "IncidentDetector::takeValues("),
+    ("  its look at the drive faults", "IncidentDetector::takeFaults("),
 ]
 
 def load(path):

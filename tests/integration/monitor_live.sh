@@ -90,6 +90,28 @@ done
 [ -z "$stalled" ] || { echo "SKIPPED: the machine is too busy to replay in time: $stalled"; exit 77; }
 echo "ok live findings = the file's ($(wc -l <file.pairs) rule/axis pairs)"
 echo "ok the recording validates to the same findings"
+# The same frames give the same report: monitor's end of report against validate's of the
+# recording (the frames the monitor judged), every object but the findings, apart from what only
+# a live capture has (the interface's name, its clock's resolution).
+"$NCSERVO" validate --format jsonl --fail-on never "${recordings[0]}" >rec.jsonl || true
+python3 - live.jsonl rec.jsonl <<'PY' || fail "monitor's report differs from validate's on the same frames"
+import json, sys
+LIVE_ONLY = {"capture", "resolution_ns", "capture_dropped"}
+def strip(v):
+    if isinstance(v, dict):
+        return {k: strip(x) for k, x in v.items() if k not in LIVE_ONLY}
+    if isinstance(v, list):
+        return [strip(x) for x in v]
+    return v
+def summary(path):
+    return [strip(j) for j in map(json.loads, open(path)) if "rule" not in j]
+live, rec = summary(sys.argv[1]), summary(sys.argv[2])
+for a, b in zip(live, rec):
+    if a != b:
+        print("live:      ", json.dumps(a)[:600]); print("validate:  ", json.dumps(b)[:600])
+assert live == rec, f"{len(live)} live objects, {len(rec)} validate objects"
+print(f"ok monitor's report = validate's on the recording ({len(live)} objects besides the findings)")
+PY
 
 # Short windows: a recording per group of findings, each recorded finding a comment on its frame.
 replay 0.3
