@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ncservo/protocol/word_bits.hpp"
+#include "row_name.hpp"
 
 namespace ncservo {
 namespace {
@@ -88,7 +89,7 @@ TEST_P(FaultRows, MessagesBeforeTheFault) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AxisMeasurements, FaultRows, ::testing::ValuesIn(kFaultRows),
-                         [](const auto& info) { return std::string(info.param.name); });
+                         test::rowName<FaultRow>);
 
 struct StepRow {
   const char* name;
@@ -118,7 +119,7 @@ TEST_P(StepRows, SetPointSteps) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AxisMeasurements, StepRows, ::testing::ValuesIn(kStepRows),
-                         [](const auto& info) { return std::string(info.param.name); });
+                         test::rowName<StepRow>);
 
 TEST(AxisMeasurementsReset, WindowsStartAfreshTheLastValuesStay) {
   AxisMeasurements m;

@@ -194,6 +194,11 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   if (args.timing && !args.layout_only) options.rules = RuleSettings{};
   CapturePipeline pipeline(std::move(options));
   std::optional<Session> session;
+  // With --timing the validator's decoder places the frames, else the session's.
+  const auto decoderInUse = [&]() -> const Decoder& {
+    const Validator* validator = pipeline.validator();
+    return validator != nullptr ? validator->decoder() : session->decoder();
+  };
   const DecodeFormat& format = rowNamed(kDecodeFormats, args.format);
   // The header comes with the first rows, once the layout can tell whether --axis names its axes:
   // an --axis it does not have is a usage error with nothing written (docs/cli.md#exit-status).
@@ -205,7 +210,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   CutRegions cut;
   auto write = [&] {
     if (!checked && !rows.empty()) {
-      selected = cli::checkAxisSelection(args.axes, session->decoder().axes());
+      selected = cli::checkAxisSelection(args.axes, decoderInUse().axes());
       checked = true;
     }
     if (!selected) {
@@ -217,7 +222,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
       header_due = false;
     }
     for (const CycleRow& row : rows) {
-      const AxisInfo& axis = session->decoder().axes().at(row.axis);
+      const AxisInfo& axis = decoderInUse().axes().at(row.axis);
       if (!cli::axisSelected(args.axes, axis)) continue;
       const std::int64_t since_first_ns = row.time_ns - *pipeline.run().first_time_ns;
       format.row(out, row, axis.name, static_cast<double>(since_first_ns) / 1e9);
@@ -225,7 +230,10 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     rows.clear();
   };
   const auto decode = [&](const PipelineFrame& f) {
-    const FrameView& view = session->onFrame(f.frame, f.bytes);
+    // --timing: the validator placed and read the frame already.
+    const FrameView& view = f.judged != nullptr
+                                ? session->onDecoded(f.judged->decode, f.judged->values)
+                                : session->onFrame(f.frame, f.bytes);
     if (args.layout_only) return;
     for (std::size_t i = 0; i < view.axis_count; ++i) cut.add(f.number, view.axes[i].placement);
     cycles.onFrame(f.number, f.time_ns, view, rows);
@@ -233,7 +241,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   };
   const auto start = [&](const DecoderOptions& layout) { session.emplace(layout); };
   const auto layout_only = [&](const PipelineFrame& f) {
-    session->onLayoutOnlyFrame(f.frame, f.bytes);
+    if (pipeline.validator() == nullptr) session->onLayoutOnlyFrame(f.frame, f.bytes);
   };
   pipeline.setSinks({start, decode, layout_only, nullptr});
   const Status status =
@@ -242,11 +250,11 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   const FrameClock& clock = pipeline.clock();
   cycles.finish(rows);
   write();
-  if (selected) selected = cli::checkAxisSelection(args.axes, session->decoder().axes());
+  if (selected) selected = cli::checkAxisSelection(args.axes, decoderInUse().axes());
   if (header_due && selected) format.header(out);  // no rows: the header alone
   std::fflush(out);
   warnIfTruncated(reader->path(),
-                  truncationOf(run.snapped, run.first_snapped, cut, session->decoder().axes()));
+                  truncationOf(run.snapped, run.first_snapped, cut, decoderInUse().axes()));
   if (const std::string empty = emptyWindowReason(input.window, run); !empty.empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(), empty);
     return kExitNoServo;
@@ -255,8 +263,8 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
-  if (args.layout_only) printLayout(session->decoder(), pipeline.inference());
-  noteDecoded(*reader, clock, session->decoder());
+  if (args.layout_only) printLayout(decoderInUse(), pipeline.inference());
+  noteDecoded(*reader, clock, decoderInUse());
   if (pipeline.lateLayout().certain_at > 0) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(),
                cli::describeLateLayout(pipeline.lateLayout()));
@@ -272,7 +280,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     return kExitUsage;
   }
   // No servo decoded (noteDecoded said why), as validate has it (docs/cli.md#exit-status).
-  if (session->decoder().axes().empty()) return kExitNoServo;
+  if (decoderInUse().axes().empty()) return kExitNoServo;
   return kExitOk;
 }
 

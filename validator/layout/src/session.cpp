@@ -4,13 +4,26 @@ namespace ncservo {
 
 const FrameView& Session::onFrame(const EcatFrame& frame, const ByteReader& bytes) {
   decoder_.placeAxes(frame, bytes, decode_);
-  view_.copy = decode_.copy;
-  view_.paired = decode_.paired;
-  view_.axis_count = decode_.axis_count;
   for (std::size_t i = 0; i < decode_.axis_count; ++i) {
+    readFrameValues(decode_.axes[i], bytes, view_.axes[i].values);
+  }
+  return take(decode_);
+}
+
+const FrameView& Session::onDecoded(const FrameDecode& decode,
+                                    const std::array<PdoValues, kMaxAxesPerFrame>& values) {
+  for (std::size_t i = 0; i < decode.axis_count; ++i) view_.axes[i].values = values[i];
+  return take(decode);
+}
+
+// The frame's values are in the view: its placements, each axis's latest values and state.
+const FrameView& Session::take(const FrameDecode& decode) {
+  view_.copy = decode.copy;
+  view_.paired = decode.paired;
+  view_.axis_count = decode.axis_count;
+  for (std::size_t i = 0; i < decode.axis_count; ++i) {
     AxisFrameView& axis = view_.axes[i];
-    axis.placement = decode_.axes[i];
-    readFrameValues(axis.placement, bytes, axis.values);
+    axis.placement = decode.axes[i];
     const std::size_t index = axis.placement.axis;
     if (index >= latest_.size()) latest_.resize(index + 1);
     PdoValues& latest = latest_[index];

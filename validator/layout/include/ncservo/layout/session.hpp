@@ -70,6 +70,10 @@ class Session {
 
   // The frame must have been walked over `bytes`. The returned view lives until the next call.
   const FrameView& onFrame(const EcatFrame& frame, const ByteReader& bytes);
+  // A frame another decoder placed and read already (the validator's observation): taken as it
+  // is, neither placed nor read again; this session's decoder() then learns nothing of it.
+  const FrameView& onDecoded(const FrameDecode& decode,
+                             const std::array<PdoValues, kMaxAxesPerFrame>& values);
 
   // A frame outside the time window (capture_stream.hpp): only what it shows of the layout.
   void onLayoutOnlyFrame(const EcatFrame& frame, const ByteReader& bytes) {
@@ -78,6 +82,8 @@ class Session {
   const Decoder& decoder() const { return decoder_; }
 
  private:
+  const FrameView& take(const FrameDecode& decode);
+
   Decoder decoder_;
   FrameDecode decode_;
   FrameView view_;
