@@ -92,7 +92,10 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
     fmt::print(output.messages, "ncservo: {}\n", *report.error);
   }
   if (writer.locatesFrames()) {
-    if (Status located = cli::locateFindings(report); !located) {
+    report.frame_spans.clear();
+    if (auto located = locateRecords(report.path, findingFrames(report)); located) {
+      report.frame_spans = std::move(*located);
+    } else {
       fmt::print(output.messages, "ncservo: {}: frames not located in the file: {}\n", path,
                  located.error().text());
     }

@@ -878,4 +878,23 @@ Result<bool> CaptureReader::next(CaptureRecord& record) {
   return true;
 }
 
+Result<std::vector<std::pair<std::uint64_t, RecordSpan>>> locateRecords(
+    const std::string& path, const std::vector<std::uint64_t>& frames) {
+  std::vector<std::pair<std::uint64_t, RecordSpan>> spans;
+  if (frames.empty() || path == "-") return spans;
+  auto opened = CaptureReader::open(path);
+  if (!opened) return fail(opened.error());
+  CaptureRecord record;
+  auto wanted = frames.begin();
+  Result<bool> more;
+  // The frames asked for were read before any damage, which the caller's run already names.
+  while (wanted != frames.end() && (more = (*opened)->next(record)) && *more) {
+    if (!record.stored) return std::vector<std::pair<std::uint64_t, RecordSpan>>{};
+    if (record.frame != *wanted) continue;
+    spans.emplace_back(record.frame, *record.stored);
+    ++wanted;
+  }
+  return spans;
+}
+
 }  // namespace ncservo

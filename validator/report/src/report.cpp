@@ -182,26 +182,12 @@ BaselineState CaptureReport::tally(const Finding& f) {
   return state;
 }
 
-Status locateFindings(CaptureReport& report) {
+std::vector<std::uint64_t> findingFrames(const CaptureReport& report) {
   std::vector<std::uint64_t> frames;
   for (const Finding& f : report.findings) frames.push_back(f.at.frame);
   std::sort(frames.begin(), frames.end());
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
-  report.frame_spans.clear();
-  if (frames.empty() || report.path == "-") return {};
-  auto opened = CaptureReader::open(report.path);
-  if (!opened) return fail(opened.error());
-  CaptureRecord record;
-  auto wanted = frames.begin();
-  Result<bool> more;
-  // The findings' frames were all read before any damage, which the report already names.
-  while (wanted != frames.end() && (more = (*opened)->next(record)) && *more) {
-    if (!record.stored) return {};  // compressed: no record has a place in the file
-    if (record.frame != *wanted) continue;
-    report.frame_spans.emplace_back(record.frame, *record.stored);
-    ++wanted;
-  }
-  return {};
+  return frames;
 }
 
 std::string isoUtc(std::int64_t time_ns, int digits) {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ncservo/base/error.hpp"
@@ -126,5 +127,11 @@ class CaptureReader {
   };
   std::vector<InterfaceDrops> interface_drops_;  // the last statistics of each interface
 };
+
+// Where the records of `frames` (1-based, sorted, each once) are stored in the file at `path`,
+// in frame order: read again from the start. Empty for standard input ("-") and for a
+// compressed capture, whose records have no place in the file.
+Result<std::vector<std::pair<std::uint64_t, RecordSpan>>> locateRecords(
+    const std::string& path, const std::vector<std::uint64_t>& frames);
 
 }  // namespace ncservo

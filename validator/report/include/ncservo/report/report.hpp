@@ -115,9 +115,9 @@ const char* verdictName(Verdict verdict);
 // An axis's configured name ("axis3" when it has none), "bus" for none.
 std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
 
-// Reads the capture again for where the frames of its kept findings are stored (a plain file
-// only: the records of a compressed capture or of standard input have no place in a file).
-Status locateFindings(CaptureReport& report);
+// The frames of the kept findings, sorted, each once (where SARIF places them: the capture
+// layer's locateRecords).
+std::vector<std::uint64_t> findingFrames(const CaptureReport& report);
 
 // ISO 8601 in UTC of a capture time, with `digits` digits of the second
 // ("2024-05-01T12:00:00.123456Z").
