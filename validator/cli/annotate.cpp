@@ -57,7 +57,7 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
   };
   pipeline.setSinks({nullptr, nullptr, nullptr, keep});
   if (Status status = streamCapture(**opened, pipeline); !status) return fail(status.error());
-  judged.coverage = coverageOf(*pipeline.validator());
+  judged.coverage = pipeline.result().coverage;
   return judged;
 }
 
