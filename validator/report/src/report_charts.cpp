@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "ncservo/layout/session.hpp"
 
 namespace ncservo::cli {
 

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cstring>
 
-#include "ncservo/layout/session.hpp"
 #include "ncservo/model/axis_model.hpp"
 #include "ncservo/report/axis_selection.hpp"
 #include "ncservo/rules/rules.hpp"

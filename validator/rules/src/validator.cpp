@@ -31,9 +31,7 @@ Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath f
     const WordClass word_class = reads.classes[static_cast<std::size_t>(def.word)];
     if (bits == 0 && word_class == nullptr) continue;
     JudgedPdo& pdo = def.pdo == Pdo::Rx ? judged.rx : judged.tx;
-    pdo.words[pdo.count++] = JudgedWord{static_cast<std::uint8_t>(def.word),
-                                        static_cast<std::uint8_t>(wordOffset(def.word)),
-                                        static_cast<std::uint8_t>(def.size), bits, word_class};
+    pdo.words[pdo.count++] = JudgedWord{static_cast<std::uint8_t>(def.word), bits, word_class};
   }
   judged.al_state = reads.al_state;
   return judged;

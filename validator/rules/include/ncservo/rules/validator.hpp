@@ -99,9 +99,7 @@ class Validator {
   // The bits of each PDO word that the axis model or an enabled rule reads, as the fast path
   // compares them.
   struct JudgedWord {
-    std::uint8_t index;   // in kWords and PdoValues::raw
-    std::uint8_t offset;  // in its PDO
-    std::uint8_t size;
+    std::uint8_t index;  // in kWords and PdoValues::raw
     std::uint64_t bits;
     WordClass word_class;  // or null
   };
