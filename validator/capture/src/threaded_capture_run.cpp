@@ -53,6 +53,7 @@ struct WalkedBatch {
     std::size_t bytes_at, captured, frame_at;
     LinkType link;
     bool judged;
+    bool probe_timed;
   };
   std::vector<Entry> entries;
   std::vector<std::uint8_t> bytes;   // the records'
@@ -66,7 +67,7 @@ struct WalkedBatch {
   void add(const CaptureRecord& record, LinkType link, const WalkedRecord& walked,
            const EcatFrame& frame) {
     entries.push_back({record.frame, walked.time_ns, bytes.size(), record.captured, frames.size(),
-                       link, walked.judged});
+                       link, walked.judged, walked.probe_timed});
     bytes.insert(bytes.end(), record.data, record.data + record.captured);
     pack(frame, frames);
   }
@@ -97,7 +98,8 @@ Status streamOnTwoThreads(const NextRecord& next, CapturePipeline& pipeline, Str
         for (const WalkedBatch::Entry& e : batch->entries) {
           unpack(batch->frames.data() + e.frame_at, frame);
           const ByteReader bytes(batch->bytes.data() + e.bytes_at, e.captured);
-          pipeline.onWalkedFrame(e.number, e.time_ns, e.link, bytes, frame, e.judged);
+          pipeline.onWalkedFrame(e.number, e.time_ns, e.link, bytes, frame, e.judged,
+                                 e.probe_timed);
         }
         queue.recycle(std::move(*batch));
       }

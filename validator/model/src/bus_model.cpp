@@ -242,8 +242,10 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
   // A timestamp that went backwards gives no latency (docs/timing.md#rule-time).
   if (cyclic.awaiting_return && frame_time_ns_ >= now_.time_ns) {
     const std::int64_t latency = now_.time_ns - cyclic.last_master.time_ns;
-    if (capture_clock_) timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
-    frame_timing_.latency_ns = latency;
+    if (capture_clock_ && latencies_measured_) {
+      timing_.onLatency(now_.frame, cyclic.last_master.frame, latency);
+    }
+    if (latencies_measured_) frame_timing_.latency_ns = latency;
     cyclic.last_latency_ns = latency;
     events.push_back(
         {cyclic.last_master, ReturnLatencyEvent{latency, cyclic.last_master.frame, cyclic.id}});

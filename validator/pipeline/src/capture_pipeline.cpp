@@ -42,6 +42,12 @@ CapturePipeline::CapturePipeline(PipelineOptions options, WindowLimits limits)
     : rules_(std::move(options.rules)),
       time_window_(options.window),
       clock_(options.timestamps),
+      clock_stage_([this](std::uint64_t number, std::int64_t time_ns, LinkType link,
+                          const ByteReader& bytes, const EcatFrame& frame,
+                          bool judged) { route(number, time_ns, link, bytes, frame, judged); },
+                   [this](std::uint64_t number) {
+                     if (sinks_.duplicate) sinks_.duplicate(number);
+                   }),
       window_(std::move(options.layout), limits) {
   if (!window_.learning() && rules_) {
     validator_.emplace(window_.options(), *rules_);
@@ -65,6 +71,7 @@ void CapturePipeline::decided() {
   if (rules_) {
     validator_.emplace(window_.options(), *rules_);
     incidents_.emplace(*rules_);
+    clock_told_ = false;
   }
   started();
   window_.replay(
@@ -77,6 +84,12 @@ void CapturePipeline::decided() {
 void CapturePipeline::deliver(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
                               const ByteReader& bytes) {
   started();
+  if (validator_ && !clock_told_) {
+    // On the bus's clock or in cycles, a returned copy has no time of its own to measure.
+    const ClockSource source = clock_stage_.choice().source;
+    validator_->measureLatencies(source == ClockSource::Capture || source == ClockSource::Probe);
+    clock_told_ = true;
+  }
   const Observation* judged =
       validator_ ? &validator_->onFrame(number, time_ns, frame, bytes) : nullptr;
   if (fit_ && judged != nullptr) fit_->onFrame(judged->decode, bytes);
@@ -97,7 +110,8 @@ void CapturePipeline::deliverLayoutOnly(std::uint64_t number, std::int64_t time_
 void CapturePipeline::onRecord(LinkType link, const CaptureRecord& record) {
   if (const std::optional<WalkedRecord> walked = walk(link, record, frame_)) {
     const ByteReader bytes(record.data, record.captured);
-    onWalkedFrame(record.frame, walked->time_ns, link, bytes, frame_, walked->judged);
+    onWalkedFrame(record.frame, walked->time_ns, link, bytes, frame_, walked->judged,
+                  walked->probe_timed);
   }
 }
 
@@ -115,11 +129,17 @@ std::optional<WalkedRecord> CapturePipeline::walk(LinkType link, const CaptureRe
   if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) {
     return std::nullopt;
   }
-  return WalkedRecord{time_ns, judged};
+  return WalkedRecord{time_ns, judged, clock_.source() == TimestampSource::Probe};
 }
 
 void CapturePipeline::onWalkedFrame(std::uint64_t number, std::int64_t time_ns, LinkType link,
-                                    const ByteReader& bytes, const EcatFrame& frame, bool judged) {
+                                    const ByteReader& bytes, const EcatFrame& frame, bool judged,
+                                    bool probe_timed) {
+  clock_stage_.onFrame(number, time_ns, link, bytes, frame, judged, probe_timed);
+}
+
+void CapturePipeline::route(std::uint64_t number, std::int64_t time_ns, LinkType link,
+                            const ByteReader& bytes, const EcatFrame& frame, bool judged) {
   if (window_.learning()) {
     window_.hold(number, time_ns, link, bytes, frame, judged);
     if (!window_.learning()) decided();
@@ -131,6 +151,7 @@ void CapturePipeline::onWalkedFrame(std::uint64_t number, std::int64_t time_ns, 
 }
 
 void CapturePipeline::endLearning() {
+  clock_stage_.finish();
   if (!window_.learning()) return;
   window_.finish();
   decided();
@@ -183,6 +204,9 @@ CaptureResult CapturePipeline::result() const {
   r.timestamps = clock_.source();
   r.probe = clock_.counts();
   r.probe_note = clock_.note();
+  r.clock = clock_stage_.choice();
+  r.duplicates = clock_stage_.duplicates();
+  r.untimed_frames = clock_stage_.untimed();
   r.late_layout = lateLayout();
   r.layout_warnings = layout_warnings_;
   if (!validator_) return r;

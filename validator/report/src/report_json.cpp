@@ -262,6 +262,26 @@ Json inferredJson(const AxisEvidence& e) {
 
 }  // namespace
 
+// Which clock judged the capture and why (docs/timing.md#the-clock).
+Json clockJson(const CaptureReport& r) {
+  const CaptureStamps& stamps = r.clock.stamps;
+  const auto us = [](const std::optional<std::int64_t>& ns) {
+    return ns ? Json(static_cast<double>(*ns) / 1000.0) : Json(nullptr);
+  };
+  Json clock{{"source", clockSourceName(r.clock.source)},
+             {"why", r.clock.why},
+             {"capture_stamps",
+              {{"intervals", stamps.intervals},
+               {"quantum_us", us(stamps.quantum_ns)},
+               {"bunched", stamps.bunched},
+               {"burst_us", us(stamps.burst_ns)},
+               {"late_us_p99", us(stamps.late_p99_ns)}}}};
+  if (r.clock.reference) clock["reference"] = hex16(r.clock.reference->adp);
+  if (r.clock.source == ClockSource::Cycles) clock["cycle_us"] = r.clock.cycle_ns / 1000.0;
+  if (r.untimed_frames > 0) clock["untimed_frames"] = r.untimed_frames;
+  return clock;
+}
+
 Json timingJson(const CaptureReport& r) {
   Json timing{
       {"timestamps", timestampSourceName(r.timestamps)},
@@ -419,6 +439,8 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
                         {"max", optionalNumber(r.cycle_time.max_us)}};
   if (r.capture_drops) c["capture_dropped"] = captureDroppedJson(*r.capture_drops);
   c["timing"] = timingJson(r);
+  c["clock"] = clockJson(r);
+  c["duplicates"] = r.duplicates.count;
   if (r.probe.probed > 0 || !r.probe_note.empty()) c["probe"] = probeJson(r);
   if (r.truncation.any()) c["truncated"] = truncationJson(r.truncation);
   if (!r.coverage.not_judged.empty()) c["not_judged"] = notJudgedJson(r);

@@ -293,10 +293,19 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   writeTextAxes(out, r);
   writeTextIncidents(out, r);
   fmt::print(out, "timestamps: {}\n", timestampSourceName(r.timestamps));
-  std::fputs(timingText(r.timing, timestampSourceName(r.timestamps),
-                        timestampResolutionNs(r.timestamps, r.timestamp_digits))
-                 .c_str(),
-             out);
+  fmt::print(out, "clock: {}\n", describeClock(r.clock));
+  if (r.duplicates.count > 0) {
+    fmt::print(out, "duplicates: {} records ignored (the first: frame {})\n", r.duplicates.count,
+               r.duplicates.first_frame);
+  }
+  const bool own_stamps =
+      r.clock.source == ClockSource::Capture || r.clock.source == ClockSource::Probe;
+  std::fputs(
+      timingText(r.timing,
+                 own_stamps ? timestampSourceName(r.timestamps) : clockSourceName(r.clock.source),
+                 own_stamps ? timestampResolutionNs(r.timestamps, r.timestamp_digits) : 1)
+          .c_str(),
+      out);
   fmt::print(out, "{}\n", describeCyclicDatagrams(r));
   writeCyclicFrames(out, r);
   writeCaptureLoss(out, r);

@@ -72,6 +72,8 @@ class BusModel {
   IntervalStats captureIntervals() const;
   // Cycle intervals and return latencies of every segment (docs/timing.md).
   const TimingStats& timing() const { return timing_; }
+  // Off: returned copies add no latency (the frames are timed on a clock that gives them none).
+  void measureLatencies(bool measured) { latencies_measured_ = measured; }
   // What the last frame given to onCyclicFrame added to timing().
   const FrameTiming& frameTiming() const { return frame_timing_; }
   // Returned datagrams carrying servo PDOs whose WKC was not captured (COM-001 not judged).
@@ -209,6 +211,7 @@ class BusModel {
   // latency statistics are the servos' task's; another task's frames keep only their own clock.
   bool servo_frames_seen_ = false;
   bool capture_clock_ = true;  // the frame in hand feeds the capture's statistics
+  bool latencies_measured_ = true;
   bool returned_copies_seen_ = false;
 };
 

@@ -22,6 +22,7 @@
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/bus_model.hpp"
 #include "ncservo/pipeline/capture_result.hpp"
+#include "ncservo/pipeline/clock_stage.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -90,6 +91,7 @@ struct PipelineFrame {
 struct WalkedRecord {
   std::int64_t time_ns;
   bool judged;
+  bool probe_timed;  // by the probe's clock
 };
 
 class CapturePipeline {
@@ -104,6 +106,9 @@ class CapturePipeline {
     // The findings the validator reported on a frame, after `frame`, and at the end of the
     // capture (may be null).
     std::function<void(const std::vector<Finding>& findings)> findings;
+    // A record dropped as a duplicate of one within its cycle (docs/cli.md#duplicates; may be
+    // null).
+    std::function<void(std::uint64_t number)> duplicate;
   };
 
   explicit CapturePipeline(PipelineOptions options, WindowLimits limits = {});
@@ -122,18 +127,21 @@ class CapturePipeline {
   // no state but run().first_time_ns, set by the first record, before any frame is delivered.
   std::optional<WalkedRecord> walk(LinkType link, const CaptureRecord& record, EcatFrame& frame);
   // One frame already walked over `bytes` (any status but NotEtherCat, NotDatagrams and
-  // BusFault) and timed, as the plugin's first pass sees it: held or delivered. `judged`:
-  // inside the time window.
+  // BusFault) and timed, as the plugin's first pass sees it: timed on the capture's clock
+  // (docs/timing.md#the-clock), then held or delivered. `judged`: inside the time window;
+  // `probe_timed`: `time_ns` is the probe's.
   void onWalkedFrame(std::uint64_t number, std::int64_t time_ns, LinkType link,
-                     const ByteReader& bytes, const EcatFrame& frame, bool judged = true);
+                     const ByteReader& bytes, const EcatFrame& frame, bool judged = true,
+                     bool probe_timed = false);
   // The frames ended while learning: the window decides with what it held and delivers it.
   void endLearning();
   // The capture ended: endLearning, then the validator's end-of-capture judgement, whose
   // findings go to `Sinks::findings`. `start` has been called even for a capture with no frame.
   void finish();
 
-  // Frames are still held back in the learning window.
-  bool learning() const { return window_.learning(); }
+  // Frames are still held back: while the capture's stamps are judged, or in the learning
+  // window.
+  bool learning() const { return clock_stage_.assessing() || window_.learning(); }
   // The layout decided and what the inference found, once no longer learning.
   const DecoderOptions& layout() const { return window_.options(); }
   const std::optional<InferenceResult>& inference() const { return window_.inference(); }
@@ -154,6 +162,8 @@ class CapturePipeline {
   // The incidents found so far (docs/incidents.md); null as validator().
   const IncidentDetector* incidents() const { return incidents_ ? &*incidents_ : nullptr; }
   const FrameClock& clock() const { return clock_; }
+  // The clock that judges the capture, and the duplicates dropped (docs/timing.md#the-clock).
+  const ClockStage& clockStage() const { return clock_stage_; }
   const CaptureRun& run() const { return run_; }
   const TimeWindow& timeWindow() const { return time_window_; }
   // What the run found, for every report of it; after finish(), or at any point after the
@@ -162,6 +172,9 @@ class CapturePipeline {
 
  private:
   void decided();
+  // A frame timed on the capture's clock: held in the learning window or delivered.
+  void route(std::uint64_t number, std::int64_t time_ns, LinkType link, const ByteReader& bytes,
+             const EcatFrame& frame, bool judged);
   void started();
   void deliver(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
                const ByteReader& bytes);
@@ -171,6 +184,8 @@ class CapturePipeline {
   std::optional<RuleSettings> rules_;
   TimeWindow time_window_;
   FrameClock clock_;
+  ClockStage clock_stage_;
+  bool clock_told_ = false;  // the validator knows which clock times it
   LayoutWindow window_;
   std::optional<Validator> validator_;
   std::optional<IncidentDetector> incidents_;  // beside the validator

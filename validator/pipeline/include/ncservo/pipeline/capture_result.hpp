@@ -16,9 +16,11 @@
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/model/axis_model.hpp"
 #include "ncservo/model/bus_model.hpp"
+#include "ncservo/model/capture_clock.hpp"
 #include "ncservo/model/capture_segments.hpp"
 #include "ncservo/model/dc_clock.hpp"
 #include "ncservo/model/timing.hpp"
+#include "ncservo/pipeline/clock_stage.hpp"
 #include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/frame_clock.hpp"
@@ -67,6 +69,11 @@ struct CaptureResult {
   TimestampSource timestamps = TimestampSource::Capture;
   ProbeCounts probe;
   std::string probe_note;  // FrameClock::note()
+  // The clock that judged the capture and why (docs/timing.md#the-clock); the records dropped as
+  // duplicates; frames the bus's clock could not time (its reads stopped).
+  ClockChoice clock;
+  CaptureDuplicates duplicates;
+  std::uint64_t untimed_frames = 0;
   Truncation truncation;
   std::uint64_t startup_frames_cut = 0;  // layout from a start-up cut by the snap length
   LateLayout late_layout;                // inference went on looking after its first window

@@ -66,6 +66,9 @@ class Validator {
   // The capture's segments (docs/timing.md#rule-time): the rules judge each on its own clock.
   const SegmentTracker& segments() const { return segments_; }
   const BusModel& bus() const { return bus_; }
+  // Whether the frames' times measure the return latency: not on the bus's clock or in cycles,
+  // where a returned copy has no time of its own (docs/timing.md#the-clock).
+  void measureLatencies(bool measured) { bus_.measureLatencies(measured); }
   // The cycle interval and return latency the last frame given to onFrame added to the timing
   // statistics; all empty when it added none.
   const FrameTiming& frameTiming() const;
