@@ -94,6 +94,7 @@ struct WordItems {
 WordItems word_items[kWordCount];
 expert_field ei_region_malformed = EI_INIT;
 expert_field ei_layout_learning = EI_INIT;
+expert_field ei_clock_judging = EI_INIT;
 expert_field ei_structure_only = EI_INIT;
 expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
 
@@ -176,6 +177,12 @@ struct IncidentRecord {
   const char* text;         // "communication-loss: 12 cycles lost ...", in file scope
   const guint32* evidence;  // evidence_count frame numbers, in file scope
 };
+// Why the first pass saw a frame held: the capture's clock was being judged, or the layout learned.
+enum HeldFor : guint8 {
+  kNotHeld = 0,
+  kHeldForLayout = 1,
+  kHeldForClock = 2,
+};
 // Which timing values a frame has (FrameTiming).
 enum TimingFlags : guint8 {
   kHasInterval = 1,
@@ -192,9 +199,11 @@ struct FrameRecord {
   guint16 incident_count;
   guint8 copy;
   guint8 timing;  // TimingFlags
-  // Held in the learning window when the first pass saw it: in a single pass, shown before the
-  // layout was known.
-  bool held;
+  // Held when the first pass saw it (HeldFor): in a single pass, shown before the layout or the
+  // clock was known.
+  guint8 held;
+  guint8 clock;    // ClockSource of the timing values
+  bool duplicate;  // a copy of a record within its cycle, not judged
   gint64 interval_ns;
   gint64 deviation_ns;
   gint64 latency_ns;
@@ -441,6 +450,7 @@ const Validator* validator() {
 }
 
 void validateFrame(const PipelineFrame& delivered);
+void keepDuplicate(std::uint64_t number);
 
 // The layout is decided: which axes came from the PDO structure alone.
 void keepLayout(const DecoderOptions& layout) {
@@ -475,7 +485,7 @@ void initCapture() {
   g_pipeline = new CapturePipeline({g_options != nullptr ? *g_options : DecoderOptions{},
                                     g_settings != nullptr ? *g_settings : RuleSettings{},
                                     TimeWindow{}, TimestampMode::Capture});
-  g_pipeline->setSinks({keepLayout, validateFrame, nullptr, nullptr});
+  g_pipeline->setSinks({keepLayout, validateFrame, nullptr, nullptr, keepDuplicate});
 }
 
 void cleanupCapture() {
@@ -548,7 +558,9 @@ const char* infoText(const FrameRecord& record) {
     if (counts[d] > counts[most]) most = d;
   }
   wmem_strbuf_t* text = wmem_strbuf_new(wmem_file_scope(), " [NCSERVO");
-  if (record.held) wmem_strbuf_append(text, " layout being learned");
+  if (record.held == kHeldForLayout) wmem_strbuf_append(text, " layout being learned");
+  if (record.held == kHeldForClock) wmem_strbuf_append(text, " clock being judged");
+  if (record.duplicate) wmem_strbuf_append(text, " duplicate record, not judged");
   if (distinct > 0 && counts[most] > 2) {
     wmem_strbuf_append_printf(text, " %s \u00d7%u", stateLabel(states[most]), counts[most]);
   }
@@ -742,6 +754,7 @@ void validateFrame(const PipelineFrame& delivered) {
   record.interval_ns = timing.interval_ns.value_or(0);
   record.deviation_ns = timing.deviation_ns.value_or(0);
   record.latency_ns = timing.latency_ns.value_or(0);
+  record.clock = static_cast<guint8>(g_pipeline->clockStage().choice().source);
   keepFindings(record, by, nullptr);
   keepIncidents(record);
   if (shared == nullptr || any_findings) {
@@ -750,6 +763,13 @@ void validateFrame(const PipelineFrame& delivered) {
     if (shared->info == nullptr) shared->info = infoText(record);
     record.info = shared->info;
   }
+}
+
+// A record the pipeline dropped as a copy of one within its cycle (docs/cli.md#duplicates).
+void keepDuplicate(std::uint64_t number) {
+  FrameRecord& record = freshRecord(number);
+  record.duplicate = true;
+  record.info = infoText(record);
 }
 
 // A frame the learning window holds, on the first pass: judged in its turn for the findings that
@@ -766,7 +786,9 @@ void keepHeldFrame(std::uint64_t number, std::int64_t time_ns, const ByteReader&
   const bool any_findings = std::any_of(findings.begin(), findings.end(), needsNoLayout);
   if (!held && !any_findings) return;
   FrameRecord& record = freshRecord(number);
-  record.held = held;
+  record.held = !held                                  ? kNotHeld
+                : g_pipeline->clockStage().assessing() ? kHeldForClock
+                                                       : kHeldForLayout;
   keepFindings(record, *g_held_validator, needsNoLayout);
   if (any_findings) {
     record.info = infoText(record);
@@ -1117,6 +1139,11 @@ void addTimingItems(proto_tree* tree, tvbuff_t* tvb, const FrameRecord& record, 
   } items[] = {{Derived::CycleInterval, kHasInterval, record.interval_ns},
                {Derived::CycleDeviation, kHasDeviation, record.deviation_ns},
                {Derived::Latency, kHasLatency, record.latency_ns}};
+  if (wants.is(Derived::Clock)) {
+    proto_item_set_generated(
+        proto_tree_add_string(tree, derivedHf(Derived::Clock), tvb, anchor, 0,
+                              clockSourceName(static_cast<ClockSource>(record.clock))));
+  }
   for (const auto& item : items) {
     if ((record.timing & item.flag) == 0 || !wants.is(item.id)) continue;
     const double us = static_cast<double>(item.ns) / 1000.0;
@@ -1152,7 +1179,7 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
       layer.wants->protocol ||
       (tree != nullptr && layer.axis != nullptr &&
        ((layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0 || structure_only_note)) ||
-      (tree != nullptr && record.held);
+      (tree != nullptr && (record.held != kNotHeld || record.duplicate));
   proto_item* root = nullptr;
   proto_tree* layer_tree = tree;
   guint start = 0;
@@ -1198,7 +1225,14 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
   }
-  if (record.held && layer.first) expert_add_info(pinfo, root, &ei_layout_learning);
+  if (layer.first) {
+    if (record.held == kHeldForLayout) expert_add_info(pinfo, root, &ei_layout_learning);
+    if (record.held == kHeldForClock) expert_add_info(pinfo, root, &ei_clock_judging);
+    if (record.duplicate && layer.wants->is(Derived::Duplicate)) {
+      proto_item_set_generated(proto_tree_add_string(layer_tree, derivedHf(Derived::Duplicate), tvb,
+                                                     0, 0, "a copy of a record within its cycle"));
+    }
+  }
   for (guint i = 0; i < record.finding_count; ++i) {
     const FindingRecord& f = record.findings[i];
     const bool here = layer.axis != nullptr && f.axis == layer.axis->axis;
@@ -1219,7 +1253,8 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 // Without a tree (the packet list) only the findings' expert info and the Info column are
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
-  if (record.held) expert_add_info(pinfo, nullptr, &ei_layout_learning);
+  if (record.held == kHeldForLayout) expert_add_info(pinfo, nullptr, &ei_layout_learning);
+  if (record.held == kHeldForClock) expert_add_info(pinfo, nullptr, &ei_clock_judging);
   for (guint a = 0; g_any_structure_only && a < record.axis_count; ++a) {
     if (structureOnlyNoted(record, record.axes[a], pinfo->num))
       expert_add_info(pinfo, nullptr, &ei_structure_only);
@@ -1281,10 +1316,14 @@ tap_packet_status takeNoPacket(void*, packet_info*, epan_dissect_t*, const void*
 void drawTiming(void*) {
   // A single pass can end inside the learning window: its frames are validated now.
   if (g_pipeline != nullptr) g_pipeline->endLearning();
-  const std::string text =
-      timingText(validator() != nullptr ? validator()->bus().timing().summary() : TimingSummary{},
-                 timestampSourceName(TimestampSource::Capture),
-                 timestampResolutionNs(TimestampSource::Capture, g_timestamp_digits.value_or(6)));
+  const ClockSource clock =
+      g_pipeline != nullptr ? g_pipeline->clockStage().choice().source : ClockSource::Capture;
+  const bool own_stamps = clock == ClockSource::Capture || clock == ClockSource::Probe;
+  const std::string text = timingText(
+      validator() != nullptr ? validator()->bus().timing().summary() : TimingSummary{},
+      own_stamps ? timestampSourceName(TimestampSource::Capture) : clockSourceName(clock),
+      own_stamps ? timestampResolutionNs(TimestampSource::Capture, g_timestamp_digits.value_or(6))
+                 : 1);
   std::printf("\n%s\nNCSERVO timing\n%s%s\n", std::string(67, '=').c_str(), text.c_str(),
               std::string(67, '=').c_str());
 }
@@ -1339,6 +1378,11 @@ void registerProtocol() {
       {&ei_region_malformed,
        {"ncservo.malformed", PI_MALFORMED, PI_ERROR,
         "A PDO region is cut short or lies partly outside its datagram", EXPFILL}},
+      {&ei_clock_judging,
+       {"ncservo.clock_judging", PI_UNDECODED, PI_CHAT,
+        "capture's clock being judged (docs/timing.md#the-clock): `tshark -2` or the GUI decodes "
+        "this frame",
+        EXPFILL}},
       {&ei_layout_learning,
        {"ncservo.layout_learning", PI_UNDECODED, PI_CHAT,
         "layout being learned: `tshark -2` or the GUI decodes this frame", EXPFILL}},

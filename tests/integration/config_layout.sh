@@ -20,7 +20,8 @@ tshark_fields "$WORK/capture" "$WORK/tshark.tsv" -o "ncservo.config:$WORK/layout
 python3 "$CHECK" --fields "$(fields_csv)" "$WORK/truth.jsonl" "$WORK/tshark.tsv"
 
 # The same capture with the default layout switched off and no configuration: nothing decoded.
-"$TSHARK" "$PLUGIN" -r "$WORK/capture" -o ncservo.default_layout:FALSE -Y ncservo >"$WORK/none.txt"
+"$TSHARK" "$PLUGIN" -r "$WORK/capture" -o ncservo.default_layout:FALSE -Y ncservo.axis \
+  >"$WORK/none.txt"
 [ ! -s "$WORK/none.txt" ] || fail "default_layout FALSE still decoded frames"
 rc=0
 "$NCSERVO" decode --no-default-layout "$WORK/capture" >"$WORK/none.csv" 2>"$WORK/none.err" || rc=$?

@@ -20,10 +20,13 @@ run_tshark() { # OUT CAPTURE tshark-args...
   [ ! -s "$WORK/tshark.err" ] || fail "tshark $* printed on stderr: $(head -3 "$WORK/tshark.err")"
 }
 
-run_tshark "$WORK/noted1.txt" "$inferred" -Y ncservo.layout_learning -T fields -e frame.number
+# A single pass holds the first cycles while the capture's clock is judged, then the learning
+# window: both are noted, each with its own note.
+held='ncservo.layout_learning or ncservo.clock_judging'
+run_tshark "$WORK/noted1.txt" "$inferred" -Y "$held" -T fields -e frame.number
 run_tshark "$WORK/decoded1.txt" "$inferred" -Y ncservo.axis -T fields -e frame.number
 run_tshark "$WORK/decoded2.txt" "$inferred" -2 -Y ncservo.axis -T fields -e frame.number
-run_tshark "$WORK/noted2.txt" "$inferred" -2 -Y ncservo.layout_learning -T fields -e frame.number
+run_tshark "$WORK/noted2.txt" "$inferred" -2 -Y "$held" -T fields -e frame.number
 run_tshark "$WORK/tree1.txt" "$inferred" -c 2 -V -O ncservo
 run_tshark "$WORK/list1.txt" "$inferred" -c 2
 first=$(head -n1 "$WORK/decoded1.txt")
@@ -34,9 +37,10 @@ diff -u "$WORK/window.txt" "$WORK/noted1.txt" >"$WORK/noted.diff" ||
   fail "one pass: the noted frames are not the window's ($(wc -l <"$WORK/window.txt") frames" \
     "before frame $first): $(head -8 "$WORK/noted.diff")"
 [ ! -s "$WORK/noted2.txt" ] || fail "-2 notes frames $(head -3 "$WORK/noted2.txt" | xargs)"
-grep -qF 'Expert Info (Chat/Undecoded): layout being learned: `tshark -2` or the GUI decodes this frame' \
+# The first frames are held while the clock is judged.
+grep -qF 'Expert Info (Chat/Undecoded): capture'"'"'s clock being judged (docs/timing.md#the-clock): `tshark -2` or the GUI decodes this frame' \
   "$WORK/tree1.txt" || fail "-V on a window frame: no chat note: $(grep -m3 -i expert "$WORK/tree1.txt")"
-grep -qF '[NCSERVO layout being learned]' "$WORK/list1.txt" ||
+grep -qF '[NCSERVO clock being judged]' "$WORK/list1.txt" ||
   fail "the Info column of a window frame: $(head -1 "$WORK/list1.txt")"
 
 findings() { # OUT CAPTURE [-2]

@@ -363,7 +363,8 @@ CaptureReport judge(const std::vector<const std::vector<Frame>*>& recordings,
            report.baseline_states.push_back(report.tally(f));
            report.findings.push_back(f);
          }
-       }});
+       },
+       nullptr});
   std::uint64_t number = 0;
   EcatFrame frame;
   for (const std::vector<Frame>* recording : recordings) {

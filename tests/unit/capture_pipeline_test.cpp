@@ -52,7 +52,8 @@ struct Seen {
             [this](const PipelineFrame& f) { layout_only.push_back(f.number); },
             [this](const std::vector<Finding>& found) {
               findings.insert(findings.end(), found.begin(), found.end());
-            }};
+            },
+            nullptr};
   }
 };
 

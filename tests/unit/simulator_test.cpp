@@ -770,9 +770,11 @@ Validated validate(const SimOptions& resolved, bool with_config,
   // Through the capture pipeline, as the CLI reads a capture.
   CapturePipeline pipeline({decoder, settings, TimeWindow{}, TimestampMode::Capture});
   Validated out;
-  pipeline.setSinks({nullptr, nullptr, nullptr, [&out](const std::vector<Finding>& found) {
+  pipeline.setSinks({nullptr, nullptr, nullptr,
+                     [&out](const std::vector<Finding>& found) {
                        out.findings.insert(out.findings.end(), found.begin(), found.end());
-                     }});
+                     },
+                     nullptr});
   std::uint64_t number = 0;
   EcatFrame frame;
   for (const Frame& f : simulate(resolved)) {

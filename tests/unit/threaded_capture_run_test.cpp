@@ -165,7 +165,8 @@ struct Seen {
               for (const Finding& f : found) {
                 events.push_back("finding " + std::to_string(f.at.frame) + " " + f.message);
               }
-            }};
+            },
+            nullptr};
   }
 };
 
@@ -312,7 +313,7 @@ TEST(TwoThreads, AFailingSinkEndsTheReading) {
                      [&](const PipelineFrame&) {
                        if (++frames == 1000) throw std::runtime_error("cannot write");
                      },
-                     nullptr, nullptr});
+                     nullptr, nullptr, nullptr});
   Source source(std::nullopt);
   const BatchLimits limits{8, 1 << 16, 2};
   EXPECT_THROW(streamOnTwoThreads(

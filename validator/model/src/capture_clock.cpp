@@ -127,6 +127,7 @@ CaptureStamps StampAssessor::stamps() const {
   CaptureStamps s;
   if (samples_.size() < 2) return s;
   s.intervals = samples_.size() - 1;
+  if (s.intervals < kFewest) return s;
   const std::int64_t span = samples_.back().capture_ns - samples_.front().capture_ns;
   const bool bus = busClockUsable();
   s.cycle_ns = bus ? *busCycleNs() : span / static_cast<std::int64_t>(s.intervals);

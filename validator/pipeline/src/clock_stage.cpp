@@ -13,6 +13,16 @@ constexpr std::size_t kSinceCycle = 64;
 // capture was paused, appended to another, or the reference clock was set anew.
 constexpr std::int64_t kReanchorNs = 1'000'000'000;
 
+// Which copy a frame of the cyclic frame is, by its working counters: none captured (a snap
+// length cut them) says nothing.
+ClockStage::Copy copyOf(const EcatFrame& frame) {
+  if (frame.anyWkcAboveZero()) return ClockStage::Copy::Returned;
+  for (std::size_t i = 0; i < frame.count; ++i) {
+    if (frame.datagrams[i].has_wkc) return ClockStage::Copy::Master;
+  }
+  return ClockStage::Copy::None;
+}
+
 bool sameBytes(const std::vector<std::uint8_t>& kept, const ByteReader& bytes) {
   return kept.size() == bytes.size() &&
          (bytes.size() == 0 || std::memcmp(kept.data(), bytes.data(), bytes.size()) == 0);
@@ -42,7 +52,7 @@ const ClockChoice& ClockStage::choice() const {
 
 bool ClockStage::isDuplicate(const EcatFrame& frame, const ByteReader& bytes) {
   if (cyclic_key_ && cyclic_key_->matches(frame)) {
-    const Copy copy = frame.anyWkcAboveZero() ? Copy::Returned : Copy::Master;
+    const Copy copy = copyOf(frame);
     if (copy == last_copy_ && sameBytes(last_copy_bytes_, bytes)) return true;
     last_copy_ = copy;
     copyInto(last_copy_bytes_, bytes);
@@ -73,11 +83,12 @@ void ClockStage::hold(std::uint64_t number, std::int64_t time_ns, LinkType link,
   copyInto(held.bytes, bytes);
   held_bytes_ += bytes.size();
   if (clock_key_ && clock_key_->matches(frame)) {
-    if (frame.anyWkcAboveZero()) {
+    const Copy copy = copyOf(frame);
+    if (copy == Copy::Returned) {
       if (const std::optional<SystemTimeRead> read = systemTimeRead(frame, bytes)) {
         held.bus_ns = unwrap_.extend(*read);
       }
-    } else {
+    } else if (copy == Copy::Master) {
       held.clock_master = true;
     }
   }
@@ -96,7 +107,10 @@ void ClockStage::onFrame(std::uint64_t number, std::int64_t time_ns, LinkType li
     if (cyclic_key_ && cyclic_key_->matches(frame)) {
       ++copies_;
       duplicate_copies_ += duplicate ? 1 : 0;
-      if (!duplicate && !frame.anyWkcAboveZero()) cyclic_stamps_.add(time_ns, std::nullopt);
+      const Copy copy = copyOf(frame);
+      if (!duplicate && copy != Copy::None) {
+        (copy == Copy::Master ? cyclic_stamps_ : returned_stamps_).add(time_ns, std::nullopt);
+      }
     }
     std::optional<SystemTimeRead> read;
     if (!duplicate && frame.anyWkcAboveZero()) read = systemTimeRead(frame, bytes);
@@ -108,7 +122,7 @@ void ClockStage::onFrame(std::uint64_t number, std::int64_t time_ns, LinkType li
         const ByteReader kept(it->bytes.data(), it->bytes.size());
         EcatFrame walked;
         walkPacket(it->link, kept, walked);
-        if (clock_key_->matches(walked) && !walked.anyWkcAboveZero()) {
+        if (clock_key_->matches(walked) && copyOf(walked) == Copy::Master) {
           it->clock_master = true;
           break;
         }
@@ -116,7 +130,8 @@ void ClockStage::onFrame(std::uint64_t number, std::int64_t time_ns, LinkType li
     }
     hold(number, time_ns, link, bytes, frame, judged, duplicate);
     if (read && clock_key_->matches(frame)) clock_stamps_.add(time_ns, held_.back().bus_ns);
-    if (clock_stamps_.enough() || (!clock_key_ && cyclic_stamps_.enough()) ||
+    if (clock_stamps_.enough() ||
+        (!clock_key_ && (cyclic_stamps_.enough() || returned_stamps_.enough())) ||
         held_.size() >= kMaxHeldFrames || held_bytes_ >= kMaxHeldBytes) {
       decide();
     }
@@ -161,21 +176,24 @@ void ClockStage::pass(const Held& held, std::int64_t time_ns) {
 // Cycles: a master copy of the cyclic frame, or a returned copy whose master copy the capture
 // missed, begins a cycle; before the first, frames keep their stamps.
 std::int64_t ClockStage::cycleTime(std::int64_t capture_ns, const EcatFrame& frame) {
-  if (cyclic_key_ && cyclic_key_->matches(frame)) {
-    const Copy copy = frame.anyWkcAboveZero() ? Copy::Returned : Copy::Master;
-    if (copy == Copy::Master || last_cycle_copy_ != Copy::Master) {
-      if (last_cycle_copy_ == Copy::None) cycles_anchor_ns_ = capture_ns;
-      cycles_ += last_cycle_copy_ == Copy::None ? 0 : 1;
-    }
-    last_cycle_copy_ = copy;
+  const Copy copy = cyclic_key_ && cyclic_key_->matches(frame) ? copyOf(frame) : Copy::None;
+  // A copy not told apart (its working counters not captured) begins no cycle.
+  if (copy == Copy::Master || (copy == Copy::Returned && last_cycle_copy_ != Copy::Master)) {
+    if (last_cycle_copy_ == Copy::None) cycles_anchor_ns_ = capture_ns;
+    cycles_ += last_cycle_copy_ == Copy::None ? 0 : 1;
   }
+  if (copy != Copy::None) last_cycle_copy_ = copy;
   if (last_cycle_copy_ == Copy::None) return capture_ns;
   return cycles_anchor_ns_ + static_cast<std::int64_t>(cycles_) * choice_->cycle_ns;
 }
 
 void ClockStage::decide() {
+  // The reads of the bus's clock time the stamps best; else the cyclic frame's master copies, or
+  // its returned copies in a capture without master copies.
   const bool clock_read = clock_stamps_.samples() >= StampAssessor::kFewest;
-  choice_ = chooseClock(probe_timed_, clock_read ? clock_stamps_ : cyclic_stamps_,
+  const StampAssessor& cyclic =
+      cyclic_stamps_.samples() >= StampAssessor::kFewest ? cyclic_stamps_ : returned_stamps_;
+  choice_ = chooseClock(probe_timed_, clock_read ? clock_stamps_ : cyclic,
                         clock_read ? reference_ : std::nullopt);
   drop_duplicates_ = copies_ > 0 && duplicate_copies_ * 10 >= copies_;
   std::deque<Held> window = std::move(held_);

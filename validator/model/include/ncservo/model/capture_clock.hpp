@@ -81,7 +81,7 @@ struct CaptureStamps {
 class StampAssessor {
  public:
   // Cycles enough to judge the stamps by; fewer judge them when the capture ends first.
-  static constexpr std::size_t kCycles = 512;
+  static constexpr std::size_t kCycles = 128;
   // Fewer intervals than this say nothing about the stamps.
   static constexpr std::size_t kFewest = 8;
 

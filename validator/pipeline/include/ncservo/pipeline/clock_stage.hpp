@@ -39,6 +39,8 @@ struct CaptureDuplicates {
 
 class ClockStage {
  public:
+  // Which copy of the cyclic frame a frame is (None: not told apart, or none seen yet).
+  enum class Copy : std::uint8_t { None, Master, Returned };
   // A frame on its way, timed.
   using Sink = std::function<void(std::uint64_t number, std::int64_t time_ns, LinkType link,
                                   const ByteReader& bytes, const EcatFrame& frame, bool judged)>;
@@ -86,7 +88,6 @@ class ClockStage {
     std::vector<Datagram> datagrams;
     bool matches(const EcatFrame& frame) const;
   };
-  enum class Copy : std::uint8_t { None, Master, Returned };
 
   bool isDuplicate(const EcatFrame& frame, const ByteReader& bytes);
   void hold(std::uint64_t number, std::int64_t time_ns, LinkType link, const ByteReader& bytes,
@@ -110,7 +111,7 @@ class ClockStage {
   // whose master copies time the stamps; the first to read the bus's time, the clock frame.
   std::optional<FrameKey> cyclic_key_, clock_key_;
   std::optional<SystemTimeRead> reference_;
-  StampAssessor cyclic_stamps_, clock_stamps_;
+  StampAssessor cyclic_stamps_, returned_stamps_, clock_stamps_;
   SystemTimeUnwrapper unwrap_;
   std::deque<Held> held_;
   std::size_t held_bytes_ = 0;

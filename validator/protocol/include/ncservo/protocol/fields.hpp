@@ -805,8 +805,10 @@ enum class Derived : std::uint8_t {
   CycleInterval,
   CycleDeviation,
   Latency,
+  Clock,
   Incident,
   IncidentEvidence,
+  Duplicate,
 };
 // What a derived field holds, which gives its type in a registration.
 enum class DerivedKind : std::uint8_t {
@@ -890,6 +892,11 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
      .blurb = "Time from the master copy to this returned copy at the capture point, in us "
               "(docs/timing.md)",
      .kind = DerivedKind::Microseconds},
+    {.id = Derived::Clock,
+     .label = "Clock",
+     .filter = "ncservo.clock",
+     .blurb = "The clock that timed the cycle interval and latency: capture, probe, bus or cycles "
+              "(docs/timing.md#the-clock)"},
     {.id = Derived::Incident,
      .label = "Incident",
      .filter = "ncservo.incident",
@@ -901,6 +908,11 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
      .blurb = "A frame of the incident's chain: a finding or a bus event before it, or what its "
               "cause read (docs/incidents.md)",
      .kind = DerivedKind::FrameNumber},
+    {.id = Derived::Duplicate,
+     .label = "Duplicate",
+     .filter = "ncservo.duplicate",
+     .blurb = "An exact copy of a record within its cycle, which the capture holds twice: not "
+              "judged (docs/cli.md#duplicates)"},
 };
 static_assert(
     [] {
