@@ -17,6 +17,7 @@
 #include "ncservo/capture/compressed_output.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/sim/simulator.hpp"
+#include "ncservo/wire/ecat_wire.hpp"
 
 namespace ncservo::cli {
 namespace {
@@ -82,8 +83,9 @@ struct SimulateArgs {
   std::string eni;
   std::string incidents_truth;
   std::string io_inputs = "slow";
-  std::string idle;      // SECONDS or all; empty: none
-  std::string start_in;  // empty: the capture starts with the session
+  std::string idle;            // SECONDS or all; empty: none
+  std::string start_in;        // empty: the capture starts with the session
+  std::string capture_stamps;  // empty: the bus's own times
   bool no_startup = false;
   bool list_faults = false;
 };
@@ -135,6 +137,15 @@ bool simulationOptions(SimulateArgs& args) {
   o.startup = !args.no_startup;
   o.terminal_inputs = rowNamed(sim::kTerminalInputs, args.io_inputs).inputs;
   if (!args.start_in.empty()) o.mid_start = *sim::midStartFromName(args.start_in);
+  if (!args.capture_stamps.empty()) {
+    Result<sim::CaptureStamps> stamps = sim::parseCaptureStamps(args.capture_stamps);
+    if (!stamps) {
+      fmt::print(stderr, "ncservo simulate: {}\n", stamps.error().text());
+      return false;
+    }
+    o.capture_stamps = std::move(*stamps);
+  }
+  o.writes_pcapng = captureFormatFor(args.format, args.output) == CaptureFormat::Pcapng;
   if (!parseIdle(args.idle, o)) return false;
   for (const std::string& text : args.faults) {
     Result<sim::FaultRequest> fault = sim::parseFault(text);
@@ -185,15 +196,24 @@ bool writeCapture(const SimulateArgs& args, sim::Simulator& simulator) {
   const Compression compression = args.compress.empty()
                                       ? compressionForName(args.output)
                                       : rowNamed(kCompressions, args.compress).compression;
-  Result<std::unique_ptr<CaptureWriter>> writer =
-      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), compression);
+  // --second-interface: the office port beside the bus (docs/simulate.md#the-capturing-pc).
+  std::vector<PcapngInterface> interfaces;
+  if (args.options.second_interface) {
+    interfaces = {{.dlt = ecat::kDltEthernet}, {.dlt = ecat::kDltLinuxSll}};
+  }
+  Result<std::unique_ptr<CaptureWriter>> writer = CaptureWriter::open(
+      args.output, captureFormatFor(args.format, args.output), compression, interfaces);
   // An output that cannot be written is a usage error, as for every command (docs/cli.md).
   if (!writer) {
     fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
     return false;
   }
   const auto frames = simulator.run([&](const sim::SimFrame& frame) {
-    return (*writer)->write(frame.time_ns, frame.data, frame.size);
+    return (*writer)->write(PacketRecord{.time_ns = frame.time_ns,
+                                         .data = frame.data,
+                                         .captured = frame.size,
+                                         .original = frame.size,
+                                         .interface_id = frame.interface_id});
   });
   const Status closed = (*writer)->close();
   if (!closed || !frames) {
@@ -324,6 +344,16 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--io-task-us", sa.options.io_task_us,
                      "a second task: the terminals in a frame of their own at this cycle time, a "
                      "multiple of --cycle-us");
+  command.add_option("--capture-stamps", sa.capture_stamps,
+                     rowsHelp("SHAPE:LENGTH (us or ms): how the capturing PC stamps the records; "
+                              "the bus's own times stay in its frames:",
+                              sim::kStampShapes));
+  command.add_flag("--duplicate-records", sa.options.duplicate_records,
+                   "every record twice, the copy right after it, as a switch port mirroring both "
+                   "directions gives it");
+  command.add_flag("--second-interface", sa.options.second_interface,
+                   "pcapng only: the capturing PC's office port (ARP and UDP, Linux cooked) as a "
+                   "second interface beside the bus's");
   command.add_option("--layout-config", sa.layout_config,
                      "also write the layout as a configuration file for validate --config");
   command.add_option(

@@ -175,6 +175,16 @@ Status checkShapeOptions(const SimOptions& o) {
   return {};
 }
 
+// What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc).
+Status checkCaptureOptions(const SimOptions& o) {
+  if (o.second_interface && !o.writes_pcapng) {
+    return fail(
+        "--second-interface: a pcap holds one interface; write a pcapng (--format pcapng or a "
+        ".pcapng file)");
+  }
+  return {};
+}
+
 // The bus's numbers and its disturbances, each within its range.
 Status checkBusOptions(SimOptions& o) {
   if (o.axes < 1 || o.axes > 32) return fail(fmt::format("--axes {}: from 1 to 32", o.axes));
@@ -211,7 +221,8 @@ Status checkBusOptions(SimOptions& o) {
                       late.text, most_late_us));
     }
   }
-  return checkShapeOptions(o);
+  if (Status shapes = checkShapeOptions(o); !shapes) return shapes;
+  return checkCaptureOptions(o);
 }
 
 // The run's length (the scenario's when not given), and what the faults scenario needs.

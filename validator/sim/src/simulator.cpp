@@ -11,6 +11,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "capture_shaper.hpp"
 #include "esl_probe.hpp"
 #include "fault_plan.hpp"
 #include "incident_plan.hpp"
@@ -69,6 +70,7 @@ struct Simulator::Impl {
   Rng capture_loss_rng{o.seed ^ 0xC0FFEE5EEDULL};
   std::uint64_t master_copies_dropped = 0;
   std::uint64_t frames_cut = 0;  // before --start-in's moment
+  CaptureShaper shaper{o};       // what the capturing PC does to the recording
   // The incidents scenario: its plan, what the capture shows of it, the slaves' falls from OP
   // and the master's AL status checks.
   struct Fall {
@@ -204,6 +206,7 @@ struct Simulator::Impl {
         continue;
       }
       p.seen = true;
+      shaper.track(frame);
       seen.push_back({incidentKindName(kind), axis < 0 ? std::nullopt : std::optional<int>(axis),
                       frame, p.cause});
       return;
@@ -331,7 +334,8 @@ struct Simulator::Impl {
   }
 
   std::optional<std::uint64_t> run(const FrameSink& captured) {
-    const FrameSink kept = o.mid_start == MidStart::None ? captured : midStartSink(captured);
+    const FrameSink shaped = shaper.active() ? shaper.sink(captured) : captured;
+    const FrameSink kept = o.mid_start == MidStart::None ? shaped : midStartSink(shaped);
     const FrameSink sink = o.probe == Probe::Esl ? eslProbeSink(kept, o.seed) : kept;
     std::int64_t t = 0;
     const std::int64_t step_ns = std::min<std::int64_t>(cycle_ns, kMs);
@@ -423,6 +427,7 @@ struct Simulator::Impl {
         }
       }
     }
+    if (shaper.active()) return shaper.records();
     return master.frames() - master_copies_dropped - frames_cut;
   }
 };
@@ -446,7 +451,14 @@ Result<std::vector<IncidentTruth>> Simulator::incidents() const {
                               incidentKindName(p.kind), p.axis, p.cause));
     }
   }
-  return impl.seen;
+  // The bus's frame numbers as the capture's records (copies and office records between them).
+  std::vector<IncidentTruth> incidents = impl.seen;
+  for (IncidentTruth& incident : incidents) {
+    const std::optional<std::uint64_t> record = impl.shaper.recordOf(incident.frame);
+    if (!record) return fail(fmt::format("no record known for frame {}", incident.frame));
+    incident.frame = *record;
+  }
+  return incidents;
 }
 
 const std::vector<AxisConfig>& Simulator::layout() const {

@@ -11,6 +11,7 @@
 
 #include "ncservo/base/error.hpp"
 #include "ncservo/rules/rules.hpp"
+#include "ncservo/sim/capture_shapes.hpp"
 #include "ncservo/sim/faults.hpp"
 
 namespace ncservo::sim {
@@ -150,6 +151,12 @@ struct SimOptions {
   bool idle_all = false;  // ... or for the whole capture
   MidStart mid_start = MidStart::None;
   int io_task_us = 0;  // the terminals in a frame of their own at this cycle (0: none)
+  // What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc); the
+  // defaults do nothing.
+  CaptureStamps capture_stamps;
+  bool duplicate_records = false;  // every record twice, as a mirroring switch port gives it
+  bool second_interface = false;   // the PC's office port as a second interface (pcapng only)
+  bool writes_pcapng = false;      // the capture is a pcapng (the CLI says, from --format)
 };
 
 // This simulator's set-up: the odd axes have an incremental encoder (zero-pulse search), the even
@@ -172,7 +179,8 @@ struct SimFrame {
   std::int64_t time_ns;  // since the Unix epoch: the capturing PC's stamp
   const std::uint8_t* data;
   std::size_t size;
-  bool returned = false;  // the copy the ring returned (else the master's)
+  bool returned = false;           // the copy the ring returned (else the master's)
+  std::uint32_t interface_id = 0;  // the capture's interface: 0 the bus, 1 the office port
 };
 // Receives each frame in capture order; returns false to stop (e.g. a write error).
 using FrameSink = std::function<bool(const SimFrame&)>;
