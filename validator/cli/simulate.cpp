@@ -136,7 +136,15 @@ bool simulationOptions(SimulateArgs& args) {
   o.probe = rowNamed(kProbes, args.probe).probe;
   o.startup = !args.no_startup;
   o.terminal_inputs = rowNamed(sim::kTerminalInputs, args.io_inputs).inputs;
-  if (!args.start_in.empty()) o.mid_start = *sim::midStartFromName(args.start_in);
+  if (!args.start_in.empty()) {
+    const Result<sim::MidStartRequest> start = sim::parseMidStart(args.start_in);
+    if (!start) {
+      fmt::print(stderr, "ncservo simulate: {}\n", start.error().text());
+      return false;
+    }
+    o.mid_start = start->start;
+    o.mid_start_fault = start->fault;
+  }
   if (!args.capture_stamps.empty()) {
     Result<sim::CaptureStamps> stamps = sim::parseCaptureStamps(args.capture_stamps);
     if (!stamps) {
@@ -336,11 +344,11 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--idle", sa.idle,
                      "SECONDS or all: the drives ready and nothing enabled for that long after "
                      "the start-up, or for the whole capture");
-  command
-      .add_option("--start-in", sa.start_in,
-                  rowsHelp("the capture begins in the middle of the commissioning session:",
-                           sim::kMidStarts))
-      ->check(cli::oneOf(namesOf(sim::kMidStarts)));
+  command.add_option(
+      "--start-in", sa.start_in,
+      rowsHelp("the capture begins in the middle of the commissioning session:", sim::kMidStarts) +
+          " Or fault:RULE: inside the standing condition of that rule's --fault (SE-003: ServoEn "
+          "with no enable requested; FLT-001: ServoEn beside a drive error).");
   command.add_option("--io-task-us", sa.options.io_task_us,
                      "a second task: the terminals in a frame of their own at this cycle time, a "
                      "multiple of --cycle-us");

@@ -308,10 +308,19 @@ struct Simulator::Impl {
   }
 
   // --start-in: the capture keeps nothing before the moment (half a cycle early, so that each
-  // cycle keeps both its copies).
+  // cycle keeps both its copies). Inside a fault (fault:RULE) the moment is the cycle after the
+  // fault's first, whose returned copy shows the drive's answer to it.
+  std::int64_t midStartNs() const {
+    if (o.mid_start != MidStart::InFault) {
+      return plan_start_ns + at(midStartRow(o.mid_start).after_plan_s);
+    }
+    for (const FaultRequest& f : o.faults) {
+      if (f.rule == *o.mid_start_fault) return firstSlotAt(*f.at_s) + cycle_ns;
+    }
+    return 0;  // resolveOptions added the fault
+  }
   FrameSink midStartSink(const FrameSink& captured) {
-    const std::int64_t from_ns =
-        kEpochNs + plan_start_ns + at(midStartRow(o.mid_start).after_plan_s) - cycle_ns / 2;
+    const std::int64_t from_ns = kEpochNs + midStartNs() - cycle_ns / 2;
     return [this, captured, from_ns](const SimFrame& frame) {
       if (frame.time_ns >= from_ns) return captured(frame);
       ++frames_cut;

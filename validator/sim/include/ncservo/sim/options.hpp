@@ -73,8 +73,9 @@ inline constexpr TerminalInputsName kTerminalInputs[] = {
 };
 
 // Where a capture that begins in the middle of a commissioning session begins (--start-in):
-// the capture drops every frame before that moment, the start-up included.
-enum class MidStart : std::uint8_t { None, Homing, Fault, ErrorClear };
+// the capture drops every frame before that moment, the start-up included. InFault (`fault:RULE`,
+// no row below) begins inside the standing condition of that rule's --fault.
+enum class MidStart : std::uint8_t { None, Homing, Fault, ErrorClear, InFault };
 struct MidStartName {
   const char* name;
   MidStart start;
@@ -97,6 +98,13 @@ inline constexpr MidStartName kMidStarts[] = {
 };
 std::optional<MidStart> midStartFromName(std::string_view name);
 const MidStartName& midStartRow(MidStart start);
+// --start-in NAME or fault:RULE.
+struct MidStartRequest {
+  MidStart start = MidStart::None;
+  std::optional<RuleId> fault;  // InFault: the rule whose --fault the capture begins inside
+};
+// The request, or an error naming the moments and the rules a capture can begin inside.
+Result<MidStartRequest> parseMidStart(std::string_view text);
 
 // A probe in the line between the master and the first slave.
 enum class Probe : std::uint8_t {
@@ -150,6 +158,7 @@ struct SimOptions {
   double idle_s = 0;      // the NC enables nothing for this long after the start-up
   bool idle_all = false;  // ... or for the whole capture
   MidStart mid_start = MidStart::None;
+  std::optional<RuleId> mid_start_fault;  // MidStart::InFault: the --fault it begins inside
   int io_task_us = 0;  // the terminals in a frame of their own at this cycle (0: none)
   // What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc); the
   // defaults do nothing.
