@@ -35,10 +35,11 @@ machine; --layout-config writes the exact one for `validate --config`):
 --echo-inputs
     master copies carry the inputs of the last returned copy, as a SOEM master's do.
 
-What the capturing PC does to the recording (docs/protocol.md has the bus; its own clock, its
-mirrored copies and its other ports are the PC's): the frames, their bytes and order and the DC
-system time they carry stay the bus's, and so do the truth, the findings' windows and the
-incidents (their frame numbers count the capture's records, the original of a mirrored copy).
+What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc; `ncservo
+simulate` has options of the same names, written apart from these): the frames, their bytes and
+order and the DC system time they carry stay the bus's, and so do the truth, the findings' windows
+and the incidents (their frame numbers count the capture's records, the original of a mirrored
+copy).
 
 --capture-stamps SHAPE:LENGTH   (LENGTH in us or ms)
     bunched:4ms    the NIC coalesces interrupts: every record is stamped at the end of its burst

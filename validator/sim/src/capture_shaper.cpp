@@ -1,3 +1,5 @@
+// The capturing PC between the simulated bus and the capture writer (capture_shaper.hpp,
+// docs/simulate.md#the-capturing-pc).
 #include "capture_shaper.hpp"
 
 #include <algorithm>
