@@ -347,8 +347,8 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option(
       "--start-in", sa.start_in,
       rowsHelp("the capture begins in the middle of the commissioning session:", sim::kMidStarts) +
-          " Or fault:RULE: inside the standing condition of that rule's --fault (SE-003: ServoEn "
-          "with no enable requested; FLT-001: ServoEn beside a drive error).");
+          " Or fault:RULE: inside the standing condition of that rule's --fault, RULE one of " +
+          sim::standingFaultRules() + " (docs/simulate.md#shapes).");
   command.add_option("--io-task-us", sa.options.io_task_us,
                      "a second task: the terminals in a frame of their own at this cycle time, a "
                      "multiple of --cycle-us");

@@ -61,9 +61,7 @@ const MidStartName& midStartRow(MidStart start) {
   return kMidStarts[0];
 }
 
-namespace {
-// The rules whose fault has a standing condition a capture can begin inside, "SE-003, FLT-001".
-std::string standingRules() {
+std::string standingFaultRules() {
   std::string codes;
   for (const FaultRecipe& recipe : faultRecipes()) {
     if (recipe.standing_ns > 0) {
@@ -72,7 +70,6 @@ std::string standingRules() {
   }
   return codes;
 }
-}  // namespace
 
 Result<MidStartRequest> parseMidStart(std::string_view text) {
   if (const std::optional<MidStart> start = midStartFromName(text)) {
@@ -83,7 +80,7 @@ Result<MidStartRequest> parseMidStart(std::string_view text) {
     std::string names;
     for (const MidStartName& row : kMidStarts) names += std::string(row.name) + ", ";
     return fail(fmt::format("--start-in {}: one of {}or fault:RULE with RULE one of {}", text,
-                            names, standingRules()));
+                            names, standingFaultRules()));
   }
   std::string code(text.substr(kInFault.size()));
   for (char& c : code) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -95,7 +92,7 @@ Result<MidStartRequest> parseMidStart(std::string_view text) {
   if (recipe == nullptr || recipe->standing_ns <= 0) {
     return fail(fmt::format(
         "--start-in {}: {}'s fault has no standing condition to begin inside; one of {}", text,
-        code, standingRules()));
+        code, standingFaultRules()));
   }
   return MidStartRequest{MidStart::InFault, rule->id};
 }

@@ -105,6 +105,9 @@ struct MidStartRequest {
 };
 // The request, or an error naming the moments and the rules a capture can begin inside.
 Result<MidStartRequest> parseMidStart(std::string_view text);
+// The rules whose fault has a standing condition a capture can begin inside (the recipe rows
+// with a standing time), "SE-003, FLT-001".
+std::string standingFaultRules();
 
 // A probe in the line between the master and the first slave.
 enum class Probe : std::uint8_t {
