@@ -35,6 +35,27 @@ machine; --layout-config writes the exact one for `validate --config`):
 --echo-inputs
     master copies carry the inputs of the last returned copy, as a SOEM master's do.
 
+What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc; `ncservo
+simulate` has options of the same names, written apart from these): the frames, their bytes and
+order and the DC system time they carry stay the bus's, and so do the truth, the findings' windows
+and the incidents (their frame numbers count the capture's records, the original of a mirrored
+copy).
+
+--capture-stamps SHAPE:LENGTH   (LENGTH in us or ms)
+    bunched:4ms    the NIC coalesces interrupts: every record is stamped at the end of its burst
+                   window (the capture clock cut in windows of LENGTH from the epoch), the records
+                   of a burst 2 us apart in capture order (100 us to 100 ms)
+    quantised:1ms  a coarse clock: every stamp floored to a multiple of LENGTH (1 us to 100 ms)
+    late:400us     every stamp late by a random whole number of us from 0 to LENGTH, then never
+                   before the stamp before it (1 us to 10 ms)
+--duplicate-records
+    every record twice, the copy right after its original with the same bytes, stamped 1 us
+    later (the same stamp under quantised stamps), as a switch port mirroring both directions
+--second-interface
+    pcapng only: interface 1, Linux cooked (LINKTYPE_LINUX_SLL, 113), carries the PC's office
+    port: ARP requests and UDP datagrams of the PC and its neighbours, 0.5 to 7 ms apart,
+    between the EtherCAT records (interface 0, Ethernet) by time
+
 It is also the oracle for the rule engine (`ncservo validate`):
 
 --ready-mode 0|1
@@ -207,6 +228,7 @@ RETURNED_MAC = bytes.fromhex("020000000001")  # slaves set the locally-administe
 BROADCAST_MAC = b"\xff" * 6
 
 T0_NS = 1_704_067_200 * 10**9  # capture start, 2024-01-01 00:00:00 UTC
+LINKTYPE_ETHERNET, LINKTYPE_LINUX_SLL = 1, 113  # tcpdump.org link types
 DC_EPOCH_OFFSET_NS = 946_684_800 * 10**9  # DC time counts from 2000-01-01
 
 # --- drive model constants (plausible values, not from the spec) ---
@@ -860,6 +882,7 @@ class Expectations:
         self.cycle_ns, self.delay_ns = cycle_ns, delay_ns
         self.items = []
         self.times, self.keys = [], []  # every written frame, in order
+        self.records = None  # each frame's record number, when other records come between
 
     def add(self, rule, axis, cycle, copy, timeout=None, ref=None, end=None, due=None):
         """The condition shows first in (cycle, copy); a timed one is due `timeout` after
@@ -885,6 +908,9 @@ class Expectations:
             raise ValueError(f"{rule}: the capture ends before the injected condition shows")
         return i
 
+    def _number(self, index):
+        return self.records[index] if self.records is not None else index + 1
+
     def resolve(self):
         expected = []
         for rule, axis, key, timeout, ref, end, due_key in self.items:
@@ -902,8 +928,8 @@ class Expectations:
                     raise ValueError(f"{rule}: the capture ends before {timeout} has passed")
                 slack = self.times[due] + SLACK_CYCLES * self.cycle_ns
                 last = bisect.bisect_right(self.times, slack) - 1
-            expected.append({"rule": rule, "axis": axis, "first_frame": first + 1,
-                             "last_frame": last + 1, "due_frame": due + 1})
+            expected.append({"rule": rule, "axis": axis, "first_frame": self._number(first),
+                             "last_frame": self._number(last), "due_frame": self._number(due)})
         expected.sort(key=lambda e: (e["first_frame"], e["rule"], -1 if e["axis"] is None
                                      else e["axis"]))
         return expected
@@ -1450,7 +1476,9 @@ class PcapWriter:
         magic = 0xA1B23C4D if nanosecond else 0xA1B2C3D4
         out.write(struct.pack("<IHHiIII", magic, 2, 4, 0, 0, 65535, 1))
 
-    def write(self, t_ns, data):
+    def write(self, t_ns, data, interface=0):
+        if interface:
+            raise ValueError("a pcap has one interface")
         self.count += 1
         sec, frac = divmod(t_ns, 10**9)
         self.out.write(self.record.pack(sec, frac // self.divisor, len(data), len(data)))
@@ -1458,27 +1486,158 @@ class PcapWriter:
 
 
 class PcapngWriter:
-    def __init__(self, out):
+    def __init__(self, out, link_types=(LINKTYPE_ETHERNET,)):
         self.out = out
         self.epb = struct.Struct("<IIIIIII")
         self.count = 0  # frames written
         shb_body = struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1)
         self._block(0x0A0D0D0A, shb_body)
         tsresol = struct.pack("<HHB3x", 9, 1, 9)  # if_tsresol = 10^-9
-        idb_body = struct.pack("<HHI", 1, 0, 65535) + tsresol + struct.pack("<HH", 0, 0)
-        self._block(1, idb_body)
+        for link_type in link_types:  # one IDB per interface, numbered in this order
+            idb_body = struct.pack("<HHI", link_type, 0, 65535) + tsresol + struct.pack("<HH", 0, 0)
+            self._block(1, idb_body)
 
     def _block(self, block_type, body):
         total = 12 + len(body)
         self.out.write(struct.pack("<II", block_type, total) + body + struct.pack("<I", total))
 
-    def write(self, t_ns, data):
+    def write(self, t_ns, data, interface=0):
         self.count += 1
         pad = -len(data) % 4
         total = 32 + len(data) + pad
-        self.out.write(self.epb.pack(6, total, 0, t_ns >> 32, t_ns & 0xFFFFFFFF,
+        self.out.write(self.epb.pack(6, total, interface, t_ns >> 32, t_ns & 0xFFFFFFFF,
                                      len(data), len(data)))
         self.out.write(data + bytes(pad) + struct.pack("<I", total))
+
+
+STAMP_SHAPES = {  # --capture-stamps: shape -> the length's range in us
+    "bunched": (100, 100_000), "quantised": (1, 100_000), "late": (1, 10_000)}
+BURST_STEP_NS = 2000  # records of one burst, in capture order
+MIRROR_LAG_NS = 1000  # a mirrored copy after its original
+
+
+def parse_capture_stamps(text, error):
+    """SHAPE:LENGTH -> (shape, length in ns); `error` on anything else."""
+    shape, _, length = text.partition(":")
+    if shape not in STAMP_SHAPES:
+        error(f"--capture-stamps {text}: SHAPE:LENGTH, SHAPE one of {', '.join(STAMP_SHAPES)}")
+    units = {"us": 1, "ms": 1000}
+    if length[-2:] not in units:
+        error(f"--capture-stamps {text}: LENGTH in us or ms, e.g. {shape}:4ms")
+    try:
+        micros = float(length[:-2]) * units[length[-2:]]
+    except ValueError:
+        micros = -1
+    low, high = STAMP_SHAPES[shape]
+    if micros != int(micros) or not low <= micros <= high:
+        error(f"--capture-stamps {text}: a whole number of us from {low} us to {high} us")
+    return shape, int(micros) * 1000
+
+
+class OfficePort:
+    """The capturing PC's office port (--second-interface): a record every 0.5 to 7 ms, an ARP
+    request of a neighbour (a quarter of them) or a UDP datagram between the PC and a neighbour
+    or broadcast by one, each behind a Linux cooked (SLL v1) header."""
+
+    PC = (bytes.fromhex("3c970e112233"), bytes((10, 20, 30, 5)))
+    NEIGHBOURS = [(bytes.fromhex(f"a0b3cc0000{i:02x}"), bytes((10, 20, 30, 20 + i)))
+                  for i in range(1, 5)]
+    BROADCAST_IP = bytes((10, 20, 30, 255))
+    SLL_HOST, SLL_BROADCAST, SLL_OUTGOING = 0, 1, 4  # packet types
+
+    def __init__(self, seed):
+        self.rng = random.Random(f"{seed}/office")
+        self.next_ns = None
+        self.ident = 0
+
+    def records_until(self, t_ns):
+        """The port's records stamped at or before t_ns (the first one after the first call)."""
+        if self.next_ns is None:
+            self.next_ns = t_ns + self._gap()
+        while self.next_ns <= t_ns:
+            yield self.next_ns, self._record()
+            self.next_ns += self._gap()
+
+    def _gap(self):
+        return self.rng.randint(500, 7000) * 1000
+
+    @staticmethod
+    def _sll(packet_type, mac, protocol):
+        return struct.pack(">HHH6s2xH", packet_type, 1, 6, mac, protocol)
+
+    def _record(self):
+        rng = self.rng
+        mac, ip = rng.choice(self.NEIGHBOURS)
+        if rng.random() < 0.25:  # who has (RFC 826)?
+            target = rng.choice(self.NEIGHBOURS + [self.PC])[1]
+            arp = struct.pack(">HHBBH6s4s6s4s", 1, 0x0800, 6, 4, 1, mac, ip, bytes(6), target)
+            return self._sll(self.SLL_BROADCAST, mac, 0x0806) + arp
+        kind = rng.choice((self.SLL_OUTGOING, self.SLL_HOST, self.SLL_BROADCAST))
+        if kind == self.SLL_OUTGOING:
+            sender, src, dst = self.PC[0], self.PC[1], ip
+        else:
+            sender, src = mac, ip
+            dst = self.PC[1] if kind == self.SLL_HOST else self.BROADCAST_IP
+        payload = bytes(rng.getrandbits(8) for _ in range(rng.randint(8, 400)))
+        udp = struct.pack(">HHHH", rng.randint(50000, 50999), rng.randint(50000, 50999),
+                          8 + len(payload), 0) + payload
+        self.ident = (self.ident + 1) & 0xFFFF
+        header = struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(udp), self.ident, 0x4000, 64,
+                             17, 0, src, dst)
+        total = sum(struct.unpack(">10H", header))
+        while total > 0xFFFF:
+            total = (total & 0xFFFF) + (total >> 16)
+        header = header[:10] + struct.pack(">H", ~total & 0xFFFF) + header[12:]
+        return self._sll(kind, sender, 0x0800) + header + udp
+
+
+class CapturingPc:
+    """What the capturing PC writes of each frame of the bus: the frame stamped by its clock
+    (--capture-stamps), a mirrored copy right after it (--duplicate-records), and the office
+    port's records before it (--second-interface). `count` is the record number of the last
+    frame's original; `records` the record number of every frame of the bus, in order."""
+
+    def __init__(self, writer, args):
+        self.writer = writer
+        self.shape, self.length_ns = args.capture_stamps or (None, 0)
+        self.mirror = args.duplicate_records
+        self.office = OfficePort(args.seed) if args.second_interface else None
+        self.late = random.Random(f"{args.seed}/late")
+        self.burst, self.in_burst = None, 0
+        self.last_ns = 0
+        self.count = 0
+        self.records = []
+
+    def _stamp(self, t_ns):
+        if self.shape == "bunched":
+            burst = t_ns // self.length_ns
+            self.in_burst = self.in_burst + 1 if burst == self.burst else 0
+            self.burst = burst
+            return (burst + 1) * self.length_ns + self.in_burst * BURST_STEP_NS
+        if self.shape == "quantised":
+            return t_ns - t_ns % self.length_ns
+        if self.shape == "late":
+            return t_ns + self.late.randint(0, self.length_ns // 1000) * 1000
+        return t_ns
+
+    def write(self, t_ns, data):
+        if not (self.shape or self.mirror or self.office):  # the bus's own times, as before
+            self.writer.write(t_ns, data)
+            self.count = self.writer.count
+            self.records.append(self.count)
+            return
+        stamp = max(self._stamp(t_ns), self.last_ns)  # a PC's stamps never go back
+        if self.office:
+            for office_ns, record in self.office.records_until(stamp):
+                self.writer.write(office_ns, record, interface=1)
+        self.writer.write(stamp, data)
+        self.count = self.writer.count
+        self.records.append(self.count)
+        self.last_ns = stamp
+        if self.mirror:
+            copy_ns = stamp if self.shape == "quantised" else stamp + MIRROR_LAG_NS
+            self.writer.write(copy_ns, data)
+            self.last_ns = copy_ns
 
 
 class TruthWriter:
@@ -1509,8 +1668,9 @@ class TruthWriter:
         axes = ",".join(f'{{"axis":{i},{fields}}}' for i in range(n_axes))
         return f'{{"frame":%d,"time":%r,"copy":"{copy}","axes":[{axes}]}}\n'
 
-    def write(self, t_ns, copy, outputs, inputs):
-        self.frame_number += 1
+    def write(self, t_ns, copy, outputs, inputs, frame=None):
+        """`frame`: the record's number in the capture, when other records come between."""
+        self.frame_number = frame if frame is not None else self.frame_number + 1
         if self.first_ns is None:
             self.first_ns = t_ns
         head = (self.frame_number, (t_ns - self.first_ns) / 1e9)
@@ -1604,7 +1764,15 @@ def generate(args, out, truth_out, expect=None, incidents=None):
     io_inputs = bytes(IO_TASK_BYTES)
     echoed = builder.zero_inputs  # --echo-inputs: the last inputs received
     nb_echoed = bytes(neighbours.in_size)
-    writer = PcapngWriter(out) if args.format == "pcapng" else PcapWriter(out, args.nanosecond)
+    if args.format == "pcapng":
+        link_types = (LINKTYPE_ETHERNET,) + ((LINKTYPE_LINUX_SLL,) if args.second_interface else ())
+        writer = CapturingPc(PcapngWriter(out, link_types), args)
+    else:
+        writer = CapturingPc(PcapWriter(out, args.nanosecond), args)
+    # the truth and the findings name the capture's records once other records come between
+    numbered = args.duplicate_records or args.second_interface
+    if expect and numbered:
+        expect.records = writer.records
     truth = TruthWriter(truth_out, builder) if truth_out else None
     session = Session(args, args.inject + args.incident, expect, args.self_check)
     sew_error = [False] * args.axes  # per axis, in the last returned copy written
@@ -1628,7 +1796,7 @@ def generate(args, out, truth_out, expect=None, incidents=None):
                 incidents.append({"kind": "bus-outage", "axis": None, "frame": writer.count,
                                   "cause": "communication-loss"})
             if truth:
-                truth.write(t_ns, "master", out_bytes, None)
+                truth.write(t_ns, "master", out_bytes, None, writer.count if numbered else None)
             if expect:
                 expect.frame(t_ns, k, MASTER)
         if directive == LOST or (args.loss and loss_rng.random() < args.loss):
@@ -1646,7 +1814,8 @@ def generate(args, out, truth_out, expect=None, incidents=None):
             if incidents is not None:
                 note_drive_faults(incidents, sew_error, inputs, session.drives, writer.count)
             if truth:
-                truth.write(t_ret, "returned", out_bytes, in_bytes)
+                truth.write(t_ret, "returned", out_bytes, in_bytes,
+                            writer.count if numbered else None)
             if expect:
                 expect.frame(t_ret, k, RETURNED)
         io_inputs = write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect)
@@ -1738,6 +1907,13 @@ def parse_args(argv):
                    help="master copies carry the last inputs received, as SOEM's do")
     p.add_argument("--layout-config", metavar="FILE",
                    help="write the exact layout as a configuration file (TOML)")
+    p.add_argument("--capture-stamps", metavar="SHAPE:LENGTH",
+                   help="how the capturing PC stamps the records: bunched, quantised or late, "
+                        "LENGTH in us or ms (see the module docstring)")
+    p.add_argument("--duplicate-records", action="store_true",
+                   help="every record twice, as a switch port mirroring both directions")
+    p.add_argument("--second-interface", action="store_true",
+                   help="pcapng only: the PC's office port as interface 1 (Linux cooked)")
     p.add_argument("-o", "--output", help="capture file to write (required)")
     p.add_argument("--truth", help="JSON Lines truth file to write")
     args = p.parse_args(argv)
@@ -1774,6 +1950,10 @@ def parse_args(argv):
     if args.incidents and (args.inject or args.loss or args.copies != "both"):
         p.error("--incidents: no --inject or --loss, and both copies (its truth knows the "
                 "causes of its own chains only)")
+    if args.capture_stamps:
+        args.capture_stamps = parse_capture_stamps(args.capture_stamps, p.error)
+    if args.second_interface and args.format != "pcapng":
+        p.error("--second-interface: a pcap holds one interface; give --format pcapng")
     if args.findings:
         args.self_check = True
     args.inject = [parse_injection(text, i, args, p.error) for i, text in enumerate(args.inject)]

@@ -17,6 +17,7 @@
 #include "ncservo/capture/compressed_output.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/sim/simulator.hpp"
+#include "ncservo/wire/ecat_wire.hpp"
 
 namespace ncservo::cli {
 namespace {
@@ -82,8 +83,9 @@ struct SimulateArgs {
   std::string eni;
   std::string incidents_truth;
   std::string io_inputs = "slow";
-  std::string idle;      // SECONDS or all; empty: none
-  std::string start_in;  // empty: the capture starts with the session
+  std::string idle;            // SECONDS or all; empty: none
+  std::string start_in;        // empty: the capture starts with the session
+  std::string capture_stamps;  // empty: the bus's own times
   bool no_startup = false;
   bool list_faults = false;
 };
@@ -134,7 +136,24 @@ bool simulationOptions(SimulateArgs& args) {
   o.probe = rowNamed(kProbes, args.probe).probe;
   o.startup = !args.no_startup;
   o.terminal_inputs = rowNamed(sim::kTerminalInputs, args.io_inputs).inputs;
-  if (!args.start_in.empty()) o.mid_start = *sim::midStartFromName(args.start_in);
+  if (!args.start_in.empty()) {
+    const Result<sim::MidStartRequest> start = sim::parseMidStart(args.start_in);
+    if (!start) {
+      fmt::print(stderr, "ncservo simulate: {}\n", start.error().text());
+      return false;
+    }
+    o.mid_start = start->start;
+    o.mid_start_fault = start->fault;
+  }
+  if (!args.capture_stamps.empty()) {
+    Result<sim::CaptureStamps> stamps = sim::parseCaptureStamps(args.capture_stamps);
+    if (!stamps) {
+      fmt::print(stderr, "ncservo simulate: {}\n", stamps.error().text());
+      return false;
+    }
+    o.capture_stamps = std::move(*stamps);
+  }
+  o.writes_pcapng = captureFormatFor(args.format, args.output) == CaptureFormat::Pcapng;
   if (!parseIdle(args.idle, o)) return false;
   for (const std::string& text : args.faults) {
     Result<sim::FaultRequest> fault = sim::parseFault(text);
@@ -185,15 +204,24 @@ bool writeCapture(const SimulateArgs& args, sim::Simulator& simulator) {
   const Compression compression = args.compress.empty()
                                       ? compressionForName(args.output)
                                       : rowNamed(kCompressions, args.compress).compression;
-  Result<std::unique_ptr<CaptureWriter>> writer =
-      CaptureWriter::open(args.output, captureFormatFor(args.format, args.output), compression);
+  // --second-interface: the office port beside the bus (docs/simulate.md#the-capturing-pc).
+  std::vector<PcapngInterface> interfaces;
+  if (args.options.second_interface) {
+    interfaces = {{.dlt = ecat::kDltEthernet}, {.dlt = ecat::kDltLinuxSll}};
+  }
+  Result<std::unique_ptr<CaptureWriter>> writer = CaptureWriter::open(
+      args.output, captureFormatFor(args.format, args.output), compression, interfaces);
   // An output that cannot be written is a usage error, as for every command (docs/cli.md).
   if (!writer) {
     fmt::print(stderr, "ncservo simulate: {}\n", writer.error().text());
     return false;
   }
   const auto frames = simulator.run([&](const sim::SimFrame& frame) {
-    return (*writer)->write(frame.time_ns, frame.data, frame.size);
+    return (*writer)->write(PacketRecord{.time_ns = frame.time_ns,
+                                         .data = frame.data,
+                                         .captured = frame.size,
+                                         .original = frame.size,
+                                         .interface_id = frame.interface_id});
   });
   const Status closed = (*writer)->close();
   if (!closed || !frames) {
@@ -316,14 +344,24 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--idle", sa.idle,
                      "SECONDS or all: the drives ready and nothing enabled for that long after "
                      "the start-up, or for the whole capture");
-  command
-      .add_option("--start-in", sa.start_in,
-                  rowsHelp("the capture begins in the middle of the commissioning session:",
-                           sim::kMidStarts))
-      ->check(cli::oneOf(namesOf(sim::kMidStarts)));
+  command.add_option(
+      "--start-in", sa.start_in,
+      rowsHelp("the capture begins in the middle of the commissioning session:", sim::kMidStarts) +
+          " Or fault:RULE: inside the standing condition of that rule's --fault, RULE one of " +
+          sim::standingFaultRules() + " (docs/simulate.md#shapes).");
   command.add_option("--io-task-us", sa.options.io_task_us,
                      "a second task: the terminals in a frame of their own at this cycle time, a "
                      "multiple of --cycle-us");
+  command.add_option("--capture-stamps", sa.capture_stamps,
+                     rowsHelp("SHAPE:LENGTH (us or ms): how the capturing PC stamps the records; "
+                              "the bus's own times stay in its frames:",
+                              sim::kStampShapes));
+  command.add_flag("--duplicate-records", sa.options.duplicate_records,
+                   "every record twice, the copy right after it, as a switch port mirroring both "
+                   "directions gives it");
+  command.add_flag("--second-interface", sa.options.second_interface,
+                   "pcapng only: the capturing PC's office port (ARP and UDP, Linux cooked) as a "
+                   "second interface beside the bus's");
   command.add_option("--layout-config", sa.layout_config,
                      "also write the layout as a configuration file for validate --config");
   command.add_option(

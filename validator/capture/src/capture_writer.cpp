@@ -70,7 +70,7 @@ class PcapWriter final : public CaptureWriter {
     return std::ferror(file_) == 0;
   }
   bool write(const PacketRecord& record) override {
-    if (dumper_ == nullptr) return false;
+    if (dumper_ == nullptr || record.interface_id != 0) return false;
     pcap_pkthdr header{};
     header.ts.tv_sec = static_cast<time_t>(record.time_ns / 1'000'000'000);
     header.ts.tv_usec = static_cast<suseconds_t>(record.time_ns % 1'000'000'000 / 1000);
@@ -111,14 +111,14 @@ class PcapWriter final : public CaptureWriter {
   Error error_;
 };
 
-// pcapng: a Section Header Block, one Interface Description Block with if_tsresol (10^-6 or
-// 10^-9 s), then one Enhanced Packet Block per frame (pcapng specification, §4).
+// pcapng: a Section Header Block, an Interface Description Block per interface with
+// if_tsresol (10^-6 or 10^-9 s), then one Enhanced Packet Block per frame, naming its interface
+// by its IDB's place (pcapng specification, §4).
 class PcapngWriter final : public CaptureWriter {
  public:
   PcapngWriter(std::string path, std::FILE* file, std::unique_ptr<char[]> buffer,
-               const PcapngInterface& interface)
+               const std::vector<PcapngInterface>& interfaces)
       : path_(std::move(path)), file_(file), buffer_(std::move(buffer)) {
-    for (int i = 0; i < interface.timestamp_digits; ++i) ticks_per_second_ *= 10;
     block_.reserve(2048);
     begin(0x0A0D0D0A);  // SHB
     put32(0x1A2B3C4D);  // byte-order magic
@@ -127,28 +127,18 @@ class PcapngWriter final : public CaptureWriter {
     put32(0xFFFFFFFF);  // section length unknown
     put32(0xFFFFFFFF);
     finish();
-    begin(0x00000001);  // IDB
-    put16(static_cast<std::uint16_t>(interface.dlt));
-    put16(0);
-    put32(kSnapLength);
-    put16(9);  // if_tsresol
-    put16(1);
-    block_.push_back(static_cast<std::uint8_t>(interface.timestamp_digits));  // 10^-digits s
-    block_.resize(block_.size() + 3, 0);
-    put16(0);  // opt_endofopt
-    put16(0);
-    finish();
+    for (const PcapngInterface& interface : interfaces) describe(interface);
   }
   ~PcapngWriter() override { (void)close(); }
   bool write(std::int64_t time_ns, const std::uint8_t* data, std::size_t size) override {
     return write(PacketRecord{time_ns, data, size, size, nullptr});
   }
   bool write(const PacketRecord& record) override {
-    if (file_ == nullptr) return false;
+    if (file_ == nullptr || record.interface_id >= ticks_per_second_.size()) return false;
     const auto ts = static_cast<std::uint64_t>(record.time_ns) /
-                    (std::uint64_t{1'000'000'000} / ticks_per_second_);
+                    (std::uint64_t{1'000'000'000} / ticks_per_second_[record.interface_id]);
     begin(0x00000006);  // EPB
-    put32(0);           // interface 0
+    put32(record.interface_id);
     put32(static_cast<std::uint32_t>(ts >> 32));
     put32(static_cast<std::uint32_t>(ts));
     put32(static_cast<std::uint32_t>(record.captured));
@@ -178,6 +168,23 @@ class PcapngWriter final : public CaptureWriter {
   }
 
  private:
+  // An Interface Description Block: the interface's link type and timestamp resolution.
+  void describe(const PcapngInterface& interface) {
+    std::uint64_t ticks = 1;
+    for (int i = 0; i < interface.timestamp_digits; ++i) ticks *= 10;
+    ticks_per_second_.push_back(ticks);
+    begin(0x00000001);  // IDB
+    put16(static_cast<std::uint16_t>(interface.dlt));
+    put16(0);
+    put32(kSnapLength);
+    put16(9);  // if_tsresol
+    put16(1);
+    block_.push_back(static_cast<std::uint8_t>(interface.timestamp_digits));  // 10^-digits s
+    block_.resize(block_.size() + 3, 0);
+    put16(0);  // opt_endofopt
+    put16(0);
+    finish();
+  }
   void put16(std::uint16_t v) { appendLe(block_, v, 2); }
   void put32(std::uint32_t v) { appendLe(block_, v, 4); }
   void pad() { block_.resize((block_.size() + 3) & ~std::size_t{3}, 0); }
@@ -202,16 +209,21 @@ class PcapngWriter final : public CaptureWriter {
   std::FILE* file_;
   std::unique_ptr<char[]> buffer_;  // file_'s, freed after it is closed
   std::vector<std::uint8_t> block_;
-  std::uint64_t ticks_per_second_ = 1;
+  std::vector<std::uint64_t> ticks_per_second_;  // per interface, in the order of their IDBs
   bool failed_ = false;
   Error error_;
 };
 
 }  // namespace
 
-Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& path,
-                                                           CaptureFormat format,
-                                                           Compression compression) {
+Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(
+    const std::string& path, CaptureFormat format, Compression compression,
+    const std::vector<PcapngInterface>& interfaces) {
+  if (format == CaptureFormat::Pcap &&
+      (interfaces.size() > 1 ||
+       (interfaces.size() == 1 && interfaces[0].dlt != PcapngInterface{}.dlt))) {
+    return fail(writeError(path, "a pcap holds one Ethernet interface: write a pcapng"));
+  }
   const Result<std::FILE*> opened = openFile(path);
   if (!opened) return fail(opened.error());
   std::FILE* file = *opened;
@@ -227,7 +239,9 @@ Result<std::unique_ptr<CaptureWriter>> CaptureWriter::open(const std::string& pa
   }
   std::unique_ptr<char[]> buffer = bufferFile(file);
   if (format == CaptureFormat::Pcapng) {
-    return std::make_unique<PcapngWriter>(path, file, std::move(buffer), PcapngInterface{});
+    return std::make_unique<PcapngWriter>(
+        path, file, std::move(buffer),
+        interfaces.empty() ? std::vector<PcapngInterface>{PcapngInterface{}} : interfaces);
   }
   pcap_t* dead =
       pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kSnapLength, PCAP_TSTAMP_PRECISION_MICRO);
@@ -248,7 +262,8 @@ Result<std::unique_ptr<CaptureWriter>> CaptureWriter::openPcapng(const std::stri
   const Result<std::FILE*> opened = openFile(path);
   if (!opened) return fail(opened.error());
   std::unique_ptr<char[]> buffer = bufferFile(*opened);
-  return std::make_unique<PcapngWriter>(path, *opened, std::move(buffer), interface);
+  return std::make_unique<PcapngWriter>(path, *opened, std::move(buffer),
+                                        std::vector<PcapngInterface>{interface});
 }
 
 }  // namespace ncservo

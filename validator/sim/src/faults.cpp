@@ -48,7 +48,9 @@ const std::vector<FaultRecipe>& faultRecipes() {
              f.nc(0, NcAction::Disable);
              f.quirk(DriveQuirk::LateDisable);
              f.nc(250 * kMs, NcAction::Enable);
-           }},
+           },
+       // ServoEn with no enable requested, from the disable on (models.cpp kLateDisableNs)
+       .standing_ns = 60 * kMs},
       {.rule = RuleId::Se004,
        .phase = FaultPhase::Cycle,
        .need = AxisNeed::Any,
@@ -179,7 +181,9 @@ const std::vector<FaultRecipe>& faultRecipes() {
            [](FaultActions& f) {
              f.driveFault();
              f.quirk(DriveQuirk::SlowFaultReaction);
-           }},
+           },
+       // ServoEn beside the error, from the fault on (models.cpp kSlowReactionNs)
+       .standing_ns = 200 * kMs},
       {.rule = RuleId::Pt001,
        .phase = FaultPhase::Cycle,
        .need = AxisNeed::Any,

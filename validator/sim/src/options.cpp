@@ -60,6 +60,43 @@ const MidStartName& midStartRow(MidStart start) {
   }
   return kMidStarts[0];
 }
+
+std::string standingFaultRules() {
+  std::string codes;
+  for (const FaultRecipe& recipe : faultRecipes()) {
+    if (recipe.standing_ns > 0) {
+      codes += (codes.empty() ? "" : ", ") + std::string(ruleDef(recipe.rule).code);
+    }
+  }
+  return codes;
+}
+
+Result<MidStartRequest> parseMidStart(std::string_view text) {
+  if (const std::optional<MidStart> start = midStartFromName(text)) {
+    return MidStartRequest{*start, std::nullopt};
+  }
+  constexpr std::string_view kInFault = "fault:";
+  if (!text.starts_with(kInFault)) {
+    std::string names;
+    for (const MidStartName& row : kMidStarts) names += std::string(row.name) + ", ";
+    return fail(fmt::format("--start-in {}: one of {}or fault:RULE with RULE one of {}", text,
+                            names, standingFaultRules()));
+  }
+  std::string code(text.substr(kInFault.size()));
+  for (char& c : code) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  const RuleDef* rule = ruleByCode(code);
+  if (rule == nullptr) {
+    return fail(fmt::format("--start-in {}: no rule '{}' (see `ncservo rules`)", text, code));
+  }
+  const FaultRecipe* recipe = faultRecipe(rule->id);
+  if (recipe == nullptr || recipe->standing_ns <= 0) {
+    return fail(fmt::format(
+        "--start-in {}: {}'s fault has no standing condition to begin inside; one of {}", text,
+        code, standingFaultRules()));
+  }
+  return MidStartRequest{MidStart::InFault, rule->id};
+}
+
 int defaultIoSlaves(ImageStyle style) {
   switch (style) {
     case ImageStyle::Mixed:
@@ -172,6 +209,19 @@ Status checkShapeOptions(const SimOptions& o) {
   if (o.mid_start != MidStart::None && (o.scenario != Scenario::Commissioning || idle)) {
     return fail("--start-in: a commissioning run only, without --idle");
   }
+  if (o.mid_start == MidStart::InFault && !o.mid_start_fault) {
+    return fail("--start-in fault:RULE: no rule given");
+  }
+  return {};
+}
+
+// What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc).
+Status checkCaptureOptions(const SimOptions& o) {
+  if (o.second_interface && !o.writes_pcapng) {
+    return fail(
+        "--second-interface: a pcap holds one interface; write a pcapng (--format pcapng or a "
+        ".pcapng file)");
+  }
   return {};
 }
 
@@ -211,7 +261,8 @@ Status checkBusOptions(SimOptions& o) {
                       late.text, most_late_us));
     }
   }
-  return checkShapeOptions(o);
+  if (Status shapes = checkShapeOptions(o); !shapes) return shapes;
+  return checkCaptureOptions(o);
 }
 
 // The run's length (the scenario's when not given), and what the faults scenario needs.
@@ -248,7 +299,8 @@ Status checkDuration(SimOptions& o) {
 }
 
 // One --fault's time and axis, defaulted where not given, checked against the run and its recipe.
-Status placeFault(FaultRequest& f, const SimOptions& o) {
+// `after_s`: the moment a --start-in capture begins, which a fault must come after.
+Status placeFault(FaultRequest& f, const SimOptions& o, std::optional<double> after_s) {
   const double duration = *o.duration_s;
   const double start = o.startup ? kStartupSeconds : 0.0;
   const char* code = ruleDef(f.rule).code;
@@ -272,9 +324,7 @@ Status placeFault(FaultRequest& f, const SimOptions& o) {
     // After the start-up and the enables; in a commissioning run before the emergency stop
     // and the disables that end it (at 53 % and 85 % of the run), else before the end.
     double earliest = start + o.idle_s + 0.45;
-    if (o.mid_start != MidStart::None) {
-      earliest = std::max(earliest, start + midStartRow(o.mid_start).after_plan_s + 0.1);
-    }
+    if (after_s) earliest = std::max(earliest, *after_s + 0.1);
     const double latest = o.scenario == Scenario::Commissioning
                               ? o.idle_s + 0.53 * (duration - o.idle_s) - 0.25
                               : duration - 0.4;
@@ -317,13 +367,38 @@ Status placeFault(FaultRequest& f, const SimOptions& o) {
   return {};
 }
 
+// --start-in fault:RULE: the fault it begins inside, placed before the others (added with the
+// rule's defaults when no --fault names the rule), and its time, which the others come after.
+Result<std::optional<double>> placeStartFault(SimOptions& o) {
+  if (o.mid_start != MidStart::InFault) {
+    if (o.mid_start == MidStart::None) return std::nullopt;
+    const double start = o.startup ? kStartupSeconds : 0.0;
+    return std::optional<double>(start + midStartRow(o.mid_start).after_plan_s);
+  }
+  auto inside = std::find_if(o.faults.begin(), o.faults.end(),
+                             [&](const FaultRequest& f) { return f.rule == *o.mid_start_fault; });
+  if (inside == o.faults.end()) {
+    FaultRequest added;
+    added.rule = *o.mid_start_fault;
+    added.text = ruleDef(added.rule).code;
+    inside = o.faults.insert(o.faults.begin(), std::move(added));
+  }
+  std::rotate(o.faults.begin(), inside, inside + 1);
+  if (Status placed = placeFault(o.faults.front(), o, std::nullopt); !placed)
+    return fail(placed.error());
+  return o.faults.front().at_s;
+}
+
 }  // namespace
 
 Status resolveOptions(SimOptions& o) {
   if (Status bus = checkBusOptions(o); !bus) return bus;
   if (Status duration = checkDuration(o); !duration) return duration;
-  for (FaultRequest& f : o.faults) {
-    if (Status placed = placeFault(f, o); !placed) return placed;
+  const Result<std::optional<double>> begins_s = placeStartFault(o);
+  if (!begins_s) return fail(begins_s.error());
+  const std::size_t placed_already = o.mid_start == MidStart::InFault ? 1 : 0;
+  for (std::size_t i = placed_already; i < o.faults.size(); ++i) {
+    if (Status placed = placeFault(o.faults[i], o, *begins_s); !placed) return placed;
   }
   return {};
 }

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "capture_shaper.hpp"
 #include "esl_probe.hpp"
 #include "fault_plan.hpp"
 #include "incident_plan.hpp"
@@ -69,6 +70,7 @@ struct Simulator::Impl {
   Rng capture_loss_rng{o.seed ^ 0xC0FFEE5EEDULL};
   std::uint64_t master_copies_dropped = 0;
   std::uint64_t frames_cut = 0;  // before --start-in's moment
+  CaptureShaper shaper{o};       // what the capturing PC does to the recording
   // The incidents scenario: its plan, what the capture shows of it, the slaves' falls from OP
   // and the master's AL status checks.
   struct Fall {
@@ -204,6 +206,7 @@ struct Simulator::Impl {
         continue;
       }
       p.seen = true;
+      shaper.track(frame);
       seen.push_back({incidentKindName(kind), axis < 0 ? std::nullopt : std::optional<int>(axis),
                       frame, p.cause});
       return;
@@ -305,10 +308,19 @@ struct Simulator::Impl {
   }
 
   // --start-in: the capture keeps nothing before the moment (half a cycle early, so that each
-  // cycle keeps both its copies).
+  // cycle keeps both its copies). Inside a fault (fault:RULE) the moment is the cycle after the
+  // fault's first, whose returned copy shows the drive's answer to it.
+  std::int64_t midStartNs() const {
+    if (o.mid_start != MidStart::InFault) {
+      return plan_start_ns + at(midStartRow(o.mid_start).after_plan_s);
+    }
+    for (const FaultRequest& f : o.faults) {
+      if (f.rule == *o.mid_start_fault) return firstSlotAt(*f.at_s) + cycle_ns;
+    }
+    return 0;  // resolveOptions added the fault
+  }
   FrameSink midStartSink(const FrameSink& captured) {
-    const std::int64_t from_ns =
-        kEpochNs + plan_start_ns + at(midStartRow(o.mid_start).after_plan_s) - cycle_ns / 2;
+    const std::int64_t from_ns = kEpochNs + midStartNs() - cycle_ns / 2;
     return [this, captured, from_ns](const SimFrame& frame) {
       if (frame.time_ns >= from_ns) return captured(frame);
       ++frames_cut;
@@ -331,7 +343,8 @@ struct Simulator::Impl {
   }
 
   std::optional<std::uint64_t> run(const FrameSink& captured) {
-    const FrameSink kept = o.mid_start == MidStart::None ? captured : midStartSink(captured);
+    const FrameSink shaped = shaper.active() ? shaper.sink(captured) : captured;
+    const FrameSink kept = o.mid_start == MidStart::None ? shaped : midStartSink(shaped);
     const FrameSink sink = o.probe == Probe::Esl ? eslProbeSink(kept, o.seed) : kept;
     std::int64_t t = 0;
     const std::int64_t step_ns = std::min<std::int64_t>(cycle_ns, kMs);
@@ -423,6 +436,7 @@ struct Simulator::Impl {
         }
       }
     }
+    if (shaper.active()) return shaper.records();
     return master.frames() - master_copies_dropped - frames_cut;
   }
 };
@@ -446,7 +460,14 @@ Result<std::vector<IncidentTruth>> Simulator::incidents() const {
                               incidentKindName(p.kind), p.axis, p.cause));
     }
   }
-  return impl.seen;
+  // The bus's frame numbers as the capture's records (copies and office records between them).
+  std::vector<IncidentTruth> incidents = impl.seen;
+  for (IncidentTruth& incident : incidents) {
+    const std::optional<std::uint64_t> record = impl.shaper.recordOf(incident.frame);
+    if (!record) return fail(fmt::format("no record known for frame {}", incident.frame));
+    incident.frame = *record;
+  }
+  return incidents;
 }
 
 const std::vector<AxisConfig>& Simulator::layout() const {

@@ -67,6 +67,10 @@ struct FaultRecipe {
   ScenarioSlot scenario;
   const char* description;  // what --list-faults prints: what the simulator does, or why not
   void (*apply)(FaultActions& actions);  // nullptr: the rule is not injectable
+  // How long the fault's condition stands from its time, so that a capture can begin inside it
+  // (--start-in fault:RULE, docs/simulate.md#shapes); 0: it has no condition to begin inside
+  // from its time (a moment, or one that comes later).
+  std::int64_t standing_ns = 0;
   bool injectable() const { return apply != nullptr; }
 };
 

@@ -11,6 +11,7 @@
 
 #include "ncservo/base/error.hpp"
 #include "ncservo/rules/rules.hpp"
+#include "ncservo/sim/capture_shapes.hpp"
 #include "ncservo/sim/faults.hpp"
 
 namespace ncservo::sim {
@@ -72,8 +73,9 @@ inline constexpr TerminalInputsName kTerminalInputs[] = {
 };
 
 // Where a capture that begins in the middle of a commissioning session begins (--start-in):
-// the capture drops every frame before that moment, the start-up included.
-enum class MidStart : std::uint8_t { None, Homing, Fault, ErrorClear };
+// the capture drops every frame before that moment, the start-up included. InFault (`fault:RULE`,
+// no row below) begins inside the standing condition of that rule's --fault.
+enum class MidStart : std::uint8_t { None, Homing, Fault, ErrorClear, InFault };
 struct MidStartName {
   const char* name;
   MidStart start;
@@ -96,6 +98,16 @@ inline constexpr MidStartName kMidStarts[] = {
 };
 std::optional<MidStart> midStartFromName(std::string_view name);
 const MidStartName& midStartRow(MidStart start);
+// --start-in NAME or fault:RULE.
+struct MidStartRequest {
+  MidStart start = MidStart::None;
+  std::optional<RuleId> fault;  // InFault: the rule whose --fault the capture begins inside
+};
+// The request, or an error naming the moments and the rules a capture can begin inside.
+Result<MidStartRequest> parseMidStart(std::string_view text);
+// The rules whose fault has a standing condition a capture can begin inside (the recipe rows
+// with a standing time), "SE-003, FLT-001".
+std::string standingFaultRules();
 
 // A probe in the line between the master and the first slave.
 enum class Probe : std::uint8_t {
@@ -149,7 +161,14 @@ struct SimOptions {
   double idle_s = 0;      // the NC enables nothing for this long after the start-up
   bool idle_all = false;  // ... or for the whole capture
   MidStart mid_start = MidStart::None;
+  std::optional<RuleId> mid_start_fault;  // MidStart::InFault: the --fault it begins inside
   int io_task_us = 0;  // the terminals in a frame of their own at this cycle (0: none)
+  // What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc); the
+  // defaults do nothing.
+  CaptureStamps capture_stamps;
+  bool duplicate_records = false;  // every record twice, as a mirroring switch port gives it
+  bool second_interface = false;   // the PC's office port as a second interface (pcapng only)
+  bool writes_pcapng = false;      // the capture is a pcapng (the CLI says, from --format)
 };
 
 // This simulator's set-up: the odd axes have an incremental encoder (zero-pulse search), the even
@@ -172,7 +191,8 @@ struct SimFrame {
   std::int64_t time_ns;  // since the Unix epoch: the capturing PC's stamp
   const std::uint8_t* data;
   std::size_t size;
-  bool returned = false;  // the copy the ring returned (else the master's)
+  bool returned = false;           // the copy the ring returned (else the master's)
+  std::uint32_t interface_id = 0;  // the capture's interface: 0 the bus, 1 the office port
 };
 // Receives each frame in capture order; returns false to stop (e.g. a write error).
 using FrameSink = std::function<bool(const SimFrame&)>;
