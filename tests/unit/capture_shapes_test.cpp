@@ -46,7 +46,7 @@ class ParseCaptureStamps : public ::testing::TestWithParam<StampsTextRow> {};
 
 TEST_P(ParseCaptureStamps, Rows) {
   const StampsTextRow& row = GetParam();
-  const Result<CaptureStamps> stamps = parseCaptureStamps(row.text);
+  const Result<StampShaping> stamps = parseCaptureStamps(row.text);
   if (!row.shape) {
     ASSERT_FALSE(stamps.has_value());
     EXPECT_EQ(stamps.error().text(), row.error);
@@ -119,9 +119,9 @@ class CaptureClockRows : public ::testing::TestWithParam<ClockRow> {};
 
 TEST_P(CaptureClockRows, StampsInCaptureOrder) {
   const ClockRow& row = GetParam();
-  CaptureStamps stamps;
+  StampShaping stamps;
   if (*row.stamps != '\0') {
-    const Result<CaptureStamps> parsed = parseCaptureStamps(row.stamps);
+    const Result<StampShaping> parsed = parseCaptureStamps(row.stamps);
     ASSERT_TRUE(parsed.has_value()) << parsed.error().text();
     stamps = *parsed;
   }
@@ -166,7 +166,7 @@ INSTANTIATE_TEST_SUITE_P(
     test::rowName<ClockRow>);
 
 TEST(CaptureClockLate, WithinTheLengthNeverBackAndFromTheSeed) {
-  const Result<CaptureStamps> stamps = parseCaptureStamps("late:400us");
+  const Result<StampShaping> stamps = parseCaptureStamps("late:400us");
   ASSERT_TRUE(stamps.has_value());
   auto run = [&](std::uint64_t seed) {
     CaptureClock clock(*stamps, seed);

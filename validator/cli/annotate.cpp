@@ -55,7 +55,7 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
       ++judged.findings;
     }
   };
-  pipeline.setSinks({nullptr, nullptr, nullptr, keep});
+  pipeline.setSinks({nullptr, nullptr, nullptr, keep, nullptr});
   if (Status status = streamCapture(**opened, pipeline); !status) return fail(status.error());
   judged.coverage = pipeline.result().coverage;
   return judged;

@@ -68,7 +68,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
       if (output.live != nullptr) output.live->finding(report, f, state);
     }
   };
-  pipeline.setSinks({start, validate, nullptr, keepFindings});
+  pipeline.setSinks({start, validate, nullptr, keepFindings, nullptr});
   StreamStop stop{&cli::ReportWriter::interrupted()};
   const Status status = streamCapture(*reader, pipeline, &stop, threads);
   const CaptureRun& run = pipeline.run();

@@ -174,11 +174,30 @@ struct DecodeInput {
   TimeWindow window;  // --from/--to
 };
 
-// The notes after a decode: which clock timed the frames, and why no axis was found.
-void noteDecoded(const CaptureReader& reader, const FrameClock& clock, const Decoder& decoder) {
+// Whether the frames' own timestamps (the capture's or the probe's) timed them.
+bool ownStamps(const CapturePipeline& pipeline) {
+  const ClockSource source = pipeline.clockStage().choice().source;
+  return source == ClockSource::Capture || source == ClockSource::Probe;
+}
+
+// The notes after a decode: which clock timed the frames (the `time` column, the VCD's times),
+// and why no axis was found.
+void noteDecoded(const CaptureReader& reader, const CapturePipeline& pipeline,
+                 const Decoder& decoder) {
+  const FrameClock& clock = pipeline.clock();
   if (clock.source() == TimestampSource::Probe || !clock.note().empty()) {
     fmt::print(stderr, "ncservo: {}: timestamps: {}{}{}\n", reader.path(),
                timestampSourceName(clock.source()), clock.note().empty() ? "" : "; ", clock.note());
+  }
+  const ClockChoice& choice = pipeline.clockStage().choice();
+  if (choice.source == ClockSource::Bus || choice.source == ClockSource::Cycles) {
+    fmt::print(stderr, "ncservo: {}: times on the clock {}\n", reader.path(),
+               describeClock(choice));
+  }
+  if (pipeline.clockStage().duplicates().count > 0) {
+    fmt::print(stderr, "ncservo: {}: duplicates: {} records ignored (the first: frame {})\n",
+               reader.path(), pipeline.clockStage().duplicates().count,
+               pipeline.clockStage().duplicates().first_frame);
   }
   if (decoder.axes().empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), decoder.noServoReason());
@@ -243,7 +262,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   const auto layout_only = [&](const PipelineFrame& f) {
     if (pipeline.validator() == nullptr) session->onLayoutOnlyFrame(f.frame, f.bytes);
   };
-  pipeline.setSinks({start, decode, layout_only, nullptr});
+  pipeline.setSinks({start, decode, layout_only, nullptr, nullptr});
   const Status status =
       streamCapture(*reader, pipeline, nullptr, cli::captureThreads(args.read_thread, 1));
   const CaptureRun& run = pipeline.run();
@@ -264,15 +283,20 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     return kExitCapture;
   }
   if (args.layout_only) printLayout(decoderInUse(), pipeline.inference());
-  noteDecoded(*reader, clock, decoderInUse());
+  noteDecoded(*reader, pipeline, decoderInUse());
   if (pipeline.lateLayout().certain_at > 0) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(),
                cli::describeLateLayout(pipeline.lateLayout()));
   }
   if (const Validator* timing = pipeline.validator()) {
-    fmt::print(stderr, "ncservo: {}: {}", reader->path(),
-               timingText(timing->bus().timing().summary(), timestampSourceName(clock.source()),
-                          timestampResolutionNs(clock.source(), reader->timestampDigits())));
+    fmt::print(
+        stderr, "ncservo: {}: {}", reader->path(),
+        timingText(timing->bus().timing().summary(),
+                   ownStamps(pipeline) ? timestampSourceName(clock.source())
+                                       : clockSourceName(pipeline.clockStage().choice().source),
+                   ownStamps(pipeline)
+                       ? timestampResolutionNs(clock.source(), reader->timestampDigits())
+                       : 1));
     std::fputs(dcText(timing->dc().stations(), timing->dc().settledNs()).c_str(), stderr);
   }
   if (!selected) {
@@ -302,8 +326,11 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   Status written;
   std::int64_t end_ns = 0;
   std::int64_t frame_ns = 0;  // the last frame's, where its findings and the capture's last show
+  bool clock_said = false;
   const auto decode = [&](const PipelineFrame& f) {
     if (!written) return;  // a failed write ends the work: the rest is read, not written
+    if (!clock_said) waveforms.timedBy(describeClock(pipeline.clockStage().choice()));
+    clock_said = true;
     frame_ns = f.time_ns - *pipeline.run().first_time_ns;
     end_ns = std::max(end_ns, frame_ns);
     written = waveforms.frame(frame_ns, *f.judged, pipeline.validator()->decoder());
@@ -311,7 +338,7 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   const auto findings = [&](const std::vector<Finding>& found) {
     if (written) written = waveforms.findings(frame_ns, found);
   };
-  pipeline.setSinks({nullptr, decode, nullptr, findings});
+  pipeline.setSinks({nullptr, decode, nullptr, findings, nullptr});
   // The VCD's text writer keeps a second thread busy already.
   const Status status =
       streamCapture(reader, pipeline, nullptr, cli::captureThreads(args.read_thread, 1, 2));
@@ -333,7 +360,7 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {} (the frames before it were decoded)\n", status.error().text());
     return kExitCapture;
   }
-  noteDecoded(reader, pipeline.clock(), validator.decoder());
+  noteDecoded(reader, pipeline, validator.decoder());
   if (!to_stdout) {
     const std::string save = cli::gtkwPathFor(args.output);
     std::FILE* file = std::fopen(save.c_str(), "w");

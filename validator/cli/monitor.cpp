@@ -509,7 +509,7 @@ int runMonitor(const MonitorArgs& args) {
   const auto findings = [&](const std::vector<Finding>& found) {
     reportFindings(found, pipeline, **writer, report, output);
   };
-  pipeline.setSinks({start, frame, nullptr, findings});
+  pipeline.setSinks({start, frame, nullptr, findings, nullptr});
   const LiveCapture captured = captureLive(args, handle, pipeline, output);
   std::fflush(stdout);
   output.board.clear();

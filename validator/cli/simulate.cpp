@@ -146,7 +146,7 @@ bool simulationOptions(SimulateArgs& args) {
     o.mid_start_fault = start->fault;
   }
   if (!args.capture_stamps.empty()) {
-    Result<sim::CaptureStamps> stamps = sim::parseCaptureStamps(args.capture_stamps);
+    Result<sim::StampShaping> stamps = sim::parseCaptureStamps(args.capture_stamps);
     if (!stamps) {
       fmt::print(stderr, "ncservo simulate: {}\n", stamps.error().text());
       return false;

@@ -37,6 +37,7 @@ Json notJudgedJson(const CaptureReport& r);
 Json truncationJson(const Truncation& t);
 Json segmentsJson(const CaptureReport& r);
 Json timingJson(const CaptureReport& r);
+Json clockJson(const CaptureReport& r);
 Json captureJson(const CaptureReport& r, Verdict verdict);
 // One incident (docs/incidents.md, INTERFACES.md "Incidents"), as JSON and JSON Lines write it.
 Json incidentJson(const CaptureReport& r, const Incident& incident);

@@ -47,8 +47,11 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
     const Json j{{"capture", r.path}, {"incident", incidentJson(r, incident)}};
     std::fputs((j.dump() + "\n").c_str(), sink.out);
   }
-  std::fputs((Json{{"capture", r.path}, {"timing", timingJson(r)}}.dump() + "\n").c_str(),
-             sink.out);
+  const Json timing{{"capture", r.path},
+                    {"timing", timingJson(r)},
+                    {"clock", clockJson(r)},
+                    {"duplicates", r.duplicates.count}};
+  std::fputs((timing.dump() + "\n").c_str(), sink.out);
   if (r.coverage.complete() && r.segment_count <= 1 && r.coverage.not_judged.empty() &&
       !r.truncation.any()) {
     return;

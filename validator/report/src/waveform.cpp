@@ -413,7 +413,9 @@ Status WaveformWriter::writeHeader(const Decoder& decoder) {
   put(fmt::format("$version ncservo {} $end\n", NCSERVO_VERSION));
   put("$comment layout source: ");
   put(layoutSourceName(decoder.source()));
-  put("; time 0 is the capture's first frame $end\n$timescale 1 ns $end\n");
+  put("; time 0 is the capture's first frame");
+  if (!clock_.empty()) put("; clock: " + clock_);
+  put(" $end\n$timescale 1 ns $end\n");
   put(fmt::format("$scope module {} $end\n$var string 1 {} findings $end\n$upscope $end\n",
                   kBusScope, ids_[0]));
   for (std::size_t a = 0; a < axes_.size(); ++a) {

@@ -71,7 +71,7 @@ std::uint16_t ipv4Checksum(const std::uint8_t* header, std::size_t size) {
 
 }  // namespace
 
-Result<CaptureStamps> parseCaptureStamps(std::string_view text) {
+Result<StampShaping> parseCaptureStamps(std::string_view text) {
   auto malformed = [&] {
     return fail(fmt::format(
         "--capture-stamps {}: expected SHAPE:LENGTH, SHAPE bunched, quantised or late and LENGTH "
@@ -93,12 +93,12 @@ Result<CaptureStamps> parseCaptureStamps(std::string_view text) {
     return fail(fmt::format("--capture-stamps {}: {} from {} to {}", text, row->length_is,
                             lengthText(row->least_ns), lengthText(row->most_ns)));
   }
-  return CaptureStamps{row->shape, *length, std::string(text)};
+  return StampShaping{row->shape, *length, std::string(text)};
 }
 
 // --- the clock ---
 
-CaptureClock::CaptureClock(const CaptureStamps& stamps, std::uint64_t seed)
+CaptureClock::CaptureClock(const StampShaping& stamps, std::uint64_t seed)
     : stamps_(stamps), late_(seed ^ kLateSeedSalt) {}
 
 std::int64_t CaptureClock::shaped(std::int64_t passed_ns) {

@@ -85,6 +85,9 @@ class WaveformWriter {
     std::optional<std::uint16_t> axis;  // none for the bus
   };
   const std::vector<Scope>& scopes() const { return scopes_; }
+  // The clock that times the frames (docs/timing.md#the-clock), said in the header's comment;
+  // before the first frame.
+  void timedBy(std::string clock) { clock_ = std::move(clock); }
 
  private:
   struct Value {
@@ -143,6 +146,7 @@ class WaveformWriter {
   std::vector<SignalBits> signal_bits_;                      // by signals_ index
   bool header_written_ = false;
   std::vector<Scope> scopes_;
+  std::string clock_;
   AxisSlot bus_;
   std::vector<AxisSlot> axes_;           // by scope order after the bus
   std::vector<std::ptrdiff_t> slot_of_;  // by axis index: index in axes_, or -1

@@ -51,13 +51,13 @@ inline constexpr StampShapeRow kStampShapes[] = {
 };
 
 // --capture-stamps as given: the shape and its length.
-struct CaptureStamps {
+struct StampShaping {
   StampShape shape = StampShape::Exact;
   std::int64_t length_ns = 0;  // the burst window, the quantum or the most a stamp is late
   std::string text;            // as given, for messages
 };
 // "bunched:4ms", "quantised:1ms", "late:400us"; an error says what is wrong with the text.
-Result<CaptureStamps> parseCaptureStamps(std::string_view text);
+Result<StampShaping> parseCaptureStamps(std::string_view text);
 
 // A burst's records are this far apart in capture order, as a NIC's coalesced interrupt hands
 // them over one after the other.
@@ -69,7 +69,7 @@ inline constexpr std::int64_t kDuplicateLagNs = 1 * kUs;
 // records' times so far and the seed. Its stamps never go back, as a PC's do not.
 class CaptureClock {
  public:
-  CaptureClock(const CaptureStamps& stamps, std::uint64_t seed);
+  CaptureClock(const StampShaping& stamps, std::uint64_t seed);
   // The stamp of the next record, which passed the capture point at `passed_ns`.
   std::int64_t stamp(std::int64_t passed_ns);
   // The stamp of the mirrored copy of the record just stamped `original_ns`: 1 us later, or the
@@ -80,7 +80,7 @@ class CaptureClock {
   std::int64_t shaped(std::int64_t passed_ns);
   std::int64_t kept(std::int64_t stamp_ns);
 
-  CaptureStamps stamps_;
+  StampShaping stamps_;
   Rng late_;
   std::int64_t burst_ = -1;    // the burst window of the last record (Bunched)
   std::int64_t in_burst_ = 0;  // records stamped in it so far

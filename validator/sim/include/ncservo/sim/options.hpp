@@ -165,7 +165,7 @@ struct SimOptions {
   int io_task_us = 0;  // the terminals in a frame of their own at this cycle (0: none)
   // What the capturing PC does to the recording (docs/simulate.md#the-capturing-pc); the
   // defaults do nothing.
-  CaptureStamps capture_stamps;
+  StampShaping capture_stamps;
   bool duplicate_records = false;  // every record twice, as a mirroring switch port gives it
   bool second_interface = false;   // the PC's office port as a second interface (pcapng only)
   bool writes_pcapng = false;      // the capture is a pcapng (the CLI says, from --format)
