@@ -126,15 +126,31 @@ done
 "$NCSERVO" validate "$WORK/healthy-bunched.pcap" >"$WORK/h.txt" || fail "healthy bunched: exit $?"
 grep -q '^clock: bus (reference clock 0x[0-9a-f]*, FRMW of 0x0910); capture stamps bunched into 4 ms bursts' \
   "$WORK/h.txt" || fail "the text report's clock line: $(grep '^clock' "$WORK/h.txt")"
+# The plugin's timing block is validate's, on the bus's clock.
+"$TSHARK" "$PLUGIN" -2 -r "$WORK/healthy-bunched.pcap" -q -z ncservo,timing >"$WORK/z.txt" 2>&1 ||
+  fail "tshark -z ncservo,timing: exit $?"
+grep -E '^timing \(|^  (return|worst)' "$WORK/h.txt" >"$WORK/h.timing"
+grep -E '^timing \(|^  (return|worst)' "$WORK/z.txt" >"$WORK/z.timing"
+grep -q '^timing (bus timestamps, 1 ns): cycle .* median 250.000 ' "$WORK/h.timing" ||
+  fail "healthy bunched: the timing block: $(head -1 "$WORK/h.timing")"
+diff -u "$WORK/h.timing" "$WORK/z.timing" >"$WORK/z.diff" ||
+  fail "tshark -2 -z ncservo,timing differs from validate: $(head -8 "$WORK/z.diff")"
 "$NCSERVO" validate "$WORK/healthy-twice.pcap" >"$WORK/h.txt" || fail "healthy twice: exit $?"
 grep -q '^duplicates: [0-9]* records ignored (the first: frame 2)' "$WORK/h.txt" ||
   fail "the text report's duplicates line: $(grep '^dup' "$WORK/h.txt")"
+# Wireshark marks each copy, and only the copies: the even frames.
+validate "$WORK/healthy.pcap" "$WORK/h.json"
+records=$(field "$WORK/h.json" 'c["frames"]')
+"$TSHARK" "$PLUGIN" -2 -r "$WORK/healthy-twice.pcap" -Y ncservo.duplicate -T fields \
+  -e frame.number >"$WORK/copies.txt" 2>&1 || fail "tshark -Y ncservo.duplicate: exit $?"
+awk '$1 % 2 == 1 { odd++ } END { exit odd > 0 || NR != '"$records"' }' "$WORK/copies.txt" ||
+  fail "tshark -2 marks $(wc -l <"$WORK/copies.txt") records as duplicates, not the $records copies"
 
 # The independent generator, with injected violations, against its own list of them.
 for shape in bunched:4ms quantised:1ms late:400us duplicates; do
   args=(--capture-stamps "$shape")
   [ $shape = duplicates ] && args=(--duplicate-records)
-  python3 "$GEN" --axes 4 --cycles 4000 --inject SE-001@0.8:1 --inject COM-002@1.6 \
+  python3 "$GEN" --axes 4 --cycles 12000 --cycle-us 250 --inject SE-001@0.8:1 --inject COM-002@1.6 \
     "${args[@]}" -o "$WORK/gen.pcap" --findings "$WORK/gen.findings.json" ||
     fail "gen_capture.py ${args[*]}"
   validate "$WORK/gen.pcap" "$WORK/gen.json"

@@ -51,9 +51,11 @@ grep -q "^layout: inferred, 5 axes" "$WORK/plain.txt" || fail "default layout: $
   --layout-config "$WORK/fields.toml" 2>/dev/null
 chmod a+r "$WORK/fields.pcap" "$WORK/fields.toml"
 # (but those only a finding carries: a conforming capture has none; plugin_views.sh shows them;
-# and an incident's evidence, which its following error lacks here: incidents_plugin.sh shows it)
+# and an incident's evidence, which its following error lacks here: incidents_plugin.sh shows it;
+# and a duplicate record's mark, which a capture without copies lacks: capture_clock.sh shows it)
 mapfile -t fields < <("$NCSERVO" fields | cut -f1 |
-  grep -v -x -e ncservo.finding -e ncservo.since_frame -e ncservo.incident.evidence)
+  grep -v -x -e ncservo.finding -e ncservo.since_frame -e ncservo.incident.evidence \
+    -e ncservo.duplicate)
 # the same with the layout learned from the start-up (no preference set)
 "$TSHARK" "$PLUGIN" -r "$WORK/fields.pcap" -T fields -e ncservo.axis -e ncservo.sew -Y ncservo.sew \
   >"$WORK/learned.tsv" 2>"$WORK/tshark.err" || fail "tshark exit $?"

@@ -180,6 +180,19 @@ bool ownStamps(const CapturePipeline& pipeline) {
   return source == ClockSource::Capture || source == ClockSource::Probe;
 }
 
+// decode --timing's block on standard error, on the clock that timed the frames.
+void printTiming(const CaptureReader& reader, const CapturePipeline& pipeline) {
+  const Validator& timing = *pipeline.validator();
+  const TimestampSource stamps = pipeline.clock().source();
+  const bool own = ownStamps(pipeline);
+  fmt::print(stderr, "ncservo: {}: {}", reader.path(),
+             timingText(timing.bus().timing().summary(),
+                        own ? timestampSourceName(stamps)
+                            : clockSourceName(pipeline.clockStage().choice().source),
+                        own ? timestampResolutionNs(stamps, reader.timestampDigits()) : 1));
+  std::fputs(dcText(timing.dc().stations(), timing.dc().settledNs()).c_str(), stderr);
+}
+
 // The notes after a decode: which clock timed the frames (the `time` column, the VCD's times),
 // and why no axis was found.
 void noteDecoded(const CaptureReader& reader, const CapturePipeline& pipeline,
@@ -266,7 +279,6 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   const Status status =
       streamCapture(*reader, pipeline, nullptr, cli::captureThreads(args.read_thread, 1));
   const CaptureRun& run = pipeline.run();
-  const FrameClock& clock = pipeline.clock();
   cycles.finish(rows);
   write();
   if (selected) selected = cli::checkAxisSelection(args.axes, decoderInUse().axes());
@@ -288,17 +300,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(),
                cli::describeLateLayout(pipeline.lateLayout()));
   }
-  if (const Validator* timing = pipeline.validator()) {
-    fmt::print(
-        stderr, "ncservo: {}: {}", reader->path(),
-        timingText(timing->bus().timing().summary(),
-                   ownStamps(pipeline) ? timestampSourceName(clock.source())
-                                       : clockSourceName(pipeline.clockStage().choice().source),
-                   ownStamps(pipeline)
-                       ? timestampResolutionNs(clock.source(), reader->timestampDigits())
-                       : 1));
-    std::fputs(dcText(timing->dc().stations(), timing->dc().settledNs()).c_str(), stderr);
-  }
+  if (pipeline.validator() != nullptr) printTiming(*reader, pipeline);
   if (!selected) {
     fmt::print(stderr, "ncservo: {}\n", selected.error().text());
     return kExitUsage;
