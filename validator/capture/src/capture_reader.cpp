@@ -621,7 +621,12 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
     }
   }
   reader->link_ = linkTypeFromDlt(reader->dlt_);
-  if (reader->link_ == LinkType::Unsupported) return fail(unsupportedLinkType(name, reader->dlt_));
+  // A pcapng read in place may hold other interfaces after its first (docs/protocol.md §8): its
+  // records of a link type the walker does not know are counted, not refused.
+  const bool each_interface = reader->parser_ && reader->pcapng_format_;
+  if (reader->link_ == LinkType::Unsupported && !each_interface) {
+    return fail(unsupportedLinkType(name, reader->dlt_));
+  }
   return reader;
 }
 
@@ -828,6 +833,10 @@ std::optional<RecordSpan> CaptureReader::storedSpan() {
   return RecordSpan{at - length, length};
 }
 
+std::size_t CaptureReader::sectionInterfaces() const {
+  return parser_ ? parser_->sectionInterfaces() : 1;
+}
+
 Result<bool> CaptureReader::nextInPlace(CaptureRecord& record) {
   switch (parser_->next(record)) {
     case RecordParser::Outcome::Record:
@@ -875,6 +884,9 @@ Result<bool> CaptureReader::next(CaptureRecord& record) {
   record.captured = header->caplen;
   record.original = header->len;
   record.stored = stream_ ? std::nullopt : storedSpan();
+  record.interface = 0;
+  record.link_type = dlt_;
+  record.link = link_;
   return true;
 }
 
