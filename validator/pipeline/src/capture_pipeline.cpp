@@ -119,8 +119,12 @@ CaptureInterface* CapturePipeline::interfaceOf(const CaptureRecord& record) {
 
 std::optional<WalkedRecord> CapturePipeline::walk(const CaptureRecord& record, EcatFrame& frame) {
   if (!run_.first_time_ns) run_.first_time_ns = record.time_ns;
-  run_.records = record.frame;
-  if (record.captured < record.original && run_.snapped++ == 0) run_.first_snapped = record.frame;
+  // Records merged by time may come out of frame order (record_merge.hpp).
+  run_.records = std::max(run_.records, record.frame);
+  if (record.captured < record.original &&
+      (run_.snapped++ == 0 || record.frame < run_.first_snapped)) {
+    run_.first_snapped = record.frame;
+  }
   CaptureInterface* counted = interfaceOf(record);
   if (counted != nullptr) {
     ++counted->frames;

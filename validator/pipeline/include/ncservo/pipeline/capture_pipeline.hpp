@@ -121,8 +121,12 @@ class CapturePipeline {
   // the record counted in run() and under its interface, walked into `frame` and timed by clock().
   // None when the frame goes no further (not EtherCAT, not process data, a probe's bus fault, a
   // link type the walker does not know). The two halves share no state but run().first_time_ns,
-  // set by the first record, before any frame is delivered.
+  // set by the first record (or setTimeOrigin), before any frame is delivered.
   std::optional<WalkedRecord> walk(const CaptureRecord& record, EcatFrame& frame);
+  // The time of the capture's frame 1, when the records come merged by time (record_merge.hpp)
+  // and another came first: the capture's own seconds count from frame 1, as Wireshark's
+  // frame.time_relative. Given before that first record.
+  void setTimeOrigin(std::int64_t time_ns) { run_.first_time_ns = time_ns; }
   // One frame already walked over `bytes` (any status but NotEtherCat, NotDatagrams and
   // BusFault) and timed, as the plugin's first pass sees it: held or delivered. `judged`:
   // inside the time window.
