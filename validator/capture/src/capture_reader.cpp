@@ -833,14 +833,11 @@ std::optional<RecordSpan> CaptureReader::storedSpan() {
   return RecordSpan{at - length, length};
 }
 
-std::size_t CaptureReader::sectionInterfaces() const {
-  return parser_ ? parser_->sectionInterfaces() : 1;
-}
-
 Result<bool> CaptureReader::nextInPlace(CaptureRecord& record) {
   switch (parser_->next(record)) {
     case RecordParser::Outcome::Record:
       record.frame = ++frames_;
+      section_interfaces_ = parser_->sectionInterfaces();
       if (stream_) {
         record.stored.reset();
       } else if (mapped_ != nullptr) {

@@ -4,23 +4,36 @@
 
 namespace ncservo {
 
+namespace {
+
+// The capture's seconds count from its frame 1, which the merge may give after another.
+void keepOrigin(const RecordMerge& merged, const Result<bool>& read, const CaptureRecord& record,
+                CapturePipeline& pipeline) {
+  if (read && *read && record.frame != 1 && merged.origin()) {
+    pipeline.setTimeOrigin(*merged.origin());
+  }
+}
+
+}  // namespace
+
 Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop,
                      CaptureThreads threads) {
   RecordMerge merged(reader);
-  bool first = true;
-  const auto next = [&](CaptureRecord& record) {
-    Result<bool> read = merged.next(record);
-    // The capture's seconds count from its frame 1, which the merge may give later.
-    if (first && read && *read) {
-      first = false;
-      if (record.frame != 1 && merged.origin()) pipeline.setTimeOrigin(*merged.origin());
-    }
-    return read;
-  };
-  if (threads == CaptureThreads::Two) return streamOnTwoThreads(next, pipeline, stop);
+  if (threads == CaptureThreads::Two) {
+    bool first = true;
+    return streamOnTwoThreads(
+        [&](CaptureRecord& record) {
+          Result<bool> read = merged.next(record);
+          if (first) keepOrigin(merged, read, record, pipeline);
+          first = false;
+          return read;
+        },
+        pipeline, stop);
+  }
   CaptureRecord record;
-  Result<bool> status;
-  while ((status = next(record)) && *status) {
+  Result<bool> status = merged.next(record);
+  keepOrigin(merged, status, record, pipeline);
+  for (; status && *status; status = merged.next(record)) {
     if (stopRequested(stop)) return endStream(status, true, pipeline, stop);
     pipeline.onRecord(record);
   }

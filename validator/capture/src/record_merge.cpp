@@ -1,6 +1,7 @@
 #include "ncservo/capture/record_merge.hpp"
 
 #include <algorithm>
+#include <tuple>
 
 namespace ncservo {
 
@@ -9,24 +10,25 @@ RecordMerge::RecordMerge(CaptureReader& reader, MergeLimits limits)
   limits_.records = std::max<std::size_t>(limits_.records, 1);
 }
 
-Result<bool> RecordMerge::next(CaptureRecord& record) {
+void RecordMerge::start(Result<bool>& read, CaptureRecord& record) {
+  if (!origin_ns_) origin_ns_ = record.time_ns;
+  if (reader_.sectionInterfaces() < 2) return;
+  // The section's interfaces are described before its records: from its first record on, every
+  // record is held until it is due.
+  merging_ = true;
+  latest_ns_ = record.time_ns;
+  hold(record);
+  read = nextMerged(record);
+}
+
+Result<bool> RecordMerge::nextMerged(CaptureRecord& record) {
   if (given_ != kNone) {
     free_.push_back(given_);
     given_ = kNone;
   }
-  if (!merging_) {
-    Result<bool> read = reader_.next(record);
-    if (read && *read && !origin_ns_) origin_ns_ = record.time_ns;
-    if (!read || !*read || reader_.sectionInterfaces() < 2) return read;
-    // The section's interfaces are described before its records: from its first record on,
-    // every record is held until it is due.
-    merging_ = true;
-    latest_ns_ = record.time_ns;
-    hold(record);
-  }
   for (;;) {
-    if (const std::size_t at = due(); at < order_.size()) {
-      give(at, record);
+    if (const std::size_t lane = due(); lane != kNone) {
+      give(lanes_[lane], record);
       return true;
     }
     if (ended_) return end_;
@@ -37,16 +39,16 @@ Result<bool> RecordMerge::next(CaptureRecord& record) {
       continue;
     }
     // A later section of one interface: nothing left to merge with.
-    if (order_.empty() && reader_.sectionInterfaces() < 2) {
+    if (held_ == 0 && reader_.sectionInterfaces() < 2) {
       merging_ = false;
       record = read_;
       return true;
     }
     // Further back than the look-ahead's window: not a record handed over late but a jump of the
     // capture (another recording appended, docs/cli.md "Appended or paused captures"). What is
-    // held goes first, as the file has it, and the merge starts again from there.
+    // held goes first, merged as before, and the merge starts again from there.
     if (read_.time_ns < latest_ns_ - limits_.window_ns) {
-      barrier_ = order_.size();
+      ++era_;
       latest_ns_ = read_.time_ns;
     }
     latest_ns_ = std::max(latest_ns_, read_.time_ns);
@@ -65,33 +67,64 @@ void RecordMerge::hold(const CaptureRecord& record) {
   held.record = record;
   held.bytes.assign(record.data, record.data + record.captured);
   held.record.data = held.bytes.data();
-  order_.push_back(slot);
+  held.era = era_;
+  held.read = reads_++;
+  laneOf(record.interface).slots.push_back(slot);
+  ++held_;
 }
 
-// Each interface's first held record is its next; the earliest of those is due once the look-ahead
-// is full, a record as much later as the window was read, or the reading ended. A tie goes to the
-// one first in the file.
-std::size_t RecordMerge::due() const {
-  if (order_.empty()) return kNone;
-  heads_.clear();
-  std::size_t best = kNone;
-  // Before a jump back, only what was held before it, and at once.
-  const std::size_t among = barrier_ > 0 ? barrier_ : order_.size();
-  for (std::size_t i = 0; i < among; ++i) {
-    const CaptureRecord& r = slots_[order_[i]].record;
-    if (std::find(heads_.begin(), heads_.end(), r.interface) != heads_.end()) continue;
-    heads_.push_back(r.interface);
-    if (best == kNone || r.time_ns < slots_[order_[best]].record.time_ns) best = i;
+RecordMerge::Lane& RecordMerge::laneOf(std::uint32_t interface) {
+  Lane* idle = nullptr;
+  for (Lane& lane : lanes_) {
+    if (lane.interface == interface) return lane;
+    if (idle == nullptr && lane.empty()) idle = &lane;
   }
-  const std::int64_t time_ns = slots_[order_[best]].record.time_ns;
-  const bool full = order_.size() >= limits_.records;
-  return barrier_ > 0 || ended_ || full || latest_ns_ - time_ns >= limits_.window_ns ? best : kNone;
+  // An empty lane is taken over once there are as many as records may be held: a capture of
+  // many interfaces does not grow them without bound.
+  if (idle != nullptr && lanes_.size() >= limits_.records) {
+    idle->interface = interface;
+    return *idle;
+  }
+  lanes_.push_back({.interface = interface, .slots = {}, .front = 0});
+  return lanes_.back();
 }
 
-void RecordMerge::give(std::size_t at, CaptureRecord& record) {
-  const std::size_t slot = order_[at];
-  order_.erase(order_.begin() + static_cast<std::ptrdiff_t>(at));
-  if (barrier_ > 0) --barrier_;
+// Each interface's first held record is its next; the earliest of those goes first (those read
+// before a jump back before all others, a tie to the one first in the file), once the look-ahead
+// is full, a record as much later as the window was read, or the reading ended.
+std::size_t RecordMerge::due() const {
+  std::size_t best = kNone;
+  const Held* first = nullptr;
+  for (std::size_t i = 0; i < lanes_.size(); ++i) {
+    const Lane& lane = lanes_[i];
+    if (lane.empty()) continue;
+    const Held& next = slots_[lane.slots[lane.front]];
+    if (first == nullptr || std::tie(next.era, next.record.time_ns, next.read) <
+                                std::tie(first->era, first->record.time_ns, first->read)) {
+      best = i;
+      first = &next;
+    }
+  }
+  if (first == nullptr) return kNone;
+  const bool full = held_ >= limits_.records;
+  const bool before_jump = first->era < era_;
+  return before_jump || ended_ || full || latest_ns_ - first->record.time_ns >= limits_.window_ns
+             ? best
+             : kNone;
+}
+
+void RecordMerge::give(Lane& lane, CaptureRecord& record) {
+  const std::size_t slot = lane.slots[lane.front++];
+  // Given ones are dropped from the lane's front now and then, so it stays small.
+  if (lane.empty()) {
+    lane.slots.clear();
+    lane.front = 0;
+  } else if (lane.front >= limits_.records) {
+    lane.slots.erase(lane.slots.begin(),
+                     lane.slots.begin() + static_cast<std::ptrdiff_t>(lane.front));
+    lane.front = 0;
+  }
+  --held_;
   record = slots_[slot].record;
   given_ = slot;
 }

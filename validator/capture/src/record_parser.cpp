@@ -77,6 +77,7 @@ RecordParser::RecordParser(CaptureBytes& bytes, const RecordFormat& format,
       at_(format.pcapng ? 0 : kPcapFileHeader),
       big_(format.big_endian),
       pcap_link_(linkTypeFromDlt(format.dlt)) {
+  if (format.pcapng) section_interfaces_ = 0;
   // Versions before 2.3 wrote the two lengths the other way round; 2.3 did either (sf-pcap.c).
   if (format.version_major == 543 || (format.version_major == 2 && format.version_minor < 3)) {
     lengths_ = Lengths::Swapped;
@@ -328,6 +329,7 @@ bool RecordParser::readInterface(const PcapngBlock& block) {
   first_interface_ = false;
   if (!addInterface(block.body + 8, block.size - 8, block.type, added)) return false;
   if (interfaces_seen_ < std::numeric_limits<std::uint32_t>::max()) ++interfaces_seen_;
+  section_interfaces_ = interfaces_.size();
   return true;
 }
 
@@ -352,6 +354,7 @@ bool RecordParser::readSectionHeader(const PcapngBlock& block) {
     return false;
   }
   interfaces_.clear();
+  section_interfaces_ = 0;
   return true;
 }
 

@@ -103,18 +103,14 @@ void CapturePipeline::onRecord(const CaptureRecord& record) {
 }
 
 CaptureInterface* CapturePipeline::interfaceOf(const CaptureRecord& record) {
-  if (interface_at_ < interfaces_.size() && interfaces_[interface_at_].id == record.interface) {
-    return &interfaces_[interface_at_];
-  }
-  for (std::size_t i = 0; i < interfaces_.size(); ++i) {
-    if (interfaces_[i].id != record.interface) continue;
-    interface_at_ = i;
-    return &interfaces_[i];
+  for (CaptureInterface& i : interfaces_) {
+    if (i.id == record.interface) return last_interface_ = &i;
   }
   if (interfaces_.size() >= kMaxInterfaces) return nullptr;
+  // Room for all at once: the pointer to the last one stays valid.
+  if (interfaces_.empty()) interfaces_.reserve(kMaxInterfaces);
   interfaces_.push_back({.id = record.interface, .link_type = record.link_type});
-  interface_at_ = interfaces_.size() - 1;
-  return &interfaces_.back();
+  return last_interface_ = &interfaces_.back();
 }
 
 std::optional<WalkedRecord> CapturePipeline::walk(const CaptureRecord& record, EcatFrame& frame) {
@@ -125,7 +121,10 @@ std::optional<WalkedRecord> CapturePipeline::walk(const CaptureRecord& record, E
       (run_.snapped++ == 0 || record.frame < run_.first_snapped)) {
     run_.first_snapped = record.frame;
   }
-  CaptureInterface* counted = interfaceOf(record);
+  // A capture of one interface finds it at once.
+  CaptureInterface* counted =
+      last_interface_ != nullptr && last_interface_->id == record.interface ? last_interface_
+                                                                            : interfaceOf(record);
   if (counted != nullptr) {
     ++counted->frames;
   } else {

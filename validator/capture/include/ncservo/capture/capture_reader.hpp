@@ -71,7 +71,7 @@ class CaptureReader {
   // How many interfaces the pcapng section being read has described so far; 1 for a pcap, and
   // for a pcapng libpcap reads (it opens only those whose interfaces share one link type, and
   // does not say which interface a record came from).
-  std::size_t sectionInterfaces() const;
+  std::size_t sectionInterfaces() const { return section_interfaces_; }
   Compression compression() const { return compression_; }
   const std::string& path() const { return path_; }
   int timestampDigits() const { return timestamp_digits_; }
@@ -123,6 +123,7 @@ class CaptureReader {
   int dlt_ = 0;
   Compression compression_ = Compression::None;
   std::uint64_t frames_ = 0;
+  std::size_t section_interfaces_ = 1;  // the parser's, after the last record
   int timestamp_digits_ = 6;
   bool pcapng_ = false;           // a plain pcapng file, whose records are located
   bool pcapng_format_ = false;    // a pcapng, plain or not

@@ -35,7 +35,16 @@ class RecordMerge {
   // As CaptureReader::next: the next record by time, its bytes valid until the next call; false
   // at the end; a read error once every record before it was given. Frame numbers stay the
   // file's (as Wireshark numbers frames), so they may go back where interfaces were merged.
-  Result<bool> next(CaptureRecord& record);
+  // Inline, one result returned from every path: a section of one interface costs a record a
+  // few instructions over the reader's own (docs/benchmarks.md "Reading captures").
+  Result<bool> next(CaptureRecord& record) {
+    const bool merging = merging_;
+    Result<bool> read = merging ? nextMerged(record) : reader_.next(record);
+    if (!merging && read && *read && (!origin_ns_ || reader_.sectionInterfaces() > 1)) {
+      start(read, record);
+    }
+    return read;
+  }
   // The time of the capture's first record (frame 1), once read: what its seconds count from.
   const std::optional<std::int64_t>& origin() const { return origin_ns_; }
 
@@ -43,24 +52,39 @@ class RecordMerge {
   struct Held {
     CaptureRecord record;
     std::vector<std::uint8_t> bytes;  // the record's, copied out of the reader's window
+    std::uint64_t era = 0;            // jumps back read before it
+    std::uint64_t read = 0;           // its place in the file's order
   };
+  // One interface's held records, in file order: slots[front..] (the front ones given).
+  struct Lane {
+    std::uint32_t interface = 0;
+    std::vector<std::size_t> slots;
+    std::size_t front = 0;
+    bool empty() const { return front == slots.size(); }
+  };
+  // The capture's first record, or the first of a section of several interfaces (then held, and
+  // `read` and `record` become the merge's first).
+  void start(Result<bool>& read, CaptureRecord& record);
+  Result<bool> nextMerged(CaptureRecord& record);
   void hold(const CaptureRecord& record);
-  // The position in order_ of the record to give now; order_.size() when none is due yet.
+  Lane& laneOf(std::uint32_t interface);
+  // The lane whose next record is to be given now; kNone when none is due yet.
   std::size_t due() const;
-  void give(std::size_t at, CaptureRecord& record);
+  void give(Lane& lane, CaptureRecord& record);
 
   CaptureReader& reader_;
   MergeLimits limits_;
   bool merging_ = false;
   static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-  std::vector<Held> slots_;         // limits_.records + 1, reused
-  std::vector<std::size_t> order_;  // the held slots, in file order
-  std::vector<std::size_t> free_;   // the slots not held
-  std::size_t given_ = kNone;       // the slot whose bytes the caller holds until the next call
-  std::int64_t latest_ns_ = 0;      // the latest time read while merging (since a jump back)
-  std::size_t barrier_ = 0;         // the first held records, read before a jump back, go first
-  CaptureRecord read_;              // the record just read
-  mutable std::vector<std::uint32_t> heads_;  // due()'s: the interfaces whose next it has seen
+  std::vector<Held> slots_;        // reused; at most limits_.records held and one given
+  std::vector<std::size_t> free_;  // the slots not held
+  std::vector<Lane> lanes_;        // by interface, kept while empty (few)
+  std::size_t held_ = 0;
+  std::size_t given_ = kNone;   // the slot whose bytes the caller holds until the next call
+  std::int64_t latest_ns_ = 0;  // the latest time read while merging (since a jump back)
+  std::uint64_t era_ = 0;       // jumps back so far
+  std::uint64_t reads_ = 0;
+  CaptureRecord read_;  // the record just read
   std::optional<std::int64_t> origin_ns_;
   bool ended_ = false;
   Result<bool> end_ = false;  // how the reader ended: false, or its error

@@ -85,7 +85,7 @@ class RecordParser {
   Outcome next(CaptureRecord& record);
   const std::string& error() const { return error_; }
   // The interfaces of the current pcapng section described so far (1 for a pcap).
-  std::size_t sectionInterfaces() const { return format_.pcapng ? interfaces_.size() : 1; }
+  std::size_t sectionInterfaces() const { return section_interfaces_; }
 
   // The most interfaces one section may describe: their descriptions are kept while the section
   // lasts, so a file of nothing else must not take memory without bound.
@@ -136,9 +136,10 @@ class RecordParser {
   std::uint64_t at_ = 0;  // the next record's (block's) offset
   bool big_ = false;
   enum class Lengths : std::uint8_t { Kept, Swapped, MaybeSwapped } lengths_ = Lengths::Kept;
-  bool first_interface_ = true;        // the next interface description is the capture's first
-  std::vector<Interface> interfaces_;  // of the current section
-  std::uint32_t interfaces_seen_ = 0;  // in the sections before and this one: the next one's id
+  bool first_interface_ = true;         // the next interface description is the capture's first
+  std::vector<Interface> interfaces_;   // of the current section
+  std::size_t section_interfaces_ = 1;  // interfaces_.size() for a pcapng, asked every record
+  std::uint32_t interfaces_seen_ = 0;   // in the sections before and this one: the next one's id
   LinkType pcap_link_ = LinkType::Unsupported;
   // Statistics blocks passed since the last record: counted once a record or the end follows
   // (as the libpcap path counts them).

@@ -175,7 +175,8 @@ class CapturePipeline {
                const ByteReader& bytes);
   void deliverLayoutOnly(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
                          const ByteReader& bytes);
-  // The count of the record's interface; null past kMaxInterfaces (then counted as omitted).
+  // The count of the record's interface, found or added (then the last one); null past
+  // kMaxInterfaces (its records are counted as omitted).
   CaptureInterface* interfaceOf(const CaptureRecord& record);
 
   std::optional<RuleSettings> rules_;
@@ -190,9 +191,9 @@ class CapturePipeline {
   Sinks sinks_;
   bool started_ = false;
   CaptureRun run_;
-  EcatFrame frame_;                           // the record being walked
-  std::vector<CaptureInterface> interfaces_;  // in the order first seen
-  std::size_t interface_at_ = 0;              // the last record's, in interfaces_
+  EcatFrame frame_;                             // the record being walked
+  std::vector<CaptureInterface> interfaces_;    // in the order first seen
+  CaptureInterface* last_interface_ = nullptr;  // the last record's, in interfaces_
   std::uint64_t interface_records_omitted_ = 0;
 };
 
