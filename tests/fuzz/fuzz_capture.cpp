@@ -61,7 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     while ((status = reader->next(record)) && *status) {
       if (record.frame == 1) report.first_time_ns = record.time_ns;
       report.frames = record.frame;
-      fuzz::feedFrame(validator, reader->link(), record.frame, record.time_ns, record.data,
+      fuzz::feedFrame(validator, record.link, record.frame, record.time_ns, record.data,
                       record.captured, frame);
       for (const Finding& f : validator.findings()) {
         const cli::BaselineState state = report.tally(f);

@@ -1,5 +1,7 @@
 // CaptureReader (capture_reader.hpp) over plain, gzip and zstd pcap and pcapng, from a file and
-// from a pipe on standard input; cut and corrupt compressed streams (docs/protocol.md §8).
+// from a pipe on standard input; cut and corrupt compressed streams (docs/protocol.md §8); a
+// pcapng's interfaces of their own, and RecordMerge (record_merge.hpp) merging them by time
+// (docs/protocol.md §8).
 #include "ncservo/capture/capture_reader.hpp"
 
 #include <gtest/gtest.h>
@@ -9,17 +11,22 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <optional>
+#include <ostream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "capture_builder.hpp"
 #include "ncservo/capture/capture_writer.hpp"
+#include "ncservo/capture/record_merge.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
+using test::PcapngFile;
 
 struct Frame {
   std::int64_t time_ns;
@@ -184,7 +191,7 @@ TEST_P(ReaderFormats, ReadsEveryFrame) {
   ASSERT_TRUE(opened) << opened.error().text();
   CaptureReader& reader = **opened;
   EXPECT_EQ(reader.compression(), row.compression);
-  EXPECT_EQ(reader.link(), LinkType::Ethernet);
+  EXPECT_EQ(reader.dlt(), 1);
   EXPECT_EQ(reader.path(), row.via_stdin ? "standard input" : path);
   const ReadBack got = readAll(reader);
   EXPECT_FALSE(got.error) << got.error->text();
@@ -298,6 +305,251 @@ TEST(CaptureReader, CompressedNotACaptureSaysSo) {
       << opened.error().text();
   std::remove(path.c_str());
 }
+
+// A pcapng of several interfaces, read by the reader alone (file order) or merged by time: each
+// row from a plain file, a gzip file and zstd on standard input, which must all give the same.
+struct Delivered {
+  std::uint64_t frame;
+  std::uint32_t interface;
+  int link_type;
+  std::int64_t time_ns;
+};
+bool operator==(const Delivered& a, const Delivered& b) {
+  return a.frame == b.frame && a.interface == b.interface && a.link_type == b.link_type &&
+         a.time_ns == b.time_ns;
+}
+std::ostream& operator<<(std::ostream& out, const Delivered& d) {
+  return out << "{frame " << d.frame << ", interface " << d.interface << ", link type "
+             << d.link_type << ", " << d.time_ns << " ns}";
+}
+
+struct InterfacesRow {
+  const char* name;
+  Bytes file;
+  bool merged;  // through RecordMerge, else the reader's own order
+  std::vector<Delivered> want;
+  std::optional<std::uint64_t> error_frame = std::nullopt;  // the frame the error names
+  const char* error = nullptr;                              // and what it says
+  MergeLimits limits = {};
+};
+
+constexpr std::int64_t kUs = 1000, kMs = 1000000;
+
+// Interfaces with nanosecond timestamps, each record's bytes its frame number (to check the bytes
+// that come are the record's).
+PcapngFile twoInterfaces(std::uint16_t second = 1) {
+  PcapngFile file(false);
+  file.interface(1, 65535, 9).interface(second, 65535, 9);
+  return file;
+}
+PcapngFile& at(PcapngFile& file, std::uint32_t interface, std::int64_t ns, std::uint8_t frame) {
+  return file.enhanced(interface, static_cast<std::uint64_t>(ns), 60, 60, 60, frame);
+}
+
+std::vector<InterfacesRow> interfacesRows() {
+  std::vector<InterfacesRow> r;
+  {
+    PcapngFile f(false);
+    f.interface(1, 65535, 6).interface(113, 65535, 9, 100);
+    f.enhanced(0, 1500000, 60, 60, 60, 1).enhanced(1, 2000000007, 60, 60, 60, 2);
+    f.enhanced(0, 1500001, 60, 60, 60, 3);
+    r.push_back(
+        {"link_types_resolutions_and_offset_of_their_own",
+         f.w.out,
+         false,
+         {{1, 0, 1, 1500 * kMs}, {2, 1, 113, 102'000'000'007}, {3, 0, 1, 1500 * kMs + 1 * kUs}}});
+  }
+  {
+    PcapngFile f(false);
+    f.interface(147, 65535, 9).interface(1, 65535, 9);
+    at(f, 0, 0, 1);
+    at(f, 1, 10, 2);
+    r.push_back({"first_interface_of_a_link_type_not_walked",
+                 f.w.out,
+                 false,
+                 {{1, 0, 147, 0}, {2, 1, 1, 10}}});
+  }
+  {
+    // A TAP's two directions, the returned copy of the second cycle written before its master.
+    PcapngFile f = twoInterfaces();
+    at(f, 0, 0, 1);
+    at(f, 1, 50 * kUs, 2);
+    at(f, 1, 1050 * kUs, 3);
+    at(f, 0, 1000 * kUs, 4);
+    at(f, 0, 2000 * kUs, 5);
+    at(f, 1, 2050 * kUs, 6);
+    r.push_back({"tap_directions_merged_by_time",
+                 f.w.out,
+                 true,
+                 {{1, 0, 1, 0},
+                  {2, 1, 1, 50 * kUs},
+                  {4, 0, 1, 1000 * kUs},
+                  {3, 1, 1, 1050 * kUs},
+                  {5, 0, 1, 2000 * kUs},
+                  {6, 1, 1, 2050 * kUs}}});
+    r.push_back({"tap_directions_in_file_order_without_the_merge",
+                 f.w.out,
+                 false,
+                 {{1, 0, 1, 0},
+                  {2, 1, 1, 50 * kUs},
+                  {3, 1, 1, 1050 * kUs},
+                  {4, 0, 1, 1000 * kUs},
+                  {5, 0, 1, 2000 * kUs},
+                  {6, 1, 1, 2050 * kUs}}});
+  }
+  {
+    // One interface: its records as they are, a jump back included (the capture's own).
+    PcapngFile f(false);
+    f.interface(1, 65535, 9);
+    at(f, 0, 0, 1);
+    at(f, 0, 10 * kMs, 2);
+    at(f, 0, 5 * kMs, 3);
+    r.push_back({"one_interface_in_file_order",
+                 f.w.out,
+                 true,
+                 {{1, 0, 1, 0}, {2, 0, 1, 10 * kMs}, {3, 0, 1, 5 * kMs}}});
+  }
+  {
+    PcapngFile f = twoInterfaces(113);
+    at(f, 0, 3 * kMs, 1);
+    at(f, 0, 1 * kMs, 2);
+    at(f, 1, 2 * kMs, 3);
+    r.push_back({"each_interface_keeps_its_own_order",
+                 f.w.out,
+                 true,
+                 {{3, 1, 113, 2 * kMs}, {1, 0, 1, 3 * kMs}, {2, 0, 1, 1 * kMs}}});
+  }
+  {
+    // Another recording appended (a jump back by more than the window): never merged across,
+    // the merge starts again after it.
+    PcapngFile f = twoInterfaces();
+    at(f, 0, 20 * kMs, 1);
+    at(f, 1, 21 * kMs, 2);
+    at(f, 1, 1 * kMs + 50 * kUs, 3);
+    at(f, 0, 1 * kMs, 4);
+    at(f, 0, 22 * kMs, 5);
+    r.push_back({"a_jump_back_is_not_merged_across",
+                 f.w.out,
+                 true,
+                 {{1, 0, 1, 20 * kMs},
+                  {2, 1, 1, 21 * kMs},
+                  {4, 0, 1, 1 * kMs},
+                  {3, 1, 1, 1 * kMs + 50 * kUs},
+                  {5, 0, 1, 22 * kMs}}});
+  }
+  {
+    PcapngFile f = twoInterfaces();
+    for (std::uint8_t i = 1; i <= 4; ++i) at(f, 0, i * kMs, i);
+    at(f, 1, 0, 5);
+    r.push_back({"look_ahead_bounded_by_its_count",
+                 f.w.out,
+                 true,
+                 {{1, 0, 1, 1 * kMs},
+                  {2, 0, 1, 2 * kMs},
+                  {3, 0, 1, 3 * kMs},
+                  {5, 1, 1, 0},
+                  {4, 0, 1, 4 * kMs}},
+                 std::nullopt,
+                 nullptr,
+                 {.records = 2, .window_ns = 1000 * kMs}});
+  }
+  {
+    PcapngFile f = twoInterfaces();
+    at(f, 0, 0, 1);
+    at(f, 0, 2 * kMs, 2);
+    at(f, 0, 4 * kMs, 3);
+    at(f, 1, 1500 * kUs, 4);
+    r.push_back({"further_back_than_the_window_not_merged",
+                 f.w.out,
+                 true,
+                 {{1, 0, 1, 0}, {2, 0, 1, 2 * kMs}, {3, 0, 1, 4 * kMs}, {4, 1, 1, 1500 * kUs}},
+                 std::nullopt,
+                 nullptr,
+                 {.records = 64, .window_ns = 1 * kMs}});
+  }
+  {
+    PcapngFile f = twoInterfaces(113);
+    at(f, 0, 2 * kMs, 1);
+    at(f, 1, 1 * kMs, 2);
+    f.section().interface(276, 65535, 9);
+    at(f, 0, 3 * kMs, 3);
+    at(f, 0, 4 * kMs, 4);
+    r.push_back(
+        {"a_later_section_of_one_interface",
+         f.w.out,
+         true,
+         {{2, 1, 113, 1 * kMs}, {1, 0, 1, 2 * kMs}, {3, 2, 276, 3 * kMs}, {4, 2, 276, 4 * kMs}}});
+  }
+  {
+    // Cut inside the fifth record's block: the four before it come (merged), then the error.
+    PcapngFile f = twoInterfaces();
+    at(f, 0, 0, 1);
+    at(f, 1, 300 * kUs, 2);
+    at(f, 0, 200 * kUs, 3);
+    at(f, 0, 400 * kUs, 4);
+    at(f, 1, 500 * kUs, 5);
+    f.cut(20);
+    const Bytes cut = f.w.out;
+    r.push_back({"a_truncated_block_names_its_frame_merged",
+                 cut,
+                 true,
+                 {{1, 0, 1, 0}, {3, 0, 1, 200 * kUs}, {2, 1, 1, 300 * kUs}, {4, 0, 1, 400 * kUs}},
+                 5,
+                 "truncated pcapng dump file"});
+    r.push_back({"a_truncated_block_names_its_frame",
+                 cut,
+                 false,
+                 {{1, 0, 1, 0}, {2, 1, 1, 300 * kUs}, {3, 0, 1, 200 * kUs}, {4, 0, 1, 400 * kUs}},
+                 5,
+                 "truncated pcapng dump file"});
+  }
+  return r;
+}
+
+class ReaderInterfaces : public ::testing::TestWithParam<InterfacesRow> {};
+
+TEST_P(ReaderInterfaces, EachRecordWithItsInterfaceInTimeWhereMerged) {
+  const InterfacesRow& row = GetParam();
+  enum class Source { File, GzipFile, ZstdStdin };
+  for (const Source source : {Source::File, Source::GzipFile, Source::ZstdStdin}) {
+    SCOPED_TRACE(source == Source::File ? "file" : source == Source::GzipFile ? "gzip" : "stdin");
+    const Bytes bytes = source == Source::File       ? row.file
+                        : source == Source::GzipFile ? gzipOf(row.file)
+                                                     : zstdOf(row.file);
+    const std::string path = tempPath();
+    writeFile(path, bytes);
+    std::optional<StdinPipe> pipe;
+    if (source == Source::ZstdStdin) pipe.emplace(bytes);
+    auto opened = CaptureReader::open(source == Source::ZstdStdin ? "-" : path);
+    ASSERT_TRUE(opened) << opened.error().text();
+    CaptureReader& reader = **opened;
+    RecordMerge merge(reader, row.limits);
+    std::vector<Delivered> got;
+    CaptureRecord record;
+    Result<bool> next;
+    while ((next = row.merged ? merge.next(record) : reader.next(record)) && *next) {
+      got.push_back({record.frame, record.interface, record.link_type, record.time_ns});
+      EXPECT_EQ(record.link, linkTypeFromDlt(record.link_type));
+      ASSERT_EQ(record.captured, 60u);
+      for (std::size_t i = 0; i < record.captured; ++i) {
+        ASSERT_EQ(record.data[i], record.frame) << "frame " << record.frame << " byte " << i;
+      }
+    }
+    EXPECT_EQ(got, row.want);
+    if (row.error == nullptr) {
+      EXPECT_TRUE(next) << next.error().text();
+    } else {
+      ASSERT_FALSE(next);
+      EXPECT_EQ(next.error().path, source == Source::ZstdStdin ? "standard input" : path);
+      EXPECT_EQ(next.error().frame, *row.error_frame);
+      EXPECT_NE(next.error().text().find(row.error), std::string::npos) << next.error().text();
+    }
+    std::remove(path.c_str());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Rows, ReaderInterfaces, ::testing::ValuesIn(interfacesRows()),
+                         test::rowName<InterfacesRow>);
 
 }  // namespace
 }  // namespace ncservo

@@ -141,7 +141,7 @@ TEST_P(FastPathOnBundled, ChangesNothing) {
   CaptureRecord record;
   Result<bool> more;
   while ((more = (*reader)->next(record)) && *more) {
-    both.frame(record.frame, record.time_ns, record.data, record.captured, (*reader)->link());
+    both.frame(record.frame, record.time_ns, record.data, record.captured, record.link);
   }
   EXPECT_EQ(both.on.finish(), both.off.finish());
 }

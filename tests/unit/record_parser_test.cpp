@@ -10,178 +10,15 @@
 #include <string>
 #include <vector>
 
+#include "capture_builder.hpp"
 #include "row_name.hpp"
 
 namespace ncservo {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
-
-// Writes fields in one byte order.
-struct Writer {
-  bool big = false;
-  Bytes out;
-  void u8(std::uint8_t v) { out.push_back(v); }
-  void u16(std::uint16_t v) {
-    if (big) {
-      u8(static_cast<std::uint8_t>(v >> 8));
-      u8(static_cast<std::uint8_t>(v));
-    } else {
-      u8(static_cast<std::uint8_t>(v));
-      u8(static_cast<std::uint8_t>(v >> 8));
-    }
-  }
-  void u32(std::uint32_t v) {
-    if (big) {
-      u16(static_cast<std::uint16_t>(v >> 16));
-      u16(static_cast<std::uint16_t>(v));
-    } else {
-      u16(static_cast<std::uint16_t>(v));
-      u16(static_cast<std::uint16_t>(v >> 16));
-    }
-  }
-  void u64(std::uint64_t v) {
-    if (big) {
-      u32(static_cast<std::uint32_t>(v >> 32));
-      u32(static_cast<std::uint32_t>(v));
-    } else {
-      u32(static_cast<std::uint32_t>(v));
-      u32(static_cast<std::uint32_t>(v >> 32));
-    }
-  }
-  void fill(std::size_t n, std::uint8_t value = 0xAB) { out.insert(out.end(), n, value); }
-};
-
-// pcap-savefile(5): the file header, then records of seconds, fraction, lengths and data.
-struct PcapFile {
-  Writer w;
-  PcapFile(bool big, std::uint32_t magic, std::uint16_t minor = 4, std::uint32_t snaplen = 65535) {
-    w.big = big;
-    w.u32(magic);
-    w.u16(2);
-    w.u16(minor);
-    w.u32(0);
-    w.u32(0);
-    w.u32(snaplen);
-    w.u32(1);  // Ethernet
-  }
-  PcapFile& record(std::uint32_t seconds, std::uint32_t fraction, std::uint32_t captured,
-                   std::uint32_t original, std::size_t data) {
-    w.u32(seconds);
-    w.u32(fraction);
-    w.u32(captured);
-    w.u32(original);
-    w.fill(data);
-    return *this;
-  }
-  PcapFile& cut(std::size_t bytes) {
-    w.out.resize(w.out.size() - bytes);
-    return *this;
-  }
-};
-
-// pcapng blocks: type, total length, body padded to 4 bytes, total length.
-struct PcapngFile {
-  Writer w;
-  explicit PcapngFile(bool big) {
-    w.big = big;
-    section();
-  }
-  PcapngFile& block(std::uint32_t type, const Bytes& body, std::optional<std::uint32_t> length = {},
-                    std::optional<std::uint32_t> trailer = {}) {
-    const auto padded = static_cast<std::uint32_t>((body.size() + 3) / 4 * 4);
-    w.u32(type);
-    w.u32(length.value_or(12 + padded));
-    w.out.insert(w.out.end(), body.begin(), body.end());
-    w.fill(padded - body.size(), 0);
-    w.u32(trailer.value_or(length.value_or(12 + padded)));
-    return *this;
-  }
-  Writer body() const { return Writer{w.big, {}}; }
-  PcapngFile& section(std::uint32_t magic = 0x1A2B3C4D) {
-    Writer b = body();
-    b.u32(magic);
-    b.u16(1);
-    b.u16(0);
-    b.u64(~std::uint64_t{0});
-    return block(0x0A0D0D0A, b.out);
-  }
-  // An interface: link type, snap length, and if_tsresol / if_tsoffset when given.
-  PcapngFile& interface(std::uint16_t link = 1, std::uint32_t snaplen = 65535,
-                        std::optional<std::uint8_t> tsresol = {},
-                        std::optional<std::int64_t> tsoffset = {}) {
-    Writer b = body();
-    b.u16(link);
-    b.u16(0);
-    b.u32(snaplen);
-    if (tsresol) {
-      b.u16(9);
-      b.u16(1);
-      b.u8(*tsresol);
-      b.fill(3, 0);
-    }
-    if (tsoffset) {
-      b.u16(14);
-      b.u16(8);
-      b.u64(static_cast<std::uint64_t>(*tsoffset));
-    }
-    b.u16(0);
-    b.u16(0);
-    return block(1, b.out);
-  }
-  PcapngFile& enhanced(std::uint32_t interface, std::uint64_t ticks, std::uint32_t captured,
-                       std::uint32_t original, std::size_t data) {
-    Writer b = body();
-    b.u32(interface);
-    b.u32(static_cast<std::uint32_t>(ticks >> 32));
-    b.u32(static_cast<std::uint32_t>(ticks));
-    b.u32(captured);
-    b.u32(original);
-    b.fill(data);
-    return block(6, b.out);
-  }
-  PcapngFile& simple(std::uint32_t original, std::size_t data) {
-    Writer b = body();
-    b.u32(original);
-    b.fill(data);
-    return block(3, b.out);
-  }
-  PcapngFile& obsolete(std::uint16_t interface, std::uint64_t ticks, std::uint32_t captured,
-                       std::size_t data) {
-    Writer b = body();
-    b.u16(interface);
-    b.u16(0);
-    b.u32(static_cast<std::uint32_t>(ticks >> 32));
-    b.u32(static_cast<std::uint32_t>(ticks));
-    b.u32(captured);
-    b.u32(captured);
-    b.fill(data);
-    return block(2, b.out);
-  }
-  // Interface statistics: isb_ifdrop (option 5) and isb_osdrop (7).
-  PcapngFile& statistics(std::uint64_t ifdrop, std::uint64_t osdrop) {
-    Writer b = body();
-    b.u32(0);
-    b.u64(0);
-    b.u16(5);
-    b.u16(8);
-    b.u64(ifdrop);
-    b.u16(7);
-    b.u16(8);
-    b.u64(osdrop);
-    b.u16(0);
-    b.u16(0);
-    return block(5, b.out);
-  }
-  PcapngFile& raw(const Bytes& bytes) {
-    w.out.insert(w.out.end(), bytes.begin(), bytes.end());
-    return *this;
-  }
-  PcapngFile& cut(std::size_t bytes) {
-    w.out.resize(w.out.size() - bytes);
-    return *this;
-  }
-};
+using test::Bytes;
+using test::PcapFile;
+using test::PcapngFile;
 
 constexpr std::uint32_t kMicro = 0xA1B2C3D4, kNano = 0xA1B23C4D;
 
@@ -189,6 +26,8 @@ struct Want {
   std::int64_t time_ns;
   std::size_t captured;
   std::size_t original;
+  std::uint32_t interface = 0;  // in the file, across its sections
+  int link_type = 1;
 };
 
 struct ParserRow {
@@ -334,7 +173,65 @@ std::vector<ParserRow> rows() {
                    .enhanced(0, 5, 60, 60, 60)
                    .w.out,
                pcapngFormat(false),
-               {{0, 60, 60}, {5, 60, 60}},
+               {{0, 60, 60}, {5, 60, 60, 1}},
+               nullptr});
+  // Interfaces of their own (docs/protocol.md §8), as dumpcap -i eth0 -i any writes them.
+  r.push_back({"pcapng_interfaces_of_their_own_link_type_resolution_and_offset",
+               PcapngFile(false)
+                   .interface(1, 65535, 6)
+                   .interface(113, 65535, 9, 100)
+                   .enhanced(0, 1500000, 60, 60, 60)
+                   .enhanced(1, 2000000007, 44, 44, 44)
+                   .enhanced(0, 1500001, 61, 61, 61)
+                   .w.out,
+               pcapngFormat(false),
+               {{kSecond + 500000000, 60, 60},
+                {102 * kSecond + 7, 44, 44, 1, 113},
+                {kSecond + 500001000, 61, 61}},
+               nullptr});
+  r.push_back({"pcapng_big_endian_interfaces_of_their_own",
+               PcapngFile(true)
+                   .interface(276, 65535, 9, -1)
+                   .interface(1)
+                   .enhanced(1, 3000000, 60, 60, 60)
+                   .enhanced(0, 4000000005, 50, 50, 50)
+                   .w.out,
+               pcapngFormat(true),
+               {{3 * kSecond, 60, 60, 1, 1}, {3 * kSecond + 5, 50, 50, 0, 276}},
+               nullptr});
+  r.push_back({"pcapng_interfaces_of_their_own_snapshot_length",
+               PcapngFile(false)
+                   .interface(1, 64)
+                   .interface(113, 1000)
+                   .enhanced(1, 0, 600, 600, 600)
+                   .simple(100, 64)
+                   .w.out,
+               pcapngFormat(false, 64),
+               {{0, 600, 600, 1, 113}, {0, 64, 100}},
+               nullptr});
+  // A link type the walker does not know: its records are records, never held to a snapshot
+  // length (only to their block).
+  r.push_back({"pcapng_unknown_link_type_records_read",
+               PcapngFile(false)
+                   .interface(1, 64)
+                   .interface(147, 64)
+                   .enhanced(1, 0, 200, 200, 200)
+                   .enhanced(0, 0, 60, 60, 60)
+                   .w.out,
+               pcapngFormat(false, 64),
+               {{0, 200, 200, 1, 147}, {0, 60, 60}},
+               nullptr});
+  r.push_back({"pcapng_second_section_numbers_its_interfaces_on",
+               PcapngFile(false)
+                   .interface(1)
+                   .interface(113)
+                   .enhanced(1, 0, 60, 60, 60)
+                   .section()
+                   .interface(276)
+                   .enhanced(0, 7, 60, 60, 60)
+                   .w.out,
+               pcapngFormat(false),
+               {{0, 60, 60, 1, 113}, {7000, 60, 60, 2, 276}},
                nullptr});
   // pcapng: must fail.
   r.push_back({"pcapng_block_length_not_a_multiple_of_4",
@@ -388,11 +285,35 @@ std::vector<ParserRow> rows() {
                pcapngFormat(false),
                {},
                "the file has sections with different byte orders"});
-  r.push_back({"pcapng_second_interface_of_another_link_type",
-               PcapngFile(false).interface().interface(113).w.out,
+  r.push_back({"pcapng_second_section_forgets_the_first_ones_interfaces",
+               PcapngFile(false)
+                   .interface(1)
+                   .interface(113)
+                   .section()
+                   .interface(1)
+                   .enhanced(1, 0, 60, 60, 60)
+                   .w.out,
                pcapngFormat(false),
                {},
-               "an interface has a type 113 different from the type of the first interface"});
+               "a packet arrived on interface 1, but there's no Interface Description Block for "
+               "that interface"});
+  r.push_back(
+      {"pcapng_interface_beyond_its_snapshot_length",
+       PcapngFile(false).interface(1).interface(113, 100).enhanced(1, 0, 101, 101, 101).w.out,
+       pcapngFormat(false),
+       {},
+       "invalid packet capture length 101, bigger than snaplen of 100"});
+  r.push_back({"pcapng_more_interfaces_than_a_section_may_describe",
+               [] {
+                 PcapngFile file(false);
+                 for (std::size_t i = 0; i <= RecordParser::kMaxSectionInterfaces; ++i) {
+                   file.interface();
+                 }
+                 return file.w.out;
+               }(),
+               pcapngFormat(false),
+               {},
+               "a section describes more than 65536 interfaces"});
   r.push_back({"pcapng_resolution_too_fine",
                PcapngFile(false).interface(1, 65535, 20).w.out,
                pcapngFormat(false),
@@ -431,13 +352,17 @@ TEST_P(RecordParserRows, ReadsWhatIsThereAndSaysWhatIsNot) {
     // The bytes handed over lie inside the capture.
     ASSERT_GE(record.data, row.file.data());
     ASSERT_LE(record.data + record.captured, row.file.data() + row.file.size());
-    got.push_back({record.time_ns, record.captured, record.original});
+    got.push_back(
+        {record.time_ns, record.captured, record.original, record.interface, record.link_type});
+    EXPECT_EQ(record.link, linkTypeFromDlt(record.link_type)) << "record " << got.size();
   }
   ASSERT_EQ(got.size(), row.records.size());
   for (std::size_t i = 0; i < got.size(); ++i) {
     EXPECT_EQ(got[i].time_ns, row.records[i].time_ns) << "record " << i + 1;
     EXPECT_EQ(got[i].captured, row.records[i].captured) << "record " << i + 1;
     EXPECT_EQ(got[i].original, row.records[i].original) << "record " << i + 1;
+    EXPECT_EQ(got[i].interface, row.records[i].interface) << "record " << i + 1;
+    EXPECT_EQ(got[i].link_type, row.records[i].link_type) << "record " << i + 1;
   }
   if (row.error == nullptr) {
     EXPECT_EQ(outcome, RecordParser::Outcome::End) << parser.error();

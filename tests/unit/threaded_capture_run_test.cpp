@@ -180,7 +180,7 @@ struct Source {
   std::atomic<bool>* requested;
   std::size_t read = 0;
   std::vector<std::uint8_t> scratch;  // one buffer, overwritten by every record
-  Result<bool> next(CaptureRecord& record, LinkType& link) {
+  Result<bool> next(CaptureRecord& record) {
     const std::vector<Recorded>& all = records();
     if (stop_after && read == *stop_after) requested->store(true);
     if (error_after && read == *error_after) {
@@ -195,7 +195,7 @@ struct Source {
     record.data = scratch.data();
     record.captured = r.bytes.size();
     record.original = r.original;
-    link = LinkType::Ethernet;
+    record.link = LinkType::Ethernet;
     return true;
   }
 };
@@ -224,9 +224,8 @@ Outcome oneThread(const RunCase& c) {
   pipeline.setSinks(seen.sinks(pipeline));
   Source source(c.error_after);
   CaptureRecord record;
-  LinkType link{};
   Result<bool> status;
-  while ((status = source.next(record, link)) && *status) pipeline.onRecord(link, record);
+  while ((status = source.next(record)) && *status) pipeline.onRecord(record);
   pipeline.finish();
   Outcome out{seen.events, std::nullopt, pipeline.run()};
   if (!status) out.error = status.error().text();
@@ -239,8 +238,7 @@ Outcome twoThreads(const RunCase& c) {
   pipeline.setSinks(seen.sinks(pipeline));
   Source source(c.error_after);
   const Status status = streamOnTwoThreads(
-      [&](CaptureRecord& record, LinkType& link) { return source.next(record, link); }, pipeline,
-      nullptr, c.limits);
+      [&](CaptureRecord& record) { return source.next(record); }, pipeline, nullptr, c.limits);
   Outcome out{seen.events, std::nullopt, pipeline.run()};
   if (!status) out.error = status.error().text();
   return out;
@@ -294,9 +292,9 @@ TEST(TwoThreads, CtrlCStopsBothThreadsUnfinished) {
     std::atomic<bool> requested{false};
     Source source(std::nullopt, stop_after, &requested);
     StreamStop stop{&requested};
-    const Status status = streamOnTwoThreads(
-        [&](CaptureRecord& record, LinkType& link) { return source.next(record, link); }, pipeline,
-        &stop, {16, 1 << 16, 2});
+    const Status status =
+        streamOnTwoThreads([&](CaptureRecord& record) { return source.next(record); }, pipeline,
+                           &stop, {16, 1 << 16, 2});
     EXPECT_TRUE(status);
     EXPECT_TRUE(stop.stopped);
     EXPECT_EQ(pipeline.run().records, stop_after);  // as one thread says where it stopped
@@ -316,9 +314,8 @@ TEST(TwoThreads, AFailingSinkEndsTheReading) {
                      nullptr, nullptr, nullptr});
   Source source(std::nullopt);
   const BatchLimits limits{8, 1 << 16, 2};
-  EXPECT_THROW(streamOnTwoThreads(
-                   [&](CaptureRecord& record, LinkType& link) { return source.next(record, link); },
-                   pipeline, nullptr, limits),
+  EXPECT_THROW(streamOnTwoThreads([&](CaptureRecord& record) { return source.next(record); },
+                                  pipeline, nullptr, limits),
                std::runtime_error);
   EXPECT_GE(frames, 1000u);
   EXPECT_LT(source.read, records().size());

@@ -376,7 +376,8 @@ struct LiveCapture {
 LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline& pipeline,
                         MonitorOutput& output) {
   const int digits = pcap_get_tstamp_precision(handle) == PCAP_TSTAMP_PRECISION_NANO ? 9 : 6;
-  const LinkType link = linkTypeFromDlt(pcap_datalink(handle));
+  const int link_type = pcap_datalink(handle);
+  const LinkType link = linkTypeFromDlt(link_type);
   using Clock = std::chrono::steady_clock;
   const auto began = Clock::now();
   std::optional<Clock::time_point> deadline;
@@ -418,7 +419,9 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
       record.data = data;
       record.captured = header->caplen;
       record.original = header->len;
-      pipeline.onRecord(link, record);
+      record.link_type = link_type;
+      record.link = link;
+      pipeline.onRecord(record);
       if (output.recorder) output.recorder->onRecord(record, !pipeline.learning());
     } else if (got == PCAP_ERROR_BREAK) {
       break;

@@ -621,7 +621,12 @@ Result<std::unique_ptr<CaptureReader>> CaptureReader::open(const std::string& pa
     }
   }
   reader->link_ = linkTypeFromDlt(reader->dlt_);
-  if (reader->link_ == LinkType::Unsupported) return fail(unsupportedLinkType(name, reader->dlt_));
+  // A pcapng read in place may hold other interfaces after its first (docs/protocol.md §8): its
+  // records of a link type the walker does not know are counted, not refused.
+  const bool each_interface = reader->parser_ && reader->pcapng_format_;
+  if (reader->link_ == LinkType::Unsupported && !each_interface) {
+    return fail(unsupportedLinkType(name, reader->dlt_));
+  }
   return reader;
 }
 
@@ -832,6 +837,7 @@ Result<bool> CaptureReader::nextInPlace(CaptureRecord& record) {
   switch (parser_->next(record)) {
     case RecordParser::Outcome::Record:
       record.frame = ++frames_;
+      section_interfaces_ = parser_->sectionInterfaces();
       if (stream_) {
         record.stored.reset();
       } else if (mapped_ != nullptr) {
@@ -875,6 +881,9 @@ Result<bool> CaptureReader::next(CaptureRecord& record) {
   record.captured = header->caplen;
   record.original = header->len;
   record.stored = stream_ ? std::nullopt : storedSpan();
+  record.interface = 0;
+  record.link_type = dlt_;
+  record.link = link_;
   return true;
 }
 

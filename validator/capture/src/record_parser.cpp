@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 
 namespace ncservo {
 
@@ -74,7 +75,9 @@ RecordParser::RecordParser(CaptureBytes& bytes, const RecordFormat& format,
       format_(format),
       statistics_(std::move(statistics)),
       at_(format.pcapng ? 0 : kPcapFileHeader),
-      big_(format.big_endian) {
+      big_(format.big_endian),
+      pcap_link_(linkTypeFromDlt(format.dlt)) {
+  if (format.pcapng) section_interfaces_ = 0;
   // Versions before 2.3 wrote the two lengths the other way round; 2.3 did either (sf-pcap.c).
   if (format.version_major == 543 || (format.version_major == 2 && format.version_minor < 3)) {
     lengths_ = Lengths::Swapped;
@@ -156,6 +159,9 @@ RecordParser::Outcome RecordParser::nextPcap(CaptureRecord& record) {
   record.captured = kept;
   record.original = original;
   record.stored = RecordSpan{start, kPcapRecordHeader + std::uint64_t{captured}};
+  record.interface = 0;
+  record.link_type = format_.dlt;
+  record.link = pcap_link_;
   return Outcome::Record;
 }
 
@@ -226,6 +232,13 @@ RecordParser::Outcome RecordParser::readBlock(PcapngBlock& block) {
   return Outcome::Record;
 }
 
+RecordParser::Outcome RecordParser::noInterface(std::uint32_t interface) {
+  return failed(
+      fmt::format("a packet arrived on interface {}, but there's no Interface "
+                  "Description Block for that interface",
+                  interface));
+}
+
 RecordParser::Outcome RecordParser::tooShort(const PcapngBlock& block) {
   return failed(fmt::format("block of type {} in pcapng dump file is too short", block.type));
 }
@@ -241,7 +254,9 @@ RecordParser::Outcome RecordParser::readPacket(const PcapngBlock& block, Capture
     fixed = 4;
     if (block.size < fixed) return tooShort(block);
     original = load32(body, big_);
-    captured = std::min(original, format_.snapshot);
+    // Of interface 0, whose snapshot length says what was kept.
+    if (interfaces_.empty()) return noInterface(0);
+    captured = std::min(original, interfaces_.front().snapshot);
   } else {
     fixed = 20;
     if (block.size < fixed) return tooShort(block);
@@ -250,23 +265,24 @@ RecordParser::Outcome RecordParser::readPacket(const PcapngBlock& block, Capture
     captured = load32(body + 12, big_);
     original = load32(body + 16, big_);
   }
-  if (interface >= interfaces_.size()) {
-    return failed(
-        fmt::format("a packet arrived on interface {}, but there's no Interface "
-                    "Description Block for that interface",
-                    interface));
-  }
-  if (captured > format_.snapshot) {
+  if (interface >= interfaces_.size()) return noInterface(interface);
+  const Interface& at = interfaces_[interface];
+  // Only a record that will be walked is held to its snapshot length (as libpcap holds every
+  // record to the first interface's); any record is held to its block.
+  if (at.limited && captured > at.snapshot) {
     return failed(fmt::format("invalid packet capture length {}, bigger than snaplen of {}",
-                              captured, static_cast<std::int32_t>(format_.snapshot)));
+                              captured, static_cast<std::int32_t>(at.snapshot)));
   }
-  const std::int64_t time_ns = packetTime(interfaces_[interface], ticks);
+  const std::int64_t time_ns = packetTime(at, ticks);
   if (block.size - fixed < captured) return tooShort(block);
   record.time_ns = time_ns;
   record.data = body + fixed;
   record.captured = captured;
   record.original = original;
   record.stored = RecordSpan{block.start, block.length};
+  record.interface = at.id;
+  record.link_type = at.link_type;
+  record.link = at.link;
   return Outcome::Record;
 }
 
@@ -288,30 +304,33 @@ std::int64_t RecordParser::packetTime(const Interface& at, std::uint64_t ticks) 
                      static_cast<std::int32_t>(static_cast<std::uint32_t>(fraction)));
 }
 
+// Each interface with its own link type and snapshot length, as Wireshark reads them (libpcap
+// refuses a second interface whose link type or snapshot length is not the first one's):
+// docs/protocol.md §8.
 bool RecordParser::readInterface(const PcapngBlock& block) {
   if (block.size < 8) {
     tooShort(block);
     return false;
   }
-  const std::uint16_t link = load16(block.body, big_);
-  const std::uint32_t snaplen = load32(block.body + 4, big_);
-  if (!first_interface_) {
-    if (static_cast<std::uint32_t>(format_.dlt) != link) {
-      failed(fmt::format(
-          "an interface has a type {} different from the type of the first interface", link));
-      return false;
-    }
-    const std::uint32_t adjusted = snaplen == 0 || snaplen > kMaxSnaplen ? kMaxSnaplen : snaplen;
-    if (adjusted != format_.snapshot) {
-      failed(
-          fmt::format("an interface has a snapshot length {} different from the "
-                      "snapshot length of the first interface",
-                      snaplen));
-      return false;
-    }
+  if (interfaces_.size() >= kMaxSectionInterfaces) {
+    failed(fmt::format("a section describes more than {} interfaces", kMaxSectionInterfaces));
+    return false;
   }
+  Interface added;
+  added.link_type = load16(block.body, big_);
+  added.link = linkTypeFromDlt(added.link_type);
+  const std::uint32_t snaplen = load32(block.body + 4, big_);
+  // The capture's first interface keeps libpcap's snapshot length (it opened the file with it).
+  added.snapshot = first_interface_                        ? format_.snapshot
+                   : snaplen == 0 || snaplen > kMaxSnaplen ? kMaxSnaplen
+                                                           : snaplen;
+  added.limited = added.link != LinkType::Unsupported;
+  added.id = interfaces_seen_;
   first_interface_ = false;
-  return addInterface(block.body + 8, block.size - 8, block.type);
+  if (!addInterface(block.body + 8, block.size - 8, block.type, added)) return false;
+  if (interfaces_seen_ < std::numeric_limits<std::uint32_t>::max()) ++interfaces_seen_;
+  section_interfaces_ = interfaces_.size();
+  return true;
 }
 
 bool RecordParser::readSectionHeader(const PcapngBlock& block) {
@@ -335,6 +354,7 @@ bool RecordParser::readSectionHeader(const PcapngBlock& block) {
     return false;
   }
   interfaces_.clear();
+  section_interfaces_ = 0;
   return true;
 }
 
@@ -354,8 +374,8 @@ void RecordParser::keepStatistics(const PcapngBlock& block) {
 
 // An interface description's options: if_tsresol and if_tsoffset say how to read its times;
 // checked and worded as libpcap's process_idb_options.
-bool RecordParser::addInterface(const std::uint8_t* options, std::size_t size, std::uint32_t type) {
-  Interface added;
+bool RecordParser::addInterface(const std::uint8_t* options, std::size_t size, std::uint32_t type,
+                                Interface added) {
   bool saw_resolution = false, saw_offset = false;
   std::size_t at = 0;
   while (at < size) {

@@ -64,10 +64,9 @@ struct WalkedBatch {
     bytes.clear();
     frames.clear();
   }
-  void add(const CaptureRecord& record, LinkType link, const WalkedRecord& walked,
-           const EcatFrame& frame) {
+  void add(const CaptureRecord& record, const WalkedRecord& walked, const EcatFrame& frame) {
     entries.push_back({record.frame, walked.time_ns, bytes.size(), record.captured, frames.size(),
-                       link, walked.judged, walked.probe_timed});
+                       record.link, walked.judged, walked.probe_timed});
     bytes.insert(bytes.end(), record.data, record.data + record.captured);
     pack(frame, frames);
   }
@@ -124,16 +123,15 @@ Status streamOnTwoThreads(const NextRecord& next, CapturePipeline& pipeline, Str
     WalkedBatch batch = queue.spare();
     batch.clear();
     CaptureRecord record;
-    LinkType link = LinkType::Unsupported;
     EcatFrame frame;
-    while ((status = next(record, link)) && *status) {
+    while ((status = next(record)) && *status) {
       if (stopRequested(stop)) {
         stopped = true;
         break;
       }
-      const std::optional<WalkedRecord> walked = pipeline.walk(link, record, frame);
+      const std::optional<WalkedRecord> walked = pipeline.walk(record, frame);
       if (!walked) continue;
-      batch.add(record, link, *walked, frame);
+      batch.add(record, *walked, frame);
       if (!batch.full(limits)) continue;
       if (!queue.push(std::move(batch))) break;  // the judging thread failed
       batch = queue.spare();

@@ -1,6 +1,7 @@
 #include "ncservo/pipeline/capture_pipeline.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -107,22 +108,46 @@ void CapturePipeline::deliverLayoutOnly(std::uint64_t number, std::int64_t time_
   if (sinks_.layout_only) sinks_.layout_only(PipelineFrame{number, time_ns, frame, bytes, nullptr});
 }
 
-void CapturePipeline::onRecord(LinkType link, const CaptureRecord& record) {
-  if (const std::optional<WalkedRecord> walked = walk(link, record, frame_)) {
+void CapturePipeline::onRecord(const CaptureRecord& record) {
+  if (const std::optional<WalkedRecord> walked = walk(record, frame_)) {
     const ByteReader bytes(record.data, record.captured);
-    onWalkedFrame(record.frame, walked->time_ns, link, bytes, frame_, walked->judged,
+    onWalkedFrame(record.frame, walked->time_ns, record.link, bytes, frame_, walked->judged,
                   walked->probe_timed);
   }
 }
 
-std::optional<WalkedRecord> CapturePipeline::walk(LinkType link, const CaptureRecord& record,
-                                                  EcatFrame& frame) {
+CaptureInterface* CapturePipeline::interfaceOf(const CaptureRecord& record) {
+  for (CaptureInterface& i : interfaces_) {
+    if (i.id == record.interface) return last_interface_ = &i;
+  }
+  if (interfaces_.size() >= kMaxInterfaces) return nullptr;
+  // Room for all at once: the pointer to the last one stays valid.
+  if (interfaces_.empty()) interfaces_.reserve(kMaxInterfaces);
+  interfaces_.push_back({.id = record.interface, .link_type = record.link_type});
+  return last_interface_ = &interfaces_.back();
+}
+
+std::optional<WalkedRecord> CapturePipeline::walk(const CaptureRecord& record, EcatFrame& frame) {
   if (!run_.first_time_ns) run_.first_time_ns = record.time_ns;
-  run_.records = record.frame;
-  if (record.captured < record.original && run_.snapped++ == 0) run_.first_snapped = record.frame;
+  // Records merged by time may come out of frame order (record_merge.hpp).
+  run_.records = std::max(run_.records, record.frame);
+  if (record.captured < record.original &&
+      (run_.snapped++ == 0 || record.frame < run_.first_snapped)) {
+    run_.first_snapped = record.frame;
+  }
+  // A capture of one interface finds it at once.
+  CaptureInterface* counted =
+      last_interface_ != nullptr && last_interface_->id == record.interface ? last_interface_
+                                                                            : interfaceOf(record);
+  if (counted != nullptr) {
+    ++counted->frames;
+  } else {
+    ++interface_records_omitted_;
+  }
   const ByteReader bytes(record.data, record.captured);
-  walkPacket(link, bytes, frame);
+  walkPacket(record.link, bytes, frame);
   if (frame.status == WalkStatus::NotEtherCat) return std::nullopt;
+  if (counted != nullptr) counted->ethercat = true;
   const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame.probe);
   const bool judged = time_window_.contains(time_ns - *run_.first_time_ns);
   run_.in_window += judged ? 1 : 0;
@@ -188,6 +213,27 @@ std::vector<std::string> eniCycleWarnings(const std::vector<EniCyclicFrame>& eni
   return warnings;
 }
 
+namespace {
+
+// Why nothing could be checked when no record came on a link type the walker reads (a pcapng
+// opens whatever its interfaces are: docs/cli.md#interfaces); empty when some did.
+std::string unreadLinkTypes(const CaptureResult& r) {
+  std::vector<int> types;
+  for (const CaptureInterface& i : r.interfaces) {
+    if (linkTypeFromDlt(i.link_type) != LinkType::Unsupported) return {};
+    if (std::find(types.begin(), types.end(), i.link_type) == types.end()) {
+      types.push_back(i.link_type);
+    }
+  }
+  if (types.empty()) return {};
+  return fmt::format(
+      "no frame of a link type ncservo reads (Ethernet, Linux cooked SLL and SLL2): the "
+      "capture's link type{} {}",
+      types.size() == 1 ? " is" : "s are", fmt::join(types, ", "));
+}
+
+}  // namespace
+
 bool CapturePipeline::structureOnly(std::uint16_t axis) const {
   const std::optional<InferenceResult>& inferred = window_.inference();
   const bool layout_inferred =
@@ -209,6 +255,10 @@ CaptureResult CapturePipeline::result() const {
   r.untimed_frames = clock_stage_.untimed();
   r.late_layout = lateLayout();
   r.layout_warnings = layout_warnings_;
+  r.interfaces = interfaces_;
+  std::sort(r.interfaces.begin(), r.interfaces.end(),
+            [](const CaptureInterface& a, const CaptureInterface& b) { return a.id < b.id; });
+  r.interface_records_omitted = interface_records_omitted_;
   if (!validator_) return r;
   const Validator& validator = *validator_;
   takeValidator(validator, r);
@@ -225,6 +275,9 @@ CaptureResult CapturePipeline::result() const {
   }
   r.truncation = truncationOf(run_.snapped, run_.first_snapped, validator.cutRegions(),
                               validator.decoder().axes());
+  if (std::string unread = unreadLinkTypes(r); !r.coverage.complete() && !unread.empty()) {
+    r.coverage.reason = std::move(unread);
+  }
   return r;
 }
 

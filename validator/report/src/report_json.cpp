@@ -311,6 +311,16 @@ Json captureDroppedJson(const CaptureDrops& d) {
           {"system", d.system_dropped ? Json(*d.system_dropped) : Json(nullptr)}};
 }
 
+// What each interface held (docs/cli.md#interfaces).
+Json interfacesJson(const CaptureReport& r) {
+  Json interfaces = Json::array();
+  for (const CaptureInterface& i : r.interfaces) {
+    interfaces.push_back(
+        {{"id", i.id}, {"link_type", i.link_type}, {"frames", i.frames}, {"ethercat", i.ethercat}});
+  }
+  return interfaces;
+}
+
 Json layoutAxesJson(const CaptureReport& r) {
   Json layout_axes = Json::array();
   for (std::size_t i = 0; i < r.layout.size(); ++i) {
@@ -438,6 +448,10 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
                         {"p99", optionalNumber(r.cycle_time.p99_us)},
                         {"max", optionalNumber(r.cycle_time.max_us)}};
   if (r.capture_drops) c["capture_dropped"] = captureDroppedJson(*r.capture_drops);
+  c["interfaces"] = interfacesJson(r);
+  if (r.interface_records_omitted > 0) {
+    c["frames_of_unlisted_interfaces"] = r.interface_records_omitted;
+  }
   c["timing"] = timingJson(r);
   c["clock"] = clockJson(r);
   c["duplicates"] = r.duplicates.count;

@@ -96,6 +96,34 @@ void writeCyclicFrames(std::FILE* out, const CaptureReport& r) {
   fmt::print(out, "cyclic frames: {}\n", fmt::join(items, "; "));
 }
 
+// A link type as Wireshark's capture file properties name it.
+std::string linkTypeText(int link_type) {
+  switch (link_type) {
+    case 1:
+      return "Ethernet";
+    case 113:
+      return "Linux cooked";
+    case 276:
+      return "Linux cooked v2";
+    default:
+      return fmt::format("link type {}", link_type);
+  }
+}
+
+// What each interface held, when the records came from more than one (docs/cli.md#interfaces).
+void writeInterfaces(std::FILE* out, const CaptureReport& r) {
+  if (r.interfaces.size() + (r.interface_records_omitted > 0 ? 1 : 0) < 2) return;
+  std::vector<std::string> items;
+  for (const CaptureInterface& i : r.interfaces) {
+    items.push_back(fmt::format("{}: {}, {} frame{}{}", i.id, linkTypeText(i.link_type), i.frames,
+                                i.frames == 1 ? "" : "s", i.ethercat ? ", EtherCAT" : ""));
+  }
+  if (r.interface_records_omitted > 0) {
+    items.push_back(fmt::format("{} frames of further interfaces", r.interface_records_omitted));
+  }
+  fmt::print(out, "interfaces: {} ({})\n", r.interfaces.size(), fmt::join(items, "; "));
+}
+
 // Copies the capture missed, told apart from cycles the bus lost (docs/timing.md "Capture loss").
 void writeCaptureLoss(std::FILE* out, const CaptureReport& r) {
   if (r.master_copies_missing > 0 || r.returned_copies_missing > 0) {
@@ -284,7 +312,9 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
     fmt::print(out, ", cycle {:.1f} us (p99 {:.1f}, max {:.1f})", *r.cycle_time.median_us,
                r.cycle_time.p99_us.value_or(0), r.cycle_time.max_us.value_or(0));
   }
-  fmt::print(out, "\nlayout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
+  fmt::print(out, "\n");
+  writeInterfaces(out, r);
+  fmt::print(out, "layout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
              r.layout.size() == 1 ? "is" : "es");
   if (r.startup_frames_cut > 0) {
     fmt::print(out, "  {}\n", describeStartupCut(r.startup_frames_cut));

@@ -1,5 +1,7 @@
 // Reads pcap and pcapng captures (libpcap) record by record, in constant memory; gzip- and
 // zstd-compressed ones too (docs/protocol.md §8), recognised by their first bytes, not their names.
+// A pcapng's interfaces may have different link types (docs/protocol.md §8): each record says its
+// own, and a record of a link type the walker does not know is still a record.
 #pragma once
 
 #include <cstddef>
@@ -60,10 +62,16 @@ class CaptureReader {
   // The record's bytes stay valid until the next call. A plain file's records are read in place
   // in the mapped file (docs/benchmarks.md "Reading captures"): their bytes stay valid as long
   // as the reader (pages released behind the reading are read again from the file if touched).
+  // The records come in the file's order (frame numbers count up), each with its interface and
+  // link type.
   Result<bool> next(CaptureRecord& record);
 
-  LinkType link() const { return link_; }
+  // The first interface's link type (a pcap's only one).
   int dlt() const { return dlt_; }
+  // How many interfaces the pcapng section being read has described so far; 1 for a pcap, and
+  // for a pcapng libpcap reads (it opens only those whose interfaces share one link type, and
+  // does not say which interface a record came from).
+  std::size_t sectionInterfaces() const { return section_interfaces_; }
   Compression compression() const { return compression_; }
   const std::string& path() const { return path_; }
   int timestampDigits() const { return timestamp_digits_; }
@@ -111,10 +119,11 @@ class CaptureReader {
   std::FILE* source_ = nullptr;                 // the file opened here, closed here
   ::pcap* handle_ = nullptr;
   std::string path_;
-  LinkType link_ = LinkType::Unsupported;
+  LinkType link_ = LinkType::Unsupported;  // the first interface's, for libpcap's records
   int dlt_ = 0;
   Compression compression_ = Compression::None;
   std::uint64_t frames_ = 0;
+  std::size_t section_interfaces_ = 1;  // the parser's, after the last record
   int timestamp_digits_ = 6;
   bool pcapng_ = false;           // a plain pcapng file, whose records are located
   bool pcapng_format_ = false;    // a pcapng, plain or not

@@ -16,6 +16,7 @@ enum class CaptureThreads : std::uint8_t { One, Two };
 
 // Reads to the end, or to the reader's error (everything before it is delivered), then finishes
 // the pipeline: `start` is called even for a capture with no frame. With `stop` it may end before.
+// The records of several interfaces are merged by time (record_merge.hpp).
 Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamStop* stop = nullptr,
                      CaptureThreads threads = CaptureThreads::One);
 

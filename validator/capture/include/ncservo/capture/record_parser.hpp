@@ -1,7 +1,10 @@
 // The records of a pcap or pcapng capture read in place from its bytes (docs/protocol.md §8):
 // the same records, times and error texts as libpcap 1.10's offline reader, without its two
-// copies of every record. The file header was already checked (libpcap opened it); what follows
-// is untrusted: every length is checked against the bytes that are there before it is used.
+// copies of every record. A pcapng is read as Wireshark reads it, beyond what libpcap opens
+// (docs/protocol.md §8): its interfaces may have different link types and snapshot lengths, and
+// each record carries its interface and link type. The file header was already checked (libpcap
+// opened it); what follows is untrusted: every length is checked against the bytes that are there
+// before it is used.
 #pragma once
 
 #include <cstddef>
@@ -11,6 +14,7 @@
 #include <vector>
 
 #include "ncservo/wire/capture_record.hpp"
+#include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo {
 
@@ -59,7 +63,7 @@ class MemoryBytes : public CaptureBytes {
 struct RecordFormat {
   bool pcapng = false;
   bool big_endian = false;     // the byte order of the file (of its first section)
-  int dlt = 0;                 // the first interface's link type
+  int dlt = 0;                 // a pcap's link type (a pcapng's interfaces say their own)
   std::uint32_t snapshot = 0;  // libpcap's snapshot length (0 and too large already adjusted)
   int version_major = 2;       // pcap: old versions stored the two lengths the other way round
   int version_minor = 4;
@@ -80,12 +84,23 @@ class RecordParser {
   // Failed: error() says why in libpcap's words.
   Outcome next(CaptureRecord& record);
   const std::string& error() const { return error_; }
+  // The interfaces of the current pcapng section described so far (1 for a pcap).
+  std::size_t sectionInterfaces() const { return section_interfaces_; }
+
+  // The most interfaces one section may describe: their descriptions are kept while the section
+  // lasts, so a file of nothing else must not take memory without bound.
+  static constexpr std::size_t kMaxSectionInterfaces = 1 << 16;
 
  private:
   struct Interface {
     std::uint64_t resolution = 1000000;  // units of a second
     std::int64_t offset = 0;             // seconds added (if_tsoffset)
     bool binary = false;                 // resolution is a power of 2
+    int link_type = 0;
+    LinkType link = LinkType::Unsupported;
+    std::uint32_t snapshot = 0;  // the longest record it may hold (a simple packet's length)
+    bool limited = false;        // a longer record is an error (else only counted, never walked)
+    std::uint32_t id = 0;        // in the file, across sections
   };
 
   // A pcapng block, whole and checked: its place, type and length, its bytes and body.
@@ -109,8 +124,10 @@ class RecordParser {
   bool readSectionHeader(const PcapngBlock& block);
   void keepStatistics(const PcapngBlock& block);
   Outcome tooShort(const PcapngBlock& block);
+  Outcome noInterface(std::uint32_t interface);
   Outcome failed(std::string why);
-  bool addInterface(const std::uint8_t* options, std::size_t size, std::uint32_t type);
+  bool addInterface(const std::uint8_t* options, std::size_t size, std::uint32_t type,
+                    Interface added);
   void flushStatistics();
 
   CaptureBytes& bytes_;
@@ -119,8 +136,11 @@ class RecordParser {
   std::uint64_t at_ = 0;  // the next record's (block's) offset
   bool big_ = false;
   enum class Lengths : std::uint8_t { Kept, Swapped, MaybeSwapped } lengths_ = Lengths::Kept;
-  bool first_interface_ = true;        // the next interface description is the capture's first
-  std::vector<Interface> interfaces_;  // of the current section
+  bool first_interface_ = true;         // the next interface description is the capture's first
+  std::vector<Interface> interfaces_;   // of the current section
+  std::size_t section_interfaces_ = 1;  // interfaces_.size() for a pcapng, asked every record
+  std::uint32_t interfaces_seen_ = 0;   // in the sections before and this one: the next one's id
+  LinkType pcap_link_ = LinkType::Unsupported;
   // Statistics blocks passed since the last record: counted once a record or the end follows
   // (as the libpcap path counts them).
   std::vector<std::uint8_t> pending_statistics_;

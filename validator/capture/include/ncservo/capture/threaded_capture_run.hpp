@@ -31,10 +31,10 @@ inline bool stopRequested(const StreamStop* stop) {
 Status endStream(const Result<bool>& status, bool stopped, CapturePipeline& pipeline,
                  StreamStop* stop);
 
-// The records of a capture in order: fills `record` (its bytes valid until the next call) and
-// `link`, and returns true; false at the end; an error when a record cannot be read (the records
-// before it were good).
-using NextRecord = std::function<Result<bool>(CaptureRecord& record, LinkType& link)>;
+// The records of a capture in order: fills `record` (its bytes valid until the next call; its
+// link type its own) and returns true; false at the end; an error when a record cannot be read
+// (the records before it were good).
+using NextRecord = std::function<Result<bool>(CaptureRecord& record)>;
 
 // A batch holds up to `records` records or about `bytes` of their bytes (a longer record still
 // fits); at most `in_flight` batches wait for the judging thread, so memory stays bounded.

@@ -118,14 +118,20 @@ class CapturePipeline {
   // Given before the first record or frame.
   void setSinks(Sinks sinks) { sinks_ = std::move(sinks); }
 
-  // One record as read: walked, timed, held in the learning window or delivered. The same as
-  // walk(), then onWalkedFrame over the record's bytes when it returned a frame.
-  void onRecord(LinkType link, const CaptureRecord& record);
+  // One record as read: walked from its own link type, timed, held in the learning window or
+  // delivered. The same as walk(), then onWalkedFrame over the record's bytes when it returned a
+  // frame.
+  void onRecord(const CaptureRecord& record);
   // onRecord's first half, which a reading thread runs ahead of the rest (docs/cli.md#two-threads):
-  // the record counted in run(), walked into `frame` and timed by clock(). None when the frame
-  // goes no further (not EtherCAT, not process data, a probe's bus fault). The two halves share
-  // no state but run().first_time_ns, set by the first record, before any frame is delivered.
-  std::optional<WalkedRecord> walk(LinkType link, const CaptureRecord& record, EcatFrame& frame);
+  // the record counted in run() and under its interface, walked into `frame` and timed by clock().
+  // None when the frame goes no further (not EtherCAT, not process data, a probe's bus fault, a
+  // link type the walker does not know). The two halves share no state but run().first_time_ns,
+  // set by the first record (or setTimeOrigin), before any frame is delivered.
+  std::optional<WalkedRecord> walk(const CaptureRecord& record, EcatFrame& frame);
+  // The time of the capture's frame 1, when the records come merged by time (record_merge.hpp)
+  // and another came first: the capture's own seconds count from frame 1, as Wireshark's
+  // frame.time_relative. Given before that first record.
+  void setTimeOrigin(std::int64_t time_ns) { run_.first_time_ns = time_ns; }
   // One frame already walked over `bytes` (any status but NotEtherCat, NotDatagrams and
   // BusFault) and timed, as the plugin's first pass sees it: timed on the capture's clock
   // (docs/timing.md#the-clock), then held or delivered. `judged`: inside the time window;
@@ -165,6 +171,8 @@ class CapturePipeline {
   // The clock that judges the capture, and the duplicates dropped (docs/timing.md#the-clock).
   const ClockStage& clockStage() const { return clock_stage_; }
   const CaptureRun& run() const { return run_; }
+  // The most interfaces counted one by one in result() (a pcapng may describe any number).
+  static constexpr std::size_t kMaxInterfaces = 64;
   const TimeWindow& timeWindow() const { return time_window_; }
   // What the run found, for every report of it; after finish(), or at any point after the
   // layout was decided for what was found so far.
@@ -180,6 +188,9 @@ class CapturePipeline {
                const ByteReader& bytes);
   void deliverLayoutOnly(std::uint64_t number, std::int64_t time_ns, const EcatFrame& frame,
                          const ByteReader& bytes);
+  // The count of the record's interface, found or added (then the last one); null past
+  // kMaxInterfaces (its records are counted as omitted).
+  CaptureInterface* interfaceOf(const CaptureRecord& record);
 
   std::optional<RuleSettings> rules_;
   TimeWindow time_window_;
@@ -195,7 +206,10 @@ class CapturePipeline {
   Sinks sinks_;
   bool started_ = false;
   CaptureRun run_;
-  EcatFrame frame_;  // the record being walked
+  EcatFrame frame_;                             // the record being walked
+  std::vector<CaptureInterface> interfaces_;    // in the order first seen
+  CaptureInterface* last_interface_ = nullptr;  // the last record's, in interfaces_
+  std::uint64_t interface_records_omitted_ = 0;
 };
 
 }  // namespace ncservo

@@ -55,6 +55,15 @@ Truncation truncationOf(std::uint64_t snapped, std::uint64_t first_snapped, cons
 // An axis's name in `layout` ("axis3" where it has none there).
 std::string axisNameIn(const std::vector<AxisInfo>& layout, std::uint16_t axis);
 
+// What one interface of the capture held (docs/cli.md#interfaces): its records, and whether any
+// was an EtherCAT frame. `link_type` is its link type's number (1 Ethernet, 113 Linux cooked).
+struct CaptureInterface {
+  std::uint32_t id = 0;
+  int link_type = 0;
+  std::uint64_t frames = 0;
+  bool ethercat = false;
+};
+
 struct CaptureResult {
   std::uint64_t frames = 0;  // records read, of any kind
   std::uint64_t cycles = 0;
@@ -91,6 +100,10 @@ struct CaptureResult {
   std::int64_t dc_settled_ns = 0;
   std::vector<Incident> incidents;  // docs/incidents.md, in frame order
   std::uint64_t incidents_omitted = 0;
+  // Each interface the records came from, by id (up to CapturePipeline::kMaxInterfaces), and the
+  // records of further interfaces, not listed.
+  std::vector<CaptureInterface> interfaces;
+  std::uint64_t interface_records_omitted = 0;
 };
 
 // What the validator's models hold at the end of a run: the bus, the layout and each axis (the
