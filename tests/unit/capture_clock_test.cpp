@@ -71,7 +71,9 @@ TEST_P(AssessTest, ChoosesTheClock) {
     const std::int64_t bus_ns = 1'000'000'000 + static_cast<std::int64_t>(i) * row.cycle_ns;
     std::optional<std::uint64_t> read;
     if (row.bus_read) read = row.bus_advances ? static_cast<std::uint64_t>(bus_ns) : 42;
-    assessor.add(row.stamper(i, bus_ns), read);
+    const std::int64_t stamp = row.stamper(i, bus_ns);
+    assessor.add(stamp, read);
+    if (read) assessor.addRead(stamp, *read);
   }
   std::optional<SystemTimeRead> reference;
   if (row.bus_read) reference = SystemTimeRead{0, true, ecat::kFrmw, 0x1001};

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "ncservo/model/dc_clock.hpp"
 #include "ncservo/wire/slave_directory.hpp"
@@ -83,6 +84,21 @@ std::optional<SystemTimeRead> systemTimeRead(const EcatFrame& frame, const ByteR
   return std::nullopt;
 }
 
+bool sameClock(const SystemTimeRead& a, const SystemTimeRead& b) {
+  return a.command == b.command && (!ecat::addressSurvivesRing(a.command) || a.adp == b.adp);
+}
+
+bool asksSystemTime(const EcatFrame& frame) {
+  for (std::size_t i = 0; i < frame.count; ++i) {
+    const Datagram& dg = frame.datagrams[i];
+    if (readsSystemTime(dg.command) && dg.ado() <= ecat::kRegDcSystemTime &&
+        std::size_t{dg.ado()} + dg.length >= std::size_t{ecat::kRegDcSystemTime} + 4) {
+      return true;
+    }
+  }
+  return false;
+}
+
 std::uint64_t SystemTimeUnwrapper::extend(const SystemTimeRead& read) {
   if (read.wide || !last_) {
     last_ = read.raw;
@@ -123,6 +139,38 @@ bool StampAssessor::busClockUsable() const {
   return static_cast<double>(*bus_cycle) > mean / 2 && static_cast<double>(*bus_cycle) < mean * 2;
 }
 
+void StampAssessor::addRead(std::int64_t capture_ns, std::uint64_t bus_ns) {
+  if (reads_.size() < 4 * kCycles) reads_.push_back({capture_ns, bus_ns});
+}
+
+// Each read's stamp against the bus's time it carried, less the line through them (the clocks'
+// offset and drift), over the earliest.
+std::optional<std::int64_t> StampAssessor::lateP99Ns() const {
+  if (reads_.size() < kFewest) return std::nullopt;
+  LineFit fit;
+  const std::uint64_t bus0 = *reads_.front().bus_ns;
+  const std::int64_t capture0 = reads_.front().capture_ns;
+  const auto point = [&](const Sample& read) {
+    const auto x = static_cast<double>(*read.bus_ns - bus0);
+    return std::pair{x, static_cast<double>(read.capture_ns - capture0) - x};
+  };
+  for (const Sample& read : reads_) {
+    const auto [x, y] = point(read);
+    fit.add(x, y);
+  }
+  const double slope = fit.slope().value_or(0);
+  const double offset = (fit.sy - slope * fit.sx) / fit.n;
+  std::vector<std::int64_t> residuals;
+  for (const Sample& read : reads_) {
+    const auto [x, y] = point(read);
+    residuals.push_back(std::llround(y - (offset + slope * x)));
+  }
+  const std::int64_t earliest = *std::min_element(residuals.begin(), residuals.end());
+  for (std::int64_t& r : residuals) r -= earliest;
+  std::sort(residuals.begin(), residuals.end());
+  return residuals[(residuals.size() * 99 + 99) / 100 - 1];
+}
+
 CaptureStamps StampAssessor::stamps() const {
   CaptureStamps s;
   if (samples_.size() < 2) return s;
@@ -151,30 +199,8 @@ CaptureStamps StampAssessor::stamps() const {
     if (!s.bunched) s.burst_ns.reset();
   }
   if (bus) {
-    // Lateness: each stamp against the bus's time, less the line through them (the clocks'
-    // offset and drift), over the earliest.
-    LineFit fit;
-    const std::uint64_t bus0 = *samples_.front().bus_ns;
-    const std::int64_t capture0 = samples_.front().capture_ns;
-    for (const Sample& sample : samples_) {
-      if (!sample.bus_ns) continue;
-      const auto x = static_cast<double>(*sample.bus_ns - bus0);
-      fit.add(x, static_cast<double>(sample.capture_ns - capture0) - x);
-    }
-    const double slope = fit.slope().value_or(0);
-    const double offset = (fit.sy - slope * fit.sx) / fit.n;
-    std::vector<std::int64_t> residuals;
-    for (const Sample& sample : samples_) {
-      if (!sample.bus_ns) continue;
-      const auto x = static_cast<double>(*sample.bus_ns - bus0);
-      const double y = static_cast<double>(sample.capture_ns - capture0) - x;
-      residuals.push_back(std::llround(y - (offset + slope * x)));
-    }
-    const std::int64_t earliest = *std::min_element(residuals.begin(), residuals.end());
-    for (std::int64_t& r : residuals) r -= earliest;
-    std::sort(residuals.begin(), residuals.end());
-    s.late_p99_ns = residuals[(residuals.size() * 99 + 99) / 100 - 1];
-    s.late = !s.quantised && !s.bunched && *s.late_p99_ns * 4 > s.cycle_ns;
+    s.late_p99_ns = lateP99Ns();
+    s.late = s.late_p99_ns && !s.quantised && !s.bunched && *s.late_p99_ns * 4 > s.cycle_ns;
   }
   // Short intervals neither in bursts nor explained by lateness against a bus clock: the stamps
   // cannot be told apart from a bus that sent in bursts, so they are not trusted either.

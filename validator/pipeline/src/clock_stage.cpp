@@ -82,15 +82,14 @@ void ClockStage::hold(std::uint64_t number, std::int64_t time_ns, LinkType link,
   Held held{number, time_ns, link, judged, duplicate, false, std::nullopt, spareBuffer()};
   copyInto(held.bytes, bytes);
   held_bytes_ += bytes.size();
-  if (clock_key_ && clock_key_->matches(frame)) {
-    const Copy copy = copyOf(frame);
-    if (copy == Copy::Returned) {
-      if (const std::optional<SystemTimeRead> read = systemTimeRead(frame, bytes)) {
-        held.bus_ns = unwrap_.extend(*read);
-      }
-    } else if (copy == Copy::Master) {
-      held.clock_master = true;
-    }
+  // The bus's clock: the reads of the reference clock in returned copies, and the master copies
+  // that ask for them.
+  const Copy copy = copyOf(frame);
+  if (copy == Copy::Returned && reference_) {
+    const std::optional<SystemTimeRead> read = systemTimeRead(frame, bytes);
+    if (read && sameClock(*read, *reference_)) held.bus_ns = unwrap_.extend(*read);
+  } else if (copy == Copy::Master) {
+    held.clock_master = asksSystemTime(frame);
   }
   held_.push_back(std::move(held));
 }
@@ -104,35 +103,30 @@ void ClockStage::onFrame(std::uint64_t number, std::int64_t time_ns, LinkType li
       cyclic_key_ = FrameKey{{frame.datagrams.begin(), frame.datagrams.begin() + frame.count}};
     }
     const bool duplicate = isDuplicate(frame, bytes);
+    if (!duplicate && !reference_ && copyOf(frame) == Copy::Returned) {
+      reference_ = systemTimeRead(frame, bytes);
+    }
+    hold(number, time_ns, link, bytes, frame, judged, duplicate);
+    // Each copy of the cyclic frame with the last read of the reference clock since the one
+    // before: a read every cycle, in that frame or another, pairs the bus's intervals with the
+    // stamps' (a start-up's bursts of reads, before the first cyclic frame, do not).
+    if (const std::optional<std::uint64_t> read = held_.back().bus_ns) {
+      read_for_master_ = read_for_returned_ = read;
+      cyclic_stamps_.addRead(time_ns, *read);
+      returned_stamps_.addRead(time_ns, *read);
+    }
     if (cyclic_key_ && cyclic_key_->matches(frame)) {
       ++copies_;
       duplicate_copies_ += duplicate ? 1 : 0;
       const Copy copy = copyOf(frame);
-      if (!duplicate && copy != Copy::None) {
-        (copy == Copy::Master ? cyclic_stamps_ : returned_stamps_).add(time_ns, std::nullopt);
+      if (!duplicate && copy == Copy::Master) {
+        cyclic_stamps_.add(time_ns, std::exchange(read_for_master_, std::nullopt));
+      } else if (!duplicate && copy == Copy::Returned) {
+        returned_stamps_.add(time_ns, std::exchange(read_for_returned_, std::nullopt));
       }
     }
-    std::optional<SystemTimeRead> read;
-    if (!duplicate && frame.anyWkcAboveZero()) read = systemTimeRead(frame, bytes);
-    if (read && !clock_key_) {
-      clock_key_ = FrameKey{{frame.datagrams.begin(), frame.datagrams.begin() + frame.count}};
-      reference_ = read;
-      // Its master copy, held already, reads the clock too.
-      for (auto it = held_.rbegin(); it != held_.rend(); ++it) {
-        const ByteReader kept(it->bytes.data(), it->bytes.size());
-        EcatFrame walked;
-        walkPacket(it->link, kept, walked);
-        if (clock_key_->matches(walked) && copyOf(walked) == Copy::Master) {
-          it->clock_master = true;
-          break;
-        }
-      }
-    }
-    hold(number, time_ns, link, bytes, frame, judged, duplicate);
-    if (read && clock_key_->matches(frame)) clock_stamps_.add(time_ns, held_.back().bus_ns);
-    if (clock_stamps_.enough() ||
-        (!clock_key_ && (cyclic_stamps_.enough() || returned_stamps_.enough())) ||
-        held_.size() >= kMaxHeldFrames || held_bytes_ >= kMaxHeldBytes) {
+    if (cyclic_stamps_.enough() || returned_stamps_.enough() || held_.size() >= kMaxHeldFrames ||
+        held_bytes_ >= kMaxHeldBytes) {
       decide();
     }
     return;
@@ -188,13 +182,10 @@ std::int64_t ClockStage::cycleTime(std::int64_t capture_ns, const EcatFrame& fra
 }
 
 void ClockStage::decide() {
-  // The reads of the bus's clock time the stamps best; else the cyclic frame's master copies, or
-  // its returned copies in a capture without master copies.
-  const bool clock_read = clock_stamps_.samples() >= StampAssessor::kFewest;
+  // The cyclic frame's master copies, or its returned copies in a capture without master copies.
   const StampAssessor& cyclic =
       cyclic_stamps_.samples() >= StampAssessor::kFewest ? cyclic_stamps_ : returned_stamps_;
-  choice_ = chooseClock(probe_timed_, clock_read ? clock_stamps_ : cyclic,
-                        clock_read ? reference_ : std::nullopt);
+  choice_ = chooseClock(probe_timed_, cyclic, reference_);
   drop_duplicates_ = copies_ > 0 && duplicate_copies_ * 10 >= copies_;
   std::deque<Held> window = std::move(held_);
   held_.clear();

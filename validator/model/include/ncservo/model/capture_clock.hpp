@@ -48,6 +48,13 @@ struct SystemTimeRead {
 // APRD or BRD, of 4 or 8 bytes at 0x0910 or a block that holds them.
 std::optional<SystemTimeRead> systemTimeRead(const EcatFrame& frame, const ByteReader& bytes);
 
+// Whether two reads are of the same clock: the same command, and the same slave where the
+// address survives the ring (a broadcast's or an auto-increment read's comes back changed).
+bool sameClock(const SystemTimeRead& a, const SystemTimeRead& b);
+// Whether the frame asks for a system time: its datagram headers alone, so a master copy does too,
+// before any slave answered.
+bool asksSystemTime(const EcatFrame& frame);
+
 // 32-bit reads of the system time made 64-bit across their wrap-around (every 4.3 s).
 class SystemTimeUnwrapper {
  public:
@@ -85,8 +92,12 @@ class StampAssessor {
   // Fewer intervals than this say nothing about the stamps.
   static constexpr std::size_t kFewest = 8;
 
-  // One copy of the cyclic frame: its capture stamp and, when it carried one, the bus's time.
+  // One copy of the cyclic frame: its capture stamp and the bus's time of the last read of the
+  // reference clock before it (once a cycle, in that frame or another), if any.
   void add(std::int64_t capture_ns, std::optional<std::uint64_t> bus_ns);
+  // A read of the reference clock and the stamp of the frame that carried it: how late the
+  // stamps are against the bus's clock.
+  void addRead(std::int64_t capture_ns, std::uint64_t bus_ns);
   std::size_t samples() const { return samples_.size(); }
   bool enough() const { return samples_.size() > kCycles; }
   // Whether the bus's times advance, every one, by about what the stamps say on average: a clock
@@ -100,7 +111,9 @@ class StampAssessor {
     std::optional<std::uint64_t> bus_ns;
   };
   std::optional<std::int64_t> busCycleNs() const;
+  std::optional<std::int64_t> lateP99Ns() const;
   std::vector<Sample> samples_;
+  std::vector<Sample> reads_;
 };
 
 // The clock a capture is judged on, and why: what every report says (`clock`).

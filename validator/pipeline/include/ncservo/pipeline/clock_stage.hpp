@@ -5,7 +5,7 @@
 // (model/capture_clock.hpp); then they and every later frame go on in capture order:
 // - on the capture's or the probe's clock, with the time they came with;
 // - on the bus's clock, each cycle at the reference clock's system time its returned copy read:
-//   a frame is held until the read that follows it; the master copies of the reading frame take
+//   a frame is held until the read that follows it; the master copies that asked for it take
 //   the read's time (spread evenly when several came before one read), the frames between them
 //   keep their stamps' offsets, never past the next; the returned copies have no latency of
 //   their own;
@@ -108,10 +108,12 @@ class ClockStage {
   mutable std::optional<ClockChoice> capture_choice_;  // what choice() says before the choice
 
   // Judging the stamps: the first frame that may carry process data names the cyclic frame
-  // whose master copies time the stamps; the first to read the bus's time, the clock frame.
-  std::optional<FrameKey> cyclic_key_, clock_key_;
+  // whose master copies time the stamps; the first read of a system time names the reference
+  // clock, whose reads time them better.
+  std::optional<FrameKey> cyclic_key_;
   std::optional<SystemTimeRead> reference_;
-  StampAssessor cyclic_stamps_, returned_stamps_, clock_stamps_;
+  StampAssessor cyclic_stamps_, returned_stamps_;
+  std::optional<std::uint64_t> read_for_master_, read_for_returned_;  // since the last sample
   SystemTimeUnwrapper unwrap_;
   std::deque<Held> held_;
   std::size_t held_bytes_ = 0;
