@@ -119,6 +119,8 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
         {"p99", number(r.cycle_time.p99_us)},
         {"max", number(r.cycle_time.max_us)}}},
       {"layout_source", layoutSourceName(r.layout_source)},
+      {"clock", describeClock(r.clock)},
+      {"duplicates", r.duplicates.count},
       {"findings", std::move(findings)},
       {"findings_total", r.findings.size()},
       {"baseline", r.baseline ? Json(fmt::format("against the baseline {}: {}", r.baseline_path,
@@ -360,6 +362,10 @@ function captureSection(capture, index) {
   section.appendChild(el('h3', {}, 'Cycle time'));
   const ct = capture.cycle_time_us;
   section.appendChild(el('p', {}, ct.median === null ? 'No cycle measured.' : `median ${ct.median} µs, p99 ${ct.p99} µs, max ${ct.max} µs`));
+  section.appendChild(el('p', {class: 'note'}, `Clock: ${capture.clock} (docs/timing.md#the-clock).`));
+  if (capture.duplicates > 0) {
+    section.appendChild(el('p', {class: 'note'}, `${capture.duplicates} duplicate records ignored (docs/cli.md).`));
+  }
   if (capture.cycle_histogram.length) {
     const canvas = el('canvas', {width: 700, height: 260, id: `histogram-${index}`});
     section.appendChild(canvas);
