@@ -221,6 +221,52 @@ INSTANTIATE_TEST_SUITE_P(
                       BusRow{"late_400us", lateBy(400 * kUs), ClockSource::Bus}),
     test::rowName<BusRow>);
 
+struct EarlyRow {
+  const char* name;
+  Stamper stamper;
+  std::size_t cycles;  // the cyclic frame's copies seen when the stage decides
+};
+
+class EarlyDecisionTest : public ::testing::TestWithParam<EarlyRow> {};
+
+// Stamps clean over the first 32 cycles decide the clock there, so a single pass holds few frames;
+// stamps with anything to watch wait for all 128.
+TEST_P(EarlyDecisionTest, DecidesAsSoonAsTheStampsAllow) {
+  const EarlyRow& row = GetParam();
+  std::size_t fed = 0;
+  std::optional<std::size_t> fed_at_decision;
+  ClockStage stage(
+      [&](std::uint64_t, std::int64_t, LinkType, const ByteReader&, const EcatFrame&, bool) {
+        if (!fed_at_decision) fed_at_decision = fed;
+      });
+  EcatFrame frame;
+  const std::vector<SimFrame>& frames = simulated();
+  // The first frame that may carry process data: the cyclic frame's first copy.
+  std::size_t first_cyclic = 0;
+  for (std::size_t i = 0; i < frames.size() && !fed_at_decision; ++i) {
+    const ByteReader bytes(frames[i].bytes.data(), frames[i].bytes.size());
+    walkPacket(LinkType::Ethernet, bytes, frame);
+    ++fed;
+    if (first_cyclic == 0 && frame.mayCarryProcessData()) first_cyclic = fed;
+    stage.onFrame(fed, row.stamper(i, frames[i].time_ns), LinkType::Ethernet, bytes, frame, true,
+                  false);
+  }
+  ASSERT_TRUE(fed_at_decision) << "the stage never decided";
+  EXPECT_EQ(clockSourceName(stage.choice().source), std::string("capture")) << stage.choice().why;
+  // Two copies a cycle, the master's first; a few of the first cycles may pass unsampled.
+  const std::size_t cycles = (*fed_at_decision - first_cyclic + 2) / 2;
+  EXPECT_NEAR(static_cast<double>(cycles), static_cast<double>(row.cycles), 4.0)
+      << stage.choice().why;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Stamps, EarlyDecisionTest,
+    ::testing::Values(EarlyRow{"clean", steady(), StampAssessor::kEarlyCycles + 1},
+                      // Late by up to a fifth of the 250 us cycle: fit, but not clean.
+                      EarlyRow{"late_a_fifth", lateBy(50 * kUs), StampAssessor::kCycles + 1},
+                      EarlyRow{"fine_quantum", quantisedTo(100 * kUs), StampAssessor::kCycles + 1}),
+    test::rowName<EarlyRow>);
+
 TEST(ClockStage, DropsEveryRecordsCopyAndCountsIt) {
   std::vector<Passed> passed;
   std::vector<std::uint64_t> dropped;

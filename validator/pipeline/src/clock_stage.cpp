@@ -125,8 +125,10 @@ void ClockStage::onFrame(std::uint64_t number, std::int64_t time_ns, LinkType li
         returned_stamps_.add(time_ns, std::exchange(read_for_returned_, std::nullopt));
       }
     }
-    if (cyclic_stamps_.enough() || returned_stamps_.enough() || held_.size() >= kMaxHeldFrames ||
-        held_bytes_ >= kMaxHeldBytes) {
+    const bool clean_early = cyclic_stamps_.samples() == StampAssessor::kEarlyCycles + 1 &&
+                             cyclic_stamps_.stamps().clean();
+    if (clean_early || cyclic_stamps_.enough() || returned_stamps_.enough() ||
+        held_.size() >= kMaxHeldFrames || held_bytes_ >= kMaxHeldBytes) {
       decide();
     }
     return;

@@ -81,6 +81,11 @@ struct CaptureStamps {
   // than two cycles.
   std::optional<std::int64_t> late_p99_ns;
   bool fit() const { return intervals > 0 && !quantised && !bunched && !late; }
+  // Fit with nothing to watch: no short interval at all, and late by no more than an eighth of
+  // the cycle.
+  bool clean() const {
+    return fit() && short_intervals == 0 && (!late_p99_ns || *late_p99_ns * 8 <= cycle_ns);
+  }
 };
 
 // The first cycles of a capture, taken apart: the capture stamps of one cyclic frame's copies,
@@ -91,6 +96,9 @@ class StampAssessor {
   static constexpr std::size_t kCycles = 128;
   // Fewer intervals than this say nothing about the stamps.
   static constexpr std::size_t kFewest = 8;
+  // Stamps clean over this many cycles are judged fit there: a single pass in Wireshark holds
+  // its first frames no longer than it must.
+  static constexpr std::size_t kEarlyCycles = 32;
 
   // One copy of the cyclic frame: its capture stamp and the bus's time of the last read of the
   // reference clock before it (once a cycle, in that frame or another), if any.
