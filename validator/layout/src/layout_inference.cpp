@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <bitset>
 #include <cmath>
 #include <cstring>
@@ -171,6 +172,10 @@ struct TxCandidate {
   CycleBits enabled;  // ServoEn
   CycleBits ack;      // ErrClearAck
   CycleBits zack;     // ZPulseAck
+  // ServoEn set from the first cycle this window judged up to this cycle (exclusive): an enable
+  // before the window switched it on (docs/layout.md, a capture that begins in a fault).
+  std::uint32_t enabled_from_start_until = 0;
+  bool first_run_open = true;  // ServoEn has been set in every cycle judged so far
 };
 
 bool dead(std::uint32_t seen, std::uint32_t violations) {
@@ -375,7 +380,12 @@ struct LayoutInference::State {
     if (failures == 1) ++c.faulty;
     if (moved) ++c.moves;
     if ((ssw & kSswStatus) != 0) ++c.status;
-    if ((ssw & kSswServoEn) != 0) c.enabled.set(cycle, bytes);
+    if ((ssw & kSswServoEn) != 0) {
+      c.enabled.set(cycle, bytes);
+      if (c.first_run_open) c.enabled_from_start_until = cycle + 1;
+    } else {
+      c.first_run_open = false;
+    }
     if ((ssw & kSswErrClearAck) != 0) c.ack.set(cycle, bytes);
     if ((ssw & kSswZPulseAck) != 0) c.zack.set(cycle, bytes);
     if (!readyPerTable(ssw, sew)) ++c.ready_mismatches;
@@ -551,15 +561,38 @@ std::vector<std::uint64_t> recentlyEnabled(const CycleBits& se, std::uint32_t cy
   return recent;
 }
 
+// The first cycle with a bit set, or the largest cycle when none is.
+std::uint32_t firstCycle(const CycleBits& bits) {
+  for (std::size_t w = 0; w < bits.words.size(); ++w) {
+    if (bits.words[w] != 0) {
+      return static_cast<std::uint32_t>(64 * w + std::countr_zero(bits.words[w]));
+    }
+  }
+  return std::numeric_limits<std::uint32_t>::max();
+}
+
+// The cycles of word `w` before cycle `end`.
+std::uint64_t cyclesBefore(std::size_t w, std::uint32_t end) {
+  const std::uint64_t first = 64 * std::uint64_t{w};
+  if (end <= first) return 0;
+  if (end >= first + 64) return ~std::uint64_t{0};
+  return (std::uint64_t{1} << (end - first)) - 1;
+}
+
 // How well a candidate RxPDO's SE and ErrorClear explain a TxPDO's ServoEn and ErrClearAck.
+// A ServoEn already set when the window began, until the SE first reads 0x2, is no evidence
+// against the pair: an enable the window did not see switched it on, and whether the drive
+// holds it too long is SE-003's to judge (docs/layout.md, a capture that begins in a fault).
 PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& recent,
                     const TxCandidate& tx) {
   PairScore p;
+  const std::uint32_t unseen_enable_until =
+      std::min(tx.enabled_from_start_until, firstCycle(rx.enabled));
   for (std::size_t w = 0; w < recent.size(); ++w) {
     const std::uint64_t en = tx.enabled.word(w);
     if (en == 0 && tx.ack.word(w) == 0 && tx.zack.word(w) == 0) continue;
     p.agree += popcount(rx.enabled.word(w) & en);
-    p.disagree += popcount(en & ~recent[w]);
+    p.disagree += popcount(en & ~recent[w] & ~cyclesBefore(w, unseen_enable_until));
     p.clear += popcount(rx.clear.word(w) & tx.ack.word(w));
     p.zpulse += popcount(rx.zpulse.word(w) & tx.zack.word(w));
   }
@@ -623,11 +656,13 @@ bool LayoutInference::outputsFirst(InferenceResult& result) const {
 namespace {
 
 // A control word whose SE may explain a ServoEn: written by the master, reserved bits zero, SE
-// 0x2 at least once.
+// 0x2 at least once, and not changing cycle after cycle as a set point or a counter does (a
+// ServoEn switched on before the window is explained by no SE in it, so only such a word could
+// seem to explain it there; docs/layout.md).
 bool handshakeRx(const Stream& s, std::size_t o) {
   const RxCandidate& c = s.rx[o];
   return c.seen >= kMinObservations && !dead(c.seen, c.violations) && c.enabled.any() &&
-         !s.slaveWrote(o, kRxPdoSize);
+         !dead(c.seen, c.scw_flaps) && !s.slaveWrote(o, kRxPdoSize);
 }
 
 // The handshake evidence of each TxPDO window that shows ServoEn: the best pair score of any
