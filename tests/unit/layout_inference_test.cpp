@@ -32,8 +32,12 @@ enum class Style {
   Cia402,      // per slave outputs then inputs, a CiA 402 drive of 10/40-byte PDOs between servos
   Cia402Slow,  // the same with a drive whose torque changes every 50 cycles (the simulator's)
   SoemCia402,  // outputs then inputs, that drive after each of the first two servos
-  TwinCat,     // an LWR of outputs and LRDs of inputs in separate areas and frames
-  Fixed,       // FPWR to SM2 and FPRD of SM3 per station
+  // Per slave outputs then inputs, a CiA 402 drive of 12/28-byte PDOs before each servo (the
+  // simulator's mixed image): its torque, read one word on as a control word, shows SE 0x2 until
+  // it steps at cycle 200 (every 50 ms at 250 us).
+  Cia402Torque,
+  TwinCat,  // an LWR of outputs and LRDs of inputs in separate areas and frames
+  Fixed,    // FPWR to SM2 and FPRD of SM3 per station
 };
 
 // EnabledNeverRequested: every drive shows ServoEn from the first cycle to the last while its
@@ -151,6 +155,23 @@ Bytes cia402SlowTx(int cycle) {
   return out;
 }
 
+// The simulator's CiA 402 drive of the mixed image: outputs (controlword, target position,
+// velocity, mode) and inputs (statusword, position, velocity, a torque stepping every 200 cycles
+// from 10, zeros).
+Bytes cia402TorquePdos(int cycle) {
+  Bytes out;
+  test::putLe(out, 0x000F, 2);
+  test::putLe(out, static_cast<std::uint32_t>(100 * cycle), 4);
+  test::putLe(out, 1000, 4);
+  test::putLe(out, 8, 2);
+  test::putLe(out, 0x1237, 2);
+  test::putLe(out, static_cast<std::uint32_t>(25 * cycle), 4);
+  test::putLe(out, 1000, 4);
+  test::putLe(out, static_cast<std::uint32_t>(10 + cycle / 200), 2);
+  out.resize(12 + 28, 0);
+  return out;
+}
+
 Bytes cia402Pdos(Style style, int cycle) {
   return test::concat(
       {cia402Rx(cycle), style == Style::Cia402Slow ? cia402SlowTx(cycle) : cia402Tx(cycle)});
@@ -209,7 +230,8 @@ std::vector<Bytes> cycleFrames(Style style, std::vector<AxisModel>& axes, int cy
     case Style::Mixed:
     case Style::Terminals:
     case Style::Cia402:
-    case Style::Cia402Slow: {
+    case Style::Cia402Slow:
+    case Style::Cia402Torque: {
       const bool mixed = style == Style::Mixed;
       const bool terminals = style == Style::Terminals;
       Bytes data;
@@ -219,6 +241,7 @@ std::vector<Bytes> cycleFrames(Style style, std::vector<AxisModel>& axes, int cy
         if (style == Style::Cia402 || style == Style::Cia402Slow) {
           data = test::concat({data, cia402Pdos(style, cycle)});
         }
+        if (style == Style::Cia402Torque) data = test::concat({data, cia402TorquePdos(cycle)});
         const auto out = static_cast<std::uint32_t>(kImage + data.size());
         data = test::concat({data, axes[k].rx(cycle)});
         if (mixed) data = test::concat({data, ioBytes(2 + k % 5, cycle, 40 + k)});
@@ -367,6 +390,12 @@ std::vector<Row> rows() {
   }
   out.push_back(
       Row{"soem cia402 bad message code 4", Style::SoemCia402, 4, Motion::Commissioning, false, 1});
+  // Beside a neighbour whose inputs read as a control word agree with every ServoEn for the first
+  // 200 cycles: the two windows explain it equally until the torque steps, so the early decision
+  // waits for the evidence that tells them apart.
+  for (int n : {1, 3, 8}) {
+    out.push_back(Row{"cia402 torque " + std::to_string(n), Style::Cia402Torque, n});
+  }
   // A recording that begins inside a drive fault, the drive enabled beside its error with no
   // enable requested (SE-003 and FLT-001 for the rules), 1.5 s at 1 ms: its ServoEn came from an
   // enable before the capture and is no evidence against its control word (docs/layout.md).

@@ -877,7 +877,24 @@ InferredAxis axisAt(const std::vector<Stream>& streams, std::size_t k, const RxC
   return axis;
 }
 
-// 5. Confidence: how far the best overlapping rival is behind, for both PDOs.
+// Whether RxPDO window `i` could be axis k's instead of the chosen one: it overlaps the chosen
+// window, or it lies between the RxPDOs chosen for the axes before and after k, so that the pairs
+// stay in process-image order with it.
+bool couldTakeSlot(const std::vector<Stream>& streams, const std::vector<RxChoice>& rx,
+                   const std::vector<std::size_t>& choice, std::size_t k, std::size_t i) {
+  const RxChoice& r = rx[choice[k]];
+  if (i == choice[k]) return false;
+  if (rx[i].stream == r.stream && overlaps(rx[i].offset, kRxPdoSize, r.offset, kRxPdoSize)) {
+    return true;
+  }
+  auto at = [&](std::size_t j) { return streams[rx[j].stream].imageAddress(rx[j].offset); };
+  return (k == 0 || at(choice[k - 1]) + kRxPdoSize <= at(i)) &&
+         (k + 1 == choice.size() || at(i) + kRxPdoSize <= at(choice[k + 1]));
+}
+
+// 5. Confidence: how far the best rival is behind, for both PDOs; for the RxPDO, any window that
+// could take its place (a word elsewhere that has agreed with the ServoEn as often, such as a
+// neighbour's input that has not changed yet, makes the placement a guess: docs/layout.md).
 // The axes go to `result`; the ones too close to a rival are returned, described.
 std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
                                    const std::vector<RxChoice>& rx, const ServoCandidates& servos,
@@ -893,8 +910,7 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     const PairScore& p = servos.pair[k][choice[k]];
     std::int64_t rival = 0;
     for (std::size_t i = 0; i < m; ++i) {
-      if (i != choice[k] && rx[i].stream == r.stream &&
-          overlaps(rx[i].offset, kRxPdoSize, r.offset, kRxPdoSize)) {
+      if (couldTakeSlot(streams, rx, choice, k, i)) {
         rival = std::max(rival, servos.pair[k][i].score);
       }
     }
