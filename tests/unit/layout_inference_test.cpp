@@ -42,7 +42,9 @@ enum class Style {
 
 // EnabledNeverRequested: every drive shows ServoEn from the first cycle to the last while its
 // NC never asks for it (SE 0x1 throughout): no control word explains it.
-enum class Motion { Commissioning, IdleEnabledNever, AllZero, EnabledNeverRequested };
+// Running: every axis enabled by SE 0x2 and moving from the first cycle to the last (a capture
+// of a running machine: no handshake happens in it).
+enum class Motion { Commissioning, IdleEnabledNever, AllZero, EnabledNeverRequested, Running };
 
 // The capture begins inside a drive fault (simulate --start-in fault:FLT-001 with the NC's SE
 // already back at 0x1): the drive stays enabled beside a following error (SEW 0x00080001) for
@@ -62,7 +64,7 @@ struct AxisModel {
 
   int enableCycle() const { return starts_in_fault ? kReEnableCycle : 12 + 3 * axis; }
   bool enabled(int cycle) const {
-    if (motion == Motion::EnabledNeverRequested) return true;
+    if (motion == Motion::EnabledNeverRequested || motion == Motion::Running) return true;
     if (motion != Motion::Commissioning) return false;
     return (starts_in_fault && cycle < kFaultStandsCycles) || cycle >= enableCycle() + 3;
   }
@@ -74,6 +76,8 @@ struct AxisModel {
       if (cycle >= 5 + axis || starts_in_fault) scw |= 0x1;
       if (cycle >= enableCycle()) scw = (scw & ~0x3u) | 0x2;
       if (cycle >= 200 && cycle < 206) scw |= 1u << 9;
+    } else if (motion == Motion::Running) {
+      scw |= 0x2;
     } else {
       scw |= 0x1;
     }
@@ -89,14 +93,14 @@ struct AxisModel {
       ssw &= ~0x2u;  // not ready with an error (Servo_Ready_Mode 0)
       sew = 0x00080001;
     }
-    if (cycle >= 202 && cycle < 208) ssw |= 0x10;
+    if (motion != Motion::Running && cycle >= 202 && cycle < 208) ssw |= 0x10;
     const int code = bad_message && cycle % 10 == 3 ? 12 : cycle % 4;
     const float data = enabled(cycle) ? 100.0f + static_cast<float>(cycle % 97) * 1.5f : 560.0f;
     return test::txPdo(test::TxValues(position, ssw, sew, code, data,
                                       {0.5f * static_cast<float>(axis), 1.25f, -3.0f, 42.0f}));
   }
   void step(int cycle) {
-    if (motion != Motion::Commissioning || !enabled(cycle)) return;
+    if ((motion != Motion::Commissioning && motion != Motion::Running) || !enabled(cycle)) return;
     speed = std::min(speed + 7, 3000);
     position += speed;
   }
@@ -396,6 +400,12 @@ std::vector<Row> rows() {
   for (int n : {1, 3, 8}) {
     out.push_back(Row{"cia402 torque " + std::to_string(n), Style::Cia402Torque, n});
   }
+  // A recording that begins inside a drive fault beside that neighbour: until the torque steps,
+  // the neighbour's word explains the ServoEn the window began with and the control word cannot.
+  for (const auto& [n, fault_axis] : {std::pair{1, 0}, std::pair{4, 2}}) {
+    out.push_back(Row{"cia402 torque starts in a fault " + std::to_string(n), Style::Cia402Torque,
+                      n, Motion::Commissioning, false, -1, fault_axis, 1500});
+  }
   // A recording that begins inside a drive fault, the drive enabled beside its error with no
   // enable requested (SE-003 and FLT-001 for the rules), 1.5 s at 1 ms: its ServoEn came from an
   // enable before the capture and is no evidence against its control word (docs/layout.md).
@@ -444,6 +454,44 @@ TEST_P(InferredLayout, IsTheLayoutTheFramesWereBuiltWith) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Styles, InferredLayout, ::testing::ValuesIn(rows()), test::rowName<Row>);
+
+// When the learning window ends: early, once every axis is explained by a handshake it saw happen;
+// at its full length when the only agreement is over drives already enabled when it began, which
+// a word that merely reads SE 0x2 explains as well (docs/layout.md).
+struct WindowLengthRow {
+  std::string name;
+  Style style;
+  Motion motion;
+  bool full_length;
+};
+
+class LearningWindowLength : public ::testing::TestWithParam<WindowLengthRow> {};
+
+TEST_P(LearningWindowLength, EndsEarlyOnlyOnHandshakesSeen) {
+  Truth truth;
+  const InferenceResult result = infer(GetParam().style, 4, GetParam().motion, 4096, truth);
+  ASSERT_TRUE(result.refusal.empty()) << result.refusal;
+  ASSERT_EQ(result.axes.size(), truth.axes.size());
+  for (std::size_t k = 0; k < truth.axes.size(); ++k) {
+    EXPECT_EQ(result.axes[k].config.outputs, truth.axes[k].outputs) << "axis " << k;
+    EXPECT_EQ(result.axes[k].config.inputs, truth.axes[k].inputs) << "axis " << k;
+  }
+  if (GetParam().full_length) {
+    EXPECT_EQ(result.cycles, 4096u);
+  } else {
+    EXPECT_LT(result.cycles, 4096u);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, LearningWindowLength,
+    ::testing::Values(
+        WindowLengthRow{"soem commissioning", Style::Soem, Motion::Commissioning, false},
+        WindowLengthRow{"soem running", Style::Soem, Motion::Running, true},
+        WindowLengthRow{"etherlab running", Style::EtherLab, Motion::Running, true},
+        WindowLengthRow{"twincat running", Style::TwinCat, Motion::Running, true},
+        WindowLengthRow{"cia402 torque running", Style::Cia402Torque, Motion::Running, true}),
+    test::rowName<WindowLengthRow>);
 
 struct RefusalRow {
   std::string name;

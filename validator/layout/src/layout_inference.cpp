@@ -173,7 +173,7 @@ struct TxCandidate {
   CycleBits ack;      // ErrClearAck
   CycleBits zack;     // ZPulseAck
   // ServoEn set from the first cycle this window judged up to this cycle (exclusive): an enable
-  // before the window switched it on (docs/layout.md, a capture that begins in a fault).
+  // before the window switched it on (docs/layout.md#begins-in-a-fault).
   std::uint32_t enabled_from_start_until = 0;
   bool first_run_open = true;  // ServoEn has been set in every cycle judged so far
 };
@@ -507,11 +507,13 @@ void LayoutInference::onFrame(const EcatFrame& frame, const ByteReader& bytes, b
     st.settled = true;
     return;
   }
-  // Early decision at doubling checkpoints: every servo-like TxPDO paired, every axis clear.
+  // Early decision at doubling checkpoints: every servo-like TxPDO paired, every axis clear, each
+  // by a handshake the window saw happen.
   const std::uint32_t c = st.cycles;
   if (c >= st.limits.min_cycles && (c & (c - 1)) == 0) {
     const InferenceResult result = decide();
-    st.settled = !result.axes.empty() && result.refusal.empty() && result.unexplained == 0;
+    st.settled = !result.axes.empty() && result.refusal.empty() && result.unexplained == 0 &&
+                 result.unconfirmed == 0;
   }
 }
 
@@ -540,6 +542,9 @@ std::vector<std::size_t> tile(const std::vector<std::int64_t>& score, std::size_
 struct PairScore {
   std::int64_t score = std::numeric_limits<std::int64_t>::min();
   std::uint32_t agree = 0;
+  // Of `agree`, the cycles after the ServoEn the window began with had ended: the others show only
+  // that the word read 0x2 beside a drive already enabled, as a neighbour's steady input can.
+  std::uint32_t agree_after_start = 0;
   std::uint32_t disagree = 0;
   std::uint32_t clear = 0;
   std::uint32_t zpulse = 0;
@@ -582,7 +587,7 @@ std::uint64_t cyclesBefore(std::size_t w, std::uint32_t end) {
 // How well a candidate RxPDO's SE and ErrorClear explain a TxPDO's ServoEn and ErrClearAck.
 // A ServoEn already set when the window began, until the SE first reads 0x2, is no evidence
 // against the pair: an enable the window did not see switched it on, and whether the drive
-// holds it too long is SE-003's to judge (docs/layout.md, a capture that begins in a fault).
+// holds it too long is SE-003's to judge (docs/layout.md#begins-in-a-fault).
 PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& recent,
                     const TxCandidate& tx) {
   PairScore p;
@@ -592,6 +597,8 @@ PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& rec
     const std::uint64_t en = tx.enabled.word(w);
     if (en == 0 && tx.ack.word(w) == 0 && tx.zack.word(w) == 0) continue;
     p.agree += popcount(rx.enabled.word(w) & en);
+    p.agree_after_start +=
+        popcount(rx.enabled.word(w) & en & ~cyclesBefore(w, tx.enabled_from_start_until));
     p.disagree += popcount(en & ~recent[w] & ~cyclesBefore(w, unseen_enable_until));
     p.clear += popcount(rx.clear.word(w) & tx.ack.word(w));
     p.zpulse += popcount(rx.zpulse.word(w) & tx.zack.word(w));
@@ -877,6 +884,13 @@ InferredAxis axisAt(const std::vector<Stream>& streams, std::size_t k, const RxC
   return axis;
 }
 
+// Whether a pair's handshakes include one the window saw happen: a ServoEn that SE 0x2 explains
+// after the ServoEn the window began with, an ErrClearAck or a ZPulseAck. An agreement only over a
+// ServoEn already set when the window began (or none at all) ends no window early.
+bool seenInWindow(const PairScore& p) {
+  return p.agree_after_start >= kMinAgreement || p.clear > 0 || p.zpulse > 0;
+}
+
 // Whether RxPDO window `i` could be axis k's instead of the chosen one: it overlaps the chosen
 // window, or it lies between the RxPDOs chosen for the axes before and after k, so that the pairs
 // stay in process-image order with it.
@@ -917,6 +931,7 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     const double rx_confidence =
         std::max(0.0, 1.0 - static_cast<double>(rival) / static_cast<double>(p.score));
     InferredAxis axis = axisAt(streams, k, r, servos.tx[k], p);
+    if (!seenInWindow(p)) ++result.unconfirmed;
     AxisEvidence& e = axis.evidence;
     e.confidence = std::min(servos.tx[k].confidence, rx_confidence);
     if (e.confidence < kMinConfidence) {
@@ -1042,13 +1057,16 @@ std::string describeRx(const std::vector<Stream>& streams, const RxChoice& r) {
   return fmt::format("{} offset {}", streams[r.stream].describe(), r.offset);
 }
 
-// The axis of rank k from the structure, its handshakes (if any) adding evidence.
+// The axis of rank k from the structure, its handshakes (if any) adding evidence; `unconfirmed`
+// counts it when it has some but none the window saw happen.
 InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cycles,
-                           const ChosenTx& chosen, const RxChoice& r, std::size_t k) {
+                           const ChosenTx& chosen, const RxChoice& r, std::size_t k,
+                           std::uint32_t& unconfirmed) {
   const Stream& rs = streams[r.stream];
   const Stream& ts = streams[chosen.stream];
   const PairScore p = pairScore(rs.rx[r.offset], recentlyEnabled(rs.rx[r.offset].enabled, cycles),
                                 ts.tx[chosen.offset]);
+  if (p.agree > 0 && !seenInWindow(p)) ++unconfirmed;
   InferredAxis axis = axisAt(streams, k, r, chosen, p);
   AxisEvidence& e = axis.evidence;
   e.paired_by_order = true;
@@ -1102,8 +1120,10 @@ bool LayoutInference::fromStructure(InferenceResult& result, std::string& why) c
     return false;
   }
   result.axes.clear();
+  result.unconfirmed = 0;
   for (std::size_t k = 0; k < c.tx.size(); ++k) {
-    result.axes.push_back(structureAxis(st.streams, st.cycles, c.tx[k], c.rx[choice[k]], k));
+    result.axes.push_back(
+        structureAxis(st.streams, st.cycles, c.tx[k], c.rx[choice[k]], k, result.unconfirmed));
   }
   return true;
 }
