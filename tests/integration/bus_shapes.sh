@@ -213,6 +213,10 @@ sim_case sim-start-in-flt001-se-dropped-twincat "--image twincat --axes 3 --cycl
 --start-in fault:FLT-001 --fault FLT-001@0.8:1 --fault SE-001@0.95:1" SE-003:1 FLT-001:1
 sim_case sim-start-in-se003-250us "--image etherlab --cycle-us 250 --start-in fault:SE-003 \
 --fault SE-003@1.0:2" SE-003:2
+# ... and among the mixed image's CiA 402 drive, whose torque reads SE 0x2 beside the ServoEn the
+# capture begins with until it steps: the window waits for a handshake it sees happen.
+sim_case sim-start-in-se003-mixed-250us "--image mixed --cycle-us 250 --axes 2 --seed 43 \
+--start-in fault:SE-003 --fault SE-003@0.9:1" SE-003:1
 # A second task: a 10 ms I/O frame with its own datagram list beside the 1 ms servo frames.
 sim_case sim-second-task "--no-startup --io-slaves 4 --io-task-us 10000 $faults" SE-001:0 MSG-001:1
 # Healthy, beside 8 terminals of a 10 ms task, at 1 ms and 250 us: no finding. At 250 us a CiA 402
@@ -254,8 +258,8 @@ print(len(json.load(open(sys.argv[1]))["captures"][0]["layout"]["axes"]))' "$dir
   [ "$got" = "$want" ] || case_failed "$name" "tshark -2 decodes $got axes, the layout holds $want"
 }
 for name in sim-start-in-flt001-se-dropped sim-start-in-flt001-se-dropped-1ax \
-  sim-start-in-flt001-se-dropped-twincat sim-start-in-se003-250us sim-second-task-8 \
-  sim-second-task-8-mixed-homing sim-second-task-16-mixed-homing; do
+  sim-start-in-flt001-se-dropped-twincat sim-start-in-se003-250us sim-start-in-se003-mixed-250us \
+  sim-second-task-8 sim-second-task-8-mixed-homing sim-second-task-16-mixed-homing; do
   axes_check "$name"
 done
 
