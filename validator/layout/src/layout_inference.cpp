@@ -663,9 +663,9 @@ bool LayoutInference::outputsFirst(InferenceResult& result) const {
 namespace {
 
 // A control word whose SE may explain a ServoEn: written by the master, reserved bits zero, SE
-// 0x2 at least once, and not changing cycle after cycle as a set point or a counter does (a
-// ServoEn switched on before the window is explained by no SE in it, so only such a word could
-// seem to explain it there; docs/layout.md).
+// 0x2 at least once, and not changing cycle after cycle as a set point or a counter does: such a
+// word passes 0x2 now and then and seems to explain a ServoEn nothing in the window switched on
+// (docs/layout.md#begins-in-a-fault).
 bool handshakeRx(const Stream& s, std::size_t o) {
   const RxCandidate& c = s.rx[o];
   return c.seen >= kMinObservations && !dead(c.seen, c.violations) && c.enabled.any() &&
