@@ -7,7 +7,9 @@
 #   injections' companions (check_findings.py for the generator's captures);
 # - its findings equal those with the exact `--config` (JSON Lines, byte for byte);
 # - `tshark -2` with the plugin shows the findings validate reports, on the same frames, and the
-#   same as with the exact configuration (ncservo.config).
+#   same as with the exact configuration (ncservo.config);
+# - for the starts inside a fault and the second task's cases, validate and tshark -2 decode as many
+#   axes as the exact layout holds.
 # And an idle 4-axis capture (nothing enabled anywhere) decodes all 4 axes (validate, decode and
 # tshark -2), says they were found from the structure only (text and JSON report, an expert note
 # in tshark -2), and yields no finding.
@@ -198,8 +200,33 @@ done
 # Already enabled when the capture starts: the first enable edges it shows are the faulty ones.
 sim_case sim-start-in-homing-faulty-enables "--start-in homing --duration 5 --fault SE-001@1.2:0 \
 --fault SE-001@1.3:2 --fault SE-004@1.4:3 --fault SE-002@1.5:1" SE-001:0 SE-001:2 SE-004:3 SE-002:1
+# A start inside a drive fault whose NC has already dropped SE to 0x1 while the drive holds
+# ServoEn beside its error for 200 ms (SE-001's disable at FLT-001's moment, docs/layout.md): the
+# structure decides, and the broken handshake is SE-003's and FLT-001's, on the frames the exact
+# layout gives. The simulator drops SE-001's own illegal enable here (the NC is handling the
+# fault at its moment), so SE-001 is not expected.
+sim_case sim-start-in-flt001-se-dropped "--start-in fault:FLT-001 --fault FLT-001@0.8:2 \
+--fault SE-001@0.95:2" SE-003:2 FLT-001:2
+sim_case sim-start-in-flt001-se-dropped-1ax "--axes 1 --start-in fault:FLT-001 \
+--fault FLT-001@0.8:0 --fault SE-001@0.95:0" SE-003:0 FLT-001:0
+sim_case sim-start-in-flt001-se-dropped-twincat "--image twincat --axes 3 --cycle-us 2000 \
+--start-in fault:FLT-001 --fault FLT-001@0.8:1 --fault SE-001@0.95:1" SE-003:1 FLT-001:1
+sim_case sim-start-in-se003-250us "--image etherlab --cycle-us 250 --start-in fault:SE-003 \
+--fault SE-003@1.0:2" SE-003:2
+# ... and among the mixed image's CiA 402 drive, whose torque reads SE 0x2 beside the ServoEn the
+# capture begins with until it steps: the window waits for a handshake it sees happen.
+sim_case sim-start-in-se003-mixed-250us "--image mixed --cycle-us 250 --axes 2 --seed 43 \
+--start-in fault:SE-003 --fault SE-003@0.9:1" SE-003:1
 # A second task: a 10 ms I/O frame with its own datagram list beside the 1 ms servo frames.
 sim_case sim-second-task "--no-startup --io-slaves 4 --io-task-us 10000 $faults" SE-001:0 MSG-001:1
+# Healthy, beside 8 terminals of a 10 ms task, at 1 ms and 250 us: no finding. At 250 us a CiA 402
+# drive's torque (the mixed image) reads as a control word agreeing with every ServoEn for its
+# first 50 ms; the early decision waits until it steps (docs/layout.md).
+sim_case sim-second-task-8 "--no-startup --io-slaves 8 --io-task-us 10000"
+sim_case sim-second-task-8-mixed-homing "--io-slaves 8 --io-task-us 10000 --image mixed \
+--cycle-us 250 --start-in homing"
+sim_case sim-second-task-16-mixed-homing "--io-slaves 16 --io-task-us 10000 --image mixed \
+--cycle-us 250 --axes 6 --seed 4 --start-in homing"
 sim_case sim-second-task-mixed "--no-startup --image mixed --io-task-us 4000 --cycle-us 500 --seed 2 \
 --fault SE-001@1.0:0" SE-001:0
 gen_case gen-second-task "--cycles 3000 --io-task-cycles 10 --inject SE-001 --inject SE-003"
@@ -212,6 +239,29 @@ sim_case sim-capture-loss "--no-startup --capture-loss 0.03 --seed 5 $faults" SE
 # All of it at once.
 gen_case gen-machine "--cycles 6000 --io-terminals 5 --cia402 1 --echo-inputs --io-task-cycles 10 \
 --idle-cycles 2500 --inject SE-001@4.0 --inject EC-004@4.5"
+
+# axes_check NAME: validate (JSON report) and tshark -2 decode as many axes as the simulator's
+# exact layout holds.
+axes_check() {
+  local name=$1 dir="$WORK/$1"
+  wanted "$name" || return 0
+  [ -s "$dir/free.json" ] || return 0  # judge said why
+  local want got
+  want=$(grep -c '^\[\[axis\]\]' "$WORK/$name.toml")
+  got=$(python3 -c '
+import json, sys
+print(len(json.load(open(sys.argv[1]))["captures"][0]["layout"]["axes"]))' "$dir/free.json")
+  [ "$got" = "$want" ] || case_failed "$name" "validate decodes $got axes, the layout holds $want"
+  "$TSHARK" "$PLUGIN" -2 -r "$WORK/$name.pcap" -Y ncservo -T fields -E occurrence=a \
+    -E aggregator=, -e ncservo.axis >"$dir/plugin-axes.txt" 2>/dev/null || true
+  got=$(tr ',' '\n' <"$dir/plugin-axes.txt" | awk 'NF' | sort -u | wc -l)
+  [ "$got" = "$want" ] || case_failed "$name" "tshark -2 decodes $got axes, the layout holds $want"
+}
+for name in sim-start-in-flt001-se-dropped sim-start-in-flt001-se-dropped-1ax \
+  sim-start-in-flt001-se-dropped-twincat sim-start-in-se003-250us sim-start-in-se003-mixed-250us \
+  sim-second-task-8 sim-second-task-8-mixed-homing sim-second-task-16-mixed-homing; do
+  axes_check "$name"
+done
 
 # An idle 4-axis capture: all 4 axes decoded, found from the structure only, no finding.
 idle_check() {

@@ -3,7 +3,8 @@
 // drives give back exactly the layout they were built with; an idle capture decodes from the
 // structure alone; neighbours that look alike (I/O terminals with changing inputs, CiA 402 drives
 // with 10/40-byte PDOs) are never axes, alone or beside a servo whose message code is out of range
-// now and then; empty data is refused.
+// now and then; a capture that begins inside a drive fault (enabled with no enable requested)
+// decodes; empty data, and drives enabled all along that no control word asked to be, are refused.
 #include "ncservo/layout/layout_inference.hpp"
 
 #include <gtest/gtest.h>
@@ -31,11 +32,25 @@ enum class Style {
   Cia402,      // per slave outputs then inputs, a CiA 402 drive of 10/40-byte PDOs between servos
   Cia402Slow,  // the same with a drive whose torque changes every 50 cycles (the simulator's)
   SoemCia402,  // outputs then inputs, that drive after each of the first two servos
-  TwinCat,     // an LWR of outputs and LRDs of inputs in separate areas and frames
-  Fixed,       // FPWR to SM2 and FPRD of SM3 per station
+  // Per slave outputs then inputs, a CiA 402 drive of 12/28-byte PDOs before each servo (the
+  // simulator's mixed image): its torque, read one word on as a control word, shows SE 0x2 until
+  // it steps at cycle 200 (every 50 ms at 250 us).
+  Cia402Torque,
+  TwinCat,  // an LWR of outputs and LRDs of inputs in separate areas and frames
+  Fixed,    // FPWR to SM2 and FPRD of SM3 per station
 };
 
-enum class Motion { Commissioning, IdleEnabledNever, AllZero };
+// EnabledNeverRequested: every drive shows ServoEn from the first cycle to the last while its
+// NC never asks for it (SE 0x1 throughout): no control word explains it.
+// Running: every axis enabled by SE 0x2 and moving from the first cycle to the last (a capture
+// of a running machine: no handshake happens in it).
+enum class Motion { Commissioning, IdleEnabledNever, AllZero, EnabledNeverRequested, Running };
+
+// The capture begins inside a drive fault (simulate --start-in fault:FLT-001 with the NC's SE
+// already back at 0x1): the drive stays enabled beside a following error (SEW 0x00080001) for
+// this many cycles, is cleared by the ErrorClear handshake at cycle 200 and enabled again legally.
+constexpr int kFaultStandsCycles = 200;
+constexpr int kReEnableCycle = 212;
 
 // One drive and its NC, cycle by cycle: enable by SE 0x1 -> 0x2, ServoEn 3 cycles later, then
 // motion with varying message data; an ErrorClear handshake at cycle 200.
@@ -44,15 +59,25 @@ struct AxisModel {
   Motion motion;
   std::int64_t position = 0;
   std::int32_t speed = 0;
-  bool bad_message = false;  // message code 12 (outside 0..9) in one cycle of 10: MSG-001
+  bool bad_message = false;      // message code 12 (outside 0..9) in one cycle of 10: MSG-001
+  bool starts_in_fault = false;  // enabled beside an error with no enable requested, at first
+
+  int enableCycle() const { return starts_in_fault ? kReEnableCycle : 12 + 3 * axis; }
+  bool enabled(int cycle) const {
+    if (motion == Motion::EnabledNeverRequested || motion == Motion::Running) return true;
+    if (motion != Motion::Commissioning) return false;
+    return (starts_in_fault && cycle < kFaultStandsCycles) || cycle >= enableCycle() + 3;
+  }
 
   Bytes rx(int cycle) const {
     std::uint32_t scw = 0x404;  // EMGON, Brake
     if (motion == Motion::AllZero) return test::rxPdo(0, 0);
     if (motion == Motion::Commissioning) {
-      if (cycle >= 5 + axis) scw |= 0x1;
-      if (cycle >= 12 + 3 * axis) scw = (scw & ~0x3u) | 0x2;
+      if (cycle >= 5 + axis || starts_in_fault) scw |= 0x1;
+      if (cycle >= enableCycle()) scw = (scw & ~0x3u) | 0x2;
       if (cycle >= 200 && cycle < 206) scw |= 1u << 9;
+    } else if (motion == Motion::Running) {
+      scw |= 0x2;
     } else {
       scw |= 0x1;
     }
@@ -61,16 +86,21 @@ struct AxisModel {
   Bytes tx(int cycle) const {
     if (motion == Motion::AllZero) return test::txPdo({});
     std::uint32_t ssw = 0x22;  // ServoRDY, N=0
-    const bool enabled = motion == Motion::Commissioning && cycle >= 15 + 3 * axis;
-    if (enabled) ssw = 0x83 | 0x40;
-    if (cycle >= 202 && cycle < 208) ssw |= 0x10;
+    std::uint32_t sew = 0;
+    const bool faulty = starts_in_fault && cycle < 204;
+    if (enabled(cycle)) ssw = 0x83 | 0x40;
+    if (faulty) {
+      ssw &= ~0x2u;  // not ready with an error (Servo_Ready_Mode 0)
+      sew = 0x00080001;
+    }
+    if (motion != Motion::Running && cycle >= 202 && cycle < 208) ssw |= 0x10;
     const int code = bad_message && cycle % 10 == 3 ? 12 : cycle % 4;
-    const float data = enabled ? 100.0f + static_cast<float>(cycle % 97) * 1.5f : 560.0f;
-    return test::txPdo(test::TxValues(position, ssw, 0, code, data,
+    const float data = enabled(cycle) ? 100.0f + static_cast<float>(cycle % 97) * 1.5f : 560.0f;
+    return test::txPdo(test::TxValues(position, ssw, sew, code, data,
                                       {0.5f * static_cast<float>(axis), 1.25f, -3.0f, 42.0f}));
   }
   void step(int cycle) {
-    if (motion != Motion::Commissioning || cycle < 15 + 3 * axis) return;
+    if ((motion != Motion::Commissioning && motion != Motion::Running) || !enabled(cycle)) return;
     speed = std::min(speed + 7, 3000);
     position += speed;
   }
@@ -126,6 +156,23 @@ Bytes cia402SlowTx(int cycle) {
   test::putLe(out, 1000, 4);
   test::putLe(out, static_cast<std::uint32_t>(cycle / 50 % 200), 2);
   out.resize(kTxPdoSize, 0);
+  return out;
+}
+
+// The simulator's CiA 402 drive of the mixed image: outputs (controlword, target position,
+// velocity, mode) and inputs (statusword, position, velocity, a torque stepping every 200 cycles
+// from 10, zeros).
+Bytes cia402TorquePdos(int cycle) {
+  Bytes out;
+  test::putLe(out, 0x000F, 2);
+  test::putLe(out, static_cast<std::uint32_t>(100 * cycle), 4);
+  test::putLe(out, 1000, 4);
+  test::putLe(out, 8, 2);
+  test::putLe(out, 0x1237, 2);
+  test::putLe(out, static_cast<std::uint32_t>(25 * cycle), 4);
+  test::putLe(out, 1000, 4);
+  test::putLe(out, static_cast<std::uint32_t>(10 + cycle / 200), 2);
+  out.resize(12 + 28, 0);
   return out;
 }
 
@@ -187,7 +234,8 @@ std::vector<Bytes> cycleFrames(Style style, std::vector<AxisModel>& axes, int cy
     case Style::Mixed:
     case Style::Terminals:
     case Style::Cia402:
-    case Style::Cia402Slow: {
+    case Style::Cia402Slow:
+    case Style::Cia402Torque: {
       const bool mixed = style == Style::Mixed;
       const bool terminals = style == Style::Terminals;
       Bytes data;
@@ -197,6 +245,7 @@ std::vector<Bytes> cycleFrames(Style style, std::vector<AxisModel>& axes, int cy
         if (style == Style::Cia402 || style == Style::Cia402Slow) {
           data = test::concat({data, cia402Pdos(style, cycle)});
         }
+        if (style == Style::Cia402Torque) data = test::concat({data, cia402TorquePdos(cycle)});
         const auto out = static_cast<std::uint32_t>(kImage + data.size());
         data = test::concat({data, axes[k].rx(cycle)});
         if (mixed) data = test::concat({data, ioBytes(2 + k % 5, cycle, 40 + k)});
@@ -271,11 +320,12 @@ Bytes soemMasterCopy(const Bytes& returned, const Bytes& previous, std::size_t a
 
 // `echo`: SOEM's master copies are captured too, each before its returned copy.
 // `faulty_axis`: that axis's message code is out of range in one cycle of 10.
+// `fault_axis`: the capture begins inside that axis's drive fault.
 InferenceResult infer(Style style, int axis_count, Motion motion, int cycles, Truth& truth,
-                      bool echo = false, int faulty_axis = -1) {
+                      bool echo = false, int faulty_axis = -1, int fault_axis = -1) {
   std::vector<AxisModel> axes;
   for (int k = 0; k < axis_count; ++k) {
-    axes.push_back(AxisModel{k, motion, 1000000 * (k + 1), 0, k == faulty_axis});
+    axes.push_back(AxisModel{k, motion, 1000000 * (k + 1), 0, k == faulty_axis, k == fault_axis});
   }
   LayoutInference inference;
   EcatFrame frame;
@@ -305,6 +355,8 @@ struct Row {
   Motion motion = Motion::Commissioning;
   bool echo = false;     // SOEM's master copies captured too
   int faulty_axis = -1;  // this axis's message code out of range in one cycle of 10 (MSG-001)
+  int fault_axis = -1;   // the capture begins inside this axis's drive fault
+  int cycles = 4096;     // cycles captured
 };
 
 constexpr std::pair<const char*, Style> kStyles[] = {
@@ -342,6 +394,27 @@ std::vector<Row> rows() {
   }
   out.push_back(
       Row{"soem cia402 bad message code 4", Style::SoemCia402, 4, Motion::Commissioning, false, 1});
+  // Beside a neighbour whose inputs read as a control word agree with every ServoEn for the first
+  // 200 cycles: the two windows explain it equally until the torque steps, so the early decision
+  // waits for the evidence that tells them apart.
+  for (int n : {1, 3, 8}) {
+    out.push_back(Row{"cia402 torque " + std::to_string(n), Style::Cia402Torque, n});
+  }
+  // A recording that begins inside a drive fault beside that neighbour: until the torque steps,
+  // the neighbour's word explains the ServoEn the window began with and the control word cannot.
+  for (const auto& [n, fault_axis] : {std::pair{1, 0}, std::pair{4, 2}}) {
+    out.push_back(Row{"cia402 torque starts in a fault " + std::to_string(n), Style::Cia402Torque,
+                      n, Motion::Commissioning, false, -1, fault_axis, 1500});
+  }
+  // A recording that begins inside a drive fault, the drive enabled beside its error with no
+  // enable requested (SE-003 and FLT-001 for the rules), 1.5 s at 1 ms: its ServoEn came from an
+  // enable before the capture and is no evidence against its control word (docs/layout.md).
+  for (const auto& [name, style] : kStyles) {
+    for (const auto& [n, fault_axis] : {std::pair{1, 0}, std::pair{4, 2}}) {
+      out.push_back(Row{std::string(name) + " starts in a fault " + std::to_string(n), style, n,
+                        Motion::Commissioning, false, -1, fault_axis, 1500});
+    }
+  }
   return out;
 }
 
@@ -352,8 +425,9 @@ class InferredLayout : public ::testing::TestWithParam<Row> {};
 TEST_P(InferredLayout, IsTheLayoutTheFramesWereBuiltWith) {
   Truth truth;
   const bool idle = GetParam().motion == Motion::IdleEnabledNever;
-  const InferenceResult result = infer(GetParam().style, GetParam().axes, GetParam().motion, 4096,
-                                       truth, GetParam().echo, GetParam().faulty_axis);
+  const InferenceResult result =
+      infer(GetParam().style, GetParam().axes, GetParam().motion, GetParam().cycles, truth,
+            GetParam().echo, GetParam().faulty_axis, GetParam().fault_axis);
   ASSERT_TRUE(result.refusal.empty()) << result.refusal;
   ASSERT_EQ(result.axes.size(), truth.axes.size());
   for (std::size_t k = 0; k < truth.axes.size(); ++k) {
@@ -381,6 +455,44 @@ TEST_P(InferredLayout, IsTheLayoutTheFramesWereBuiltWith) {
 
 INSTANTIATE_TEST_SUITE_P(Styles, InferredLayout, ::testing::ValuesIn(rows()), test::rowName<Row>);
 
+// When the learning window ends: early, once every axis is explained by a handshake it saw happen;
+// at its full length when the only agreement is over drives already enabled when it began, which
+// a word that merely reads SE 0x2 explains as well (docs/layout.md).
+struct WindowLengthRow {
+  std::string name;
+  Style style;
+  Motion motion;
+  bool full_length;
+};
+
+class LearningWindowLength : public ::testing::TestWithParam<WindowLengthRow> {};
+
+TEST_P(LearningWindowLength, EndsEarlyOnlyOnHandshakesSeen) {
+  Truth truth;
+  const InferenceResult result = infer(GetParam().style, 4, GetParam().motion, 4096, truth);
+  ASSERT_TRUE(result.refusal.empty()) << result.refusal;
+  ASSERT_EQ(result.axes.size(), truth.axes.size());
+  for (std::size_t k = 0; k < truth.axes.size(); ++k) {
+    EXPECT_EQ(result.axes[k].config.outputs, truth.axes[k].outputs) << "axis " << k;
+    EXPECT_EQ(result.axes[k].config.inputs, truth.axes[k].inputs) << "axis " << k;
+  }
+  if (GetParam().full_length) {
+    EXPECT_EQ(result.cycles, 4096u);
+  } else {
+    EXPECT_LT(result.cycles, 4096u);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, LearningWindowLength,
+    ::testing::Values(
+        WindowLengthRow{"soem commissioning", Style::Soem, Motion::Commissioning, false},
+        WindowLengthRow{"soem running", Style::Soem, Motion::Running, true},
+        WindowLengthRow{"etherlab running", Style::EtherLab, Motion::Running, true},
+        WindowLengthRow{"twincat running", Style::TwinCat, Motion::Running, true},
+        WindowLengthRow{"cia402 torque running", Style::Cia402Torque, Motion::Running, true}),
+    test::rowName<WindowLengthRow>);
+
 struct RefusalRow {
   std::string name;
   Style style;
@@ -400,11 +512,17 @@ TEST_P(RefusedLayout, DecodesNothingAndSaysWhy) {
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, RefusedLayout,
-    ::testing::Values(RefusalRow{"all zero soem", Style::Soem, Motion::AllZero, "ambiguous"},
-                      RefusalRow{"all zero twincat", Style::TwinCat, Motion::AllZero, "ambiguous"},
-                      // Idle, a control word shifted into the CiA 402 drive's RxPDO fits too.
-                      RefusalRow{"idle soem cia402", Style::SoemCia402, Motion::IdleEnabledNever,
-                                 "could be at"}),
+    ::testing::Values(
+        RefusalRow{"all zero soem", Style::Soem, Motion::AllZero, "ambiguous"},
+        RefusalRow{"all zero twincat", Style::TwinCat, Motion::AllZero, "ambiguous"},
+        // Idle, a control word shifted into the CiA 402 drive's RxPDO fits too.
+        RefusalRow{"idle soem cia402", Style::SoemCia402, Motion::IdleEnabledNever, "could be at"},
+        // Drives enabled all along that no control word ever asked to be: the
+        // enable before the window explains no ServoEn for a whole window.
+        RefusalRow{"enabled never requested soem", Style::Soem, Motion::EnabledNeverRequested,
+                   "has no control word that fits"},
+        RefusalRow{"enabled never requested etherlab", Style::EtherLab,
+                   Motion::EnabledNeverRequested, "no control word explains their ServoEn"}),
     test::rowName<RefusalRow>);
 
 // An idle axis whose RxPDO is followed by two zero bytes: the window one byte later keeps a

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <bitset>
 #include <cmath>
 #include <cstring>
@@ -171,6 +172,10 @@ struct TxCandidate {
   CycleBits enabled;  // ServoEn
   CycleBits ack;      // ErrClearAck
   CycleBits zack;     // ZPulseAck
+  // ServoEn set from the first cycle this window judged up to this cycle (exclusive): an enable
+  // before the window switched it on (docs/layout.md#begins-in-a-fault).
+  std::uint32_t enabled_from_start_until = 0;
+  bool first_run_open = true;  // ServoEn has been set in every cycle judged so far
 };
 
 bool dead(std::uint32_t seen, std::uint32_t violations) {
@@ -375,7 +380,12 @@ struct LayoutInference::State {
     if (failures == 1) ++c.faulty;
     if (moved) ++c.moves;
     if ((ssw & kSswStatus) != 0) ++c.status;
-    if ((ssw & kSswServoEn) != 0) c.enabled.set(cycle, bytes);
+    if ((ssw & kSswServoEn) != 0) {
+      c.enabled.set(cycle, bytes);
+      if (c.first_run_open) c.enabled_from_start_until = cycle + 1;
+    } else {
+      c.first_run_open = false;
+    }
     if ((ssw & kSswErrClearAck) != 0) c.ack.set(cycle, bytes);
     if ((ssw & kSswZPulseAck) != 0) c.zack.set(cycle, bytes);
     if (!readyPerTable(ssw, sew)) ++c.ready_mismatches;
@@ -497,11 +507,13 @@ void LayoutInference::onFrame(const EcatFrame& frame, const ByteReader& bytes, b
     st.settled = true;
     return;
   }
-  // Early decision at doubling checkpoints: every servo-like TxPDO paired, every axis clear.
+  // Early decision at doubling checkpoints: every servo-like TxPDO paired, every axis clear, each
+  // by a handshake the window saw happen.
   const std::uint32_t c = st.cycles;
   if (c >= st.limits.min_cycles && (c & (c - 1)) == 0) {
     const InferenceResult result = decide();
-    st.settled = !result.axes.empty() && result.refusal.empty() && result.unexplained == 0;
+    st.settled = !result.axes.empty() && result.refusal.empty() && result.unexplained == 0 &&
+                 result.unconfirmed == 0;
   }
 }
 
@@ -530,6 +542,9 @@ std::vector<std::size_t> tile(const std::vector<std::int64_t>& score, std::size_
 struct PairScore {
   std::int64_t score = std::numeric_limits<std::int64_t>::min();
   std::uint32_t agree = 0;
+  // Of `agree`, the cycles after the ServoEn the window began with had ended: the others show only
+  // that the word read 0x2 beside a drive already enabled, as a neighbour's steady input can.
+  std::uint32_t agree_after_start = 0;
   std::uint32_t disagree = 0;
   std::uint32_t clear = 0;
   std::uint32_t zpulse = 0;
@@ -551,15 +566,40 @@ std::vector<std::uint64_t> recentlyEnabled(const CycleBits& se, std::uint32_t cy
   return recent;
 }
 
+// The first cycle with a bit set, or the largest cycle when none is.
+std::uint32_t firstCycle(const CycleBits& bits) {
+  for (std::size_t w = 0; w < bits.words.size(); ++w) {
+    if (bits.words[w] != 0) {
+      return static_cast<std::uint32_t>(64 * w + std::countr_zero(bits.words[w]));
+    }
+  }
+  return std::numeric_limits<std::uint32_t>::max();
+}
+
+// The cycles of word `w` before cycle `end`.
+std::uint64_t cyclesBefore(std::size_t w, std::uint32_t end) {
+  const std::uint64_t first = 64 * std::uint64_t{w};
+  if (end <= first) return 0;
+  if (end >= first + 64) return ~std::uint64_t{0};
+  return (std::uint64_t{1} << (end - first)) - 1;
+}
+
 // How well a candidate RxPDO's SE and ErrorClear explain a TxPDO's ServoEn and ErrClearAck.
+// A ServoEn already set when the window began, until the SE first reads 0x2, is no evidence
+// against the pair: an enable the window did not see switched it on, and whether the drive
+// holds it too long is SE-003's to judge (docs/layout.md#begins-in-a-fault).
 PairScore pairScore(const RxCandidate& rx, const std::vector<std::uint64_t>& recent,
                     const TxCandidate& tx) {
   PairScore p;
+  const std::uint32_t unseen_enable_until =
+      std::min(tx.enabled_from_start_until, firstCycle(rx.enabled));
   for (std::size_t w = 0; w < recent.size(); ++w) {
     const std::uint64_t en = tx.enabled.word(w);
     if (en == 0 && tx.ack.word(w) == 0 && tx.zack.word(w) == 0) continue;
     p.agree += popcount(rx.enabled.word(w) & en);
-    p.disagree += popcount(en & ~recent[w]);
+    p.agree_after_start +=
+        popcount(rx.enabled.word(w) & en & ~cyclesBefore(w, tx.enabled_from_start_until));
+    p.disagree += popcount(en & ~recent[w] & ~cyclesBefore(w, unseen_enable_until));
     p.clear += popcount(rx.clear.word(w) & tx.ack.word(w));
     p.zpulse += popcount(rx.zpulse.word(w) & tx.zack.word(w));
   }
@@ -623,11 +663,13 @@ bool LayoutInference::outputsFirst(InferenceResult& result) const {
 namespace {
 
 // A control word whose SE may explain a ServoEn: written by the master, reserved bits zero, SE
-// 0x2 at least once.
+// 0x2 at least once, and not changing cycle after cycle as a set point or a counter does: such a
+// word passes 0x2 now and then and seems to explain a ServoEn nothing in the window switched on
+// (docs/layout.md#begins-in-a-fault).
 bool handshakeRx(const Stream& s, std::size_t o) {
   const RxCandidate& c = s.rx[o];
   return c.seen >= kMinObservations && !dead(c.seen, c.violations) && c.enabled.any() &&
-         !s.slaveWrote(o, kRxPdoSize);
+         !dead(c.seen, c.scw_flaps) && !s.slaveWrote(o, kRxPdoSize);
 }
 
 // The handshake evidence of each TxPDO window that shows ServoEn: the best pair score of any
@@ -842,7 +884,31 @@ InferredAxis axisAt(const std::vector<Stream>& streams, std::size_t k, const RxC
   return axis;
 }
 
-// 5. Confidence: how far the best overlapping rival is behind, for both PDOs.
+// Whether a pair's handshakes include one the window saw happen: a ServoEn that SE 0x2 explains
+// after the ServoEn the window began with, an ErrClearAck or a ZPulseAck. An agreement only over a
+// ServoEn already set when the window began (or none at all) ends no window early.
+bool seenInWindow(const PairScore& p) {
+  return p.agree_after_start >= kMinAgreement || p.clear > 0 || p.zpulse > 0;
+}
+
+// Whether RxPDO window `i` could be axis k's instead of the chosen one: it overlaps the chosen
+// window, or it lies between the RxPDOs chosen for the axes before and after k, so that the pairs
+// stay in process-image order with it.
+bool couldTakeSlot(const std::vector<Stream>& streams, const std::vector<RxChoice>& rx,
+                   const std::vector<std::size_t>& choice, std::size_t k, std::size_t i) {
+  const RxChoice& r = rx[choice[k]];
+  if (i == choice[k]) return false;
+  if (rx[i].stream == r.stream && overlaps(rx[i].offset, kRxPdoSize, r.offset, kRxPdoSize)) {
+    return true;
+  }
+  auto at = [&](std::size_t j) { return streams[rx[j].stream].imageAddress(rx[j].offset); };
+  return (k == 0 || at(choice[k - 1]) + kRxPdoSize <= at(i)) &&
+         (k + 1 == choice.size() || at(i) + kRxPdoSize <= at(choice[k + 1]));
+}
+
+// 5. Confidence: how far the best rival is behind, for both PDOs; for the RxPDO, any window that
+// could take its place (a word elsewhere that has agreed with the ServoEn as often, such as a
+// neighbour's input that has not changed yet, makes the placement a guess: docs/layout.md).
 // The axes go to `result`; the ones too close to a rival are returned, described.
 std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
                                    const std::vector<RxChoice>& rx, const ServoCandidates& servos,
@@ -858,14 +924,14 @@ std::vector<std::string> placeAxes(const std::vector<Stream>& streams,
     const PairScore& p = servos.pair[k][choice[k]];
     std::int64_t rival = 0;
     for (std::size_t i = 0; i < m; ++i) {
-      if (i != choice[k] && rx[i].stream == r.stream &&
-          overlaps(rx[i].offset, kRxPdoSize, r.offset, kRxPdoSize)) {
+      if (couldTakeSlot(streams, rx, choice, k, i)) {
         rival = std::max(rival, servos.pair[k][i].score);
       }
     }
     const double rx_confidence =
         std::max(0.0, 1.0 - static_cast<double>(rival) / static_cast<double>(p.score));
     InferredAxis axis = axisAt(streams, k, r, servos.tx[k], p);
+    if (!seenInWindow(p)) ++result.unconfirmed;
     AxisEvidence& e = axis.evidence;
     e.confidence = std::min(servos.tx[k].confidence, rx_confidence);
     if (e.confidence < kMinConfidence) {
@@ -991,13 +1057,16 @@ std::string describeRx(const std::vector<Stream>& streams, const RxChoice& r) {
   return fmt::format("{} offset {}", streams[r.stream].describe(), r.offset);
 }
 
-// The axis of rank k from the structure, its handshakes (if any) adding evidence.
+// The axis of rank k from the structure, its handshakes (if any) adding evidence; `unconfirmed`
+// counts it when it has some but none the window saw happen.
 InferredAxis structureAxis(const std::vector<Stream>& streams, std::uint32_t cycles,
-                           const ChosenTx& chosen, const RxChoice& r, std::size_t k) {
+                           const ChosenTx& chosen, const RxChoice& r, std::size_t k,
+                           std::uint32_t& unconfirmed) {
   const Stream& rs = streams[r.stream];
   const Stream& ts = streams[chosen.stream];
   const PairScore p = pairScore(rs.rx[r.offset], recentlyEnabled(rs.rx[r.offset].enabled, cycles),
                                 ts.tx[chosen.offset]);
+  if (p.agree > 0 && !seenInWindow(p)) ++unconfirmed;
   InferredAxis axis = axisAt(streams, k, r, chosen, p);
   AxisEvidence& e = axis.evidence;
   e.paired_by_order = true;
@@ -1051,8 +1120,10 @@ bool LayoutInference::fromStructure(InferenceResult& result, std::string& why) c
     return false;
   }
   result.axes.clear();
+  result.unconfirmed = 0;
   for (std::size_t k = 0; k < c.tx.size(); ++k) {
-    result.axes.push_back(structureAxis(st.streams, st.cycles, c.tx[k], c.rx[choice[k]], k));
+    result.axes.push_back(
+        structureAxis(st.streams, st.cycles, c.tx[k], c.rx[choice[k]], k, result.unconfirmed));
   }
   return true;
 }

@@ -59,6 +59,10 @@ struct InferenceResult {
   std::uint32_t cycles = 0;  // cycles observed
   // TxPDOs that look like a servo's but that no control word explains (yet): the window goes on.
   std::uint32_t unexplained = 0;
+  // Axes whose handshakes are all over a ServoEn already set when the window began, beside a SE
+  // that read 0x2: a neighbour's steady input explains that as well, so the window goes on until
+  // one is seen happen or it is full (docs/layout.md).
+  std::uint32_t unconfirmed = 0;
   // Why nothing was inferred, the candidates and how to write a configuration (empty when axes
   // were inferred).
   std::string refusal;
