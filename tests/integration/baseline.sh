@@ -45,16 +45,19 @@ print(b["new"], b["unchanged"], b["absent"], *[f["rule"] for f in c["findings"] 
 PY
 }
 
-# The same recording behind another one, and the baseline itself: all unchanged, exit 0.
+# The same recording behind another one, and the baseline itself: all unchanged, exit 0. (The
+# recording in front has a drive fault of its own, the commissioning scenario's E09: one new
+# incident, which incident_gate.sh judges; here only the findings are.)
 for capture in behind base; do
   rc=0
-  "$NCSERVO" validate --baseline base.json --format json -o "$capture.json" "$capture.pcap" || rc=$?
+  "$NCSERVO" validate --baseline base.json --fail-on-incident never --format json \
+    -o "$capture.json" "$capture.pcap" || rc=$?
   [ "$rc" = 0 ] || fail "$capture against its baseline exits $rc, expected 0"
   counts=$(json_counts "$capture.json")
   [ "$counts" = "0 3 0" ] || fail "$capture against its baseline: '$counts', expected '0 3 0'"
 done
 # The text says it, and the verdict is about the new findings.
-"$NCSERVO" validate --baseline base.json behind.pcap >behind.txt 2>/dev/null ||
+"$NCSERVO" validate --baseline base.json --fail-on-incident never behind.pcap >behind.txt 2>/dev/null ||
   fail "behind.pcap in text exits $?"
 grep -q '^baseline: 0 new, 3 unchanged, 0 absent against base.json' behind.txt ||
   fail "no baseline line in the text: $(grep baseline behind.txt)"
@@ -80,7 +83,8 @@ python3 - more.sarif <<'PY' || fail "SARIF baselineState disagrees"
 import json, sys
 results = json.load(open(sys.argv[1]))["runs"][0]["results"]
 states = sorted((r["ruleId"], r["baselineState"]) for r in results)
-assert states == [("COM-002", "unchanged"), ("EC-001", "unchanged"), ("SE-002", "unchanged"),
+assert states == [("COM-002", "unchanged"), ("EC-001", "unchanged"),
+                  ("INC-communication-loss", "unchanged"), ("SE-002", "unchanged"),
                   ("SEW-001", "new")], states
 PY
 grep -c '"baseline":"new"' more.jsonl | grep -qx 1 || fail "JSON Lines: not one new finding"

@@ -214,15 +214,17 @@ INSTANTIATE_TEST_SUITE_P(
 
 // ---- diff: findings by rule and axis, incidents, the exit status ----
 
-// "drive-fault axis1 communication-loss": kind, axis ("bus": none), cause ("-": none).
+// "drive-fault axis1 communication-loss 2": kind, axis ("bus": none), cause, ordinal (1 if none).
 ReportedIncident incident(const std::string& text) {
   std::istringstream words(text);
   std::string kind, axis, cause;
-  words >> kind >> axis >> cause;
+  std::uint32_t ordinal = 1;
+  words >> kind >> axis >> cause >> ordinal;
   ReportedIncident i;
-  i.kind = kind;
-  if (axis != "bus") i.axis = axis;
-  if (cause != "-") i.cause = cause;
+  i.fingerprint.kind = kind;
+  if (axis != "bus") i.fingerprint.axis = axis;
+  i.fingerprint.cause = cause;
+  i.fingerprint.ordinal = ordinal;
   return i;
 }
 
@@ -233,6 +235,9 @@ struct DiffRow {
   std::size_t added, absent, unchanged;
   std::size_t incidents_added, incidents_absent, incidents_unchanged;
   bool fails;  // at --fail-on error
+  // The kinds --fail-on-incident gates, and whether NEW's incidents then fail the diff.
+  const char* incident_gate = "never";
+  bool incident_fails = false;
 };
 
 class Diff : public ::testing::TestWithParam<DiffRow> {};
@@ -264,8 +269,11 @@ TEST_P(Diff, CountsAndTheExitStatus) {
     by_group += g.added;
   }
   EXPECT_EQ(by_group, row.added);
-  EXPECT_EQ(diffFails(d, Severity::Error, false), row.fails);
-  EXPECT_FALSE(diffFails(d, Severity::Error, true));  // --fail-on never
+  const IncidentGate none = *parseIncidentGate("never");
+  EXPECT_EQ(diffFails(d, Severity::Error, false, none), row.fails);
+  EXPECT_FALSE(diffFails(d, Severity::Error, true, none));  // --fail-on never
+  const IncidentGate gate = *parseIncidentGate(row.incident_gate);
+  EXPECT_EQ(diffFails(d, Severity::Error, true, gate), row.incident_fails);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -309,7 +317,51 @@ INSTANTIATE_TEST_SUITE_P(
                 1,
                 0,
                 2,
+                false,
+                "drive-fault",
+                true},
+        DiffRow{"a second fault of one cause",
+                {},
+                {},
+                {"drive-fault axis1 encoder"},
+                {"drive-fault axis1 encoder", "drive-fault axis1 encoder 2"},
+                0,
+                0,
+                0,
+                1,
+                0,
+                1,
+                false,
+                "any",
+                true},
+        DiffRow{"a new outage, drive faults gated",
+                {},
+                {},
+                {},
+                {"bus-outage bus communication-loss"},
+                0,
+                0,
+                0,
+                1,
+                0,
+                0,
+                false,
+                "drive-fault,esm",
                 false},
+        DiffRow{"a new slave fall, esm gated",
+                {},
+                {},
+                {},
+                {"esm 0x1002 unknown"},
+                0,
+                0,
+                0,
+                1,
+                0,
+                0,
+                false,
+                "esm",
+                true},
         DiffRow{"an incident gone",
                 {},
                 {},
@@ -321,6 +373,8 @@ INSTANTIATE_TEST_SUITE_P(
                 0,
                 1,
                 1,
+                false,
+                "any",
                 false}),
     test::rowName<DiffRow>);
 

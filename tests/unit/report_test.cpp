@@ -245,6 +245,91 @@ INSTANTIATE_TEST_SUITE_P(
         VerdictRow{"unreadable", {0, 0, 2}, true, true, "error", false, Verdict::Unreadable, 3}),
     test::rowName<VerdictRow>);
 
+// docs/cli.md#exit-status: incidents of the kinds --fail-on-incident names fail the run (with a
+// baseline, only new ones), and the capture's verdict says FAIL.
+struct IncidentVerdictRow {
+  const char* name;
+  std::vector<IncidentKind> kinds;
+  std::vector<BaselineState> states;  // beside kinds; empty: no baseline
+  const char* gate;
+  std::size_t warnings;
+  Verdict verdict;
+  int exit_status;
+};
+
+class IncidentVerdicts : public ::testing::TestWithParam<IncidentVerdictRow> {};
+
+TEST_P(IncidentVerdicts, GateTheKindsNamed) {
+  const IncidentVerdictRow& row = GetParam();
+  CaptureReport report;
+  report.counts = {0, row.warnings, 0};
+  report.coverage.any_axis = true;
+  report.frames = 10;
+  for (const IncidentKind kind : row.kinds) {
+    Incident incident;
+    incident.kind = kind;
+    report.incidents.push_back(incident);
+  }
+  report.incident_states = row.states;
+  ReportPolicy policy;
+  const Result<IncidentGate> gate = parseIncidentGate(row.gate);
+  ASSERT_TRUE(gate) << gate.error().text();
+  policy.incidents = *gate;
+  const CaptureVerdict judged = judgeCapture(policy, report);
+  EXPECT_EQ(judged.verdict, row.verdict);
+  EXPECT_EQ(judged.exit_status, row.exit_status);
+}
+
+using enum IncidentKind;
+constexpr BaselineState kNew = BaselineState::New;
+constexpr BaselineState kSame = BaselineState::Unchanged;
+INSTANTIATE_TEST_SUITE_P(
+    Rows, IncidentVerdicts,
+    ::testing::Values(
+        IncidentVerdictRow{"none", {}, {}, "any", 0, Verdict::Pass, 0},
+        IncidentVerdictRow{"drive_fault_any", {DriveFault}, {}, "any", 0, Verdict::Fail, 1},
+        IncidentVerdictRow{"drive_fault_never", {DriveFault}, {}, "never", 1, Verdict::Warn, 0},
+        IncidentVerdictRow{
+            "outage_not_named", {BusOutage}, {}, "drive-fault,esm", 0, Verdict::Pass, 0},
+        IncidentVerdictRow{"esm_named", {DriveFault, Esm}, {}, "esm", 0, Verdict::Fail, 1},
+        IncidentVerdictRow{
+            "unchanged_against_baseline", {DriveFault}, {kSame}, "any", 0, Verdict::Pass, 0},
+        IncidentVerdictRow{"new_against_baseline",
+                           {DriveFault, DriveFault},
+                           {kSame, kNew},
+                           "drive-fault",
+                           0,
+                           Verdict::Fail,
+                           1}),
+    test::rowName<IncidentVerdictRow>);
+
+struct GateTextRow {
+  const char* name;
+  const char* text;
+  const char* parsed;  // incidentGateText of it; "" when refused
+};
+
+class IncidentGates : public ::testing::TestWithParam<GateTextRow> {};
+
+TEST_P(IncidentGates, ParseAndSayTheKinds) {
+  const GateTextRow& row = GetParam();
+  const Result<IncidentGate> gate = parseIncidentGate(row.text);
+  EXPECT_EQ(gate ? incidentGateText(*gate) : std::string(), row.parsed);
+  if (!gate) {
+    EXPECT_NE(gate.error().text().find("is no kind of incident"), std::string::npos);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rows, IncidentGates,
+    ::testing::Values(GateTextRow{"any", "any", "any"}, GateTextRow{"never", "never", "never"},
+                      GateTextRow{"one", "bus-outage", "bus-outage"},
+                      GateTextRow{"two", "esm,drive-fault", "drive-fault,esm"},
+                      GateTextRow{"all_three", "drive-fault,bus-outage,esm", "any"},
+                      GateTextRow{"typo", "drive-faults", ""},
+                      GateTextRow{"empty_word", "esm,", ""}),
+    test::rowName<GateTextRow>);
+
 TEST(Verdicts, TheMostSeriousStatusWins) {
   EXPECT_EQ(moreSerious(0, 4), 4);
   EXPECT_EQ(moreSerious(4, 1), 1);

@@ -80,16 +80,30 @@ CaptureThreads captureThreads(const std::string& read_thread, unsigned captures,
   return captures * (busy + 1) <= cores ? CaptureThreads::Two : CaptureThreads::One;
 }
 
-void addFailOnOption(CLI::App& command, std::string& fail_on) {
+void addFailOnOption(CLI::App& command, FailOnArgs& fail_on) {
   command
-      .add_option("--fail-on", fail_on,
+      .add_option("--fail-on", fail_on.findings,
                   "exit 1 on findings at or above: error, warning, info, never")
       ->check(oneOf({"error", "warning", "info", "never"}));
+  command
+      .add_option("--fail-on-incident", fail_on.incidents,
+                  "exit 1 on incidents of these kinds: drive-fault, bus-outage, esm (joined by "
+                  "commas), any or never (default: any new one against a baseline, never "
+                  "without one; docs/cli.md#exit-status)")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            const Result<IncidentGate> gate = parseIncidentGate(text);
+            return gate ? std::string() : gate.error().text();
+          },
+          "KINDS"));
 }
 
-void setFailOn(const std::string& fail_on, ReportPolicy& policy) {
-  policy.never = fail_on == "never";
-  policy.fail_on = policy.never ? Severity::Error : *severityFromName(fail_on);
+void setFailOn(const FailOnArgs& fail_on, bool against_baseline, ReportPolicy& policy) {
+  policy.never = fail_on.findings == "never";
+  policy.fail_on = policy.never ? Severity::Error : *severityFromName(fail_on.findings);
+  std::string incidents = fail_on.incidents;
+  if (incidents.empty()) incidents = against_baseline && !policy.never ? "any" : "never";
+  policy.incidents = *parseIncidentGate(incidents);
 }
 
 void addLayoutOptions(CLI::App& command, LayoutArgs& layout) {

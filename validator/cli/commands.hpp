@@ -67,10 +67,16 @@ void addReadThreadOption(CLI::App& command, std::string& read_thread);
 // without the reading thread: auto adds it when the cores hold one more thread per capture.
 CaptureThreads captureThreads(const std::string& read_thread, unsigned captures, unsigned busy = 1);
 
-// --fail-on (docs/cli.md#exit-status): the least severity whose findings make the exit status 1,
-// or never; and what it sets in the report's policy.
-void addFailOnOption(CLI::App& command, std::string& fail_on);
-void setFailOn(const std::string& fail_on, ReportPolicy& policy);
+// --fail-on and --fail-on-incident (docs/cli.md#exit-status): the least severity whose findings
+// make the exit status 1, or never; the kinds of incident that do; and what they set in the
+// report's policy. Without --fail-on-incident, incidents fail a run only against a baseline
+// (`against_baseline`: validate --baseline, diff), and never under --fail-on never.
+struct FailOnArgs {
+  std::string findings = "error";
+  std::string incidents;  // empty: not given
+};
+void addFailOnOption(CLI::App& command, FailOnArgs& fail_on);
+void setFailOn(const FailOnArgs& fail_on, bool against_baseline, ReportPolicy& policy);
 
 // The layout files of every command that reads a capture (docs/protocol.md §9.1, §9.2).
 struct LayoutArgs {

@@ -18,7 +18,7 @@ struct DiffArgs {
   std::string base, next;
   std::string format = cli::diffFormatNames().front();
   std::string output;
-  std::string fail_on = "error";
+  cli::FailOnArgs fail_on;
   CheckArgs check;
 };
 
@@ -60,7 +60,7 @@ int runDiff(const DiffArgs& o) {
     return kExitUsage;
   }
   cli::ReportPolicy policy;
-  cli::setFailOn(o.fail_on, policy);
+  cli::setFailOn(o.fail_on, true, policy);
   policy.enabled = setup->settings.enabled;
   Result<std::FILE*> out = openOutput(o.output, {o.base, o.next});
   if (!out) {
@@ -79,7 +79,8 @@ int runDiff(const DiffArgs& o) {
     diff.base_source = o.base;
     diff.next_source = o.next;
     cli::writeDiff(*out, o.format, diff);
-    rc = cli::diffFails(diff, policy.fail_on, policy.never) ? kExitFindings : kExitOk;
+    rc = cli::diffFails(diff, policy.fail_on, policy.never, policy.incidents) ? kExitFindings
+                                                                              : kExitOk;
   }
   const bool written = std::fflush(*out) == 0;
   if (*out != stdout) std::fclose(*out);

@@ -52,7 +52,7 @@ struct MonitorArgs : RuleArgs {
   std::string interface;
   LayoutArgs layout;
   std::string format = "text";
-  std::string fail_on = "error";
+  FailOnArgs fail_on;
   std::string timestamps = "auto";
   std::optional<double> duration_s;
   std::string record_dir;
@@ -314,7 +314,7 @@ Status checkMonitorArgs(const MonitorArgs& args) {
 Result<std::unique_ptr<ReportWriter>> openMonitorReport(const MonitorArgs& args,
                                                         const RuleSettings& settings) {
   ReportPolicy policy;
-  setFailOn(args.fail_on, policy);
+  setFailOn(args.fail_on, false, policy);
   policy.verbose = true;  // text: every finding as it happens
   policy.enabled = settings.enabled;
   return ReportWriter::open({{findReportFormat(args.format), ""}}, policy);

@@ -28,7 +28,7 @@ struct ValidateArgs : CheckArgs {
   std::vector<std::string> captures;
   std::string format = cli::reportFormatNames().front();
   std::string output;
-  std::string fail_on = "error";
+  cli::FailOnArgs fail_on;
   bool allow_empty = false;
   bool verbose = false;
   std::optional<unsigned> jobs;      // default: the cores
@@ -247,7 +247,7 @@ int runValidate(const ValidateArgs& o) {
     return kExitUsage;
   }
   cli::ReportPolicy policy;
-  cli::setFailOn(o.fail_on, policy);
+  cli::setFailOn(o.fail_on, !o.baseline.empty(), policy);
   policy.allow_empty = o.allow_empty;
   policy.verbose = o.verbose;
   policy.enabled = setup->settings.enabled;

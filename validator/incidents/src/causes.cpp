@@ -264,4 +264,11 @@ const CauseDef& causeDef(CauseId id) {
   return kCauses[static_cast<std::size_t>(id)];
 }
 
+std::optional<CauseId> findCause(std::string_view name) {
+  for (const CauseDef& cause : kCauses) {
+    if (name == cause.name) return cause.id;
+  }
+  return std::nullopt;
+}
+
 }  // namespace ncservo

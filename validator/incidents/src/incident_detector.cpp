@@ -146,6 +146,8 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis,
       [](const IncidentEvidence& a, const IncidentEvidence& b) { return a.at.frame < b.at.frame; });
   if (messages != nullptr) incident.before = messages->before;
   incident.end = incident.at;
+  const std::optional<std::uint16_t> station = incident.axis ? std::nullopt : incident.station;
+  incident.ordinal = ++ordinals_[{incident.kind, incident.axis, station, incident.cause}];
   incidents_.push_back(std::move(incident));
 }
 
@@ -156,6 +158,7 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
   if (validator.segments().count() != segments_) {
     if (segments_ != 0) resetWindows();
     segments_ = validator.segments().count();
+    ordinals_.clear();
   }
   clock_ns_ = validator.segments().now();
   last_ = Stamp{frame, time_ns};

@@ -3,6 +3,7 @@
 #include "ncservo/report/baseline.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -12,9 +13,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <tuple>
 
 #include "ncservo/base/number.hpp"
+#include "ncservo/incidents/incident.hpp"
 
 namespace ncservo::cli {
 
@@ -22,6 +23,48 @@ using Json = nlohmann::ordered_json;
 
 std::string fingerprintText(const Fingerprint& f) {
   return fmt::format("{} {} #{}", f.rule, f.axis ? *f.axis : std::string("bus"), f.ordinal);
+}
+
+std::string fingerprintText(const IncidentFingerprint& f) {
+  return fmt::format("{} {} {} #{}", f.kind, f.axis ? *f.axis : std::string("bus"), f.cause,
+                     f.ordinal);
+}
+
+bool IncidentGate::gates(std::string_view kind) const {
+  for (std::size_t k = 0; k < kinds.size(); ++k) {
+    if (kinds[k] && kind == incidentKindName(static_cast<IncidentKind>(k))) return true;
+  }
+  return false;
+}
+
+std::string incidentGateText(const IncidentGate& gate) {
+  if (!gate.any()) return "never";
+  if (gate.kinds[0] && gate.kinds[1] && gate.kinds[2]) return "any";
+  std::vector<std::string> kinds;
+  for (std::size_t k = 0; k < gate.kinds.size(); ++k) {
+    if (gate.kinds[k]) kinds.emplace_back(incidentKindName(static_cast<IncidentKind>(k)));
+  }
+  return fmt::format("{}", fmt::join(kinds, ","));
+}
+
+Result<IncidentGate> parseIncidentGate(std::string_view text) {
+  if (text == "any") return IncidentGate{};
+  IncidentGate gate{{false, false, false}};
+  if (text == "never") return gate;
+  for (std::size_t comma = 0; comma != std::string_view::npos;) {
+    comma = text.find(',');
+    const std::string_view word = text.substr(0, comma);
+    bool known = false;
+    for (std::size_t k = 0; k < gate.kinds.size(); ++k) {
+      if (word == incidentKindName(static_cast<IncidentKind>(k))) known = gate.kinds[k] = true;
+    }
+    if (!known) {
+      return fail(fmt::format(
+          "'{}' is no kind of incident (drive-fault, bus-outage, esm; or any, never)", word));
+    }
+    if (comma != std::string_view::npos) text.remove_prefix(comma + 1);
+  }
+  return gate;
 }
 
 const char* baselineStateName(BaselineState state) {
@@ -71,6 +114,47 @@ std::uint64_t count(const Json& object, const char* key) {
   return object[key].get<std::uint64_t>();
 }
 
+// The ordinal after a fingerprint's last '#' ("SE-001 axis0 #2": 2).
+std::uint32_t ordinalOf(const std::string& fingerprint, const std::string& where) {
+  const auto hash = fingerprint.rfind('#');
+  const auto ordinal =
+      hash == std::string::npos
+          ? Result<std::uint32_t>(fail(""))
+          : parseNumber<std::uint32_t>(std::string_view(fingerprint).substr(hash + 1));
+  if (!ordinal || *ordinal == 0) {
+    throw Bad{fmt::format("{}: fingerprint '{}' does not end in #N", where, fingerprint)};
+  }
+  return *ordinal;
+}
+
+// An incident as the report holds it; a report written before incidents had fingerprints gives
+// none, and its ordinal is taken from the order (numberUnfingerprinted).
+ReportedIncident incidentOf(const Json& i, const std::string& where) {
+  ReportedIncident incident;
+  incident.fingerprint.kind = optionalText(i, "kind").value_or("");
+  incident.fingerprint.axis = optionalText(i, "axis_name");
+  if (!incident.fingerprint.axis) incident.fingerprint.axis = optionalText(i, "station");
+  if (i.contains("cause") && i["cause"].is_object()) {
+    incident.fingerprint.cause = optionalText(i["cause"], "id").value_or("");
+    incident.text = optionalText(i["cause"], "text").value_or("");
+  }
+  if (const std::optional<std::string> f = optionalText(i, "fingerprint")) {
+    incident.fingerprint.ordinal = ordinalOf(*f, where);
+  }
+  incident.frame = count(i, "frame");
+  return incident;
+}
+
+// Ordinals, in report order, for the incidents whose report gave none.
+void numberUnfingerprinted(std::vector<ReportedIncident>& incidents) {
+  std::map<IncidentFingerprint, std::uint32_t> seen;
+  for (ReportedIncident& i : incidents) {
+    if (i.fingerprint.ordinal != 0) continue;
+    IncidentFingerprint key = i.fingerprint;
+    i.fingerprint.ordinal = ++seen[key];
+  }
+}
+
 ReportedFinding findingOf(const Json& f, const std::string& where) {
   ReportedFinding r;
   r.fingerprint.rule = text(f, "rule", where);
@@ -83,16 +167,7 @@ ReportedFinding findingOf(const Json& f, const std::string& where) {
     throw Bad{where +
               ": no 'fingerprint' (a report of an older ncservo: write it again with this one)"};
   }
-  const std::string fingerprint = text(f, "fingerprint", where);
-  const auto hash = fingerprint.rfind('#');
-  const auto ordinal =
-      hash == std::string::npos
-          ? Result<std::uint32_t>(fail(""))
-          : parseNumber<std::uint32_t>(std::string_view(fingerprint).substr(hash + 1));
-  if (!ordinal || *ordinal == 0) {
-    throw Bad{fmt::format("{}: fingerprint '{}' does not end in #N", where, fingerprint)};
-  }
-  r.fingerprint.ordinal = *ordinal;
+  r.fingerprint.ordinal = ordinalOf(text(f, "fingerprint", where), where);
   const std::optional<Severity> severity = severityFromName(text(f, "severity", where));
   if (!severity) throw Bad{where + ": 'severity' is not error, warning or info"};
   r.severity = *severity;
@@ -128,17 +203,11 @@ ReportedCapture captureOf(const Json& c, const std::string& where) {
   }
   // Incidents (docs/cli.md), where the report has them.
   if (c.contains("incidents") && c["incidents"].is_array()) {
-    for (const Json& i : c["incidents"]) {
-      ReportedIncident incident;
-      incident.kind = optionalText(i, "kind").value_or("");
-      incident.axis = optionalText(i, "axis_name");
-      if (i.contains("cause") && i["cause"].is_object()) {
-        incident.cause = optionalText(i["cause"], "id");
-        incident.text = optionalText(i["cause"], "text").value_or("");
-      }
-      incident.frame = count(i, "frame");
-      r.incidents.push_back(std::move(incident));
+    const Json& incidents = c["incidents"];
+    for (std::size_t i = 0; i < incidents.size(); ++i) {
+      r.incidents.push_back(incidentOf(incidents[i], fmt::format("{}, incident {}", where, i + 1)));
     }
+    numberUnfingerprinted(r.incidents);
   }
   if (c.contains("timing") && c["timing"].is_object()) {
     const Json& timing = c["timing"];
@@ -209,30 +278,6 @@ const ReportedCapture* baselineCaptureFor(const ReportFile& baseline, const std:
   return nullptr;
 }
 
-BaselineMatcher::BaselineMatcher(const ReportedCapture* capture) : capture_(capture) {
-  if (capture_ == nullptr) return;
-  taken_.assign(capture_->findings.size(), false);
-  for (std::size_t i = capture_->findings.size(); i-- > 0;) {
-    waiting_[capture_->findings[i].fingerprint].push_back(i);
-  }
-}
-
-BaselineState BaselineMatcher::match(const Fingerprint& fingerprint) {
-  const auto it = waiting_.find(fingerprint);
-  if (it == waiting_.end() || it->second.empty()) return BaselineState::New;
-  taken_[it->second.back()] = true;
-  it->second.pop_back();
-  return BaselineState::Unchanged;
-}
-
-std::vector<ReportedFinding> BaselineMatcher::absent() const {
-  std::vector<ReportedFinding> left;
-  for (std::size_t i = 0; i < taken_.size(); ++i) {
-    if (!taken_[i]) left.push_back(capture_->findings[i]);
-  }
-  return left;
-}
-
 namespace {
 
 DiffGroup& groupOf(std::vector<DiffGroup>& groups, const Fingerprint& f) {
@@ -241,13 +286,6 @@ DiffGroup& groupOf(std::vector<DiffGroup>& groups, const Fingerprint& f) {
   }
   groups.push_back({f.rule, f.axis});
   return groups.back();
-}
-
-// Incidents are matched as findings are, by kind, axis and cause id
-// (docs/baselines.md#ncservo-diff).
-using IncidentKey = std::tuple<std::string, std::optional<std::string>, std::optional<std::string>>;
-IncidentKey keyOf(const ReportedIncident& i) {
-  return {i.kind, i.axis, i.cause};
 }
 
 }  // namespace
@@ -269,30 +307,29 @@ CaptureDiff diffCaptures(ReportedCapture base, ReportedCapture next) {
   }
   diff.absent = matcher.absent();
   for (const ReportedFinding& f : diff.absent) ++groupOf(diff.groups, f.fingerprint).absent;
-  // Each of NEW's incidents takes the first of BASE's of its key not yet taken.
-  std::vector<bool> taken(base.incidents.size(), false);
+  // Incidents are matched as findings are, by their fingerprints (docs/baselines.md#ncservo-diff).
   for (const ReportedIncident& i : next.incidents) {
-    std::size_t j = 0;
-    while (j < taken.size() && (taken[j] || keyOf(base.incidents[j]) != keyOf(i))) ++j;
-    if (j == taken.size()) {
+    if (matcher.match(i.fingerprint) == BaselineState::New) {
       diff.incidents_added.push_back(i);
     } else {
-      taken[j] = true;
       ++diff.incidents_unchanged;
     }
   }
-  for (std::size_t j = 0; j < taken.size(); ++j) {
-    if (!taken[j]) diff.incidents_absent.push_back(base.incidents[j]);
-  }
+  diff.incidents_absent = matcher.absentIncidents();
   diff.base = std::move(base);
   diff.next = std::move(next);
   return diff;
 }
 
-bool diffFails(const CaptureDiff& diff, Severity fail_on, bool never) {
-  if (never) return false;
-  return std::any_of(diff.added.begin(), diff.added.end(),
-                     [&](const ReportedFinding& f) { return f.severity >= fail_on; });
+bool diffFails(const CaptureDiff& diff, Severity fail_on, bool never,
+               const IncidentGate& incidents) {
+  const bool finding =
+      !never && std::any_of(diff.added.begin(), diff.added.end(),
+                            [&](const ReportedFinding& f) { return f.severity >= fail_on; });
+  return finding || std::any_of(diff.incidents_added.begin(), diff.incidents_added.end(),
+                                [&](const ReportedIncident& i) {
+                                  return incidents.gates(i.fingerprint.kind);
+                                });
 }
 
 }  // namespace ncservo::cli

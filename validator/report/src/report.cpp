@@ -15,6 +15,8 @@
 #include <iterator>
 #include <limits>
 
+#include "ncservo/incidents/causes.hpp"
+
 namespace ncservo::cli {
 
 namespace {
@@ -100,8 +102,34 @@ Fingerprint CaptureReport::fingerprintOf(const Finding& f) const {
           f.ordinal};
 }
 
+IncidentFingerprint CaptureReport::fingerprintOf(const Incident& i) const {
+  std::optional<std::string> where;
+  if (i.axis) {
+    where = axisLabel(*this, i.axis);
+  } else if (i.station) {
+    where = fmt::format("0x{:04X}", *i.station);
+  }
+  return {incidentKindName(i.kind), where, causeDef(i.cause).name, i.ordinal};
+}
+
 void CaptureReport::closeBaseline() {
-  if (baseline) baseline_absent = baseline->absent();
+  if (!baseline) return;
+  baseline_absent = baseline->absent();
+  incident_states.clear();
+  for (const Incident& i : incidents) incident_states.push_back(baseline->match(fingerprintOf(i)));
+  baseline_absent_incidents = baseline->absentIncidents();
+}
+
+bool CaptureReport::incidentGated(std::size_t index, const IncidentGate& gate) const {
+  const bool new_or_unmatched =
+      index >= incident_states.size() || incident_states[index] != BaselineState::Unchanged;
+  return new_or_unmatched && gate.kinds[static_cast<std::size_t>(incidents[index].kind)];
+}
+
+std::size_t CaptureReport::gatedIncidents(const IncidentGate& gate) const {
+  std::size_t gated = 0;
+  for (std::size_t i = 0; i < incidents.size(); ++i) gated += incidentGated(i, gate) ? 1 : 0;
+  return gated;
 }
 
 std::string describeBaseline(const CaptureReport& r) {
@@ -113,7 +141,9 @@ CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& r) 
   // The findings the verdict is about: all of them, or the new ones against a baseline
   // (docs/baselines.md).
   const auto reaches = [&](Severity level) { return r.reaches(level); };
-  const bool gate = !policy.never && reaches(policy.fail_on);  // what --fail-on fails
+  // What --fail-on and --fail-on-incident fail.
+  const bool gate =
+      (!policy.never && reaches(policy.fail_on)) || r.gatedIncidents(policy.incidents) > 0;
   const bool checked = r.coverage.complete();
   if (r.error) return {Verdict::Unreadable, kExitCapture};
   const int status = gate                              ? kExitFindings
@@ -134,6 +164,30 @@ int moreSerious(int a, int b) {
   return rank(a) <= rank(b) ? a : b;
 }
 
+namespace {
+
+// What made the exit status 1: findings at or above --fail-on, incidents --fail-on-incident
+// gates, or both.
+std::string gateReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports) {
+  bool findings = false;
+  std::size_t incidents = 0;
+  for (const CaptureReport& r : reports) {
+    findings = findings || (!policy.never && r.reaches(policy.fail_on));
+    incidents += r.gatedIncidents(policy.incidents);
+  }
+  std::vector<std::string> why;
+  if (findings) {
+    why.push_back(fmt::format("findings at or above --fail-on {}", severityName(policy.fail_on)));
+  }
+  if (incidents > 0) {
+    why.push_back(fmt::format("{} incident{} under --fail-on-incident {}", incidents,
+                              incidents == 1 ? "" : "s", incidentGateText(policy.incidents)));
+  }
+  return fmt::format("{}", fmt::join(why, ", "));
+}
+
+}  // namespace
+
 std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports,
                        int exit_status) {
   const std::string fail_on = policy.never ? "never" : severityName(policy.fail_on);
@@ -141,7 +195,7 @@ std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureRepo
     case kExitCapture:
       return "a capture could not be read to its end";
     case kExitFindings:
-      return fmt::format("findings at or above --fail-on {}", fail_on);
+      return gateReason(policy, reports);
     case kExitNoServo:
       return "no servo checked";
     case kExitOk:
@@ -150,15 +204,30 @@ std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureRepo
       return "";
   }
   bool findings = false;
+  std::size_t ungated = 0;    // incidents of kinds --fail-on-incident leaves out
+  std::size_t unchanged = 0;  // incidents the baseline had
   bool unchecked = false;
   for (const CaptureReport& r : reports) {
     findings = findings || r.reaches(Severity::Info);
+    for (std::size_t i = 0; i < r.incidents.size(); ++i) {
+      const bool same =
+          i < r.incident_states.size() && r.incident_states[i] == BaselineState::Unchanged;
+      (same ? unchanged : ungated) += 1;
+    }
     unchecked = unchecked || (!r.unopened() && !r.coverage.complete());
   }
   std::vector<std::string> why;
   if (findings) {
     why.push_back(policy.never ? std::string("--fail-on never")
                                : fmt::format("nothing at or above --fail-on {}", fail_on));
+  }
+  // --fail-on never alone gates no incident either: said once.
+  if (ungated > 0 && !(policy.never && !policy.incidents.any())) {
+    why.push_back(fmt::format("{} incident{} not gated (--fail-on-incident {})", ungated,
+                              ungated == 1 ? "" : "s", incidentGateText(policy.incidents)));
+  }
+  if (unchanged > 0) {
+    why.push_back(fmt::format("{} unchanged incident{}", unchanged, unchanged == 1 ? "" : "s"));
   }
   if (unchecked && policy.allow_empty) why.emplace_back("--allow-empty");
   return fmt::format("{}", fmt::join(why, ", "));
@@ -185,6 +254,7 @@ BaselineState CaptureReport::tally(const Finding& f) {
 std::vector<std::uint64_t> findingFrames(const CaptureReport& report) {
   std::vector<std::uint64_t> frames;
   for (const Finding& f : report.findings) frames.push_back(f.at.frame);
+  for (const Incident& i : report.incidents) frames.push_back(i.at.frame);
   std::sort(frames.begin(), frames.end());
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
   return frames;

@@ -68,8 +68,8 @@ std::string findingLine(const ReportedFinding& f) {
 }
 
 std::string incidentLine(const ReportedIncident& i) {
-  return fmt::format("{} {} {} frame {}{}", i.kind, axisText(i.axis), i.cause.value_or("-"),
-                     i.frame, i.text.empty() ? "" : ": " + i.text);
+  return fmt::format("{} frame {}{}", fingerprintText(i.fingerprint), i.frame,
+                     i.text.empty() ? "" : ": " + i.text);
 }
 
 std::string summaryLine(const CaptureDiff& d) {
@@ -121,9 +121,11 @@ Json sideJson(const std::string& source, const ReportedCapture& c) {
 }
 
 Json incidentJson(const ReportedIncident& i) {
-  return {{"kind", i.kind},
-          {"axis_name", i.axis ? Json(*i.axis) : Json(nullptr)},
-          {"cause", i.cause ? Json(*i.cause) : Json(nullptr)},
+  const IncidentFingerprint& f = i.fingerprint;
+  return {{"kind", f.kind},
+          {"axis_name", f.axis ? Json(*f.axis) : Json(nullptr)},
+          {"cause", f.cause.empty() ? Json(nullptr) : Json(f.cause)},
+          {"fingerprint", fingerprintText(f)},
           {"frame", i.frame},
           {"text", i.text}};
 }
@@ -237,7 +239,8 @@ void writeDiffHtml(std::FILE* out, const CaptureDiff& d) {
   for (const auto& [state, list] :
        {std::pair{"new", &d.incidents_added}, std::pair{"absent", &d.incidents_absent}}) {
     for (const ReportedIncident& i : *list) {
-      incidents.push_back({state, i.kind, axisText(i.axis), i.cause.value_or("-"),
+      const IncidentFingerprint& f = i.fingerprint;
+      incidents.push_back({state, f.kind, axisText(f.axis), f.cause.empty() ? "-" : f.cause,
                            fmt::format("{}", i.frame), i.text});
     }
   }

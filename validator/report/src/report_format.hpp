@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ncservo/report/report.hpp"
@@ -40,7 +41,15 @@ Json timingJson(const CaptureReport& r);
 Json clockJson(const CaptureReport& r);
 Json captureJson(const CaptureReport& r, Verdict verdict);
 // One incident (docs/incidents.md, INTERFACES.md "Incidents"), as JSON and JSON Lines write it.
-Json incidentJson(const CaptureReport& r, const Incident& incident);
+Json incidentJson(const CaptureReport& r, std::size_t index);
+// An incident's line ("axis1 fault E19 at frame 3040, 1.520 s — encoder: ..."), and its evidence
+// and recovery lines, each starting with `indent` (report_text.cpp).
+std::string incidentSummary(const CaptureReport& r, const Incident& incident);
+std::string incidentDetails(const Incident& incident, std::string_view indent);
+// "INC-encoder": the rule id SARIF and JUnit give an incident of that cause.
+std::string incidentRuleId(CauseId cause);
+// The baseline's incidents not seen again (JSON `baseline_absent_incidents`).
+Json baselineAbsentIncidentsJson(const CaptureReport& r);
 
 // html_incidents.cpp: the HTML page's incident cards — their data, style and script
 // (incidentCards(capture, section, index)).

@@ -170,16 +170,23 @@ Json reportedFindingJson(const ReportedFinding& f, const char* state) {
 
 Json baselineJson(const CaptureReport& r) {
   const ReportedCapture* matched = r.baseline->capture();
-  return {{"report", r.baseline_path},
-          {"capture", matched != nullptr ? Json(matched->path) : Json(nullptr)},
-          {"new", r.newCount()},
-          {"unchanged", r.unchanged},
-          {"absent", r.baseline_absent.size()},
-          {"new_summary",
-           {{"error", r.new_counts[2]}, {"warning", r.new_counts[1]}, {"info", r.new_counts[0]}}}};
+  return {
+      {"report", r.baseline_path},
+      {"capture", matched != nullptr ? Json(matched->path) : Json(nullptr)},
+      {"new", r.newCount()},
+      {"unchanged", r.unchanged},
+      {"absent", r.baseline_absent.size()},
+      {"new_summary",
+       {{"error", r.new_counts[2]}, {"warning", r.new_counts[1]}, {"info", r.new_counts[0]}}},
+      {"incidents",
+       {{"new", std::count(r.incident_states.begin(), r.incident_states.end(), BaselineState::New)},
+        {"unchanged",
+         std::count(r.incident_states.begin(), r.incident_states.end(), BaselineState::Unchanged)},
+        {"absent", r.baseline_absent_incidents.size()}}}};
 }
 
-Json incidentJson(const CaptureReport& r, const Incident& incident) {
+Json incidentJson(const CaptureReport& r, std::size_t index) {
+  const Incident& incident = r.incidents[index];
   Json j;
   j["kind"] = incidentKindName(incident.kind);
   j["axis"] = incident.axis ? Json(*incident.axis) : Json(nullptr);
@@ -199,6 +206,8 @@ Json incidentJson(const CaptureReport& r, const Incident& incident) {
   }
   j["errors"] = std::move(errors);
   j["cause"] = {{"id", causeDef(incident.cause).name}, {"text", incident.cause_text}};
+  j["fingerprint"] = fingerprintText(r.fingerprintOf(incident));
+  if (index < r.incident_states.size()) j["baseline"] = baselineStateName(r.incident_states[index]);
   Json evidence = Json::array();
   for (const IncidentEvidence& e : incident.evidence) {
     evidence.push_back({{"frame", e.at.frame}, {"what", e.what}});
@@ -216,6 +225,21 @@ Json incidentJson(const CaptureReport& r, const Incident& incident) {
   j["recovery"] = {{"error_clear_frame", frameOf(incident.error_clear)},
                    {"reenabled_frame", frameOf(incident.reenabled)}};
   return j;
+}
+
+// The baseline's incidents not seen again, as `diff` reads them back.
+Json baselineAbsentIncidentsJson(const CaptureReport& r) {
+  Json absent = Json::array();
+  for (const ReportedIncident& i : r.baseline_absent_incidents) {
+    const IncidentFingerprint& f = i.fingerprint;
+    absent.push_back({{"kind", f.kind},
+                      {"axis_name", f.axis ? Json(*f.axis) : Json(nullptr)},
+                      {"cause", {{"id", f.cause}, {"text", i.text}}},
+                      {"frame", i.frame},
+                      {"fingerprint", fingerprintText(f)},
+                      {"baseline", "absent"}});
+  }
+  return absent;
 }
 
 Json notJudgedJson(const CaptureReport& r) {
@@ -374,7 +398,7 @@ Json baselineAbsentJson(const CaptureReport& r) {
 
 Json incidentsJson(const CaptureReport& r) {
   Json incidents = Json::array();
-  for (const Incident& incident : r.incidents) incidents.push_back(incidentJson(r, incident));
+  for (std::size_t i = 0; i < r.incidents.size(); ++i) incidents.push_back(incidentJson(r, i));
   return incidents;
 }
 
@@ -466,6 +490,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   }
   c["incidents"] = incidentsJson(r);
   if (r.incidents_omitted > 0) c["incidents_omitted"] = r.incidents_omitted;
+  if (r.baseline) c["baseline_absent_incidents"] = baselineAbsentIncidentsJson(r);
   c["axes"] = axesJson(r);
   c["summary"] = {{"error", r.count(Severity::Error)},
                   {"warning", r.count(Severity::Warning)},

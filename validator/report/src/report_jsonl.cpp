@@ -43,9 +43,15 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
     std::fputs((j.dump() + "\n").c_str(), sink.out);
   }
   // docs/incidents.md: one line per incident, once the capture has ended them.
-  for (const Incident& incident : r.incidents) {
-    const Json j{{"capture", r.path}, {"incident", incidentJson(r, incident)}};
+  for (std::size_t i = 0; i < r.incidents.size(); ++i) {
+    const Json j{{"capture", r.path}, {"incident", incidentJson(r, i)}};
     std::fputs((j.dump() + "\n").c_str(), sink.out);
+  }
+  if (r.baseline) {
+    for (Json& absent : baselineAbsentIncidentsJson(r)) {
+      const Json j{{"capture", r.path}, {"incident", std::move(absent)}};
+      std::fputs((j.dump() + "\n").c_str(), sink.out);
+    }
   }
   const Json timing{{"capture", r.path},
                     {"timing", timingJson(r)},

@@ -111,6 +111,33 @@ void writeLayoutCase(pugi::xml_node suite, const CaptureReport& r) {
   testcase.append_child("system-out").text() = body.c_str();
 }
 
+// One test case per incident (docs/incidents.md), named by its fingerprint so that a CI keeps
+// it from run to run: failed when --fail-on-incident gates its kind (with a baseline, when new).
+CaseResult writeIncidentCase(pugi::xml_node suite, const ReportSink& sink, const CaptureReport& r,
+                             std::size_t index) {
+  const Incident& incident = r.incidents[index];
+  const std::string rule = incidentRuleId(incident.cause);
+  auto testcase = suite.append_child("testcase");
+  testcase.append_attribute("classname") = (r.path + ".incidents").c_str();
+  testcase.append_attribute("name") =
+      fmt::format("{} {}", rule, fingerprintText(r.fingerprintOf(incident))).c_str();
+  testcase.append_attribute("time") = "0";
+  const bool failing = r.incidentGated(index, sink.policy.incidents);
+  const BaselineState state =
+      index < r.incident_states.size() ? r.incident_states[index] : BaselineState::None;
+  const std::string body = fmt::format(
+      "{}{}\n{}", incidentSummary(r, incident),
+      state == BaselineState::None ? std::string() : fmt::format(" [{}]", baselineStateName(state)),
+      incidentDetails(incident, ""));
+  auto node = testcase.append_child(failing ? "failure" : "system-out");
+  if (failing) {
+    node.append_attribute("message") = incidentSummary(r, incident).c_str();
+    node.append_attribute("type") = rule.c_str();
+  }
+  node.text() = body.c_str();
+  return failing ? CaseResult::Failed : CaseResult::Passed;
+}
+
 void writeErrorCase(pugi::xml_node suite, const CaptureReport& r) {
   auto testcase = suite.append_child("testcase");
   testcase.append_attribute("classname") = r.path.c_str();
@@ -144,10 +171,14 @@ SuiteCounts writeSuite(pugi::xml_node suites, const ReportSink& sink, const Capt
     failures += result == CaseResult::Failed ? 1 : 0;
     skipped += result == CaseResult::Skipped ? 1 : 0;
   }
+  for (std::size_t i = 0; i < r.incidents.size(); ++i) {
+    failures += writeIncidentCase(suite, sink, r, i) == CaseResult::Failed ? 1 : 0;
+  }
   const bool misfit = !r.layout_warnings.empty();
   if (misfit) writeLayoutCase(suite, r);
   if (r.error) writeErrorCase(suite, r);
-  const std::size_t tests = kRules.size() + (misfit ? 1 : 0) + (r.error ? 1 : 0);
+  const std::size_t tests =
+      kRules.size() + r.incidents.size() + (misfit ? 1 : 0) + (r.error ? 1 : 0);
   suite.append_attribute("tests") = tests;
   suite.append_attribute("failures") = failures;
   suite.append_attribute("errors") = r.error ? 1 : 0;

@@ -198,8 +198,42 @@ void writeNotJudged(std::FILE* out, const CaptureReport& r) {
 
 }  // namespace
 
+std::string incidentSummary(const CaptureReport& r, const Incident& incident) {
+  return fmt::format("{} at frame {}, {:.3f} s \u2014 {}: {}",
+                     incidentHeadline(incident, axisLabel(r, incident.axis)), incident.at.frame,
+                     seconds(r, incident.at), causeDef(incident.cause).name, incident.cause_text);
+}
+
+std::string incidentDetails(const Incident& incident, std::string_view indent) {
+  std::string text;
+  if (!incident.evidence.empty()) {
+    std::vector<std::string> items;
+    for (const IncidentEvidence& e : incident.evidence)
+      items.push_back(fmt::format("frame {} {}", e.at.frame, e.what));
+    text += fmt::format("{}evidence: {}\n", indent, fmt::join(items, "; "));
+  }
+  std::vector<std::string> recovery;
+  if (incident.error_clear)
+    recovery.push_back(fmt::format("errors cleared at frame {}", incident.error_clear->frame));
+  if (incident.reenabled) {
+    recovery.push_back(fmt::format("{} at frame {}",
+                                   incident.kind == IncidentKind::Esm         ? "back in OP"
+                                   : incident.kind == IncidentKind::BusOutage ? "cycles run again"
+                                                                              : "enabled again",
+                                   incident.reenabled->frame));
+  }
+  text +=
+      fmt::format("{}recovery: {}\n", indent,
+                  !recovery.empty() ? fmt::format("{}", fmt::join(recovery, ", "))
+                  : incident.ended
+                      ? fmt::format("none before the next fault (frame {})", incident.end.frame)
+                      : fmt::format("none before the capture ends (frame {})", incident.end.frame));
+  return text;
+}
+
 // docs/incidents.md#the-text-report: per axis (then the bus and slaves that are no axis), each
-// incident's line with its cause, its evidence and its recovery.
+// incident's line with its cause (and, against a baseline, whether it is new), its evidence and
+// its recovery.
 void writeTextIncidents(std::FILE* out, const CaptureReport& r) {
   if (r.incidents.empty()) return;
   fmt::print(out, "incidents: {}{}\n", r.incidents.size(),
@@ -218,32 +252,16 @@ void writeTextIncidents(std::FILE* out, const CaptureReport& r) {
     for (std::size_t n = 0; n < r.incidents.size(); ++n) {
       const Incident& incident = r.incidents[n];
       if (incident.axis != group) continue;
-      fmt::print(out, "    incident {}: {} at frame {}, {:.3f} s \u2014 {}: {}\n", n + 1,
-                 incidentHeadline(incident, axisLabel(r, incident.axis)), incident.at.frame,
-                 seconds(r, incident.at), causeDef(incident.cause).name, incident.cause_text);
-      if (!incident.evidence.empty()) {
-        std::vector<std::string> items;
-        for (const IncidentEvidence& e : incident.evidence)
-          items.push_back(fmt::format("frame {} {}", e.at.frame, e.what));
-        fmt::print(out, "      evidence: {}\n", fmt::join(items, "; "));
-      }
-      std::vector<std::string> recovery;
-      if (incident.error_clear)
-        recovery.push_back(fmt::format("errors cleared at frame {}", incident.error_clear->frame));
-      if (incident.reenabled) {
-        recovery.push_back(fmt::format("{} at frame {}",
-                                       incident.kind == IncidentKind::Esm ? "back in OP"
-                                       : incident.kind == IncidentKind::BusOutage
-                                           ? "cycles run again"
-                                           : "enabled again",
-                                       incident.reenabled->frame));
-      }
-      fmt::print(out, "      recovery: {}\n",
-                 !recovery.empty() ? fmt::format("{}", fmt::join(recovery, ", "))
-                 : incident.ended
-                     ? fmt::format("none before the next fault (frame {})", incident.end.frame)
-                     : fmt::format("none before the capture ends (frame {})", incident.end.frame));
+      const std::string state = n < r.incident_states.size()
+                                    ? fmt::format(" [{}]", baselineStateName(r.incident_states[n]))
+                                    : std::string();
+      fmt::print(out, "    incident {}{}: {}\n{}", n + 1, state, incidentSummary(r, incident),
+                 incidentDetails(incident, "      "));
     }
+  }
+  for (const ReportedIncident& i : r.baseline_absent_incidents) {
+    fmt::print(out, "  absent from the baseline's incidents: {} (frame {})\n",
+               fingerprintText(i.fingerprint), i.frame);
   }
 }
 

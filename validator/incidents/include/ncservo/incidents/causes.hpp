@@ -4,7 +4,9 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ncservo/incidents/incident.hpp"
@@ -31,5 +33,7 @@ struct CauseDef {
 // Defined in causes.cpp, next to the tests the table names.
 extern const std::array<CauseDef, kCauseCount> kCauses;
 const CauseDef& causeDef(CauseId id);
+// The cause of that public id ("encoder"), if there is one.
+std::optional<CauseId> findCause(std::string_view name);
 
 }  // namespace ncservo

@@ -57,6 +57,9 @@ struct Incident {
   std::array<std::optional<double>, kBefore.size()> before{};  // by kBefore row
   std::optional<Stamp> error_clear;                            // SEW.ServoErrors fell; ESM: none
   std::optional<Stamp> reenabled;                              // enabled again (ESM: back in OP)
+  // Among the incidents of its kind, axis (or station) and cause in its capture segment, from 1:
+  // what a baseline matches it by (docs/baselines.md#fingerprints).
+  std::uint32_t ordinal = 0;
 };
 
 // The SEW bit's filter name without "ncservo.sew." ("ecat_watchdog"), and its label with the

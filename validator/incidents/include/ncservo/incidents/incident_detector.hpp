@@ -5,7 +5,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <optional>
+#include <tuple>
 #include <vector>
 
 #include "ncservo/incidents/incident.hpp"
@@ -57,6 +60,10 @@ class IncidentDetector {
   std::vector<Incident> incidents_;
   std::uint64_t omitted_ = 0;
   std::uint64_t segments_ = 0;
+  // The incidents so far in this segment by kind, axis (or station) and cause: their ordinals.
+  using OrdinalKey =
+      std::tuple<IncidentKind, std::optional<std::uint16_t>, std::optional<std::uint16_t>, CauseId>;
+  std::map<OrdinalKey, std::uint32_t> ordinals_;
 };
 
 }  // namespace ncservo

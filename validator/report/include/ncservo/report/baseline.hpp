@@ -4,6 +4,7 @@
 // JSON report holds.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -28,6 +29,19 @@ struct Fingerprint {
 // "SE-001 axis0 #2", "COM-002 bus #1": the JSON report's `fingerprint`.
 std::string fingerprintText(const Fingerprint& fingerprint);
 
+// What an incident is matched by (docs/baselines.md#fingerprints): its kind, its axis's name (or
+// its slave's station, none for the bus), its cause's id and its ordinal among the incidents of
+// those three in its capture segment.
+struct IncidentFingerprint {
+  std::string kind;                 // "drive-fault"
+  std::optional<std::string> axis;  // "axis2", "0x1002"; none for the bus
+  std::string cause;                // "encoder"
+  std::uint32_t ordinal = 0;
+  auto operator<=>(const IncidentFingerprint&) const = default;
+};
+// "drive-fault axis2 encoder #1": the JSON report's incident `fingerprint`.
+std::string fingerprintText(const IncidentFingerprint& fingerprint);
+
 // A finding against a baseline; None without one.
 enum class BaselineState : std::uint8_t { None, New, Unchanged };
 // "new", "unchanged" (and "" for None), as JSON, JSON Lines and SARIF name them.
@@ -45,11 +59,10 @@ struct ReportedFinding {
   std::string message;
 };
 
-// One incident as a JSON report holds it (docs/cli.md: `incidents`): what `diff` compares.
+// One incident as a JSON report holds it (docs/cli.md: `incidents`): what baselines and `diff`
+// compare.
 struct ReportedIncident {
-  std::string kind;
-  std::optional<std::string> axis;   // axis_name
-  std::optional<std::string> cause;  // cause.id
+  IncidentFingerprint fingerprint;
   std::uint64_t frame = 0;
   std::string text;  // cause.text
 };
@@ -92,22 +105,62 @@ bool looksLikeJsonReport(const std::string& path);
 const ReportedCapture* baselineCaptureFor(const ReportFile& baseline, const std::string& path,
                                           std::size_t run_captures);
 
-// One capture's findings matched against a baseline capture's, in capture order, as they come
-// (so JSON Lines can say it on each line): a finding takes a baseline finding of its fingerprint
-// not yet taken, the earliest first; what is left at the end is absent.
+// Items (findings or incidents) matched against a baseline's, in capture order, as they come:
+// an item takes a baseline item of its fingerprint not yet taken, the earliest first; what is
+// left at the end is absent.
+template <class Reported>
+class FingerprintMatcher {
+ public:
+  using Key = decltype(Reported::fingerprint);
+  // `items` null: every item is new. They must outlive the matcher.
+  explicit FingerprintMatcher(const std::vector<Reported>* items) : items_(items) {
+    if (items_ == nullptr) return;
+    taken_.assign(items_->size(), false);
+    for (std::size_t i = items_->size(); i-- > 0;) waiting_[(*items_)[i].fingerprint].push_back(i);
+  }
+  BaselineState match(const Key& fingerprint) {
+    const auto it = waiting_.find(fingerprint);
+    if (it == waiting_.end() || it->second.empty()) return BaselineState::New;
+    taken_[it->second.back()] = true;
+    it->second.pop_back();
+    return BaselineState::Unchanged;
+  }
+  // The baseline's items none took, in the baseline's order.
+  std::vector<Reported> absent() const {
+    std::vector<Reported> left;
+    for (std::size_t i = 0; i < taken_.size(); ++i) {
+      if (!taken_[i]) left.push_back((*items_)[i]);
+    }
+    return left;
+  }
+
+ private:
+  const std::vector<Reported>* items_;
+  std::map<Key, std::vector<std::size_t>> waiting_;  // item indices, latest first
+  std::vector<bool> taken_;
+};
+
+// One capture's findings and incidents matched against a baseline capture's (so JSON Lines can
+// say it on each finding's line).
 class BaselineMatcher {
  public:
-  // `capture` null: every finding is new. It must outlive the matcher.
-  explicit BaselineMatcher(const ReportedCapture* capture);
-  BaselineState match(const Fingerprint& fingerprint);
-  // The baseline's findings no finding took, in the baseline's order.
-  std::vector<ReportedFinding> absent() const;
+  // `capture` null: everything is new. It must outlive the matcher.
+  explicit BaselineMatcher(const ReportedCapture* capture)
+      : capture_(capture),
+        findings_(capture ? &capture->findings : nullptr),
+        incidents_(capture ? &capture->incidents : nullptr) {}
+  BaselineState match(const Fingerprint& fingerprint) { return findings_.match(fingerprint); }
+  BaselineState match(const IncidentFingerprint& fingerprint) {
+    return incidents_.match(fingerprint);
+  }
+  std::vector<ReportedFinding> absent() const { return findings_.absent(); }
+  std::vector<ReportedIncident> absentIncidents() const { return incidents_.absent(); }
   const ReportedCapture* capture() const { return capture_; }
 
  private:
   const ReportedCapture* capture_;
-  std::map<Fingerprint, std::vector<std::size_t>> waiting_;  // finding indices, latest first
-  std::vector<bool> taken_;
+  FingerprintMatcher<ReportedFinding> findings_;
+  FingerprintMatcher<ReportedIncident> incidents_;
 };
 
 // `ncservo diff BASE NEW` (docs/baselines.md#diff): one capture against another.
@@ -128,8 +181,23 @@ struct CaptureDiff {
   std::size_t incidents_unchanged = 0;
 };
 CaptureDiff diffCaptures(ReportedCapture base, ReportedCapture next);
-// Whether NEW has a finding at or above `fail_on` that BASE does not (never: false).
-bool diffFails(const CaptureDiff& diff, Severity fail_on, bool never);
+// The kinds of incident that fail a run (--fail-on-incident, docs/cli.md#exit-status), by
+// IncidentKind.
+struct IncidentGate {
+  std::array<bool, 3> kinds{true, true, true};
+  bool any() const { return kinds[0] || kinds[1] || kinds[2]; }
+  bool gates(std::string_view kind) const;
+};
+// "any", "never", or kinds joined by commas ("drive-fault,esm"); what the option was given.
+std::string incidentGateText(const IncidentGate& gate);
+// Parses the option's value: any, never, or a comma-separated list of kinds; fails naming the
+// word it does not know.
+Result<IncidentGate> parseIncidentGate(std::string_view text);
+
+// Whether NEW has a finding at or above `fail_on` that BASE does not (never: false), or an
+// incident of a kind `incidents` gates.
+bool diffFails(const CaptureDiff& diff, Severity fail_on, bool never,
+               const IncidentGate& incidents);
 
 // `diff --format`: text, json or html.
 std::vector<std::string> diffFormatNames();

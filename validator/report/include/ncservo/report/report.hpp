@@ -85,6 +85,10 @@ struct CaptureReport : CaptureResult {
   std::array<std::size_t, 3> new_counts{};
   std::size_t unchanged = 0;
   std::vector<ReportedFinding> baseline_absent;
+  // The incidents against the baseline, after closeBaseline(): each one's state (beside
+  // `incidents`), and the baseline's incidents not seen again.
+  std::vector<BaselineState> incident_states;
+  std::vector<ReportedIncident> baseline_absent_incidents;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // The findings that count for the verdict and the exit status: all of them, or with a
   // baseline the new ones.
@@ -94,10 +98,17 @@ struct CaptureReport : CaptureResult {
   std::size_t newCount() const { return new_counts[0] + new_counts[1] + new_counts[2]; }
   // Counts a finding, by severity and in its group; against a baseline, matches it.
   BaselineState tally(const Finding& finding);
-  // The fingerprint of a finding of this capture.
+  // The fingerprint of a finding of this capture, and of an incident.
   Fingerprint fingerprintOf(const Finding& finding) const;
-  // The capture's findings have all come: the baseline's not seen again are absent.
+  IncidentFingerprint fingerprintOf(const Incident& incident) const;
+  // The capture's findings and incidents have all come: the incidents are matched, and the
+  // baseline's not seen again are absent.
   void closeBaseline();
+  // The incidents that count for the exit status under `gate`: all of its kinds, or with a
+  // baseline the new ones.
+  std::size_t gatedIncidents(const IncidentGate& gate) const;
+  // Whether incident `index` fails the run under `gate`.
+  bool incidentGated(std::size_t index, const IncidentGate& gate) const;
   // The capture could not be read at all: nothing in it was checked.
   bool unopened() const { return error.has_value() && frames == 0; }
   // Whether any finding that counts is at or above `level`.
@@ -115,8 +126,8 @@ const char* verdictName(Verdict verdict);
 // An axis's configured name ("axis3" when it has none), "bus" for none.
 std::string axisLabel(const CaptureReport& report, const std::optional<std::uint16_t>& axis);
 
-// The frames of the kept findings, sorted, each once (where SARIF places them: the capture
-// layer's locateRecords).
+// The frames of the kept findings and of the incidents, sorted, each once (where SARIF places
+// them: the capture layer's locateRecords).
 std::vector<std::uint64_t> findingFrames(const CaptureReport& report);
 
 // ISO 8601 in UTC of a capture time, with `digits` digits of the second
@@ -138,6 +149,7 @@ std::string ruleHelpUri(const RuleDef& rule);
 struct ReportPolicy {
   Severity fail_on = Severity::Error;
   bool never = false;
+  IncidentGate incidents;  // --fail-on-incident
   bool allow_empty = false;
   bool verbose = false;  // text: every finding, not one line per rule and axis
   std::array<bool, kRuleCount> enabled{};
