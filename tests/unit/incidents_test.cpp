@@ -160,7 +160,10 @@ TEST(Incidents, ChainEvidenceRecoveryAndBefore) {
   ASSERT_EQ(incidents.size(), 1u);
   const Incident& incident = incidents.front();
   EXPECT_EQ(incident.cause, CauseId::CommunicationLoss);
-  EXPECT_NE(incident.cause_text.find("cycles lost (frame"), std::string::npos)
+  // Cycles 291-293 have no copy at all: they lie between cycle 290's master copy (frame 581; its
+  // returned copy is 582) and cycle 294's (frame 583).
+  EXPECT_NE(incident.cause_text.find("3 cycles lost (between frames 581 and 583)"),
+            std::string::npos)
       << incident.cause_text;
   EXPECT_NE(incident.cause_text.find("then ECatWatchDog (E31)"), std::string::npos)
       << incident.cause_text;
@@ -195,6 +198,23 @@ TEST(Incidents, NoRecoveryEndsAtTheCapturesLastFrame) {
   EXPECT_FALSE(incident.error_clear);
   EXPECT_FALSE(incident.reenabled);
   EXPECT_EQ(incident.end.frame, driver.frames());
+}
+
+// docs/incidents.md#communication-loss: the frames named are the master copies that got no
+// returned copy, first to last, as stock Wireshark shows them unanswered.
+TEST(Incidents, NameTheMasterCopiesThatWereNotReturned) {
+  Script s(kFault + 80);
+  s.noReturned(291, 294);  // cycles 291-293: master copies 583, 584, 585, none returned
+  s.sew(kFault, kCleared, kSummary | kEcatWatchdog);
+  s.ssw(kFault, kCleared + 20, kSswReady);
+  ValidatorDriver driver;
+  driver.run(s);
+  ASSERT_EQ(driver.incidents().incidents().size(), 1u);
+  const Incident& incident = driver.incidents().incidents().front();
+  EXPECT_NE(incident.cause_text.find("3 cycles lost (frames 583-585)"), std::string::npos)
+      << incident.cause_text;
+  ASSERT_FALSE(incident.evidence.empty());
+  EXPECT_EQ(incident.evidence.front().at.frame, 583u) << incident.evidence.front().what;
 }
 
 TEST(Incidents, NoFaultNoIncident) {

@@ -70,32 +70,46 @@ bool bitsWithValue(const CauseContext& c, CauseMatch& m, std::uint32_t bits, std
   return true;
 }
 
+}  // namespace
+
+std::string lostCyclesText(const AxisTrack& axis, const Mark& at, std::int64_t window_ns,
+                           std::vector<IncidentEvidence>* evidence) {
+  // The runs newest first: the frames named are the oldest run's first and the newest's last.
+  std::uint64_t lost = 0, failed = 0, first = 0, last = 0;
+  bool between = true;
+  for (std::size_t i = 0; i < axis.failures.size(); ++i) {
+    const FailureRun& run = axis.failures[i];
+    if (!within(run.last, at, window_ns)) continue;
+    lost += run.lost;
+    failed += run.failed;
+    first = run.first_frame.frame;
+    if (last == 0) last = run.last_frame.frame;
+    between = between && run.between;
+    if (evidence == nullptr) continue;
+    evidence->push_back(IncidentEvidence{
+        run.first_frame,
+        run.lost > 0
+            ? fmt::format("{} cycle{} lost", run.lost, run.lost == 1 ? "" : "s")
+            : fmt::format("{} cycle{} with a wrong WKC", run.failed, run.failed == 1 ? "" : "s")});
+  }
+  if (lost + failed == 0) return "";
+  std::string text;
+  if (lost > 0) text = fmt::format("{} cycle{} lost", lost, lost == 1 ? "" : "s");
+  if (failed > 0) {
+    text += fmt::format("{}{} cycle{} with a wrong WKC", text.empty() ? "" : ", ", failed,
+                        failed == 1 ? "" : "s");
+  }
+  text += between         ? fmt::format(" (between frames {} and {})", first, last)
+          : first == last ? fmt::format(" (frame {})", first)
+                          : fmt::format(" (frames {}-{})", first, last);
+  return text;
+}
+
+namespace {
+
 bool communicationLoss(const CauseContext& c, CauseMatch& m) {
   std::string text;
-  if (c.axis != nullptr) {
-    std::uint64_t lost = 0, failed = 0, first = 0, last = 0;
-    for (std::size_t i = 0; i < c.axis->failures.size(); ++i) {
-      const FailureRun& run = c.axis->failures[i];
-      if (!within(run.last, c.at, kShortWindowNs)) continue;
-      lost += run.lost;
-      failed += run.failed;
-      first = run.first.frame;
-      if (last == 0) last = run.last.frame;
-      evidence(m, run.first,
-               run.lost > 0 ? fmt::format("{} cycle{} lost", run.lost, run.lost == 1 ? "" : "s")
-                            : fmt::format("{} cycle{} with a wrong WKC", run.failed,
-                                          run.failed == 1 ? "" : "s"));
-    }
-    if (lost + failed > 0) {
-      if (lost > 0) text = fmt::format("{} cycle{} lost", lost, lost == 1 ? "" : "s");
-      if (failed > 0) {
-        text += fmt::format("{}{} cycle{} with a wrong WKC", text.empty() ? "" : ", ", failed,
-                            failed == 1 ? "" : "s");
-      }
-      text += first == last ? fmt::format(" (frame {})", first)
-                            : fmt::format(" (frames {}-{})", first, last);
-    }
-  }
+  if (c.axis != nullptr) text = lostCyclesText(*c.axis, c.at, kShortWindowNs, &m.evidence);
   if ((c.sew & kEcatBits) != 0) {
     text += fmt::format("{}{}", text.empty() ? "" : ", then ", sewLabels(c.sew & kEcatBits));
   }

@@ -170,10 +170,12 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
     const bool lost = account.outcome == AxisAccount::Outcome::Lost;
     if (a.failures.size() == 0 ||
         a.failures.newest().last.clock_ns + kFailureMergeNs < at.clock_ns) {
-      a.failures.push(FailureRun{at, at, 0, 0});
+      a.failures.push(FailureRun{at, at, account.first, account.last, account.between, 0, 0});
     }
     FailureRun& run = a.failures.newest();
     run.last = at;
+    run.last_frame = account.last;
+    run.between = run.between && account.between;
     (lost ? run.lost : run.failed) += account.cycles;
   }
   for (const Finding& f : validator.findings()) {
@@ -278,12 +280,24 @@ void IncidentDetector::checkOutage(const Validator& validator) {
       it->end = last_;
       it->reenabled = last_;
       it->recovered = it->ended = true;
+      // Declared once the limit was passed; told whole now that it is over, as its axes' drive
+      // faults tell it.
+      const Mark now{last_.frame, clock_ns_, last_.time_ns};
+      const std::string whole =
+          worst == nullptr
+              ? std::string()
+              : lostCyclesText(*worst, now, now.clock_ns - outage_at_.clock_ns + kFailureMergeNs,
+                               nullptr);
+      if (it->cause == CauseId::CommunicationLoss && !whole.empty()) {
+        it->cause_text = "every axis failing: " + whole;
+      }
       break;
     }
     return;
   }
   if (axes == 0 || !every) return;
   outage_ = true;
+  outage_at_ = Mark{last_.frame, clock_ns_, last_.time_ns};
   Incident incident;
   incident.kind = IncidentKind::BusOutage;
   incident.at = last_;

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "ncservo/base/stamp.hpp"
 #include "ncservo/incidents/incident.hpp"
@@ -24,7 +25,12 @@ inline constexpr double kTemperatureRiseC = 10.0;
 // kFailureMergeNs of the last joins its run.
 inline constexpr std::int64_t kFailureMergeNs = 10 * kMsNs;
 struct FailureRun {
-  Mark first, last;
+  Mark first, last;  // where the detector learnt of its first and last failures
+  // The frames they are about (AxisAccount): the master copies that got no returned copy, the
+  // returned copies with a wrong WKC; when `between`, only cycles of which nothing was captured,
+  // lying between these two frames.
+  Stamp first_frame, last_frame;
+  bool between = false;
   std::uint64_t lost = 0;    // cycles lost or not returned
   std::uint64_t failed = 0;  // cycles returned with a wrong WKC
 };
@@ -47,6 +53,11 @@ struct AxisTrack {
     findings.clear();
   }
 };
+
+// "12 cycles lost (frames 3027-3038)": the axis's failure runs whose last failure lies within
+// `window_ns` before `at`, each added to `evidence` where given (docs/incidents.md).
+std::string lostCyclesText(const AxisTrack& axis, const Mark& at, std::int64_t window_ns,
+                           std::vector<IncidentEvidence>* evidence);
 
 struct BusTrack {
   Ring<FindingMark, 16> findings;  // about the bus, or a slave that is no axis

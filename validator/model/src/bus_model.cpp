@@ -215,7 +215,9 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
         }
         events.push_back({cyclic.last_master, event});
       }
-      for (std::uint16_t a : cyclic.axes) accounts.push_back({a, Outcome::Lost, 1});
+      for (std::uint16_t a : cyclic.axes) {
+        accounts.push_back({a, Outcome::Lost, 1, cyclic.last_master, cyclic.last_master});
+      }
     }
     cyclic.awaiting_return = true;
     cyclic.last_master = now_;
@@ -285,7 +287,7 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode, const Stamp&
   if (nominal_known) {
     const bool gap = interval * kGapDenominator > *median * kGapNumerator;
     if (gap) {
-      PendingGap pending{*cyclic.last_tick, interval, *median, at.frame, {}};
+      PendingGap pending{*cyclic.last_tick, interval, *median, at, {}};
       for (std::size_t i = 0; i < decode.axis_count; ++i)
         pending.axes.push_back(decode.axes[i].axis);
       // From 2.5 cycles on no next interval makes it late: its cycles are lost now, so that
@@ -293,7 +295,7 @@ void BusModel::tick(CyclicFrame& cyclic, const FrameDecode& decode, const Stamp&
       const std::uint32_t missing = missingCycles(interval, *median);
       if (missing >= 2) {
         for (std::uint16_t axis : pending.axes)
-          accounts_->push_back({axis, Outcome::Lost, missing});
+          accounts_->push_back({axis, Outcome::Lost, missing, pending.since, at, true});
         pending.accounted = true;
       }
       cyclic.pending_gap = std::move(pending);
@@ -330,14 +332,16 @@ void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
   e.nominal_ns = gap.nominal_ns;
   e.next_interval_ns = next;
   e.previous_frame = gap.since.frame;
-  e.next_frame = gap.end_frame;
+  e.next_frame = gap.end.frame;
   if (next && missingCycles(gap.interval_ns + *next, gap.nominal_ns) == 1) {
     e.verdict = CycleGapEvent::Verdict::Late;
   } else {
     e.missing = missingCycles(gap.interval_ns, gap.nominal_ns);
   }
   if (accounts != nullptr && !gap.accounted && e.missing > 0) {
-    for (std::uint16_t axis : gap.axes) accounts->push_back({axis, Outcome::Lost, e.missing});
+    for (std::uint16_t axis : gap.axes) {
+      accounts->push_back({axis, Outcome::Lost, e.missing, gap.since, gap.end, true});
+    }
   }
   events.push_back({gap.since, e});
   cyclic.pending_gap.reset();
@@ -462,7 +466,7 @@ bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
     Outcome outcome = Outcome::Good;
     if (p.rx_placed && p.rx_datagram < count) outcome = outcomes[p.rx_datagram];
     if (p.tx_placed && p.tx_datagram < count) outcome = std::max(outcome, outcomes[p.tx_datagram]);
-    accounts_->push_back({p.axis, outcome, 1});
+    accounts_->push_back({p.axis, outcome, 1, now_, now_});
   }
   return false;
 }

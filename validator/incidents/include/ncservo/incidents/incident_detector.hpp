@@ -54,6 +54,7 @@ class IncidentDetector {
   Stamp last_;                   // the last frame given
   std::int64_t clock_ns_ = 0;    // its time on the segment's clock
   bool outage_ = false;          // every axis failing: a bus outage is open
+  Mark outage_at_;               // ... since this frame
   std::size_t open_faults_ = 0;  // drive faults not yet recovered
   std::vector<std::unique_ptr<AxisTrack>> axes_;
   std::unique_ptr<BusTrack> bus_;

@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "ncservo/base/stamp.hpp"
 #include "ncservo/layout/decoder.hpp"
 #include "ncservo/model/bus_events.hpp"
 #include "ncservo/model/interval_stats.hpp"
@@ -23,6 +24,11 @@ struct AxisAccount {
   std::uint16_t axis = 0;
   Outcome outcome = Outcome::Good;
   std::uint32_t cycles = 1;
+  // The frames the account is about (docs/incidents.md#communication-loss): the master copy that
+  // got no returned copy, the returned copy with a wrong WKC; for cycles of which no copy was
+  // captured (`between`), the frames before and after them.
+  Stamp first, last;
+  bool between = false;
 };
 
 // A process-data datagram of a cyclic frame, as the report names what was judged.
@@ -116,7 +122,7 @@ class BusModel {
     Stamp since;  // the tick before it
     std::int64_t interval_ns = 0;
     std::int64_t nominal_ns = 0;
-    std::uint64_t end_frame = 0;
+    Stamp end;                        // the tick after it
     std::vector<std::uint16_t> axes;  // the axes its missing cycles would have carried
     bool accounted = false;           // its lost cycles already counted (certainly lost)
   };
