@@ -3,6 +3,7 @@
 // quantiles stay within half a histogram bin. The validator's per-frame timing gives what the
 // statistics took from each frame.
 #include "ncservo/model/timing.hpp"
+#include "ncservo/model/timing_text.hpp"
 
 #include <gtest/gtest.h>
 
@@ -227,3 +228,27 @@ TEST(FrameTiming, GivesWhatTheStatisticsTookFromTheFrame) {
 
 }  // namespace
 }  // namespace ncservo
+
+// Each count agrees with its noun and verb: "1 returned copy", never "1 returned copies".
+TEST(CopiesMissingText, AgreesWithItsCounts) {
+  struct Row {
+    std::uint64_t master, returned;
+    const char* text;
+  };
+  const Row rows[] = {
+      {0, 0, ""},
+      {0, 1,
+       "0 master copies missing from the capture (their returned copies prove the cycles ran), "
+       "1 returned copy never came"},
+      {1, 0,
+       "1 master copy missing from the capture (its returned copy proves the cycle ran), 0 "
+       "returned copies never came"},
+      {2, 3,
+       "2 master copies missing from the capture (their returned copies prove the cycles ran), "
+       "3 returned copies never came"},
+  };
+  for (const Row& row : rows) {
+    EXPECT_EQ(copiesMissingText(row.master, row.returned), row.text)
+        << row.master << ", " << row.returned;
+  }
+}

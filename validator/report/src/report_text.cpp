@@ -139,11 +139,10 @@ void writeInterfaces(std::FILE* out, const CaptureReport& r) {
 
 // Copies the capture missed, told apart from cycles the bus lost (docs/timing.md "Capture loss").
 void writeCaptureLoss(std::FILE* out, const CaptureReport& r) {
-  if (r.master_copies_missing > 0 || r.returned_copies_missing > 0) {
-    fmt::print(out,
-               "copies missing: {} master copies missing from the capture (their returned copies "
-               "prove the cycles ran), {} returned copies never came\n",
-               r.master_copies_missing, r.returned_copies_missing);
+  if (const std::string missing =
+          copiesMissingText(r.master_copies_missing, r.returned_copies_missing);
+      !missing.empty()) {
+    fmt::print(out, "copies missing: {}\n", missing);
   }
   if (r.capture_drops && r.capture_drops->dropped() > 0) {
     fmt::print(out, "capture drops: {}\n", describeCaptureDrops(*r.capture_drops));
