@@ -14,7 +14,8 @@ frame = bytes(12) + b"\x08\x00" + b"\x45" + bytes(39)
 records = b"".join(struct.pack("<IIII", 1000 + i, 0, len(frame), len(frame)) + frame for i in range(5))
 open(f"{work}/lo.pcap", "wb").write(header + records)
 PY
-python3 "$GEN" --axes 2 --cycles 200 --idle-all -o "$WORK/idle.pcap" >/dev/null
+# EtherCAT whose inference refuses: an idle servo behind two CiA 402 drives of the same PDO sizes.
+python3 "$GEN" --axes 1 --cia402 2 --idle-all -o "$WORK/idle.pcap" >/dev/null
 
 # validate_no_servo CAPTURE REASON: exit 4, the reason in text and JSON, one line.
 validate_no_servo() {
@@ -38,11 +39,11 @@ validate_no_servo "$WORK/lo.pcap" "no EtherCAT frame in the capture: its 5 frame
 ! grep -q 'axis\]\]\|--config' "$WORK/out" || fail "lo.pcap: a layout example where no layout helps"
 echo "ok an empty and a loopback capture: no EtherCAT frame"
 
-# EtherCAT with idle servos: the inference refuses, and the text (only) shows a --config example.
+# EtherCAT with an idle servo: the inference refuses, and the text (only) shows a --config example.
 rc=0
 "$NCSERVO" validate "$WORK/idle.pcap" >"$WORK/out" 2>/dev/null || rc=$?
 [ "$rc" = 4 ] || fail "idle.pcap: exit $rc, expected 4"
-grep -q '^NO SERVO: no servo of this protocol found.*give the layout in a --config file' "$WORK/out" ||
+grep -q '^NO SERVO: no servo of this protocol found in the cyclic traffic.*give the layout in a --config file' "$WORK/out" ||
   fail "idle.pcap text: $(grep NO "$WORK/out")"
 grep -q '^    \[\[axis\]\]$' "$WORK/out" || fail "idle.pcap: no [[axis]] example in the text"
 "$NCSERVO" validate --format json "$WORK/idle.pcap" >"$WORK/out.json" 2>/dev/null || true
@@ -50,7 +51,12 @@ python3 -c 'import json,sys; r=json.load(open(sys.argv[1]))["captures"][0]["reas
   "$WORK/out.json" || fail "idle.pcap: the json reason is not one line"
 "$NCSERVO" validate --format jsonl "$WORK/idle.pcap" >"$WORK/out.jsonl" 2>/dev/null || true
 python3 -c 'import json,sys; [json.loads(l) for l in open(sys.argv[1])]' "$WORK/out.jsonl" || fail "jsonl"
-echo "ok idle servos: the example in the text, one line in json"
+# The same with inference off.
+rc=0
+"$NCSERVO" validate --no-default-layout "$SRC/captures/commissioning-4axis.pcap" >"$WORK/out" 2>/dev/null || rc=$?
+[ "$rc" = 4 ] || fail "--no-default-layout: exit $rc, expected 4"
+grep -q '^    outputs = 0x' "$WORK/out" || fail "--no-default-layout: no example: $(cat "$WORK/out")"
+echo "ok an idle servo, inference off: the example in the text, one line in json"
 
 # Live on the loopback: root or the capture capability.
 [ "$(id -u)" = 0 ] || skip "monitor -i lo needs root"
