@@ -1219,8 +1219,8 @@ void addCaptureNotes(packet_info* pinfo, proto_item* root) {
                            "NCSERVO preference not used: %s", error.c_str());
   }
   for (const std::string& misfit : g_layout_misfits) {
-    expert_add_info_format(pinfo, root, noteEi(ExpertNote::LayoutMisfit),
-                           "layout does not fit: %s", misfit.c_str());
+    expert_add_info_format(pinfo, root, noteEi(ExpertNote::LayoutMisfit), "layout does not fit: %s",
+                           misfit.c_str());
   }
 }
 
@@ -1286,8 +1286,10 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
   }
   if (layer.first) {
     addCaptureNotes(pinfo, root);
-    if (record.held == kHeldForLayout) expert_add_info(pinfo, root, noteEi(ExpertNote::LayoutLearning));
-    if (record.held == kHeldForClock) expert_add_info(pinfo, root, noteEi(ExpertNote::ClockJudging));
+    if (record.held == kHeldForLayout)
+      expert_add_info(pinfo, root, noteEi(ExpertNote::LayoutLearning));
+    if (record.held == kHeldForClock)
+      expert_add_info(pinfo, root, noteEi(ExpertNote::ClockJudging));
     if (record.duplicate && layer.wants->is(Derived::Duplicate)) {
       proto_item_set_generated(proto_tree_add_string(layer_tree, derivedHf(Derived::Duplicate), tvb,
                                                      0, 0, "a copy of a record within its cycle"));
@@ -1314,8 +1316,10 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   addCaptureNotes(pinfo, nullptr);
-  if (record.held == kHeldForLayout) expert_add_info(pinfo, nullptr, noteEi(ExpertNote::LayoutLearning));
-  if (record.held == kHeldForClock) expert_add_info(pinfo, nullptr, noteEi(ExpertNote::ClockJudging));
+  if (record.held == kHeldForLayout)
+    expert_add_info(pinfo, nullptr, noteEi(ExpertNote::LayoutLearning));
+  if (record.held == kHeldForClock)
+    expert_add_info(pinfo, nullptr, noteEi(ExpertNote::ClockJudging));
   for (guint a = 0; g_any_structure_only && a < record.axis_count; ++a) {
     if (structureOnlyNoted(record, record.axes[a], pinfo->num))
       expert_add_info(pinfo, nullptr, noteEi(ExpertNote::StructureOnly));

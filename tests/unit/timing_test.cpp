@@ -3,7 +3,6 @@
 // quantiles stay within half a histogram bin. The validator's per-frame timing gives what the
 // statistics took from each frame.
 #include "ncservo/model/timing.hpp"
-#include "ncservo/model/timing_text.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ncservo/model/timing_text.hpp"
 #include "row_name.hpp"
 #include "validator_driver.hpp"
 
@@ -226,9 +226,6 @@ TEST(FrameTiming, GivesWhatTheStatisticsTookFromTheFrame) {
   }
 }
 
-}  // namespace
-}  // namespace ncservo
-
 // Each count agrees with its noun and verb: "1 returned copy", never "1 returned copies".
 TEST(CopiesMissingText, AgreesWithItsCounts) {
   struct Row {
@@ -252,3 +249,6 @@ TEST(CopiesMissingText, AgreesWithItsCounts) {
         << row.master << ", " << row.returned;
   }
 }
+
+}  // namespace
+}  // namespace ncservo

@@ -48,8 +48,8 @@ inline constexpr ExpertNoteDef kExpertNotes[] = {
      "layout does not fit"},
     // On the first decoded frame: a preference (a configuration or ENI file, the ready mode)
     // could not be used, so the layout and rules come from elsewhere (docs/plugin.md).
-    {ExpertNote::PreferenceError, "ncservo.preference_error", NoteGroup::Protocol,
-     NoteLevel::Error, "NCSERVO preference not used"},
+    {ExpertNote::PreferenceError, "ncservo.preference_error", NoteGroup::Protocol, NoteLevel::Error,
+     "NCSERVO preference not used"},
 };
 inline constexpr std::size_t kExpertNoteCount = std::size(kExpertNotes);
 
