@@ -72,12 +72,13 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
     }
   };
   pipeline.setSinks({start, validate, nullptr, keepFindings, nullptr});
+  // Progress for one capture at a time only (parallel jobs' messages wait for their turn); the
+  // records are counted only then.
+  const bool progress_shown = output.messages == stderr && cli::progressWanted();
   std::atomic<std::uint64_t> records{0};
-  StreamStop stop{&cli::ReportWriter::interrupted(), false, &records};
+  StreamStop stop{&cli::ReportWriter::interrupted(), false, progress_shown ? &records : nullptr};
   const Status status = [&] {
-    // One capture at a time only: parallel jobs' messages wait for their turn.
-    const cli::Progress progress(path == "-" ? "standard input" : path, records,
-                                 output.messages == stderr && cli::progressWanted());
+    const cli::Progress progress(path == "-" ? "standard input" : path, records, progress_shown);
     return streamCapture(*reader, pipeline, &stop, threads);
   }();
   const CaptureRun& run = pipeline.run();
