@@ -36,6 +36,7 @@
 #include "ncservo/layout/layout_inference.hpp"
 #include "ncservo/model/timing_text.hpp"
 #include "ncservo/pipeline/capture_pipeline.hpp"
+#include "ncservo/pipeline/expert_notes.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/rules/rules.hpp"
@@ -92,11 +93,12 @@ struct WordItems {
   std::size_t part_count;
 };
 WordItems word_items[kWordCount];
-expert_field ei_region_malformed = EI_INIT;
-expert_field ei_layout_learning = EI_INIT;
-expert_field ei_clock_judging = EI_INIT;
-expert_field ei_structure_only = EI_INIT;
-expert_field ei_rule[kRuleCount];  // one expert item per rule: ncservo.rule.<slug>
+expert_field ei_note[kExpertNoteCount];  // the expert items of kExpertNotes, in its order
+expert_field ei_rule[kRuleCount];        // one expert item per rule: ncservo.rule.<slug>
+
+expert_field* noteEi(ExpertNote note) {
+  return &ei_note[static_cast<std::size_t>(note)];
+}
 
 const char* pref_config_path = "";
 const char* pref_eni_path = "";
@@ -136,6 +138,13 @@ DecoderOptions* g_options = nullptr;
 RuleSettings* g_settings = nullptr;
 CapturePipeline* g_pipeline = nullptr;
 bool g_capture_open = false;
+// What each capture's first decoded frame says as expert info, besides a dialog or standard
+// error (report_failure): the preferences that could not be used, and in a later pass the
+// misfits of a configured or ENI layout (docs/plugin.md#preferences).
+std::vector<std::string> g_preference_errors;
+std::vector<std::string> g_layout_misfits;
+bool g_misfits_taken = false;  // in this capture's later pass
+guint32 g_first_frame = 0;     // the first frame with a record; 0: none yet
 // While the learning window holds the frames, a single pass shows each before the layout is
 // known: a validator with the layout known so far (none, as a start-up would have ended the
 // window) judges them in their turn, for the findings that need no layout. The window's replay
@@ -353,6 +362,27 @@ hf_register_info* buildFieldRegistrations(std::size_t& count) {
   return hf;
 }
 
+// The notes' expert items, from their table (ncservo/pipeline/expert_notes.hpp).
+ei_register_info* buildNoteRegistrations() {
+  constexpr int kGroups[] = {PI_MALFORMED, PI_UNDECODED, PI_ASSUMPTION, PI_PROTOCOL};
+  constexpr int kLevels[] = {PI_CHAT, PI_NOTE, PI_WARN, PI_ERROR};
+  auto* ei = g_new0(ei_register_info, kExpertNoteCount);
+  for (std::size_t i = 0; i < kExpertNoteCount; ++i) {
+    const ExpertNoteDef& note = kExpertNotes[i];
+    ei_note[i] = EI_INIT;
+    ei[i].ids = &ei_note[i];
+    ei[i].eiinfo.name = note.filter;
+    ei[i].eiinfo.group = kGroups[static_cast<std::size_t>(note.group)];
+    ei[i].eiinfo.severity = kLevels[static_cast<std::size_t>(note.level)];
+    ei[i].eiinfo.summary = note.summary;
+    // As EXPFILL fills them.
+    ei[i].eiinfo.hf_info.p_id = nullptr;
+    ei[i].eiinfo.hf_info.hfinfo.id = -1;
+    ei[i].eiinfo.hf_info.hfinfo.same_name_prev_id = -1;
+  }
+  return ei;
+}
+
 // One expert item per rule, generated from the rule table, at the rule's default severity.
 ei_register_info* buildRuleRegistrations() {
   auto* ei = g_new0(ei_register_info, kRuleCount);
@@ -407,7 +437,14 @@ void buildWordItems() {
   }
 }
 
+// A preference that cannot be used: said at once, and again on each capture's first frame.
+void preferenceFailed(const std::string& text) {
+  report_failure("NCSERVO: %s", text.c_str());
+  g_preference_errors.push_back(text);
+}
+
 void applyPreferences() {
+  g_preference_errors.clear();
   auto* settings = new RuleSettings();
   std::optional<Config> config;
   std::vector<AxisConfig> eni_axes;
@@ -416,7 +453,7 @@ void applyPreferences() {
     if (eni) {
       eni_axes = std::move(eni->axes);
     } else {
-      report_failure("NCSERVO: %s", eni.error().text().c_str());
+      preferenceFailed(eni.error().text());
     }
   }
   if (pref_config_path != nullptr && pref_config_path[0] != '\0') {
@@ -425,16 +462,16 @@ void applyPreferences() {
       config = std::move(*loaded);
       // Severity overrides are left to Wireshark's own expert-severity table (docs/plugin.md).
       if (Status applied = applyConfig(*config, *settings); !applied) {
-        report_failure("NCSERVO: %s", applied.error().text().c_str());
+        preferenceFailed(applied.error().text());
       }
     } else {
-      report_failure("NCSERVO: %s", loaded.error().text().c_str());
+      preferenceFailed(loaded.error().text());
     }
   }
   if (const Result<std::optional<int>> mode = readyModeOf(pref_servo_ready_mode); mode) {
     settings->servo_ready_mode = *mode;
   } else {
-    report_failure("NCSERVO: %s", mode.error().text().c_str());
+    preferenceFailed(mode.error().text());
   }
   auto* options = new DecoderOptions(
       layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != 0));
@@ -479,6 +516,9 @@ void initCapture() {
   g_next_shared = 0;
   std::fill(std::begin(g_recent_shared), std::end(g_recent_shared), 0);
   g_timestamp_digits.reset();
+  g_layout_misfits.clear();
+  g_misfits_taken = false;
+  g_first_frame = 0;
   g_capture_open = true;
   delete g_pipeline;
   // Wireshark times the frames and shows them all: no frame clock, no time window.
@@ -1166,6 +1206,24 @@ bool structureOnlyNoted(const FrameRecord& record, const AxisRecord& axis, guint
   return false;
 }
 
+// The capture's notes, on its first decoded frame: the preferences not used and the layout's
+// misfits (docs/plugin.md#preferences).
+bool notesFrame(const packet_info* pinfo) {
+  return pinfo->num == g_first_frame && (!g_preference_errors.empty() || !g_layout_misfits.empty());
+}
+
+void addCaptureNotes(packet_info* pinfo, proto_item* root) {
+  if (!notesFrame(pinfo)) return;
+  for (const std::string& error : g_preference_errors) {
+    expert_add_info_format(pinfo, root, noteEi(ExpertNote::PreferenceError),
+                           "NCSERVO preference not used: %s", error.c_str());
+  }
+  for (const std::string& misfit : g_layout_misfits) {
+    expert_add_info_format(pinfo, root, noteEi(ExpertNote::LayoutMisfit), "layout does not fit: %s",
+                           misfit.c_str());
+  }
+}
+
 // One layer of the protocol per axis, so that Wireshark's layer operator selects an axis:
 // `ncservo.state#3` is the third axis of the frame (docs/plugin.md).
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
@@ -1179,7 +1237,8 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
       layer.wants->protocol ||
       (tree != nullptr && layer.axis != nullptr &&
        ((layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0 || structure_only_note)) ||
-      (tree != nullptr && (record.held != kNotHeld || record.duplicate));
+      (tree != nullptr && (record.held != kNotHeld || record.duplicate)) ||
+      (tree != nullptr && layer.first && notesFrame(pinfo));
   proto_item* root = nullptr;
   proto_tree* layer_tree = tree;
   guint start = 0;
@@ -1213,21 +1272,24 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     for (const bool rx : {true, false}) {
       if (!(r.flags & (kRxMalformed | kTxMalformed))) break;
       if (!(r.flags & (rx ? kRxMalformed : kTxMalformed))) continue;
-      expert_add_info_format(pinfo, root, &ei_region_malformed,
+      expert_add_info_format(pinfo, root, noteEi(ExpertNote::Malformed),
                              "Axis %u: the %s (%u bytes at frame offset %u) is cut short or lies "
                              "partly outside its datagram",
                              r.axis, rx ? "RxPDO" : "TxPDO",
                              static_cast<unsigned>(rx ? kRxPdoSize : kTxPdoSize),
                              rx ? r.rx_offset : r.tx_offset);
     }
-    if (structure_only_note) expert_add_info(pinfo, root, &ei_structure_only);
+    if (structure_only_note) expert_add_info(pinfo, root, noteEi(ExpertNote::StructureOnly));
   } else if (protocol_item) {
     root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
   }
   if (layer.first) {
-    if (record.held == kHeldForLayout) expert_add_info(pinfo, root, &ei_layout_learning);
-    if (record.held == kHeldForClock) expert_add_info(pinfo, root, &ei_clock_judging);
+    addCaptureNotes(pinfo, root);
+    if (record.held == kHeldForLayout)
+      expert_add_info(pinfo, root, noteEi(ExpertNote::LayoutLearning));
+    if (record.held == kHeldForClock)
+      expert_add_info(pinfo, root, noteEi(ExpertNote::ClockJudging));
     if (record.duplicate && layer.wants->is(Derived::Duplicate)) {
       proto_item_set_generated(proto_tree_add_string(layer_tree, derivedHf(Derived::Duplicate), tvb,
                                                      0, 0, "a copy of a record within its cycle"));
@@ -1253,11 +1315,14 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
 // Without a tree (the packet list) only the findings' expert info and the Info column are
 // needed: Wireshark counts and colours by them.
 void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
-  if (record.held == kHeldForLayout) expert_add_info(pinfo, nullptr, &ei_layout_learning);
-  if (record.held == kHeldForClock) expert_add_info(pinfo, nullptr, &ei_clock_judging);
+  addCaptureNotes(pinfo, nullptr);
+  if (record.held == kHeldForLayout)
+    expert_add_info(pinfo, nullptr, noteEi(ExpertNote::LayoutLearning));
+  if (record.held == kHeldForClock)
+    expert_add_info(pinfo, nullptr, noteEi(ExpertNote::ClockJudging));
   for (guint a = 0; g_any_structure_only && a < record.axis_count; ++a) {
     if (structureOnlyNoted(record, record.axes[a], pinfo->num))
-      expert_add_info(pinfo, nullptr, &ei_structure_only);
+      expert_add_info(pinfo, nullptr, noteEi(ExpertNote::StructureOnly));
   }
   for (guint i = 0; i < record.finding_count; ++i) {
     expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);
@@ -1275,9 +1340,12 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
     // held. The plugin has no end of capture: a gap in the last cycle goes unjudged here.
     g_pipeline->endLearning();
     stopHeldJudging();
+    if (!g_misfits_taken) g_layout_misfits = g_pipeline->layoutMisfitsSoFar();
+    g_misfits_taken = true;
   }
   const FrameRecord* record = recordOf(pinfo);
   if (record == nullptr) return 0;
+  if (g_first_frame == 0) g_first_frame = pinfo->num;
   // The postdissector has no protocol of its own: expert info added here names this one.
   pinfo->current_proto = "NCSERVO";
   // col_append_lstr finds the column's end with strlen, where col_append_str's g_strlcat walks
@@ -1374,23 +1442,8 @@ void registerProtocol() {
   }
   proto_register_subtree_array(ett, static_cast<int>(std::size(ett)));
 
-  static ei_register_info ei[] = {
-      {&ei_region_malformed,
-       {"ncservo.malformed", PI_MALFORMED, PI_ERROR,
-        "A PDO region is cut short or lies partly outside its datagram", EXPFILL}},
-      {&ei_clock_judging,
-       {"ncservo.clock_judging", PI_UNDECODED, PI_CHAT,
-        "capture's clock being judged (docs/timing.md#the-clock): `tshark -2` or the GUI decodes "
-        "this frame",
-        EXPFILL}},
-      {&ei_layout_learning,
-       {"ncservo.layout_learning", PI_UNDECODED, PI_CHAT,
-        "layout being learned: `tshark -2` or the GUI decodes this frame", EXPFILL}},
-      {&ei_structure_only,
-       {"ncservo.structure_only", PI_ASSUMPTION, PI_NOTE, kStructureOnlyNote, EXPFILL}},
-  };
   expert_module_t* expert = expert_register_protocol(proto_ncservo);
-  expert_register_field_array(expert, ei, static_cast<int>(std::size(ei)));
+  expert_register_field_array(expert, buildNoteRegistrations(), static_cast<int>(kExpertNoteCount));
   expert_register_field_array(expert, buildRuleRegistrations(), static_cast<int>(kRuleCount));
 
   module_t* prefs = prefs_register_protocol(proto_ncservo, applyPreferences);

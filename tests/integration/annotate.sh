@@ -2,7 +2,8 @@
 # annotate.sh SRC BUILD: `ncservo annotate` on the bundled, simulated and real
 # captures. Stock tshark, without the plugin, shows exactly one comment per finding on its frame,
 # each starting with the rule ID; the frames, their timestamps and lengths are the input's; a
-# pcapng's existing comments and other blocks are kept; --snippets keeps only frames near a
+# pcapng's existing comments and other blocks are kept (an earlier annotation's own comments are
+# replaced, not doubled); --snippets keeps only frames near a
 # finding; standard input and writing over the input are refused.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
@@ -25,25 +26,31 @@ comments() {
     >"$2" 2>/dev/null || fail "tshark comments of $1"
 }
 
-# check_comments COMMENTS.json FINDINGS.jsonl TIMES: each finding's frame has its comment, TIMES
-# times over (a capture annotated twice), and no frame has another.
+# check_comments COMMENTS.json FINDINGS.jsonl [OTHERS]: each finding's frame has its comment,
+# once (a capture annotated again has its comments replaced), and no frame has another but
+# frame 1's OTHERS (someone else's comment, kept).
 check_comments() {
   python3 - "$@" <<'PY'
 import collections, json, sys
+others = sys.argv[3] if len(sys.argv) > 3 else None
 shown = collections.defaultdict(list)
 for packet in json.load(open(sys.argv[1])):
     layers = packet["_source"]["layers"]
     shown[int(layers["frame.number"][0])] += layers["frame.comment"]
+if others is not None:
+    assert others in shown[1], f"someone else's comment on frame 1 is gone: {shown[1]}"
+    shown[1].remove(others)
+    if not shown[1]:
+        del shown[1]
 expected = collections.defaultdict(list)
 for line in open(sys.argv[2]):
     f = json.loads(line)
     if "rule" in f:
         expected[f["frame"]].append(f["rule"])
-times = int(sys.argv[3])
 assert set(shown) == set(expected), f"frames with comments {sorted(shown)[:9]} != findings' {sorted(expected)[:9]}"
 for frame, rules in expected.items():
     got = sorted(c.split(" ")[0] for c in shown[frame])
-    assert got == sorted(rules * times), f"frame {frame}: comments {shown[frame]} for findings {rules}"
+    assert got == sorted(rules), f"frame {frame}: comments {shown[frame]} for findings {rules}"
 print(sum(len(v) for v in expected.values()), "findings,", len(expected), "frames")
 PY
 }
@@ -59,16 +66,19 @@ annotated() {
   "$NCSERVO" annotate "$input" "$WORK/out.pcapng" 2>"$WORK/err" || rc=$?
   [ $rc = $checked ] || fail "$name: exit $rc, validate's $checked: $(cat "$WORK/err")"
   comments "$WORK/out.pcapng" "$WORK/comments.json"
-  check_comments "$WORK/comments.json" "$WORK/findings.jsonl" 1 || fail "$name: comments"
+  check_comments "$WORK/comments.json" "$WORK/findings.jsonl" || fail "$name: comments"
   frames "$input" "$WORK/in.frames"
   frames "$WORK/out.pcapng" "$WORK/out.frames"
   cmp -s "$WORK/in.frames" "$WORK/out.frames" || fail "$name: frames differ: $(diff "$WORK/in.frames" "$WORK/out.frames" | head -4)"
-  # Annotated again: the first comments are kept, the new ones added.
+  # Annotated again, with a colleague's comment on frame 1: ours replaced, theirs kept.
+  editcap -a "1:checked by a colleague" "$WORK/out.pcapng" "$WORK/noted.pcapng" ||
+    fail "$name: editcap -a"
   rc=0
-  "$NCSERVO" annotate "$WORK/out.pcapng" "$WORK/twice.pcapng" 2>/dev/null || rc=$?
+  "$NCSERVO" annotate "$WORK/noted.pcapng" "$WORK/twice.pcapng" 2>/dev/null || rc=$?
   [ $rc = $checked ] || fail "$name: twice: exit $rc"
   comments "$WORK/twice.pcapng" "$WORK/twice.json"
-  check_comments "$WORK/twice.json" "$WORK/findings.jsonl" 2 || fail "$name: comments kept"
+  check_comments "$WORK/twice.json" "$WORK/findings.jsonl" "checked by a colleague" ||
+    fail "$name: annotated again: ours not replaced, or the colleague's not kept"
   echo "ok $name"
 }
 

@@ -156,7 +156,7 @@ with open(sys.argv[1], "wb") as f:
 PY
 expect 4 validate "$WORK/none.pcap"
 expect 4 decode "$WORK/none.pcap"
-says err "no servo"
+says err "no EtherCAT frame in the capture"
 expect 4 annotate "$WORK/none.pcap" "$WORK/none-annotated.pcapng"
 says err "NO SERVO:"
 [ -s "$WORK/none-annotated.pcapng" ] || fail "annotate wrote no copy"

@@ -20,6 +20,16 @@ set -e
 [ $rc = 2 ] || fail "missing config: exit $rc, expected 2"
 grep -qF "$WORK/missing.toml" "$WORK/err2.txt" || fail "missing config message: $(cat "$WORK/err2.txt")"
 
+# Two axes on the same PDO bytes (Y's outputs inside X's, both at the same inputs).
+printf '[[axis]]\nname = "X"\noutputs = 0x10000\ninputs = 0x10100\n\n[[axis]]\nname = "Y"\noutputs = 0x10004\ninputs = 0x10100\n' >"$WORK/overlap.toml"
+set +e
+"$NCSERVO" validate --config "$WORK/overlap.toml" "$WORK/capture" >/dev/null 2>"$WORK/err3.txt"
+rc=$?
+set -e
+[ $rc = 2 ] || fail "overlapping axes: exit $rc, expected 2"
+grep -qF "$WORK/overlap.toml:8: key 'axis[1].outputs': overlaps axis 'X'" "$WORK/err3.txt" ||
+  fail "overlap message: $(cat "$WORK/err3.txt")"
+
 # tshark reports the bad preference file and keeps running.
 set +e
 "$TSHARK" "$PLUGIN" -r "$WORK/capture" -o "ncservo.config:$WORK/bad.toml" -c 1 >/dev/null 2>"$WORK/ts.err"

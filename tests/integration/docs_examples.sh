@@ -16,6 +16,8 @@
 # - `<!-- not tested: REASON -->` just before the fence skips a block that cannot run here (it
 #   needs root, a sanitizer build, or hours); the reason is required. README's two commands,
 #   `.ci/setup && .ci/demo` and `.ci/test`, are of this kind: they set up and run this very suite.
+# - A ```text block just after `<!-- output: the end of the block above -->` is what the last
+#   ```sh block before it prints last: its lines must be the last lines of that block's output.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
@@ -47,8 +49,12 @@ for doc in docs:
             i += 1
             continue
         end = next(j for j in range(i + 1, len(lines)) if lines[j].startswith("```"))
-        if fence.group(1) == "sh":
-            before = lines[i - 1].strip() if i > 0 else ""
+        before = lines[i - 1].strip() if i > 0 else ""
+        if before == "<!-- output: the end of the block above -->":
+            if fence.group(1) != "text" or n == 0:
+                sys.exit(f"{doc.relative_to(src)}:{i + 1}: an output mark needs a ```text block after a ```sh one")
+            (out / f"{n - 1:03}.expect").write_text("\n".join(lines[i + 1:end]) + "\n")
+        elif fence.group(1) == "sh":
             where = f"{doc.relative_to(src)}:{i + 1}"
             exit_mark = re.fullmatch(r"<!-- exit: (\d+) -->", before)
             skip_mark = re.fullmatch(r"<!-- not tested: (.+) -->", before)
@@ -85,6 +91,12 @@ for block in "$WORK"/blocks/*.sh; do
     fail "$where exited $rc, the text says $expected:
 $(cat "$block")
 stderr: $(tail -5 "$dir/.stderr")"
+  expect=${block%.sh}.expect
+  if [ -f "$expect" ]; then
+    tail -n "$(wc -l <"$expect")" "$dir/.stdout" | diff -u "$expect" - >"$dir/.diff" ||
+      fail "$where prints an end other than the text after it shows:
+$(cat "$dir/.diff")"
+  fi
   ran=$((ran + 1))
   rm -rf "$dir"
 done

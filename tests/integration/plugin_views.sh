@@ -12,7 +12,8 @@
 # - `tshark -z expert` shows one line per rule, counting its findings;
 # - readable at many axes: on a simulated 32-axis capture every Info column stays short and names
 #   each rule once; -V hides SCW/SSW bits at rest behind one line per word, and filters and
-#   -T fields still find them.
+#   -T fields still find them; the status bits whose clear value is the drive's state stay on
+#   their own lines (an axis in error shows ServoEn: no).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 cap="$SRC/captures/faults-4axis.pcap"
@@ -93,6 +94,21 @@ if len(rest) != 2 or any(v != ",".join(["0"] * 29) for v in rest):
     ok = False
     print(f"the hidden bits at rest are not found by a filter and -T fields: {rest[:4]}")
 sys.exit(0 if ok else 1)
+PY
+
+# An axis in error shows the status bits whose clear value is its state, each on its own line
+# (docs/plugin.md): sim-incidents-4axis.pcap frame 3264, the fourth axis (E19).
+cap="$SRC/captures/sim-incidents-4axis.pcap" run_tshark "$WORK/tree3264.txt" -V -O ncservo \
+  -Y 'frame.number == 3264'
+python3 - "$WORK/tree3264.txt" <<'PY' || fail "an axis in error folds its state bits into 'At rest'"
+import re, sys
+tree = open(sys.argv[1]).read()
+axis = tree[tree.index("NC-Servo axis 3 "):]
+assert "error" in axis.splitlines()[0], axis.splitlines()[0]
+for bit in ("ServoEn: no", "ServoRDY: no", "N=0: no", "N=Ns: no", "PulseEnabled: no"):
+    assert re.search(rf"= {re.escape(bit)}$", axis, re.M), f"no line '= {bit}'"
+rest = [line for line in axis.splitlines() if "At rest:" in line]
+assert not any(re.search(r"ServoEn|ServoRDY|PulseEnabled|N=0|N=Ns", line) for line in rest), rest
 PY
 
 python3 - "$WORK" <<'PY' || fail "the plugin's views differ from the CLI's"

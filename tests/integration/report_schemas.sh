@@ -19,7 +19,8 @@ gzip -c "$WORK/nano.pcapng" >"$WORK/nano.pcapng.gz"
 python3 "$GEN" --axes 2 --cycles 200 -o "$WORK/clean.pcap"
 printf 'not a capture\n' >"$WORK/text.pcap"
 printf '[[axis]]\nname = "ghost"\noutputs = 0x00090000\ninputs = 0x00090028\n' >"$WORK/ghost.toml"
-# A layout whose second axis's inputs are two bytes off (docs/layout.md#a-layout-that-does-not-fit).
+# A layout whose first axis's inputs are two bytes early (docs/layout.md#a-layout-that-does-not-fit;
+# not into another axis's inputs, which is a configuration error).
 "$NCSERVO" simulate -o "$WORK/fit.pcap" --layout-config "$WORK/fit.toml" 2>/dev/null
 python3 - "$WORK/fit.toml" "$WORK/misfit.toml" <<'PY'
 import sys, tomllib
@@ -27,7 +28,7 @@ axes = tomllib.load(open(sys.argv[1], "rb"))["axis"]
 with open(sys.argv[2], "w") as out:
     for i, a in enumerate(axes):
         out.write(f'[[axis]]\nname = "{a["name"]}"\noutputs = {a["outputs"]:#x}\n'
-                  f'inputs = {a["inputs"] + (2 if i == 1 else 0):#x}\n')
+                  f'inputs = {a["inputs"] + (-2 if i == 0 else 0):#x}\n')
 PY
 
 cases=(  # NAME|ARGS (captures from $WORK)

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -81,6 +82,37 @@ TEST(CaptureAnnotation, CommentsFollowTheBlocksOptions) {
     const auto annotated = withComments(block.data(), block.size(), c.comments);
     ASSERT_TRUE(annotated.has_value());
     EXPECT_EQ(*annotated, packetBlock(c.big, c.type, c.packet, all, true));
+  }
+}
+
+// Annotating again: the comments `replaced` picks go, the rest of the options stay in order.
+TEST(CaptureAnnotation, ReplacedCommentsGoAndOthersStay) {
+  const auto ours = [](std::string_view c) { return c.substr(0, 4) == "OUR "; };
+  struct Row {
+    const char* name;
+    bool big;
+    std::vector<Option> options;
+    std::vector<std::string> comments;
+    std::vector<Option> kept;
+  };
+  const Row rows[] = {
+      {"ours replaced", false, {{1, "OUR old"}}, {"OUR new"}, {}},
+      {"someone else's kept",
+       false,
+       {{1, "by hand"}, {1, "OUR old"}, kHash},
+       {"OUR new"},
+       {{1, "by hand"}, kHash}},
+      {"ours gone, none new", true, {kHash, {1, "OUR old"}}, {}, {kHash}},
+      {"nothing of ours", false, {{1, "OUR"}}, {"OUR new"}, {{1, "OUR"}}},
+  };
+  for (const Row& row : rows) {
+    SCOPED_TRACE(row.name);
+    const auto block = packetBlock(row.big, kEpb, 60, row.options, true);
+    std::vector<Option> all = row.kept;
+    for (const std::string& comment : row.comments) all.push_back({1, comment});
+    const auto annotated = withComments(block.data(), block.size(), row.comments, ours);
+    ASSERT_TRUE(annotated.has_value());
+    EXPECT_EQ(*annotated, packetBlock(row.big, kEpb, 60, all, true));
   }
 }
 

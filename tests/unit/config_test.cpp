@@ -143,6 +143,18 @@ const GoodCase kGoodCases[] = {
        EXPECT_EQ(c.axes[0].sm_outputs, 0x1100);
        EXPECT_TRUE(c.axes[0].physical());
      }},
+    {"adjacent axes do not overlap",
+     "[[axis]]\noutputs = 0x10000\ninputs = 0x10100\n[[axis]]\noutputs = 0x1000A\ninputs = "
+     "0x10128\n",
+     [](const Config& c) { EXPECT_EQ(c.axes.size(), 2u); }},
+    {"outputs of one axis at another's inputs (one LRW image)",
+     "[[axis]]\noutputs = 0x10000\ninputs = 0x10100\n[[axis]]\noutputs = 0x10100\ninputs = "
+     "0x10000\n",
+     [](const Config& c) { EXPECT_EQ(c.axes.size(), 2u); }},
+    {"the same SM addresses on two stations",
+     "[[axis]]\nstation = 1001\nsm_outputs = 0x1100\nsm_inputs = 0x1180\n[[axis]]\nstation = "
+     "1002\nsm_outputs = 0x1100\nsm_inputs = 0x1180\n",
+     [](const Config& c) { EXPECT_EQ(c.axes.size(), 2u); }},
     {"largest logical address", "[[axis]]\noutputs = 0xFFFFFFFF\ninputs = 0\n",
      [](const Config& c) { EXPECT_EQ(c.axes[0].outputs, 0xFFFFFFFFu); }},
     {"several rules",
@@ -230,6 +242,19 @@ const BadCase kBadCases[] = {
     {"second axis without inputs",
      "[[axis]]\noutputs = 0\ninputs = 10\n\n[[axis]]\nname = \"Y\"\noutputs = 50\n", 5,
      "axis[1].inputs", "missing"},
+    // Two axes on the same bytes would each decode the other's data (docs/configuration.md).
+    {"outputs inside another axis's",
+     "[[axis]]\nname = \"X\"\noutputs = 0x10000\ninputs = 0x10100\n\n[[axis]]\nname = "
+     "\"Y\"\noutputs = 0x10004\ninputs = 0x10100\n",
+     8, "axis[1].outputs", "overlaps axis 'X'"},
+    {"inputs at another axis's",
+     "[[axis]]\nname = \"X\"\noutputs = 0x10000\ninputs = 0x10100\n\n[[axis]]\nname = "
+     "\"Y\"\ninputs = 0x10127\noutputs = 0x1000A\n",
+     8, "axis[1].inputs", "overlaps axis 'X'"},
+    {"station axes on the same sync manager",
+     "[[axis]]\nstation = 1001\nsm_outputs = 0x1100\nsm_inputs = 0x1180\n\n[[axis]]\nstation = "
+     "1001\nsm_outputs = 0x1104\nsm_inputs = 0x1400\n",
+     8, "axis[1].sm_outputs", "overlaps axis 'axis0'"},
     {"station axis without sm_inputs", "[[axis]]\nstation = 1001\nsm_outputs = 0x1100\n", 1,
      "axis[0].sm_inputs", "missing"},
     {"station axis without sm_outputs", "[[axis]]\nstation = 1001\nsm_inputs = 0x1180\n", 1,

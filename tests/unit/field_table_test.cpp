@@ -120,8 +120,8 @@ TEST(FieldTable, FilterNamesAreExactlyThoseOfTheSpec) {
 
 // The bits a view may gather as "at rest": a clear flag whose clear value means nothing happens,
 // reserved bits zero; a clear value that says something (emergency, internal braking, an
-// absolute encoder), a multi-valued selection and the SEW (whose clear causes are gathered on
-// their own) are not.
+// absolute encoder, the drive's state: not enabled, not ready, turning, pulses off), a
+// multi-valued selection and the SEW (whose clear causes are gathered on their own) are not.
 TEST(FieldTable, AtRestValuesMarkOnlyQuietBitsOfTheControlAndStatusWords) {
   struct Row {
     std::string_view filter;
@@ -132,8 +132,9 @@ TEST(FieldTable, AtRestValuesMarkOnlyQuietBitsOfTheControlAndStatusWords) {
       {"ncservo.scw.error_clear", 0},
       {"ncservo.scw.reserved", 0},
       {"ncservo.scw.prgdwn", 0},
-      {"ncservo.ssw.servo_en", 0},
       {"ncservo.ssw.zpulse_ack", 0},
+      {"ncservo.ssw.err_clear_ack", 0},
+      {"ncservo.ssw.no_encoder", 0},
       {"ncservo.ssw.reserved", 0},
       {"ncservo.ssw.temp_warning", 0},
       {"ncservo.scw.emgon", std::nullopt},
@@ -142,6 +143,11 @@ TEST(FieldTable, AtRestValuesMarkOnlyQuietBitsOfTheControlAndStatusWords) {
       {"ncservo.scw.prmtbl", std::nullopt},
       {"ncservo.scw.ext_prmtbl", std::nullopt},
       {"ncservo.ssw.incremental", std::nullopt},
+      {"ncservo.ssw.servo_en", std::nullopt},
+      {"ncservo.ssw.servo_rdy", std::nullopt},
+      {"ncservo.ssw.n_zero", std::nullopt},
+      {"ncservo.ssw.n_setpoint", std::nullopt},
+      {"ncservo.ssw.pulse_enabled", std::nullopt},
       {"ncservo.sew.following", std::nullopt},
       {"ncservo.sew.reserved", std::nullopt},
       {"ncservo.scw", std::nullopt},

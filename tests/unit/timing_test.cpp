@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ncservo/model/timing_text.hpp"
 #include "row_name.hpp"
 #include "validator_driver.hpp"
 
@@ -222,6 +223,30 @@ TEST(FrameTiming, GivesWhatTheStatisticsTookFromTheFrame) {
     EXPECT_EQ(timing.interval_ns, row.interval_ns);
     EXPECT_EQ(timing.deviation_ns, row.deviation_ns);
     EXPECT_EQ(timing.latency_ns, row.latency_ns);
+  }
+}
+
+// Each count agrees with its noun and verb: "1 returned copy", never "1 returned copies".
+TEST(CopiesMissingText, AgreesWithItsCounts) {
+  struct Row {
+    std::uint64_t master, returned;
+    const char* text;
+  };
+  const Row rows[] = {
+      {0, 0, ""},
+      {0, 1,
+       "0 master copies missing from the capture (their returned copies prove the cycles ran), "
+       "1 returned copy never came"},
+      {1, 0,
+       "1 master copy missing from the capture (its returned copy proves the cycle ran), 0 "
+       "returned copies never came"},
+      {2, 3,
+       "2 master copies missing from the capture (their returned copies prove the cycles ran), "
+       "3 returned copies never came"},
+  };
+  for (const Row& row : rows) {
+    EXPECT_EQ(copiesMissingText(row.master, row.returned), row.text)
+        << row.master << ", " << row.returned;
   }
 }
 

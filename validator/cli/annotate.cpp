@@ -112,7 +112,9 @@ int runAnnotate(const AnnotateArgs& args) {
     return kExitCapture;
   }
   const FrameFilter keep = args.snippets_s ? snippetFilter(*judged, *args.snippets_s) : nullptr;
-  if (Status written = annotateCapture(args.input, args.output, judged->comments, keep); !written) {
+  if (Status written =
+          annotateCapture(args.input, args.output, judged->comments, keep, isFindingComment);
+      !written) {
     fmt::print(stderr, "ncservo annotate: {}\n", written.error().text());
     // docs/cli.md#exit-status: an output that cannot be written is a usage error, as in every
     // command; the input's damage is 3.

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <atomic>
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -10,6 +12,7 @@
 #include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/frame_clock.hpp"
+#include "progress.hpp"
 
 namespace ncservo::cli {
 
@@ -69,8 +72,15 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
     }
   };
   pipeline.setSinks({start, validate, nullptr, keepFindings, nullptr});
-  StreamStop stop{&cli::ReportWriter::interrupted()};
-  const Status status = streamCapture(*reader, pipeline, &stop, threads);
+  // Progress for one capture at a time only (parallel jobs' messages wait for their turn); the
+  // records are counted only then.
+  const bool progress_shown = output.messages == stderr && cli::progressWanted();
+  std::atomic<std::uint64_t> records{0};
+  StreamStop stop{&cli::ReportWriter::interrupted(), false, progress_shown ? &records : nullptr};
+  const Status status = [&] {
+    const cli::Progress progress(path == "-" ? "standard input" : path, records, progress_shown);
+    return streamCapture(*reader, pipeline, &stop, threads);
+  }();
   const CaptureRun& run = pipeline.run();
   if (stop.stopped) {  // Ctrl-C: not a report, only where it stopped (docs/cli.md#interrupted)
     report.frames = run.records;

@@ -250,6 +250,17 @@ Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::
 
 // "SE-001 illegal-enable-edge axis X: what was seen", and where the condition began when that
 // is an earlier frame.
+bool isFindingComment(std::string_view comment) {
+  const std::size_t space = comment.find(' ');
+  if (space == std::string_view::npos) return false;
+  const RuleDef* rule = ruleByCode(comment.substr(0, space));
+  if (rule == nullptr || comment.substr(0, space) != rule->code) return false;
+  const std::string_view rest = comment.substr(space + 1);
+  const std::string_view slug = rule->slug;
+  return rest.substr(0, slug.size()) == slug && rest.size() > slug.size() &&
+         rest[slug.size()] == ' ';
+}
+
 std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes) {
   std::string where = "bus";
   if (finding.axis) {

@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ncservo/base/error.hpp"
@@ -129,6 +130,9 @@ Result<std::FILE*> openOutput(const std::string& output, const std::vector<std::
 // A finding as a packet comment (annotate, the flight recorder): "SE-001 illegal-enable-edge
 // axis X: what was seen", and where the condition began when that is an earlier frame.
 std::string findingComment(const Finding& finding, const std::vector<AxisInfo>& axes);
+// Whether a packet comment is one findingComment wrote ("RULE-ID slug ..."): annotating an
+// annotated capture replaces those and keeps everyone else's (docs/field.md).
+bool isFindingComment(std::string_view comment);
 
 // The subcommands' setups: each declares its options and returns what runs it.
 Handler decodeCommand(CLI::App& command);

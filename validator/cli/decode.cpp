@@ -212,8 +212,14 @@ void noteDecoded(const CaptureReader& reader, const CapturePipeline& pipeline,
                reader.path(), pipeline.clockStage().duplicates().count,
                pipeline.clockStage().duplicates().first_frame);
   }
-  if (decoder.axes().empty()) {
+  if (const std::string none = noEtherCatReason(pipeline.run()); !none.empty()) {
+    fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), none);
+  } else if (decoder.axes().empty()) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader.path(), decoder.noServoReason());
+    if (decoder.noServoWantsLayout()) {
+      fmt::print(stderr, "a --config file gives each axis (docs/configuration.md#axis), e.g.:\n{}",
+                 kLayoutConfigExample);
+    }
   }
 }
 

@@ -5,9 +5,12 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
+#include "ncservo/pipeline/expert_notes.hpp"
 #include "ncservo/protocol/fields.hpp"
+#include "ncservo/rules/rules.hpp"
 
 namespace ncservo::cli {
 namespace {
@@ -30,28 +33,68 @@ void printFieldMarkdown(const FieldDef& f) {
     values += fmt::format("{}{}={}{}", i ? "; " : "", f.values[i].value, f.values[i].name,
                           f.values[i].unit ? fmt::format(" [{}]", f.values[i].unit) : "");
   }
-  fmt::print("| `{}` | {} | {} | {} | {} | {} | {} |\n", f.filter, f.label, wordDef(f.word).name,
-             maskText(f), values, f.blurb, f.clause);
+  fmt::print("| `{}` | {} | {} | {} | {} | {} | {} | {} |\n", f.filter, f.label,
+             wordDef(f.word).name, maskText(f), values,
+             f.at_rest ? fmt::format("{}", *f.at_rest) : "", f.blurb, f.clause);
 }
 
 void printDerivedMarkdown(const DerivedFieldDef& f) {
-  fmt::print("| `{}` | {} | (derived) | | | {} | docs/plugin.md |\n", f.filter, f.label, f.blurb);
+  fmt::print("| `{}` | {} | (derived) | | | | {} | docs/plugin.md |\n", f.filter, f.label, f.blurb);
 }
 
-// `fields`'s formats: a header, then one line per field of the field table, then per derived field.
+// An expert item of the plugin's: one per rule (its filter from the rule table), then the notes.
+struct ExpertRow {
+  std::string filter;
+  std::string label;
+  const char* level;
+  std::string meaning;
+  const char* spec;
+};
+
+std::vector<ExpertRow> expertRows() {
+  constexpr const char* kLevels[] = {"chat", "note", "warning", "error"};
+  std::vector<ExpertRow> rows;
+  for (const RuleDef& rule : kRules) {
+    rows.push_back({ruleFilterName(rule), fmt::format("{} {}", rule.code, rule.slug),
+                    severityName(rule.severity), rule.summary, "docs/rules.md"});
+  }
+  for (const ExpertNoteDef& note : kExpertNotes) {
+    rows.push_back({note.filter, note.summary, kLevels[static_cast<std::size_t>(note.level)],
+                    note.summary, "docs/plugin.md"});
+  }
+  return rows;
+}
+
+void printExpertTsv(const ExpertRow& e) {
+  fmt::print("{}\t{}\t(expert, {})\t\t{}\n", e.filter, e.label, e.level, e.meaning);
+}
+
+void printExpertMarkdown(const ExpertRow& e) {
+  fmt::print("| `{}` | {} | (expert, {}) | | | | {} | {} |\n", e.filter, e.label, e.level,
+             e.meaning, e.spec);
+}
+
+// `fields`'s formats: a header, then one line per field of the field table, per derived field,
+// then per expert item: every field the plugin registers (fields_registered.sh).
 struct FieldListFormat {
   const char* name;
   const char* header;
   void (*field)(const FieldDef& f);
   void (*derived)(const DerivedFieldDef& f);
+  void (*expert)(const ExpertRow& e);
 };
 const FieldListFormat kFieldListFormats[] = {
-    {.name = "tsv", .header = "", .field = printFieldTsv, .derived = printDerivedTsv},
+    {.name = "tsv",
+     .header = "",
+     .field = printFieldTsv,
+     .derived = printDerivedTsv,
+     .expert = printExpertTsv},
     {.name = "markdown",
-     .header = "| filter name | label | word | bits | values | meaning | spec |\n"
-               "|---|---|---|---|---|---|---|\n",
+     .header = "| filter name | label | word | bits | values | at rest | meaning | spec |\n"
+               "|---|---|---|---|---|---|---|---|\n",
      .field = printFieldMarkdown,
-     .derived = printDerivedMarkdown},
+     .derived = printDerivedMarkdown,
+     .expert = printExpertMarkdown},
 };
 
 }  // namespace
@@ -64,6 +107,7 @@ Handler fieldsCommand(CLI::App& command) {
     fmt::print("{}", list.header);
     for (const FieldDef& f : kFields) list.field(f);
     for (const DerivedFieldDef& f : kDerivedFields) list.derived(f);
+    for (const ExpertRow& e : expertRows()) list.expert(e);
     return kExitOk;
   };
 }

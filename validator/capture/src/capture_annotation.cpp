@@ -77,7 +77,8 @@ Status copyRange(std::FILE* in, std::uint64_t from, std::uint64_t to, std::FILE*
 // A pcapng file: its blocks copied as stored (libpcap locates each packet's block), the packets'
 // with their comments added.
 Status copyPcapng(CaptureReader& reader, const std::string& input, std::FILE* out,
-                  const FrameComments& comments, const FrameFilter& keep) {
+                  const FrameComments& comments, const FrameFilter& keep,
+                  const CommentFilter& replaced) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> raw(std::fopen(input.c_str(), "rb"), std::fclose);
   if (!raw) return fail(fileError(input, fmt::format("cannot read: {}", std::strerror(errno))));
   std::uint64_t copied = 0;
@@ -94,7 +95,9 @@ Status copyPcapng(CaptureReader& reader, const std::string& input, std::FILE* ou
     copied = record.stored->offset + record.stored->length;
     if (keep && !keep(record.frame, record.time_ns)) continue;
     const auto found = comments.find(record.frame);
-    if (found == comments.end()) {
+    // A block with options may hold comments to replace; one without is copied as it is.
+    const bool options = record.stored->length > kPacketHeader + padded(record.captured) + 4;
+    if (found == comments.end() && !(replaced && options)) {
       if (Status same = copyRange(raw.get(), record.stored->offset, copied, out, input); !same) {
         return same;
       }
@@ -105,7 +108,9 @@ Status copyPcapng(CaptureReader& reader, const std::string& input, std::FILE* ou
         std::fread(block.data(), 1, block.size(), raw.get()) != block.size()) {
       return fail(Error{input, 0, record.frame, {}, "its block could not be read again"});
     }
-    const auto annotated = withComments(block.data(), block.size(), found->second);
+    static const std::vector<std::string> kNone;
+    const auto annotated = withComments(block.data(), block.size(),
+                                        found == comments.end() ? kNone : found->second, replaced);
     if (!annotated) {
       return fail(Error{input,
                         0,
@@ -145,7 +150,8 @@ Status convertPcap(CaptureReader& reader, const std::string& output, const Frame
 }  // namespace
 
 std::optional<std::vector<std::uint8_t>> withComments(const std::uint8_t* block, std::size_t size,
-                                                      const std::vector<std::string>& comments) {
+                                                      const std::vector<std::string>& comments,
+                                                      const CommentFilter& replaced) {
   if (size < kPacketHeader + 4) return std::nullopt;
   const Endian endian{block[0] == 0};
   const std::uint32_t type = endian.load32(block);
@@ -155,15 +161,20 @@ std::optional<std::vector<std::uint8_t>> withComments(const std::uint8_t* block,
   const std::size_t options = kPacketHeader + padded(endian.load32(block + kCapturedLengthAt));
   const std::size_t trailer = size - 4;
   if (options > trailer) return std::nullopt;
-  // The options it has, up to (not including) opt_endofopt, which may be absent.
-  std::size_t end = options;
-  while (end + 4 <= trailer) {
-    const std::uint16_t code = endian.load16(block + end);
-    const std::size_t length = endian.load16(block + end + 2);
-    if (code == kOptionEnd || end + 4 + padded(length) > trailer) break;
-    end += 4 + padded(length);
+  // The options it has, up to (not including) opt_endofopt, which may be absent; less the
+  // comments replaced.
+  std::vector<std::uint8_t> out(block, block + options);
+  for (std::size_t at = options; at + 4 <= trailer;) {
+    const std::uint16_t code = endian.load16(block + at);
+    const std::size_t length = endian.load16(block + at + 2);
+    const std::size_t next = at + 4 + padded(length);
+    if (code == kOptionEnd || next > trailer) break;
+    const std::string_view text(reinterpret_cast<const char*>(block + at + 4), length);
+    if (!(replaced && code == kOptionComment && replaced(text))) {
+      out.insert(out.end(), block + at, block + next);
+    }
+    at = next;
   }
-  std::vector<std::uint8_t> out(block, block + end);
   for (const std::string& comment : comments) {
     const std::size_t length = std::min(comment.size(), kMaxOptionLength);
     endian.put16(out, kOptionComment);
@@ -179,7 +190,8 @@ std::optional<std::vector<std::uint8_t>> withComments(const std::uint8_t* block,
 }
 
 Status annotateCapture(const std::string& input, const std::string& output,
-                       const FrameComments& comments, const FrameFilter& keep) {
+                       const FrameComments& comments, const FrameFilter& keep,
+                       const CommentFilter& replaced) {
   auto opened = CaptureReader::open(input);
   if (!opened) return fail(opened.error());
   CaptureReader& reader = **opened;
@@ -193,7 +205,7 @@ Status annotateCapture(const std::string& input, const std::string& output,
   if (out == nullptr) {
     return fail(fileError(output, fmt::format("cannot write: {}", std::strerror(errno))));
   }
-  Status copied = copyPcapng(reader, input, out, comments, keep);
+  Status copied = copyPcapng(reader, input, out, comments, keep, replaced);
   const bool flushed = std::fflush(out) == 0 && std::ferror(out) == 0;
   if (out != stdout) std::fclose(out);
   if (copied && !flushed) {

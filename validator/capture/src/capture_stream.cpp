@@ -34,7 +34,7 @@ Status streamCapture(CaptureReader& reader, CapturePipeline& pipeline, StreamSto
   Result<bool> status = merged.next(record);
   keepOrigin(merged, status, record, pipeline);
   for (; status && *status; status = merged.next(record)) {
-    if (stopRequested(stop)) return endStream(status, true, pipeline, stop);
+    if (stopBeforeRecord(stop)) return endStream(status, true, pipeline, stop);
     pipeline.onRecord(record);
   }
   // A read that Ctrl-C cut short (standard input waiting for more) is no damage of the capture.

@@ -125,7 +125,7 @@ Status streamOnTwoThreads(const NextRecord& next, CapturePipeline& pipeline, Str
     CaptureRecord record;
     EcatFrame frame;
     while ((status = next(record)) && *status) {
-      if (stopRequested(stop)) {
+      if (stopBeforeRecord(stop)) {
         stopped = true;
         break;
       }

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "ncservo/base/text.hpp"
+#include "ncservo/protocol/pdo_layout.hpp"
 #include "ncservo/rules/rules.hpp"
 
 namespace ncservo {
@@ -81,6 +82,37 @@ std::string unknownKey(std::string_view key, const std::vector<std::string>& kno
   return "unknown key" + didYouMean(key, known);
 }
 
+// The bytes [at, at + size) of one PDO of two axes overlap.
+bool overlaps(std::optional<std::uint32_t> a, std::optional<std::uint32_t> b, std::size_t size) {
+  if (!a || !b) return false;
+  const std::uint64_t lo = std::max(*a, *b), hi = std::min(*a, *b);
+  return lo - hi < size;
+}
+
+// The key of `axis` whose PDO lies on bytes an earlier axis already has, and that axis: two
+// axes on the same bytes would each decode the other's data (docs/configuration.md#axis). A
+// logical axis's outputs may share bytes with another's inputs (one LRW image); two outputs or
+// two inputs may not, nor two station axes' sync managers on one station.
+std::optional<std::pair<const char*, const AxisConfig*>> overlapOf(
+    const std::vector<AxisConfig>& earlier, const AxisConfig& axis) {
+  for (const AxisConfig& other : earlier) {
+    if (other.physical() != axis.physical()) continue;
+    if (axis.physical() && other.station != axis.station) continue;
+    if (axis.physical()) {
+      if (overlaps(other.sm_outputs, axis.sm_outputs, kRxPdoSize)) {
+        return std::pair{"sm_outputs", &other};
+      }
+      if (overlaps(other.sm_inputs, axis.sm_inputs, kTxPdoSize)) {
+        return std::pair{"sm_inputs", &other};
+      }
+      continue;
+    }
+    if (overlaps(other.outputs, axis.outputs, kRxPdoSize)) return std::pair{"outputs", &other};
+    if (overlaps(other.inputs, axis.inputs, kTxPdoSize)) return std::pair{"inputs", &other};
+  }
+  return std::nullopt;
+}
+
 void readAxis(Checker& check, const toml::table& table, std::size_t index, Config& config) {
   AxisConfig axis;
   const std::string prefix = fmt::format("axis[{}]", index);
@@ -146,6 +178,13 @@ void readAxis(Checker& check, const toml::table& table, std::size_t index, Confi
       check.fail(table, prefix + ".name", fmt::format("axis name '{}' is used twice", axis.name));
       return;
     }
+  }
+  if (const auto overlap = overlapOf(config.axes, axis)) {
+    const auto& [key, other] = *overlap;
+    const toml::node* node = table.get(key);
+    check.fail(node != nullptr ? *node : table, prefix + "." + key,
+               fmt::format("overlaps axis '{}': two axes on the same PDO bytes", other->name));
+    return;
   }
   config.axes.push_back(std::move(axis));
 }

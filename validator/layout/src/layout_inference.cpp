@@ -1164,8 +1164,7 @@ std::string refusal(const std::vector<Stream>& streams, std::uint32_t cycles,
   for (const Stream& s : streams) listed.push_back(s.describe());
   return fmt::format(
       "{}; cyclic datagrams: {}; give the layout in a --config file, one [[axis]] per servo with "
-      "the logical addresses of its 10-byte RxPDO and 40-byte TxPDO, e.g.\n"
-      "[[axis]]\nname = \"X\"\noutputs = 0x00010000\ninputs = 0x00010028",
+      "the logical addresses of its 10-byte RxPDO and 40-byte TxPDO",
       why, listed.empty() ? std::string("none") : fmt::format("{}", fmt::join(listed, ", ")));
 }
 

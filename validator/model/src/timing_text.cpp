@@ -69,4 +69,14 @@ std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_
   return out;
 }
 
+std::string copiesMissingText(std::uint64_t master, std::uint64_t returned) {
+  if (master == 0 && returned == 0) return "";
+  return fmt::format(
+      "{} master cop{} missing from the capture ({} returned cop{} the cycle{} ran), {} "
+      "returned cop{} never came",
+      master, master == 1 ? "y" : "ies", master == 1 ? "its" : "their",
+      master == 1 ? "y proves" : "ies prove", master == 1 ? "" : "s", returned,
+      returned == 1 ? "y" : "ies");
+}
+
 }  // namespace ncservo

@@ -148,6 +148,7 @@ std::optional<WalkedRecord> CapturePipeline::walk(const CaptureRecord& record, E
   walkPacket(record.link, bytes, frame);
   if (frame.status == WalkStatus::NotEtherCat) return std::nullopt;
   if (counted != nullptr) counted->ethercat = true;
+  ++run_.ethercat;
   const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame.probe);
   const bool judged = time_window_.contains(time_ns - *run_.first_time_ns);
   run_.in_window += judged ? 1 : 0;
@@ -185,6 +186,13 @@ void CapturePipeline::endLearning() {
 std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run) {
   if (!window.limited() || run.in_window > 0) return "";
   return fmt::format("no EtherCAT frame in the time window ({})", describeTimeWindow(window));
+}
+
+std::string noEtherCatReason(const CaptureRun& run) {
+  if (run.ethercat > 0) return "";
+  if (run.records == 0) return "no EtherCAT frame in the capture: it holds no frame";
+  return fmt::format("no EtherCAT frame in the capture: its {} frame{} {} other traffic",
+                     run.records, run.records == 1 ? "" : "s", run.records == 1 ? "is" : "are");
 }
 
 std::vector<std::string> eniCycleWarnings(const std::vector<EniCyclicFrame>& eni,
@@ -272,13 +280,24 @@ CaptureResult CapturePipeline::result() const {
   r.coverage = coverageOf(validator);
   if (std::string empty = emptyWindowReason(time_window_, run_); !empty.empty()) {
     r.coverage.reason = std::move(empty);
+    r.coverage.wants_layout = false;
+  }
+  if (std::string none = noEtherCatReason(run_); !none.empty()) {
+    r.coverage.reason = std::move(none);
+    r.coverage.wants_layout = false;
   }
   r.truncation = truncationOf(run_.snapped, run_.first_snapped, validator.cutRegions(),
                               validator.decoder().axes());
   if (std::string unread = unreadLinkTypes(r); !r.coverage.complete() && !unread.empty()) {
     r.coverage.reason = std::move(unread);
+    r.coverage.wants_layout = false;
   }
   return r;
+}
+
+std::vector<std::string> CapturePipeline::layoutMisfitsSoFar() const {
+  if (!fit_ || !validator_) return {};
+  return fit_->warnings(validator_->decoder().axes());
 }
 
 void CapturePipeline::finish() {

@@ -9,15 +9,28 @@
 #include <iterator>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ncservo/incidents/causes.hpp"
+#include "ncservo/layout/decoder.hpp"
 #include "ncservo/model/timing_text.hpp"
 #include "report_format.hpp"
 
 namespace ncservo::cli::detail {
 
 namespace {
+
+// Beside a NO SERVO that asks for a layout: how a --config file gives one, indented.
+void writeLayoutExample(std::FILE* out) {
+  fmt::print(out, "  a --config file gives each axis (docs/configuration.md#axis), e.g.:\n");
+  std::string_view example = kLayoutConfigExample;
+  while (!example.empty()) {
+    const std::size_t end = example.find('\n');
+    fmt::print(out, "    {}\n", example.substr(0, end));
+    example.remove_prefix(end == std::string_view::npos ? example.size() : end + 1);
+  }
+}
 
 // The verdicts as text shouts them.
 const char* verdictHeadline(Verdict v) {
@@ -126,11 +139,10 @@ void writeInterfaces(std::FILE* out, const CaptureReport& r) {
 
 // Copies the capture missed, told apart from cycles the bus lost (docs/timing.md "Capture loss").
 void writeCaptureLoss(std::FILE* out, const CaptureReport& r) {
-  if (r.master_copies_missing > 0 || r.returned_copies_missing > 0) {
-    fmt::print(out,
-               "copies missing: {} master copies missing from the capture (their returned copies "
-               "prove the cycles ran), {} returned copies never came\n",
-               r.master_copies_missing, r.returned_copies_missing);
+  if (const std::string missing =
+          copiesMissingText(r.master_copies_missing, r.returned_copies_missing);
+      !missing.empty()) {
+    fmt::print(out, "copies missing: {}\n", missing);
   }
   if (r.capture_drops && r.capture_drops->dropped() > 0) {
     fmt::print(out, "capture drops: {}\n", describeCaptureDrops(*r.capture_drops));
@@ -371,6 +383,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   if (r.truncation.any()) fmt::print(out, "truncated: {}\n", describeTruncation(r.truncation));
   writeNotJudged(out, r);
   if (!r.coverage.complete()) fmt::print(out, "NO SERVO: {}\n", r.coverage.reason);
+  if (!r.coverage.complete() && r.coverage.wants_layout) writeLayoutExample(out);
   if (r.error) fmt::print(out, "error: {}\n", *r.error);
   writeTextBaseline(out, r);
   const std::string dropped =

@@ -61,6 +61,7 @@ Coverage coverageOf(const Validator& validator) {
   }
   if (decoder.axes().empty()) {
     out.reason = decoder.noServoReason();
+    out.wants_layout = decoder.noServoWantsLayout();
   } else if (!out.any_axis && placed) {
     out.reason = fmt::format(
         "no servo axis decoded: the {} layout's axes appeared, but none of their PDO words was "

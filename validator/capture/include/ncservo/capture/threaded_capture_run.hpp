@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 
 #include "ncservo/base/error.hpp"
@@ -20,9 +21,18 @@ namespace ncservo {
 struct StreamStop {
   const std::atomic<bool>* requested = nullptr;
   bool stopped = false;  // set when the stream ended for it, the pipeline unfinished
+  // Counts the records read, for a progress line (cli/progress.hpp); none when null.
+  std::atomic<std::uint64_t>* records = nullptr;
 };
 inline bool stopRequested(const StreamStop* stop) {
   return stop != nullptr && stop->requested != nullptr && stop->requested->load();
+}
+// Asked before each record: stopRequested, counting the record.
+inline bool stopBeforeRecord(const StreamStop* stop) {
+  if (stop != nullptr && stop->records != nullptr) {
+    stop->records->fetch_add(1, std::memory_order_relaxed);
+  }
+  return stopRequested(stop);
 }
 
 // A stream's end, on one thread or two, once its records are read (`status`: the last read) or the

@@ -87,6 +87,12 @@ class CutRegions {
 // An axis as a configuration file would give it (for `decode --layout`).
 AxisConfig axisConfigOf(const AxisInfo& info);
 
+// How a --config file gives an axis (docs/configuration.md#axis), for the text a person reads
+// beside a reason that asks for one; several lines, so never inside a one-line reason.
+inline constexpr const char* kLayoutConfigExample =
+    "[[axis]]\nname = \"X\"\noutputs = 0x00010000  # its 10-byte RxPDO\ninputs = 0x00010028   "
+    "# its 40-byte TxPDO\n";
+
 struct DecoderOptions {
   // Explicit layout (a configuration, an ENI, or inferred by a LayoutWindow); empty = none.
   std::vector<AxisConfig> axes;
@@ -111,8 +117,10 @@ class Decoder {
   bool startupShowsNoServo() const { return learner_.sawConfiguration() && !learner_.sawServo(); }
   // What the start-up showed of every slave (learned whatever the layout source).
   const LayoutLearner& learner() const { return learner_; }
-  // Why no axis was found, for a person (empty while axes are known).
+  // Why no axis was found, for a person, one line (empty while axes are known).
   std::string noServoReason() const;
+  // No axis was found, and a --config file would give them (layoutConfigExample shows one).
+  bool noServoWantsLayout() const { return axes_.empty() && !startupShowsNoServo(); }
 
  private:
   // `signature`: of the datagram list; `any_wkc`: some WKC is above zero.

@@ -20,4 +20,8 @@ std::string timingText(const TimingSummary& timing, const char* timestamps,
 // `settled_ns` is the bound the settled frames were judged against.
 std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_ns);
 
+// The copies a capture missed, told apart from lost cycles (docs/timing.md "Capture loss"), in
+// words that agree with their counts; empty when none is missing.
+std::string copiesMissingText(std::uint64_t master, std::uint64_t returned);
+
 }  // namespace ncservo

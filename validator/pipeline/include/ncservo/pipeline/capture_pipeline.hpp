@@ -60,6 +60,7 @@ struct CaptureRun {
   std::uint64_t records = 0;                  // read, of any kind
   std::optional<std::int64_t> first_time_ns;  // of the first record
   std::uint64_t in_window = 0;                // EtherCAT frames inside the time window
+  std::uint64_t ethercat = 0;                 // EtherCAT frames, in the window or not
   std::uint64_t snapped = 0;                  // records cut by the capture's snap length
   std::uint64_t first_snapped = 0;            // the first of them (0: none)
 };
@@ -67,6 +68,9 @@ struct CaptureRun {
 // Why nothing was judged although the capture had frames: none in the time window; empty when
 // there were.
 std::string emptyWindowReason(const TimeWindow& window, const CaptureRun& run);
+// Why nothing was judged when the capture holds no EtherCAT frame at all (an empty file, a
+// loopback capture): no layout would help; empty when it holds one.
+std::string noEtherCatReason(const CaptureRun& run);
 
 struct PipelineOptions {
   DecoderOptions layout;
@@ -161,6 +165,9 @@ class CapturePipeline {
   // axis (docs/layout.md#a-layout-that-does-not-fit); then one per ENI frame whose cycle the
   // capture does not bear out; after finish().
   const std::vector<std::string>& layoutWarnings() const { return layout_warnings_; }
+  // The configured or ENI layout's misfits of the frames so far, as layoutWarnings() has them:
+  // for a view with no end of capture (the plugin's later passes).
+  std::vector<std::string> layoutMisfitsSoFar() const;
   // Whether the layout was inferred after the first window, and the frames not judged then.
   const LateLayout& lateLayout() const { return window_.late(); }
   // Null until the layout is decided, and without rules.

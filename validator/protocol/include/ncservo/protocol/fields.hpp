@@ -48,7 +48,10 @@ struct FieldDef {
   const char* blurb;
   const char* clause;  // where docs/protocol.md defines it
   // For a bit field of the SCW or SSW: its value (from the field's lowest bit) when it asks for
-  // nothing and reports nothing, so that a view can show such fields together and briefly.
+  // nothing and reports nothing, so that a view can show such fields together and briefly: a
+  // request not made, an acknowledgement or warning not given, reserved bits zero. Never a bit
+  // whose clear value reports the drive's state (ServoEn, ServoRDY, N=0, N=Ns, PulseEnabled):
+  // an engineer looks for exactly those (docs/plugin.md).
   std::optional<std::uint32_t> at_rest = std::nullopt;
   FieldView view = FieldView::Value;
 };
@@ -242,8 +245,7 @@ inline constexpr FieldDef kFields[] = {
      .filter = "ncservo.ssw.servo_en",
      NCSERVO_VALUES(kYesNo),
      .blurb = "Drive enabled: regulation and power stage live",
-     .clause = "docs/protocol.md §3",
-     .at_rest = 0},
+     .clause = "docs/protocol.md §3"},
     {.word = Word::Ssw,
      .kind = FieldKind::Flag,
      .mask = 0x2,
@@ -251,8 +253,7 @@ inline constexpr FieldDef kFields[] = {
      .filter = "ncservo.ssw.servo_rdy",
      NCSERVO_VALUES(kYesNo),
      .blurb = "Ready, per the Servo_Ready_Mode table",
-     .clause = "docs/protocol.md §3, §5",
-     .at_rest = 0},
+     .clause = "docs/protocol.md §3, §5"},
     {.word = Word::Ssw,
      .kind = FieldKind::Flag,
      .mask = 0x4,
@@ -286,8 +287,7 @@ inline constexpr FieldDef kFields[] = {
      .filter = "ncservo.ssw.n_zero",
      NCSERVO_VALUES(kYesNo),
      .blurb = "Motor speed below the standstill threshold",
-     .clause = "docs/protocol.md §3",
-     .at_rest = 0},
+     .clause = "docs/protocol.md §3"},
     {.word = Word::Ssw,
      .kind = FieldKind::Flag,
      .mask = 0x40,
@@ -295,8 +295,7 @@ inline constexpr FieldDef kFields[] = {
      .filter = "ncservo.ssw.n_setpoint",
      NCSERVO_VALUES(kYesNo),
      .blurb = "Motor speed within tolerance of the set point",
-     .clause = "docs/protocol.md §3",
-     .at_rest = 0},
+     .clause = "docs/protocol.md §3"},
     {.word = Word::Ssw,
      .kind = FieldKind::Flag,
      .mask = 0x80,
@@ -304,8 +303,7 @@ inline constexpr FieldDef kFields[] = {
      .filter = "ncservo.ssw.pulse_enabled",
      NCSERVO_VALUES(kYesNo),
      .blurb = "Power stage (IGBT) switched on",
-     .clause = "docs/protocol.md §3",
-     .at_rest = 0},
+     .clause = "docs/protocol.md §3"},
     {.word = Word::Ssw,
      .kind = FieldKind::BitRange,
      .mask = 0x300,

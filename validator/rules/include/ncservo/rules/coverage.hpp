@@ -22,7 +22,8 @@ struct NotJudged {
 struct Coverage {
   bool any_axis = false;              // some servo axis's PDO words were read
   std::vector<std::string> missing;   // configured axes (config, ENI) that never appeared
-  std::string reason;                 // why not everything was checked; empty when it was
+  std::string reason;                 // why not everything was checked, one line; empty when it was
+  bool wants_layout = false;          // the reason asks for a --config file (kLayoutConfigExample)
   std::vector<NotJudged> not_judged;  // enabled rules, in axis then table order; the bus's last
 
   bool complete() const { return any_axis && missing.empty(); }
