@@ -71,6 +71,17 @@ std::vector<CauseRow> causeRows() {
              s.msg(0, kFault + 60, 4).msgData(0, 200, 41.0F).msgData(200, kFault + 60, 96.0F);
            }),
        "overtemperature", "motor temperature 41 \u2192 96 \u00b0C over"},
+      // Flat for most of the minute, then a surge: told from where it left 35 C, not from the
+      // first reading (docs/incidents.md#overtemperature).
+      {"temperature flat then a surge",
+       faultScript(kCurrErr,
+                   [](Script& s) {
+                     s.msg(0, kFault + 60, 4)
+                         .msgData(0, 280, 35.0F)
+                         .msgData(280, 290, 65.0F)
+                         .msgData(290, kFault + 60, 95.0F);
+                   }),
+       "overtemperature", "motor temperature 35 \u2192 95 \u00b0C over 20 ms from frame 560"},
       {"temperature up 5 C: near miss",
        faultScript(
            kCurrErr,
@@ -99,7 +110,15 @@ std::vector<CauseRow> causeRows() {
       {"CurrErr with current",
        faultScript(kCurrErr,
                    [](Script& s) { s.msg(0, kFault + 60, 1).msgData(0, kFault + 60, 12.5F); }),
-       "overcurrent", "motor current 12.5 A before"},
+       "overcurrent", "motor current 12.5 A 1 ms before (frame 600)"},
+      // Message codes take turns: the last current reading is 25 cycles old, and says so.
+      {"CurrErr with an old current",
+       faultScript(kCurrErr,
+                   [](Script& s) {
+                     s.msg(0, 276, 1).msgData(0, 276, 12.5F);
+                     s.msg(276, kFault + 60, 3).msgData(276, kFault + 60, 560.0F);
+                   }),
+       "overcurrent", "motor current 12.5 A 25 ms before (frame 552)"},
       {"BVErr", faultScript(kBvErr), "bus-voltage", "BVErr (E05)"},
       {"EncoderErr", faultScript(kEncoderErr), "encoder", "EncoderErr (E01)"},
       {"NoEncoder 20 ms before",

@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "incident_tracks.hpp"
 #include "ncservo/protocol/fields.hpp"
@@ -51,10 +53,18 @@ void evidence(CauseMatch& m, const Mark& at, std::string what) {
   m.evidence.push_back(IncidentEvidence{at.stamp(), std::move(what)});
 }
 
-std::optional<double> before(const MessageHistory* messages, std::int32_t code) {
+// The drive's last message of `code` before the incident, with where it came: message codes take
+// turns, so a value may be several cycles old (docs/incidents.md#before).
+struct Said {
+  double value;
+  Mark at;
+};
+std::optional<Said> said(const MessageHistory* messages, std::int32_t code) {
   if (messages == nullptr) return std::nullopt;
   for (std::size_t i = 0; i < kBefore.size(); ++i) {
-    if (kBefore[i].message_code == code) return messages->before[i];
+    if (kBefore[i].message_code == code && messages->before[i]) {
+      return Said{*messages->before[i], messages->before_at[i]};
+    }
   }
   return std::nullopt;
 }
@@ -63,9 +73,11 @@ std::optional<double> before(const MessageHistory* messages, std::int32_t code) 
 bool bitsWithValue(const CauseContext& c, CauseMatch& m, std::uint32_t bits, std::int32_t code) {
   if ((c.sew & bits) == 0) return false;
   m.text = sewLabels(c.sew & bits);
-  if (const std::optional<double> value = before(c.messages, code)) {
+  if (const std::optional<Said> last = said(c.messages, code)) {
     const ValueName* meaning = valueName(kMessageCodeField, static_cast<std::uint64_t>(code));
-    m.text += fmt::format(", {} {:.1f} {} before", meaning->name, *value, meaning->unit);
+    m.text +=
+        fmt::format(", {} {:.1f} {} {} before (frame {})", meaning->name, last->value,
+                    meaning->unit, duration(c.at.clock_ns - last->at.clock_ns), last->at.frame);
   }
   return true;
 }
@@ -118,6 +130,41 @@ bool communicationLoss(const CauseContext& c, CauseMatch& m) {
   return true;
 }
 
+// The motor temperature's rise in the minute before `at` (docs/incidents.md#overtemperature):
+// from where it last left its steady level to the last reading, with how fast; "" when the last
+// reading is not kTemperatureRiseC above the minute's lowest.
+std::string temperatureRise(const MessageHistory& t, const Mark& at, CauseMatch& m) {
+  if (!t.temperature_last_at || !within(*t.temperature_last_at, at, kMinuteNs)) return "";
+  const std::int64_t second = t.temperature_last_at->clock_ns / 1'000'000'000;
+  std::vector<const TemperatureBucket*> minute;
+  for (const TemperatureBucket& b : t.temperature) {
+    if (b.second < second - kTemperatureWindowS || b.second > second) continue;
+    if (within(b.steady_at, at, kMinuteNs)) minute.push_back(&b);
+  }
+  if (minute.empty()) return "";
+  const double lowest = (*std::min_element(minute.begin(), minute.end(), [](auto* x, auto* y) {
+                          return x->lowest < y->lowest;
+                        }))->lowest;
+  if (t.temperature_last - lowest < kTemperatureRiseC) return "";
+  // The latest second still at the minute's level: the rise left it there.
+  const TemperatureBucket* left = nullptr;
+  for (const TemperatureBucket* b : minute) {
+    if (b->lowest <= lowest + kSteadyBandC &&
+        (left == nullptr || b->steady_at.clock_ns > left->steady_at.clock_ns)) {
+      left = b;
+    }
+  }
+  const std::int64_t took = t.temperature_last_at->clock_ns - left->steady_at.clock_ns;
+  evidence(m, left->steady_at, fmt::format("motor temperature {:.1f} \u00b0C", left->steady));
+  evidence(m, *t.temperature_last_at,
+           fmt::format("motor temperature {:.1f} \u00b0C", t.temperature_last));
+  const double rate = took > 0 ? (t.temperature_last - left->steady) * 1e9 / took : 0;
+  return fmt::format(
+      "motor temperature {:.0f} \u2192 {:.0f} \u00b0C over {} from frame {} ({:.0f} "
+      "\u00b0C/s)",
+      left->steady, t.temperature_last, duration(took), left->steady_at.frame, rate);
+}
+
 bool overtemperature(const CauseContext& c, CauseMatch& m) {
   std::string text;
   if ((c.sew & kI2t) != 0) text = sewLabels(kI2t);
@@ -130,24 +177,8 @@ bool overtemperature(const CauseContext& c, CauseMatch& m) {
     } else if (a->inputsKnown() && (a->ssw() & kTempWarning) != 0) {
       text += fmt::format("{}SSW.TempWarning set", text.empty() ? "" : ", ");
     }
-    const MessageHistory& t = *c.messages;
-    if (t.temperature_last_at && within(*t.temperature_last_at, c.at, kMinuteNs)) {
-      const std::int64_t second = t.temperature_last_at->clock_ns / 1'000'000'000;
-      const TemperatureBucket* lowest = nullptr;
-      for (const TemperatureBucket& b : t.temperature) {
-        if (b.second < second - kTemperatureWindowS || b.second > second) continue;
-        if (!within(b.at, c.at, kMinuteNs)) continue;
-        if (lowest == nullptr || b.lowest < lowest->lowest) lowest = &b;
-      }
-      if (lowest != nullptr && t.temperature_last - lowest->lowest >= kTemperatureRiseC) {
-        text += fmt::format("{}motor temperature {:.0f} \u2192 {:.0f} \u00b0C over {}",
-                            text.empty() ? "" : ", ", lowest->lowest, t.temperature_last,
-                            duration(t.temperature_last_at->clock_ns - lowest->at.clock_ns));
-        evidence(m, lowest->at, fmt::format("motor temperature {:.1f} \u00b0C", lowest->lowest));
-        evidence(m, *t.temperature_last_at,
-                 fmt::format("motor temperature {:.1f} \u00b0C", t.temperature_last));
-      }
-    }
+    const std::string rise = temperatureRise(*c.messages, c.at, m);
+    if (!rise.empty()) text += fmt::format("{}{}", text.empty() ? "" : ", ", rise);
   }
   if (text.empty()) return false;
   m.text = text;

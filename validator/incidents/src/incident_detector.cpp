@@ -144,7 +144,12 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis,
   std::stable_sort(
       incident.evidence.begin(), incident.evidence.end(),
       [](const IncidentEvidence& a, const IncidentEvidence& b) { return a.at.frame < b.at.frame; });
-  if (messages != nullptr) incident.before = messages->before;
+  if (messages != nullptr) {
+    incident.before = messages->before;
+    for (std::size_t k = 0; k < kBefore.size(); ++k) {
+      incident.before_at[k] = messages->before_at[k].stamp();
+    }
+  }
   incident.end = incident.at;
   const std::optional<std::uint16_t> station = incident.axis ? std::nullopt : incident.station;
   incident.ordinal = ++ordinals_[{incident.kind, incident.axis, station, incident.cause}];

@@ -14,7 +14,10 @@ constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
 
 void MessageHistory::take(std::int32_t code, double value, const Mark& at) {
   for (std::size_t k = 0; k < kBefore.size(); ++k) {
-    if (kBefore[k].message_code == code) before[k] = value;
+    if (kBefore[k].message_code == code) {
+      before[k] = value;
+      before_at[k] = at;
+    }
   }
   if (code != kMotorTemperatureCode) return;
   temperature_last = value;
@@ -24,10 +27,13 @@ void MessageHistory::take(std::int32_t code, double value, const Mark& at) {
   TemperatureBucket& b =
       temperature[static_cast<std::size_t>(((second % kBuckets) + kBuckets) % kBuckets)];
   if (b.second != second) {
-    b = TemperatureBucket{second, value, at};
-  } else if (value < b.lowest) {
-    b.lowest = value;
-    b.at = at;
+    b = TemperatureBucket{second, value, at, value};
+  } else {
+    b.lowest = std::min(b.lowest, value);
+  }
+  if (value <= b.lowest + kSteadyBandC) {
+    b.steady_at = at;
+    b.steady = value;
   }
 }
 

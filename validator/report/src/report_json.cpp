@@ -214,11 +214,16 @@ Json incidentJson(const CaptureReport& r, std::size_t index) {
   }
   j["evidence"] = std::move(evidence);
   Json before = Json::object();
+  Json before_frames = Json::object();
   for (std::size_t i = 0; i < kBefore.size(); ++i) {
+    if (!incident.before[i]) continue;
     // To the thousandth: message data is a float32.
-    if (incident.before[i]) before[kBefore[i].key] = std::round(*incident.before[i] * 1000) / 1000;
+    before[kBefore[i].key] = std::round(*incident.before[i] * 1000) / 1000;
+    before_frames[kBefore[i].key] = incident.before_at[i].frame;
   }
   j["before"] = std::move(before);
+  // Where each came: message codes take turns, so a value may be several cycles old.
+  j["before_frames"] = std::move(before_frames);
   auto frameOf = [](const std::optional<Stamp>& at) {
     return at ? Json(at->frame) : Json(nullptr);
   };

@@ -55,6 +55,7 @@ struct Incident {
   std::string cause_text;
   std::vector<IncidentEvidence> evidence;                      // in frame order
   std::array<std::optional<double>, kBefore.size()> before{};  // by kBefore row
+  std::array<Stamp, kBefore.size()> before_at{};               // the frame each came in
   std::optional<Stamp> error_clear;                            // SEW.ServoErrors fell; ESM: none
   std::optional<Stamp> reenabled;                              // enabled again (ESM: back in OP)
   // Among the incidents of its kind, axis (or station) and cause in its capture segment, from 1:

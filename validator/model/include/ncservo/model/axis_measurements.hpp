@@ -83,11 +83,16 @@ inline constexpr std::array<BeforeDef, 4> kBefore{{
     {0, "speed_rpm"},
 }};
 
-// The lowest motor temperature of one second of the segment's clock.
+// A motor temperature within this much of a second's lowest is at that second's steady level
+// (docs/incidents.md#overtemperature).
+inline constexpr double kSteadyBandC = 1.0;
+// The lowest motor temperature of one second of the segment's clock, and the last reading of that
+// second at its steady level: where a rise left it.
 struct TemperatureBucket {
   std::int64_t second = std::numeric_limits<std::int64_t>::min();
   double lowest = 0;
-  Mark at;
+  Mark steady_at;
+  double steady = 0;
 };
 inline constexpr std::int64_t kTemperatureWindowS = 60;
 
@@ -95,6 +100,7 @@ inline constexpr std::int64_t kTemperatureWindowS = 60;
 // motor temperature of each second of the minute before.
 struct MessageHistory {
   std::array<std::optional<double>, kBefore.size()> before{};  // by kBefore row
+  std::array<Mark, kBefore.size()> before_at{};                // ... and where each came
   std::array<TemperatureBucket, kTemperatureWindowS + 1> temperature{};
   std::optional<Mark> temperature_last_at;
   double temperature_last = 0;
