@@ -491,6 +491,13 @@ std::vector<RuleCase> ruleCases() {
     {"COM005 four missing: the first frame after the gap", {COM5}, Script().missing(20, 24),
      {now(COM5, M(24))}},
     {"COM005 not for three missing", {COM5}, Script().missing(20, 23), {}},
+    // docs/rules.md#com-002: from 2.5 cycles on no next interval can make a gap late, so its
+    // cycles count at once, on the first frame after it, before any later frame and segment.
+    {"COM005 limit 1: two missing, the first frame after the gap", {COM5},
+     Script().missing(20, 22).settings(failureLimit(1)), {now(COM5, M(22))}},
+    {"COM005 limit 1: two missing, then a new segment", {COM5},
+     Script().missing(20, 22).shift(23, 5000 * kMs).settings(failureLimit(1)),
+     {now(COM5, M(22))}},
     {"COM005 mixed failures count together", {COM5},
      Script().wkc(10, 11, 2).wkc(11, 12, 0).noReturned(12, 13).wkc(13, 14, 2), {now(COM5, R(13))}},
     {"COM005 limit 5: five failures", {COM5}, Script().wkc(10, 15, 2).settings(failureLimit(5)), {}},
@@ -742,6 +749,7 @@ TEST(ValidatorCom002, TheVerdictDecidesTheFailureCount) {
        0},
       {"two lost", Script().missing(20, 22), 2},
       {"two lost at the capture's end", Script(30).missing(27, 29), 2},
+      {"two lost, then a new segment", Script().missing(20, 22).shift(23, 5000 * kMs), 2},
   };
   for (const Row& row : rows) {
     const auto driver = runScript(row.script);
