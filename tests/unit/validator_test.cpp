@@ -77,6 +77,23 @@ RuleSettings failureLimit(std::uint32_t limit) {
   return s;
 }
 
+// Each rule's severity as docs/rules.md gives it, written out (rules_test.cpp holds the table to
+// the catalogue): the expectation does not come from the table under test.
+Severity catalogueSeverity(RuleId rule) {
+  const std::string errors =
+      " SE-001 SE-002 SE-003 ZP-001 ZP-002 EC-001 EC-003 SEW-001 RDY-001 "
+      "FLT-001 COM-001 COM-005 ESM-001 ESM-003 ";
+  const std::string warnings =
+      " SE-004 ZP-003 EC-002 EC-004 SEW-002 SEW-003 SSW-001 SCW-001 "
+      "PT-001 MSG-001 COM-002 COM-004 COM-006 COM-007 ESM-002 ";
+  const std::string infos = " COM-003 ESM-004 ";
+  const std::string code = " " + std::string(ruleDef(rule).code) + " ";
+  if (errors.find(code) != std::string::npos) return Severity::Error;
+  if (warnings.find(code) != std::string::npos) return Severity::Warning;
+  EXPECT_NE(infos.find(code), std::string::npos) << code << "has no severity written here";
+  return Severity::Info;
+}
+
 // One expected finding: where it is reported and where its condition began.
 struct Expect {
   RuleId rule;
@@ -556,7 +573,7 @@ TEST_P(ValidatorRules, ReportsExactlyTheExpectedFindings) {
     if (!watched(c, f.rule)) continue;
     const Expect& e = c.expected[i++];
     SCOPED_TRACE(test::describe(f) + ": " + f.message);
-    EXPECT_EQ(f.severity, ruleDef(f.rule).severity);
+    EXPECT_EQ(f.severity, catalogueSeverity(f.rule));
     EXPECT_EQ(f.at.time_ns, c.script.timeOf(e.at)) << "reported with its frame's own timestamp";
     EXPECT_FALSE(f.message.empty());
     EXPECT_NE(f.message.find(c.message), std::string::npos);
@@ -590,7 +607,7 @@ TEST_P(ValidatorRuleSettings, ASeverityOverrideChangesTheFindings) {
   const RuleCase& c = GetParam();
   RuleSettings settings = c.script.ruleSettings();
   for (RuleId rule : c.rules) {
-    const char* level = ruleDef(rule).severity == Severity::Info ? "error" : "info";
+    const char* level = catalogueSeverity(rule) == Severity::Info ? "error" : "info";
     ASSERT_TRUE(settings.setSeverity(ruleDef(rule).code, level));
   }
   const auto driver = runScript(c.script, settings);
@@ -599,7 +616,7 @@ TEST_P(ValidatorRuleSettings, ASeverityOverrideChangesTheFindings) {
     if (!watched(c, f.rule)) continue;
     ++seen;
     EXPECT_EQ(f.severity,
-              ruleDef(f.rule).severity == Severity::Info ? Severity::Error : Severity::Info);
+              catalogueSeverity(f.rule) == Severity::Info ? Severity::Error : Severity::Info);
   }
   EXPECT_EQ(seen, c.expected.size());
 }
