@@ -17,7 +17,6 @@
 #include "incident_plan.hpp"
 #include "master.hpp"
 #include "ncservo/config/config.hpp"
-#include "ncservo/incidents/causes.hpp"
 #include "ncservo/sim/eni_writer.hpp"
 #include "ncservo/sim/models.hpp"
 #include "segment.hpp"
@@ -188,7 +187,7 @@ struct Simulator::Impl {
       const std::int64_t slot = (t + cycle_ns - 1) / cycle_ns * cycle_ns;
       Chain chain(*this, slot, row.axis);
       row.apply(chain);
-      planned.push_back({row.kind, row.axis, causeDef(row.cause).name, slot});
+      planned.push_back({row.kind, row.axis, row.cause, slot});
       if (row.kind == IncidentKind::BusOutage) {  // and every drive's ECatTErr
         for (int a = 0; a < o.axes; ++a) {
           planned.push_back({IncidentKind::DriveFault, a, "communication-loss", slot});
