@@ -95,6 +95,6 @@ for line in open(tsv):
     for m, s, g in zip(messages.split("|"), severities.split("|"), groups.split("|")):
         if m == message and (int(s), int(g)) != want:
             sys.exit(f"frame {frame}: {m} at severity {int(s):#x}, group {int(g):#x}; "
-                     f"a {severity} rule of party {party} is {want[0]:#x}, {want[1]:#x}")
+                     f"a rule of severity {severity}, party {party} is at {want[0]:#x}, group {want[1]:#x}")
 PY
 }
