@@ -69,3 +69,32 @@ veth_pair() {
   ip link set "$host" up
   ip -n "$ns" link set "$peer" up
 }
+
+# rule_frames RULE CAPTURE OUT [tshark options...]: the frames on which tshark with the plugin shows
+# RULE, one a line, into OUT; fails unless each of RULE's expert items has the severity and group
+# docs/plugin.md gives its rule's severity and party, written here by hand, not read from the plugin.
+rule_frames() {
+  local rule=$1 capture=$2 out=$3 slug severity party
+  shift 3
+  read -r slug severity party < <("$NCSERVO" rules | awk -v id="$rule" '$1 == id { print $2, $3, $4 }')
+  [ -n "$slug" ] || fail "no rule $rule"
+  "$TSHARK" "$PLUGIN" "$@" -2 -r "$capture" -Y "ncservo.rule.${slug//-/_}" -T fields \
+    -E occurrence=a -E aggregator='|' -e frame.number -e _ws.expert.message \
+    -e _ws.expert.severity -e _ws.expert.group >"$WORK/expert.tsv" 2>"$WORK/tshark.err" ||
+    fail "tshark exit $?: $(cat "$WORK/tshark.err")"
+  [ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"
+  python3 - "$WORK/expert.tsv" "$rule $slug" "$severity" "$party" >"$out" <<'PY' || fail "$rule: the plugin's expert info is not the rule's severity and group"
+import sys
+tsv, message, severity, party = sys.argv[1:]
+# epan/proto.h: PI_ERROR, PI_WARN, PI_NOTE; PI_SEQUENCE for the bus, PI_PROTOCOL for NC and drive.
+want = ({"error": 0x00800000, "warning": 0x00600000, "info": 0x00400000}[severity],
+        0x02000000 if party == "bus" else 0x09000000)
+for line in open(tsv):
+    frame, messages, severities, groups = line.rstrip("\n").split("\t")
+    print(frame)
+    for m, s, g in zip(messages.split("|"), severities.split("|"), groups.split("|")):
+        if m == message and (int(s), int(g)) != want:
+            sys.exit(f"frame {frame}: {m} at severity {int(s):#x}, group {int(g):#x}; "
+                     f"a rule of severity {severity}, party {party} is at {want[0]:#x}, group {want[1]:#x}")
+PY
+}

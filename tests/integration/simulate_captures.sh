@@ -3,8 +3,9 @@
 # Each simulated capture in captures/ is exactly what its documented command regenerates (and so
 # is its layout file); `ncservo validate` on it, with no configuration (the layout learned from
 # its start-up), gives its golden report, and the same findings as with its layout file; it
-# triggers exactly the rules captures/README.md says; the fault table there is
-# `ncservo simulate --list-faults`.
+# triggers exactly the rules captures/README.md says, each on the frames the simulator's plan
+# gives it (--faults-truth, check_findings.py; the incidents capture: incident_truth); the fault
+# table there is `ncservo simulate --list-faults`.
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 readme="$SRC/captures/README.md"
@@ -16,7 +17,11 @@ for name in sim-commissioning-4axis.pcap sim-faults-4axis.pcap sim-io-interleave
   [ -n "$cmd" ] || fail "no regeneration command for $name"
   cmd=${cmd//captures\//$WORK/}
   cmd=${cmd/build\/validator\/ncservo/$NCSERVO}
-  eval "$cmd" 2>"$WORK/sim.err" || fail "$name: simulate exit $?: $(cat "$WORK/sim.err")"
+  # Beside the regeneration, the findings its faults must produce, from the simulator's plan (not
+  # for the incidents capture, whose truth is its incidents).
+  truth=()
+  [ -f "$SRC/captures/$stem.incidents.json" ] || truth=(--faults-truth "$WORK/$stem.faults.json")
+  eval "$cmd \"\${truth[@]}\"" 2>"$WORK/sim.err" || fail "$name: simulate exit $?: $(cat "$WORK/sim.err")"
   cmp "$SRC/captures/$name" "$WORK/$name" || fail "$name differs from its regeneration"
   if [ -f "$SRC/captures/$stem.incidents.json" ]; then
     cmp "$SRC/captures/$stem.incidents.json" "$WORK/$stem.incidents.json" ||
@@ -69,6 +74,17 @@ if want is None:
 else:
     assert fired == want, f"fired {fired}, README says {want}"
 PY
+
+  # The findings' frames against that plan, with the layout file (which names an axis from the
+  # first frame): the golden report is the validator's own, this check is not.
+  if [ ${#truth[@]} -gt 0 ]; then
+    config=()
+    [ ! -f "$SRC/captures/$stem.toml" ] || config=(--config "$SRC/captures/$stem.toml")
+    "$NCSERVO" validate "${config[@]}" --format json --fail-on never "$SRC/captures/$name" \
+      >"$WORK/$stem.planned.json" || fail "$name: validate exit $?"
+    python3 "$SRC/tests/tools/check_findings.py" "$WORK/$stem.planned.json" "$WORK/$stem.faults.json" ||
+      fail "$name: findings differ from the simulator's plan (--faults-truth)"
+  fi
 done
 # The fault table of captures/README.md is the simulator's own (no drift).
 "$NCSERVO" simulate --list-faults | tail -n +2 |

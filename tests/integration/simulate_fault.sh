@@ -4,7 +4,8 @@
 # layout learned from the start-up), reports RULE plus only the companions captures/README.md
 # documents for it (nothing else at all), and the same with the layout file the simulator wrote;
 # tshark with the plugin, with no preference set, shows the finding on exactly the frames the
-# validator reports. A rule off by default (COM-006, COM-007) is enabled for all of them.
+# validator reports, at the rule's severity and group (lib.sh rule_frames). A rule off by default
+# (COM-006, COM-007) is enabled for all of them.
 SRC=$1 BUILD=$2 RULE=$3
 shift 3
 source "$SRC/tests/integration/lib.sh"
@@ -51,12 +52,7 @@ assert rule in fired, f"{rule} did not fire; fired {sorted(fired)}"
 assert fired <= allowed, f"also fired {sorted(fired - allowed)} (allowed {sorted(allowed)})"
 PY
 
-slug=$("$NCSERVO" rules | awk -v id="$RULE" '$1 == id { print $2 }')
-field="ncservo.rule.${slug//-/_}"
-"$TSHARK" "$PLUGIN" "${plugin_prefs[@]}" -2 -r "$WORK/capture.pcap" -Y "$field" \
-  -T fields -e frame.number >"$WORK/plugin.txt" 2>"$WORK/tshark.err" ||
-  fail "tshark exit $?: $(cat "$WORK/tshark.err")"
-[ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"
+rule_frames "$RULE" "$WORK/capture.pcap" "$WORK/plugin.txt" "${plugin_prefs[@]}"
 python3 - "$WORK/report.json" "$WORK/plugin.txt" "$RULE" <<'PY' || fail "$RULE: plugin and validator disagree"
 import json, sys
 findings = json.load(open(sys.argv[1]))["captures"][0]["findings"]

@@ -3,7 +3,8 @@
 # A violation of RULE injected by the independent generator is reported by `ncservo validate` with
 # the right rule, axis and a frame inside the violation's window, nothing else of any severity
 # but the companions the generator names; and tshark with the plugin shows the finding
-# (ncservo.rule.<slug>) on exactly the frames the validator reports for that rule.
+# (ncservo.rule.<slug>) on exactly the frames the validator reports for that rule, at the rule's
+# severity and group (lib.sh rule_frames).
 SRC=$1 BUILD=$2 RULE=$3
 shift 3
 source "$SRC/tests/integration/lib.sh"
@@ -18,12 +19,7 @@ set -e
 python3 "$SRC/tests/tools/check_findings.py" "$WORK/report.json" "$WORK/expected.json" ||
   fail "$RULE: findings differ from the injection"
 
-slug=$("$NCSERVO" rules | awk -v id="$RULE" '$1 == id { print $2 }')
-[ -n "$slug" ] || fail "no rule $RULE"
-field="ncservo.rule.${slug//-/_}"
-"$TSHARK" "$PLUGIN" -2 -r "$WORK/capture.pcap" -Y "$field" -T fields -e frame.number \
-  >"$WORK/plugin.txt" 2>"$WORK/tshark.err" || fail "tshark exit $?: $(cat "$WORK/tshark.err")"
-[ ! -s "$WORK/tshark.err" ] || fail "tshark stderr: $(head -3 "$WORK/tshark.err")"
+rule_frames "$RULE" "$WORK/capture.pcap" "$WORK/plugin.txt"
 python3 - "$WORK/report.json" "$WORK/plugin.txt" "$RULE" <<'PY' || fail "$RULE: plugin and validator disagree"
 import json, sys
 findings = json.load(open(sys.argv[1]))["captures"][0]["findings"]

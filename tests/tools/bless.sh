@@ -2,14 +2,22 @@
 # bless.sh [BUILD]: regenerates the golden reports, captures/NAME.expected.json, from
 # `ncservo validate --format json` on each bundled capture NAME.pcap or NAME.pcapng (normalised by
 # golden.py: what tests bundled_capture and simulate_captures compare), then prints what changed
-# (git diff --stat and the diff). Commit a changed golden with the change of the report that
-# explains it. BUILD defaults to build/.
+# (git diff --stat and the diff). A golden judges the rules, so it changes only in a commit that
+# changes no rule (tests/README.md): with a rule changed and not committed, bless refuses. Commit
+# the rule change and the tests that judge it first, then the goldens on their own, saying why.
+# BUILD defaults to build/.
 set -euo pipefail
 src=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:-$src/build}
 ncservo="$build/validator/ncservo"
 [ -x "$ncservo" ] || { echo "bless: no $ncservo (build it first)" >&2; exit 2; }
 cd "$src"
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1 &&
+  ! git diff --quiet HEAD -- validator/rules validator/incidents; then
+  echo "bless: validator/rules or validator/incidents has uncommitted changes; commit them first," \
+    "then bless the goldens in a commit that changes no rule (tests/README.md)" >&2
+  exit 2
+fi
 trap 'rm -f captures/*.expected.json.report captures/*.expected.json.new' EXIT
 goldens=(captures/*.expected.json)
 [ -f "${goldens[0]}" ] || { echo "bless: no captures/*.expected.json" >&2; exit 2; }

@@ -10,7 +10,9 @@ written by `gen_capture.py --findings`: {"expected": [{"rule", "axis", "first_fr
 
 The check passes when
   - every expected finding is matched by its own reported finding with the same rule, the same
-    axis (null for a bus finding) and a frame inside [first_frame, last_frame], and
+    axis (null for a bus finding) and a frame inside [first_frame, last_frame] (for a timed
+    rule the window starts a cycle before its due_frame, not where its condition began: a
+    finding reported before its timeout does not match), and
   - every other reported finding, of any severity, is a companion of an injected rule
     (companions may be reported any number of times, or not at all).
 

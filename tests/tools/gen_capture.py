@@ -110,11 +110,12 @@ It is also the oracle for the rule engine (`ncservo validate`):
     The window [first_frame, last_frame] is where the validator may report the finding:
     an immediate finding exactly on the frame that first shows it (the master copy for NC
     outputs, the returned copy for drive inputs and WKC, the first master frame after a gap or
-    after a frame that was not returned); a timed one from the frame where the condition began
-    to two cycles after due_frame, the first frame more than the timeout after that begin
-    (docs/timing.md#rule-time).  COM-005: from the master frame of the fourth failed cycle
-    to the returned copy of the next.  COM-003: from the first master frame after the outage
-    to two cycles after the first frame more than drive_response after its returned copy.
+    after a frame that was not returned); a timed one from one cycle before due_frame to two
+    cycles after it, due_frame being the first frame more than the timeout after the frame where
+    the condition began (docs/timing.md#rule-time): reported before its timeout, it is
+    missing.  COM-005: from the master frame of the fourth failed cycle to the returned copy of
+    the next.  COM-003: timed like the others, due on the first frame more than drive_response
+    after the returned copy of the first master frame after the outage.
     companions lists, per injected rule, other rules it necessarily causes as well (see
     COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
 --incident KIND[@SECONDS][:AXIS]   (repeatable)
@@ -772,6 +773,9 @@ COMPANIONS = {
     "COM-005": ["COM-004"],
 }
 SLACK_CYCLES = 2  # a timed finding's window ends this many cycles after the frame it is due on
+# ... and starts this many before it: the validator may time the condition from the other copy of
+# its first cycle (docs/timing.md#rule-time), never from an earlier cycle.
+EARLY_CYCLES = 1
 FIRST_INJECTION_CYCLE = 10  # after the 8 intervals COM-002 needs to know the cycle time
 
 
@@ -928,6 +932,8 @@ class Expectations:
                     raise ValueError(f"{rule}: the capture ends before {timeout} has passed")
                 slack = self.times[due] + SLACK_CYCLES * self.cycle_ns
                 last = bisect.bisect_right(self.times, slack) - 1
+                early = self.times[due] - EARLY_CYCLES * self.cycle_ns
+                first = max(first, bisect.bisect_left(self.times, early))
             expected.append({"rule": rule, "axis": axis, "first_frame": self._number(first),
                              "last_frame": self._number(last), "due_frame": self._number(due)})
         expected.sort(key=lambda e: (e["first_frame"], e["rule"], -1 if e["axis"] is None

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -161,6 +162,84 @@ TEST(Incidents, EveryCauseRowIsTested) {
   for (const CauseRow& row : causeRows()) tested.push_back(row.cause);
   for (const CauseDef& cause : kCauses) {
     EXPECT_NE(std::find(tested.begin(), tested.end(), cause.name), tested.end()) << cause.name;
+  }
+}
+
+// docs/incidents.md's "looks back" of each cause row, in cycles of the scripts' 1 ms (0: at the
+// fault): the documented numbers, which the windows are tested on.
+std::map<std::string, std::int64_t> documentedWindows() {
+  std::ifstream doc(std::string(NCSERVO_DOCS_DIR) + "/incidents.md");
+  EXPECT_TRUE(doc) << "docs/incidents.md";
+  std::map<std::string, std::int64_t> windows;
+  std::string line;
+  bool causes = false;
+  while (std::getline(doc, line)) {
+    if (line.rfind("## ", 0) == 0) causes = line == "## Causes";
+    if (!causes || line.rfind("| `", 0) != 0) continue;
+    const std::string id = line.substr(3, line.find('`', 3) - 3);
+    const std::string back = line.substr(line.rfind(" | ") + 3);
+    std::istringstream words(back);
+    std::int64_t n = 0;
+    std::string unit;
+    words >> n >> unit;
+    windows[id] = unit == "s" ? n * 1000 : unit == "ms" ? n : 0;
+  }
+  return windows;
+}
+
+// A cause row's evidence placed at a cycle; the fault, and the row it falls to when the evidence
+// is one cycle older than the window.
+struct WindowEdgeRow {
+  const char* cause;
+  std::uint32_t sew;
+  std::function<void(Script&, std::int64_t evidence, std::int64_t end)> place;
+  const char* outside;
+};
+
+std::vector<WindowEdgeRow> windowEdgeRows() {
+  return {
+      {"communication-loss", kFollowerErr,
+       [](Script& s, std::int64_t e, std::int64_t) { s.wkc(e, e + 1, 1); }, "following-error"},
+      {"overtemperature", kCurrErr,
+       [](Script& s, std::int64_t e, std::int64_t) { s.ssw(e, e + 1, kSswRunning | kTempWarning); },
+       "overcurrent"},
+      {"following-error-after-step", kFollowerErr,
+       [](Script& s, std::int64_t e, std::int64_t end) { s.ssp(0, e, 1000).ssp(e, end, 50000); },
+       "following-error"},
+      {"encoder", kPdpint,
+       [](Script& s, std::int64_t e, std::int64_t end) { s.ssw(e, end, kSswRunning | kNoEncoder); },
+       "unknown"},
+      {"nc-command", kPdpint,
+       [](Script& s, std::int64_t e, std::int64_t) { s.scw(e - 5, e, kScwOff); }, "unknown"},
+  };
+}
+
+std::string causeOf(const WindowEdgeRow& row, std::int64_t fault, std::int64_t evidence) {
+  const std::int64_t end = fault + 60;
+  ValidatorDriver driver;
+  driver.run(faultScript(
+      row.sew, [&](Script& s) { row.place(s, evidence, end); }, fault));
+  const std::vector<Incident>& incidents = driver.incidents().incidents();
+  if (incidents.size() != 1) return std::to_string(incidents.size()) + " incidents";
+  return causeDef(incidents.front().cause).name;
+}
+
+// Evidence exactly the documented window before the fault counts; one cycle more does not.
+TEST(Incidents, EachCauseWindowEndsOnItsDocumentedNumber) {
+  const std::map<std::string, std::int64_t> windows = documentedWindows();
+  const std::vector<WindowEdgeRow> rows = windowEdgeRows();
+  for (const WindowEdgeRow& row : rows) {
+    ASSERT_TRUE(windows.count(row.cause)) << row.cause;
+    const std::int64_t window = windows.at(row.cause);
+    const std::int64_t fault = window + 100;
+    EXPECT_EQ(causeOf(row, fault, fault - window), row.cause) << row.cause << ": at the edge";
+    EXPECT_EQ(causeOf(row, fault, fault - window - 1), row.outside)
+        << row.cause << ": one cycle beyond";
+  }
+  for (const auto& [cause, window] : windows) {
+    const bool tested = std::any_of(rows.begin(), rows.end(),
+                                    [&](const WindowEdgeRow& r) { return r.cause == cause; });
+    EXPECT_TRUE(window == 0 || tested) << cause << " looks back, but no row tests its edge";
   }
 }
 

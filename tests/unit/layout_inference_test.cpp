@@ -583,6 +583,82 @@ INSTANTIATE_TEST_SUITE_P(Drives, Cia402Alone,
                                            Cia402Row{"three slow", Style::Cia402Slow, 3}),
                          test::rowName<Cia402Row>);
 
+// A capture of SOEM's master copies only, inputs not echoed (gen_capture.py --copies master):
+// the outputs alone show the outputs-first layout, each axis's TxPDO after every RxPDO
+// (docs/layout.md, "Without inputs").
+Bytes masterCopyWithoutInputs(const Bytes& returned, std::size_t axis_count) {
+  Bytes master = returned;
+  const std::size_t data = test::kChainOffset + ecat::kDatagramHeaderSize;
+  const std::size_t inputs = data + kRxPdoSize * axis_count;
+  const std::size_t wkc_end = data + (kRxPdoSize + kTxPdoSize) * axis_count + 2;
+  std::fill(master.begin() + static_cast<std::ptrdiff_t>(inputs),
+            master.begin() + static_cast<std::ptrdiff_t>(wkc_end), 0);
+  return master;
+}
+
+class MasterCopiesOnly : public ::testing::TestWithParam<int> {};
+
+TEST_P(MasterCopiesOnly, PlaceTheInputsAfterEveryOutput) {
+  std::vector<AxisModel> axes;
+  for (int k = 0; k < GetParam(); ++k) axes.push_back(AxisModel{k, Motion::Commissioning});
+  LayoutInference inference;
+  EcatFrame frame;
+  Truth truth;
+  for (int c = 0; c < 600 && !inference.settled(); ++c) {
+    const Bytes returned = cycleFrames(Style::Soem, axes, c, c == 0 ? &truth : nullptr).front();
+    const Bytes master = masterCopyWithoutInputs(returned, axes.size());
+    const ByteReader reader(master.data(), master.size());
+    walkPacket(LinkType::Ethernet, reader, frame);
+    inference.onFrame(frame, reader, false);
+  }
+  const InferenceResult result = inference.decide();
+  ASSERT_TRUE(result.refusal.empty()) << result.refusal;
+  ASSERT_EQ(result.axes.size(), truth.axes.size());
+  for (std::size_t k = 0; k < truth.axes.size(); ++k) {
+    EXPECT_EQ(result.axes[k].config.outputs, truth.axes[k].outputs) << "axis " << k;
+    EXPECT_EQ(result.axes[k].config.inputs, truth.axes[k].inputs) << "axis " << k;
+    EXPECT_TRUE(result.axes[k].evidence.outputs_only) << "axis " << k;
+    EXPECT_DOUBLE_EQ(result.axes[k].evidence.confidence, 0.5) << "axis " << k;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Axes, MasterCopiesOnly, ::testing::Values(2, 4, 8));
+
+// A TxPDO with a rival window 32 bytes on that passes every check as well: the 8 bytes they share
+// are the first window's last two extra data words and the second's ActPos (a position whose
+// bits are also a plausible float). Nothing tells which is the drive's: the confidence, how far
+// the next best overlapping candidate is behind, is 0 and the placement is refused
+// (docs/layout.md).
+TEST(InferredLayout, ARivalOverlappingTheTxPdosEndIsRefused) {
+  constexpr std::size_t kRivalAfter = 32;
+  constexpr std::uint32_t kFloat512 = 0x44000000;  // 512.0f
+  AxisModel axis{0, Motion::Commissioning};
+  LayoutInference inference;
+  EcatFrame frame;
+  for (int c = 0; c < 4096 && !inference.settled(); ++c) {
+    Bytes tx = axis.tx(c);
+    Bytes position;
+    test::putLe(position, kFloat512 + 50u * static_cast<std::uint32_t>(c), 8);
+    std::copy(position.begin(), position.end(), tx.begin());
+    std::copy(position.begin(), position.end(), tx.begin() + kRivalAfter);
+    const Bytes rival_rest(tx.begin() + static_cast<std::ptrdiff_t>(kTxPdoSize - kRivalAfter),
+                           tx.end());
+    const Bytes data = test::concat({axis.rx(c), tx, rival_rest});
+    axis.step(c);
+    const Bytes bytes = FrameBuilder().add(Dg(ecat::kLrw, 1, 0x00010000, data, 3)).bytes();
+    const ByteReader reader(bytes.data(), bytes.size());
+    walkPacket(LinkType::Ethernet, reader, frame);
+    inference.onFrame(frame, reader, true);
+  }
+  const InferenceResult result = inference.decide();
+  EXPECT_TRUE(result.axes.empty()) << describeEvidence(result.axes.front());
+  EXPECT_NE(result.refusal.find("the layout is ambiguous: more than one placement fits axis0 "
+                                "(RxPDO LRW 0x00010000+82 offset 0, TxPDO LRW 0x00010000+82 "
+                                "offset 10, confidence 0 %)"),
+            std::string::npos)
+      << result.refusal;
+}
+
 TEST(InferredLayout, NoCyclicDataIsSaid) {
   LayoutInference inference;
   EXPECT_NE(inference.decide().refusal.find("no cyclic process data"), std::string::npos);

@@ -82,6 +82,7 @@ struct SimulateArgs {
   std::string layout_config;
   std::string eni;
   std::string incidents_truth;
+  std::string faults_truth;
   std::string io_inputs = "slow";
   std::string idle;            // SECONDS or all; empty: none
   std::string start_in;        // empty: the capture starts with the session
@@ -260,6 +261,16 @@ int runSimulate(SimulateArgs& args) {
     fmt::print(stderr, "ncservo simulate: {} master copies left out of the capture\n",
                simulator.masterCopiesDropped());
   }
+  if (!args.faults_truth.empty()) {
+    const Result<std::vector<sim::FaultTruth>> faults = simulator.faults();
+    if (!faults) {
+      fmt::print(stderr, "ncservo simulate: --faults-truth: {}\n", faults.error().text());
+      return kExitUsage;
+    }
+    if (!writeBesideCapture(args.faults_truth, sim::faultsJson(*faults), "fault truth")) {
+      return kExitUsage;
+    }
+  }
   if (!args.incidents_truth.empty()) {
     const Result<std::vector<sim::IncidentTruth>> incidents = simulator.incidents();
     if (!incidents) {
@@ -370,6 +381,8 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--incidents-truth", sa.incidents_truth,
                      "with --scenario incidents: also write the incidents `validate` must list, "
                      "as JSON (kind, axis, frame, cause)");
+  command.add_option("--faults-truth", sa.faults_truth,
+                     "also write the findings the faults must give (rule, axis, frames), as JSON");
   command.add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
   return [args] { return runSimulate(*args); };
 }

@@ -11,6 +11,7 @@ void FaultPlan::inject(RuleId rule, double at_s, int axis) {
   if (recipe == nullptr || !recipe->injectable()) return;  // refused by resolveOptions
   at_ns_ = static_cast<std::int64_t>(std::llround(at_s * 1e9));
   axis_ = axis;
+  placed_.push_back({rule, axis, at_ns_, recipe->phase == FaultPhase::Startup});
   recipe->apply(*this);
 }
 

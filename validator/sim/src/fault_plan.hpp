@@ -42,6 +42,16 @@ class FaultPlan final : public FaultActions {
 
   std::optional<std::size_t> opRequestSlave() const { return op_request_slave_; }
 
+  // Each fault as the plan placed it: the rule, its axis (-1: the whole bus), its time and
+  // whether it is the start-up's.
+  struct Placed {
+    RuleId rule;
+    int axis;
+    std::int64_t at_ns;
+    bool startup;
+  };
+  const std::vector<Placed>& placed() const { return placed_; }
+
  private:
   void nc(std::int64_t offset_ns, NcAction action, double value) override;
   void quirk(DriveQuirk quirk) override;
@@ -70,6 +80,7 @@ class FaultPlan final : public FaultActions {
   int axis_ = -1;
   std::size_t axisIndex() const { return static_cast<std::size_t>(axis_ < 0 ? 0 : axis_); }
 
+  std::vector<Placed> placed_;
   std::vector<TimedBusFault> bus_faults_;
   std::vector<DriveFaultEvent> drive_faults_;
   int skip_cycles_ = 0;                          // COM-002

@@ -18,12 +18,12 @@ constexpr std::uint16_t kAlCodeSyncError = 0x001A;
 // last on its axis, so that no later fault there has a warm motor in its minute.
 const std::vector<IncidentRow>& incidentRows() {
   static const std::vector<IncidentRow> table = {
-      {.cause = CauseId::FollowingError,
+      {.cause = "following-error",
        .kind = IncidentKind::DriveFault,
        .axis = 0,
        .description = "FollowerErr (E09) at a steady speed set point",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kFollowing); }},
-      {.cause = CauseId::FollowingErrorAfterStep,
+      {.cause = "following-error-after-step",
        .kind = IncidentKind::DriveFault,
        .axis = 1,
        .description = "the NC steps the speed set point to 3000 rpm in one cycle; FollowerErr "
@@ -33,7 +33,7 @@ const std::vector<IncidentRow>& incidentRows() {
              a.nc(0, NcAction::SpeedStep, 3000);
              a.driveFault(25 * kMs, bits::kFollowing);
            }},
-      {.cause = CauseId::Overcurrent,
+      {.cause = "overcurrent",
        .kind = IncidentKind::DriveFault,
        .axis = 2,
        .description = "the motor current climbs at 2000 A/s to 24 A (message codes 1 and 2); "
@@ -45,7 +45,7 @@ const std::vector<IncidentRow>& incidentRows() {
                          .trip = 24,
                          .cause = bits::kCurrentErr});
            }},
-      {.cause = CauseId::CommunicationLoss,
+      {.cause = "communication-loss",
        .kind = IncidentKind::DriveFault,
        .axis = 3,
        .description = "the axis's slave misses the LRW of 2 cycles (WKC 3 short, COM-001); "
@@ -56,7 +56,7 @@ const std::vector<IncidentRow>& incidentRows() {
              a.bus(1, {Bus::SkipAxisLrw});  // the next cycle (offsets below a cycle round up)
              a.driveFault(3 * kMs, bits::kEcatWatchdog);
            }},
-      {.cause = CauseId::BusVoltage,
+      {.cause = "bus-voltage",
        .kind = IncidentKind::DriveFault,
        .axis = 0,
        .description = "the axis brakes to standstill and the DC bus climbs at 2400 V/s to 800 V "
@@ -70,17 +70,17 @@ const std::vector<IncidentRow>& incidentRows() {
                                   .cause = bits::kBusVoltageErr});
              a.nc(250 * kMs, NcAction::Speed, 600);
            }},
-      {.cause = CauseId::Encoder,
+      {.cause = "encoder",
        .kind = IncidentKind::DriveFault,
        .axis = 1,
        .description = "EncoderErr (E01)",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kEncoderErr); }},
-      {.cause = CauseId::Overspeed,
+      {.cause = "overspeed",
        .kind = IncidentKind::DriveFault,
        .axis = 2,
        .description = "OverSpeed (E11)",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kOverspeed); }},
-      {.cause = CauseId::Configuration,
+      {.cause = "configuration",
        .kind = IncidentKind::DriveFault,
        .axis = 3,
        .description = "the NC selects parameter table 5; PTBLCHKSErr (E30) 20 ms later",
@@ -89,7 +89,7 @@ const std::vector<IncidentRow>& incidentRows() {
              a.nc(-20 * kMs, NcAction::Table, 5);
              a.driveFault(0, bits::kParamChecksum);
            }},
-      {.cause = CauseId::NcCommand,
+      {.cause = "nc-command",
        .kind = IncidentKind::DriveFault,
        .axis = 0,
        .description = "the NC sets reserved SCW bit 20 for 5 cycles (SCW-001); SRTErr 10 ms "
@@ -99,19 +99,19 @@ const std::vector<IncidentRow>& incidentRows() {
              a.nc(-10 * kMs, NcAction::ReservedBit, 5);
              a.driveFault(0, bits::kServoRuntime);
            }},
-      {.cause = CauseId::Unknown,
+      {.cause = "unknown",
        .kind = IncidentKind::DriveFault,
        .axis = 1,
        .description = "PDPINT (E16), a power stage fault with nothing before it",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kPdpint); }},
-      {.cause = CauseId::Unknown,
+      {.cause = "unknown",
        .kind = IncidentKind::Esm,
        .axis = 2,
        .description = "the axis's slave falls from OP to SAFE-OP with AL status code 0x001A; the "
                       "master's AL status poll (every 10 ms) sees it, acknowledges it and "
                       "requests OP; the NC enables the axis again",
        .apply = [](IncidentActions& a) { a.fallFromOp(0, kAlCodeSyncError); }},
-      {.cause = CauseId::CommunicationLoss,
+      {.cause = "communication-loss",
        .kind = IncidentKind::BusOutage,
        .axis = -1,
        .description = "12 cycles are lost before the slaves (COM-004, COM-005); every drive "
@@ -120,7 +120,7 @@ const std::vector<IncidentRow>& incidentRows() {
            [](IncidentActions& a) {
              a.bus(0, {Bus::LoseBeforeSlaves, 12});
            }},
-      {.cause = CauseId::Overtemperature,
+      {.cause = "overtemperature",
        .kind = IncidentKind::DriveFault,
        .axis = 3,
        .description = "the motor temperature climbs at 200 °C/s (message code 4), "

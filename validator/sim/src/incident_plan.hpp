@@ -31,7 +31,9 @@ class IncidentActions {
 // afterwards (drive faults with cause communication-loss); an ESM row's axis's slave falls from OP.
 
 struct IncidentRow {
-  CauseId cause;  // the cause the incident must get
+  // The cause id the incident must get, as docs/incidents.md names it: written here, not taken
+  // from the cause table the validator judges with, so that the truth is the plan's own.
+  const char* cause;
   IncidentKind kind;
   int axis;                 // -1: the whole bus
   const char* description;  // the chain, for docs/simulate.md

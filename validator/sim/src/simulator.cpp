@@ -17,7 +17,6 @@
 #include "incident_plan.hpp"
 #include "master.hpp"
 #include "ncservo/config/config.hpp"
-#include "ncservo/incidents/causes.hpp"
 #include "ncservo/sim/eni_writer.hpp"
 #include "ncservo/sim/models.hpp"
 #include "segment.hpp"
@@ -39,6 +38,23 @@ struct PlannedIncident {
 // A planned incident is seen this long after its time at the latest (a drift trips around it).
 constexpr std::int64_t kIncidentSlackNs = 250 * kMs;
 }  // namespace
+
+std::string faultsJson(const std::vector<FaultTruth>& faults) {
+  nlohmann::ordered_json expected = nlohmann::ordered_json::array();
+  nlohmann::ordered_json companions = nlohmann::ordered_json::object();
+  for (const FaultTruth& f : faults) {
+    expected.push_back(
+        {{"rule", f.rule},
+         {"axis", f.axis ? nlohmann::ordered_json(*f.axis) : nlohmann::ordered_json()},
+         {"first_frame", f.first_frame},
+         {"last_frame", f.last_frame}});
+    const FaultRecipe* recipe = faultRecipe(ruleByCode(f.rule)->id);
+    nlohmann::ordered_json others = nlohmann::ordered_json::array();
+    for (RuleId other : recipe->companions) others.push_back(ruleDef(other).code);
+    companions[f.rule] = others;
+  }
+  return nlohmann::ordered_json{{"expected", expected}, {"companions", companions}}.dump(1) + "\n";
+}
 
 std::string incidentsJson(const std::vector<IncidentTruth>& incidents) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
@@ -79,6 +95,13 @@ struct Simulator::Impl {
     std::uint16_t code;
     bool done = false;
   };
+  // Where each planned fault's findings may be reported, in bus frames (faults()).
+  struct FaultWindow {
+    FaultPlan::Placed fault;
+    std::uint64_t first = 0;
+    std::uint64_t last = 0;
+  };
+  std::vector<FaultWindow> fault_windows;
   std::vector<PlannedIncident> planned;
   std::vector<IncidentTruth> seen;
   std::vector<std::string> unplanned;
@@ -117,6 +140,25 @@ struct Simulator::Impl {
       faults.inject(f.rule, f.at_s.value_or(-1), f.axis.value_or(-1));
     }
     if (o.scenario == Scenario::Faults) faults.injectScenario();
+    for (const FaultPlan::Placed& fault : faults.placed()) fault_windows.push_back({fault});
+  }
+
+  // The capture ends: the windows still open end with it.
+  void closeFaultWindows() {
+    for (FaultWindow& w : fault_windows) {
+      if (w.last == 0) w.last = master.frames();
+    }
+  }
+  // Before a cycle's frames: the windows that open or close at its slot (FaultTruth).
+  void markFaultWindows(std::int64_t slot, bool operational) {
+    for (FaultWindow& w : fault_windows) {
+      if (w.first == 0 && (w.fault.startup || slot >= w.fault.at_ns)) {
+        w.first = w.fault.startup ? 1 : master.frames() + 1;
+      }
+      const bool over =
+          w.fault.startup ? operational : slot >= w.fault.at_ns + kFaultReportedWithinNs;
+      if (w.last == 0 && over) w.last = master.frames();
+    }
   }
 
   // --- scenarios ---
@@ -188,7 +230,7 @@ struct Simulator::Impl {
       const std::int64_t slot = (t + cycle_ns - 1) / cycle_ns * cycle_ns;
       Chain chain(*this, slot, row.axis);
       row.apply(chain);
-      planned.push_back({row.kind, row.axis, causeDef(row.cause).name, slot});
+      planned.push_back({row.kind, row.axis, row.cause, slot});
       if (row.kind == IncidentKind::BusOutage) {  // and every drive's ECatTErr
         for (int a = 0; a < o.axes; ++a) {
           planned.push_back({IncidentKind::DriveFault, a, "communication-loss", slot});
@@ -369,6 +411,7 @@ struct Simulator::Impl {
       const std::int64_t slot = first_cycle + static_cast<std::int64_t>(cycle) * cycle_ns;
       if (slot >= duration_ns) break;
       if (o.scenario == Scenario::Soak) planSoak(slot);
+      markFaultWindows(slot, operational);
       faults.startBusFaults(slot);
       std::int64_t send = slot;
       if (o.jitter_us > 0) send += rng.between(-o.jitter_us, o.jitter_us) * kUs;
@@ -436,6 +479,7 @@ struct Simulator::Impl {
         }
       }
     }
+    closeFaultWindows();
     if (shaper.active()) return shaper.records();
     return master.frames() - master_copies_dropped - frames_cut;
   }
@@ -446,6 +490,31 @@ Simulator::~Simulator() = default;
 
 std::uint64_t Simulator::masterCopiesDropped() const {
   return impl_->master_copies_dropped;
+}
+
+Result<std::vector<FaultTruth>> Simulator::faults() const {
+  const Impl& impl = *impl_;
+  if (impl.shaper.active() || impl.o.mid_start != MidStart::None || impl.o.capture_loss > 0) {
+    return fail(
+        "the capture's records are not the bus's frames (a capture shape, --start-in or "
+        "--capture-loss): no fault truth");
+  }
+  std::vector<FaultTruth> out;
+  for (const Impl::FaultWindow& w : impl.fault_windows) {
+    const RuleDef& rule = ruleDef(w.fault.rule);
+    std::vector<std::optional<int>> axes;  // a bus rule names none; the whole bus, every axis
+    if (rule.kind == RuleKind::Bus) {
+      axes.push_back(std::nullopt);
+    } else if (w.fault.axis < 0) {
+      for (int a = 0; a < impl.o.axes; ++a) axes.push_back(a);
+    } else {
+      axes.push_back(w.fault.axis);
+    }
+    for (const std::optional<int>& axis : axes) {
+      out.push_back({rule.code, axis, w.first, w.last});
+    }
+  }
+  return out;
 }
 
 Result<std::vector<IncidentTruth>> Simulator::incidents() const {

@@ -35,6 +35,22 @@ struct IncidentTruth {
 // `{"incidents": [{"kind", "axis", "frame", "cause"}, ...]}`, for --incidents-truth.
 std::string incidentsJson(const std::vector<IncidentTruth>& incidents);
 
+// A finding a planned fault must produce, from the plan alone: the rule, its axis (none for a
+// bus rule) and the frames it may be reported on, from the fault's time to kFaultReportedWithinNs
+// after it (a start-up fault: from the first frame to the slaves' reaching OP).
+struct FaultTruth {
+  std::string rule;
+  std::optional<int> axis;
+  std::uint64_t first_frame = 0;
+  std::uint64_t last_frame = 0;
+};
+// Every recipe's condition and timeout are over this long after its fault's time (the longest,
+// FLT-001's drive enabled 200 ms beside its error; docs/simulate.md).
+inline constexpr std::int64_t kFaultReportedWithinNs = 300'000'000;
+// gen_capture.py --findings' form, which check_findings.py reads: `{"expected": [{"rule", "axis",
+// "first_frame", "last_frame"}, ...], "companions": {RULE: [RULE, ...]}}`, for --faults-truth.
+std::string faultsJson(const std::vector<FaultTruth>& faults);
+
 class Simulator {
  public:
   // The options must have passed resolveOptions.
@@ -57,6 +73,10 @@ class Simulator {
   // After run, in the `incidents` scenario: every incident it wrote, in capture order; an error
   // when an incident happened that its plan did not say, or one it planned did not happen.
   Result<std::vector<IncidentTruth>> incidents() const;
+  // After run: the findings of every fault it planned (--fault, the faults scenario); an error
+  // when the capture's records are not the bus's frames (a capture shape, --start-in,
+  // --capture-loss).
+  Result<std::vector<FaultTruth>> faults() const;
 
  private:
   struct Impl;
