@@ -160,3 +160,14 @@ PY
   echo "ok $name"
 done
 [ $judged -ge 3 ] || fail "only $judged cyclic frames in the real captures"
+# One source, one rounding: the summary's cycle time is the timing series' (docs/cli.md), on a
+# capture whose PC stamps make the two methods differ in the last digits (5142.59 vs 5143.0).
+"$NCSERVO" validate --format json --fail-on never --allow-empty "$real/ethercrab-dc-to-op.pcapng" \
+  >"$WORK/one.json" ||
+  fail "ethercrab-dc-to-op: validate exit $?"
+python3 - "$WORK/one.json" <<'PY' || fail "cycle_time_us and timing.cycle_us disagree"
+import json, sys
+c = json.load(open(sys.argv[1]))["captures"][0]
+summary, series = c["cycle_time_us"], c["timing"]["cycle_us"]
+assert summary == {k: series[k] for k in ("median", "p99", "max")}, (summary, series)
+PY
