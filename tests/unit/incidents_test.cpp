@@ -236,10 +236,11 @@ TEST(Incidents, EachCauseWindowEndsOnItsDocumentedNumber) {
     EXPECT_EQ(causeOf(row, fault, fault - window - 1), row.outside)
         << row.cause << ": one cycle beyond";
   }
-  for (const auto& [cause, window] : windows) {
+  for (const auto& entry : windows) {
     const bool tested = std::any_of(rows.begin(), rows.end(),
-                                    [&](const WindowEdgeRow& r) { return r.cause == cause; });
-    EXPECT_TRUE(window == 0 || tested) << cause << " looks back, but no row tests its edge";
+                                    [&](const WindowEdgeRow& r) { return r.cause == entry.first; });
+    EXPECT_TRUE(entry.second == 0 || tested)
+        << entry.first << " looks back, but no row tests its edge";
   }
 }
 
