@@ -26,7 +26,7 @@ comments() {
     >"$2" 2>/dev/null || fail "tshark comments of $1"
 }
 
-# check_comments COMMENTS.json FINDINGS.jsonl [OTHERS]: each finding's frame has its comment,
+# check_comments COMMENTS.json FINDINGS.jsonl [OTHERS]: each finding's and incident's frame has its comment,
 # once (a capture annotated again has its comments replaced), and no frame has another but
 # frame 1's OTHERS (someone else's comment, kept).
 check_comments() {
@@ -47,11 +47,13 @@ for line in open(sys.argv[2]):
     f = json.loads(line)
     if "rule" in f:
         expected[f["frame"]].append(f["rule"])
-assert set(shown) == set(expected), f"frames with comments {sorted(shown)[:9]} != findings' {sorted(expected)[:9]}"
+    if "incident" in f:  # docs/field.md: an incident's comment starts with INC-<cause>
+        expected[f["incident"]["frame"]].append("INC-" + f["incident"]["cause"]["id"])
+assert set(shown) == set(expected), f"frames with comments {sorted(shown)[:9]} != findings' and incidents' {sorted(expected)[:9]}"
 for frame, rules in expected.items():
     got = sorted(c.split(" ")[0] for c in shown[frame])
     assert got == sorted(rules), f"frame {frame}: comments {shown[frame]} for findings {rules}"
-print(sum(len(v) for v in expected.values()), "findings,", len(expected), "frames")
+print(sum(len(v) for v in expected.values()), "findings and incidents,", len(expected), "frames")
 PY
 }
 
@@ -86,7 +88,7 @@ for input in "${inputs[@]}"; do
   annotated "$input"
 done
 
-# --snippets: only frames within S seconds of a finding, the findings' frames among them.
+# --snippets: only frames within S seconds of a finding or an incident, their frames among them.
 "$NCSERVO" annotate --snippets 0.05 "$SRC/captures/faults-4axis.pcap" "$WORK/snip.pcapng" 2>/dev/null ||
   fail "snippets: exit $?"
 "$NCSERVO" validate --format jsonl --fail-on never "$SRC/captures/faults-4axis.pcap" >"$WORK/f.jsonl"
@@ -95,8 +97,9 @@ done
 "$TSHARK" none -r "$SRC/captures/faults-4axis.pcap" -T fields -e frame.time_epoch >"$WORK/all.txt" 2>/dev/null
 python3 - "$WORK/f.jsonl" "$WORK/snip.pcapng" "$WORK/all.txt" "$WORK/snip.txt" <<'PY' || fail "snippets"
 import json, sys, subprocess
-findings = [json.loads(l) for l in open(sys.argv[1])]
-findings = [f for f in findings if "rule" in f]
+lines = [json.loads(l) for l in open(sys.argv[1])]
+# Findings and incidents, each a frame and a time: the snippets are cut around both.
+findings = [f for f in lines if "rule" in f] + [l["incident"] for l in lines if "incident" in l]
 epochs = [float(l) for l in open(sys.argv[3])]
 first = epochs[0]
 near = [t for t in epochs if any(abs(t - first - f["time"]) <= 0.05 + 1e-6 for f in findings)]

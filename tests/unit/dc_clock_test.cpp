@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "frame_builder.hpp"
@@ -176,6 +177,51 @@ INSTANTIATE_TEST_SUITE_P(
                       DriftCase{"long capture, 10 ms cycle", -7.5, 0, 10'000'000, 20'000, 8,
                                 1ull << 40}),
     test::rowName<DriftCase>);
+
+// The slope's standard error, worked by hand: x 0..3, y 0, 1, 1, 2 give the line y = 0.4 + 0.6 x
+// with residuals -0.4, 0.2, -0.4, 0.2... summing to 0.2 squared; SE = sqrt(0.2 / 2 / 5).
+TEST(LineFitError, ByHand) {
+  LineFit scattered;
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, 1.0}, {2.0, 1.0}, {3.0, 2.0}})
+    scattered.add(x, y);
+  ASSERT_TRUE(scattered.slopeStandardError());
+  EXPECT_NEAR(*scattered.slope(), 0.6, 1e-12);
+  EXPECT_NEAR(*scattered.slopeStandardError(), 0.1414213562, 1e-9);
+  LineFit straight;
+  for (const double x : {0.0, 1.0, 2.0, 5.0}) straight.add(x, 3.0 + 2.0 * x);
+  EXPECT_NEAR(*straight.slopeStandardError(), 0.0, 1e-9);
+  LineFit two;
+  two.add(0, 0);
+  two.add(1, 1);
+  EXPECT_FALSE(two.slopeStandardError());  // a line through two points leaves nothing to scatter
+}
+
+// Stamps jittered by a PC (uniform, ±`jitter_ns`): the drift found lies within its uncertainty of
+// the clock's, and the uncertainty grows with the jitter.
+TEST(DcDriftUncertainty, CoversTheTruthAndGrowsWithTheJitter) {
+  constexpr double kPpm = 37.0;
+  std::optional<double> previous;
+  for (const std::int64_t jitter_ns : {0LL, 20'000LL, 200'000LL}) {
+    Harness h;
+    std::uint64_t state = 12345;  // a fixed LCG: the same stamps on every run
+    const std::int64_t t0 = 1'700'000'000'000'000'000;
+    for (int i = 0; i < 4000; ++i) {
+      const std::int64_t bus_ns = static_cast<std::int64_t>(i) * 1'000'000;
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      const auto draw = static_cast<double>(state >> 11) / 9007199254740992.0;  // [0, 1)
+      const auto stamp_jitter = static_cast<std::int64_t>((2 * draw - 1) * jitter_ns);
+      const auto clock = static_cast<std::uint64_t>(1'000'000 + bus_ns * (1 + kPpm * 1e-6));
+      h.readTime(ecat::kFrmw, kStation, clock, t0 + bus_ns + stamp_jitter);
+    }
+    const DcStation s = h.clock.stations().at(0);
+    ASSERT_TRUE(s.drift_ppm && s.drift_uncertainty_ppm) << jitter_ns;
+    EXPECT_LE(std::abs(*s.drift_ppm - kPpm), *s.drift_uncertainty_ppm + 1e-3) << jitter_ns;
+    if (previous) {
+      EXPECT_GT(*s.drift_uncertainty_ppm, *previous * 5) << jitter_ns;
+    }
+    previous = s.drift_uncertainty_ppm;
+  }
+}
 
 // Which reads count: returned copies only, some slave answered, one slave addressed.
 struct ReadCase {

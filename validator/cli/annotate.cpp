@@ -17,6 +17,7 @@
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/capture/capture_stream.hpp"
 #include "ncservo/pipeline/capture_pipeline.hpp"
+#include "ncservo/report/report.hpp"
 #include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/frame_clock.hpp"
@@ -37,6 +38,7 @@ struct Judged {
   Coverage coverage;  // whether every axis was checked (no servo: nothing was)
   std::vector<std::int64_t> finding_times_ns;  // of each finding's frame, in capture order
   std::size_t findings = 0;
+  std::size_t incidents = 0;
 };
 
 // The first pass: every finding, as a comment on its frame.
@@ -57,7 +59,17 @@ Result<Judged> judge(const AnnotateArgs& args, const LayoutFiles& files,
   };
   pipeline.setSinks({nullptr, nullptr, nullptr, keep, nullptr});
   if (Status status = streamCapture(**opened, pipeline); !status) return fail(status.error());
-  judged.coverage = pipeline.result().coverage;
+  const CaptureResult result = pipeline.result();
+  judged.coverage = result.coverage;
+  // docs/field.md#annotate: each incident on its frame too, so that a colleague without the
+  // plugin sees its cause in any Wireshark.
+  CaptureReport report;
+  static_cast<CaptureResult&>(report) = result;
+  for (const Incident& incident : result.incidents) {
+    judged.comments[incident.at.frame].push_back(incidentComment(report, incident));
+    judged.finding_times_ns.push_back(incident.at.time_ns);
+    ++judged.incidents;
+  }
   return judged;
 }
 
@@ -112,8 +124,9 @@ int runAnnotate(const AnnotateArgs& args) {
     return kExitCapture;
   }
   const FrameFilter keep = args.snippets_s ? snippetFilter(*judged, *args.snippets_s) : nullptr;
-  if (Status written =
-          annotateCapture(args.input, args.output, judged->comments, keep, isFindingComment);
+  if (Status written = annotateCapture(
+          args.input, args.output, judged->comments, keep,
+          [](std::string_view c) { return isFindingComment(c) || isIncidentComment(c); });
       !written) {
     fmt::print(stderr, "ncservo annotate: {}\n", written.error().text());
     // docs/cli.md#exit-status: an output that cannot be written is a usage error, as in every
@@ -121,8 +134,10 @@ int runAnnotate(const AnnotateArgs& args) {
     return written.error().path == args.output ? kExitUsage : kExitCapture;
   }
   if (args.output != "-") {
-    fmt::print(stderr, "ncservo annotate: {} finding{} as comments on {} frame{} in {}\n",
-               judged->findings, judged->findings == 1 ? "" : "s", judged->comments.size(),
+    fmt::print(stderr,
+               "ncservo annotate: {} finding{} and {} incident{} as comments on {} frame{} in {}\n",
+               judged->findings, judged->findings == 1 ? "" : "s", judged->incidents,
+               judged->incidents == 1 ? "" : "s", judged->comments.size(),
                judged->comments.size() == 1 ? "" : "s", args.output);
   }
   // The copy is written all the same; nothing of the protocol was checked in it (as validate).

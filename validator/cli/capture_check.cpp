@@ -1,7 +1,9 @@
 #include "capture_check.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -23,7 +25,7 @@ Result<CheckSetup> prepareCheck(const CheckArgs& o) {
   setup.files = std::move(*files);
   if (Status built = buildSettings(o, setup.files.config, setup.settings); !built)
     return fail(built.error());
-  const Result<TimeWindow> time_window = timeWindowOf(o.window.from_s, o.window.to_s);
+  const Result<TimeWindow> time_window = timeWindowOf(o.window.from, o.window.to, o.window.zone());
   if (!time_window) return fail(time_window.error());
   setup.window = *time_window;
   setup.timestamps = *timestampModeFromName(o.timestamps);
@@ -31,6 +33,31 @@ Result<CheckSetup> prepareCheck(const CheckArgs& o) {
   if (setup.files.eni) setup.eni_frames = setup.files.eni->frames;
   return setup;
 }
+
+namespace {
+
+// The incidents the report's scope keeps; a named axis the capture does not have is an error.
+Status keepScope(CaptureReport& report) {
+  for (const std::string& name : report.scope.axes) {
+    if (std::none_of(report.layout.begin(), report.layout.end(),
+                     [&](const AxisInfo& axis) { return axis.name == name; })) {
+      std::vector<std::string> names;
+      for (const AxisInfo& axis : report.layout) names.push_back(axis.name);
+      return fail(fmt::format(
+          "--axis {}: no axis of that name (its axes: {})", name,
+          names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
+    }
+  }
+  std::vector<Incident> kept;
+  for (Incident& incident : report.incidents) {
+    if (report.scope.incidents && report.inScope(incident.axis))
+      kept.push_back(std::move(incident));
+  }
+  report.incidents = std::move(kept);
+  return {};
+}
+
+}  // namespace
 
 int validateCapture(const std::string& path, const CheckSetup& setup,
                     const cli::ReportWriter& writer, const CaptureOutput& output,
@@ -62,6 +89,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   };
   const auto keepFindings = [&](const std::vector<Finding>& findings) {
     for (const Finding& f : findings) {
+      if (!report.scope.findings || !report.inScope(f.axis)) continue;
       const cli::BaselineState state = report.tally(f);
       if (output.live == nullptr || writer.keepsFindings()) {
         report.findings.push_back(f);
@@ -87,6 +115,11 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
     return kExitInterrupted;
   }
   static_cast<CaptureResult&>(report) = pipeline.result();
+  if (Status scoped = keepScope(report); !scoped) {
+    fmt::print(output.messages, "ncservo: {}: {}\n", path, scoped.error().text());
+    if (output.live != nullptr) output.live->endCapture(report);
+    return kExitUsage;
+  }
   for (const std::string& warning : report.layout_warnings) {
     fmt::print(output.messages, "ncservo: {}: layout does not fit: {}\n", path, warning);
   }

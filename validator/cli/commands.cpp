@@ -213,10 +213,15 @@ Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
 }
 
 void addWindowOptions(CLI::App& command, WindowArgs& window) {
-  command.add_option("--from", window.from_s,
-                     "only frames at or after SECONDS since the capture's first frame");
-  command.add_option("--to", window.to_s,
-                     "only frames at or before SECONDS since the capture's first frame");
+  command.add_option("--from", window.from,
+                     "only frames at or after TIME: seconds since the capture's first frame, or "
+                     "an ISO 8601 time (2024-05-01T10:41:00Z)");
+  command.add_option("--to", window.to,
+                     "only frames at or before TIME: seconds since the capture's first frame, or "
+                     "an ISO 8601 time");
+  command.add_flag("--local-time", window.local_time,
+                   "times of day in this machine's local time (TZ), not UTC: the report's, and "
+                   "an ISO --from/--to without an offset");
 }
 
 void warnIfTruncated(const std::string& capture, const Truncation& truncation,

@@ -111,7 +111,9 @@ Status buildSettings(const RuleArgs& o, const std::optional<Config>& config,
 
 // --from/--to (docs/cli.md), seconds since the capture's first frame.
 struct WindowArgs {
-  std::optional<double> from_s, to_s;
+  std::optional<std::string> from, to;  // seconds or ISO 8601 times (docs/cli.md#time-window)
+  bool local_time = false;              // --local-time
+  TimeZone zone() const { return local_time ? TimeZone::Local : TimeZone::Utc; }
 };
 void addWindowOptions(CLI::App& command, WindowArgs& window);
 

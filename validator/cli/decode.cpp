@@ -190,7 +190,10 @@ void printTiming(const CaptureReader& reader, const CapturePipeline& pipeline) {
                         own ? timestampSourceName(stamps)
                             : clockSourceName(pipeline.clockStage().choice().source),
                         own ? timestampResolutionNs(stamps, reader.timestampDigits()) : 1));
-  std::fputs(dcText(timing.dc().stations(), timing.dc().settledNs()).c_str(), stderr);
+  std::fputs(dcText(timing.dc().stations(), timing.dc().settledNs(),
+                    clockSourceMeaning(pipeline.clockStage().choice().source))
+                 .c_str(),
+             stderr);
 }
 
 // The notes after a decode: which clock timed the frames (the `time` column, the VCD's times),
@@ -387,7 +390,8 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
 
 int runDecode(const DecodeArgs& args) {
   DecodeInput input;
-  const Result<TimeWindow> window = timeWindowOf(args.window.from_s, args.window.to_s);
+  const Result<TimeWindow> window =
+      timeWindowOf(args.window.from, args.window.to, args.window.zone());
   if (!window) {
     fmt::print(stderr, "ncservo: {}\n", window.error().text());
     return kExitUsage;

@@ -284,6 +284,28 @@ int runSimulate(SimulateArgs& args) {
   return kExitOk;
 }
 
+// What the bus's timing does (jitter, drift, latency, lost and late cycles, loss): the options.
+void addBusTimingOptions(CLI::App& command, SimulateArgs& sa) {
+  command.add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
+  command.add_option("--dc-drift", sa.options.dc_drift_ppm,
+                     "PPM: the reference clock runs this fast against the master's (and the "
+                     "capture's) clock, -1000 to 1000 (docs/simulate.md)");
+  command.add_option("--latency-us", sa.options.latency_us,
+                     "returned copies this long after their master copy, microseconds (default: "
+                     "the ring's own few microseconds)");
+  command.add_option(
+      "--late-cycle", sa.late_cycles,
+      "SECONDS:US: the first cycle at or after SECONDS is sent US late (repeatable)");
+  command.add_option("--lost-cycles", sa.lost_cycles,
+                     "SECONDS:N: N cycles from the first at or after SECONDS are not sent "
+                     "(repeatable)");
+  command.add_option("--loss", sa.options.loss,
+                     "probability that a returned frame is lost (COM-004 findings)");
+  command.add_option("--capture-loss", sa.options.capture_loss,
+                     "probability that the capture misses a cycle's master copies, keeping "
+                     "their returned copies (not the bus: no COM-002)");
+}
+
 }  // namespace
 
 Handler simulateCommand(CLI::App& command) {
@@ -330,21 +352,7 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--fault", sa.faults,
                      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
   command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");
-  command.add_option("--jitter-us", sa.options.jitter_us, "master send jitter, microseconds");
-  command.add_option("--latency-us", sa.options.latency_us,
-                     "returned copies this long after their master copy, microseconds (default: "
-                     "the ring's own few microseconds)");
-  command.add_option(
-      "--late-cycle", sa.late_cycles,
-      "SECONDS:US: the first cycle at or after SECONDS is sent US late (repeatable)");
-  command.add_option("--lost-cycles", sa.lost_cycles,
-                     "SECONDS:N: N cycles from the first at or after SECONDS are not sent "
-                     "(repeatable)");
-  command.add_option("--loss", sa.options.loss,
-                     "probability that a returned frame is lost (COM-004 findings)");
-  command.add_option("--capture-loss", sa.options.capture_loss,
-                     "probability that the capture misses a cycle's master copies, keeping "
-                     "their returned copies (not the bus: no COM-002)");
+  addBusTimingOptions(command, sa);
   command
       .add_option(
           "--io-inputs", sa.io_inputs,

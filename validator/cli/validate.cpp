@@ -34,6 +34,8 @@ struct ValidateArgs : CheckArgs {
   std::optional<unsigned> jobs;      // default: the cores
   std::vector<std::string> reports;  // FORMAT:FILE
   std::string baseline;              // a JSON report (docs/baselines.md)
+  std::vector<std::string> axes;     // --axis
+  std::string only;                  // --only findings|incidents
 };
 
 // A capture validated apart (CaptureOutput without `live`) given to the writer as if it had
@@ -118,6 +120,12 @@ Result<std::optional<cli::ReportFile>> loadBaseline(const ValidateArgs& o) {
 std::vector<cli::CaptureReport> emptyReports(const ValidateArgs& o,
                                              const std::optional<cli::ReportFile>& baseline) {
   std::vector<cli::CaptureReport> reports(o.captures.size());
+  for (cli::CaptureReport& report : reports) {
+    report.zone = o.window.zone();
+    report.scope.axes = o.axes;
+    report.scope.findings = o.only != "incidents";
+    report.scope.incidents = o.only != "findings";
+  }
   if (baseline) {
     for (std::size_t i = 0; i < o.captures.size(); ++i) {
       const cli::ReportedCapture* matched =
@@ -284,6 +292,11 @@ Handler validateCommand(CLI::App& command) {
   cli::addRuleOptions(command, *args);
   addTimestampsOption(command, args->timestamps);
   addWindowOptions(command, args->window);
+  command.add_option("--axis", args->axes,
+                     "NAME: report only this axis's findings and incidents, and the bus's "
+                     "(repeatable; docs/cli.md#scope)");
+  command.add_option("--only", args->only, "report only findings, or only incidents")
+      ->check(CLI::IsMember({"findings", "incidents"}));
   command.add_flag("--allow-empty", args->allow_empty,
                    "exit 0, not 4, where no servo (or not every configured axis) was decoded");
   command

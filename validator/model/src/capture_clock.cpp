@@ -66,6 +66,13 @@ const char* clockSourceName(ClockSource source) {
   return "capture";
 }
 
+const char* clockSourceMeaning(ClockSource source) {
+  for (const ClockSourceRow& row : kClockSources) {
+    if (row.source == source) return row.meaning;
+  }
+  return kClockSources.front().meaning;
+}
+
 std::optional<SystemTimeRead> systemTimeRead(const EcatFrame& frame, const ByteReader& bytes) {
   for (std::size_t i = 0; i < frame.count; ++i) {
     const Datagram& dg = frame.datagrams[i];

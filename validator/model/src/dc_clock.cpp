@@ -1,6 +1,7 @@
 #include "ncservo/model/dc_clock.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace ncservo {
 
@@ -41,6 +42,7 @@ void LineFit::add(double x, double y) {
   sy += y;
   sxx += x * x;
   sxy += x * y;
+  syy += y * y;
 }
 
 void LineFit::merge(const LineFit& other) {
@@ -49,6 +51,18 @@ void LineFit::merge(const LineFit& other) {
   sy += other.sy;
   sxx += other.sxx;
   sxy += other.sxy;
+  syy += other.syy;
+}
+
+std::optional<double> LineFit::slopeStandardError() const {
+  const std::optional<double> b = slope();
+  if (!b || n < 3) return std::nullopt;
+  const double spread_x = sxx - sx * sx / n;
+  const double spread_xy = sxy - sx * sy / n;
+  const double spread_y = syy - sy * sy / n;
+  // Rounding may leave a perfect line's residuals a little below zero.
+  const double residuals = std::max(spread_y - *b * spread_xy, 0.0);
+  return std::sqrt(residuals / (n - 2) / spread_x);
 }
 
 std::optional<double> LineFit::slope() const {
@@ -98,6 +112,15 @@ std::optional<double> DriftFit::ppmOf(std::size_t from_block, std::size_t to_blo
 
 std::optional<double> DriftFit::driftPpm() const {
   return ppmOf(0, used_blocks_);
+}
+
+std::optional<double> DriftFit::driftUncertaintyPpm() const {
+  constexpr double kNinetyFivePercent = 1.96;  // standard errors, for a normal scatter
+  LineFit fit;
+  for (std::size_t i = 0; i < used_blocks_; ++i) fit.merge(blocks_[i]);
+  const std::optional<double> error = fit.slopeStandardError();
+  if (!error) return std::nullopt;
+  return kNinetyFivePercent * *error / kNsPerPpmSecond;
 }
 
 std::optional<double> DriftFit::firstHalfPpm() const {
@@ -225,6 +248,7 @@ std::vector<DcStation> DcClock::stations() const {
     station.reference = d.reference;
     station.time_reads = d.fit.samples();
     station.drift_ppm = d.fit.driftPpm();
+    station.drift_uncertainty_ppm = d.fit.driftUncertaintyPpm();
     station.first_half_ppm = d.fit.firstHalfPpm();
     station.second_half_ppm = d.fit.secondHalfPpm();
     station.difference_reads = d.difference_reads;

@@ -42,13 +42,18 @@ std::string timingText(const TimingSummary& timing, const char* timestamps,
   return out + "\n";
 }
 
-std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_ns) {
+std::string dcText(const std::vector<DcStation>& stations, std::int64_t settled_ns,
+                   std::string_view against) {
   if (stations.empty()) return {};
-  std::string out = "distributed clocks:\n";
+  std::string out = fmt::format("distributed clocks (drift against {}, ± at 95 %):\n", against);
   for (const DcStation& s : stations) {
     out += fmt::format("  {}{}:", slaveName(s.slave), s.reference ? ", the reference clock" : "");
     if (s.time_reads > 0) {
-      out += s.drift_ppm ? fmt::format(" drift {:+.3f} ppm", *s.drift_ppm) : " drift unknown";
+      out += s.drift_ppm ? fmt::format(" drift {:+.3f}{} ppm", *s.drift_ppm,
+                                       s.drift_uncertainty_ppm
+                                           ? fmt::format(" ± {:.3f}", *s.drift_uncertainty_ppm)
+                                           : std::string())
+                         : " drift unknown";
       if (s.first_half_ppm && s.second_half_ppm) {
         out += fmt::format(" (first half {:+.3f}, second half {:+.3f})", *s.first_half_ppm,
                            *s.second_half_ppm);

@@ -9,33 +9,50 @@
 #include <tuple>
 #include <utility>
 
+#include "ncservo/base/number.hpp"
+
 namespace ncservo {
 
-Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s) {
+Result<TimeWindow> timeWindowOf(const std::optional<std::string>& from,
+                                const std::optional<std::string>& to, TimeZone zone) {
   constexpr double kLimitS = 1e9;  // about 30 years either way: the nanoseconds fit
   TimeWindow window;
-  for (auto [option, seconds, ns] :
-       {std::tuple{"--from", from_s, &window.from_ns}, std::tuple{"--to", to_s, &window.to_ns}}) {
-    if (!seconds) continue;
-    if (!std::isfinite(*seconds) || std::fabs(*seconds) > kLimitS) {
+  for (auto [option, text, ns, absolute] :
+       {std::tuple{"--from", &from, &window.from_ns, &window.from_absolute},
+        std::tuple{"--to", &to, &window.to_ns, &window.to_absolute}}) {
+    if (!*text) continue;
+    if (const Result<double> seconds = parseNumber<double>(**text); seconds) {
+      if (!std::isfinite(*seconds) || std::fabs(*seconds) > kLimitS) {
+        return fail(
+            fmt::format("{} {}: expected seconds since the capture's first frame", option, **text));
+      }
+      *ns = std::llround(*seconds * 1e9);
+    } else if (const std::optional<std::int64_t> time = parseIsoTime(**text, zone); time) {
+      *ns = *time;
+      *absolute = true;
+    } else {
       return fail(
-          fmt::format("{} {}: expected seconds since the capture's first frame", option, *seconds));
+          fmt::format("{} {}: expected seconds since the capture's first frame or an ISO 8601 time "
+                      "(2024-05-01T10:41:00, with Z or +01:00 for its zone)",
+                      option, **text));
     }
-    *ns = std::llround(*seconds * 1e9);
   }
-  if (window.from_ns && window.to_ns && *window.to_ns < *window.from_ns) {
-    return fail(fmt::format("--to {} is before --from {}", *to_s, *from_s));
+  if (window.from_ns && window.to_ns && window.from_absolute == window.to_absolute &&
+      *window.to_ns < *window.from_ns) {
+    return fail(fmt::format("--to {} is before --from {}", *to, *from));
   }
   return window;
 }
 
 std::string describeTimeWindow(const TimeWindow& window) {
   std::string out;
-  auto add = [&out](const char* option, const std::optional<std::int64_t>& ns) {
-    if (ns) out += fmt::format("{}{} {:g}", out.empty() ? "" : " ", option, *ns / 1e9);
+  auto add = [&out](const char* option, const std::optional<std::int64_t>& ns, bool absolute) {
+    if (!ns) return;
+    out += fmt::format("{}{} {}", out.empty() ? "" : " ", option,
+                       absolute ? isoTime(*ns, 6, TimeZone::Utc) : fmt::format("{:g}", *ns / 1e9));
   };
-  add("--from", window.from_ns);
-  add("--to", window.to_ns);
+  add("--from", window.from_ns, window.from_absolute);
+  add("--to", window.to_ns, window.to_absolute);
   return out;
 }
 
@@ -150,7 +167,7 @@ std::optional<WalkedRecord> CapturePipeline::walk(const CaptureRecord& record, E
   if (counted != nullptr) counted->ethercat = true;
   ++run_.ethercat;
   const std::int64_t time_ns = clock_.time(record.frame, record.time_ns, frame.probe);
-  const bool judged = time_window_.contains(time_ns - *run_.first_time_ns);
+  const bool judged = time_window_.contains(time_ns - *run_.first_time_ns, *run_.first_time_ns);
   run_.in_window += judged ? 1 : 0;
   if (frame.status == WalkStatus::NotDatagrams || frame.status == WalkStatus::BusFault) {
     return std::nullopt;

@@ -36,6 +36,7 @@ Json incidentsHtmlJson(const CaptureReport& r) {
                     {"axis", axisLabel(r, incident.axis)},
                     {"frame", incident.at.frame},
                     {"time", seconds(r, incident.at)},
+                    {"time_of_day", dayTimeOf(r, incident.at)},
                     {"cause", causeDef(incident.cause).name},
                     {"text", incident.cause_text},
                     {"evidence", std::move(evidence)},
@@ -67,7 +68,7 @@ function incidentCards(capture, section, index) {
   section.appendChild(cards);
   for (const incident of capture.incidents) {
     const figure = el('figure', {class: 'incident', id: `incident-${index}-${incident.n}`, 'data-cause': incident.cause, 'data-axis': incident.axis});
-    figure.appendChild(el('figcaption', {}, `incident ${incident.n}: ${incident.title} at frame ${incident.frame}, ${incident.time.toFixed(3)} s — ${incident.cause}: ${incident.text}`));
+    figure.appendChild(el('figcaption', {}, `incident ${incident.n}: ${incident.title} at frame ${incident.frame}, ${incident.time.toFixed(3)} s (${incident.time_of_day}) — ${incident.cause}: ${incident.text}`));
     const canvas = el('canvas', {width: 600, height: 150});
     figure.appendChild(canvas);
     const list = el('ol');

@@ -113,6 +113,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
         {"warning", r.count(Severity::Warning)},
         {"info", r.count(Severity::Info)}}},
       {"frames", r.frames},
+      {"start", r.frames > 0 ? detail::startOf(r) : std::string()},
       {"cycles", r.cycles},
       {"cycle_time_us",
        {{"median", number(r.cycle_time.median_us)},
@@ -320,7 +321,7 @@ function captureSection(capture, index) {
   const verdict = el('p');
   verdict.appendChild(el('span', {class: 'verdict v-' + capture.verdict.replace(' ', '.'), id: `verdict-${index}`}, capture.verdict.toUpperCase()));
   const c = capture.counts;
-  verdict.appendChild(document.createTextNode(` ${c.error} errors, ${c.warning} warnings, ${c.info} info; ${capture.frames} frames, ${capture.cycles} cycles; layout: ${capture.layout_source}`));
+  verdict.appendChild(document.createTextNode(` ${c.error} errors, ${c.warning} warnings, ${c.info} info; ${capture.frames} frames, ${capture.cycles} cycles` + (capture.start ? `, from ${capture.start}` : '') + `; layout: ${capture.layout_source}`));
   section.appendChild(verdict);
   if (capture.baseline) section.appendChild(el('p', {class: 'baseline'}, capture.baseline));
   if (capture.reason) section.appendChild(el('p', {}, 'No servo: ' + capture.reason));

@@ -15,6 +15,7 @@
 #include <iterator>
 #include <limits>
 
+#include "ncservo/base/wall_time.hpp"
 #include "ncservo/incidents/causes.hpp"
 
 namespace ncservo::cli {
@@ -260,37 +261,25 @@ std::vector<std::uint64_t> findingFrames(const CaptureReport& report) {
   return frames;
 }
 
+std::string describeScope(const ReportScope& scope) {
+  std::vector<std::string> parts;
+  if (!scope.axes.empty()) {
+    parts.push_back(fmt::format("ax{} {} and the bus", scope.axes.size() == 1 ? "is" : "es",
+                                fmt::join(scope.axes, ", ")));
+  }
+  if (!scope.findings) parts.emplace_back("incidents only");
+  if (!scope.incidents) parts.emplace_back("findings only");
+  return fmt::format("{}", fmt::join(parts, "; "));
+}
+
+bool CaptureReport::inScope(const std::optional<std::uint16_t>& axis) const {
+  if (!axis || scope.axes.empty()) return true;
+  return std::find(scope.axes.begin(), scope.axes.end(), axisLabel(*this, axis)) !=
+         scope.axes.end();
+}
+
 std::string isoUtc(std::int64_t time_ns, int digits) {
-  constexpr std::int64_t kNsPerSecond = 1000000000;
-  const std::int64_t seconds =
-      time_ns >= 0 ? time_ns / kNsPerSecond : -((-time_ns + kNsPerSecond - 1) / kNsPerSecond);
-  const std::int64_t nanoseconds = time_ns - seconds * kNsPerSecond;
-  // A report asks for many times within one second (findings, state changes, incidents): the
-  // calendar part of the last second asked for is kept.
-  thread_local std::int64_t last_second = std::numeric_limits<std::int64_t>::min();
-  thread_local char calendar[64];
-  thread_local std::size_t calendar_size = 0;
-  if (seconds != last_second) {
-    const std::time_t whole = static_cast<std::time_t>(seconds);
-    std::tm utc{};
-    gmtime_r(&whole, &utc);
-    calendar_size =
-        fmt::format_to_n(calendar, sizeof calendar, "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}",
-                         utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min,
-                         utc.tm_sec)
-            .size;
-    last_second = seconds;
-  }
-  std::string text(calendar, std::min(calendar_size, sizeof calendar));
-  digits = std::clamp(digits, 0, 9);
-  if (digits > 0) {
-    // The first `digits` of the nine: the fraction truncated, as the capture's precision has it.
-    char fraction[16];
-    fmt::format_to(fraction, ".{:09}", nanoseconds);
-    text.append(fraction, 1 + static_cast<std::size_t>(digits));
-  }
-  text += 'Z';
-  return text;
+  return isoTime(time_ns, digits, TimeZone::Utc);
 }
 
 char* writeSeconds(std::int64_t ns, char* out) {

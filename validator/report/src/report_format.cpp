@@ -26,6 +26,14 @@ std::string utcOf(const CaptureReport& r, const Stamp& at) {
   return isoUtc(at.time_ns, r.timestamp_digits);
 }
 
+std::string dayTimeOf(const CaptureReport& r, const Stamp& at) {
+  return timeOfDay(at.time_ns, r.zone);
+}
+
+std::string startOf(const CaptureReport& r) {
+  return isoTime(r.first_time_ns, r.timestamp_digits, r.zone);
+}
+
 }  // namespace detail
 
 using detail::axisName;

@@ -25,6 +25,10 @@ std::string axisName(const CaptureReport& r, std::uint16_t axis);
 // Seconds since the capture's first frame, and the time in UTC at the capture's precision.
 double seconds(const CaptureReport& r, const Stamp& at);
 std::string utcOf(const CaptureReport& r, const Stamp& at);
+// "10:41:07.123": the time of day, in UTC or local time (CaptureReport::zone), to the millisecond.
+std::string dayTimeOf(const CaptureReport& r, const Stamp& at);
+// "2024-05-01T10:41:05.888888Z": the capture's first frame, in its zone and precision.
+std::string startOf(const CaptureReport& r);
 
 // The JSON of one finding (with its state against a baseline, where there is one), one capture,
 // and the parts JSON Lines repeats (report_json.cpp).

@@ -126,6 +126,7 @@ Json dcJson(const CaptureReport& r) {
                     {"reference", s.reference},
                     {"samples", s.time_reads},
                     {"drift_ppm", ppm(s.drift_ppm)},
+                    {"drift_uncertainty_ppm", ppm(s.drift_uncertainty_ppm)},
                     {"drift_first_half_ppm", ppm(s.first_half_ppm)},
                     {"drift_second_half_ppm", ppm(s.second_half_ppm)},
                     {"systime_diff_ns", std::move(difference)},
@@ -471,6 +472,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   }
   if (!r.coverage.complete()) c["reason"] = r.coverage.reason;
   if (!r.coverage.missing.empty()) c["missing_axes"] = r.coverage.missing;
+  if (r.scope.limited()) c["scope"] = describeScope(r.scope);
   c["frames"] = r.frames;
   c["cycles"] = r.cycles;
   c["cycle_time_us"] = {{"median", optionalNumber(r.cycle_time.median_us)},

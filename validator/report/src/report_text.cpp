@@ -66,13 +66,14 @@ Verdict runVerdict(const ReportPolicy& policy, const std::vector<CaptureReport>&
 // One line per rule and axis: how many findings, the first and last frame, the first message.
 void writeTextGroups(const ReportSink& sink, const CaptureReport& r) {
   for (const FindingGroup& g : r.groups) {
-    const std::string first = fmt::format("{} ({:.6f} s)", g.first.frame, seconds(r, g.first));
+    const std::string first =
+        fmt::format("{} ({:.6f} s, {})", g.first.frame, seconds(r, g.first), dayTimeOf(r, g.first));
     fmt::print(sink.out, "{:<7} {:<7} {} {} finding{}{}, {}: {}\n", severityName(g.severity),
                ruleDef(g.rule).code, axisLabel(r, g.axis), g.count, g.count == 1 ? "" : "s",
                r.baseline ? fmt::format(" ({} new)", g.added) : std::string(),
                g.count == 1 ? "frame " + first
-                            : fmt::format("frames {} to {} ({:.6f} s), first", first, g.last.frame,
-                                          seconds(r, g.last)),
+                            : fmt::format("frames {} to {} ({:.6f} s, {}), first", first,
+                                          g.last.frame, seconds(r, g.last), dayTimeOf(r, g.last)),
                g.first_message);
   }
 }
@@ -169,8 +170,9 @@ void writeTextAxes(std::FILE* out, const CaptureReport& r) {
     if (a.ready_mode) fmt::print(out, "; Servo_Ready_Mode {}", *a.ready_mode);
     fmt::print(out, "\n");
     for (const ErrorHistoryEntry& e : a.error_history) {
-      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s\n", sewCauseText(*e.cause),
-                 e.cause->canopen, e.at.frame, seconds(r, e.at));
+      fmt::print(out, "    error {} (0x{:04X}) at frame {}, {:.6f} s ({})\n",
+                 sewCauseText(*e.cause), e.cause->canopen, e.at.frame, seconds(r, e.at),
+                 dayTimeOf(r, e.at));
     }
   }
 }
@@ -211,9 +213,10 @@ void writeNotJudged(std::FILE* out, const CaptureReport& r) {
 }  // namespace
 
 std::string incidentSummary(const CaptureReport& r, const Incident& incident) {
-  return fmt::format("{} at frame {}, {:.3f} s \u2014 {}: {}",
+  return fmt::format("{} at frame {}, {:.3f} s ({}) \u2014 {}: {}",
                      incidentHeadline(incident, axisLabel(r, incident.axis)), incident.at.frame,
-                     seconds(r, incident.at), causeDef(incident.cause).name, incident.cause_text);
+                     seconds(r, incident.at), dayTimeOf(r, incident.at),
+                     causeDef(incident.cause).name, incident.cause_text);
 }
 
 std::string incidentDetails(const Incident& incident, std::string_view indent) {
@@ -292,7 +295,10 @@ void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Find
                  axisLabel(r, f.axis), f.at.frame);
   char time[kSecondsTextSize];
   line.append(time, writeSeconds(f.at.time_ns - r.first_time_ns, time));
-  fmt::format_to(out, " s)");
+  line.append(std::string_view(" s, "));
+  char day_time[kTimeOfDaySize];
+  line.append(day_time, writeTimeOfDay(f.at.time_ns, r.zone, day_time));
+  line.push_back(')');
   if (f.since.frame != f.at.frame) fmt::format_to(out, ", since frame {}", f.since.frame);
   fmt::format_to(out, ": {}", f.message);
   if (state != BaselineState::None) fmt::format_to(out, " [{}]", baselineStateName(state));
@@ -343,6 +349,13 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
                r.cycle_time.p99_us.value_or(0), r.cycle_time.max_us.value_or(0));
   }
   fmt::print(out, "\n");
+  if (r.frames > 0) {
+    fmt::print(out, "start: {} (times of day in {})\n", startOf(r),
+               r.zone == TimeZone::Utc ? "UTC" : "local time");
+  }
+  if (r.scope.limited()) {
+    fmt::print(out, "scope: {} (the rest neither reported nor counted)\n", describeScope(r.scope));
+  }
   writeInterfaces(out, r);
   fmt::print(out, "layout: {}, {} ax{}\n", layoutSourceName(r.layout_source), r.layout.size(),
              r.layout.size() == 1 ? "is" : "es");
@@ -369,7 +382,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   fmt::print(out, "{}\n", describeCyclicDatagrams(r));
   writeCyclicFrames(out, r);
   writeCaptureLoss(out, r);
-  std::fputs(dcText(r.dc, r.dc_settled_ns).c_str(), out);
+  std::fputs(dcText(r.dc, r.dc_settled_ns, clockSourceMeaning(r.clock.source)).c_str(), out);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);
@@ -434,3 +447,33 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
 }
 
 }  // namespace ncservo::cli::detail
+
+namespace ncservo::cli {
+
+using detail::incidentDetails;
+using detail::incidentRuleId;
+using detail::incidentSummary;
+
+std::string incidentComment(const CaptureReport& report, const Incident& incident) {
+  std::string comment =
+      fmt::format("{} {}", incidentRuleId(incident.cause), incidentSummary(report, incident));
+  // The details' lines, one after another.
+  const std::string lines = incidentDetails(incident, "");
+  std::string_view details = lines;
+  while (!details.empty()) {
+    const std::size_t end = std::min(details.find('\n'), details.size());
+    comment += fmt::format("; {}", details.substr(0, end));
+    details.remove_prefix(std::min(end + 1, details.size()));
+  }
+  return comment;
+}
+
+bool isIncidentComment(std::string_view comment) {
+  constexpr std::string_view kPrefix = "INC-";
+  if (comment.substr(0, kPrefix.size()) != kPrefix) return false;
+  const std::size_t space = comment.find(' ');
+  return space != std::string_view::npos &&
+         findCause(comment.substr(kPrefix.size(), space - kPrefix.size())).has_value();
+}
+
+}  // namespace ncservo::cli

@@ -243,6 +243,9 @@ Status checkBusOptions(SimOptions& o) {
     return fail(fmt::format("--jitter-us {}: from 0 to a fifth of the cycle ({})", o.jitter_us,
                             o.cycle_us / 5));
   }
+  if (!(o.dc_drift_ppm >= -1000 && o.dc_drift_ppm <= 1000)) {
+    return fail(fmt::format("--dc-drift {}: from -1000 to 1000 ppm", o.dc_drift_ppm));
+  }
   if (!(o.loss >= 0 && o.loss <= 0.5)) return fail(fmt::format("--loss {}: from 0 to 0.5", o.loss));
   if (!(o.capture_loss >= 0 && o.capture_loss <= 0.5))
     return fail(fmt::format("--capture-loss {}: from 0 to 0.5", o.capture_loss));

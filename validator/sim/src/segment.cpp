@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <iterator>
 
@@ -482,7 +483,7 @@ void splitArea(std::vector<ImageDatagram>& out, std::uint8_t command, std::uint3
 
 }  // namespace
 
-Segment::Segment(const SimOptions& o, Rng& rng) : style(o.image) {
+Segment::Segment(const SimOptions& o, Rng& rng) : style(o.image), dc_drift_ppm(o.dc_drift_ppm) {
   Rng mix(o.seed ^ kMixSeedSalt);
   const std::vector<const SlaveModel*> ring = ringOrder(o, mix);
   for (std::size_t pos = 0; pos < ring.size(); ++pos) {
@@ -617,8 +618,13 @@ std::vector<AxisConfig> Segment::axisLayout() const {
 }
 
 void Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns) {
+  // The slaves keep the reference clock's time (the FRMW distributes it), which runs
+  // dc_drift_ppm fast against the master's clock, the one the capture's stamps follow.
+  const std::int64_t since_epoch_ns = now_ns - kEpochNs;
+  const std::int64_t system_time_ns =
+      since_epoch_ns + std::llround(static_cast<double>(since_epoch_ns) * dc_drift_ppm * 1e-6);
   for (Esc& esc : escs) {
-    storeLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(now_ns - kEpochNs), 8);
+    storeLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(system_time_ns), 8);
     for (RingDatagram& dg : frame) esc.process(dg);
     esc.endOfFrame();
   }

@@ -142,6 +142,7 @@ struct Segment {
   ImageStyle style = ImageStyle::Soem;
   bool outputs_first = true;  // all outputs, then all inputs (else per slave)
   bool status_poll = false;   // the cycle's first frame also reads the AL status (BRD 0x0130)
+  double dc_drift_ppm = 0;    // the reference clock's rate against the master's clock
 
   Segment(const SimOptions& options, Rng& rng);
   // docs/protocol.md §8: what the slaves' FMMUs add to the WKC of a logical datagram.

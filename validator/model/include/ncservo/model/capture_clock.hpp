@@ -35,6 +35,7 @@ inline constexpr std::array<ClockSourceRow, 4> kClockSources{{
     {ClockSource::Cycles, "cycles", "cycles counted at the nominal cycle time"},
 }};
 const char* clockSourceName(ClockSource source);
+const char* clockSourceMeaning(ClockSource source);
 
 // A read of a slave's system time (0x0910, 64 bits or 32) in a copy some slave answered: the
 // value the frame picked up as it passed that clock.

@@ -33,11 +33,14 @@ std::int64_t systemTimeDifferenceNs(std::uint32_t raw);
 
 // Running sums of a least-squares line fit y = a + b·x; sums of two fits add.
 struct LineFit {
-  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
   void add(double x, double y);
   void merge(const LineFit& other);
   // The slope b; none for fewer than two distinct x.
   std::optional<double> slope() const;
+  // The slope's standard error, from the scatter of the points about the line; none for fewer
+  // than three points at distinct x.
+  std::optional<double> slopeStandardError() const;
 };
 
 // A clock's drift against the frame timestamps, from samples (frame time, clock time). The
@@ -53,6 +56,9 @@ class DriftFit {
   // Positive when the clock runs faster than the frame timestamps; none for fewer than two
   // samples at distinct times (or a half with fewer).
   std::optional<double> driftPpm() const;
+  // Half the width of the drift's 95 % confidence interval (1.96 standard errors of the whole
+  // fit's slope): how far the stamps' jitter leaves the drift open (docs/timing.md#drift).
+  std::optional<double> driftUncertaintyPpm() const;
   std::optional<double> firstHalfPpm() const;
   std::optional<double> secondHalfPpm() const;
 
@@ -73,7 +79,8 @@ struct DcStation {
   bool reference = false;        // its system time was read with FRMW/ARMW
   std::uint64_t time_reads = 0;  // system time reads in the current fit
   std::optional<double> drift_ppm, first_half_ppm, second_half_ppm;
-  std::uint64_t difference_reads = 0;  // 0x092C reads
+  std::optional<double> drift_uncertainty_ppm;  // ± at 95 %
+  std::uint64_t difference_reads = 0;           // 0x092C reads
   std::optional<std::int64_t> last_difference_ns;
   std::int64_t max_abs_difference_ns = 0;
   // The first of the reads from which every later one stayed within the bound.

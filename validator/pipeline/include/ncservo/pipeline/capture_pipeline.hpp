@@ -15,6 +15,7 @@
 
 #include "ncservo/base/byte_reader.hpp"
 #include "ncservo/base/error.hpp"
+#include "ncservo/base/wall_time.hpp"
 #include "ncservo/incidents/incident_detector.hpp"
 #include "ncservo/layout/decoder.hpp"
 #include "ncservo/layout/eni.hpp"
@@ -32,21 +33,27 @@
 
 namespace ncservo {
 
-// `--from SECONDS --to SECONDS` (docs/cli.md): the frames whose time, in the capture's own
-// seconds (since its first record, as Wireshark's frame.time_relative), lies in [from, to]. The
-// frames outside are neither decoded for their values nor judged: the capture seen starts
-// mid-operation at `from`. They still show the layout (a start-up before the window, the
-// learning window's cyclic traffic): the pipeline gives them to `Sinks::layout_only`.
+// `--from TIME --to TIME` (docs/cli.md#time-window): the frames whose time lies in [from, to].
+// A bound is seconds since the capture's first record (as Wireshark's frame.time_relative), or
+// an ISO 8601 time of day (then `absolute`: nanoseconds since the epoch). The frames outside are
+// neither decoded for their values nor judged: the capture seen starts mid-operation at `from`.
+// They still show the layout (a start-up before the window, the learning window's cyclic
+// traffic): the pipeline gives them to `Sinks::layout_only`.
 struct TimeWindow {
   std::optional<std::int64_t> from_ns, to_ns;
-  bool contains(std::int64_t relative_ns) const {
-    return (!from_ns || relative_ns >= *from_ns) && (!to_ns || relative_ns <= *to_ns);
+  bool from_absolute = false, to_absolute = false;
+  // `relative_ns` since the first record, whose own time is `first_ns`.
+  bool contains(std::int64_t relative_ns, std::int64_t first_ns) const {
+    const std::int64_t absolute_ns = relative_ns + first_ns;
+    return (!from_ns || (from_absolute ? absolute_ns : relative_ns) >= *from_ns) &&
+           (!to_ns || (to_absolute ? absolute_ns : relative_ns) <= *to_ns);
   }
   bool limited() const { return from_ns || to_ns; }
 };
-// The window of `--from`/`--to` in seconds; fails when `to` is before `from` or either is not a
-// finite number.
-Result<TimeWindow> timeWindowOf(std::optional<double> from_s, std::optional<double> to_s);
+// The window of `--from`/`--to`, each seconds or an ISO 8601 time (without an offset, in `zone`);
+// fails when either is neither, or when `to` is before `from` (both of one kind).
+Result<TimeWindow> timeWindowOf(const std::optional<std::string>& from,
+                                const std::optional<std::string>& to, TimeZone zone);
 // "--from 1.5 --to 2", "--from 1.5", for messages.
 std::string describeTimeWindow(const TimeWindow& window);
 

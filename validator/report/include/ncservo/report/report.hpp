@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ncservo/base/error.hpp"
+#include "ncservo/base/wall_time.hpp"
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/incidents/incident.hpp"
 #include "ncservo/layout/layout_inference.hpp"
@@ -60,11 +61,25 @@ std::string describeTruncation(const Truncation& truncation);
 std::string describeLateLayout(const LateLayout& late);
 // The layout learnt from a start-up the snap length cut: axes may be missing.
 std::string describeStartupCut(std::uint64_t frames);
+// What a report tells of a capture (`validate --axis`, `--only`, docs/cli.md#scope): the findings
+// and incidents of the named axes (all when none is named), the bus's always; findings,
+// incidents or both. What is left out is neither reported nor counted for the verdict.
+struct ReportScope {
+  std::vector<std::string> axes;  // axis names
+  bool findings = true;
+  bool incidents = true;
+  bool limited() const { return !axes.empty() || !findings || !incidents; }
+};
+// "axes X, Y; incidents only": the scope, for the report's line about it.
+std::string describeScope(const ReportScope& scope);
+
 // A capture's result (capture_result.hpp) with what the report adds: where the capture is, its
 // findings as counted and grouped, and what the report itself found out about the file.
 struct CaptureReport : CaptureResult {
   std::string path;
-  int timestamp_digits = 6;             // of a second, as the capture stores its timestamps
+  int timestamp_digits = 6;       // of a second, as the capture stores its timestamps
+  TimeZone zone = TimeZone::Utc;  // of the times of day the text writes (--local-time)
+  ReportScope scope;
   std::vector<Finding> findings;        // kept only for the formats written at the end
   std::array<std::size_t, 3> counts{};  // findings by severity (Info, Warning, Error)
   std::vector<FindingGroup> groups;     // by (rule, axis), in the order of their first finding
@@ -89,6 +104,8 @@ struct CaptureReport : CaptureResult {
   // `incidents`), and the baseline's incidents not seen again.
   std::vector<BaselineState> incident_states;
   std::vector<ReportedIncident> baseline_absent_incidents;
+  // Whether the scope reports what happened on `axis` (none: the bus).
+  bool inScope(const std::optional<std::uint16_t>& axis) const;
   std::size_t count(Severity severity) const { return counts[static_cast<std::size_t>(severity)]; }
   // The findings that count for the verdict and the exit status: all of them, or with a
   // baseline the new ones.
@@ -120,6 +137,12 @@ std::string describeBaseline(const CaptureReport& report);
 
 // What a JSON report would hold of the capture, as baselines and `ncservo diff` read it.
 ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict);
+
+// An incident as one line, the comment `annotate` writes on its frame (docs/field.md#annotate):
+// "INC-encoder axis1 fault E19 at frame 3040, … — encoder: …; evidence: …; recovery: …".
+std::string incidentComment(const CaptureReport& report, const Incident& incident);
+// Whether a packet comment is one incidentComment wrote (annotate replaces its own comments).
+bool isIncidentComment(std::string_view comment);
 
 // "fail", "warn", "pass", "no servo", "unreadable": as the JSON report names a verdict.
 const char* verdictName(Verdict verdict);

@@ -147,9 +147,10 @@ struct SimOptions {
   ImageStyle image = ImageStyle::Soem;
   Probe probe = Probe::None;
   bool startup = true;
-  int ready_mode = 0;  // the drives' Servo_Ready_Mode
-  int jitter_us = 0;   // master send jitter, at most a quarter cycle
-  double loss = 0;     // probability that a returned frame is lost after the slaves
+  int ready_mode = 0;       // the drives' Servo_Ready_Mode
+  int jitter_us = 0;        // master send jitter, at most a quarter cycle
+  double dc_drift_ppm = 0;  // the reference clock's rate against the master's, -1000..1000
+  double loss = 0;          // probability that a returned frame is lost after the slaves
   int latency_us = 0;  // returned copy this long after its master copy (0: the ring's own delay)
   double capture_loss = 0;  // probability that the capture misses a cycle's master copies
   std::vector<CycleDisturbance> late_cycles;
