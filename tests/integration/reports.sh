@@ -62,8 +62,9 @@ lines = [l for l in text if re.match(r"^(error|warning|info) +[A-Z]+-\d{3} ", l)
 groups = {(f["rule"], f["axis_name"] or "bus") for f in findings}
 assert len(lines) == len(groups), (lines, groups)
 line = next(l for l in lines if " COM-004 " in l)
-want = (f"warning COM-004 bus {len(com4)} findings, frames {com4[0]['frame']} ({com4[0]['time']:.6f} s) "
-        f"to {com4[-1]['frame']} ({com4[-1]['time']:.6f} s), first: {com4[0]['message']}")
+day = lambda f: f["time_utc"][11:23]  # the time of day to the millisecond, UTC
+want = (f"warning COM-004 bus {len(com4)} findings, frames {com4[0]['frame']} ({com4[0]['time']:.6f} s, {day(com4[0])}) "
+        f"to {com4[-1]['frame']} ({com4[-1]['time']:.6f} s, {day(com4[-1])}), first: {com4[0]['message']}")
 assert line == want, (line, want)
 verbose = [l for l in open(f"{w}/lossy-verbose.txt").read().splitlines()
            if re.match(r"^(error|warning|info) +[A-Z]+-\d{3} ", l)]
