@@ -337,6 +337,7 @@ void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
     e.verdict = CycleGapEvent::Verdict::Late;
   } else {
     e.missing = missingCycles(gap.interval_ns, gap.nominal_ns);
+    lost_cycles_ += e.missing;
   }
   if (accounts != nullptr && !gap.accounted && e.missing > 0) {
     for (std::uint16_t axis : gap.axes) {
@@ -446,6 +447,7 @@ bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
       expected = record->values[mode];
     }
     if (dg.wkc != expected) {
+      ++wkc_errors_;
       check.outcome = dg.wkc == 0 ? Outcome::Lost : Outcome::Failed;
       all_good = all_good && !check.carries_axes;
       if (record == nullptr || !record->wrong_episode) {
