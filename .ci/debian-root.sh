@@ -16,7 +16,6 @@
 set -euo pipefail
 
 cache=${NCSERVO_ROOT_CACHE:-/var/cache/ncservo-roots}
-mirror=${NCSERVO_DEBIAN_MIRROR:-http://deb.debian.org/debian}
 max_age_days=${NCSERVO_ROOT_MAX_AGE_DAYS:-7}
 node_extra_ca=/etc/ncservo-node-extra-ca.crt  # in the root
 
@@ -24,6 +23,30 @@ die() {
   echo "debian-root.sh: $*" >&2
   exit 1
 }
+
+# The Debian archive this machine's own apt uses: the first source of its deb822 files
+# (/etc/apt/sources.list.d/*.sources) or, without one, of /etc/apt/sources.list, that is not the
+# security archive. NCSERVO_DEBIAN_MIRROR names another.
+apt_mirror() {
+  local found="" f
+  for f in /etc/apt/sources.list.d/*.sources; do
+    [ -f "$f" ] || continue
+    found=$(awk '
+      function stanza() { if (uris != "" && types ~ /(^| )deb( |$)/ && uris !~ /security/) { split(uris, u, " "); print u[1]; exit } uris = ""; types = "" }
+      /^[ \t]*$/ { stanza(); next }
+      /^URIs:/ { sub(/^URIs:[ \t]*/, ""); uris = $0 }
+      /^Types:/ { sub(/^Types:[ \t]*/, ""); types = $0 }
+      END { stanza() }' "$f")
+    [ -z "$found" ] || break
+  done
+  if [ -z "$found" ] && [ -f /etc/apt/sources.list ]; then
+    found=$(awk '$1 == "deb" { i = 2; if ($2 ~ /^\[/) while (i <= NF && $i !~ /\]$/) i++; if ($2 ~ /^\[/) i++; if ($i !~ /security/) { print $i; exit } }' /etc/apt/sources.list)
+  fi
+  echo "${found%/}"
+}
+mirror=${NCSERVO_DEBIAN_MIRROR:-$(apt_mirror)}
+[ -n "$mirror" ] || [ "${1:-}" = purge ] || [ "${1:-}" = remove ] || [ "${1:-}" = run ] ||
+  die "no Debian archive in this machine's apt sources (/etc/apt/sources.list.d/*.sources, /etc/apt/sources.list); name one with NCSERVO_DEBIAN_MIRROR"
 
 has_base() {
   local tarball="$cache/$1-base.tar"
