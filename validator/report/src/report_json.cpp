@@ -61,6 +61,7 @@ Json seriesJson(const std::optional<SeriesSummary>& series) {
           {"p999", us(s.p999_ns)},
           {"max", us(s.max_ns)},
           {"histogram", std::move(histogram)},
+          {"histogram_zero", us(s.reference_ns)},
           {"under", s.under},
           {"over", s.over}};
 }
