@@ -199,6 +199,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     // docs/rules.md#com-004: judged on the next master frame, once returned copies exist at all.
     if (cyclic.awaiting_return && returned_copies_seen_) {
       ++returned_copies_missing_;
+      ++lost_cycles_;  // the frame went out and never came back: its cycle was lost
       if (!cyclic.not_returned_episode) {
         cyclic.not_returned_episode = true;
         NotReturnedEvent event;

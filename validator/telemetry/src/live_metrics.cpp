@@ -238,8 +238,9 @@ std::string exposeMetrics(const MetricsSnapshot& s) {
   out.family(name("return_latency_seconds"), MetricType::Histogram,
              "Time from a master copy to its returned copy, at the capture point");
   out.histogram({}, {*s.latency.bounds, s.latency.counts, s.latency.sum});
-  out.family(name("lost_cycles_total"), MetricType::Counter,
-             "Cycles lost in the gaps COM-002 judges, every cyclic frame's");
+  out.family(
+      name("lost_cycles_total"), MetricType::Counter,
+      "Cycles lost: missing in the gaps COM-002 judges, or whose frame never came back (COM-004)");
   out.sample({}, s.lost_cycles);
   out.family(name("wkc_errors_total"), MetricType::Counter,
              "Returned process-data datagrams whose working counter was not the expected one");

@@ -203,8 +203,9 @@ Result<std::unique_ptr<MqttPublisher>> MqttPublisher::start(const MqttOptions& o
       st.connected = rc == 0;
       st.reconnected = rc == 0;
       st.notes.push_back(rc == 0
-                             ? fmt::format("--mqtt: connected to {}:{}", st.options.target.host,
-                                           st.options.target.port)
+                             ? fmt::format("--mqtt: connected to {}:{} ({} messages waiting)",
+                                           st.options.target.host, st.options.target.port,
+                                           st.pending + st.incoming.size())
                              : fmt::format("--mqtt: refused: {}", mosquitto_connack_string(rc)));
     }
     if (rc == 0) {

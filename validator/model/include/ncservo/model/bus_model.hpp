@@ -97,10 +97,10 @@ class BusModel {
   std::uint64_t masterCopiesMissing() const { return master_copies_missing_; }
   // Master copies not returned before the next master copy of their cyclic frame (COM-004).
   std::uint64_t returnedCopiesMissing() const { return returned_copies_missing_; }
-  // Cycles lost in every gap judged so far, of every cyclic frame (COM-002's count, whether or
-  // not the rule is enabled), and returned process-data datagrams whose WKC was not the expected
-  // one (each copy, where COM-001 reports an episode once): running totals for the live monitor's
-  // metrics and the reports.
+  // Cycles lost so far, of every cyclic frame: those missing in the gaps COM-002 judges (whether
+  // or not the rule is enabled) and the master copies never returned (COM-004); and returned
+  // process-data datagrams whose WKC was not the expected one (each copy, where COM-001 reports
+  // an episode once). Running totals for the live monitor's metrics and the reports.
   std::uint64_t lostCycles() const { return lost_cycles_; }
   std::uint64_t wkcErrors() const { return wkc_errors_; }
 
