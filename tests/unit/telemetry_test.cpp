@@ -13,6 +13,7 @@
 
 #include "ncservo/capture/capture_stream.hpp"
 #include "ncservo/config/config.hpp"
+#include "ncservo/incidents/causes.hpp"
 #include "ncservo/telemetry/exposition.hpp"
 #include "ncservo/telemetry/live_metrics.hpp"
 #include "ncservo/telemetry/metrics_server.hpp"
@@ -170,7 +171,9 @@ TEST(LiveMetrics, BundledCaptureAgreesWithItsResult) {
     for (const auto& [series, value] : states) {
       if (series.find("axis=\"" + axis.name + "\"") == std::string::npos) continue;
       ones += value == "1";
-      if (value == "1") EXPECT_NE(series.find(driveStateName(*axis.state)), std::string::npos);
+      if (value == "1") {
+        EXPECT_NE(series.find(driveStateName(*axis.state)), std::string::npos);
+      }
     }
     EXPECT_EQ(ones, 1) << axis.name;
     EXPECT_EQ(failures.at("{axis=\"" + axis.name + "\"}"), std::to_string(axis.telegram_failures));
@@ -188,8 +191,15 @@ TEST(LiveMetrics, SeriesBoundedByTheTables) {
   none.axes.resize(3);
   for (std::size_t i = 0; i < 3; ++i) none.axes[i].name = "axis" + std::to_string(i);
   MetricsSnapshot many = none;
-  for (auto& axis : many.axes) axis.findings.fill(100000);
-  many.bus_findings.fill(5);
+  for (const RuleDef& rule : kRules) {  // as many findings as each enabled rule can give
+    const auto r = static_cast<std::size_t>(rule.id);
+    if (!settings.isEnabled(rule.id)) continue;
+    if (rule.kind != RuleKind::Bus) {
+      for (auto& axis : many.axes) axis.findings[r] = 100000;
+    }
+    if (rule.kind != RuleKind::Axis) many.bus_findings[r] = 5;
+  }
+  for (auto& axis : many.axes) axis.incidents.fill(7);
   const auto lines = [](const std::string& text) {
     return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
   };

@@ -47,8 +47,15 @@ Result<std::unique_ptr<MetricsServer>> MetricsServer::start(const ListenAddress&
                                                             const MetricsBoard& board) {
   auto state = std::make_unique<State>();
   State& s = *state;
-  // One worker: scrapes are answered in turn, never by a pool as large as the machine.
-  s.server.new_task_queue = [] { return new httplib::ThreadPool(1); };
+  // Two workers, not a pool as large as the machine; each connection closed after its answer,
+  // so that an idle keep-alive connection never holds a worker from another scraper.
+  s.server.new_task_queue = [] { return new httplib::ThreadPool(2); };
+  s.server.set_keep_alive_max_count(1);
+  // Not httplib's SO_REUSEPORT: a second monitor on the port would take half the scrapes unseen.
+  s.server.set_socket_options([](socket_t sock) {
+    const int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   s.server.Get("/metrics", [&board, &s](const httplib::Request&, httplib::Response& response) {
     const auto began = std::chrono::steady_clock::now();
     response.set_content(board.scrape(), kExpositionContentType);
@@ -69,6 +76,10 @@ Result<std::unique_ptr<MetricsServer>> MetricsServer::start(const ListenAddress&
                             address.host, address.port));
   }
   s.thread = std::thread([&s] { s.server.listen_after_bind(); });
+  // A stop() before the thread listens would go unseen, and the join in the destructor wait.
+  for (int i = 0; i < 2000 && !s.server.is_running(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   return std::unique_ptr<MetricsServer>(new MetricsServer(std::move(state)));
 }
 

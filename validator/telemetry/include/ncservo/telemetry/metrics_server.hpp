@@ -1,6 +1,6 @@
 // The HTTP face of `monitor --metrics [ADDR:]PORT`: GET /metrics answers with the board's last
-// snapshot (Debian's cpp-httplib, on a thread of its own, one connection at a time, so that a
-// flood of scrapes takes at most one core's share from the capture).
+// snapshot (Debian's cpp-httplib, on threads of its own: two workers, one request per
+// connection, so that a flood of scrapes takes at most two threads' share from the capture).
 #pragma once
 
 #include <cstdint>
