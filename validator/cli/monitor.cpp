@@ -409,7 +409,8 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
                            std::chrono::duration<double>(*args.duration_s));
   }
   auto next_status = began;
-  auto next_tick = began;
+  // Without --metrics and --mqtt there is nothing to tick: never a reason to wake.
+  auto next_tick = output.telemetry ? began : Clock::time_point::max();
   // A blocking read can wait for ever on a quiet link (libpcap's TPACKET_V3 reader hands over
   // nothing until a frame comes, whatever its timeout): the handle reads without blocking and
   // the loop itself waits for the next frame, the status line or the deadline, whichever is
