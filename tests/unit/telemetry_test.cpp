@@ -211,6 +211,24 @@ TEST(LiveMetrics, SeriesBoundedByTheTables) {
   EXPECT_EQ(axis_states, 3u * 8u);  // the eight drive states of docs/protocol.md §6
 }
 
+// What issue 37 will feed: ESC error counters by station, port and counter; DC differences.
+TEST(LiveMetrics, SlaveCountersAsFed) {
+  LiveMetrics metrics{RuleSettings{}};
+  metrics.setEscErrors({{0x1001, 1, "rx_error", 3}, {0x03E9, 0, "lost_link", 0}});
+  MetricsSnapshot snapshot = metrics.snapshot();
+  snapshot.dc.push_back({0x1001, -2.5e-8});
+  const std::string text = exposeMetrics(snapshot);
+  const auto esc = samples(text, "ncservo_esc_errors_total");
+  EXPECT_EQ(esc.at("{station=\"0x1001\",port=\"1\",counter=\"rx_error\"}"), "3");
+  EXPECT_EQ(esc.at("{station=\"0x03E9\",port=\"0\",counter=\"lost_link\"}"), "0");
+  EXPECT_EQ(samples(text, "ncservo_dc_system_time_difference_seconds").at("{station=\"0x1001\"}"),
+            "-2.5e-08");
+  // Without them the families are declared, with no series.
+  const std::string bare = exposeMetrics(MetricsSnapshot{});
+  EXPECT_NE(bare.find("# TYPE ncservo_esc_errors_total counter\n"), std::string::npos);
+  EXPECT_TRUE(samples(bare, "ncservo_esc_errors_total").empty());
+}
+
 TEST(MetricsServer, ServesTheBoard) {
   MetricsBoard board;
   MetricsSnapshot snapshot;

@@ -39,6 +39,10 @@ void LiveTelemetry::onFindings(const std::vector<Finding>& findings,
   }
 }
 
+void LiveTelemetry::onEvent(MqttTopic topic, std::string json_line) {
+  if (mqtt_) mqtt_->publish(topic, std::move(json_line));
+}
+
 // An incident's object is final once it ended (its recovery known); the rest wait for the end.
 void LiveTelemetry::publishIncidents(const std::vector<Incident>& incidents,
                                      const cli::CaptureReport& report, bool all) {

@@ -103,6 +103,8 @@ class LiveMetrics {
   void refresh(const CapturePipeline& pipeline, std::uint64_t frames,
                std::uint64_t capture_dropped);
   void setMqttDropped(std::uint64_t dropped) { snapshot_.mqtt_dropped = dropped; }
+  // The ESC error counters as last read (issue 37 feeds them).
+  void setEscErrors(std::vector<EscErrorCount> counters) { snapshot_.esc = std::move(counters); }
   const MetricsSnapshot& snapshot() const { return snapshot_; }
 
  private:

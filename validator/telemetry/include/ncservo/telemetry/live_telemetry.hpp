@@ -37,6 +37,13 @@ class LiveTelemetry {
   void onFrame(const Validator& validator);
   // The findings of a frame, as `report` names them.
   void onFindings(const std::vector<Finding>& findings, const cli::CaptureReport& report);
+  // Where issue 37 (drive messages, link faults, ESC error counters) plugs in: an object of its
+  // as its JSON Lines line, on PREFIX/drive-message or PREFIX/link-fault; the counters as read
+  // last, for ncservo_esc_errors_total. Nothing calls them yet.
+  void onEvent(MqttTopic topic, std::string json_line);
+  void setEscErrors(std::vector<EscErrorCount> counters) {
+    metrics_.setEscErrors(std::move(counters));
+  }
   // Now and then (every 100 ms of the capture loop): the gauges and totals refreshed and handed
   // to the scrapes, the incidents that ended published. `report` lends its names and clock.
   void update(const CapturePipeline& pipeline, const cli::CaptureReport& report,
