@@ -7,13 +7,15 @@
 # `ncservo validate` finds in the frames the monitor captured (its flight recording), nothing
 # lost; a message received twice (QoS 1 after the restart) is the same object, told by its
 # fingerprint and frame. The status topic says "online", then "offline" (retained) at the end,
-# and the broker's last will says it for a monitor killed outright. Needs root, tcpreplay and
-# mosquitto: otherwise exit 77 with the reason (under CI: fails).
+# and the broker's last will says it for a monitor killed outright. mqtts:// with a CA and a
+# client certificate reaches a broker that requires one, and without the certificate does not.
+# Needs root, tcpreplay, mosquitto and openssl: otherwise exit 77 with the reason (under CI:
+# fails).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
 [ "$(id -u)" = 0 ] || skip "needs root (veth pair, network namespace)"
-require_program tcpreplay ip mosquitto mosquitto_sub
+require_program tcpreplay ip mosquitto mosquitto_sub openssl
 
 veth_pair ncsq
 cd "$WORK"
@@ -134,4 +136,43 @@ for _ in 1 2 3 4 5 6 7 8 9 10; do
 done
 [ "$last" = offline ] || fail "after kill -9 the status says '$last', not the will's offline"
 echo "ok the last will says offline for a monitor killed outright"
+
+# mqtts://: a broker that wants TLS and a client certificate from our CA.
+kill "$broker"
+wait "$broker" 2>/dev/null || true
+openssl req -x509 -newkey rsa:2048 -nodes -days 2 -subj /CN=test-ca -keyout ca.key -out ca.pem 2>/dev/null
+for who in server client; do
+  openssl req -newkey rsa:2048 -nodes -subj "/CN=$who" -keyout "$who.key" -out "$who.csr" 2>/dev/null
+  openssl x509 -req -in "$who.csr" -CA ca.pem -CAkey ca.key -CAcreateserial -days 2 -out "$who.pem" \
+    -extfile <(printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\n') 2>/dev/null
+done
+tls_port=$(free_port)
+cat >tls.conf <<CONF
+listener $tls_port 127.0.0.1
+allow_anonymous true
+user root
+cafile $WORK/ca.pem
+certfile $WORK/server.pem
+keyfile $WORK/server.key
+require_certificate true
+CONF
+mosquitto -c tls.conf >tls.log 2>&1 &
+broker=$!
+tls_sub() {
+  mosquitto_sub -p "$tls_port" --cafile ca.pem --cert client.pem --key client.key -t "tls/status" -C 1 -W 3
+}
+wait_for 50 mosquitto_sub -p "$tls_port" --cafile ca.pem --cert client.pem --key client.key -t probe -W 1 -C 1 -E ||
+  fail "the TLS broker did not start: $(tail -3 tls.log)"
+"$NCSERVO" monitor -i "$host" --mqtt "mqtts://127.0.0.1:$tls_port/tls" --mqtt-ca ca.pem \
+  --mqtt-cert client.pem --mqtt-key client.key >/dev/null 2>tls.err &
+monitor=$!
+wait_for 50 grep -q "connected to" tls.err || fail "mqtts: no connection: $(cat tls.err)"
+[ "$(tls_sub)" = online ] || fail "mqtts: not online"
+kill -INT "$monitor"
+wait "$monitor" 2>/dev/null || true
+[ "$(tls_sub)" = offline ] || fail "mqtts: not offline at the end"
+"$NCSERVO" monitor -i "$host" --mqtt "mqtts://127.0.0.1:$tls_port/tls" --mqtt-ca ca.pem \
+  --mqtt-flush 0 --duration 2 >/dev/null 2>notls.err || true
+! grep -q "connected to" notls.err || fail "mqtts without a client certificate connected: $(cat notls.err)"
+echo "ok mqtts with a client certificate connects, without one it does not"
 echo PASS

@@ -539,6 +539,8 @@ int runMonitor(const MonitorArgs& args) {
   RuleSettings settings;
   Status built = files ? buildSettings(args, files->config, settings) : fail(files.error());
   if (built) built = checkMonitorArgs(args);
+  Result<TelemetryOptions> telemetry_options = telemetryOptions(args);
+  if (built && !telemetry_options) built = fail(telemetry_options.error());
   if (!built) {
     fmt::print(stderr, "ncservo monitor: {}\n", built.error().text());
     return kExitUsage;
@@ -552,11 +554,6 @@ int runMonitor(const MonitorArgs& args) {
   auto writer = openMonitorReport(args, settings);
   if (!writer) {
     fmt::print(stderr, "ncservo monitor: {}\n", writer.error().text());
-    return kExitUsage;
-  }
-  Result<TelemetryOptions> telemetry_options = telemetryOptions(args);
-  if (!telemetry_options) {
-    fmt::print(stderr, "ncservo monitor: {}\n", telemetry_options.error().text());
     return kExitUsage;
   }
   auto telemetry = LiveTelemetry::start(*telemetry_options, settings);

@@ -108,7 +108,8 @@ Status mergeReportText(const std::string& text, const std::string& path, MergedR
   try {
     report = Json::parse(text);
   } catch (const Json::parse_error& e) {
-    return fail(Error{path, 0, 0, {}, fmt::format("not JSON ({})", e.what())});
+    // Not e.what(): it quotes what it read, the bytes of a capture given by mistake.
+    return fail(Error{path, 0, 0, {}, fmt::format("not JSON (at byte {})", e.byte)});
   }
   const auto not_report = [&path](const std::string& why) {
     return fail(
