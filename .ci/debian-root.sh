@@ -7,6 +7,7 @@
 #   .ci/debian-root.sh base RELEASE          makes the cached base of RELEASE if it has none
 #   .ci/debian-root.sh has-base RELEASE      whether the cache has a base of RELEASE
 #   .ci/debian-root.sh purge                 deletes the cache
+#   .ci/debian-root.sh mirror                prints the Debian archive the roots come from
 #
 # Cached between runs on the same machine: the debootstrapped base of each release as a tarball, and
 # the .deb files apt fetched into roots of that release (under NCSERVO_ROOT_CACHE, default
@@ -16,7 +17,6 @@
 set -euo pipefail
 
 cache=${NCSERVO_ROOT_CACHE:-/var/cache/ncservo-roots}
-mirror=${NCSERVO_DEBIAN_MIRROR:-http://deb.debian.org/debian}
 max_age_days=${NCSERVO_ROOT_MAX_AGE_DAYS:-7}
 node_extra_ca=/etc/ncservo-node-extra-ca.crt  # in the root
 
@@ -24,6 +24,32 @@ die() {
   echo "debian-root.sh: $*" >&2
   exit 1
 }
+
+# The Debian archive this machine's own apt uses: the first source of its deb822 files
+# (/etc/apt/sources.list.d/*.sources) or, without one, of /etc/apt/sources.list, that is not the
+# security archive. NCSERVO_DEBIAN_MIRROR names another; NCSERVO_APT_ETC reads another /etc/apt
+# (the test debian_root_mirror).
+apt_etc=${NCSERVO_APT_ETC:-/etc/apt}
+apt_mirror() {
+  local found="" f
+  for f in "$apt_etc"/sources.list.d/*.sources; do
+    [ -f "$f" ] || continue
+    found=$(awk '
+      function stanza() { if (uris != "" && types ~ /(^| )deb( |$)/ && uris !~ /security/) { split(uris, u, " "); print u[1]; done = 1; exit } uris = ""; types = "" }
+      /^[ \t]*$/ { stanza(); next }
+      /^URIs:/ { sub(/^URIs:[ \t]*/, ""); uris = $0 }
+      /^Types:/ { sub(/^Types:[ \t]*/, ""); types = $0 }
+      END { if (!done) stanza() }' "$f")
+    [ -z "$found" ] || break
+  done
+  if [ -z "$found" ] && [ -f "$apt_etc/sources.list" ]; then
+    found=$(awk '$1 == "deb" { i = 2; if ($2 ~ /^\[/) while (i <= NF && $i !~ /\]$/) i++; if ($2 ~ /^\[/) i++; if ($i !~ /security/) { print $i; exit } }' "$apt_etc/sources.list")
+  fi
+  echo "${found%/}"
+}
+mirror=${NCSERVO_DEBIAN_MIRROR:-$(apt_mirror)}
+[ -n "$mirror" ] || [ "${1:-}" = purge ] || [ "${1:-}" = mirror ] || [ "${1:-}" = remove ] || [ "${1:-}" = run ] ||
+  die "no Debian archive in this machine's apt sources (/etc/apt/sources.list.d/*.sources, /etc/apt/sources.list); name one with NCSERVO_DEBIAN_MIRROR"
 
 has_base() {
   local tarball="$cache/$1-base.tar"
@@ -123,7 +149,8 @@ create) [ $# = 3 ] || die "usage: create RELEASE ROOT"; create "$2" "$3" ;;
 run) [ $# -ge 3 ] || die "usage: run ROOT COMMAND..."; shift; run "$@" ;;
 remove) [ $# = 2 ] || die "usage: remove ROOT"; remove "$2" ;;
 purge) rm -rf "$cache" ;;
+mirror) [ -n "$mirror" ] || die "no Debian archive in $apt_etc/sources.list.d/*.sources or $apt_etc/sources.list"; echo "$mirror" ;;
 base) [ $# = 2 ] || die "usage: base RELEASE"; base_tarball "$2" ;;
 has-base) [ $# = 2 ] || die "usage: has-base RELEASE"; has_base "$2" ;;
-*) die "usage: create RELEASE ROOT | run ROOT COMMAND... | remove ROOT | purge | base RELEASE | has-base RELEASE" ;;
+*) die "usage: create RELEASE ROOT | run ROOT COMMAND... | remove ROOT | purge | mirror | base RELEASE | has-base RELEASE" ;;
 esac

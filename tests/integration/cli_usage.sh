@@ -114,6 +114,22 @@ layout_help() {  # layout_help COMMAND: its help's lines for --config, --no-defa
 }
 layout_help decode >"$WORK/layout-decode.txt"
 [ "$(wc -l <"$WORK/layout-decode.txt")" -eq 3 ] || fail "decode --help: $(cat "$WORK/layout-decode.txt")"
+# monitor's --metrics and --mqtt are checked before anything is captured (the interface need not
+# exist): a usage error naming what is wrong.
+expect 2 monitor -i no-such-if0 --metrics 127.0.0.1:http
+grep -q "expected \[ADDRESS:\]PORT" "$WORK/err" || fail "--metrics: $(cat "$WORK/err")"
+expect 2 monitor -i no-such-if0 --mqtt http://broker/m
+grep -q "expected mqtt://HOST\[:PORT\]/PREFIX" "$WORK/err" || fail "--mqtt: $(cat "$WORK/err")"
+expect 2 monitor -i no-such-if0 --mqtt mqtt://broker
+grep -q "no topic prefix" "$WORK/err" || fail "--mqtt without prefix: $(cat "$WORK/err")"
+expect 2 monitor -i no-such-if0 --mqtt mqtt://broker/m --mqtt-ca "$WORK/clean.pcap"
+grep -q "need mqtts://" "$WORK/err" || fail "--mqtt-ca with mqtt://: $(cat "$WORK/err")"
+expect 2 monitor -i no-such-if0 --mqtt mqtts://broker/m --mqtt-cert "$WORK/clean.pcap"
+grep -q "go together" "$WORK/err" || fail "--mqtt-cert alone: $(cat "$WORK/err")"
+expect 2 merge
+expect 3 merge "$WORK/clean.pcap"
+grep -q "clean.pcap: not JSON" "$WORK/err" || fail "merge of a capture: $(cat "$WORK/err")"
+
 for command in validate annotate monitor diff; do
   layout_help "$command" | diff "$WORK/layout-decode.txt" - >/dev/null ||
     fail "$command --help: the layout options differ from decode's"

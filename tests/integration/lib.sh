@@ -98,3 +98,28 @@ for line in open(tsv):
                      f"a rule of severity {severity}, party {party} is at {want[0]:#x}, group {want[1]:#x}")
 PY
 }
+
+# free_port: a TCP port on 127.0.0.1 nobody listens on now (the system's pick).
+free_port() {
+  python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+}
+
+# replay_into_peer CAPTURE: tcpreplay CAPTURE into `$peer` in `$ns` (veth_pair), on time on a busy
+# machine: under a real-time policy where allowed, with tcpreplay's nanosleep() timer (the
+# default one busy-waits and is then throttled; monitor_live.sh says why at length).
+replay_into_peer() {
+  local realtime="chrt -f 50"
+  $realtime true 2>/dev/null || realtime=""
+  ip netns exec "$ns" $realtime tcpreplay -q --preload-pcap --timer=nano -i "$peer" "$1" >/dev/null
+}
+
+# wait_for TRIES COMMAND...: COMMAND until it succeeds, every 0.2 s, TRIES times at most.
+wait_for() {
+  local tries=$1
+  shift
+  for ((i = 0; i < tries; i++)); do
+    "$@" >/dev/null 2>&1 && return 0
+    sleep 0.2
+  done
+  return 1
+}

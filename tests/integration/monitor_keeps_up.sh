@@ -15,14 +15,29 @@
 # one), and a monitor that cannot keep up loses frames every time (the build before the ring
 # change lost 25,940 of 95,970). The test fails when no attempt captured every frame and one of
 # them lost frames without waiting.
-SRC=$1 BUILD=$2
+# With --telemetry (monitor_keeps_up.telemetry) the monitor also serves --metrics, scraped ten
+# times a second during the replay, and publishes --mqtt to a Mosquitto broker started here: the
+# same claim holds with both on (docs/field.md#how-fast gives the CPU of both runs).
+SRC=$1 BUILD=$2 MODE=${3:-}
 source "$SRC/tests/integration/lib.sh"
 
 [ "$(id -u)" = 0 ] || skip "needs root (veth pair, network namespace)"
 require_program tcpreplay ip
+telemetry=()
+if [ "$MODE" = --telemetry ]; then
+  require_program mosquitto curl
+fi
 
 veth_pair ncsk
 cd "$WORK"
+if [ "$MODE" = --telemetry ]; then
+  mqtt_port=$(free_port) metrics_port=$(free_port)
+  printf 'listener %s 127.0.0.1\nallow_anonymous true\nuser root\n' "$mqtt_port" >mosquitto.conf
+  mosquitto -c mosquitto.conf >broker.log 2>&1 &
+  broker=$!
+  trap 'kill "$broker" 2>/dev/null || true; ip netns del "$ns" 2>/dev/null || true; ip link del "$host" 2>/dev/null || true; rm -rf "$WORK"' EXIT
+  telemetry=(--metrics "127.0.0.1:$metrics_port" --mqtt "mqtt://127.0.0.1:$mqtt_port/keeps-up")
+fi
 seconds=3
 "$NCSERVO" simulate --axes 32 --cycle-us 125 --duration "$seconds" -o bus.pcap 2>/dev/null
 frames=$("$NCSERVO" validate --fail-on never bus.pcap | sed -n 's/^bus.pcap: \([0-9]*\) frames.*/\1/p')
@@ -48,9 +63,14 @@ stolen_ms() { awk -v hz="$(getconf CLK_TCK)" '/^cpu / { printf "%d\n", $9 * 1000
 # busy_pct (the monitor's CPU time over the replay's wall time), waited_ms (its wait for a CPU
 # meanwhile) and the monitor's output.
 replay() {
-  $monitor_realtime "$NCSERVO" monitor -i "$host" --fail-on never >live.txt 2>live.err &
+  $monitor_realtime "$NCSERVO" monitor -i "$host" --fail-on never "${telemetry[@]}" >live.txt 2>live.err &
   local pid=$!
   sleep 1
+  local scraper=""
+  if [ ${#telemetry[@]} -gt 0 ]; then
+    while :; do curl -sf "http://127.0.0.1:$metrics_port/metrics" >/dev/null; sleep 0.1; done &
+    scraper=$!
+  fi
   local ran waited start replay_ms stolen
   ran=$(cpu_ns "$pid")
   waited=$(waited_ns "$pid")
@@ -62,6 +82,7 @@ replay() {
   busy_pct=$((($(cpu_ns "$pid") - ran) / 10000 / replay_ms))
   waited_ms=$((($(waited_ns "$pid") - waited) / 1000000))
   stolen_ms=$(($(stolen_ms) - stolen))
+  [ -z "$scraper" ] || kill "$scraper"
   sleep 0.5  # the kernel hands the last block over within 100 ms
   kill -INT "$pid"
   wait "$pid" || fail "monitor: exit $?: $(cat live.err)"
@@ -87,6 +108,12 @@ for attempt in 1 2 3; do
     continue
   fi
   grep -q "^$host: $frames frames," live.txt || fail "the report's frame count: $(grep -m1 frames live.txt)"
+  if [ ${#telemetry[@]} -gt 0 ]; then
+    scrapes=$(grep -o -- "--metrics: [0-9]* scrapes, [0-9.]* ms formatting each" live.err) ||
+      fail "no scrape: $(cat live.err)"
+    grep -q "connected to" live.err || fail "--mqtt never connected: $(cat live.err)"
+    ! grep -q "messages not acknowledged\|messages dropped" live.err || fail "--mqtt: $(cat live.err)"
+  fi
   # 4x of 3 s is 0.75 s: tcpreplay that took over 0.825 s did not replay at 4x.
   if awk -v s="$sent_s" -v d="$seconds" 'BEGIN { exit !(s > d / 4 * 1.1) }'; then
     busy="tcpreplay sent at $rate only (every frame was captured)"
@@ -98,5 +125,5 @@ for attempt in 1 2 3; do
 done
 [ -z "$lost" ] || fail "no attempt captured every frame; the last to lose frames without waiting: $lost"
 [ -z "$busy" ] || { echo "SKIPPED: the machine is too busy to test it: $busy"; exit 77; }
-echo "ok $frames frames at $rate: all captured, none dropped (${monitor_realtime:+the monitor under $monitor_realtime; }monitor CPU $busy_pct % of the replay, $waited_ms ms waiting for one)"
+echo "ok $frames frames at $rate: all captured, none dropped (${monitor_realtime:+the monitor under $monitor_realtime; }monitor CPU $busy_pct % of the replay, $waited_ms ms waiting for one)${scrapes:+; $scrapes}"
 echo PASS

@@ -2,7 +2,8 @@
 # monitor_quiet.sh SRC BUILD: `ncservo monitor` on a link with no traffic at all (one end of a
 # veth pair whose other end is silent, in a network namespace of its own) ends on time:
 # `--duration 3` exits within 3-4 s, and Ctrl-C within a second, each with the usual report (no
-# servo was seen: exit 4, the NO SERVO verdict). Needs root (veth, namespaces): otherwise exit 77
+# servo was seen: exit 4, the NO SERVO verdict); and it waits rather than spins, with --metrics
+# too: under a tenth of a CPU-second over a quiet second. Needs root (veth, namespaces): otherwise exit 77
 # with the reason (under CI: fails).
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
@@ -40,4 +41,22 @@ ms=$((($(date +%s%N) - start) / 1000000))
 [ "$ms" -lt 1000 ] || fail "Ctrl-C took $ms ms to end the run"
 grep -q "NO SERVO" out.txt || fail "no report after Ctrl-C: $(cat out.txt)"
 echo "ok Ctrl-C on a quiet link: exit $rc after $ms ms"
+
+# A quiet monitor waits for frames; it does not poll in a loop (once it did, with no --metrics,
+# a whole CPU).
+hz=$(getconf CLK_TCK)
+for options in "" "--metrics 127.0.0.1:0"; do
+  # shellcheck disable=SC2086
+  "$NCSERVO" monitor -i "$host" $options >out.txt 2>err.txt &
+  pid=$!
+  sleep 0.5
+  ticks=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
+  sleep 1
+  ticks=$(($(awk '{ print $14 + $15 }' "/proc/$pid/stat") - ticks))
+  kill -INT "$pid"
+  wait "$pid" || true
+  [ $((ticks * 10)) -lt "$hz" ] ||
+    fail "monitor ${options:-without options} on a quiet link: $((ticks * 1000 / hz)) ms of CPU in a second"
+  echo "ok a quiet second ${options:+with $options }took $((ticks * 1000 / hz)) ms of CPU"
+done
 echo PASS

@@ -11,7 +11,7 @@ sort -u "$WORK/user" -o "$WORK/user"
 sort -u "$WORK/all" -o "$WORK/all"
 extra=$(comm -23 "$WORK/user" "$WORK/all")
 [ -z "$extra" ] || fail "--user asks for packages the full set-up does not: $extra"
-for needed in tshark wireshark-dev cmake build-essential libfmt-dev libjs-chart.js; do
+for needed in tshark wireshark-dev cmake build-essential libfmt-dev libjs-chart.js libcpp-httplib-dev libmosquitto-dev; do
   grep -qx "$needed" "$WORK/user" || fail "--user lacks $needed"
 done
 for left in libgtest-dev libgmock-dev chromium clang npm python3-selenium libbenchmark-dev clang-format; do

@@ -23,8 +23,9 @@ RANKS = {
     "validator/capture": 8,
     "validator/report": 9,
     "validator/sim": 9,
-    "validator/cli": 10,
-    "plugin": 10,
+    "validator/telemetry": 10,
+    "validator/cli": 11,
+    "plugin": 11,
 }
 
 root = sys.argv[1]

@@ -145,5 +145,6 @@ Handler fieldsCommand(CLI::App& command);
 Handler simulateCommand(CLI::App& command);
 Handler annotateCommand(CLI::App& command);
 Handler monitorCommand(CLI::App& command);
+Handler mergeCommand(CLI::App& command);
 
 }  // namespace ncservo::cli

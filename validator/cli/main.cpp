@@ -42,6 +42,7 @@ const Subcommand kSubcommands[] = {
      cli::annotateCommand},
     {"monitor", "capture live, report findings as they happen, keep a flight record",
      cli::monitorCommand},
+    {"merge", "one report over many captures' JSON reports (docs/field.md)", cli::mergeCommand},
 };
 
 }  // namespace

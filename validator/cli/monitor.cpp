@@ -31,6 +31,7 @@
 #include "ncservo/report/report.hpp"
 #include "ncservo/rules/coverage.hpp"
 #include "ncservo/rules/validator.hpp"
+#include "ncservo/telemetry/live_telemetry.hpp"
 #include "ncservo/wire/ecat_wire.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/frame_clock.hpp"
@@ -47,6 +48,8 @@ constexpr int kKernelBuffer = 16 << 20;  // bytes: 0.55 s of a 32-axis bus at 8 
 constexpr int kReadTimeoutMs = 100;      // the longest a finding waits, and the quiet link's poll
 constexpr auto kStatusPeriod = std::chrono::milliseconds(250);
 constexpr std::size_t kRecorderMemory = 256u << 20;  // bytes of frames the recorder keeps at most
+// How often the metrics' snapshot is handed to the scrapes and ended incidents are published.
+constexpr auto kTelemetryPeriod = std::chrono::milliseconds(100);
 
 struct MonitorArgs : RuleArgs {
   std::string interface;
@@ -59,6 +62,11 @@ struct MonitorArgs : RuleArgs {
   double record_window_s = 5;
   std::string record_severity = "warning";
   double record_limit_mb = 1024;
+  std::string metrics;  // [ADDR:]PORT
+  std::string mqtt;     // mqtt[s]://HOST[:PORT]/PREFIX
+  std::string mqtt_ca, mqtt_cert, mqtt_key, mqtt_client_id;
+  std::size_t mqtt_queue = 10000;
+  double mqtt_flush_s = 5;
 };
 
 // ---- The live capture ----
@@ -335,17 +343,32 @@ void stopOnSignals(pcap_t* handle) {
   sigaction(SIGTERM, &action, nullptr);
 }
 
+// What the kernel and the interface dropped so far.
+std::uint64_t droppedSoFar(pcap_t* handle) {
+  pcap_stat stats{};
+  if (pcap_stats(handle, &stats) != 0) return 0;
+  return std::uint64_t{stats.ps_drop} + stats.ps_ifdrop;
+}
+
 // What the monitor shows besides the report: the status lines, the messages above them, the
-// flight recorder, each axis's last finding.
+// flight recorder, each axis's last finding, the metrics and MQTT (--metrics, --mqtt).
 struct MonitorOutput {
   StatusBoard board{isatty(STDERR_FILENO) == 1};
   std::optional<FlightRecorder> recorder;
   std::optional<Severity> record_at;
   std::map<std::uint16_t, std::string> last_finding;  // by axis, for the status lines
+  std::unique_ptr<LiveTelemetry> telemetry;
+  const CaptureReport* report = nullptr;
   void say(const std::string& text) {
     std::fflush(stdout);
     board.clear();
     fmt::print(stderr, "ncservo monitor: {}\n", text);
+  }
+  // Every kTelemetryPeriod: the metrics handed over, ended incidents published, notes said.
+  void tick(const CapturePipeline& pipeline, pcap_t* handle, std::uint64_t frames) {
+    if (!telemetry) return;
+    telemetry->update(pipeline, *report, frames, droppedSoFar(handle));
+    for (const std::string& note : telemetry->notes()) say(note);
   }
 };
 
@@ -386,6 +409,8 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
                            std::chrono::duration<double>(*args.duration_s));
   }
   auto next_status = began;
+  // Without --metrics and --mqtt there is nothing to tick: never a reason to wake.
+  auto next_tick = output.telemetry ? began : Clock::time_point::max();
   // A blocking read can wait for ever on a quiet link (libpcap's TPACKET_V3 reader hands over
   // nothing until a frame comes, whatever its timeout): the handle reads without blocking and
   // the loop itself waits for the next frame, the status line or the deadline, whichever is
@@ -404,7 +429,8 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
     // capture down.
     if (got == 0) std::fflush(stdout);
     if (got == 0 && selectable >= 0) {
-      auto wake = std::min(next_status, Clock::now() + std::chrono::milliseconds(kReadTimeoutMs));
+      auto wake = std::min(
+          {next_status, next_tick, Clock::now() + std::chrono::milliseconds(kReadTimeoutMs)});
       if (deadline) wake = std::min(wake, *deadline);
       const auto wait_ms =
           std::chrono::ceil<std::chrono::milliseconds>(wake - Clock::now()).count();
@@ -433,6 +459,10 @@ LiveCapture captureLive(const MonitorArgs& args, pcap_t* handle, CapturePipeline
       output.board.draw(pipeline.validator(), output.last_finding, live.frames);
       next_status = Clock::now() + kStatusPeriod;
     }
+    if (output.telemetry && Clock::now() >= next_tick) {
+      output.tick(pipeline, handle, live.frames);
+      next_tick = Clock::now() + kTelemetryPeriod;
+    }
   }
   return live;
 }
@@ -452,9 +482,8 @@ void printDrops(const std::string& interface, pcap_t* handle, std::uint64_t fram
 }
 
 // The report's end, as `validate` writes it, and the exit status.
-int endReport(const std::string& interface, const CapturePipeline& pipeline,
-              const LiveCapture& live, ReportWriter& writer, CaptureReport& report) {
-  static_cast<CaptureResult&>(report) = pipeline.result();
+int endReport(const std::string& interface, const LiveCapture& live, ReportWriter& writer,
+              CaptureReport& report) {
   if (live.error) {
     report.error = *live.error + " (the frames before it were analysed)";
     fmt::print(stderr, "ncservo monitor: {}: {}\n", interface, *report.error);
@@ -468,11 +497,50 @@ int endReport(const std::string& interface, const CapturePipeline& pipeline,
   return writer.exitStatus(report);
 }
 
+// --metrics and --mqtt with their options, checked before capturing.
+Result<TelemetryOptions> telemetryOptions(const MonitorArgs& args) {
+  TelemetryOptions options;
+  if (!args.metrics.empty()) {
+    Result<ListenAddress> address = parseListenAddress(args.metrics);
+    if (!address) return fail(address.error());
+    options.metrics = *address;
+  }
+  if (args.mqtt.empty()) {
+    if (!args.mqtt_ca.empty() || !args.mqtt_cert.empty() || !args.mqtt_key.empty()) {
+      return fail("--mqtt-ca, --mqtt-cert and --mqtt-key go with --mqtt mqtts://…");
+    }
+    return options;
+  }
+  Result<MqttTarget> target = parseMqttUrl(args.mqtt);
+  if (!target) return fail(target.error());
+  if (!target->tls &&
+      (!args.mqtt_ca.empty() || !args.mqtt_cert.empty() || !args.mqtt_key.empty())) {
+    return fail("--mqtt-ca, --mqtt-cert and --mqtt-key need mqtts://");
+  }
+  if (args.mqtt_cert.empty() != args.mqtt_key.empty()) {
+    return fail("--mqtt-cert and --mqtt-key go together");
+  }
+  for (const std::string* file : {&args.mqtt_ca, &args.mqtt_cert, &args.mqtt_key}) {
+    if (!file->empty() && !std::filesystem::is_regular_file(*file)) {
+      return fail(fmt::format("{}: no such file", *file));
+    }
+  }
+  if (args.mqtt_queue == 0 || !(args.mqtt_flush_s >= 0)) {
+    return fail("--mqtt-queue takes a number above 0, --mqtt-flush one of 0 or more");
+  }
+  options.mqtt = MqttOptions{*target,        args.mqtt_client_id, args.mqtt_ca,
+                             args.mqtt_cert, args.mqtt_key,       args.mqtt_queue};
+  options.mqtt_flush = std::chrono::milliseconds(std::llround(args.mqtt_flush_s * 1000));
+  return options;
+}
+
 int runMonitor(const MonitorArgs& args) {
   const Result<LayoutFiles> files = loadLayoutFiles(args.layout);
   RuleSettings settings;
   Status built = files ? buildSettings(args, files->config, settings) : fail(files.error());
   if (built) built = checkMonitorArgs(args);
+  Result<TelemetryOptions> telemetry_options = telemetryOptions(args);
+  if (built && !telemetry_options) built = fail(telemetry_options.error());
   if (!built) {
     fmt::print(stderr, "ncservo monitor: {}\n", built.error().text());
     return kExitUsage;
@@ -488,8 +556,18 @@ int runMonitor(const MonitorArgs& args) {
     fmt::print(stderr, "ncservo monitor: {}\n", writer.error().text());
     return kExitUsage;
   }
+  auto telemetry = LiveTelemetry::start(*telemetry_options, settings);
+  if (!telemetry) {
+    fmt::print(stderr, "ncservo monitor: {}\n", telemetry.error().text());
+    return kExitUsage;
+  }
   stopOnSignals(handle);
   MonitorOutput output;
+  output.telemetry = std::move(*telemetry);
+  if (output.telemetry && output.telemetry->metricsPort()) {
+    output.say(fmt::format("metrics at http://{}:{}/metrics", telemetry_options->metrics->host,
+                           *output.telemetry->metricsPort()));
+  }
   output.record_at = severityFromName(args.record_severity);
   if (!args.record_dir.empty()) {
     output.recorder.emplace(args.record_dir, std::llround(args.record_window_s * 1e9),
@@ -498,6 +576,7 @@ int runMonitor(const MonitorArgs& args) {
                             [&output](const std::string& text) { output.say(text); });
   }
   CaptureReport report;
+  output.report = &report;
   report.path = args.interface;
   report.timestamp_digits = pcap_get_tstamp_precision(handle) == PCAP_TSTAMP_PRECISION_NANO ? 9 : 6;
   (*writer)->beginCapture(report);
@@ -508,9 +587,11 @@ int runMonitor(const MonitorArgs& args) {
   };
   const auto frame = [&](const PipelineFrame&) {
     report.first_time_ns = *pipeline.run().first_time_ns;
+    if (output.telemetry) output.telemetry->onFrame(*pipeline.validator());
   };
   const auto findings = [&](const std::vector<Finding>& found) {
     reportFindings(found, pipeline, **writer, report, output);
+    if (output.telemetry) output.telemetry->onFindings(found, report);
   };
   pipeline.setSinks({start, frame, nullptr, findings, nullptr});
   const LiveCapture captured = captureLive(args, handle, pipeline, output);
@@ -520,7 +601,22 @@ int runMonitor(const MonitorArgs& args) {
   if (output.recorder) output.recorder->finish();
   stopOnSignals(nullptr);
   printDrops(args.interface, handle, captured.frames);
-  return endReport(args.interface, pipeline, captured, **writer, report);
+  static_cast<CaptureResult&>(report) = pipeline.result();
+  if (output.telemetry) {
+    for (const std::string& line :
+         output.telemetry->finish(pipeline, report, captured.frames, droppedSoFar(handle))) {
+      output.say(line);
+    }
+    for (const std::string& note : output.telemetry->notes()) output.say(note);
+    if (output.telemetry->metricsPort()) {
+      output.say(fmt::format(
+          "--metrics: {} scrapes, {:.3f} ms formatting each", output.telemetry->scrapes(),
+          output.telemetry->scrapes() == 0 ? 0.0
+                                           : output.telemetry->scrapeSeconds() * 1e3 /
+                                                 static_cast<double>(output.telemetry->scrapes())));
+    }
+  }
+  return endReport(args.interface, captured, **writer, report);
 }
 
 }  // namespace
@@ -544,6 +640,21 @@ Handler monitorCommand(CLI::App& command) {
       ->check(oneOf({"error", "warning", "info"}));
   command.add_option("--record-limit", args->record_limit_mb,
                      "MiB of recordings kept on disk, the oldest removed first (default 1024)");
+  command.add_option("--metrics", args->metrics,
+                     "[ADDR:]PORT: serve Prometheus metrics at /metrics (docs/field.md#metrics)");
+  command.add_option("--mqtt", args->mqtt,
+                     "mqtt://HOST[:PORT]/PREFIX or mqtts://…: publish findings and incidents, QoS "
+                     "1 (docs/field.md#mqtt)");
+  command.add_option("--mqtt-ca", args->mqtt_ca, "mqtts: the broker's CA certificate (PEM)");
+  command.add_option("--mqtt-cert", args->mqtt_cert, "mqtts: a client certificate (PEM)");
+  command.add_option("--mqtt-key", args->mqtt_key, "mqtts: the client certificate's key (PEM)");
+  command.add_option("--mqtt-client-id", args->mqtt_client_id,
+                     "the MQTT client id (default ncservo-HOSTNAME-PID)");
+  command.add_option("--mqtt-queue", args->mqtt_queue,
+                     "messages kept while the broker is away, the oldest dropped first (default "
+                     "10000)");
+  command.add_option("--mqtt-flush", args->mqtt_flush_s,
+                     "seconds the end waits for the broker to acknowledge the queue (default 5)");
   addLayoutOptions(command, args->layout);
   addRuleOptions(command, *args);
   addTimestampsOption(command, args->timestamps);

@@ -199,6 +199,7 @@ bool BusModel::onCyclicFrame(const EcatFrame& frame, const FrameDecode& decode, 
     // docs/rules.md#com-004: judged on the next master frame, once returned copies exist at all.
     if (cyclic.awaiting_return && returned_copies_seen_) {
       ++returned_copies_missing_;
+      ++lost_cycles_;  // the frame went out and never came back: its cycle was lost
       if (!cyclic.not_returned_episode) {
         cyclic.not_returned_episode = true;
         NotReturnedEvent event;
@@ -337,6 +338,7 @@ void BusModel::judgeGap(CyclicFrame& cyclic, std::optional<std::int64_t> next,
     e.verdict = CycleGapEvent::Verdict::Late;
   } else {
     e.missing = missingCycles(gap.interval_ns, gap.nominal_ns);
+    lost_cycles_ += e.missing;
   }
   if (accounts != nullptr && !gap.accounted && e.missing > 0) {
     for (std::uint16_t axis : gap.axes) {
@@ -446,6 +448,7 @@ bool BusModel::checkWorkingCounters(const EcatFrame& frame, const FrameDecode& d
       expected = record->values[mode];
     }
     if (dg.wkc != expected) {
+      ++wkc_errors_;
       check.outcome = dg.wkc == 0 ? Outcome::Lost : Outcome::Failed;
       all_good = all_good && !check.carries_axes;
       if (record == nullptr || !record->wrong_episode) {

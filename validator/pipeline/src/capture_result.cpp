@@ -31,6 +31,8 @@ void takeBus(const Validator& validator, CaptureResult& r) {
   r.cyclic_frames = bus.cyclicFrames();
   r.master_copies_missing = bus.masterCopiesMissing();
   r.returned_copies_missing = bus.returnedCopiesMissing();
+  r.lost_cycles = bus.lostCycles();
+  r.wkc_errors = bus.wkcErrors();
   r.dc = validator.dc().stations();
   r.dc_settled_ns = validator.dc().settledNs();
   r.cycles = validator.cycles();

@@ -61,6 +61,7 @@ Json seriesJson(const std::optional<SeriesSummary>& series) {
           {"p999", us(s.p999_ns)},
           {"max", us(s.max_ns)},
           {"histogram", std::move(histogram)},
+          {"histogram_zero", us(s.reference_ns)},
           {"under", s.under},
           {"over", s.over}};
 }
@@ -324,7 +325,9 @@ Json timingJson(const CaptureReport& r) {
       {"cyclic_datagrams", cyclicDatagramsJson(r)},
       {"cyclic_frames", cyclicFramesJson(r)},
       {"master_copies_missing", r.master_copies_missing},
-      {"returned_copies_missing", r.returned_copies_missing}};
+      {"returned_copies_missing", r.returned_copies_missing},
+      {"lost_cycles", r.lost_cycles},
+      {"wkc_errors", r.wkc_errors}};
   if (r.unfollowed_frames > 0) timing["frames_not_followed"] = r.unfollowed_frames;
   if (r.segment_count > r.segments.size())
     timing["segments_omitted"] = r.segment_count - r.segments.size();

@@ -5,14 +5,26 @@
 
 #include "report_format.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::cli {
+
+std::string findingJsonLine(const CaptureReport& report, const Finding& finding,
+                            BaselineState state) {
+  detail::Json j;
+  j["capture"] = report.path;
+  j.update(detail::findingJson(report, finding, state));
+  return j.dump();
+}
+
+std::string incidentJsonLine(const CaptureReport& report, std::size_t index) {
+  return detail::Json{{"capture", report.path}, {"incident", detail::incidentJson(report, index)}}
+      .dump();
+}
+
+namespace detail {
 
 void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
                        BaselineState state) {
-  Json j;
-  j["capture"] = r.path;
-  j.update(findingJson(r, f, state));
-  std::fputs((j.dump() + "\n").c_str(), sink.out);
+  std::fputs((findingJsonLine(r, f, state) + "\n").c_str(), sink.out);
 }
 
 // JSON Lines: each capture closes with its timing line, after a line of its layout's warnings
@@ -44,8 +56,7 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   }
   // docs/incidents.md: one line per incident, once the capture has ended them.
   for (std::size_t i = 0; i < r.incidents.size(); ++i) {
-    const Json j{{"capture", r.path}, {"incident", incidentJson(r, i)}};
-    std::fputs((j.dump() + "\n").c_str(), sink.out);
+    std::fputs((incidentJsonLine(r, i) + "\n").c_str(), sink.out);
   }
   if (r.baseline) {
     for (Json& absent : baselineAbsentIncidentsJson(r)) {
@@ -71,4 +82,5 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   std::fputs((j.dump() + "\n").c_str(), sink.out);
 }
 
-}  // namespace ncservo::cli::detail
+}  // namespace detail
+}  // namespace ncservo::cli

@@ -97,6 +97,12 @@ class BusModel {
   std::uint64_t masterCopiesMissing() const { return master_copies_missing_; }
   // Master copies not returned before the next master copy of their cyclic frame (COM-004).
   std::uint64_t returnedCopiesMissing() const { return returned_copies_missing_; }
+  // Cycles lost so far, of every cyclic frame: those missing in the gaps COM-002 judges (whether
+  // or not the rule is enabled) and the master copies never returned (COM-004); and returned
+  // process-data datagrams whose WKC was not the expected one (each copy, where COM-001 reports
+  // an episode once). Running totals for the live monitor's metrics and the reports.
+  std::uint64_t lostCycles() const { return lost_cycles_; }
+  std::uint64_t wkcErrors() const { return wkc_errors_; }
 
   static constexpr std::size_t kMaxCyclicFrames = ncservo::kMaxCyclicFrames;
 
@@ -210,6 +216,8 @@ class BusModel {
   std::uint64_t unfollowed_frames_ = 0;
   std::uint64_t master_copies_missing_ = 0;
   std::uint64_t returned_copies_missing_ = 0;
+  std::uint64_t lost_cycles_ = 0;
+  std::uint64_t wkc_errors_ = 0;
   std::uint64_t uncaptured_wkcs_ = 0;
   std::uint64_t first_uncaptured_wkc_frame_ = 0;
   bool master_copies_seen_ = false;

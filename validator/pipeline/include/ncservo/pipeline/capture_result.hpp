@@ -96,6 +96,8 @@ struct CaptureResult {
   std::vector<CyclicFrameSummary> cyclic_frames;  // each with its own cycle
   std::uint64_t master_copies_missing = 0;        // from the capture; their cycles ran
   std::uint64_t returned_copies_missing = 0;      // never came back (COM-004)
+  std::uint64_t lost_cycles = 0;                  // in gaps (COM-002), not returned (COM-004)
+  std::uint64_t wkc_errors = 0;                   // returned datagrams with a wrong WKC
   std::vector<DcStation> dc;                      // distributed clocks (docs/timing.md)
   std::int64_t dc_settled_ns = 0;
   std::vector<Incident> incidents;  // docs/incidents.md, in frame order

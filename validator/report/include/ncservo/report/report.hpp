@@ -167,6 +167,12 @@ char* writeSeconds(std::int64_t ns, char* out);
 std::string ruleAnchor(const RuleDef& rule);
 std::string ruleHelpUri(const RuleDef& rule);
 
+// A finding's and an incident's object as a JSON Lines report writes its line (`monitor --mqtt`
+// publishes the same): one line, without its line feed.
+std::string findingJsonLine(const CaptureReport& report, const Finding& finding,
+                            BaselineState state);
+std::string incidentJsonLine(const CaptureReport& report, std::size_t index);
+
 // When a capture's findings fail it: at or above `fail_on`, unless `never`; a capture where not
 // every axis was checked is "no servo" unless `allow_empty`.
 struct ReportPolicy {
