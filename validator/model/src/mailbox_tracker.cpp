@@ -43,6 +43,44 @@ const char* driveMessageKindName(DriveMessage::Kind kind) {
   return "unknown";
 }
 
+std::string describeDriveMessage(const DriveMessage& m) {
+  auto text = [](const char* t) { return t ? fmt::format(" {}", t) : std::string(); };
+  switch (m.kind) {
+    case DriveMessage::Kind::Emergency: {
+      std::string data;
+      for (std::uint8_t b : m.emergency.data) data += fmt::format("{:02x}", b);
+      return fmt::format("emergency 0x{:04X}{} (register 0x{:02X}, data {})", m.emergency.code,
+                         text(diag::errorCodeText(m.emergency.code)), m.emergency.error_register,
+                         data);
+    }
+    case DriveMessage::Kind::SdoAbort:
+      return fmt::format("SDO abort 0x{:04X}:{}: 0x{:08X}{}", m.index, m.subindex, m.abort_code,
+                         text(diag::abortText(m.abort_code)));
+    case DriveMessage::Kind::SdoUpload:
+    case DriveMessage::Kind::SdoDownload: {
+      std::string out = fmt::format("SDO {} 0x{:04X}:{}",
+                                    m.kind == DriveMessage::Kind::SdoUpload ? "upload" : "download",
+                                    m.index, m.subindex);
+      if (m.value) {
+        out += fmt::format(" = 0x{:X}", *m.value);
+      } else {
+        out += fmt::format(" ({} bytes)", m.size);
+      }
+      if (const char* object = diag::objectName(m.index)) {
+        out += fmt::format(" ({}", object);
+        if (m.index == diag::kPredefinedErrorField && m.subindex >= 1 && m.value) {
+          const auto e = diag::errorFieldEntry(static_cast<std::uint32_t>(*m.value));
+          out += fmt::format(": error {}, class 0x{:02X}, 0x{:04X}{}", e.number, e.error_class,
+                             e.code, text(diag::errorCodeText(e.code)));
+        }
+        out += ")";
+      }
+      return out;
+    }
+  }
+  return "unknown";
+}
+
 void MailboxTracker::MbxData::absorb(const MbxData& other) {
   for (std::size_t i = 0; i < sm.size(); ++i) {
     if (!sm_known[i] && other.sm_known[i]) {

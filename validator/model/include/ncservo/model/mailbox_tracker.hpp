@@ -42,6 +42,10 @@ struct DriveMessage {
   std::uint32_t abort_code = 0;        // SdoAbort
 };
 const char* driveMessageKindName(DriveMessage::Kind kind);  // "emergency", "sdo-upload", …
+// One line for a person: "emergency 0x8611 following error too large (register 0x21, data
+// 0d00000000)", "SDO upload 0x1003:1 = 0x0D218611 (pre-defined error field: error 13, class 0x21,
+// 0x8611 following error too large)", "SDO abort 0x1003:2: 0x08000024 no data available".
+std::string describeDriveMessage(const DriveMessage& message);
 
 // What could not be decoded as it should (hostile or damaged input).
 struct MailboxNote {
