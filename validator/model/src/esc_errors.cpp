@@ -187,7 +187,11 @@ void EscErrorTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
     }
     reads_this_frame_.push_back(read);
   }
-  // The first slave in processing order with RX errors no upstream slave forwarded.
+  localise(now, out);
+}
+
+// The first slave in processing order with RX errors no upstream slave forwarded names the link.
+void EscErrorTracker::localise(const Stamp& now, std::vector<BusEvent>& out) {
   // Slaves of unknown position keep the order they were read in, after those of known one.
   auto order = [&](std::size_t k) -> std::uint32_t {
     const auto position = directory_.slaves()[reads_this_frame_[k].slave].position;

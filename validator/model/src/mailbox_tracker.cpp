@@ -371,47 +371,56 @@ void MailboxTracker::onAnswer(Slave& slave, const SdoMessage& sdo, const ByteRea
       onUploaded(slave, message, out);
       return;
     }
-    case SdoKind::UploadSegment: {
-      if (!data.transfer) {
-        ++counts_.sdo_unpaired;
-        return;
-      }
-      Transfer& t = *data.transfer;
-      if (sdo.toggle != t.toggle) {
-        note(slave, fmt::format("SDO upload of 0x{:04X}:{}: segment toggle {} where {} was due: "
-                                "transfer dropped",
-                                t.index, t.subindex, sdo.toggle ? 1 : 0, t.toggle ? 1 : 0));
-        data.transfer.reset();
-        return;
-      }
-      t.toggle = !t.toggle;
-      for (std::size_t k = t.received; k < 8 && k - t.received < sdo.data_size; ++k) {
-        t.first[k] = bytes.u8(sdo.data_at + (k - t.received)).value_or(0);
-      }
-      const std::uint64_t received = std::uint64_t{t.received} + sdo.data_size;
-      const std::uint64_t bound = t.size ? *t.size : kMaxTransferBytes;
-      if (received > bound) {
-        note(slave, fmt::format("SDO upload of 0x{:04X}:{} runs past its {} bytes: transfer "
-                                "dropped",
-                                t.index, t.subindex, bound));
-        data.transfer.reset();
-        return;
-      }
-      t.received = static_cast<std::uint32_t>(received);
-      if (!sdo.last) return;
-      message.kind = DriveMessage::Kind::SdoUpload;
-      message.index = t.index;
-      message.subindex = t.subindex;
-      message.request_frame = t.request_frame;
-      message.size = t.received;
-      if (t.received <= 8) message.value = firstBytes(t.first, t.received);
-      data.transfer.reset();
-      onUploaded(slave, message, out);
+    case SdoKind::UploadSegment:
+      onSegment(slave, sdo, bytes, out);
       return;
-    }
     default:
       return;
   }
+}
+
+// An upload segment: joined to the transfer it continues, its toggle and length checked.
+void MailboxTracker::onSegment(Slave& slave, const SdoMessage& sdo, const ByteReader& bytes,
+                               std::vector<BusEvent>& out) {
+  MbxData& data = slave.data;
+  DriveMessage message;
+  message.slave = refOf(slave);
+  if (!data.transfer) {
+    ++counts_.sdo_unpaired;
+    return;
+  }
+  Transfer& t = *data.transfer;
+  if (sdo.toggle != t.toggle) {
+    note(slave, fmt::format("SDO upload of 0x{:04X}:{}: segment toggle {} where {} was due: "
+                            "transfer dropped",
+                            t.index, t.subindex, sdo.toggle ? 1 : 0, t.toggle ? 1 : 0));
+    data.transfer.reset();
+    return;
+  }
+  t.toggle = !t.toggle;
+  for (std::size_t k = t.received; k < 8 && k - t.received < sdo.data_size; ++k) {
+    t.first[k] = bytes.u8(sdo.data_at + (k - t.received)).value_or(0);
+  }
+  const std::uint64_t received = std::uint64_t{t.received} + sdo.data_size;
+  const std::uint64_t bound = t.size ? *t.size : kMaxTransferBytes;
+  if (received > bound) {
+    note(slave, fmt::format("SDO upload of 0x{:04X}:{} runs past its {} bytes: transfer "
+                            "dropped",
+                            t.index, t.subindex, bound));
+    data.transfer.reset();
+    return;
+  }
+  t.received = static_cast<std::uint32_t>(received);
+  if (!sdo.last) return;
+  message.kind = DriveMessage::Kind::SdoUpload;
+  message.index = t.index;
+  message.subindex = t.subindex;
+  message.request_frame = t.request_frame;
+  message.size = t.received;
+  if (t.received <= 8) message.value = firstBytes(t.first, t.received);
+  data.transfer.reset();
+  onUploaded(slave, message, out);
+  return;
 }
 
 // An upload complete: 1003h:0 read lower than before with no clear in between (ERH-001).

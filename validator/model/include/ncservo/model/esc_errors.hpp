@@ -91,6 +91,8 @@ class EscErrorTracker {
   // Rises of the counters the datagram read, into `read`; whether any was known before.
   bool take(Counters& counters, const Datagram& dg, const ByteReader& bytes, Read& read);
   void clear(Counters& counters, const Datagram& dg);
+  // This frame's reads: the link the first slave with unforwarded RX errors names.
+  void localise(const Stamp& now, std::vector<BusEvent>& out);
   void list(const EscErrorDelta& delta);
   SlaveRef refOf(std::size_t slave) const;
 

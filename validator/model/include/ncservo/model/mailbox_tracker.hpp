@@ -130,6 +130,8 @@ class MailboxTracker {
   void onRequest(Slave& slave, const SdoMessage& sdo);
   void onAnswer(Slave& slave, const SdoMessage& sdo, const ByteReader& bytes,
                 std::vector<BusEvent>& out);
+  void onSegment(Slave& slave, const SdoMessage& sdo, const ByteReader& bytes,
+                 std::vector<BusEvent>& out);
   void onUploaded(Slave& slave, DriveMessage& message, std::vector<BusEvent>& out);
   std::optional<Pending> takePending(MbxData& data, std::uint16_t index, std::uint8_t sub,
                                      bool upload);
