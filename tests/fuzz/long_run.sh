@@ -18,7 +18,7 @@ while getopts "m:b:" opt; do
 done
 shift $((OPTIND - 1))
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_frame fuzz_sequence fuzz_capture fuzz_config)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_frame fuzz_sequence fuzz_capture fuzz_config fuzz_mailbox)
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 status=0

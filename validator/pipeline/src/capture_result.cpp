@@ -47,6 +47,13 @@ void takeBus(const Validator& validator, CaptureResult& r) {
   }
   r.segments = validator.segments().segments();
   r.segment_count = validator.segments().count();
+  r.drive_messages = validator.mailbox().messages();
+  r.drive_messages_omitted = validator.mailbox().omitted();
+  r.mailbox_notes = validator.mailbox().notes();
+  r.mailbox_counts = validator.mailbox().counts();
+  r.esc_errors = validator.escErrors().deltas();
+  r.link_faults = validator.escErrors().linkFaults();
+  r.esc_errors_omitted = validator.escErrors().omitted();
 }
 
 void takeAxes(const Validator& validator, CaptureResult& r) {

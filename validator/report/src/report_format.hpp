@@ -46,6 +46,10 @@ Json clockJson(const CaptureReport& r);
 Json captureJson(const CaptureReport& r, Verdict verdict);
 // One incident (docs/incidents.md, INTERFACES.md "Incidents"), as JSON and JSON Lines write it.
 Json incidentJson(const CaptureReport& r, std::size_t index);
+// docs/drive-messages.md: JSON `drive_messages`, `esc_errors` and `link_faults` items.
+Json driveMessageJson(const CaptureReport& r, const DriveMessage& m);
+Json escErrorJson(const CaptureReport& r, const EscErrorDelta& d);
+Json linkFaultJson(const LinkFault& f);
 // An incident's line ("axis1 fault E19 at frame 3040, 1.520 s — encoder: ..."), and its evidence
 // and recovery lines, each starting with `indent` (report_text.cpp).
 std::string incidentSummary(const CaptureReport& r, const Incident& incident);

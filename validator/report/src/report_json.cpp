@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "ncservo/incidents/causes.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 #include "report_format.hpp"
 
 namespace ncservo::cli::detail {
@@ -405,6 +406,100 @@ Json baselineAbsentJson(const CaptureReport& r) {
   return absent;
 }
 
+// The axis whose slave a station is, in the layout; none for a slave that is not a servo.
+const AxisInfo* axisOfSlave(const CaptureReport& r, const SlaveRef& slave) {
+  if (!slave.station) return nullptr;
+  for (const AxisInfo& info : r.layout) {
+    if (info.has_station && info.station == *slave.station) return &info;
+  }
+  return nullptr;
+}
+
+void putSlave(Json& j, const CaptureReport& r, const SlaveRef& slave) {
+  j["station"] = slave.station ? Json(*slave.station) : Json(nullptr);
+  if (!slave.station && slave.position) j["position"] = *slave.position;
+  const AxisInfo* axis = axisOfSlave(r, slave);
+  j["axis"] = axis ? Json(axis->index) : Json(nullptr);
+  j["axis_name"] = axis ? Json(axis->name) : Json(nullptr);
+}
+
+std::string hexBytes(const std::uint8_t* bytes, std::size_t count) {
+  std::string out;
+  for (std::size_t i = 0; i < count; ++i) out += fmt::format("{:02x}", bytes[i]);
+  return out;
+}
+
+Json textOrNull(const char* text) {
+  return text ? Json(text) : Json(nullptr);
+}
+
+}  // namespace
+
+Json driveMessageJson(const CaptureReport& r, const DriveMessage& m) {
+  Json j{{"frame", m.frame}};
+  if (m.request_frame) j["request_frame"] = *m.request_frame;
+  putSlave(j, r, m.slave);
+  j["kind"] = driveMessageKindName(m.kind);
+  switch (m.kind) {
+    case DriveMessage::Kind::Emergency:
+      j["code"] = m.emergency.code;
+      j["register"] = m.emergency.error_register;
+      j["data"] = hexBytes(m.emergency.data.data(), m.emergency.data.size());
+      j["text"] = textOrNull(diag::errorCodeText(m.emergency.code));
+      break;
+    case DriveMessage::Kind::SdoAbort:
+      j["index"] = m.index;
+      j["subindex"] = m.subindex;
+      j["abort"] = m.abort_code;
+      j["text"] = textOrNull(diag::abortText(m.abort_code));
+      break;
+    case DriveMessage::Kind::SdoUpload:
+    case DriveMessage::Kind::SdoDownload:
+      j["index"] = m.index;
+      j["subindex"] = m.subindex;
+      j["value"] = m.value ? Json(*m.value) : Json(nullptr);
+      if (!m.value) j["size"] = m.size;
+      if (const char* object = diag::objectName(m.index)) j["object"] = object;
+      if (m.index == diag::kPredefinedErrorField && m.subindex >= 1 && m.value) {
+        const diag::ErrorFieldEntry e = diag::errorFieldEntry(static_cast<std::uint32_t>(*m.value));
+        j["entry"] = {{"number", e.number},
+                      {"class", e.error_class},
+                      {"code", e.code},
+                      {"text", textOrNull(diag::errorCodeText(e.code))}};
+      }
+      break;
+  }
+  return j;
+}
+
+Json escErrorJson(const CaptureReport& r, const EscErrorDelta& d) {
+  (void)r;
+  Json j{{"station", d.slave.station ? Json(*d.slave.station) : Json(nullptr)}};
+  if (!d.slave.station && d.slave.position) j["position"] = *d.slave.position;
+  if (d.broadcast) j["broadcast"] = true;
+  j["port"] = d.port;
+  j["counter"] = diag::escCounterName(d.counter);
+  j["delta"] = d.delta;
+  j["frame"] = d.frame;
+  return j;
+}
+
+Json linkFaultJson(const LinkFault& f) {
+  auto side = [](const std::optional<SlaveRef>& slave, std::uint8_t port) -> Json {
+    if (!slave) return nullptr;
+    Json j{{"station", slave->station ? Json(*slave->station) : Json(nullptr)}, {"port", port}};
+    if (!slave->station && slave->position) j["position"] = *slave->position;
+    return j;
+  };
+  return {{"upstream", side(f.upstream, f.upstream_port)},
+          {"downstream", side(f.downstream, f.downstream_port)},
+          {"errors", f.errors},
+          {"frame", f.frame},
+          {"text", linkFaultText(f)}};
+}
+
+namespace {
+
 Json incidentsJson(const CaptureReport& r) {
   Json incidents = Json::array();
   for (std::size_t i = 0; i < r.incidents.size(); ++i) incidents.push_back(incidentJson(r, i));
@@ -502,6 +597,27 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   if (r.incidents_omitted > 0) c["incidents_omitted"] = r.incidents_omitted;
   if (r.baseline) c["baseline_absent_incidents"] = baselineAbsentIncidentsJson(r);
   c["axes"] = axesJson(r);
+  Json messages = Json::array();
+  for (const DriveMessage& m : r.drive_messages) messages.push_back(driveMessageJson(r, m));
+  c["drive_messages"] = std::move(messages);
+  if (r.drive_messages_omitted > 0) c["drive_messages_omitted"] = r.drive_messages_omitted;
+  Json esc = Json::array();
+  for (const EscErrorDelta& d : r.esc_errors) esc.push_back(escErrorJson(r, d));
+  c["esc_errors"] = std::move(esc);
+  Json links = Json::array();
+  for (const LinkFault& f : r.link_faults) links.push_back(linkFaultJson(f));
+  c["link_faults"] = std::move(links);
+  if (r.esc_errors_omitted > 0) c["esc_errors_omitted"] = r.esc_errors_omitted;
+  if (!r.mailbox_notes.empty()) {
+    Json notes = Json::array();
+    for (const MailboxNote& n : r.mailbox_notes) {
+      Json j{{"frame", n.frame}};
+      putSlave(j, r, n.slave);
+      j["text"] = n.text;
+      notes.push_back(std::move(j));
+    }
+    c["mailbox_notes"] = std::move(notes);
+  }
   c["summary"] = {{"error", r.count(Severity::Error)},
                   {"warning", r.count(Severity::Warning)},
                   {"info", r.count(Severity::Info)}};

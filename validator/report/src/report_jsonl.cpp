@@ -64,6 +64,19 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
       std::fputs((j.dump() + "\n").c_str(), sink.out);
     }
   }
+  // docs/drive-messages.md: one line per drive message, counter rise and link fault.
+  for (const DriveMessage& m : r.drive_messages) {
+    const Json j{{"capture", r.path}, {"drive_message", driveMessageJson(r, m)}};
+    std::fputs((j.dump() + "\n").c_str(), sink.out);
+  }
+  for (const EscErrorDelta& d : r.esc_errors) {
+    const Json j{{"capture", r.path}, {"esc_error", escErrorJson(r, d)}};
+    std::fputs((j.dump() + "\n").c_str(), sink.out);
+  }
+  for (const LinkFault& f : r.link_faults) {
+    const Json j{{"capture", r.path}, {"link_fault", linkFaultJson(f)}};
+    std::fputs((j.dump() + "\n").c_str(), sink.out);
+  }
   const Json timing{{"capture", r.path},
                     {"timing", timingJson(r)},
                     {"clock", clockJson(r)},

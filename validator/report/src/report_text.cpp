@@ -14,6 +14,7 @@
 
 #include "ncservo/incidents/causes.hpp"
 #include "ncservo/layout/decoder.hpp"
+#include "ncservo/model/al_tracker.hpp"
 #include "ncservo/model/timing_text.hpp"
 #include "report_format.hpp"
 
@@ -174,6 +175,44 @@ void writeTextAxes(std::FILE* out, const CaptureReport& r) {
                  sewCauseText(*e.cause), e.cause->canopen, e.at.frame, seconds(r, e.at),
                  dayTimeOf(r, e.at));
     }
+    // docs/drive-messages.md: what the drive itself said, beside the history kept from SEW.
+    const AxisInfo* info = nullptr;
+    for (const AxisInfo& candidate : r.layout) {
+      if (candidate.index == a.index && candidate.has_station) info = &candidate;
+    }
+    if (info == nullptr) continue;
+    for (const DriveMessage& m : r.drive_messages) {
+      if (m.slave.station != info->station) continue;
+      fmt::print(out, "    drive said: {} at frame {}", describeDriveMessage(m), m.frame);
+      if (m.request_frame) fmt::print(out, " (request frame {})", *m.request_frame);
+      fmt::print(out, "\n");
+    }
+  }
+}
+
+// docs/drive-messages.md: the links the ESCs' counters name, the counters' rises, the mailbox's
+// notes, and the drive messages of slaves that are no axis.
+void writeBusDiagnosis(std::FILE* out, const CaptureReport& r) {
+  for (const LinkFault& f : r.link_faults) {
+    fmt::print(out, "link fault: {}: {} errors at frame {}\n", linkFaultText(f), f.errors, f.frame);
+  }
+  if (!r.esc_errors.empty()) {
+    std::uint64_t total = 0;
+    for (const EscErrorDelta& d : r.esc_errors) total += d.delta;
+    fmt::print(out, "ESC error counters: {} rises ({} counts){}\n", r.esc_errors.size(), total,
+               r.esc_errors_omitted > 0 ? fmt::format(", {} more not listed", r.esc_errors_omitted)
+                                        : std::string());
+  }
+  for (const MailboxNote& n : r.mailbox_notes) {
+    fmt::print(out, "mailbox: {} at frame {}: {}\n", slaveName(n.slave), n.frame, n.text);
+  }
+  for (const DriveMessage& m : r.drive_messages) {
+    bool axis = false;
+    for (const AxisInfo& info : r.layout)
+      axis = axis || (info.has_station && m.slave.station == info.station);
+    if (axis) continue;
+    fmt::print(out, "{} said: {} at frame {}\n", slaveName(m.slave), describeDriveMessage(m),
+               m.frame);
   }
 }
 
@@ -383,6 +422,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   writeCyclicFrames(out, r);
   writeCaptureLoss(out, r);
   std::fputs(dcText(r.dc, r.dc_settled_ns, clockSourceMeaning(r.clock.source)).c_str(), out);
+  writeBusDiagnosis(out, r);
   if (r.segment_count > 1) {
     fmt::print(out, "segments: {} (timestamps jump back, or pause longer than capture_pause)\n",
                r.segment_count);

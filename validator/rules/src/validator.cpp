@@ -117,6 +117,10 @@ const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t t
     addressing_.beginFrame(frame, decode.copy == CopyKind::Returned, decode.paired);
     observeAl(frame, bytes);
     dc_.onFrame(frame, bytes, addressing_, frame_number, time_ns);
+    events_.clear();
+    mailbox_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
+    esc_.onFrame(frame, bytes, addressing_, now_, events_);
+    if (!events_.empty()) reportEvents();
   }
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.
   if (decode.registers || al_.lastFrameReachedRegisters()) ++al_epoch_;

@@ -107,9 +107,53 @@ struct AlErrorEvent {
   std::uint64_t status_code_frame = 0;  // where the status code was read
 };
 
+// A drive's CoE emergency (PROTOCOL.md §11), on the frame that read it from its mailbox.
+struct EmergencyEvent {
+  SlaveRef slave;
+  std::uint16_t code = 0;
+  std::uint8_t error_register = 0;
+};
+
+// An SDO request the slave aborted, on the frame of the abort (MBX-003).
+struct SdoAbortEvent {
+  SlaveRef slave;
+  std::uint16_t index = 0;
+  std::uint8_t subindex = 0;
+  std::uint32_t code = 0;
+  std::optional<std::uint64_t> request_frame;
+  bool expected = false;  // 0x08000024 on an entry of an empty 1003h (seed 002)
+};
+
+// 1003h subindex 0 read lower than the read before, with no write of 0 between (ERH-001).
+struct ErrorHistoryShrunkEvent {
+  SlaveRef slave;
+  std::uint32_t before = 0;
+  std::uint32_t now = 0;
+  std::uint64_t before_frame = 0;
+};
+
+// A slave's ESC error counter rose at a port, not forwarded from upstream: a fault of the link
+// arriving at that port (LNK-001), or its lost-link counter rose (LNK-002), at a counter read.
+struct LinkErrorEvent {
+  SlaveRef slave;
+  std::uint8_t port = 0;
+  std::uint32_t errors = 0;  // RX and invalid frames, not forwarded (LNK-001); link-downs (LNK-002)
+  bool lost = false;         // the lost-link counter
+  std::optional<SlaveRef> upstream;  // the neighbour on that port, where the ring order says it
+  std::uint8_t upstream_port = 0;
+  std::uint64_t previous_read_frame = 0;  // the read the counter rose since (0: a clear)
+};
+
+// A slave's system time difference (0x092C) read, in ns (DC-001).
+struct DcDifferenceEvent {
+  SlaveRef slave;
+  std::int64_t difference_ns = 0;
+};
+
 using BusEventData =
     std::variant<WorkingCounterEvent, CycleGapEvent, CycleIntervalEvent, ReturnLatencyEvent,
-                 NotReturnedEvent, AlControlEvent, AlErrorEvent>;
+                 NotReturnedEvent, AlControlEvent, AlErrorEvent, EmergencyEvent, SdoAbortEvent,
+                 ErrorHistoryShrunkEvent, LinkErrorEvent, DcDifferenceEvent>;
 
 struct BusEvent {
   Stamp since;  // where the condition began

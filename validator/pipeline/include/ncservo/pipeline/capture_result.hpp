@@ -100,6 +100,15 @@ struct CaptureResult {
   std::uint64_t wkc_errors = 0;                   // returned datagrams with a wrong WKC
   std::vector<DcStation> dc;                      // distributed clocks (docs/timing.md)
   std::int64_t dc_settled_ns = 0;
+  // What the drives said over their mailboxes and what the ESCs counted (docs/drive-messages.md):
+  // each listed up to its tracker's bound, the rest counted.
+  std::vector<DriveMessage> drive_messages;
+  std::uint64_t drive_messages_omitted = 0;
+  std::vector<MailboxNote> mailbox_notes;
+  MailboxCounts mailbox_counts;
+  std::vector<EscErrorDelta> esc_errors;
+  std::vector<LinkFault> link_faults;
+  std::uint64_t esc_errors_omitted = 0;
   std::vector<Incident> incidents;  // docs/incidents.md, in frame order
   std::uint64_t incidents_omitted = 0;
   // Each interface the records came from, by id (up to CapturePipeline::kMaxInterfaces), and the

@@ -15,6 +15,8 @@
 #include "ncservo/model/bus_model.hpp"
 #include "ncservo/model/capture_segments.hpp"
 #include "ncservo/model/dc_clock.hpp"
+#include "ncservo/model/esc_errors.hpp"
+#include "ncservo/model/mailbox_tracker.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
 
@@ -75,6 +77,10 @@ class Validator {
   const DcClock& dc() const { return dc_; }
   // The slaves' state machines; opChanges() holds the last frame's.
   const AlTracker& al() const { return al_; }
+  // What the drives said over their mailboxes, and the ESCs' error counters
+  // (docs/drive-messages.md); frameMessages() and frameDeltas() hold the last frame's.
+  const MailboxTracker& mailbox() const { return mailbox_; }
+  const EscErrorTracker& escErrors() const { return esc_; }
   // The telegram accounting of the last frame given to onFrame (or of finish()): the axes whose
   // cycles failed or were lost, and those whose cycles ran again (docs/rules.md#com-003).
   const std::vector<AxisAccount>& frameAccounts() const { return accounts_; }
@@ -135,6 +141,8 @@ class Validator {
   FrameAddressing addressing_;  // this frame's, read by al_ and dc_ (a walked frame's)
   AlTracker al_;
   DcClock dc_;
+  MailboxTracker mailbox_;
+  EscErrorTracker esc_;
   BusModel bus_;
   SegmentTracker segments_;
   CutRegions cut_;

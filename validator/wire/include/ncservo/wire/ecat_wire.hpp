@@ -126,6 +126,23 @@ inline constexpr std::uint16_t kRegDcSystemTimeOffset = 0x0920;  // 64 bits: loc
 // than the system time received; bits 30..0 the difference in ns (ESC datasheet, DC registers).
 inline constexpr std::uint16_t kRegDcSystemTimeDifference = 0x092C;
 inline constexpr std::uint32_t kDcDifferenceSignBit = 0x80000000u;
+// ESC error counters (ETG.1000.4, ESC datasheets): 0x0300 + 2n invalid frames and 0x0301 + 2n RX
+// errors at port n, 0x0308 + n forwarded RX errors, 0x030C processing unit, 0x030D PDI errors,
+// 0x0310 + n lost links. Each saturates at 0xFF; a write to 0x0300-0x030B clears them.
+inline constexpr std::uint16_t kRegErrorCounters = 0x0300;
+inline constexpr std::size_t kErrorCountersSize = 0x14;
+inline constexpr std::size_t kEscPorts = 4;
+inline constexpr std::uint16_t kRegInvalidFrame0 = 0x0300;  // + 2n
+inline constexpr std::uint16_t kRegRxError0 = 0x0301;       // + 2n
+inline constexpr std::uint16_t kRegForwardedRxError0 = 0x0308;
+inline constexpr std::uint16_t kRegProcessingUnitError = 0x030C;
+inline constexpr std::uint16_t kRegPdiError = 0x030D;
+inline constexpr std::uint16_t kRegLostLink0 = 0x0310;
+inline constexpr std::uint16_t kRegErrorCountersClearedEnd = 0x030C;  // writes below clear
+// Sync manager watchdog: status (bit 0 clear: expired) and the SM and PDI watchdog counters.
+inline constexpr std::uint16_t kRegSmWatchdogStatus = 0x0440;
+inline constexpr std::uint16_t kRegSmWatchdogCounter = 0x0442;
+inline constexpr std::uint16_t kRegPdiWatchdogCounter = 0x0443;
 // Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
 inline constexpr std::uint16_t kProcessRam = 0x1000;
 static_assert(kRegFmmu0 + kFmmuCount * kFmmuStride <= kRegSyncManager0);
@@ -186,15 +203,36 @@ inline constexpr std::uint16_t kAlCodeEepromNoAccess = 0x0050;
 // Mailbox header: length 2 (of what follows the header), address 2, channel/priority 1,
 // type 1 (low 4 bits) and counter.
 inline constexpr std::size_t kMailboxLengthAt = 0;
+inline constexpr std::size_t kMailboxAddressAt = 2;
+inline constexpr std::size_t kMailboxChannelAt = 4;  // channel bits 5..0, priority bits 7..6
 inline constexpr std::size_t kMailboxTypeAt = 5;
 inline constexpr std::size_t kMailboxHeaderSize = 6;
+inline constexpr std::uint8_t kMailboxChannelMask = 0x3F;
+inline constexpr unsigned kMailboxPriorityShift = 6;
 inline constexpr std::uint8_t kMailboxTypeMask = 0x0F;
+inline constexpr unsigned kMailboxCounterShift = 4;  // in the type byte, bits 6..4
+inline constexpr std::uint8_t kMailboxCounterMask = 0x07;
+inline constexpr std::uint8_t kMailboxTypeError = 0;
+inline constexpr std::uint8_t kMailboxTypeAoe = 1;
+inline constexpr std::uint8_t kMailboxTypeEoe = 2;
 inline constexpr std::uint8_t kMailboxTypeCoe = 3;
-// CoE header: number, service in bits 15..12.
+inline constexpr std::uint8_t kMailboxTypeFoe = 4;
+inline constexpr std::uint8_t kMailboxTypeSoe = 5;
+inline constexpr std::uint8_t kMailboxTypeVoe = 15;
+// CoE header: number in bits 8..0, service in bits 15..12.
 inline constexpr std::size_t kCoeHeaderSize = 2;
+inline constexpr std::uint16_t kCoeNumberMask = 0x01FF;
 inline constexpr unsigned kCoeServiceShift = 12;
+inline constexpr std::uint8_t kCoeServiceEmergency = 1;
 inline constexpr std::uint8_t kCoeServiceSdoRequest = 2;
 inline constexpr std::uint8_t kCoeServiceSdoResponse = 3;
+inline constexpr std::uint8_t kCoeServiceSdoInformation = 8;
+// Emergency, after the CoE header: error code 2, error register 1 (as 1001h), manufacturer data 5.
+inline constexpr std::size_t kEmcyCodeAt = 0;
+inline constexpr std::size_t kEmcyRegisterAt = 2;
+inline constexpr std::size_t kEmcyDataAt = 3;
+inline constexpr std::size_t kEmcyDataSize = 5;
+inline constexpr std::size_t kEmcySize = kEmcyDataAt + kEmcyDataSize;
 // SDO: command 1, index 2, subindex 1, then 4 bytes of data (expedited) or of size (normal).
 inline constexpr std::size_t kSdoCommandAt = 0;
 inline constexpr std::size_t kSdoIndexAt = 1;
@@ -202,8 +240,25 @@ inline constexpr std::size_t kSdoSubindexAt = 3;
 inline constexpr std::size_t kSdoDataAt = 4;
 inline constexpr std::size_t kSdoDataSize = 4;
 inline constexpr unsigned kSdoSpecifierShift = 5;  // command specifier in bits 7..5
+// Client (request) command specifiers.
+inline constexpr std::uint8_t kSdoDownloadSegmentRequest = 0;
 inline constexpr std::uint8_t kSdoInitiateDownloadRequest = 1;
+inline constexpr std::uint8_t kSdoInitiateUploadRequest = 2;
+inline constexpr std::uint8_t kSdoUploadSegmentRequest = 3;
+inline constexpr std::uint8_t kSdoAbort = 4;  // either way
+// Server (response) command specifiers.
+inline constexpr std::uint8_t kSdoUploadSegmentResponse = 0;
+inline constexpr std::uint8_t kSdoDownloadSegmentResponse = 1;
 inline constexpr std::uint8_t kSdoInitiateUploadResponse = 2;
+inline constexpr std::uint8_t kSdoInitiateDownloadResponse = 3;
+// A segment: the command byte (toggle bit 4; of the data, bits 3..1 the unused bytes of 7 and
+// bit 0 "last segment"), then its data: 7 bytes, or all that the mailbox length gives beyond.
+inline constexpr std::uint8_t kSdoToggle = 0x10;
+inline constexpr std::uint8_t kSdoLastSegment = 0x01;
+inline constexpr unsigned kSdoSegmentUnusedShift = 1;
+inline constexpr std::uint8_t kSdoSegmentUnusedMask = 0x07;
+inline constexpr std::size_t kSdoSegmentDataAt = 1;
+inline constexpr std::size_t kSdoSegmentMinData = 7;
 inline constexpr std::uint8_t kSdoSizeIndicated = 0x01;
 inline constexpr std::uint8_t kSdoExpedited = 0x02;
 inline constexpr unsigned kSdoUnusedBytesShift = 2;  // of an expedited transfer, bits 3..2
