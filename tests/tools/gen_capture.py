@@ -2,7 +2,8 @@
 """Generate an NC <-> servo EtherCAT capture with a known truth.
 
 An independent oracle for the decoders: written from the protocol's definition (docs/protocol.md
-§1-5, §8 and the outputs-first layout of §9.4) alone, it imports nothing from the project.
+§1-5, §8 and the outputs-first layout of §9.4; PROTOCOL.md §11 for the mailbox and the ESCs'
+registers) alone, it imports nothing from the project.
 
 Every cycle the master sends one frame -- an LRW of n*10 output bytes followed by n*40 input
 bytes at logical 0x00010000, then an FRMW reading the DC system time (0x0910) -- and the ring
@@ -101,12 +102,40 @@ It is also the oracle for the rule engine (`ncservo validate`):
               E15 fault, then recovered)
       COM-004 one frame lost before the drives (its master copy only)
       COM-005 four consecutive frames lost before the drives; every drive raises ECatTErr
+    What the drives and the ESCs say themselves (PROTOCOL.md §11) is shown by the master's
+    acyclic frames, sent between the cycles as SOEM sends them: FPRD/FPWR by station address
+    only (no logical datagram: no cycle, WKC or timing rule sees them), none in a cycle lost
+    or dropped.  These injections start at SECONDS whatever the axes do; AXIS names the axis's
+    drive.  The slaves are in ring order (--io-terminals, --cia402, then the servos) at stations
+    0x1001 on.  From the first LNK-* injection on, every slave's error counters (0x0300, 20
+    bytes) are polled every 50 ms, the first poll the baseline (a few errors and lost links
+    from before the capture); from the first DC-001, every slave's system time difference
+    (0x092C, sign and magnitude) every 10 ms, within +-80 ns (the reference clock, the first
+    slave, 0).  MBX-003 and ERH-001 are SDO transfers in the drive's mailbox (SM0 at 0x1000,
+    SM1 at 0x1080, 128 bytes each; no start-up, so the validator finds them from use): the
+    request written in one frame, SM1 read in the next cycles, empty (WKC 0) twice, then with
+    the answer.  The drive's 1003h holds one entry per SEW cause bit that rose.
+      MBX-003 uploads of 1003h:00, of the first entry the drive does not hold (aborted with
+              0x08000024: expected, not a finding) and of 2000h:00, aborted with 0x06020000
+              (the drive's abort is an SDO request, CoE service 2, as ETG.1000.6 has it)
+      ERH-001 the drive holds 3 entries from before the capture; the NC reads 1003h:00, then,
+              100 ms later, 1 (the drive lost the others) with no write of 0 between; then
+              it clears the history (a download of 0 to 1003h:00) and reads 0: no finding
+      LNK-001 4 RX errors at port 0 of the drive, none forwarded (symbol errors between
+              frames: no frame lost), at the third poll
+      LNK-002 a link-down at port 1 of the drive (default the last slave, the end of the
+              line), at the third poll; inside the ring the next slave's port 0 counts it too
+              (one finding each)
+      DC-001  the drive reads -5.0, -5.2 and -4.9 us in a row after 3 reads in sync, then in
+              sync again: one finding, on the first (not on the first slave, the reference)
 --findings FILE
     write the findings the injections must produce, as JSON:
       {"expected": [{"rule": "SE-001", "axis": 0, "first_frame": N, "last_frame": M,
                      "due_frame": D}, ...],
        "companions": {"COM-003": ["COM-004"], ...}}
-    axis is null for COM-001, COM-002 and COM-004.  Frames are 1-based, counting every record.
+    axis is null for COM-001, COM-002, COM-004 and the §11 rules (MBX-003, ERH-001, LNK-001,
+    LNK-002, DC-001: without a start-up the validator does not know an axis's station).  Frames
+    are 1-based, counting every record.
     The window [first_frame, last_frame] is where the validator may report the finding:
     an immediate finding exactly on the frame that first shows it (the master copy for NC
     outputs, the returned copy for drive inputs and WKC, the first master frame after a gap or
@@ -115,7 +144,8 @@ It is also the oracle for the rule engine (`ncservo validate`):
     the condition began (docs/timing.md#rule-time): reported before its timeout, it is
     missing.  COM-005: from the master frame of the fourth failed cycle to the returned copy of
     the next.  COM-003: timed like the others, due on the first frame more than drive_response
-    after the returned copy of the first master frame after the outage.
+    after the returned copy of the first master frame after the outage.  The §11 rules: exactly
+    the returned copy of the acyclic frame that shows them.
     companions lists, per injected rule, other rules it necessarily causes as well (see
     COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
 --incident KIND[@SECONDS][:AXIS]   (repeatable)
@@ -900,6 +930,9 @@ def parse_injection(text, order, args, error):
             error(f"--inject {text}: ZP-001 needs an incremental axis (odd index)")
         if rule == "ZP-003" and axis % 2:
             error(f"--inject {text}: ZP-003 needs an absolute axis (even index)")
+    if rule == "DC-001" and args.io_terminals + args.cia402 + axis == 0:
+        error(f"--inject {text}: the first slave is the reference clock, never out of sync with "
+              "itself: give another axis, or --axes 2 or more")
     if args.copies != "both" and rule in NEEDS_BOTH_COPIES:
         error(f"--inject {text}: {rule} needs both copies of each frame (--copies both)")
     if args.copies == "master" and rule not in MASTER_ONLY_OK:
@@ -1387,7 +1420,7 @@ class Monitor:
                                  + "; ".join(problems))
 
 
-# --- the master's acyclic frames (--inject of ACYCLIC_RULES; docs/protocol.md §11) ---
+# --- the master's acyclic frames (--inject of ACYCLIC_RULES; PROTOCOL.md §11) ---
 COUNTER_POLL_NS = 50_000_000  # every slave's ESC error counters
 DC_POLL_NS = 10_000_000  # every slave's system time difference
 DC_IN_SYNC_NS = 80  # a synchronised slave's difference stays within this (settled: 100)
@@ -1568,7 +1601,10 @@ class Acyclic:
                 continue
             self.pending.remove(inj)
             script = getattr(self, "_" + inj.rule.replace("-", "_").lower())(inj)
-            self.running.append((inj, self._using_mailbox(inj, script) if mailbox else script))
+            if mailbox:
+                self.mailbox(inj.axis).busy = True
+                script = self._releasing(self.mailbox(inj.axis), script)
+            self.running.append((inj, script))
         frames = []
         for entry in list(self.running):
             try:
@@ -1585,9 +1621,8 @@ class Acyclic:
             self.mailboxes[axis] = Mailbox(FIRST_STATION + self.first_servo + axis)
         return self.mailboxes[axis]
 
-    def _using_mailbox(self, inj, script):
-        mailbox = self.mailbox(inj.axis)
-        mailbox.busy = True
+    @staticmethod
+    def _releasing(mailbox, script):
         yield from script
         mailbox.busy = False
 
