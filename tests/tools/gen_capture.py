@@ -109,12 +109,13 @@ It is also the oracle for the rule engine (`ncservo validate`):
     drive.  The slaves are in ring order (--io-terminals, --cia402, then the servos) at stations
     0x1001 on.  From the first LNK-* injection on, every slave's error counters (0x0300, 20
     bytes) are polled every 50 ms, the first poll the baseline (a few errors and lost links
-    from before the capture); from the first DC-001, every slave's system time difference
-    (0x092C, sign and magnitude) every 10 ms, within +-80 ns (the reference clock, the first
-    slave, 0).  MBX-003 and ERH-001 are SDO transfers in the drive's mailbox (SM0 at 0x1000,
-    SM1 at 0x1080, 128 bytes each; no start-up, so the validator finds them from use): the
-    request written in one frame, SM1 read in the next cycles, empty (WKC 0) twice, then with
-    the answer.  The drive's 1003h holds one entry per SEW cause bit that rose.
+    from before the capture); from the first DC-001, every 10 ms, the master writes its time
+    into the reference clock (0x0910 of the first slave, as EtherLab does) and reads every
+    slave's system time difference (0x092C, sign and magnitude), within +-80 ns.  MBX-003 and
+    ERH-001 are SDO transfers in the drive's mailbox (SM0 at 0x1000, SM1 at 0x1080, 128 bytes
+    each; no start-up, so the validator finds them from use): the request written in one
+    frame, SM1 read in the next cycles, empty (WKC 0) twice, then with the answer.  The
+    drive's 1003h holds one entry per SEW cause bit that rose.
       MBX-003 uploads of 1003h:00, of the first entry the drive does not hold (aborted with
               0x08000024: expected, not a finding) and of 2000h:00, aborted with 0x06020000
               (the drive's abort is an SDO request, CoE service 2, as ETG.1000.6 has it)
@@ -127,7 +128,7 @@ It is also the oracle for the rule engine (`ncservo validate`):
               line), at the third poll; inside the ring the next slave's port 0 counts it too
               (one finding each)
       DC-001  the drive reads -5.0, -5.2 and -4.9 us in a row after 3 reads in sync, then in
-              sync again: one finding, on the first (not on the first slave, the reference)
+              sync again: one finding, on the first
 --findings FILE
     write the findings the injections must produce, as JSON:
       {"expected": [{"rule": "SE-001", "axis": 0, "first_frame": N, "last_frame": M,
@@ -278,6 +279,7 @@ BROADCAST_MAC = b"\xff" * 6
 T0_NS = 1_704_067_200 * 10**9  # capture start, 2024-01-01 00:00:00 UTC
 LINKTYPE_ETHERNET, LINKTYPE_LINUX_SLL = 1, 113  # tcpdump.org link types
 DC_EPOCH_OFFSET_NS = 946_684_800 * 10**9  # DC time counts from 2000-01-01
+DC_REFERENCE_OFF_NS = 1234  # the reference clock slightly off the host clock
 
 # --- drive model constants (plausible values, not from the spec) ---
 SPEED_UNIT_PER_RPM = 100  # SSP in 0.01 rpm
@@ -930,9 +932,6 @@ def parse_injection(text, order, args, error):
             error(f"--inject {text}: ZP-001 needs an incremental axis (odd index)")
         if rule == "ZP-003" and axis % 2:
             error(f"--inject {text}: ZP-003 needs an absolute axis (even index)")
-    if rule == "DC-001" and args.io_terminals + args.cia402 + axis == 0:
-        error(f"--inject {text}: the first slave is the reference clock, never out of sync with "
-              "itself: give another axis, or --axes 2 or more")
     if args.copies != "both" and rule in NEEDS_BOTH_COPIES:
         error(f"--inject {text}: {rule} needs both copies of each frame (--copies both)")
     if args.copies == "master" and rule not in MASTER_ONLY_OK:
@@ -1447,8 +1446,9 @@ def mailbox_message(counter, service, command, index, subindex, data):
 
 
 class AcyclicFrame:
-    """Datagrams (command, ADP, ADO, data sent, data returned, returned WKC) and the findings
-    (rule, axis) its returned copy must produce."""
+    """Datagrams (command, ADP, ADO, data sent, data returned, returned WKC; data may be a
+    function of the time the frame is sent) and the findings (rule, axis) its returned copy
+    must produce."""
 
     def __init__(self, datagrams, shows=()):
         self.datagrams = datagrams
@@ -1495,18 +1495,21 @@ class Poller:
         if self.next_cycle is None:
             self.next_cycle = k
 
+    first_datagrams = ()  # put before the reads in the poll's first frame
+
     def step(self, k):
         if self.next_cycle is None or k < self.next_cycle:
             return []
         self.next_cycle = k + self.period
         self.polls += 1
-        per_frame = MAX_FRAME_DATAGRAMS // (12 + self.size)
+        per_frame = (MAX_FRAME_DATAGRAMS - 16 * len(self.first_datagrams)) // (12 + self.size)
         frames = []
         for first in range(0, self.slaves, per_frame):
             slaves = range(first, min(first + per_frame, self.slaves))
             frames.append(AcyclicFrame(
-                [(CMD_FPRD, FIRST_STATION + s, self.register, bytes(self.size), self.value(s), 1)
-                 for s in slaves],
+                (list(self.first_datagrams) if first == 0 else [])
+                + [(CMD_FPRD, FIRST_STATION + s, self.register, bytes(self.size), self.value(s),
+                    1) for s in slaves],
                 [(rule, None) for s, rule in self.shows if s in slaves]))
         self.shows = []
         return frames
@@ -1537,14 +1540,21 @@ class ErrorCounters(Poller):
         return bytes(self.values[slave])
 
 
+def master_time(t_ns):
+    """The master's clock in DC time (32 bits), which the reference clock follows."""
+    return struct.pack("<I", (t_ns - DC_EPOCH_OFFSET_NS + DC_REFERENCE_OFF_NS) & 0xFFFFFFFF)
+
+
 class DcDifferences(Poller):
-    """0x092C of every slave: within DC_IN_SYNC_NS (the reference clock, the first slave, 0),
-    or the values of an out-of-sync run."""
+    """0x092C of every slave: within DC_IN_SYNC_NS, or the values of an out-of-sync run.  The
+    master writes its time into the reference clock (the first slave) before, as EtherLab
+    does, so that the reference's difference means something too."""
 
     def __init__(self, slaves, period, rng):
         super().__init__(slaves, DC_DIFFERENCE, 4, period)
         self.rng = rng
         self.runs = {}  # slave -> the values it reads next
+        self.first_datagrams = [(CMD_FPWR, FIRST_STATION, DC_ADO, master_time, master_time, 1)]
 
     def value(self, slave):
         run = self.runs.get(slave)
@@ -1553,7 +1563,7 @@ class DcDifferences(Poller):
             if not run:
                 del self.runs[slave]
         else:
-            ns = self.rng.randint(-DC_IN_SYNC_NS, DC_IN_SYNC_NS) if slave else 0
+            ns = self.rng.randint(-DC_IN_SYNC_NS, DC_IN_SYNC_NS)
         return struct.pack("<I", dc_difference(ns))
 
 
@@ -1828,15 +1838,17 @@ class AcyclicBuilder:
         self.encap = encap
         self.index = 0
 
-    def copies(self, frame):
+    def copies(self, frame, t_ns):
+        """Both copies of a frame the master sends at t_ns."""
         self.index = (self.index + 1) & 0xFF
-        return self._frame(False, frame), self._frame(True, frame)
+        return self._frame(False, frame, t_ns), self._frame(True, frame, t_ns)
 
-    def _frame(self, returned, frame):
+    def _frame(self, returned, frame, t_ns):
         body = b""
         last = len(frame.datagrams) - 1
         for i, (command, adp, ado, sent, answer, wkc) in enumerate(frame.datagrams):
             data = answer if returned else sent
+            data = data(t_ns) if callable(data) else data
             length = len(data) | (LEN_MORE if i < last else 0)
             body += struct.pack("<BBHHHH", command, self.index, adp, ado, length, 0) + data
             body += struct.pack("<H", wkc if returned else 0)
@@ -2178,7 +2190,7 @@ def generate(args, out, truth_out, expect=None, incidents=None):
     sew_error = [False] * args.axes  # per axis, in the last returned copy written
     loss_rng = random.Random(f"{args.seed}/loss")
     cycle_ns, delay_ns = args.cycle_us * 1000, args.return_delay_us * 1000
-    dc_start = T0_NS - DC_EPOCH_OFFSET_NS + 1234  # reference clock slightly off the host clock
+    dc_start = T0_NS - DC_EPOCH_OFFSET_NS + DC_REFERENCE_OFF_NS
     want_master = args.copies in ("both", "master")
     want_returned = args.copies in ("both", "returned")
     chain = itertools.chain.from_iterable
@@ -2274,7 +2286,7 @@ def write_acyclic(writer, builder, frames, k, t_ns, cycle_ns, delay_ns, io_task,
     step = max(1, (t_ns + cycle_ns - t_from) // (len(frames) * len(wanted) + 1))
     t = t_from
     for frame in frames:
-        master, returned = builder.copies(frame)
+        master, returned = builder.copies(frame, t + step)
         for is_returned in wanted:
             t += step
             writer.write(t, returned if is_returned else master)
