@@ -1422,7 +1422,7 @@ class Monitor:
 # --- the master's acyclic frames (--inject of ACYCLIC_RULES; PROTOCOL.md §11) ---
 COUNTER_POLL_NS = 50_000_000  # every slave's ESC error counters
 DC_POLL_NS = 10_000_000  # every slave's system time difference
-DC_IN_SYNC_NS = 80  # a synchronised slave's difference stays within this (settled: 100)
+DC_IN_SYNC_NS = 80  # a synchronised slave's difference stays within this (well under 100)
 DC_OUT_OF_SYNC_NS = (-5000, -5200, -4900)  # DC-001: these reads in a row (limit 1000 ns)
 RX_ERRORS = 4  # LNK-001
 PRELOGGED_ENTRIES = 3  # ERH-001: the 1003h entries its drive holds from before the capture
@@ -1463,7 +1463,6 @@ class Mailbox:
     def __init__(self, station):
         self.station = station
         self.sent = self.answered = 0
-        self.busy = False
 
     def write(self, command, index, subindex, data=0):
         self.sent = self.sent % 7 + 1
@@ -1485,6 +1484,8 @@ class Poller:
     """FPRD of one register block of every slave, in ring order (frames of at most
     MAX_FRAME_DATAGRAMS bytes), every period from the first injection that needs it."""
 
+    first_datagrams = ()  # put before the reads in the poll's first frame
+
     def __init__(self, slaves, register, size, period):
         self.slaves, self.register, self.size, self.period = slaves, register, size, period
         self.next_cycle = None
@@ -1494,8 +1495,6 @@ class Poller:
     def start(self, k):
         if self.next_cycle is None:
             self.next_cycle = k
-
-    first_datagrams = ()  # put before the reads in the poll's first frame
 
     def step(self, k):
         if self.next_cycle is None or k < self.next_cycle:
@@ -1571,18 +1570,19 @@ class Acyclic:
     """The master's acyclic frames for the ACYCLIC_RULES injections: polls of every slave's
     error counters or DC difference, SDO transfers in a drive's mailbox.  Each injection is a
     script stepped once per cycle, yielding the frames to send after it; it starts at its time
-    whatever the axes do (the mailbox of a drive takes one script at a time)."""
+    whatever the axes do, after the one before it on the same drive's mailbox (or, for the
+    others, of the same rule on the same slave)."""
 
     def __init__(self, injections, session, first_servo, slaves):
         self.session = session
         self.first_servo = first_servo  # ring position of axis 0's drive
         self.pending = sorted(injections, key=lambda inj: (inj.start_cycle, inj.order))
         self.running = []  # (injection, script)
+        self.taken = set()  # what a running script uses alone (_resource)
         self.k = 0
         rng = random.Random(f"{session.seed}/acyclic")
-        cycles = lambda ns: max(1, -(-ns // session.cycle_ns))
-        self.counters = ErrorCounters(slaves, cycles(COUNTER_POLL_NS), rng)
-        self.dc = DcDifferences(slaves, cycles(DC_POLL_NS), rng)
+        self.counters = ErrorCounters(slaves, self._cycles(COUNTER_POLL_NS), rng)
+        self.dc = DcDifferences(slaves, self._cycles(DC_POLL_NS), rng)
         self.mailboxes = {}
         # 1003h's entries per drive: one per SEW cause bit that rises (section 7), at most 8
         n = len(session.drives)
@@ -1598,23 +1598,31 @@ class Acyclic:
             if rose:
                 self.entries[axis] = min(MAX_ENTRIES, self.entries[axis] + bin(rose).count("1"))
 
+    def _cycles(self, ns):
+        """Fewest cycles that last at least ns."""
+        return max(1, -(-ns // self.session.cycle_ns))
+
+    @staticmethod
+    def _resource(inj):
+        """What the injection's script uses alone: a drive's mailbox, else its rule's rise or
+        run on the axis's slave (two at once would show as one)."""
+        return ("mailbox" if inj.rule in ("MBX-003", "ERH-001") else inj.rule, inj.axis)
+
     def step(self, k):
         """The frames to send after cycle k."""
         self.k = k
-        busy = set()
+        waiting = set()
         for inj in list(self.pending):
             if inj.start_cycle > k:
                 break
-            mailbox = inj.rule in ("MBX-003", "ERH-001")
-            if mailbox and (inj.axis in busy or self.mailbox(inj.axis).busy):
-                busy.add(inj.axis)  # after the one before on that drive
+            resource = self._resource(inj)
+            if resource in self.taken or resource in waiting:
+                waiting.add(resource)  # after the one before it
                 continue
             self.pending.remove(inj)
+            self.taken.add(resource)
             script = getattr(self, "_" + inj.rule.replace("-", "_").lower())(inj)
-            if mailbox:
-                self.mailbox(inj.axis).busy = True
-                script = self._releasing(self.mailbox(inj.axis), script)
-            self.running.append((inj, script))
+            self.running.append((inj, self._releasing(resource, script)))
         frames = []
         for entry in list(self.running):
             try:
@@ -1631,10 +1639,9 @@ class Acyclic:
             self.mailboxes[axis] = Mailbox(FIRST_STATION + self.first_servo + axis)
         return self.mailboxes[axis]
 
-    @staticmethod
-    def _releasing(mailbox, script):
+    def _releasing(self, resource, script):
         yield from script
-        mailbox.busy = False
+        self.taken.discard(resource)
 
     # --- script primitives: each yield is one cycle ---
     def _until(self, condition):
@@ -1642,7 +1649,7 @@ class Acyclic:
             yield
 
     def _wait_ns(self, ns):
-        end = self.k + max(1, -(-ns // self.session.cycle_ns))
+        end = self.k + self._cycles(ns)
         while self.k < end:
             yield
 
@@ -2101,8 +2108,9 @@ class Session:
         self.pending = sorted((inj for inj in injections if not inj.acyclic),
                               key=lambda inj: (inj.start_cycle, inj.order))
         acyclic = [inj for inj in injections if inj.acyclic]
-        slaves = args.io_terminals + args.cia402  # before the servos in the ring
-        self.acyclic = Acyclic(acyclic, self, slaves, slaves + args.axes) if acyclic else None
+        first_servo = args.io_terminals + args.cia402  # the neighbours come first in the ring
+        self.acyclic = (Acyclic(acyclic, self, first_servo, first_servo + args.axes)
+                        if acyclic else None)
         self.acyclic_frames = []  # this cycle's, sent after its frame
         self.bus = None  # the running bus injection's script
         self.directive = None  # this cycle's frame: None, DROP or LOST
