@@ -2,7 +2,8 @@
 """Generate an NC <-> servo EtherCAT capture with a known truth.
 
 An independent oracle for the decoders: written from the protocol's definition (docs/protocol.md
-§1-5, §8 and the outputs-first layout of §9.4) alone, it imports nothing from the project.
+§1-5, §8 and the outputs-first layout of §9.4; PROTOCOL.md §11 for the mailbox and the ESCs'
+registers) alone, it imports nothing from the project.
 
 Every cycle the master sends one frame -- an LRW of n*10 output bytes followed by n*40 input
 bytes at logical 0x00010000, then an FRMW reading the DC system time (0x0910) -- and the ring
@@ -101,12 +102,41 @@ It is also the oracle for the rule engine (`ncservo validate`):
               E15 fault, then recovered)
       COM-004 one frame lost before the drives (its master copy only)
       COM-005 four consecutive frames lost before the drives; every drive raises ECatTErr
+    What the drives and the ESCs say themselves (PROTOCOL.md §11) is shown by the master's
+    acyclic frames, sent between the cycles as SOEM sends them: FPRD/FPWR by station address
+    only (no logical datagram: no cycle, WKC or timing rule sees them), none in a cycle lost
+    or dropped.  These injections start at SECONDS whatever the axes do; AXIS names the axis's
+    drive.  The slaves are in ring order (--io-terminals, --cia402, then the servos) at stations
+    0x1001 on.  From the first LNK-* injection on, every slave's error counters (0x0300, 20
+    bytes) are polled every 50 ms, the first poll the baseline (a few errors and lost links
+    from before the capture); from the first DC-001, every 10 ms, the master writes its time
+    into the reference clock (0x0910 of the first slave, as EtherLab does) and reads every
+    slave's system time difference (0x092C, sign and magnitude), within +-80 ns.  MBX-003 and
+    ERH-001 are SDO transfers in the drive's mailbox (SM0 at 0x1000, SM1 at 0x1080, 128 bytes
+    each; no start-up, so the validator finds them from use): the request written in one
+    frame, SM1 read in the next cycles, empty (WKC 0) twice, then with the answer.  The
+    drive's 1003h holds one entry per SEW cause bit that rose.
+      MBX-003 uploads of 1003h:00, of the first entry the drive does not hold (aborted with
+              0x08000024: expected, not a finding) and of 2000h:00, aborted with 0x06020000
+              (the drive's abort is an SDO request, CoE service 2, as ETG.1000.6 has it)
+      ERH-001 the drive holds 3 entries from before the capture; the NC reads 1003h:00, then,
+              100 ms later, 1 (the drive lost the others) with no write of 0 between; then
+              it clears the history (a download of 0 to 1003h:00) and reads 0: no finding
+      LNK-001 4 RX errors at port 0 of the drive, none forwarded (symbol errors between
+              frames: no frame lost), at the third poll
+      LNK-002 a link-down at port 1 of the drive (default the last slave, the end of the
+              line), at the third poll; inside the ring the next slave's port 0 counts it too
+              (one finding each)
+      DC-001  the drive reads -5.0, -5.2 and -4.9 us in a row after 3 reads in sync, then in
+              sync again: one finding, on the first
 --findings FILE
     write the findings the injections must produce, as JSON:
       {"expected": [{"rule": "SE-001", "axis": 0, "first_frame": N, "last_frame": M,
                      "due_frame": D}, ...],
        "companions": {"COM-003": ["COM-004"], ...}}
-    axis is null for COM-001, COM-002 and COM-004.  Frames are 1-based, counting every record.
+    axis is null for COM-001, COM-002, COM-004 and the §11 rules (MBX-003, ERH-001, LNK-001,
+    LNK-002, DC-001: without a start-up the validator does not know an axis's station).  Frames
+    are 1-based, counting every record.
     The window [first_frame, last_frame] is where the validator may report the finding:
     an immediate finding exactly on the frame that first shows it (the master copy for NC
     outputs, the returned copy for drive inputs and WKC, the first master frame after a gap or
@@ -115,7 +145,8 @@ It is also the oracle for the rule engine (`ncservo validate`):
     the condition began (docs/timing.md#rule-time): reported before its timeout, it is
     missing.  COM-005: from the master frame of the fourth failed cycle to the returned copy of
     the next.  COM-003: timed like the others, due on the first frame more than drive_response
-    after the returned copy of the first master frame after the outage.
+    after the returned copy of the first master frame after the outage.  The §11 rules: exactly
+    the returned copy of the acyclic frame that shows them.
     companions lists, per injected rule, other rules it necessarily causes as well (see
     COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
 --incident KIND[@SECONDS][:AXIS]   (repeatable)
@@ -224,6 +255,23 @@ MAX_AXES = 29
 IO_TASK_ADDRESS = 0x00020000
 IO_TASK_BYTES = 4
 
+# --- the mailbox and the ESCs' own registers (section 11) ---
+CMD_FPRD, CMD_FPWR = 4, 5
+FIRST_STATION = DC_ADP  # slaves' station addresses count up from it in ring order
+ERROR_COUNTERS, ERROR_COUNTERS_SIZE = 0x0300, 20  # 0x0300-0x0313
+INVALID_FRAME, RX_ERROR, FORWARDED, LOST_LINK = 0x0300, 0x0301, 0x0308, 0x0310  # port 0
+DC_DIFFERENCE = 0x092C
+DC_SMALLER = 1 << 31  # sign and magnitude: set when the slave's copy is smaller
+MBX_OUT, MBX_IN, MBX_SIZE = 0x1000, 0x1080, 128  # SM0 (master -> drive) and SM1 areas
+MBX_COE = 3
+COE_SDO_REQUEST, COE_SDO_RESPONSE = 2, 3
+SDO_DOWNLOAD, SDO_UPLOAD, SDO_ABORT = 1 << 5, 2 << 5, 4 << 5  # request specifiers
+SDO_UPLOADED, SDO_DOWNLOADED = 2 << 5, 3 << 5  # response specifiers
+SDO_EXPEDITED, SDO_SIZE_INDICATED = 0x02, 0x01
+ERROR_FIELD = 0x1003  # pre-defined error field: subindex 0 the number of entries
+ABORT_NO_DATA, ABORT_NO_OBJECT = 0x08000024, 0x06020000
+MAX_FRAME_DATAGRAMS = 1470  # bytes of datagrams in one frame (fits UDP in a 1500-byte MTU)
+
 MASTER_MAC = bytes.fromhex("000000000001")
 RETURNED_MAC = bytes.fromhex("020000000001")  # slaves set the locally-administered bit
 BROADCAST_MAC = b"\xff" * 6
@@ -231,6 +279,7 @@ BROADCAST_MAC = b"\xff" * 6
 T0_NS = 1_704_067_200 * 10**9  # capture start, 2024-01-01 00:00:00 UTC
 LINKTYPE_ETHERNET, LINKTYPE_LINUX_SLL = 1, 113  # tcpdump.org link types
 DC_EPOCH_OFFSET_NS = 946_684_800 * 10**9  # DC time counts from 2000-01-01
+DC_REFERENCE_OFF_NS = 1234  # the reference clock slightly off the host clock
 
 # --- drive model constants (plausible values, not from the spec) ---
 SPEED_UNIT_PER_RPM = 100  # SSP in 0.01 rpm
@@ -755,8 +804,18 @@ INJECTABLE = {
     "SSW-001": (None, 0.72, 1),
     "RDY-001": ("drive_response", 0.72, 2),
     "SEW-002": ("drive_response", 0.72, 3),
+    # what the drives and ESCs say themselves (acyclic frames; the axis picks the drive's slave)
+    "ERH-001": (None, 0.25, 2),
+    "MBX-003": (None, 0.30, 0),
+    "LNK-001": (None, 0.35, 1),
+    "DC-001": (None, 0.40, 1),
+    "LNK-002": (None, 0.50, -1),  # the last slave: the end of the line
 }
 BUS_RULES = frozenset(("COM-001", "COM-002", "COM-003", "COM-004", "COM-005"))
+# Shown by the master's acyclic frames between the cycles (PROTOCOL.md §11), not by the process
+# data: they run whatever the axes do.  Their findings have axis null: without a start-up the
+# validator does not know which station an axis is.
+ACYCLIC_RULES = frozenset(("MBX-003", "ERH-001", "LNK-001", "LNK-002", "DC-001"))
 # What a capture with only one copy of each frame can show (inputs and WKC live in the
 # returned copy; "not returned" needs the master copy).
 NEEDS_BOTH_COPIES = frozenset(("COM-003", "COM-004", "COM-005"))
@@ -832,6 +891,7 @@ class Injection:
     def __init__(self, rule, axis, start_cycle, order):
         self.rule, self.axis, self.start_cycle, self.order = rule, axis, start_cycle, order
         self.bus = rule in BUS_RULES
+        self.acyclic = rule in ACYCLIC_RULES
 
     def __str__(self):
         return self.rule if self.axis is None else f"{self.rule}:{self.axis}"
@@ -885,6 +945,7 @@ class Expectations:
     def __init__(self, cycle_ns, delay_ns):
         self.cycle_ns, self.delay_ns = cycle_ns, delay_ns
         self.items = []
+        self.exact = []  # (rule, axis, index of the frame)
         self.times, self.keys = [], []  # every written frame, in order
         self.records = None  # each frame's record number, when other records come between
 
@@ -893,6 +954,10 @@ class Expectations:
         the time of `ref` (a key; default the same place); `end` closes an explicit window
         in which the finding is due at `due` (keys)."""
         self.items.append((rule, axis, 2 * cycle + copy, timeout, ref, end, due))
+
+    def add_last_frame(self, rule, axis):
+        """Shown by the frame written last: reported exactly there."""
+        self.exact.append((rule, axis, len(self.times) - 1))
 
     def frame(self, t_ns, cycle, copy):
         self.times.append(t_ns)
@@ -936,6 +1001,10 @@ class Expectations:
                 first = max(first, bisect.bisect_left(self.times, early))
             expected.append({"rule": rule, "axis": axis, "first_frame": self._number(first),
                              "last_frame": self._number(last), "due_frame": self._number(due)})
+        for rule, axis, index in self.exact:
+            number = self._number(index)
+            expected.append({"rule": rule, "axis": axis, "first_frame": number,
+                             "last_frame": number, "due_frame": number})
         expected.sort(key=lambda e: (e["first_frame"], e["rule"], -1 if e["axis"] is None
                                      else e["axis"]))
         return expected
@@ -1350,6 +1419,313 @@ class Monitor:
                                  + "; ".join(problems))
 
 
+# --- the master's acyclic frames (--inject of ACYCLIC_RULES; PROTOCOL.md §11) ---
+COUNTER_POLL_NS = 50_000_000  # every slave's ESC error counters
+DC_POLL_NS = 10_000_000  # every slave's system time difference
+DC_IN_SYNC_NS = 80  # a synchronised slave's difference stays within this (well under 100)
+DC_OUT_OF_SYNC_NS = (-5000, -5200, -4900)  # DC-001: these reads in a row (limit 1000 ns)
+RX_ERRORS = 4  # LNK-001
+PRELOGGED_ENTRIES = 3  # ERH-001: the 1003h entries its drive holds from before the capture
+MAX_ENTRIES = 8
+SDO_EMPTY_POLLS = 2  # reads of SM1 before the drive's answer is there (WKC 0)
+ERH_READ_GAP_NS = 100_000_000  # ERH-001: between the NC's reads of 1003h:00
+EXPEDITED_BYTE = SDO_EXPEDITED | SDO_SIZE_INDICATED | 3 << 2  # 1 byte used, 3 unused
+
+
+def dc_difference(ns):
+    """0x092C as a slave holds it: sign and magnitude, not two's complement."""
+    return DC_SMALLER | -ns if ns < 0 else ns
+
+
+def mailbox_message(counter, service, command, index, subindex, data):
+    """A CoE SDO message (mailbox header: length, address, channel and priority, type and
+    counter; CoE header: number 0, service), padded to the mailbox area."""
+    sdo = struct.pack("<HBHBI", service << 12, command, index, subindex, data)
+    header = struct.pack("<HHBB", len(sdo), 0, 0, MBX_COE | counter << 4)
+    return (header + sdo).ljust(MBX_SIZE, b"\0")
+
+
+class AcyclicFrame:
+    """Datagrams (command, ADP, ADO, data sent, data returned, returned WKC; data may be a
+    function of the time the frame is sent) and the findings (rule, axis) its returned copy
+    must produce."""
+
+    def __init__(self, datagrams, shows=()):
+        self.datagrams = datagrams
+        self.shows = list(shows)
+
+
+class Mailbox:
+    """A drive's mailbox as the master uses it (no start-up: the validator finds the areas from
+    use): a request written into SM0, the answer read from SM1; each side counts its messages
+    1..7.  An abort, either side's, is an SDO request (ETG.1000.6; SOES and the SSC send it so)."""
+
+    def __init__(self, station):
+        self.station = station
+        self.sent = self.answered = 0
+
+    def write(self, command, index, subindex, data=0):
+        self.sent = self.sent % 7 + 1
+        message = mailbox_message(self.sent, COE_SDO_REQUEST, command, index, subindex, data)
+        return AcyclicFrame([(CMD_FPWR, self.station, MBX_OUT, message, message, 1)])
+
+    def read(self, answer=None, shows=()):
+        """A read of SM1; without an answer (service, command, index, subindex, data) it is
+        still empty and the read is not done (WKC 0)."""
+        empty = bytes(MBX_SIZE)
+        if answer is None:
+            return AcyclicFrame([(CMD_FPRD, self.station, MBX_IN, empty, empty, 0)])
+        self.answered = self.answered % 7 + 1
+        message = mailbox_message(self.answered, *answer)
+        return AcyclicFrame([(CMD_FPRD, self.station, MBX_IN, empty, message, 1)], shows)
+
+
+class Poller:
+    """FPRD of one register block of every slave, in ring order (frames of at most
+    MAX_FRAME_DATAGRAMS bytes), every period from the first injection that needs it."""
+
+    first_datagrams = ()  # put before the reads in the poll's first frame
+
+    def __init__(self, slaves, register, size, period):
+        self.slaves, self.register, self.size, self.period = slaves, register, size, period
+        self.next_cycle = None
+        self.polls = 0
+        self.shows = []  # (slave, rule): the next poll's read of slave shows it
+
+    def start(self, k):
+        if self.next_cycle is None:
+            self.next_cycle = k
+
+    def step(self, k):
+        if self.next_cycle is None or k < self.next_cycle:
+            return []
+        self.next_cycle = k + self.period
+        self.polls += 1
+        per_frame = (MAX_FRAME_DATAGRAMS - 16 * len(self.first_datagrams)) // (12 + self.size)
+        frames = []
+        for first in range(0, self.slaves, per_frame):
+            slaves = range(first, min(first + per_frame, self.slaves))
+            frames.append(AcyclicFrame(
+                (list(self.first_datagrams) if first == 0 else [])
+                + [(CMD_FPRD, FIRST_STATION + s, self.register, bytes(self.size), self.value(s),
+                    1) for s in slaves],
+                [(rule, None) for s, rule in self.shows if s in slaves]))
+        self.shows = []
+        return frames
+
+
+class ErrorCounters(Poller):
+    """0x0300-0x0313 of every slave: a few errors and lost links from before the capture at the
+    ports in use (0 in, 1 out; the last slave's port 1 is the end of the line), else steady."""
+
+    def __init__(self, slaves, period, rng):
+        super().__init__(slaves, ERROR_COUNTERS, ERROR_COUNTERS_SIZE, period)
+        self.values = []
+        for s in range(slaves):
+            counters = bytearray(ERROR_COUNTERS_SIZE)
+            for port in (0, 1) if s + 1 < slaves else (0,):
+                counters[INVALID_FRAME + 2 * port - ERROR_COUNTERS] = rng.randint(0, 2)
+                counters[RX_ERROR + 2 * port - ERROR_COUNTERS] = rng.randint(0, 3)
+                counters[FORWARDED + port - ERROR_COUNTERS] = rng.randint(0, 1)
+                counters[LOST_LINK + port - ERROR_COUNTERS] = rng.randint(0, 2)
+            self.values.append(counters)
+
+    def rise(self, slave, register, count, rule):
+        at = register - ERROR_COUNTERS
+        self.values[slave][at] = min(0xFF, self.values[slave][at] + count)  # saturating
+        self.shows.append((slave, rule))
+
+    def value(self, slave):
+        return bytes(self.values[slave])
+
+
+def master_time(t_ns):
+    """The master's clock in DC time (32 bits), which the reference clock follows."""
+    return struct.pack("<I", (t_ns - DC_EPOCH_OFFSET_NS + DC_REFERENCE_OFF_NS) & 0xFFFFFFFF)
+
+
+class DcDifferences(Poller):
+    """0x092C of every slave: within DC_IN_SYNC_NS, or the values of an out-of-sync run.  The
+    master writes its time into the reference clock (the first slave) before, as EtherLab
+    does, so that the reference's difference means something too."""
+
+    def __init__(self, slaves, period, rng):
+        super().__init__(slaves, DC_DIFFERENCE, 4, period)
+        self.rng = rng
+        self.runs = {}  # slave -> the values it reads next
+        self.first_datagrams = [(CMD_FPWR, FIRST_STATION, DC_ADO, master_time, master_time, 1)]
+
+    def value(self, slave):
+        run = self.runs.get(slave)
+        if run:
+            ns = run.pop(0)
+            if not run:
+                del self.runs[slave]
+        else:
+            ns = self.rng.randint(-DC_IN_SYNC_NS, DC_IN_SYNC_NS)
+        return struct.pack("<I", dc_difference(ns))
+
+
+class Acyclic:
+    """The master's acyclic frames for the ACYCLIC_RULES injections: polls of every slave's
+    error counters or DC difference, SDO transfers in a drive's mailbox.  Each injection is a
+    script stepped once per cycle, yielding the frames to send after it; it starts at its time
+    whatever the axes do, after the one before it on the same drive's mailbox (or, for the
+    others, of the same rule on the same slave)."""
+
+    def __init__(self, injections, session, first_servo, slaves):
+        self.session = session
+        self.first_servo = first_servo  # ring position of axis 0's drive
+        self.pending = sorted(injections, key=lambda inj: (inj.start_cycle, inj.order))
+        self.running = []  # (injection, script)
+        self.taken = set()  # what a running script uses alone (_resource)
+        self.k = 0
+        rng = random.Random(f"{session.seed}/acyclic")
+        self.counters = ErrorCounters(slaves, self._cycles(COUNTER_POLL_NS), rng)
+        self.dc = DcDifferences(slaves, self._cycles(DC_POLL_NS), rng)
+        self.mailboxes = {}
+        # 1003h's entries per drive: one per SEW cause bit that rises (section 7), at most 8
+        n = len(session.drives)
+        self.entries = [PRELOGGED_ENTRIES if any(inj.rule == "ERH-001" and inj.axis == axis
+                                                 for inj in injections) else 0
+                        for axis in range(n)]
+        self.sew = [0] * n
+
+    def observe(self, inputs):
+        for axis, values in enumerate(inputs):
+            rose = values[2] & ~self.sew[axis] & SEW_CAUSES
+            self.sew[axis] = values[2]
+            if rose:
+                self.entries[axis] = min(MAX_ENTRIES, self.entries[axis] + bin(rose).count("1"))
+
+    def _cycles(self, ns):
+        """Fewest cycles that last at least ns."""
+        return max(1, -(-ns // self.session.cycle_ns))
+
+    @staticmethod
+    def _resource(inj):
+        """What the injection's script uses alone: a drive's mailbox, else its rule's rise or
+        run on the axis's slave (two at once would show as one)."""
+        return ("mailbox" if inj.rule in ("MBX-003", "ERH-001") else inj.rule, inj.axis)
+
+    def step(self, k):
+        """The frames to send after cycle k."""
+        self.k = k
+        waiting = set()
+        for inj in list(self.pending):
+            if inj.start_cycle > k:
+                break
+            resource = self._resource(inj)
+            if resource in self.taken or resource in waiting:
+                waiting.add(resource)  # after the one before it
+                continue
+            self.pending.remove(inj)
+            self.taken.add(resource)
+            script = getattr(self, "_" + inj.rule.replace("-", "_").lower())(inj)
+            self.running.append((inj, self._releasing(resource, script)))
+        frames = []
+        for entry in list(self.running):
+            try:
+                frames += next(entry[1]) or []
+            except StopIteration:
+                self.running.remove(entry)
+        return frames + self.counters.step(k) + self.dc.step(k)
+
+    def unfinished(self):
+        return [str(inj) for inj in self.pending] + [str(inj) for inj, _ in self.running]
+
+    def mailbox(self, axis):
+        if axis not in self.mailboxes:
+            self.mailboxes[axis] = Mailbox(FIRST_STATION + self.first_servo + axis)
+        return self.mailboxes[axis]
+
+    def _releasing(self, resource, script):
+        yield from script
+        self.taken.discard(resource)
+
+    # --- script primitives: each yield is one cycle ---
+    def _until(self, condition):
+        while not condition():
+            yield
+
+    def _wait_ns(self, ns):
+        end = self.k + self._cycles(ns)
+        while self.k < end:
+            yield
+
+    def _polls(self, poller, count):
+        """Until `count` more polls have been sent."""
+        poller.start(self.k)
+        done = poller.polls + count
+        yield from self._until(lambda: poller.polls >= done)
+
+    def _sdo(self, mailbox, request, answer, shows=()):
+        """One SDO transfer: the request written, SM1 polled in the next cycles until the
+        drive's answer is there."""
+        yield [mailbox.write(*request)]
+        for _ in range(SDO_EMPTY_POLLS):
+            yield [mailbox.read()]
+        yield [mailbox.read(answer, shows)]
+
+    def _upload_count(self, mailbox, axis, shows=()):
+        """1003h:00, expedited, 1 byte."""
+        entries = self.entries[axis]
+        yield from self._sdo(mailbox, (SDO_UPLOAD, ERROR_FIELD, 0),
+                             (COE_SDO_RESPONSE, SDO_UPLOADED | EXPEDITED_BYTE, ERROR_FIELD, 0,
+                              entries), shows)
+
+    # --- the scripts ---
+    def _lnk_001(self, inj):
+        slave = self.first_servo + inj.axis
+        yield from self._polls(self.counters, 2)  # the baseline, then one unchanged
+        # symbol errors on the link into port 0 between frames: no frame lost, none forwarded
+        self.counters.rise(slave, RX_ERROR, RX_ERRORS, inj.rule)
+        yield from self._until(lambda: not self.counters.shows)
+
+    def _lnk_002(self, inj):
+        slave = self.first_servo + inj.axis
+        yield from self._polls(self.counters, 2)
+        # a link-down at port 1; inside the ring the next slave's port 0 is the link's other end
+        self.counters.rise(slave, LOST_LINK + 1, 1, inj.rule)
+        if slave + 1 < self.counters.slaves:
+            self.counters.rise(slave + 1, LOST_LINK, 1, inj.rule)
+        yield from self._until(lambda: not self.counters.shows)
+
+    def _dc_001(self, inj):
+        slave = self.first_servo + inj.axis
+        yield from self._polls(self.dc, 3)  # in sync first
+        self.dc.runs[slave] = list(DC_OUT_OF_SYNC_NS)
+        self.dc.shows.append((slave, inj.rule))  # on the first read of the run only
+        yield from self._until(lambda: slave not in self.dc.runs)
+        yield from self._polls(self.dc, 1)  # back in sync: the run has ended
+
+    def _mbx_003(self, inj):
+        mailbox = self.mailbox(inj.axis)
+        entries = self.entries[inj.axis]
+        yield from self._upload_count(mailbox, inj.axis)
+        if entries < MAX_ENTRIES:  # an entry the drive does not hold: expected, no finding
+            yield from self._sdo(mailbox, (SDO_UPLOAD, ERROR_FIELD, entries + 1),
+                                 (COE_SDO_REQUEST, SDO_ABORT, ERROR_FIELD, entries + 1,
+                                  ABORT_NO_DATA))
+        yield from self._sdo(mailbox, (SDO_UPLOAD, 0x2000, 0),
+                             (COE_SDO_REQUEST, SDO_ABORT, 0x2000, 0, ABORT_NO_OBJECT),
+                             [(inj.rule, None)])
+
+    def _erh_001(self, inj):
+        axis = inj.axis
+        mailbox = self.mailbox(axis)
+        yield from self._upload_count(mailbox, axis)  # at least PRELOGGED_ENTRIES
+        yield from self._wait_ns(ERH_READ_GAP_NS)
+        self.entries[axis] = 1  # the drive loses all entries but the newest
+        yield from self._upload_count(mailbox, axis, [(inj.rule, None)])
+        yield from self._wait_ns(ERH_READ_GAP_NS)
+        # the NC clears the history (a download of 0): lower after that is no finding
+        yield from self._sdo(mailbox, (SDO_DOWNLOAD | EXPEDITED_BYTE, ERROR_FIELD, 0, 0),
+                             (COE_SDO_RESPONSE, SDO_DOWNLOADED, ERROR_FIELD, 0, 0))
+        self.entries[axis] = 0
+        yield from self._upload_count(mailbox, axis)
+
+
 # --- frames ---
 def link_header(encap, src_mac, payload_len):
     """Ethernet (+ VLAN tags, or IPv4/UDP) in front of the EtherCAT frame header."""
@@ -1460,6 +1836,32 @@ class IoTask:
 
     def new_inputs(self):
         return bytes(self.rng.getrandbits(8) for _ in range(IO_TASK_BYTES))
+
+
+class AcyclicBuilder:
+    """Packs both copies of an AcyclicFrame, each frame with an index of its own (counting)."""
+
+    def __init__(self, encap):
+        self.encap = encap
+        self.index = 0
+
+    def copies(self, frame, t_ns):
+        """Both copies of a frame the master sends at t_ns."""
+        self.index = (self.index + 1) & 0xFF
+        return self._frame(False, frame, t_ns), self._frame(True, frame, t_ns)
+
+    def _frame(self, returned, frame, t_ns):
+        body = b""
+        last = len(frame.datagrams) - 1
+        for i, (command, adp, ado, sent, answer, wkc) in enumerate(frame.datagrams):
+            data = answer if returned else sent
+            data = data(t_ns) if callable(data) else data
+            length = len(data) | (LEN_MORE if i < last else 0)
+            body += struct.pack("<BBHHHH", command, self.index, adp, ado, length, 0) + data
+            body += struct.pack("<H", wkc if returned else 0)
+        body = struct.pack("<H", len(body) | (1 << 12)) + body
+        prefix = link_header(self.encap, RETURNED_MAC if returned else MASTER_MAC, len(body))
+        return prefix + body + bytes(max(0, 60 - len(prefix) - len(body)))
 
 
 def write_layout_config(path, n_axes, neighbours, ready_mode):
@@ -1703,7 +2105,13 @@ class Session:
         self.cycle_ns = args.cycle_us * 1000
         self.k = 0
         # injections waiting, in the order of their start (then of the command line)
-        self.pending = sorted(injections, key=lambda inj: (inj.start_cycle, inj.order))
+        self.pending = sorted((inj for inj in injections if not inj.acyclic),
+                              key=lambda inj: (inj.start_cycle, inj.order))
+        acyclic = [inj for inj in injections if inj.acyclic]
+        first_servo = args.io_terminals + args.cia402  # the neighbours come first in the ring
+        self.acyclic = (Acyclic(acyclic, self, first_servo, first_servo + args.axes)
+                        if acyclic else None)
+        self.acyclic_frames = []  # this cycle's, sent after its frame
         self.bus = None  # the running bus injection's script
         self.directive = None  # this cycle's frame: None, DROP or LOST
         self.wkc = None  # this cycle's returned WKC, if not the expected one
@@ -1723,6 +2131,10 @@ class Session:
             inputs = [drive.step(k, o[0], o[1]) for drive, o in zip(self.drives, outputs)]
         if self.monitor:
             self.monitor.check(k, outputs, inputs)
+        if self.acyclic:
+            self.acyclic.observe(inputs)
+            # none in a cycle lost or dropped: the scripts wait
+            self.acyclic_frames = self.acyclic.step(k) if self.directive is None else []
         return outputs, inputs
 
     def _inject(self, k):
@@ -1751,8 +2163,9 @@ class Session:
     def unfinished(self):
         """Injections that did not start, or did not end, before the last cycle."""
         running = [str(nc.injection.inj) for nc in self.ncs if nc.injection is not None]
-        return [str(inj) for inj in self.pending] + running + (["a bus injection"] if self.bus
-                                                                 else [])
+        return ([str(inj) for inj in self.pending] + running
+                + (["a bus injection"] if self.bus else [])
+                + (self.acyclic.unfinished() if self.acyclic else []))
 
     def deliver(self, inputs):
         """The returned copy reached the master: the NCs see the new status."""
@@ -1767,6 +2180,7 @@ def generate(args, out, truth_out, expect=None, incidents=None):
     neighbours = Neighbours(args.io_terminals, args.cia402, args.seed)
     builder = FrameBuilder(args.axes, args.encap, neighbours)
     io_task = IoTask(args.io_task_cycles, args.seed) if args.io_task_cycles else None
+    acyclic = AcyclicBuilder(args.encap)
     io_inputs = bytes(IO_TASK_BYTES)
     echoed = builder.zero_inputs  # --echo-inputs: the last inputs received
     nb_echoed = bytes(neighbours.in_size)
@@ -1784,7 +2198,7 @@ def generate(args, out, truth_out, expect=None, incidents=None):
     sew_error = [False] * args.axes  # per axis, in the last returned copy written
     loss_rng = random.Random(f"{args.seed}/loss")
     cycle_ns, delay_ns = args.cycle_us * 1000, args.return_delay_us * 1000
-    dc_start = T0_NS - DC_EPOCH_OFFSET_NS + 1234  # reference clock slightly off the host clock
+    dc_start = T0_NS - DC_EPOCH_OFFSET_NS + DC_REFERENCE_OFF_NS
     want_master = args.copies in ("both", "master")
     want_returned = args.copies in ("both", "returned")
     chain = itertools.chain.from_iterable
@@ -1807,6 +2221,8 @@ def generate(args, out, truth_out, expect=None, incidents=None):
                 expect.frame(t_ns, k, MASTER)
         if directive == LOST or (args.loss and loss_rng.random() < args.loss):
             io_inputs = write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect)
+            write_acyclic(writer, acyclic, session.acyclic_frames, k, t_ns, cycle_ns, delay_ns,
+                          io_task, args.copies, expect)
             continue
         session.deliver(inputs)
         in_bytes = builder.tx.pack(*chain(inputs))
@@ -1825,6 +2241,8 @@ def generate(args, out, truth_out, expect=None, incidents=None):
             if expect:
                 expect.frame(t_ret, k, RETURNED)
         io_inputs = write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect)
+        write_acyclic(writer, acyclic, session.acyclic_frames, k, t_ns, cycle_ns, delay_ns,
+                      io_task, args.copies, expect)
     unfinished = session.unfinished()
     if unfinished:
         print("gen_capture: injections not done before the last cycle (more --cycles, or "
@@ -1861,6 +2279,30 @@ def write_io_task(writer, io_task, k, t_ns, delay_ns, io_inputs, expect):
         expect.frame(t_io, k, RETURNED)
         expect.frame(t_io + delay_ns, k, RETURNED)
     return returned
+
+
+def write_acyclic(writer, builder, frames, k, t_ns, cycle_ns, delay_ns, io_task, copies, expect):
+    """The master's acyclic frames of cycle k (both copies, or the one captured), spread evenly
+    between the cycle's last frame and the next cycle's.  They count as the cycle's returned
+    copy for the findings' frame windows; the findings they show are due exactly on their
+    returned copies."""
+    if not frames:
+        return
+    io_frames = io_task is not None and k % io_task.every == 0
+    t_from = t_ns + (3 if io_frames else 1) * delay_ns
+    wanted = (False, True) if copies == "both" else (copies == "returned",)
+    step = max(1, (t_ns + cycle_ns - t_from) // (len(frames) * len(wanted) + 1))
+    t = t_from
+    for frame in frames:
+        master, returned = builder.copies(frame, t + step)
+        for is_returned in wanted:
+            t += step
+            writer.write(t, returned if is_returned else master)
+            if expect:
+                expect.frame(t, k, RETURNED)
+                if is_returned:
+                    for rule, axis in frame.shows:
+                        expect.add_last_frame(rule, axis)
 
 
 def parse_args(argv):
