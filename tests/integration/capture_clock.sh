@@ -10,7 +10,9 @@
 # the plugin shows the same findings on the same frames and ncservo.clock. The simulator writes
 # the shapes, and apart from it the independent generator (tests/tools/gen_capture.py) with
 # injected violations, checked against its own list of them.
-SRC=$1 BUILD=$2
+# --quick (the sanitizer build, which looks for memory errors, not at every row): the faults and
+# incidents runs, bunched stamps and copies only; the generator's bunched stamps and copies.
+SRC=$1 BUILD=$2 QUICK=${3:-}
 source "$SRC/tests/integration/lib.sh"
 
 # summary JSON [PAIRED]: one line per finding (rule, axis, frame) and incident (cause, axis,
@@ -102,10 +104,15 @@ declare -A runs=(
   [lost]="--duration 3 --seed 3 --lost-cycles 1.5:3"
   [incidents]="--scenario incidents --seed 2"
 )
-for run in healthy faults lost incidents; do
+sim_runs=(healthy faults lost incidents) sim_shapes=(bunched:4ms quantised:1ms late:400us)
+gen_shapes=(bunched:4ms quantised:1ms late:400us duplicates)
+if [ "$QUICK" = --quick ]; then
+  sim_runs=(faults incidents) sim_shapes=(bunched:4ms) gen_shapes=(bunched:4ms duplicates)
+fi
+for run in "${sim_runs[@]}"; do
   # shellcheck disable=SC2086
   sim "$WORK/$run.pcap" ${runs[$run]}
-  for shape in bunched:4ms quantised:1ms late:400us; do
+  for shape in "${sim_shapes[@]}"; do
     # shellcheck disable=SC2086
     sim "$WORK/$run-${shape%%:*}.pcap" ${runs[$run]} --capture-stamps "$shape"
     compare "$run --capture-stamps $shape" "$WORK/$run.pcap" "$WORK/$run-${shape%%:*}.pcap" bus
@@ -118,7 +125,11 @@ for run in healthy faults lost incidents; do
   [ "$duplicates" = "$records" ] || fail "$run --duplicate-records: $duplicates duplicates, not $records"
 done
 # A healthy bus: no finding, however it was stamped (the drive fault it carries is an incident).
-for shape in bunched quantised late; do
+for spec in bunched:4ms quantised:1ms late:400us; do
+  shape=${spec%%:*}
+  # shellcheck disable=SC2086
+  [ -f "$WORK/healthy-$shape.pcap" ] ||
+    sim "$WORK/healthy-$shape.pcap" ${runs[healthy]} --capture-stamps "$spec"
   validate "$WORK/healthy-$shape.pcap" "$WORK/h.json"
   [ "$(field "$WORK/h.json" 'len(c["findings"])')" = 0 ] ||
     fail "healthy --capture-stamps $shape: findings on a healthy bus"
@@ -135,10 +146,14 @@ grep -q '^timing (bus timestamps, 1 ns): cycle .* median 250.000 ' "$WORK/h.timi
   fail "healthy bunched: the timing block: $(head -1 "$WORK/h.timing")"
 diff -u "$WORK/h.timing" "$WORK/z.timing" >"$WORK/z.diff" ||
   fail "tshark -2 -z ncservo,timing differs from validate: $(head -8 "$WORK/z.diff")"
+# shellcheck disable=SC2086
+[ -f "$WORK/healthy-twice.pcap" ] || sim "$WORK/healthy-twice.pcap" ${runs[healthy]} --duplicate-records
 "$NCSERVO" validate "$WORK/healthy-twice.pcap" >"$WORK/h.txt" || fail "healthy twice: exit $?"
 grep -q '^duplicates: [0-9]* records ignored (the first: frame 2)' "$WORK/h.txt" ||
   fail "the text report's duplicates line: $(grep '^dup' "$WORK/h.txt")"
 # Wireshark marks each copy, and only the copies: the even frames.
+# shellcheck disable=SC2086
+[ -f "$WORK/healthy.pcap" ] || sim "$WORK/healthy.pcap" ${runs[healthy]}
 validate "$WORK/healthy.pcap" "$WORK/h.json"
 records=$(field "$WORK/h.json" 'c["frames"]')
 "$TSHARK" "$PLUGIN" -2 -r "$WORK/healthy-twice.pcap" -Y ncservo.duplicate -T fields \
@@ -147,7 +162,7 @@ awk '$1 % 2 == 1 { odd++ } END { exit odd > 0 || NR != '"$records"' }' "$WORK/co
   fail "tshark -2 marks $(wc -l <"$WORK/copies.txt") records as duplicates, not the $records copies"
 
 # The independent generator, with injected violations, against its own list of them.
-for shape in bunched:4ms quantised:1ms late:400us duplicates; do
+for shape in "${gen_shapes[@]}"; do
   args=(--capture-stamps "$shape")
   [ $shape = duplicates ] && args=(--duplicate-records)
   python3 "$GEN" --axes 4 --cycles 12000 --cycle-us 250 --inject SE-001@0.8:1 --inject COM-002@1.6 \
