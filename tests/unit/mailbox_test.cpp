@@ -350,6 +350,23 @@ TEST(MailboxTracker, AbortOfAnEmptyHistoryIsExpected) {
   EXPECT_EQ(std::get<SdoAbortEvent>(h.events[1].data).code, 0x06020000u);
 }
 
+// ETG.1000.6: an abort is an SDO request (service 2) whoever sends it; the area it was read from
+// tells the drive's from the master's.
+TEST(MailboxTracker, AbortWithTheRequestServiceIsTheDrives) {
+  Harness h;
+  h.startUp();
+  h.write(mbx(3, 1, coe(2, sdo(0x40, 0x2000, 0, 0))));
+  h.read(mbx(3, 1, coe(2, sdo(0x80, 0x2000, 0, 0x06020000))));
+  h.write(mbx(3, 2, coe(2, sdo(0x40, 0x6099, 1, 0))));
+  h.write(mbx(3, 3, coe(2, sdo(0x80, 0x6099, 1, 0x05040000))));  // the master gives up
+  ASSERT_EQ(h.tracker.messages().size(), 1u);
+  EXPECT_EQ(h.tracker.messages()[0].kind, DriveMessage::Kind::SdoAbort);
+  EXPECT_EQ(h.tracker.messages()[0].abort_code, 0x06020000u);
+  EXPECT_EQ(h.tracker.messages()[0].request_frame, 3u);
+  ASSERT_EQ(h.events.size(), 1u);
+  EXPECT_EQ(std::get<SdoAbortEvent>(h.events[0].data).code, 0x06020000u);
+}
+
 TEST(MailboxTracker, ErrorHistoryShrinks) {
   Harness h;
   h.startUp();

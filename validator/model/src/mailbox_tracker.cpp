@@ -241,9 +241,10 @@ void MailboxTracker::onMailbox(Slave& slave, const MailboxMessage& m, const Byte
     return;
   }
   if (!m.sdo) return;
-  if (m.sdo->request) {
+  // The direction is the area's: a drive aborts with the request service too (ETG.1000.6).
+  if (!in) {
     onRequest(slave, *m.sdo);
-  } else {
+  } else if (!m.sdo->request || m.sdo->kind == SdoKind::Abort) {
     onAnswer(slave, *m.sdo, bytes, out);
   }
 }
@@ -429,9 +430,8 @@ void MailboxTracker::onUploaded(Slave& slave, DriveMessage& message, std::vector
   if (message.index == diag::kPredefinedErrorField && message.subindex == 0 && message.value) {
     const auto now = static_cast<std::uint32_t>(*message.value & 0xFF);
     if (data.error_count && now < *data.error_count && !data.cleared) {
-      out.push_back(
-          BusEvent{data.error_count_at, ErrorHistoryShrunkEvent{message.slave, *data.error_count,
-                                                                now, data.error_count_at.frame}});
+      out.push_back(BusEvent{now_, ErrorHistoryShrunkEvent{message.slave, *data.error_count, now,
+                                                           data.error_count_at.frame}});
     }
     data.error_count = now;
     data.error_count_at = now_;
