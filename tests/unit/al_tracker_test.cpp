@@ -381,14 +381,15 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         ErrorCase{"PreOpRequestedWithCode", kInit, kPreOp, 0x0012, Code::SameFrame, RuleId::Esm003,
                   "station 0x1001: AL status 0x0012 (PRE-OP + error) while PRE-OP requested; "
-                  "AL status code 0x001D"},
+                  "AL status code 0x001D (invalid output configuration)"},
         ErrorCase{"SafeOpRefused", kPreOp, kSafeOp, 0x0012, Code::None, RuleId::Esm003,
                   "AL status 0x0012 (PRE-OP + error) while SAFE-OP requested; AL status code "
                   "not read"},
-        ErrorCase{"CodeInLaterDatagram", kPreOp, kSafeOp, 0x0012, Code::LaterDatagram,
-                  RuleId::Esm003, "while SAFE-OP requested; AL status code 0x0011"},
+        ErrorCase{
+            "CodeInLaterDatagram", kPreOp, kSafeOp, 0x0012, Code::LaterDatagram, RuleId::Esm003,
+            "while SAFE-OP requested; AL status code 0x0011 (invalid requested state change)"},
         ErrorCase{"CodeReadEarlier", kSafeOp, kOp, 0x0014, Code::Earlier, RuleId::Esm003,
-                  "AL status code 0x0024 (read in frame 4)"},
+                  "AL status code 0x0024 (invalid input mapping, read in frame 4)"},
         ErrorCase{"InitRequested", kPreOp, 0x0011, 0x0011, Code::None, RuleId::Esm004,
                   "AL status 0x0011 (INIT + error) while INIT requested"},
         ErrorCase{"InitNoRequest", kInit, std::nullopt, 0x0011, Code::None, RuleId::Esm004,
@@ -505,7 +506,8 @@ TEST(AlTracker, LongerReadCoversStatus) {
   const auto out = h.exchange({master}, {back});
   EXPECT_EQ(h.tracker.stateOfStation(kStation0), kSafeOp);
   ASSERT_EQ(out.size(), 1u) << describe(out);
-  EXPECT_NE(out[0].message.find("AL status code 0x001B"), std::string::npos) << out[0].message;
+  EXPECT_NE(out[0].message.find("AL status code 0x001B (sync manager watchdog)"), std::string::npos)
+      << out[0].message;
   // A read that starts after 0x0130 or ends before it covers nothing.
   h.exchange({Dg{ecat::kFprd, 0, physical(kStation1, 0x0131), Bytes(2, 0), 0}},
              {Dg{ecat::kFprd, 0, physical(kStation1, 0x0131), le16(kOp), 1}});

@@ -116,7 +116,30 @@ TEST(EscErrors, NamesTheLinkIntoPortZero) {
   ASSERT_EQ(h.events.size(), 1u);
   const auto& e = std::get<LinkErrorEvent>(h.events[0].data);
   EXPECT_FALSE(e.lost);
-  EXPECT_EQ(e.slave.station, 1003);
+  EXPECT_EQ(e.link.reported.station, 1003);
+  EXPECT_EQ(linkFaultText(e.link), linkFaultText(f));
+}
+
+// PROTOCOL.md §11: each port's errors that no upstream slave forwarded are its own link's, so two
+// bad cables read in one frame are two faults, in processing order.
+TEST(EscErrors, TwoBadLinksInOneReadAreTwoFaults) {
+  Harness h;
+  h.assign(4);
+  h.poll({Regs{}, Regs{}, Regs{}, Regs{}});
+  Regs second, third, fourth;
+  second.rx[0] = 2;         // the cable 1001 -> 1002
+  third.forwarded[0] = 2;   // ... forwarded by 1003, which counts them as invalid too,
+  third.invalid[0] = 7;     // with 5 of its own: the cable 1002 -> 1003
+  fourth.forwarded[0] = 7;  // 1004 sees both, forwarded
+  h.poll({Regs{}, second, third, fourth});
+  ASSERT_EQ(h.tracker.linkFaults().size(), 2u);
+  EXPECT_EQ(linkFaultText(h.tracker.linkFaults()[0]),
+            "the link between station 0x03E9 port 1 and station 0x03EA port 0");
+  EXPECT_EQ(h.tracker.linkFaults()[0].errors, 2u);
+  EXPECT_EQ(linkFaultText(h.tracker.linkFaults()[1]),
+            "the link between station 0x03EA port 1 and station 0x03EB port 0");
+  EXPECT_EQ(h.tracker.linkFaults()[1].errors, 5u);
+  EXPECT_EQ(h.events.size(), 2u);
 }
 
 TEST(EscErrors, ForwardedErrorsAloneNameNoLink) {
@@ -156,6 +179,7 @@ TEST(EscErrors, ClearedOrWrappedCounters) {
   EXPECT_EQ(h.tracker.deltas()[0].delta, 2u);
   ASSERT_EQ(h.events.size(), 1u);
   EXPECT_TRUE(std::get<LinkErrorEvent>(h.events[0].data).lost);
+  EXPECT_EQ(std::get<LinkErrorEvent>(h.events[0].data).link.reported_port, 1);
   // A write clears them: the next read's 4 is a rise of 4 from 0, not of 2.
   h.feed({Dg{ecat::kFpwr, 0, physical(1001, 0x0310), Bytes(4, 0), 0}}, false);
   r.lost[1] = 4;

@@ -85,6 +85,13 @@ const SpecRow kSpec[] = {
     {"ESM-002", "pdo-outside-op", W, NC, kNoTimeout, NONE, AXIS},
     {"ESM-003", "al-error", E, DRIVE, kNoTimeout, NONE, SLAVE},
     {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, NONE, SLAVE},
+    // What the drives and the ESCs say themselves
+    {"MBX-003", "sdo-abort", I, DRIVE, kNoTimeout, NONE, SLAVE},
+    {"ERH-001", "error-history-shrunk", W, DRIVE, kNoTimeout, NONE, SLAVE},
+    {"LNK-001", "link-rx-errors", W, BUS, kNoTimeout, NONE, SLAVE},
+    {"LNK-002", "link-lost", E, BUS, kNoTimeout, NONE, SLAVE},
+    {"DC-001", "dc-out-of-sync", W, BUS, kNoTimeout, NONE, SLAVE, ByDefault::On,
+     Limit::DcSyncLimitNs},
 };
 // clang-format on
 

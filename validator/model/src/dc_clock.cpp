@@ -141,10 +141,15 @@ void DcClock::DcData::absorb(const DcData& gone) {
   }
   if (difference_reads == 0) {
     last_difference_ns = gone.last_difference_ns;
+    last_difference_frame = gone.last_difference_frame;
     settled_frame = gone.settled_frame;
   }
   difference_reads += gone.difference_reads;
   max_abs_difference_ns = std::max(max_abs_difference_ns, gone.max_abs_difference_ns);
+  if (gone.min_abs_difference_ns) {
+    min_abs_difference_ns = std::min(min_abs_difference_ns.value_or(*gone.min_abs_difference_ns),
+                                     *gone.min_abs_difference_ns);
+  }
 }
 
 void DcClock::onSystemTime(DcData& slave, std::uint64_t raw, bool is_64_bit, std::int64_t time_ns) {
@@ -163,7 +168,10 @@ void DcClock::onDifference(DcData& slave, std::uint32_t raw, std::uint64_t frame
   const std::int64_t magnitude = difference < 0 ? -difference : difference;
   ++slave.difference_reads;
   slave.last_difference_ns = difference;
+  slave.last_difference_frame = frame_number;
   slave.max_abs_difference_ns = std::max(slave.max_abs_difference_ns, magnitude);
+  slave.min_abs_difference_ns =
+      std::min(slave.min_abs_difference_ns.value_or(magnitude), magnitude);
   if (magnitude > settled_ns_) {
     slave.settled_frame.reset();
   } else if (!slave.settled_frame) {
@@ -175,12 +183,14 @@ void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool retu
                       std::uint64_t frame_number, std::int64_t time_ns) {
   if (frame.status != WalkStatus::Ok && frame.status != WalkStatus::Truncated) return;
   addressing_.beginFrame(frame, returned, paired);
-  onFrame(frame, bytes, addressing_, frame_number, time_ns);
+  std::vector<BusEvent> unjudged;
+  onFrame(frame, bytes, addressing_, Stamp{frame_number, time_ns}, time_ns, unjudged);
 }
 
 void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes,
-                      const FrameAddressing& addressing, std::uint64_t frame_number,
-                      std::int64_t time_ns) {
+                      const FrameAddressing& addressing, const Stamp& now, std::int64_t time_ns,
+                      std::vector<BusEvent>& events) {
+  const std::uint64_t frame_number = now.frame;
   // Most frames (the cyclic process data, a master copy of the DC time's read) hold nothing
   // followed here.
   bool any = false;
@@ -226,7 +236,16 @@ void DcClock::onFrame(const EcatFrame& frame, const ByteReader& bytes,
     }
     if (time32 && distributesTime(dg.command)) slave.reference = true;
     if (difference) {
-      if (auto raw = bytes.le32(*difference)) onDifference(slave, *raw, frame_number);
+      if (auto raw = bytes.le32(*difference)) {
+        DcDifferenceEvent event;
+        event.previous_ns = slave.last_difference_ns;
+        event.previous_frame = slave.last_difference_frame;
+        event.smallest_before_ns = slave.min_abs_difference_ns;
+        onDifference(slave, *raw, frame_number);
+        event.slave = SlaveRef{directory_.slaves()[s].station, directory_.slaves()[s].position};
+        event.difference_ns = *slave.last_difference_ns;
+        events.push_back(BusEvent{now, event});
+      }
     }
   }
 }

@@ -177,9 +177,9 @@ void EscErrorTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
       list(EscErrorDelta{ref, false, at->port, at->counter, read.delta[k], now.frame});
       if (at->counter == EscCounter::LostLink) {
         LinkErrorEvent event;
-        event.slave = ref;
-        event.port = at->port;
-        event.errors = read.delta[k];
+        event.link = linkAt(s, at->port);
+        event.link.errors = read.delta[k];
+        event.link.frame = now.frame;
         event.lost = true;
         event.previous_read_frame = read.since.frame;
         out.push_back(BusEvent{now, event});
@@ -190,7 +190,37 @@ void EscErrorTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
   localise(now, out);
 }
 
-// The first slave in processing order with RX errors no upstream slave forwarded names the link.
+LinkFault EscErrorTracker::linkAt(std::size_t slave, std::uint8_t port) const {
+  LinkFault fault;
+  fault.reported = refOf(slave);
+  fault.reported_port = port;
+  fault.downstream = fault.reported;
+  fault.downstream_port = port;
+  const auto position = directory_.slaves()[slave].position;
+  if (!position || port > 1) return fault;
+  // Port 0 faces the slave before in the ring, port 1 the one after.
+  const bool into = port == 0;
+  if (into && *position == 0) return fault;
+  const std::size_t n =
+      directory_.findPosition(static_cast<std::uint16_t>(into ? *position - 1 : *position + 1));
+  if (n == directory_.kNone && into) return fault;
+  const SlaveRef neighbour =
+      n != directory_.kNone ? refOf(n)
+                            : SlaveRef{std::nullopt, static_cast<std::uint16_t>(*position + 1)};
+  if (into) {
+    fault.upstream = neighbour;
+    fault.upstream_port = 1;
+  } else {
+    fault.upstream = fault.reported;
+    fault.upstream_port = 1;
+    fault.downstream = neighbour;
+    fault.downstream_port = 0;
+  }
+  return fault;
+}
+
+// Each slave port with RX errors no upstream slave forwarded names the link into it, in processing
+// order (the slaves downstream of a bad link count its errors as forwarded, not as their own).
 void EscErrorTracker::localise(const Stamp& now, std::vector<BusEvent>& out) {
   // Slaves of unknown position keep the order they were read in, after those of known one.
   auto order = [&](std::size_t k) -> std::uint32_t {
@@ -208,52 +238,16 @@ void EscErrorTracker::localise(const Stamp& now, std::vector<BusEvent>& out) {
       const std::uint32_t forwarded =
           read.delta[offsetOf(static_cast<std::uint16_t>(ecat::kRegForwardedRxError0 + port))];
       if (received <= forwarded) continue;
-      LinkFault fault;
-      fault.reported = refOf(read.slave);
-      fault.reported_port = port;
+      LinkFault fault = linkAt(read.slave, port);
       fault.errors = received - forwarded;
       fault.frame = now.frame;
-      const auto position = directory_.slaves()[read.slave].position;
-      fault.downstream = fault.reported;
-      fault.downstream_port = port;
-      if (position && port <= 1) {
-        // Port 0 faces the slave before in the ring, port 1 the one after.
-        const bool into = port == 0;
-        if (!into || *position > 0) {
-          const std::size_t n = directory_.findPosition(
-              static_cast<std::uint16_t>(into ? *position - 1 : *position + 1));
-          if (n != directory_.kNone || !into) {
-            const SlaveRef neighbour =
-                n != directory_.kNone
-                    ? refOf(n)
-                    : SlaveRef{std::nullopt, static_cast<std::uint16_t>(*position + 1)};
-            if (into) {
-              fault.upstream = neighbour;
-              fault.upstream_port = 1;
-            } else {
-              fault.upstream = fault.reported;
-              fault.upstream_port = 1;
-              fault.downstream = neighbour;
-              fault.downstream_port = 0;
-            }
-          }
-        }
-      }
-      LinkErrorEvent event;
-      event.slave = fault.reported;
-      event.port = port;
-      event.errors = fault.errors;
-      event.upstream = fault.upstream;
-      event.upstream_port = fault.upstream_port;
-      event.previous_read_frame = read.since.frame;
-      out.push_back(BusEvent{now, event});
+      out.push_back(BusEvent{now, LinkErrorEvent{fault, false, read.since.frame}});
       frame_faults_.push_back(fault);
       if (faults_.size() < kMaxListed) {
         faults_.push_back(fault);
       } else {
         ++omitted_;
       }
-      return;  // the first names the link; the others saw its errors
     }
   }
 }

@@ -10,8 +10,10 @@
 #include "ncservo/base/text.hpp"
 #include "ncservo/model/al_tracker.hpp"
 #include "ncservo/model/axis_model.hpp"
+#include "ncservo/model/esc_errors.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/word_bits.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 #include "ncservo/wire/ethercat.hpp"
 
 namespace ncservo {
@@ -425,13 +427,81 @@ std::string alErrorText(const AlErrorEvent& e, const Stamp& at, const RuleContex
   }
   std::string code = "; AL status code not read";
   if (e.status_code) {
-    code = fmt::format("; AL status code 0x{:04X}", *e.status_code);
-    if (e.status_code_frame != at.frame) {
-      code += fmt::format(" (read in frame {})", e.status_code_frame);
-    }
+    const diag::AlCodeDef* known = diag::alStatusCode(*e.status_code);
+    code = fmt::format("; AL status code 0x{:04X} ({}{})", *e.status_code,
+                       known != nullptr ? known->text : "a code ETG.1000.6 does not list",
+                       e.status_code_frame != at.frame
+                           ? fmt::format(", read in frame {}", e.status_code_frame)
+                           : std::string{});
   }
   return fmt::format("{}: AL status 0x{:04X} ({} + error) {}{}", slaveName(e.slave), e.raw,
                      alStateName(e.raw & 0x0F), context, code);
+}
+
+// --- What the drives and the ESCs say themselves (docs/drive-messages.md) ---
+bool mbx003(const SdoAbortEvent& e, const RuleContext&) {
+  return !e.expected;
+}
+std::string mbx003Text(const SdoAbortEvent& e, const Stamp&, const RuleContext&) {
+  const char* object = diag::objectName(e.index);
+  const char* why = diag::abortText(e.code);
+  return fmt::format(
+      "{}: SDO {:04X}h:{:02X}{}{}{} aborted with 0x{:08X} ({}){}", slaveName(e.slave), e.index,
+      e.subindex, object ? " (" : "", object ? object : "", object ? ")" : "", e.code,
+      why ? why : "a code CiA 301 does not list",
+      e.request_frame ? fmt::format(", the request in frame {}", *e.request_frame) : std::string{});
+}
+
+bool erh001(const ErrorHistoryShrunkEvent&, const RuleContext&) {
+  return true;
+}
+std::string erh001Text(const ErrorHistoryShrunkEvent& e, const Stamp&, const RuleContext&) {
+  return fmt::format(
+      "{}: error history 1003h:00 read {}, {} in frame {}, and no write of 0 cleared it between",
+      slaveName(e.slave), e.now, e.before, e.before_frame);
+}
+
+bool lnk001(const LinkErrorEvent& e, const RuleContext&) {
+  return !e.lost;
+}
+bool lnk002(const LinkErrorEvent& e, const RuleContext&) {
+  return e.lost;
+}
+std::string sinceRead(std::uint64_t previous_read_frame) {
+  return previous_read_frame != 0 ? fmt::format("since the read in frame {}", previous_read_frame)
+                                  : std::string{"since they were cleared"};
+}
+std::string lnk001Text(const LinkErrorEvent& e, const Stamp&, const RuleContext&) {
+  const std::uint32_t n = e.link.errors;
+  return fmt::format(
+      "{}: {} RX or invalid-frame error{} at port {} {}, none forwarded from "
+      "upstream: {}",
+      slaveName(e.link.reported), n, n == 1 ? "" : "s", e.link.reported_port,
+      sinceRead(e.previous_read_frame), linkFaultText(e.link));
+}
+std::string lnk002Text(const LinkErrorEvent& e, const Stamp&, const RuleContext&) {
+  const std::uint32_t n = e.link.errors;
+  return fmt::format("{}: the link at port {} went down {} time{} {}: {}",
+                     slaveName(e.link.reported), e.link.reported_port, n, n == 1 ? "" : "s",
+                     sinceRead(e.previous_read_frame), linkFaultText(e.link));
+}
+
+// DC-001: one finding per run of reads beyond the limit; the run ends at a read within it. A
+// slave is judged once a read of it was within the limit: before, its clock is converging.
+bool beyondDcLimit(std::int64_t difference_ns, const RuleContext& c) {
+  return (difference_ns < 0 ? -difference_ns : difference_ns) > std::int64_t{c.limit()};
+}
+bool dc001(const DcDifferenceEvent& e, const RuleContext& c) {
+  const bool synchronised = e.smallest_before_ns && !beyondDcLimit(*e.smallest_before_ns, c);
+  return synchronised && beyondDcLimit(e.difference_ns, c) &&
+         !(e.previous_ns && beyondDcLimit(*e.previous_ns, c));
+}
+std::string dc001Text(const DcDifferenceEvent& e, const Stamp&, const RuleContext& c) {
+  return fmt::format("{}: system time difference (0x092C) {:+} ns, beyond dc_sync_limit_ns = {}{}",
+                     slaveName(e.slave), e.difference_ns, c.limit(),
+                     e.previous_ns ? fmt::format(" (the read before, frame {}: {:+} ns)",
+                                                 e.previous_frame, *e.previous_ns)
+                                   : std::string{});
 }
 
 // The table's uniform check signature over the axis model or one kind of event.
@@ -810,6 +880,52 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .clause = "docs/protocol.md §8 AL status",
      NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
      .summary = "AL status shows the error indicator at INIT"},
+    {.id = RuleId::Mbx003,
+     .code = "MBX-003",
+     .slug = "sdo-abort",
+     .severity = Severity::Info,
+     .party = Party::Drive,
+     .kind = RuleKind::Slave,
+     .clause = "docs/drive-messages.md SDO; CiA 301 abort codes",
+     NCSERVO_EVENT(SdoAbortEvent, mbx003, mbx003Text),
+     .summary = "an SDO request was aborted (not 0x08000024 on an empty 1003h)"},
+    {.id = RuleId::Erh001,
+     .code = "ERH-001",
+     .slug = "error-history-shrunk",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Slave,
+     .clause = "docs/drive-messages.md error history 1003h",
+     NCSERVO_EVENT(ErrorHistoryShrunkEvent, erh001, erh001Text),
+     .summary = "1003h:00 read lower than before with no write of 0 between"},
+    {.id = RuleId::Lnk001,
+     .code = "LNK-001",
+     .slug = "link-rx-errors",
+     .severity = Severity::Warning,
+     .party = Party::Bus,
+     .kind = RuleKind::Slave,
+     .clause = "docs/drive-messages.md ESC error counters",
+     NCSERVO_EVENT(LinkErrorEvent, lnk001, lnk001Text),
+     .summary = "a slave's RX or invalid-frame counter at a port rose, not forwarded: a bad link"},
+    {.id = RuleId::Lnk002,
+     .code = "LNK-002",
+     .slug = "link-lost",
+     .severity = Severity::Error,
+     .party = Party::Bus,
+     .kind = RuleKind::Slave,
+     .clause = "docs/drive-messages.md ESC error counters",
+     NCSERVO_EVENT(LinkErrorEvent, lnk002, lnk002Text),
+     .summary = "a slave's lost-link counter at a port rose"},
+    {.id = RuleId::Dc001,
+     .code = "DC-001",
+     .slug = "dc-out-of-sync",
+     .severity = Severity::Warning,
+     .party = Party::Bus,
+     .kind = RuleKind::Slave,
+     .clause = "docs/timing.md distributed clocks",
+     .limit = Limit::DcSyncLimitNs,
+     NCSERVO_EVENT(DcDifferenceEvent, dc001, dc001Text),
+     .summary = "a slave's system time difference (0x092C) exceeds dc_sync_limit_ns"},
 }};
 #undef NCSERVO_AXIS
 #undef NCSERVO_EVENT
@@ -933,6 +1049,24 @@ bool& MeasurementRuns::inRun(RuleId rule, CyclicFrameId frame) {
   return slot.in_run[static_cast<std::size_t>(rule)];
 }
 
+namespace {
+// The slave an event is about; none for the bus model's.
+SlaveRef slaveOf(const BusEvent& event) {
+  return std::visit(
+      [](const auto& e) -> SlaveRef {
+        using Event = std::decay_t<decltype(e)>;
+        if constexpr (std::is_same_v<Event, LinkErrorEvent>) {
+          return e.link.reported;
+        } else if constexpr (requires { e.slave; }) {
+          return e.slave;
+        } else {
+          return SlaveRef{};
+        }
+      },
+      event.data);
+}
+}  // namespace
+
 void judgeEvent(const BusEvent& event, const RuleSettings& settings, MeasurementRuns& runs,
                 std::vector<EventFinding>& out) {
   const RuleSubject subject{nullptr, &event, &runs};
@@ -940,10 +1074,7 @@ void judgeEvent(const BusEvent& event, const RuleSettings& settings, Measurement
     if (rule.event != event.data.index() || !settings.isEnabled(rule.id)) continue;
     const RuleContext context{rule, settings};
     if (!rule.check(subject, context)) continue;
-    SlaveRef slave;
-    if (const auto* control = std::get_if<AlControlEvent>(&event.data)) slave = control->slave;
-    if (const auto* error = std::get_if<AlErrorEvent>(&event.data)) slave = error->slave;
-    out.push_back(EventFinding{rule.id, slave, rule.describe(subject, context, 0)});
+    out.push_back(EventFinding{rule.id, slaveOf(event), rule.describe(subject, context, 0)});
   }
 }
 

@@ -116,8 +116,8 @@ const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t t
   if (frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated) {
     addressing_.beginFrame(frame, decode.copy == CopyKind::Returned, decode.paired);
     observeAl(frame, bytes);
-    dc_.onFrame(frame, bytes, addressing_, frame_number, time_ns);
     events_.clear();
+    dc_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
     mailbox_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
     esc_.onFrame(frame, bytes, addressing_, now_, events_);
     if (!events_.empty()) reportEvents();

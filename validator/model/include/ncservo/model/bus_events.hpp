@@ -132,22 +132,40 @@ struct ErrorHistoryShrunkEvent {
   std::uint64_t before_frame = 0;
 };
 
-// A slave's ESC error counter rose at a port, not forwarded from upstream: a fault of the link
-// arriving at that port (LNK-001), or its lost-link counter rose (LNK-002), at a counter read.
-struct LinkErrorEvent {
-  SlaveRef slave;
-  std::uint8_t port = 0;
-  std::uint32_t errors = 0;  // RX and invalid frames, not forwarded (LNK-001); link-downs (LNK-002)
-  bool lost = false;         // the lost-link counter
-  std::optional<SlaveRef> upstream;  // the neighbour on that port, where the ring order says it
+// A link the ESC counters name (JSON `link_faults`, LNK-001/LNK-002): the cable between two
+// ports, upstream first in processing order.
+struct LinkFault {
+  std::optional<SlaveRef> upstream;  // none where the ring order does not say
   std::uint8_t upstream_port = 0;
+  SlaveRef downstream;
+  std::uint8_t downstream_port = 0;
+  // For a fault at port 1 the slave read is the upstream side: `reported` names the slave and
+  // port whose counters rose.
+  SlaveRef reported;
+  std::uint8_t reported_port = 0;
+  std::uint32_t errors = 0;
+  std::uint64_t frame = 0;
+};
+
+// A slave's ESC error counters rose at a port, at a counter read: RX and invalid frames no
+// upstream slave forwarded, a fault of the link at that port (LNK-001), or its lost-link counter
+// (LNK-002).
+struct LinkErrorEvent {
+  LinkFault link;                         // errors: the rise; reported: the slave read
+  bool lost = false;                      // the lost-link counter
   std::uint64_t previous_read_frame = 0;  // the read the counter rose since (0: a clear)
 };
 
-// A slave's system time difference (0x092C) read, in ns (DC-001).
+// A slave's system time difference (0x092C) read, in ns, with its read before (DC-001: a run of
+// reads beyond the limit is one finding) and the smallest magnitude of its earlier reads (DC-001
+// judges a slave once it has been within the limit: the reads before are its start-up's
+// convergence).
 struct DcDifferenceEvent {
   SlaveRef slave;
   std::int64_t difference_ns = 0;
+  std::optional<std::int64_t> previous_ns;
+  std::uint64_t previous_frame = 0;
+  std::optional<std::int64_t> smallest_before_ns;
 };
 
 using BusEventData =

@@ -96,9 +96,10 @@ class DcClock {
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, bool returned, bool paired,
                std::uint64_t frame_number, std::int64_t time_ns);
   // The same, with the frame's addressing worked out once for every tracker (Ok or Truncated
-  // frames only, `addressing.beginFrame` called for each of them).
+  // frames only, `addressing.beginFrame` called for each of them); each 0x092C read appends a
+  // DcDifferenceEvent (DC-001) to `events`.
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, const FrameAddressing& addressing,
-               std::uint64_t frame_number, std::int64_t time_ns);
+               const Stamp& now, std::int64_t time_ns, std::vector<BusEvent>& events);
   // A capture segment starts (capture_segments.hpp): the drift fits start again; the system
   // time differences, which need no clock of the capture, carry on.
   void startSegment();
@@ -114,7 +115,9 @@ class DcClock {
     std::optional<std::uint64_t> last_time;  // the last system time read (32-bit reads unwrap)
     std::uint64_t difference_reads = 0;
     std::optional<std::int64_t> last_difference_ns;
+    std::uint64_t last_difference_frame = 0;
     std::int64_t max_abs_difference_ns = 0;
+    std::optional<std::int64_t> min_abs_difference_ns;
     std::optional<std::uint64_t> settled_frame;
     void absorb(const DcData& other);
   };

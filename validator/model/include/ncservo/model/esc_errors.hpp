@@ -8,10 +8,11 @@
 //
 // Localisation (Beckhoff's interpretation of the counters): an RX or invalid-frame error at a port
 // that no upstream slave forwarded (the forwarded counter did not rise as much) is a fault of the
-// physical link arriving at that port. Of the slaves a frame read, the first in processing order
-// (ring position, else the order read) with such errors names the link: for port 0 the cable from
-// the slave before it in the ring (its port 1), for port 1 the cable to the one after it (its
-// port 0). Bounded: kMaxListed deltas and faults listed, the rest counted.
+// physical link arriving at that port (the slaves downstream count its errors as forwarded): for
+// port 0 the cable from the slave before it in the ring (its port 1), for port 1 the cable to the
+// one after it (its port 0). Each such port of the slaves a frame read names its link, in
+// processing order (ring position, else the order read). Bounded: kMaxListed deltas and faults
+// listed, the rest counted.
 #pragma once
 
 #include <array>
@@ -41,19 +42,6 @@ struct EscErrorDelta {
   std::uint64_t frame = 0;
 };
 
-// A link the counters name (JSON `link_faults`).
-struct LinkFault {
-  std::optional<SlaveRef> upstream;  // none where the ring order does not say
-  std::uint8_t upstream_port = 0;
-  SlaveRef downstream;
-  std::uint8_t downstream_port = 0;
-  // For a fault at port 1 the slave read is the upstream side: `reported` names the slave and
-  // port whose counters rose.
-  SlaveRef reported;
-  std::uint8_t reported_port = 0;
-  std::uint32_t errors = 0;
-  std::uint64_t frame = 0;
-};
 // "the link between station 0x03EA port 1 and station 0x03EB port 0"
 std::string linkFaultText(const LinkFault& fault);
 
@@ -91,10 +79,12 @@ class EscErrorTracker {
   // Rises of the counters the datagram read, into `read`; whether any was known before.
   bool take(Counters& counters, const Datagram& dg, const ByteReader& bytes, Read& read);
   void clear(Counters& counters, const Datagram& dg);
-  // This frame's reads: the link the first slave with unforwarded RX errors names.
+  // This frame's reads: the links their unforwarded RX errors name.
   void localise(const Stamp& now, std::vector<BusEvent>& out);
   void list(const EscErrorDelta& delta);
   SlaveRef refOf(std::size_t slave) const;
+  // The link at a slave's port, its neighbour named where the ring order says who it is.
+  LinkFault linkAt(std::size_t slave, std::uint8_t port) const;
 
   SlaveDirectory<Counters> directory_;
   Counters broadcast_;

@@ -93,12 +93,17 @@ enum class RuleId : std::uint8_t {
   Esm002,
   Esm003,
   Esm004,
+  Mbx003,
+  Erh001,
+  Lnk001,
+  Lnk002,
+  Dc001,
 };
-inline constexpr std::size_t kRuleCount = 31;
+inline constexpr std::size_t kRuleCount = 36;
 
-// docs/rules.md#com-006, COM-007: the limits of the rules whose right value depends on the machine.
-// A rule's row names the limit it uses (RuleDef::limit).
-enum class Limit : std::uint8_t { CycleJitterPercent, ReturnLatencyUs };
+// docs/rules.md#com-006, COM-007, DC-001: the limits of the rules whose right value depends on the
+// machine. A rule's row names the limit it uses (RuleDef::limit).
+enum class Limit : std::uint8_t { CycleJitterPercent, ReturnLatencyUs, DcSyncLimitNs };
 struct LimitDef {
   Limit id;
   const char* name;  // the configuration key and --limit NAME
@@ -107,7 +112,7 @@ struct LimitDef {
   const char* unit;
   const char* bounds;  // what it bounds, for docs and errors
 };
-inline constexpr std::array<LimitDef, 2> kLimits{{
+inline constexpr std::array<LimitDef, 3> kLimits{{
     {.id = Limit::CycleJitterPercent,
      .name = "cycle_jitter_percent",
      .default_value = 10,
@@ -122,6 +127,13 @@ inline constexpr std::array<LimitDef, 2> kLimits{{
      .max = 1'000'000,
      .unit = "µs",
      .bounds = "how long after its master copy a returned copy may arrive"},
+    {.id = Limit::DcSyncLimitNs,
+     .name = "dc_sync_limit_ns",
+     .default_value = 1000,
+     .min = 1,
+     .max = 1'000'000'000,
+     .unit = "ns",
+     .bounds = "how far a slave's system time difference (0x092C) may be from the reference"},
 }};
 const LimitDef* limitByName(std::string_view name);
 
