@@ -446,8 +446,8 @@ std::string mbx003Text(const SdoAbortEvent& e, const Stamp&, const RuleContext&)
   const char* object = diag::objectName(e.index);
   const char* why = diag::abortText(e.code);
   return fmt::format(
-      "{}: SDO {:04X}h:{:02X}{}{}{} aborted with 0x{:08X} ({}){}", slaveName(e.slave), e.index,
-      e.subindex, object ? " (" : "", object ? object : "", object ? ")" : "", e.code,
+      "{}: SDO {:04X}h:{:02X}{} aborted with 0x{:08X} ({}){}", slaveName(e.slave), e.index,
+      e.subindex, object ? fmt::format(" ({})", object) : std::string{}, e.code,
       why ? why : "a code CiA 301 does not list",
       e.request_frame ? fmt::format(", the request in frame {}", *e.request_frame) : std::string{});
 }
