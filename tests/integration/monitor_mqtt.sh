@@ -9,6 +9,7 @@
 # fingerprint and frame. The status topic says "online", then "offline" (retained) at the end,
 # and the broker's last will says it for a monitor killed outright. mqtts:// with a CA and a
 # client certificate reaches a broker that requires one, and without the certificate does not.
+# With no broker at all, a queue of --mqtt-queue messages keeps that many and counts the rest.
 # Needs root, tcpreplay, mosquitto and openssl: otherwise exit 77 with the reason (under CI:
 # fails).
 SRC=$1 BUILD=$2
@@ -136,6 +137,31 @@ for _ in 1 2 3 4 5 6 7 8 9 10; do
 done
 [ "$last" = offline ] || fail "after kill -9 the status says '$last', not the will's offline"
 echo "ok the last will says offline for a monitor killed outright"
+
+# A broker that never comes: the queue keeps --mqtt-queue messages, drops the oldest past that
+# and says how many, and the end says what was never acknowledged.
+nobody=$(free_port)
+"$NCSERVO" monitor -i "$host" --format jsonl --mqtt "mqtt://127.0.0.1:$nobody/$prefix" \
+  --mqtt-queue 5 --mqtt-flush 0 >bounded.jsonl 2>bounded.err &
+monitor=$!
+sleep 1
+replay_into_peer faults.pcap || fail "tcpreplay failed"
+sleep 0.5
+kill -INT "$monitor"
+wait "$monitor" || true
+published=$(python3 -c '
+import json, sys
+lines = [json.loads(l) for l in open(sys.argv[1])]
+print(sum(1 for j in lines if "rule" in j or "incident" in j) + 1)  # and "offline" at the end
+' bounded.jsonl)
+[ "$published" -gt 10 ] || fail "the faults capture gave $published messages"
+grep -q -- "--mqtt: the queue holds 5 messages: dropping the oldest" bounded.err ||
+  fail "no word of the full queue: $(cat bounded.err)"
+grep -q -- "--mqtt: $((published - 5)) messages dropped, the oldest first" bounded.err ||
+  fail "$published messages published to a queue of 5: $(cat bounded.err)"
+grep -q -- "--mqtt: 5 messages not acknowledged by the broker at the end" bounded.err ||
+  fail "the 5 kept: $(cat bounded.err)"
+echo "ok with no broker, a queue of 5 kept 5 of $published messages and said so"
 
 # mqtts://: a broker that wants TLS and a client certificate from our CA.
 kill "$broker"

@@ -69,6 +69,11 @@ struct Message {
   std::optional<int> mid;  // sent on this connection, waiting for its PUBACK
 };
 
+// Messages handed to libmosquitto and not yet acknowledged, at most. libmosquitto's default of 20
+// caps a publisher at 20 messages a round trip, fewer than a faulty bus's findings on a loaded
+// machine (docs/field.md#how-fast); the rest wait in the queue, where the oldest can be dropped.
+constexpr int kInFlight = 1000;
+
 void initLibrary() {
   static std::once_flag once;
   std::call_once(once, [] { mosquitto_lib_init(); });
@@ -98,6 +103,7 @@ struct MqttPublisher::State {
   std::map<std::uint64_t, Message> queue;  // by sequence number: the oldest first
   std::map<int, std::uint64_t> in_flight;  // mid -> sequence number
   std::uint64_t next_sequence = 0;
+  std::uint64_t first_unsent = 0;  // the messages from here on were not handed to libmosquitto
   std::thread sender;
 
   std::string topic(MqttTopic t) const { return options.target.prefix + "/" + mqttTopicName(t); }
@@ -105,11 +111,12 @@ struct MqttPublisher::State {
   void dropOldest(std::size_t limit);
 };
 
+// The oldest of the messages not yet sent go: those in flight are libmosquitto's already.
 void MqttPublisher::State::dropOldest(std::size_t limit) {
   std::size_t gone = 0;
-  while (queue.size() > limit) {
-    if (queue.begin()->second.mid) in_flight.erase(*queue.begin()->second.mid);
-    queue.erase(queue.begin());
+  auto oldest = queue.lower_bound(first_unsent);
+  while (queue.size() > limit && oldest != queue.end()) {
+    oldest = queue.erase(oldest);
     ++gone;
   }
   if (gone == 0) return;
@@ -148,17 +155,20 @@ void MqttPublisher::State::send() {
     if (again) {
       in_flight.clear();
       for (auto& entry : queue) entry.second.mid.reset();
+      first_unsent = queue.empty() ? next_sequence : queue.begin()->first;
     }
     if (online) {
-      for (auto& [sequence, m] : queue) {
-        if (m.mid) continue;
+      for (auto next = queue.lower_bound(first_unsent);
+           next != queue.end() && in_flight.size() < std::size_t{kInFlight}; ++next) {
+        Message& m = next->second;
         int mid = 0;
         const int rc =
             mosquitto_publish(mosq, &mid, m.topic.c_str(), static_cast<int>(m.payload.size()),
                               m.payload.data(), 1, m.retain);
         if (rc != MOSQ_ERR_SUCCESS) break;  // not connected after all: again on reconnecting
         m.mid = mid;
-        in_flight[mid] = sequence;
+        in_flight[mid] = next->first;
+        first_unsent = next->first + 1;
       }
     }
     lock.lock();
@@ -182,6 +192,7 @@ Result<std::unique_ptr<MqttPublisher>> MqttPublisher::start(const MqttOptions& o
   s.mosq = mosquitto_new(s.options.client_id.c_str(), true, &s);
   if (s.mosq == nullptr) return fail("--mqtt: libmosquitto could not make a client");
   mosquitto_int_option(s.mosq, MOSQ_OPT_PROTOCOL_VERSION, MQTT_PROTOCOL_V311);
+  mosquitto_int_option(s.mosq, MOSQ_OPT_SEND_MAXIMUM, kInFlight);
   const std::string status = s.topic(MqttTopic::Presence);
   if (mosquitto_will_set(s.mosq, status.c_str(), 7, "offline", 1, true) != MOSQ_ERR_SUCCESS) {
     return fail(fmt::format("--mqtt: {} is not a topic", status));
@@ -276,11 +287,13 @@ std::size_t MqttPublisher::finish(std::chrono::milliseconds timeout) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       lock.lock();
     }
-    left = s.pending + s.incoming.size();
     s.phase = State::Phase::Ending;  // the sender ends at its next turn, whatever is left
   }
   s.wake.notify_one();
   s.sender.join();
+  // The sender's last turn took the last messages in (and dropped past the limit): what its
+  // queue still holds was never acknowledged.
+  left = s.queue.size() + s.incoming.size();
   mosquitto_disconnect(s.mosq);
   mosquitto_loop_stop(s.mosq, false);
   return left;
