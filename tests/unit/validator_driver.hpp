@@ -258,6 +258,59 @@ inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std:
   return builder.bytes();
 }
 
+// A station-addressed axis (docs/protocol.md §8): an FPWR of its outputs and an FPRD of its
+// inputs each cycle, the AL status polled by FPRD.
+inline constexpr std::uint16_t kStation = 0x03E9;
+inline constexpr std::uint16_t kSmOutputs = 0x1100;
+inline constexpr std::uint16_t kSmInputs = 0x1180;
+
+inline DecoderOptions stationAxis() {
+  AxisConfig axis;
+  axis.name = "X";
+  axis.station = kStation;
+  axis.sm_outputs = kSmOutputs;
+  axis.sm_inputs = kSmInputs;
+  DecoderOptions options;
+  options.axes = {axis};
+  return options;
+}
+
+// An AL status read (0x0130) of the station, with the AL status code (0x0134) when `code` is
+// given: a master's poll reads the 6 bytes in one FPRD.
+inline Dg alStatusRead(std::uint16_t al, std::optional<std::uint16_t> code, bool returned,
+                       std::uint8_t index) {
+  Bytes status;
+  putLe(status, returned ? al : 0, 2);
+  if (code) {
+    putLe(status, 0, 2);
+    putLe(status, returned ? *code : 0, 2);
+  }
+  return Dg{ecat::kFprd, index, physical(kStation, ecat::kRegAlStatus), std::move(status),
+            static_cast<std::uint16_t>(returned ? 1 : 0)};
+}
+
+// One cycle of the station-addressed axis and, when `al` is given, an FPRD of its AL status
+// (and code); the returned copy has WKC 1 everywhere.
+inline Bytes stationFrame(std::uint32_t scw, std::uint32_t ssw, std::optional<std::uint16_t> al,
+                          bool returned, std::uint32_t sew = 0,
+                          std::optional<std::uint16_t> code = std::nullopt) {
+  const std::uint16_t wkc = returned ? 1 : 0;
+  FrameBuilder builder;
+  builder.add(Dg{ecat::kFpwr, 1, physical(kStation, kSmOutputs), rxPdo(100, scw), wkc});
+  builder.add(Dg{ecat::kFprd, 2, physical(kStation, kSmInputs),
+                 returned ? txPdo(TxValues(0, ssw, sew)) : Bytes(40, 0), wkc});
+  if (al) builder.add(alStatusRead(*al, code, returned, 3));
+  return builder.bytes();
+}
+
+// The AL status read alone, in a frame of its own.
+inline Bytes alStatusFrame(std::uint16_t al, bool returned,
+                           std::optional<std::uint16_t> code = std::nullopt) {
+  FrameBuilder builder;
+  builder.add(alStatusRead(al, code, returned, 7));
+  return builder.bytes();
+}
+
 // Feeds frames to one Validator, numbering them from 1, and keeps every finding.
 class ValidatorDriver {
  public:

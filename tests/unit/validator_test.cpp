@@ -805,38 +805,9 @@ TEST(ValidatorCom003, LostCyclesSeparatedByAWrongWkcAreNotConsecutive) {
 
 // ---- ESM-002: station-addressed axes (FPWR/FPRD exchange) and AL status reads ----
 
-constexpr std::uint16_t kStation = 0x03E9;
-constexpr std::uint16_t kSmOutputs = 0x1100;
-constexpr std::uint16_t kSmInputs = 0x1180;
-constexpr std::uint16_t kRegAlStatus = 0x0130;
-
-DecoderOptions stationAxis() {
-  AxisConfig axis;
-  axis.name = "X";
-  axis.station = kStation;
-  axis.sm_outputs = kSmOutputs;
-  axis.sm_inputs = kSmInputs;
-  DecoderOptions options;
-  options.axes = {axis};
-  return options;
-}
-
-// One cycle of a station-addressed axis: FPWR of its outputs, FPRD of its inputs and, when
-// `al` is given, an FPRD of its AL status; the returned copy has WKC 1 everywhere.
-Bytes stationFrame(std::uint32_t scw, std::uint32_t ssw, std::optional<std::uint16_t> al,
-                   bool returned) {
-  const std::uint16_t wkc = returned ? 1 : 0;
-  FrameBuilder builder;
-  builder.add(Dg{ecat::kFpwr, 1, physical(kStation, kSmOutputs), test::rxPdo(100, scw), wkc});
-  builder.add(Dg{ecat::kFprd, 2, physical(kStation, kSmInputs),
-                 returned ? test::txPdo(test::TxValues(0, ssw)) : Bytes(40, 0), wkc});
-  if (al) {
-    Bytes status;
-    test::putLe(status, returned ? *al : 0, 2);
-    builder.add(Dg{ecat::kFprd, 3, physical(kStation, kRegAlStatus), status, wkc});
-  }
-  return builder.bytes();
-}
+using test::kStation;
+using test::stationAxis;
+using test::stationFrame;
 
 struct EsmStep {
   std::int64_t from;  // cycles [from, next step's from)
@@ -960,14 +931,7 @@ struct OpEntryRow {
   bool enter_op;   // the slave goes SAFE-OP -> OP at all
 };
 
-Bytes alStatusFrame(std::uint16_t al, bool returned) {
-  Bytes status;
-  test::putLe(status, returned ? al : 0, 2);
-  FrameBuilder builder;
-  builder.add(Dg{ecat::kFprd, 7, physical(kStation, kRegAlStatus), status,
-                 static_cast<std::uint16_t>(returned ? 1 : 0)});
-  return builder.bytes();
-}
+using test::alStatusFrame;
 
 TEST(ValidatorEsm, TotalFailuresResetWhenTheSlaveEntersOp) {
   const OpEntryRow rows[] = {

@@ -9,6 +9,7 @@
 
 #include "incident_tracks.hpp"
 #include "ncservo/protocol/fields.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 
 namespace ncservo {
 
@@ -127,6 +128,17 @@ bool communicationLoss(const CauseContext& c, CauseMatch& m) {
   }
   if (text.empty()) return false;
   m.text = c.kind == IncidentKind::BusOutage ? "every axis failing: " + text : text;
+  return true;
+}
+
+// The drive's ESC lost its synchronisation: its AL status code says so (diag::kAlStatusCodes).
+bool syncError(const CauseContext& c, CauseMatch& m) {
+  if (!c.al_code || !within(c.al_code->at, c.at, kShortWindowNs)) return false;
+  const diag::AlCodeDef* code = diag::alStatusCode(c.al_code->code);
+  if (code == nullptr || !code->sync) return false;
+  m.text = fmt::format("AL status code 0x{:04X} {} (frame {})", code->code, code->text,
+                       c.al_code->at.frame);
+  evidence(m, c.al_code->at, fmt::format("AL status code 0x{:04X}", code->code));
   return true;
 }
 
@@ -283,6 +295,10 @@ const std::array<CauseDef, kCauseCount> kCauses{{
      "ECatWatchDog or ECatTErr set at the fault, or cycles lost or returned with a wrong WKC on "
      "the axis within 100 ms before",
      kShortWindowNs, communicationLoss},
+    {CauseId::SyncError, "sync-error",
+     "the slave's AL status code, read at the fault or within 100 ms before, is a "
+     "synchronization, sync-manager watchdog or PLL error",
+     kShortWindowNs, syncError},
     {CauseId::Overtemperature, "overtemperature",
      "I2t_Endat set at the fault, or SSW.TempWarning rising (or set), or the motor temperature "
      "(message code 4) rising by 10 °C or more, in the minute before",

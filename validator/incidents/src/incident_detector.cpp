@@ -17,6 +17,11 @@ namespace ncservo {
 
 namespace {
 
+// A slave by its station address, else by its ring position.
+std::uint32_t alCodeKey(const SlaveRef& slave) {
+  return slave.station ? *slave.station : 0x10000u + slave.position.value_or(0xFFFF);
+}
+
 constexpr std::int64_t kEvidenceWindowNs = 100 * kMsNs;
 constexpr std::size_t kMaxFindingEvidence = 8;
 
@@ -99,6 +104,24 @@ void IncidentDetector::resetWindows() {
     if (a) a->resetWindows();
   }
   bus_->findings.clear();
+  al_codes_.clear();
+}
+
+void IncidentDetector::takeAlCodes(const Validator& validator, const Mark& at) {
+  for (const AlCodeRead& read : validator.al().codeReads()) {
+    al_codes_[alCodeKey(read.slave)] = AlCodeMark{read.code, at};
+  }
+}
+
+const AlCodeMark* IncidentDetector::alCodeOfAxis(const Validator& validator,
+                                                 std::uint16_t axis) const {
+  if (al_codes_.empty()) return nullptr;
+  for (const AxisInfo& info : validator.decoder().axes()) {
+    if (info.index != axis || !info.has_station) continue;
+    const auto found = al_codes_.find(alCodeKey(SlaveRef{info.station, std::nullopt}));
+    return found != al_codes_.end() ? &found->second : nullptr;
+  }
+  return nullptr;
 }
 
 // The incident's cause from the first matching row, its evidence (the row's and the findings of
@@ -106,13 +129,14 @@ void IncidentDetector::resetWindows() {
 // measurements (null where it has none), `messages` what the drive had said before.
 void IncidentDetector::add(Incident incident, const AxisTrack* axis,
                            const AxisMeasurements* signals, const MessageHistory* messages,
-                           std::uint32_t sew) {
+                           std::uint32_t sew, const AlCodeMark* al_code) {
   if (incidents_.size() >= kMaxIncidents) {
     ++omitted_;
     return;
   }
   const Mark at{incident.at.frame, clock_ns_, incident.at.time_ns};
   CauseContext context{incident.kind, axis, signals, messages, bus_.get(), sew, at, incident.what};
+  if (al_code != nullptr) context.al_code = *al_code;
   CauseMatch match;
   for (const CauseDef& row : kCauses) {
     match = CauseMatch{};
@@ -192,6 +216,7 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
       bus_->findings.push(std::move(mark));
     }
   }
+  takeAlCodes(validator, at);
   takeFaults(validator, observation);
   checkOutage(validator);
   takeAlChanges(validator);
@@ -230,7 +255,8 @@ void IncidentDetector::takeFaults(const Validator& validator, const Observation&
       }
       std::sort(incident.errors.begin(), incident.errors.end(),
                 [](const SewCause* x, const SewCause* y) { return x->mask < y->mask; });
-      add(std::move(incident), &a, &signals, &signals.messagesBefore(last_.frame), sew);
+      add(std::move(incident), &a, &signals, &signals.messagesBefore(last_.frame), sew,
+          alCodeOfAxis(validator, index));
       if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
           incidents_.back().axis == index) {
         a.open = incidents_.size() - 1;
@@ -346,8 +372,9 @@ void IncidentDetector::takeAlChanges(const Validator& validator) {
                     change.status_code ? fmt::format(", status code 0x{:04X}", *change.status_code)
                                        : std::string());
     const AxisModel* model = axis ? validator.axis(*axis) : nullptr;
+    const auto code = al_codes_.find(alCodeKey(change.slave));
     add(std::move(incident), axis ? &track(*axis) : nullptr, measurementsOf(model),
-        messagesOf(model), 0);
+        messagesOf(model), 0, code != al_codes_.end() ? &code->second : nullptr);
   }
 }
 

@@ -12,6 +12,7 @@
 
 #include "ncservo/base/stamp.hpp"
 #include "ncservo/incidents/incident.hpp"
+#include "ncservo/incidents/incident_detector.hpp"
 #include "ncservo/model/axis_measurements.hpp"
 #include "ncservo/rules/rules.hpp"
 
@@ -65,7 +66,7 @@ struct BusTrack {
 
 // What a cause row is given: the incident's axis (none for the bus, or a slave that is no axis)
 // with its model's measurements and the messages the drive gave before the incident, the bus,
-// the SEW at the incident and where it is.
+// the SEW at the incident and where it is, the last AL status code read of its slave.
 struct CauseContext {
   IncidentKind kind = IncidentKind::DriveFault;
   const AxisTrack* axis = nullptr;
@@ -75,6 +76,7 @@ struct CauseContext {
   std::uint32_t sew = 0;
   Mark at;
   std::string what;  // ESM: the state change, for an unknown cause's text
+  std::optional<AlCodeMark> al_code;
 };
 
 }  // namespace ncservo

@@ -202,6 +202,7 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes, bool re
   const bool walked = frame.status == WalkStatus::Ok || frame.status == WalkStatus::Truncated;
   if (!walked) {
     if (!op_changes_.empty()) op_changes_.clear();
+    if (!code_reads_.empty()) code_reads_.clear();
     last_frame_registers_ = false;
     return;
   }
@@ -213,6 +214,7 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
                         const FrameAddressing& addressing, const Stamp& now,
                         std::vector<BusEvent>& out) {
   if (!op_changes_.empty()) op_changes_.clear();
+  if (!code_reads_.empty()) code_reads_.clear();
   const std::size_t count = frame.count;
   // Writes from the master's copy, or from a returned copy whose master copy was not captured;
   // reads from a returned copy, of datagrams that some slave answered. A frame whose datagrams
@@ -249,8 +251,10 @@ void AlTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
         auto code = bytes.le16(*at);
         const std::size_t s = code ? slaveFor(address) : directory_.kNone;
         if (s != directory_.kNone) {
-          directory_.slaves()[s].data.status_code = *code;
-          directory_.slaves()[s].data.status_code_frame = now.frame;
+          Slave& entry = directory_.slaves()[s];
+          entry.data.status_code = *code;
+          entry.data.status_code_frame = now.frame;
+          code_reads_.push_back(AlCodeRead{SlaveRef{entry.station, entry.position}, *code});
         }
       }
     }

@@ -104,7 +104,7 @@ const std::vector<IncidentRow>& incidentRows() {
        .axis = 1,
        .description = "PDPINT (E16), a power stage fault with nothing before it",
        .apply = [](IncidentActions& a) { a.driveFault(0, bits::kPdpint); }},
-      {.cause = "unknown",
+      {.cause = "sync-error",
        .kind = IncidentKind::Esm,
        .axis = 2,
        .description = "the axis's slave falls from OP to SAFE-OP with AL status code 0x001A; the "

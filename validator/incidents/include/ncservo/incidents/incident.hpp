@@ -21,6 +21,7 @@ const char* incidentKindName(IncidentKind kind);
 // The cause rows, in the order they are tried (docs/incidents.md#causes): public ids.
 enum class CauseId : std::uint8_t {
   CommunicationLoss,
+  SyncError,
   Overtemperature,
   FollowingErrorAfterStep,
   FollowingError,
@@ -32,7 +33,7 @@ enum class CauseId : std::uint8_t {
   NcCommand,
   Unknown,
 };
-inline constexpr std::size_t kCauseCount = 11;
+inline constexpr std::size_t kCauseCount = 12;
 
 // A frame the incident's chain passes through, with a short text.
 struct IncidentEvidence {

@@ -20,6 +20,12 @@ namespace ncservo {
 struct AxisTrack;
 struct BusTrack;
 
+// The last AL status code (0x0134) read of a slave, and where (the cause sync-error).
+struct AlCodeMark {
+  std::uint16_t code = 0;
+  Mark at;
+};
+
 class IncidentDetector {
  public:
   static constexpr std::size_t kMaxIncidents = 1000;
@@ -44,7 +50,10 @@ class IncidentDetector {
  private:
   AxisTrack& track(std::uint16_t axis);
   void add(Incident incident, const AxisTrack* axis, const AxisMeasurements* signals,
-           const MessageHistory* messages, std::uint32_t sew);
+           const MessageHistory* messages, std::uint32_t sew, const AlCodeMark* al_code = nullptr);
+  void takeAlCodes(const Validator& validator, const Mark& at);
+  // The last AL status code read of the axis's slave, if the axis has a station and one was.
+  const AlCodeMark* alCodeOfAxis(const Validator& validator, std::uint16_t axis) const;
   void takeFaults(const Validator& validator, const Observation& observation);
   void checkOutage(const Validator& validator);
   void takeAlChanges(const Validator& validator);
@@ -57,6 +66,9 @@ class IncidentDetector {
   Mark outage_at_;               // ... since this frame
   std::size_t open_faults_ = 0;  // drive faults not yet recovered
   std::vector<std::unique_ptr<AxisTrack>> axes_;
+  // By station address, else 0x10000 + ring position: the slaves the AL tracker knows, so
+  // bounded as its directory is.
+  std::map<std::uint32_t, AlCodeMark> al_codes_;
   std::unique_ptr<BusTrack> bus_;
   std::vector<Incident> incidents_;
   std::uint64_t omitted_ = 0;

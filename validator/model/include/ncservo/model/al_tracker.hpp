@@ -41,6 +41,12 @@ struct AlOpChange {
   std::optional<std::uint8_t> requested;  // the last AL control request to it or to all
 };
 
+// An AL status code (0x0134) read of one slave (docs/incidents.md#sync-error).
+struct AlCodeRead {
+  SlaveRef slave;
+  std::uint16_t code = 0;
+};
+
 class AlTracker {
  public:
   static constexpr std::size_t kMaxSlaves = SlaveDirectory<int>::kMaxSlaves;
@@ -73,6 +79,8 @@ class AlTracker {
   // The slaves whose read state left or entered OP in the last frame given (reads of one slave
   // only: a broadcast's OR names none).
   const std::vector<AlOpChange>& opChanges() const { return op_changes_; }
+  // The AL status codes read of single slaves in the last frame given.
+  const std::vector<AlCodeRead>& codeReads() const { return code_reads_; }
 
  private:
   // What the capture showed of one slave's state machine.
@@ -102,6 +110,7 @@ class AlTracker {
   std::uint32_t op_entries_all_ = 0;           // times state_all_ became OP
   bool last_frame_registers_ = false;
   std::vector<AlOpChange> op_changes_;  // the last frame's
+  std::vector<AlCodeRead> code_reads_;  // the last frame's
 };
 
 }  // namespace ncservo
