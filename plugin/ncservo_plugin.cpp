@@ -239,6 +239,10 @@ std::vector<guint8> g_structure_only;
 bool g_any_structure_only = false;  // some axis's layout came from the structure alone
 // The incidents of the pipeline already kept in a frame's record.
 std::size_t g_incidents_kept = 0;
+// By incident index, its record (in file scope): a cause a later frame revises (link-fault,
+// docs/incidents.md#link-fault) is written into the frame where the incident began, which a
+// second pass (tshark -2) shows.
+std::vector<IncidentRecord*> g_incident_records;
 // The axis arrays kept last, each with the Info text of a frame without findings: in cyclic
 // traffic most frames carry the same axes in the same states at the same offsets, alternating
 // between a few such arrays (the master copy and the returned one, frames of a split image).
@@ -512,6 +516,7 @@ void initCapture() {
   g_structure_only.clear();
   g_any_structure_only = false;
   g_incidents_kept = 0;
+  g_incident_records.clear();
   g_shared_axes = {};
   g_next_shared = 0;
   std::fill(std::begin(g_recent_shared), std::end(g_recent_shared), 0);
@@ -742,28 +747,35 @@ void keepFindings(FrameRecord& record, const Validator& by, bool (*keep)(const F
   record.finding_count = static_cast<guint16>(std::min<std::size_t>(kept, 0xFFFF));
 }
 
-// The incidents that began in the frame, kept with their texts and evidence in file scope.
+// An incident's cause and evidence into its record, in file scope.
+void writeIncident(IncidentRecord& r, const Incident& incident) {
+  r.axis = incident.axis ? *incident.axis : kBusAxis;
+  r.text = wmem_strdup_printf(wmem_file_scope(), "%s: %s", causeDef(incident.cause).name,
+                              incident.cause_text.c_str());
+  r.evidence_count = static_cast<guint16>(std::min<std::size_t>(incident.evidence.size(), 0xFFFF));
+  auto* frames = static_cast<guint32*>(
+      wmem_alloc0(wmem_file_scope(), std::max<std::size_t>(r.evidence_count, 1) * sizeof(guint32)));
+  for (guint16 e = 0; e < r.evidence_count; ++e) {
+    frames[e] = static_cast<guint32>(incident.evidence[e].at.frame);
+  }
+  r.evidence = frames;
+}
+
+// The incidents that began in the frame, kept with their texts and evidence in file scope; and
+// the earlier ones whose cause this frame revised, rewritten in their frames' records.
 void keepIncidents(FrameRecord& record) {
   const IncidentDetector* detector = g_pipeline->incidents();
   const std::vector<Incident>& all = detector->incidents();
+  for (const std::size_t index : detector->revised()) {
+    if (index < g_incident_records.size()) writeIncident(*g_incident_records[index], all[index]);
+  }
   if (g_incidents_kept >= all.size()) return;
   const std::size_t count = all.size() - g_incidents_kept;
   auto* out =
       static_cast<IncidentRecord*>(wmem_alloc0(wmem_file_scope(), count * sizeof(IncidentRecord)));
   for (std::size_t i = 0; i < count; ++i) {
-    const Incident& incident = all[g_incidents_kept + i];
-    IncidentRecord& r = out[i];
-    r.axis = incident.axis ? *incident.axis : kBusAxis;
-    r.text = wmem_strdup_printf(wmem_file_scope(), "%s: %s", causeDef(incident.cause).name,
-                                incident.cause_text.c_str());
-    r.evidence_count =
-        static_cast<guint16>(std::min<std::size_t>(incident.evidence.size(), 0xFFFF));
-    auto* frames = static_cast<guint32*>(wmem_alloc0(
-        wmem_file_scope(), std::max<std::size_t>(r.evidence_count, 1) * sizeof(guint32)));
-    for (guint16 e = 0; e < r.evidence_count; ++e) {
-      frames[e] = static_cast<guint32>(incident.evidence[e].at.frame);
-    }
-    r.evidence = frames;
+    writeIncident(out[i], all[g_incidents_kept + i]);
+    g_incident_records.push_back(&out[i]);
   }
   g_incidents_kept = all.size();
   record.incidents = out;
@@ -777,7 +789,9 @@ void validateFrame(const PipelineFrame& delivered) {
   const FrameDecode& decode = view.decode;
   const Validator& by = *validator();
   const bool any_findings = !by.findings().empty();
-  const bool any_incidents = g_pipeline->incidents()->incidents().size() > g_incidents_kept;
+  const IncidentDetector* detector = g_pipeline->incidents();
+  const bool any_incidents =
+      detector->incidents().size() > g_incidents_kept || !detector->revised().empty();
   if (decode.axis_count == 0 && !any_findings && !any_incidents) {
     if (FrameRecord* kept = frameSlot(number)) *kept = FrameRecord{};
     return;

@@ -234,11 +234,104 @@ TEST(Incidents, SyncErrorFromTheSlavesAlStatusCode) {
   }
 }
 
+// link-fault (docs/incidents.md#link-fault): the station-addressed axis loses the returned copies
+// of cycles 295-297 and faults (PDPINT) at kFault; the master reads its slave's ESC error
+// counters (0x0300, 20 bytes) at `first_read` and at `second_read`, the second with `rx` RX
+// errors at port 0 and `lost` lost links at port 0.
+struct LinkRow {
+  const char* name;
+  std::int64_t second_read;
+  std::uint8_t rx;
+  std::uint8_t lost;
+  const char* cause;
+  const char* text;  // a part of the cause's text
+  std::int64_t first_read = 100;
+};
+
+std::vector<LinkRow> linkRows() {
+  return {
+      {"read before the fault", kFault - 2, 5, 0, "link-fault", "5 RX errors at the read of frame"},
+      {"read 5 s after the fault", kFault + 5000, 5, 0, "link-fault", "since frame"},
+      // The read comes 100 us after its cycle's returned copy: 9.9991 s and 10.0001 s.
+      {"read just under 10 s after the fault", kFault + 9'999, 5, 0, "link-fault", "; "},
+      {"read just over 10 s after the fault: too late", kFault + 10'000, 5, 0, "communication-loss",
+       "cycles lost"},
+      {"no rise at the second read", kFault + 10, 0, 0, "communication-loss", "cycles lost"},
+      {"the read before came after the failures began", kFault + 10, 5, 0, "communication-loss",
+       "cycles lost", 296},
+      {"a lost link", kFault + 10, 0, 1, "link-fault", "1 lost link at the read of frame"},
+  };
+}
+
+Bytes counterRead(std::uint8_t rx, std::uint8_t lost, bool returned) {
+  Bytes counters(ecat::kErrorCountersSize, 0);
+  if (returned) {
+    counters[0x01] = rx;    // 0x0301: RX errors at port 0
+    counters[0x10] = lost;  // 0x0310: lost links at port 0
+  }
+  FrameBuilder builder;
+  builder.add(Dg{ecat::kFprd, 9, physical(kStation, ecat::kRegInvalidFrame0), std::move(counters),
+                 static_cast<std::uint16_t>(returned ? 1 : 0)});
+  return builder.bytes();
+}
+
+TEST(Incidents, LinkFaultFromTheEscCountersReadUpTo10sLater) {
+  for (const LinkRow& row : linkRows()) {
+    SCOPED_TRACE(row.name);
+    ValidatorDriver driver(RuleSettings{}, stationAxis());
+    std::uint64_t read_frame = 0;
+    bool final_before_read = true;
+    bool revised_at_read = false;
+    for (std::int64_t k = 0; k < std::max(row.second_read, kFault) + 20; ++k) {
+      const std::int64_t t = kEpochNs + k * kMs;
+      const std::uint32_t sew = k >= kFault && k < kCleared ? kSummary | kPdpint : 0;
+      driver.feed(stationFrame(kScwRunning, kSswRunning, std::nullopt, false), t);
+      if (k < 295 || k > 297) {
+        driver.feed(stationFrame(kScwRunning, kSswRunning, std::nullopt, true, sew), t + 20 * kUs);
+      }
+      if (k == row.first_read || k == row.second_read) {
+        const bool second = k == row.second_read;
+        if (second && k > kFault && !driver.incidents().incidents().empty()) {
+          final_before_read = driver.incidents().causeFinal(0);
+        }
+        driver.feed(counterRead(second ? row.rx : 0, second ? row.lost : 0, false), t + 100 * kUs);
+        driver.feed(counterRead(second ? row.rx : 0, second ? row.lost : 0, true), t + 120 * kUs);
+        if (second) {
+          read_frame = driver.frames();
+          const std::vector<std::size_t>& revised = driver.incidents().revised();
+          revised_at_read = std::find(revised.begin(), revised.end(), 0u) != revised.end();
+        }
+      }
+    }
+    driver.finish();
+    const std::vector<Incident>& incidents = driver.incidents().incidents();
+    ASSERT_EQ(incidents.size(), 1u);
+    const Incident& incident = incidents.front();
+    EXPECT_EQ(incident.kind, IncidentKind::DriveFault);
+    EXPECT_STREQ(causeDef(incident.cause).name, row.cause) << incident.cause_text;
+    EXPECT_NE(incident.cause_text.find(row.text), std::string::npos) << incident.cause_text;
+    EXPECT_TRUE(driver.incidents().causeFinal(0)) << "final once the capture ended";
+    if (incident.cause != CauseId::LinkFault) continue;
+    EXPECT_NE(incident.cause_text.find("the link into station 0x03E9 port 0"), std::string::npos)
+        << incident.cause_text;
+    EXPECT_NE(incident.cause_text.find("cycles lost"), std::string::npos) << incident.cause_text;
+    EXPECT_TRUE(std::any_of(incident.evidence.begin(), incident.evidence.end(),
+                            [&](const IncidentEvidence& e) { return e.at.frame == read_frame; }))
+        << "the read is the evidence";
+    EXPECT_EQ(incident.ordinal, 1u);
+    if (row.second_read > kFault) {
+      EXPECT_FALSE(final_before_read) << "the cause waited for the read";
+      EXPECT_TRUE(revised_at_read) << "the read's frame revised it";
+    }
+  }
+}
+
 // Every row of the table is reached by some row above.
 TEST(Incidents, EveryCauseRowIsTested) {
   std::vector<std::string> tested;
   for (const CauseRow& row : causeRows()) tested.push_back(row.cause);
   for (const SyncRow& row : syncRows()) tested.push_back(row.cause);
+  for (const LinkRow& row : linkRows()) tested.push_back(row.cause);
   for (const CauseDef& cause : kCauses) {
     EXPECT_NE(std::find(tested.begin(), tested.end(), cause.name), tested.end()) << cause.name;
   }
@@ -318,8 +411,10 @@ TEST(Incidents, EachCauseWindowEndsOnItsDocumentedNumber) {
   for (const auto& entry : windows) {
     const bool tested = std::any_of(rows.begin(), rows.end(),
                                     [&](const WindowEdgeRow& r) { return r.cause == entry.first; });
-    // sync-error's edge: its rows "100 ms before" and "101 ms before" above.
-    EXPECT_TRUE(entry.second == 0 || tested || entry.first == "sync-error")
+    // sync-error's edge: its rows "100 ms before" and "101 ms before" above; link-fault's 100 ms
+    // are communication-loss's, and its wait of 10 s its rows above.
+    EXPECT_TRUE(entry.second == 0 || tested || entry.first == "sync-error" ||
+                entry.first == "link-fault")
         << entry.first << " looks back, but no row tests its edge";
   }
 }

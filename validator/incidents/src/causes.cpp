@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "incident_tracks.hpp"
+#include "ncservo/model/al_tracker.hpp"
+#include "ncservo/model/esc_errors.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/wire/diagnosis_texts.hpp"
 
@@ -31,7 +33,6 @@ constexpr std::uint32_t kConfigurationBits =
     mask32("ncservo.sew.program_checksum") | mask32("ncservo.sew.flash");
 constexpr std::uint32_t kTempWarning = mask32("ncservo.ssw.temp_warning");
 
-constexpr std::int64_t kShortWindowNs = 100 * kMsNs;
 constexpr std::int64_t kMinuteNs = 60'000 * kMsNs;
 
 // "FollowerErr (E09), OverLoad (E20)": the labels of the SEW bits in `bits`, in bit order.
@@ -118,7 +119,53 @@ std::string lostCyclesText(const AxisTrack& axis, const Mark& at, std::int64_t w
   return text;
 }
 
+std::uint64_t firstFailedFrame(const AxisTrack& axis, const Mark& at, std::int64_t window_ns) {
+  std::uint64_t first = 0;
+  for (std::size_t i = 0; i < axis.failures.size(); ++i) {
+    const FailureRun& run = axis.failures[i];
+    if (within(run.last, at, window_ns)) first = run.first_frame.frame;  // newest first
+  }
+  return first;
+}
+
+std::string linkRiseText(const LinkMark& link) {
+  const LinkErrorEvent& e = link.event;
+  const std::string counted =
+      e.lost ? fmt::format("{} lost link{}", e.link.errors, e.link.errors == 1 ? "" : "s")
+             : fmt::format("{} RX error{}", e.link.errors, e.link.errors == 1 ? "" : "s");
+  const std::string since = e.previous_read_frame == 0
+                                ? std::string("since the counters were cleared")
+                                : fmt::format("since frame {}", e.previous_read_frame);
+  return fmt::format("{}: {} at the read of frame {} ({})", linkFaultText(e.link), counted,
+                     link.at.frame, since);
+}
+
+IncidentEvidence linkRiseEvidence(const LinkMark& link) {
+  const LinkErrorEvent& e = link.event;
+  return IncidentEvidence{
+      link.at.stamp(),
+      fmt::format("{} {} at {} port {}", e.link.errors, e.lost ? "lost links" : "RX errors",
+                  slaveName(e.link.reported), e.link.reported_port)};
+}
+
 namespace {
+
+// A link's counters rose over the axis's failures, read before the incident (after it: the
+// detector's pending links, kLinkReadWaitNs).
+bool linkFault(const CauseContext& c, CauseMatch& m) {
+  if (c.axis == nullptr || c.bus == nullptr || c.bus->links.size() == 0) return false;
+  const std::uint64_t first = firstFailedFrame(*c.axis, c.at, kShortWindowNs);
+  if (first == 0) return false;
+  for (std::size_t i = 0; i < c.bus->links.size(); ++i) {
+    const LinkMark& link = c.bus->links[i];
+    if (!link.covers(first) || link.at.clock_ns > c.at.clock_ns) continue;
+    m.text = fmt::format("{}; {}", linkRiseText(link),
+                         lostCyclesText(*c.axis, c.at, kShortWindowNs, &m.evidence));
+    m.evidence.push_back(linkRiseEvidence(link));
+    return true;
+  }
+  return false;
+}
 
 bool communicationLoss(const CauseContext& c, CauseMatch& m) {
   std::string text;
@@ -291,6 +338,10 @@ bool unknown(const CauseContext& c, CauseMatch& m) {
 
 // docs/incidents.md#causes; INTERFACES.md "Incidents" fixes the ids and their order.
 const std::array<CauseDef, kCauseCount> kCauses{{
+    {CauseId::LinkFault, "link-fault",
+     "cycles lost or failing on the axis within 100 ms before, and a link's RX or lost-link "
+     "counters risen at their next read, up to 10 s after the fault",
+     kShortWindowNs, linkFault},
     {CauseId::CommunicationLoss, "communication-loss",
      "ECatWatchDog or ECatTErr set at the fault, or cycles lost or returned with a wrong WKC on "
      "the axis within 100 ms before",

@@ -104,7 +104,56 @@ void IncidentDetector::resetWindows() {
     if (a) a->resetWindows();
   }
   bus_->findings.clear();
+  bus_->links.clear();
   al_codes_.clear();
+  awaited_.clear();  // their causes are final: the windows start afresh
+}
+
+bool IncidentDetector::causeFinal(std::size_t index) const {
+  return std::none_of(awaited_.begin(), awaited_.end(),
+                      [&](const AwaitedLink& a) { return a.incident == index; });
+}
+
+void IncidentDetector::awaitLink(const AxisTrack* axis) {
+  if (axis == nullptr || incidents_.empty()) return;
+  const Incident& incident = incidents_.back();
+  if (incident.cause == CauseId::LinkFault) return;
+  const Mark at{incident.at.frame, clock_ns_, incident.at.time_ns};
+  const std::uint64_t first = firstFailedFrame(*axis, at, kShortWindowNs);
+  if (first == 0) return;
+  if (awaited_.size() >= kMaxAwaited) awaited_.erase(awaited_.begin());  // the oldest is final
+  awaited_.push_back(AwaitedLink{incidents_.size() - 1, first, clock_ns_ + kLinkReadWaitNs});
+}
+
+// This frame's rises of the links' counters: kept for the cause rows, and each makes the
+// incidents waiting for it link-fault.
+void IncidentDetector::takeLinks(const Validator& validator, const Mark& at) {
+  if (!revised_.empty()) revised_.clear();
+  if (!awaited_.empty()) {
+    std::erase_if(awaited_, [&](const AwaitedLink& a) { return a.until_ns < at.clock_ns; });
+  }
+  for (const LinkErrorEvent& event : validator.escErrors().frameLinkEvents()) {
+    if (event.link.frame != at.frame) break;  // an earlier frame's: this one read no counters
+    bus_->links.push(LinkMark{at, event});
+    const LinkMark& link = bus_->links.newest();
+    std::erase_if(awaited_, [&](const AwaitedLink& a) {
+      if (!link.covers(a.first_failed)) return false;
+      reviseToLink(a.incident, link);
+      return true;
+    });
+  }
+}
+
+void IncidentDetector::reviseToLink(std::size_t index, const LinkMark& link) {
+  Incident& incident = incidents_[index];
+  const std::optional<std::uint16_t> station = incident.axis ? std::nullopt : incident.station;
+  std::uint32_t& old_count = ordinals_[{incident.kind, incident.axis, station, incident.cause}];
+  if (old_count == incident.ordinal) --old_count;  // the last of its cause: no gap left
+  incident.cause = CauseId::LinkFault;
+  incident.cause_text = fmt::format("{}; {}", linkRiseText(link), incident.cause_text);
+  incident.evidence.push_back(linkRiseEvidence(link));
+  incident.ordinal = ++ordinals_[{incident.kind, incident.axis, station, incident.cause}];
+  revised_.push_back(index);
 }
 
 void IncidentDetector::takeAlCodes(const Validator& validator, const Mark& at) {
@@ -135,7 +184,8 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis,
     return;
   }
   const Mark at{incident.at.frame, clock_ns_, incident.at.time_ns};
-  CauseContext context{incident.kind, axis, signals, messages, bus_.get(), sew, at, incident.what};
+  CauseContext context{incident.kind, axis, signals,       messages, bus_.get(),
+                       sew,           at,   incident.what, {}};
   if (al_code != nullptr) context.al_code = *al_code;
   CauseMatch match;
   for (const CauseDef& row : kCauses) {
@@ -217,6 +267,7 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
     }
   }
   takeAlCodes(validator, at);
+  takeLinks(validator, at);
   takeFaults(validator, observation);
   checkOutage(validator);
   takeAlChanges(validator);
@@ -257,6 +308,7 @@ void IncidentDetector::takeFaults(const Validator& validator, const Observation&
                 [](const SewCause* x, const SewCause* y) { return x->mask < y->mask; });
       add(std::move(incident), &a, &signals, &signals.messagesBefore(last_.frame), sew,
           alCodeOfAxis(validator, index));
+      awaitLink(&a);
       if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
           incidents_.back().axis == index) {
         a.open = incidents_.size() - 1;
@@ -333,6 +385,7 @@ void IncidentDetector::checkOutage(const Validator& validator) {
   incident.kind = IncidentKind::BusOutage;
   incident.at = last_;
   add(std::move(incident), worst, measurementsOf(worst_model), messagesOf(worst_model), 0);
+  awaitLink(worst);
 }
 
 // docs/incidents.md#esm: a slave's AL state read falling from OP that the master did not request
@@ -379,6 +432,7 @@ void IncidentDetector::takeAlChanges(const Validator& validator) {
 }
 
 void IncidentDetector::finish() {
+  awaited_.clear();  // no read comes any more: every cause is final
   for (Incident& incident : incidents_) {
     if (!incident.ended) incident.end = last_;
   }

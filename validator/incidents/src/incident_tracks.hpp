@@ -14,6 +14,7 @@
 #include "ncservo/incidents/incident.hpp"
 #include "ncservo/incidents/incident_detector.hpp"
 #include "ncservo/model/axis_measurements.hpp"
+#include "ncservo/model/bus_events.hpp"
 #include "ncservo/rules/rules.hpp"
 
 namespace ncservo {
@@ -21,6 +22,9 @@ namespace ncservo {
 // docs/incidents.md#overtemperature: the motor temperature rose by at least this much from the
 // lowest reading of the minute before to the last one.
 inline constexpr double kTemperatureRiseC = 10.0;
+
+// How far the rows that look at what came just before a fault look back (docs/incidents.md).
+inline constexpr std::int64_t kShortWindowNs = 100 * kMsNs;
 
 // Failed cycles of an axis close together (docs/rules.md#com-003): a new failure within
 // kFailureMergeNs of the last joins its run.
@@ -60,8 +64,31 @@ struct AxisTrack {
 std::string lostCyclesText(const AxisTrack& axis, const Mark& at, std::int64_t window_ns,
                            std::vector<IncidentEvidence>* evidence);
 
+// The first frame of the axis's failure runs whose last failure lies within `window_ns` before
+// `at` (0: none).
+std::uint64_t firstFailedFrame(const AxisTrack& axis, const Mark& at, std::int64_t window_ns);
+
+// A link's counters rising at a read (EscErrorTracker; LNK-001, LNK-002), and where.
+struct LinkMark {
+  Mark at;
+  LinkErrorEvent event;
+  // Whether the rise covers failures from frame `first_failed` on: the read before it came
+  // before them, this one after their start (docs/incidents.md#link-fault).
+  bool covers(std::uint64_t first_failed) const {
+    return event.previous_read_frame < first_failed && at.frame >= first_failed;
+  }
+};
+// link-fault's text of a rise: "the link between ... port 1 and ... port 0: 5 RX errors at the
+// read of frame 912 (since frame 400)", and its evidence.
+std::string linkRiseText(const LinkMark& link);
+IncidentEvidence linkRiseEvidence(const LinkMark& link);
+
+// The reads that can still name a link: how long after a failure the counters may be read.
+inline constexpr std::int64_t kLinkReadWaitNs = 10'000 * kMsNs;
+
 struct BusTrack {
   Ring<FindingMark, 16> findings;  // about the bus, or a slave that is no axis
+  Ring<LinkMark, 8> links;         // the last rises of the links' counters
 };
 
 // What a cause row is given: the incident's axis (none for the bus, or a slave that is no axis)

@@ -124,6 +124,7 @@ void EscErrorTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
                               std::vector<BusEvent>& out) {
   frame_deltas_.clear();
   frame_faults_.clear();
+  frame_events_.clear();
   bool any = false;
   for (std::size_t i = 0; i < frame.count && !any; ++i) {
     any = reachesCounters(frame.datagrams[i]) ||
@@ -182,6 +183,7 @@ void EscErrorTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
         event.link.frame = now.frame;
         event.lost = true;
         event.previous_read_frame = read.since.frame;
+        frame_events_.push_back(event);
         out.push_back(BusEvent{now, event});
       }
     }
@@ -241,7 +243,8 @@ void EscErrorTracker::localise(const Stamp& now, std::vector<BusEvent>& out) {
       LinkFault fault = linkAt(read.slave, port);
       fault.errors = received - forwarded;
       fault.frame = now.frame;
-      out.push_back(BusEvent{now, LinkErrorEvent{fault, false, read.since.frame}});
+      frame_events_.push_back(LinkErrorEvent{fault, false, read.since.frame});
+      out.push_back(BusEvent{now, frame_events_.back()});
       frame_faults_.push_back(fault);
       if (faults_.size() < kMaxListed) {
         faults_.push_back(fault);

@@ -109,7 +109,9 @@ void LiveMetrics::refresh(const CapturePipeline& pipeline, std::uint64_t frames,
   snapshot_.wkc_errors = validator->bus().wkcErrors();
   if (const IncidentDetector* detector = pipeline.incidents()) {
     const std::vector<Incident>& incidents = detector->incidents();
-    for (; incidents_counted_ < incidents.size(); ++incidents_counted_) {
+    // Counted once their cause is final: a counter never goes back (docs/incidents.md#link-fault).
+    for (; incidents_counted_ < incidents.size() && detector->causeFinal(incidents_counted_);
+         ++incidents_counted_) {
       const Incident& incident = incidents[incidents_counted_];
       const auto cause = static_cast<std::size_t>(incident.cause);
       ++(incident.axis ? axis(*incident.axis).incidents : snapshot_.bus_incidents)[cause];

@@ -43,14 +43,17 @@ void LiveTelemetry::onEvent(MqttTopic topic, std::string json_line) {
   if (mqtt_) mqtt_->publish(topic, std::move(json_line));
 }
 
-// An incident's object is final once it ended (its recovery known); the rest wait for the end.
+// An incident's object is final once it ended (its recovery known) and its cause is (a read of
+// the links' counters can still make it link-fault); the rest wait for the end.
 void LiveTelemetry::publishIncidents(const std::vector<Incident>& incidents,
-                                     const cli::CaptureReport& report, bool all) {
+                                     const cli::CaptureReport& report, bool all,
+                                     const IncidentDetector* detector) {
   if (!mqtt_) return;
   if (incident_published_.size() < incidents.size()) incident_published_.resize(incidents.size());
   cli::CaptureReport lent;  // incidentJsonLine reads a report's incidents: this one's copy
   for (std::size_t i = 0; i < incidents.size(); ++i) {
-    if (incident_published_[i] || !(all || incidents[i].ended)) continue;
+    if (incident_published_[i]) continue;
+    if (!all && !(incidents[i].ended && detector->causeFinal(i))) continue;
     if (lent.incidents.empty()) {
       lent.path = report.path;
       lent.timestamp_digits = report.timestamp_digits;
@@ -66,7 +69,7 @@ void LiveTelemetry::publishIncidents(const std::vector<Incident>& incidents,
 void LiveTelemetry::update(const CapturePipeline& pipeline, const cli::CaptureReport& report,
                            std::uint64_t frames, std::uint64_t capture_dropped) {
   if (const IncidentDetector* detector = pipeline.incidents()) {
-    publishIncidents(detector->incidents(), report, false);
+    publishIncidents(detector->incidents(), report, false, detector);
   }
   if (!server_) return;
   metrics_.refresh(pipeline, frames, capture_dropped);
@@ -80,7 +83,7 @@ std::vector<std::string> LiveTelemetry::finish(const CapturePipeline& pipeline,
                                                std::uint64_t frames,
                                                std::uint64_t capture_dropped) {
   std::vector<std::string> said;
-  publishIncidents(report.incidents, report, true);
+  publishIncidents(report.incidents, report, true, nullptr);
   if (mqtt_) {
     const std::size_t left = mqtt_->finish(mqtt_flush_);
     if (left > 0) {

@@ -20,6 +20,7 @@ const char* incidentKindName(IncidentKind kind);
 
 // The cause rows, in the order they are tried (docs/incidents.md#causes): public ids.
 enum class CauseId : std::uint8_t {
+  LinkFault,
   CommunicationLoss,
   SyncError,
   Overtemperature,
@@ -33,7 +34,7 @@ enum class CauseId : std::uint8_t {
   NcCommand,
   Unknown,
 };
-inline constexpr std::size_t kCauseCount = 12;
+inline constexpr std::size_t kCauseCount = 13;
 
 // A frame the incident's chain passes through, with a short text.
 struct IncidentEvidence {

@@ -19,6 +19,7 @@ namespace ncservo {
 
 struct AxisTrack;
 struct BusTrack;
+struct LinkMark;
 
 // The last AL status code (0x0134) read of a slave, and where (the cause sync-error).
 struct AlCodeMark {
@@ -42,8 +43,14 @@ class IncidentDetector {
   // The capture ended: the incidents not recovered end on its last frame.
   void finish();
 
-  // In the order they began (frame order); the cause of each is final when it is added.
+  // In the order they began (frame order). A cause is final when the incident is added, but
+  // for one whose axis lost cycles before it: a read of the links' counters up to
+  // kLinkReadWaitNs later can still make it link-fault (docs/incidents.md#link-fault).
   const std::vector<Incident>& incidents() const { return incidents_; }
+  // Whether incident `index`'s cause is final.
+  bool causeFinal(std::size_t index) const;
+  // The incidents whose cause the last frame changed (to link-fault), by index.
+  const std::vector<std::size_t>& revised() const { return revised_; }
   // Incidents beyond kMaxIncidents, counted only.
   std::uint64_t omitted() const { return omitted_; }
 
@@ -52,6 +59,10 @@ class IncidentDetector {
   void add(Incident incident, const AxisTrack* axis, const AxisMeasurements* signals,
            const MessageHistory* messages, std::uint32_t sew, const AlCodeMark* al_code = nullptr);
   void takeAlCodes(const Validator& validator, const Mark& at);
+  void takeLinks(const Validator& validator, const Mark& at);
+  // The incident just added waits for a link read, if its axis lost cycles before it.
+  void awaitLink(const AxisTrack* axis);
+  void reviseToLink(std::size_t index, const LinkMark& link);
   // The last AL status code read of the axis's slave, if the axis has a station and one was.
   const AlCodeMark* alCodeOfAxis(const Validator& validator, std::uint16_t axis) const;
   void takeFaults(const Validator& validator, const Observation& observation);
@@ -69,6 +80,15 @@ class IncidentDetector {
   // By station address, else 0x10000 + ring position: the slaves the AL tracker knows, so
   // bounded as its directory is.
   std::map<std::uint32_t, AlCodeMark> al_codes_;
+  // Incidents whose cause a later read of the links' counters can still make link-fault.
+  struct AwaitedLink {
+    std::size_t incident;
+    std::uint64_t first_failed;  // the first frame of the failures before it
+    std::int64_t until_ns;       // on the segment's clock
+  };
+  static constexpr std::size_t kMaxAwaited = 64;
+  std::vector<AwaitedLink> awaited_;
+  std::vector<std::size_t> revised_;  // this frame's
   std::unique_ptr<BusTrack> bus_;
   std::vector<Incident> incidents_;
   std::uint64_t omitted_ = 0;

@@ -60,6 +60,9 @@ class EscErrorTracker {
   // The last frame's (the plugin's fields).
   const std::vector<EscErrorDelta>& frameDeltas() const { return frame_deltas_; }
   const std::vector<LinkFault>& frameLinkFaults() const { return frame_faults_; }
+  // The last frame's rises of RX and lost-link counters, as LNK-001/LNK-002 judge them (the
+  // incident cause link-fault, docs/incidents.md#link-fault).
+  const std::vector<LinkErrorEvent>& frameLinkEvents() const { return frame_events_; }
   std::uint64_t reads() const { return reads_; }
   std::uint64_t broadcastReads() const { return broadcast_reads_; }
 
@@ -91,6 +94,7 @@ class EscErrorTracker {
   std::vector<Read> reads_this_frame_;
   std::vector<EscErrorDelta> deltas_, frame_deltas_;
   std::vector<LinkFault> faults_, frame_faults_;
+  std::vector<LinkErrorEvent> frame_events_;
   std::uint64_t omitted_ = 0;
   std::uint64_t reads_ = 0;
   std::uint64_t broadcast_reads_ = 0;

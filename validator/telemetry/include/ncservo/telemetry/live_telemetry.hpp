@@ -62,8 +62,9 @@ class LiveTelemetry {
 
  private:
   LiveTelemetry(const RuleSettings& settings, std::chrono::milliseconds mqtt_flush);
+  // `detector`: whose causes are final (null with `all`: every one is).
   void publishIncidents(const std::vector<Incident>& incidents, const cli::CaptureReport& report,
-                        bool all);
+                        bool all, const IncidentDetector* detector);
 
   LiveMetrics metrics_;
   MetricsBoard board_;
