@@ -16,7 +16,8 @@ CHECK_INCIDENTS="$SRC/tests/tools/check_incidents.py"
   --incidents-truth "$WORK/sim.incidents.json" 2>"$WORK/sim.err" ||
   fail "simulate --scenario incidents exit $?: $(cat "$WORK/sim.err")"
 python3 "$GEN" --axes 4 --cycles 4000 --seed 5 --incident communication-loss \
-  --incident overtemperature --incident following-error-after-step --incident bus-outage \
+  --incident overtemperature --incident following-error-after-step --incident link-fault \
+  --incident bus-outage \
   --incidents "$WORK/gen.incidents.json" -o "$WORK/gen.pcap" || fail "gen_capture.py exit $?"
 bundled="$SRC/captures/sim-incidents-4axis"
 cp "$bundled.pcap" "$WORK/bundled.pcap"
@@ -118,9 +119,12 @@ for i in truth:
     if t is None:
         problems.append(f"{where}: decode has no row of that frame")
         continue
-    if cause == "communication-loss":
+    if cause in ("communication-loss", "link-fault"):
         if not (rules_before("COM-001", t) or rules_before("COM-004", t)):
             problems.append(f"{where}: no COM-001 or COM-004 in the 100 ms before it")
+    if cause == "link-fault":  # the counters' read after it names the link: LNK-001 within 10 s
+        if not [f for f in findings if f["rule"] == "LNK-001" and t <= f["time"] <= t + 10]:
+            problems.append(f"{where}: no LNK-001 in the 10 s after it")
     elif cause == "nc-command":
         if not [f for f in rules_before("SCW-001", t) if f["axis"] == axis]:
             problems.append(f"{where}: no SCW-001 on axis {axis} in the 100 ms before it")

@@ -24,7 +24,7 @@ import re
 import sys
 
 # INTERFACES.md "Incidents": the cause ids, longest first so that an alternation takes the whole id.
-CAUSE_IDS = ("communication-loss", "sync-error", "overtemperature", "following-error-after-step",
+CAUSE_IDS = ("link-fault", "communication-loss", "sync-error", "overtemperature", "following-error-after-step",
              "following-error", "overcurrent", "bus-voltage", "encoder", "overspeed",
              "configuration", "nc-command", "unknown")
 CAUSE_ID = re.compile("|".join(sorted(CAUSE_IDS, key=len, reverse=True)))

@@ -155,6 +155,10 @@ It is also the oracle for the rule engine (`ncservo validate`):
       communication-loss          2 cycles lost before the drives (COM-004; under the telegram
                                   failure limit, so no ECatTErr), then ECatWatchDog 3 cycles
                                   later (default 20 % of the session, axis 2)
+      link-fault                  the communication-loss chain on a bad cable: the master polls
+                                  every slave's ESC error counters (as LNK-001 below), and the
+                                  first poll after the fault shows 4 RX errors at the drive's
+                                  port 0 that no slave forwarded (LNK-001) (57 %, axis 2)
       overtemperature             the motor temperature (message code 4, extra data 4) climbs at
                                   200 °C/s, SSW.TempWarning above 80 °C, I2t_Endat at 96 °C; the
                                   motor cools after it (30 %, axis 3)
@@ -844,11 +848,12 @@ FIRST_INJECTION_CYCLE = 10  # after the 8 intervals COM-002 needs to know the cy
 # fault (axis 1, a following error at a steady set point) is an incident too.
 CHAINS = {
     "communication-loss": (0.20, 2),
+    "link-fault": (0.57, 2),
     "overtemperature": (0.30, 3),
     "following-error-after-step": (0.40, 0),
     "bus-outage": (0.65, None),
 }
-BUS_CHAINS = frozenset(("communication-loss", "bus-outage"))
+BUS_CHAINS = frozenset(("communication-loss", "link-fault", "bus-outage"))
 OUTAGE_CYCLES = 8  # the bus outage: frames lost before the drives
 TELEGRAM_FAILURE_LIMIT = 3  # COM-005's default: an outage is every axis failing longer
 STEP_UNITS = 200_000  # the set-point step: 2000 rpm in one cycle
@@ -1257,6 +1262,22 @@ class Injector:
         yield from self._outage(LOST, 2)
         yield from self.hold(3)
         self.session.drives[axis].fault(SEW_ECAT_WATCHDOG, "communication-loss")
+        yield from self._until_fault_recovered(self.session.ncs[axis], recoveries)
+
+    def _link_fault(self):
+        """The counters polled (two polls: the baseline, then one unchanged), 2 cycles lost
+        before the drives, the axis's drive raising ECatWatchDog 3 cycles after; the link into
+        the drive's port 0 counts the RX errors, shown at the next poll (PROTOCOL.md §11)."""
+        axis = self.inj.axis
+        acyclic = self.session.acyclic
+        acyclic.counters.start(self.k())
+        polls = acyclic.counters.polls + 2
+        yield from self.until(lambda: acyclic.counters.polls >= polls)
+        recoveries = self.session.ncs[axis].recoveries
+        yield from self._outage(LOST, 2)
+        yield from self.hold(3)
+        self.session.drives[axis].fault(SEW_ECAT_WATCHDOG, "link-fault")
+        acyclic.counters.rise(acyclic.first_servo + axis, RX_ERROR, RX_ERRORS, "LNK-001")
         yield from self._until_fault_recovered(self.session.ncs[axis], recoveries)
 
     def _bus_outage(self):
@@ -2109,8 +2130,10 @@ class Session:
                               key=lambda inj: (inj.start_cycle, inj.order))
         acyclic = [inj for inj in injections if inj.acyclic]
         first_servo = args.io_terminals + args.cia402  # the neighbours come first in the ring
+        # --incident link-fault polls the counters too
+        polled = acyclic or any(inj.rule == "link-fault" for inj in injections)
         self.acyclic = (Acyclic(acyclic, self, first_servo, first_servo + args.axes)
-                        if acyclic else None)
+                        if polled else None)
         self.acyclic_frames = []  # this cycle's, sent after its frame
         self.bus = None  # the running bus injection's script
         self.directive = None  # this cycle's frame: None, DROP or LOST
