@@ -234,4 +234,43 @@ inline Bytes fmmuBlock(std::uint32_t logical, std::uint16_t length, std::uint16_
   return out;
 }
 
+// A mailbox (PROTOCOL.md §11) as the tests' SM areas hold it: kMailboxArea bytes.
+inline constexpr std::size_t kMailboxArea = 48;
+
+// Mailbox header (length, address, channel 0, type | counter << 4) and the body, padded to the
+// SM area.
+inline Bytes mbx(std::uint8_t type, std::uint8_t counter, const Bytes& body,
+                 std::size_t pad = kMailboxArea,
+                 std::optional<std::uint16_t> length = std::nullopt) {
+  Bytes out;
+  putLe(out, length ? *length : body.size(), 2);
+  putLe(out, 0, 2);
+  out.push_back(0);
+  out.push_back(static_cast<std::uint8_t>(type | (counter << 4)));
+  out.insert(out.end(), body.begin(), body.end());
+  if (out.size() < pad) out.resize(pad, 0);
+  return out;
+}
+// CoE header (number 0, service) and the rest.
+inline Bytes coe(std::uint8_t service, const Bytes& rest) {
+  Bytes out;
+  putLe(out, std::uint16_t(service) << 12, 2);
+  out.insert(out.end(), rest.begin(), rest.end());
+  return out;
+}
+inline Bytes sdo(std::uint8_t command, std::uint16_t index, std::uint8_t sub, std::uint32_t data) {
+  Bytes out{command};
+  putLe(out, index, 2);
+  out.push_back(sub);
+  putLe(out, data, 4);
+  return out;
+}
+inline Bytes emcy(std::uint16_t code, std::uint8_t reg, const Bytes& data) {
+  Bytes out;
+  putLe(out, code, 2);
+  out.push_back(reg);
+  out.insert(out.end(), data.begin(), data.end());
+  return out;
+}
+
 }  // namespace ncservo::test

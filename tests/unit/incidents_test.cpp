@@ -326,6 +326,80 @@ TEST(Incidents, LinkFaultFromTheEscCountersReadUpTo10sLater) {
   }
 }
 
+// The drive's own words (docs/incidents.md#the-drives-own-words): the station-addressed axis with
+// its mailbox (SM0 0x1000, SM1 0x1080 from the start-up), PDPINT at kFault. Emergencies read 150
+// and 50 ms before it, an SDO upload of 2000h:0 100 ms after, of 1003h:1 2 s after, and an
+// emergency 11 s after: the evidence holds the emergency of the 100 ms before and the 1003h entry,
+// the latter added at its read's frame.
+TEST(Incidents, TheDrivesOwnWordsAreEvidence) {
+  constexpr std::uint16_t kOut = 0x1000, kIn = 0x1080;
+  ValidatorDriver driver(RuleSettings{}, stationAxis());
+  std::int64_t t = 0;
+  // The master copy (a read's data still empty), then the returned copy with WKC 1.
+  auto send = [&](Dg dg, bool read) {
+    const Bytes data = dg.data;
+    if (read) dg.data = Bytes(data.size(), 0);
+    FrameBuilder master;
+    master.add(dg);
+    driver.feed(master.bytes(), t += 10 * kUs);
+    dg.data = data;
+    dg.wkc = 1;
+    FrameBuilder returned;
+    returned.add(dg);
+    driver.feed(returned.bytes(), t += 10 * kUs);
+  };
+  auto write = [&](const Bytes& mailbox) {
+    send(Dg{ecat::kFpwr, 5, physical(kStation, kOut), mailbox, 0}, false);
+  };
+  auto read = [&](const Bytes& mailbox) {
+    send(Dg{ecat::kFprd, 6, physical(kStation, kIn), mailbox, 0}, true);
+  };
+  std::uint64_t history_frame = 0;
+  std::vector<std::size_t> revised_there;
+  std::uint8_t counter = 0;
+  auto next = [&] { return static_cast<std::uint8_t>(counter++ % 7 + 1); };
+  for (std::int64_t k = 0; k < kFault + 11'100; ++k) {
+    t = kEpochNs + k * kMs;
+    const std::uint32_t sew = k >= kFault && k < kCleared ? kSummary | kPdpint : 0;
+    driver.feed(stationFrame(kScwRunning, kSswRunning, std::nullopt, false), t);
+    driver.feed(stationFrame(kScwRunning, kSswRunning, std::nullopt, true, sew), t += 20 * kUs);
+    if (k == 1) {  // the start-up's SM0 and SM1 in mailbox mode
+      send(Dg{ecat::kFpwr, 4, physical(kStation, ecat::kRegSyncManager0),
+              concat({smBlock(kOut, kMailboxArea, 0x26), smBlock(kIn, kMailboxArea, 0x22)}), 0},
+           false);
+    }
+    if (k == kFault - 150) read(mbx(3, next(), coe(1, emcy(0x5530, 0x01, {0, 0, 0, 0, 0}))));
+    if (k == kFault - 50) read(mbx(3, next(), coe(1, emcy(0x8611, 0x21, {0x0D, 0, 0, 0, 0}))));
+    if (k == kFault + 100) {
+      write(mbx(3, next(), coe(2, sdo(0x40, 0x2000, 0, 0))));
+      read(mbx(3, next(), coe(3, sdo(0x4F, 0x2000, 0, 7))));
+    }
+    if (k == kFault + 2000) {
+      write(mbx(3, next(), coe(2, sdo(0x40, 0x1003, 1, 0))));
+      read(mbx(3, next(), coe(3, sdo(0x43, 0x1003, 1, 0x0D218611))));
+      history_frame = driver.frames();
+      revised_there = driver.incidents().revised();
+    }
+    if (k == kFault + 11'000) read(mbx(3, next(), coe(1, emcy(0x2310, 0x03, {0, 0, 0, 0, 0}))));
+  }
+  driver.finish();
+  const std::vector<Incident>& incidents = driver.incidents().incidents();
+  ASSERT_EQ(incidents.size(), 1u);
+  std::string evidence;
+  for (const IncidentEvidence& e : incidents[0].evidence) {
+    evidence += fmt::format("frame {} {}\n", e.at.frame, e.what);
+  }
+  EXPECT_NE(evidence.find("drive: emergency 0x8611"), std::string::npos) << evidence;
+  EXPECT_NE(evidence.find(fmt::format("frame {} drive: SDO upload 0x1003:1", history_frame)),
+            std::string::npos)
+      << evidence;
+  for (const char* outside : {"0x5530", "0x2000", "0x2310"}) {
+    EXPECT_EQ(evidence.find(outside), std::string::npos) << outside << "\n" << evidence;
+  }
+  EXPECT_EQ(revised_there, std::vector<std::size_t>{0}) << "revised at the history's read";
+  EXPECT_STREQ(causeDef(incidents[0].cause).name, "unknown") << "words are evidence, not a cause";
+}
+
 // Every row of the table is reached by some row above.
 TEST(Incidents, EveryCauseRowIsTested) {
   std::vector<std::string> tested;

@@ -28,40 +28,10 @@ constexpr std::uint16_t kOut = 0x1000;  // SM0
 constexpr std::uint16_t kIn = 0x1080;   // SM1
 constexpr std::size_t kArea = 48;
 
-// Mailbox header (length, address, channel 0, type | counter << 4) and the body, padded to the
-// SM area.
-Bytes mbx(std::uint8_t type, std::uint8_t counter, const Bytes& body, std::size_t pad = kArea,
-          std::optional<std::uint16_t> length = std::nullopt) {
-  Bytes out;
-  test::putLe(out, length ? *length : body.size(), 2);
-  test::putLe(out, 0, 2);
-  out.push_back(0);
-  out.push_back(static_cast<std::uint8_t>(type | (counter << 4)));
-  out.insert(out.end(), body.begin(), body.end());
-  if (out.size() < pad) out.resize(pad, 0);
-  return out;
-}
-// CoE header (number 0, service) and the rest.
-Bytes coe(std::uint8_t service, const Bytes& rest) {
-  Bytes out;
-  test::putLe(out, std::uint16_t(service) << 12, 2);
-  out.insert(out.end(), rest.begin(), rest.end());
-  return out;
-}
-Bytes sdo(std::uint8_t command, std::uint16_t index, std::uint8_t sub, std::uint32_t data) {
-  Bytes out{command};
-  test::putLe(out, index, 2);
-  out.push_back(sub);
-  test::putLe(out, data, 4);
-  return out;
-}
-Bytes emcy(std::uint16_t code, std::uint8_t reg, const Bytes& data) {
-  Bytes out;
-  test::putLe(out, code, 2);
-  out.push_back(reg);
-  out.insert(out.end(), data.begin(), data.end());
-  return out;
-}
+using test::coe;
+using test::emcy;
+using test::mbx;
+using test::sdo;
 
 MailboxMessage decode(const Bytes& data) {
   return decodeMailbox(ByteReader(data.data(), data.size()), 0, data.size());

@@ -8,9 +8,11 @@
 #include "incident_tracks.hpp"
 #include "ncservo/incidents/causes.hpp"
 #include "ncservo/model/al_tracker.hpp"
+#include "ncservo/model/mailbox_tracker.hpp"
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/protocol/word_bits.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 #include "ncservo/wire/ecat_wire.hpp"
 
 namespace ncservo {
@@ -107,6 +109,7 @@ void IncidentDetector::resetWindows() {
   bus_->links.clear();
   al_codes_.clear();
   awaited_.clear();  // their causes are final: the windows start afresh
+  awaited_words_.clear();
 }
 
 bool IncidentDetector::causeFinal(std::size_t index) const {
@@ -128,7 +131,6 @@ void IncidentDetector::awaitLink(const AxisTrack* axis) {
 // This frame's rises of the links' counters: kept for the cause rows, and each makes the
 // incidents waiting for it link-fault.
 void IncidentDetector::takeLinks(const Validator& validator, const Mark& at) {
-  if (!revised_.empty()) revised_.clear();
   if (!awaited_.empty()) {
     std::erase_if(awaited_, [&](const AwaitedLink& a) { return a.until_ns < at.clock_ns; });
   }
@@ -144,6 +146,64 @@ void IncidentDetector::takeLinks(const Validator& validator, const Mark& at) {
   }
 }
 
+namespace {
+
+// What of a drive's mailbox tells about its fault: its emergencies, and the answers to reads of
+// its error register, error history and last error code.
+bool driveWord(const DriveMessage& m) {
+  if (m.kind == DriveMessage::Kind::Emergency) return true;
+  if (m.kind != DriveMessage::Kind::SdoUpload) return false;
+  return m.index == diag::kErrorRegister || m.index == diag::kLastErrorCode ||
+         (m.index == diag::kPredefinedErrorField && m.subindex > 0);
+}
+
+}  // namespace
+
+void IncidentDetector::takeDriveWords(const Validator& validator, const Mark& at) {
+  if (!awaited_words_.empty()) {
+    std::erase_if(awaited_words_, [&](const AwaitedWords& a) {
+      return a.until_ns < at.clock_ns || a.taken >= kMaxDriveWords;
+    });
+  }
+  for (const DriveMessage& m : validator.mailbox().frameMessages()) {
+    if (m.frame != at.frame) break;  // an earlier frame's: this one read no mailbox
+    if (!driveWord(m) || !m.slave.station) continue;
+    std::optional<std::uint16_t> axis;
+    for (const AxisInfo& info : validator.decoder().axes()) {
+      if (info.has_station && info.station == *m.slave.station) axis = info.index;
+    }
+    if (!axis) continue;
+    AxisTrack& a = track(*axis);
+    a.words.push(DriveWordMark{at, "drive: " + describeDriveMessage(m)});
+    for (AwaitedWords& awaited : awaited_words_) {
+      if (awaited.axis != *axis || awaited.taken >= kMaxDriveWords) continue;
+      incidents_[awaited.incident].evidence.push_back(
+          IncidentEvidence{at.stamp(), a.words.newest().what});
+      ++awaited.taken;
+      if (std::find(revised_.begin(), revised_.end(), awaited.incident) == revised_.end()) {
+        revised_.push_back(awaited.incident);
+      }
+    }
+  }
+}
+
+void IncidentDetector::addDriveWords(Incident& incident, const AxisTrack& axis,
+                                     const Mark& at) const {
+  for (std::size_t i = axis.words.size(); i-- > 0;) {  // oldest first
+    const DriveWordMark& word = axis.words[i];
+    if (within(word.at, at, kShortWindowNs)) {
+      incident.evidence.push_back(IncidentEvidence{word.at.stamp(), word.what});
+    }
+  }
+}
+
+void IncidentDetector::awaitDriveWords(std::uint16_t axis) {
+  if (incidents_.empty()) return;
+  if (awaited_words_.size() >= kMaxAwaited) awaited_words_.erase(awaited_words_.begin());
+  awaited_words_.push_back(
+      AwaitedWords{incidents_.size() - 1, axis, clock_ns_ + kLinkReadWaitNs, 0});
+}
+
 void IncidentDetector::reviseToLink(std::size_t index, const LinkMark& link) {
   Incident& incident = incidents_[index];
   const std::optional<std::uint16_t> station = incident.axis ? std::nullopt : incident.station;
@@ -153,7 +213,9 @@ void IncidentDetector::reviseToLink(std::size_t index, const LinkMark& link) {
   incident.cause_text = fmt::format("{}; {}", linkRiseText(link), incident.cause_text);
   incident.evidence.push_back(linkRiseEvidence(link));
   incident.ordinal = ++ordinals_[{incident.kind, incident.axis, station, incident.cause}];
-  revised_.push_back(index);
+  if (std::find(revised_.begin(), revised_.end(), index) == revised_.end()) {
+    revised_.push_back(index);
+  }
 }
 
 void IncidentDetector::takeAlCodes(const Validator& validator, const Mark& at) {
@@ -197,6 +259,7 @@ void IncidentDetector::add(Incident incident, const AxisTrack* axis,
   }
   incident.cause_text = std::move(match.text);
   incident.evidence = std::move(match.evidence);
+  if (axis != nullptr && incident.axis) addDriveWords(incident, *axis, at);
   std::vector<const FindingMark*> findings;
   const Ring<FindingMark, 16>* rings[] = {axis != nullptr ? &axis->findings : nullptr,
                                           &bus_->findings};
@@ -266,8 +329,10 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
       bus_->findings.push(std::move(mark));
     }
   }
+  if (!revised_.empty()) revised_.clear();
   takeAlCodes(validator, at);
   takeLinks(validator, at);
+  takeDriveWords(validator, at);
   takeFaults(validator, observation);
   checkOutage(validator);
   takeAlChanges(validator);
@@ -308,11 +373,12 @@ void IncidentDetector::takeFaults(const Validator& validator, const Observation&
                 [](const SewCause* x, const SewCause* y) { return x->mask < y->mask; });
       add(std::move(incident), &a, &signals, &signals.messagesBefore(last_.frame), sew,
           alCodeOfAxis(validator, index));
-      awaitLink(&a);
       if (!incidents_.empty() && incidents_.back().at.frame == last_.frame &&
-          incidents_.back().axis == index) {
+          incidents_.back().axis == index) {  // added: not past kMaxIncidents
         a.open = incidents_.size() - 1;
         ++open_faults_;
+        awaitLink(&a);
+        awaitDriveWords(index);
       }
     }
     // docs/incidents.md#recovery: the errors cleared (ServoErrors fell), then enabled again.
@@ -385,7 +451,10 @@ void IncidentDetector::checkOutage(const Validator& validator) {
   incident.kind = IncidentKind::BusOutage;
   incident.at = last_;
   add(std::move(incident), worst, measurementsOf(worst_model), messagesOf(worst_model), 0);
-  awaitLink(worst);
+  if (!incidents_.empty() && incidents_.back().kind == IncidentKind::BusOutage &&
+      incidents_.back().at.frame == last_.frame) {
+    awaitLink(worst);
+  }
 }
 
 // docs/incidents.md#esm: a slave's AL state read falling from OP that the master did not request
@@ -433,6 +502,7 @@ void IncidentDetector::takeAlChanges(const Validator& validator) {
 
 void IncidentDetector::finish() {
   awaited_.clear();  // no read comes any more: every cause is final
+  awaited_words_.clear();
   for (Incident& incident : incidents_) {
     if (!incident.ended) incident.end = last_;
   }

@@ -46,16 +46,25 @@ struct FindingMark {
   std::string what;  // "COM-002 12 cycles lost ..."
 };
 
+// What the drive itself said (docs/incidents.md#the-drives-own-words): an emergency, or an entry
+// of its error history (1003h), its last error code (603Fh) or error register (1001h) read.
+struct DriveWordMark {
+  Mark at;
+  std::string what;  // "drive: emergency 0x8611 following error too large (...)"
+};
+
 // What the detector keeps of an axis beside its model's measurements (axis_measurements.hpp).
 struct AxisTrack {
   Ring<FailureRun, 8> failures;
   Ring<FindingMark, 16> findings;
+  Ring<DriveWordMark, 4> words;
   // The drive fault not yet recovered: its index in the detector's incidents.
   std::optional<std::size_t> open;
 
   void resetWindows() {
     failures.clear();
     findings.clear();
+    words.clear();
   }
 };
 

@@ -47,9 +47,10 @@ class IncidentDetector {
   // for one whose axis lost cycles before it: a read of the links' counters up to
   // kLinkReadWaitNs later can still make it link-fault (docs/incidents.md#link-fault).
   const std::vector<Incident>& incidents() const { return incidents_; }
-  // Whether incident `index`'s cause is final.
+  // Whether incident `index`'s cause is final. Its evidence can still take the drive's own
+  // words read later (docs/incidents.md#the-drives-own-words).
   bool causeFinal(std::size_t index) const;
-  // The incidents whose cause the last frame changed (to link-fault), by index.
+  // The incidents whose cause (to link-fault) or evidence the last frame changed, by index.
   const std::vector<std::size_t>& revised() const { return revised_; }
   // Incidents beyond kMaxIncidents, counted only.
   std::uint64_t omitted() const { return omitted_; }
@@ -63,6 +64,10 @@ class IncidentDetector {
   // The incident just added waits for a link read, if its axis lost cycles before it.
   void awaitLink(const AxisTrack* axis);
   void reviseToLink(std::size_t index, const LinkMark& link);
+  void takeDriveWords(const Validator& validator, const Mark& at);
+  // The incident just added: the drive's words of the 100 ms before, and those to come.
+  void addDriveWords(Incident& incident, const AxisTrack& axis, const Mark& at) const;
+  void awaitDriveWords(std::uint16_t axis);
   // The last AL status code read of the axis's slave, if the axis has a station and one was.
   const AlCodeMark* alCodeOfAxis(const Validator& validator, std::uint16_t axis) const;
   void takeFaults(const Validator& validator, const Observation& observation);
@@ -89,6 +94,15 @@ class IncidentDetector {
   static constexpr std::size_t kMaxAwaited = 64;
   std::vector<AwaitedLink> awaited_;
   std::vector<std::size_t> revised_;  // this frame's
+  // Incidents whose evidence takes the drive's words read up to kLinkReadWaitNs after them.
+  struct AwaitedWords {
+    std::size_t incident;
+    std::uint16_t axis;
+    std::int64_t until_ns;
+    std::size_t taken = 0;  // at most kMaxDriveWords
+  };
+  static constexpr std::size_t kMaxDriveWords = 4;
+  std::vector<AwaitedWords> awaited_words_;
   std::unique_ptr<BusTrack> bus_;
   std::vector<Incident> incidents_;
   std::uint64_t omitted_ = 0;
