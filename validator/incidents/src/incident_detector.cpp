@@ -118,7 +118,8 @@ bool IncidentDetector::causeFinal(std::size_t index) const {
 }
 
 void IncidentDetector::awaitLink(const AxisTrack* axis) {
-  if (axis == nullptr || incidents_.empty()) return;
+  // A master that has not read the counters of a single slave so far is not polling them.
+  if (!counters_read_ || axis == nullptr || incidents_.empty()) return;
   const Incident& incident = incidents_.back();
   if (incident.cause == CauseId::LinkFault) return;
   const Mark at{incident.at.frame, clock_ns_, incident.at.time_ns};
@@ -131,6 +132,7 @@ void IncidentDetector::awaitLink(const AxisTrack* axis) {
 // This frame's rises of the links' counters: kept for the cause rows, and each makes the
 // incidents waiting for it link-fault.
 void IncidentDetector::takeLinks(const Validator& validator, const Mark& at) {
+  counters_read_ = validator.escErrors().reads() > 0;
   if (!awaited_.empty()) {
     std::erase_if(awaited_, [&](const AwaitedLink& a) { return a.until_ns < at.clock_ns; });
   }

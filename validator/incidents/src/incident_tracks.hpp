@@ -12,7 +12,6 @@
 
 #include "ncservo/base/stamp.hpp"
 #include "ncservo/incidents/incident.hpp"
-#include "ncservo/incidents/incident_detector.hpp"
 #include "ncservo/model/axis_measurements.hpp"
 #include "ncservo/model/bus_events.hpp"
 #include "ncservo/rules/rules.hpp"

@@ -36,6 +36,12 @@ enum class CauseId : std::uint8_t {
 };
 inline constexpr std::size_t kCauseCount = 13;
 
+// The last AL status code (0x0134) read of a slave, and where (the cause sync-error).
+struct AlCodeMark {
+  std::uint16_t code = 0;
+  Mark at;
+};
+
 // A frame the incident's chain passes through, with a short text.
 struct IncidentEvidence {
   Stamp at;  // the frame's own capture time

@@ -21,12 +21,6 @@ struct AxisTrack;
 struct BusTrack;
 struct LinkMark;
 
-// The last AL status code (0x0134) read of a slave, and where (the cause sync-error).
-struct AlCodeMark {
-  std::uint16_t code = 0;
-  Mark at;
-};
-
 class IncidentDetector {
  public:
   static constexpr std::size_t kMaxIncidents = 1000;
@@ -44,8 +38,9 @@ class IncidentDetector {
   void finish();
 
   // In the order they began (frame order). A cause is final when the incident is added, but
-  // for one whose axis lost cycles before it: a read of the links' counters up to
-  // kLinkReadWaitNs later can still make it link-fault (docs/incidents.md#link-fault).
+  // for one whose axis lost cycles before it in a capture whose master reads the ESCs' error
+  // counters: a read up to kLinkReadWaitNs later can still make it link-fault
+  // (docs/incidents.md#link-fault).
   const std::vector<Incident>& incidents() const { return incidents_; }
   // Whether incident `index`'s cause is final. Its evidence can still take the drive's own
   // words read later (docs/incidents.md#the-drives-own-words).
@@ -92,6 +87,7 @@ class IncidentDetector {
     std::int64_t until_ns;       // on the segment's clock
   };
   static constexpr std::size_t kMaxAwaited = 64;
+  bool counters_read_ = false;  // the capture has shown a read of a slave's error counters
   std::vector<AwaitedLink> awaited_;
   std::vector<std::size_t> revised_;  // this frame's
   // Incidents whose evidence takes the drive's words read up to kLinkReadWaitNs after them.
