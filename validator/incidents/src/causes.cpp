@@ -150,23 +150,6 @@ IncidentEvidence linkRiseEvidence(const LinkMark& link) {
 
 namespace {
 
-// A link's counters rose over the axis's failures, read before the incident (after it: the
-// detector's pending links, kLinkReadWaitNs).
-bool linkFault(const CauseContext& c, CauseMatch& m) {
-  if (c.axis == nullptr || c.bus == nullptr || c.bus->links.size() == 0) return false;
-  const std::uint64_t first = firstFailedFrame(*c.axis, c.at, kShortWindowNs);
-  if (first == 0) return false;
-  for (std::size_t i = 0; i < c.bus->links.size(); ++i) {
-    const LinkMark& link = c.bus->links[i];
-    if (!link.covers(first) || link.at.clock_ns > c.at.clock_ns) continue;
-    m.text = fmt::format("{}; {}", linkRiseText(link),
-                         lostCyclesText(*c.axis, c.at, kShortWindowNs, &m.evidence));
-    m.evidence.push_back(linkRiseEvidence(link));
-    return true;
-  }
-  return false;
-}
-
 bool communicationLoss(const CauseContext& c, CauseMatch& m) {
   std::string text;
   if (c.axis != nullptr) text = lostCyclesText(*c.axis, c.at, kShortWindowNs, &m.evidence);
@@ -176,6 +159,24 @@ bool communicationLoss(const CauseContext& c, CauseMatch& m) {
   if (text.empty()) return false;
   m.text = c.kind == IncidentKind::BusOutage ? "every axis failing: " + text : text;
   return true;
+}
+
+// A link's counters rose over the axis's failures, read before the incident (after it: the
+// detector's pending links, kLinkReadWaitNs). The text is communication-loss's after the link's,
+// as a revision to link-fault writes it.
+bool linkFault(const CauseContext& c, CauseMatch& m) {
+  if (c.axis == nullptr || c.bus == nullptr || c.bus->links.size() == 0) return false;
+  const std::uint64_t first = firstFailedFrame(*c.axis, c.at, kShortWindowNs);
+  if (first == 0) return false;
+  for (std::size_t i = 0; i < c.bus->links.size(); ++i) {
+    const LinkMark& link = c.bus->links[i];
+    if (!link.covers(first) || link.at.clock_ns > c.at.clock_ns) continue;
+    communicationLoss(c, m);
+    m.text = fmt::format("{}; {}", linkRiseText(link), m.text);
+    m.evidence.push_back(linkRiseEvidence(link));
+    return true;
+  }
+  return false;
 }
 
 // The drive's ESC lost its synchronisation: its AL status code says so (diag::kAlStatusCodes).
