@@ -19,6 +19,15 @@ namespace ncservo {
 
 namespace {
 
+// The axis whose slave has this station address (configuration, ENI or start-up), if any.
+std::optional<std::uint16_t> axisOfStation(const Validator& validator, std::uint16_t station) {
+  std::optional<std::uint16_t> axis;
+  for (const AxisInfo& info : validator.decoder().axes()) {
+    if (info.has_station && info.station == station) axis = info.index;
+  }
+  return axis;
+}
+
 // A slave by its station address, else by its ring position.
 std::uint32_t alCodeKey(const SlaveRef& slave) {
   return slave.station ? *slave.station : 0x10000u + slave.position.value_or(0xFFFF);
@@ -151,12 +160,11 @@ void IncidentDetector::takeLinks(const Validator& validator, const Mark& at) {
 namespace {
 
 // What of a drive's mailbox tells about its fault: its emergencies, and the answers to reads of
-// its error register, error history and last error code.
+// the objects its diagnosis uses (diag::kObjects), but 1003h's number of entries.
 bool driveWord(const DriveMessage& m) {
   if (m.kind == DriveMessage::Kind::Emergency) return true;
-  if (m.kind != DriveMessage::Kind::SdoUpload) return false;
-  return m.index == diag::kErrorRegister || m.index == diag::kLastErrorCode ||
-         (m.index == diag::kPredefinedErrorField && m.subindex > 0);
+  if (m.kind != DriveMessage::Kind::SdoUpload || diag::objectName(m.index) == nullptr) return false;
+  return m.index != diag::kPredefinedErrorField || m.subindex > 0;
 }
 
 }  // namespace
@@ -170,10 +178,7 @@ void IncidentDetector::takeDriveWords(const Validator& validator, const Mark& at
   for (const DriveMessage& m : validator.mailbox().frameMessages()) {
     if (m.frame != at.frame) break;  // an earlier frame's: this one read no mailbox
     if (!driveWord(m) || !m.slave.station) continue;
-    std::optional<std::uint16_t> axis;
-    for (const AxisInfo& info : validator.decoder().axes()) {
-      if (info.has_station && info.station == *m.slave.station) axis = info.index;
-    }
+    const std::optional<std::uint16_t> axis = axisOfStation(validator, *m.slave.station);
     if (!axis) continue;
     AxisTrack& a = track(*axis);
     a.words.push(DriveWordMark{at, "drive: " + describeDriveMessage(m)});
@@ -182,9 +187,7 @@ void IncidentDetector::takeDriveWords(const Validator& validator, const Mark& at
       incidents_[awaited.incident].evidence.push_back(
           IncidentEvidence{at.stamp(), a.words.newest().what});
       ++awaited.taken;
-      if (std::find(revised_.begin(), revised_.end(), awaited.incident) == revised_.end()) {
-        revised_.push_back(awaited.incident);
-      }
+      markRevised(awaited.incident);
     }
   }
 }
@@ -215,6 +218,10 @@ void IncidentDetector::reviseToLink(std::size_t index, const LinkMark& link) {
   incident.cause_text = fmt::format("{}; {}", linkRiseText(link), incident.cause_text);
   incident.evidence.push_back(linkRiseEvidence(link));
   incident.ordinal = ++ordinals_[{incident.kind, incident.axis, station, incident.cause}];
+  markRevised(index);
+}
+
+void IncidentDetector::markRevised(std::size_t index) {
   if (std::find(revised_.begin(), revised_.end(), index) == revised_.end()) {
     revised_.push_back(index);
   }
@@ -463,12 +470,8 @@ void IncidentDetector::checkOutage(const Validator& validator) {
 // (its last AL control request was OP, or none was seen); back in OP ends it.
 void IncidentDetector::takeAlChanges(const Validator& validator) {
   for (const AlOpChange& change : validator.al().opChanges()) {
-    std::optional<std::uint16_t> axis;
-    if (change.slave.station) {
-      for (const AxisInfo& info : validator.decoder().axes()) {
-        if (info.has_station && info.station == *change.slave.station) axis = info.index;
-      }
-    }
+    const std::optional<std::uint16_t> axis =
+        change.slave.station ? axisOfStation(validator, *change.slave.station) : std::nullopt;
     if (change.to == ecat::kAlOp) {
       for (auto it = incidents_.rbegin(); it != incidents_.rend(); ++it) {
         if (it->kind != IncidentKind::Esm || it->ended || it->station != change.slave.station ||

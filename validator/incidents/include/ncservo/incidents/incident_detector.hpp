@@ -59,6 +59,7 @@ class IncidentDetector {
   // The incident just added waits for a link read, if its axis lost cycles before it.
   void awaitLink(const AxisTrack* axis);
   void reviseToLink(std::size_t index, const LinkMark& link);
+  void markRevised(std::size_t index);  // once per frame
   void takeDriveWords(const Validator& validator, const Mark& at);
   // The incident just added: the drive's words of the 100 ms before, and those to come.
   void addDriveWords(Incident& incident, const AxisTrack& axis, const Mark& at) const;
