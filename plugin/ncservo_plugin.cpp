@@ -146,10 +146,8 @@ std::vector<std::string> g_layout_misfits;
 bool g_misfits_taken = false;  // in this capture's later pass
 guint32 g_first_frame = 0;     // the first frame with a record; 0: none yet
 // While the learning window holds the frames, a single pass shows each before the layout is
-// known: a validator with the layout known so far (none, as a start-up would have ended the
-// window) judges them in their turn, for the findings that need no layout. The window's replay
-// then keeps each frame's record anew for later passes.
-Validator* g_held_validator = nullptr;
+// known, with the findings the pipeline's judge of held frames reported on it. The window's
+// replay then keeps each frame's record anew for later passes.
 const char* g_held_info = nullptr;  // the Info text of a held frame without findings
 
 // What the first pass found in a frame, kept in file scope for later passes.
@@ -502,14 +500,8 @@ void keepLayout(const DecoderOptions& layout) {
   }
 }
 
-void stopHeldJudging() {
-  delete g_held_validator;
-  g_held_validator = nullptr;
-}
-
 void initCapture() {
   plugin::resetItemTexts();
-  stopHeldJudging();
   g_held_info = nullptr;
   g_frames.clear();
   g_structure_only_first.clear();
@@ -531,10 +523,10 @@ void initCapture() {
                                     g_settings != nullptr ? *g_settings : RuleSettings{},
                                     TimeWindow{}, TimestampMode::Capture});
   g_pipeline->setSinks({keepLayout, validateFrame, nullptr, nullptr, keepDuplicate});
+  g_pipeline->judgeHeldFrames();
 }
 
 void cleanupCapture() {
-  stopHeldJudging();
   delete g_pipeline;
   g_pipeline = nullptr;
   std::vector<std::unique_ptr<FrameRecord[]>>().swap(g_frames);
@@ -717,12 +709,6 @@ FrameRecord& freshRecord(std::uint64_t number) {
   return g_frames[block][number & (kFrameBlock - 1)] = FrameRecord{};
 }
 
-// Whether a finding stands whatever layout the window decides: the rules on the slaves' state
-// machines read the AL registers, not the process data.
-bool needsNoLayout(const Finding& f) {
-  return ruleDef(f.rule).kind == RuleKind::Slave;
-}
-
 // The findings `by` reported on the frame (those `keep` accepts, all when null), kept with their
 // texts in file scope.
 void keepFindings(FrameRecord& record, const Validator& by, bool (*keep)(const Finding&)) {
@@ -828,22 +814,18 @@ void keepDuplicate(std::uint64_t number) {
 
 // A frame the learning window holds, on the first pass: judged in its turn for the findings that
 // need no layout; one that may carry process data says that its layout is being learned.
-void keepHeldFrame(std::uint64_t number, std::int64_t time_ns, const ByteReader& bytes,
-                   const EcatFrame& frame) {
-  if (g_held_validator == nullptr) {
-    g_held_validator =
-        new Validator(g_pipeline->layout(), g_settings != nullptr ? *g_settings : RuleSettings{});
-  }
-  g_held_validator->onFrame(number, time_ns, frame, bytes);
-  const std::vector<Finding>& findings = g_held_validator->findings();
+void keepHeldFrame(std::uint64_t number, const EcatFrame& frame) {
+  static const std::vector<Finding> kNone;
+  const Validator* judge = g_pipeline->heldJudge();
+  const std::vector<Finding>& findings = judge != nullptr ? judge->findings() : kNone;
   const bool held = frame.mayCarryProcessData();
-  const bool any_findings = std::any_of(findings.begin(), findings.end(), needsNoLayout);
+  const bool any_findings = std::any_of(findings.begin(), findings.end(), standsWithoutLayout);
   if (!held && !any_findings) return;
   FrameRecord& record = freshRecord(number);
   record.held = !held                                  ? kNotHeld
                 : g_pipeline->clockStage().assessing() ? kHeldForClock
                                                        : kHeldForLayout;
-  keepFindings(record, *g_held_validator, needsNoLayout);
+  if (judge != nullptr) keepFindings(record, *judge, standsWithoutLayout);
   if (any_findings) {
     record.info = infoText(record);
   } else {
@@ -873,11 +855,7 @@ void analyseFrame(tvbuff_t* tvb, packet_info* pinfo) {
   const std::int64_t time_ns =
       static_cast<std::int64_t>(pinfo->abs_ts.secs) * 1'000'000'000 + pinfo->abs_ts.nsecs;
   g_pipeline->onWalkedFrame(pinfo->num, time_ns, link, bytes, frame);
-  if (g_pipeline->learning()) {
-    keepHeldFrame(pinfo->num, time_ns, bytes, frame);
-  } else if (g_held_validator != nullptr) {
-    stopHeldJudging();
-  }
+  if (g_pipeline->learning()) keepHeldFrame(pinfo->num, frame);
 }
 
 // Whether an item is needed: the tree is shown, or a filter, column or tap references the field
@@ -1353,7 +1331,6 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
     // The capture may have ended inside the learning window: decide with what the first pass
     // held. The plugin has no end of capture: a gap in the last cycle goes unjudged here.
     g_pipeline->endLearning();
-    stopHeldJudging();
     if (!g_misfits_taken) g_layout_misfits = g_pipeline->layoutMisfitsSoFar();
     g_misfits_taken = true;
   }

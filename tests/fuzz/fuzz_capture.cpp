@@ -13,6 +13,7 @@
 #include "fuzz_common.hpp"
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/report/report.hpp"
+#include "verdict.hpp"
 
 namespace {
 
@@ -36,16 +37,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size > 0 && std::fwrite(data, 1, size, file) != size) std::abort();
   std::fclose(file);
 
-  static const std::vector<std::string> formats = cli::reportFormatNames();
-  const cli::ReportFormat* format = cli::findReportFormat(formats[size % formats.size()]);
-  cli::ReportPolicy policy;
-  policy.enabled = RuleSettings{}.enabled;
+  static const std::vector<std::string> formats = report::reportFormatNames();
+  const report::ReportFormat* format = report::findReportFormat(formats[size % formats.size()]);
+  report::ReportOptions options;
+  options.enabled = RuleSettings{}.enabled;
+  static const cli::PolicyJudge judge{cli::VerdictPolicy{}};
   // A device is written as it is, never renamed over.
-  auto opened_writer = cli::ReportWriter::open({{format, "/dev/null"}}, policy);
+  auto opened_writer = report::ReportWriter::open({{format, "/dev/null"}}, options, judge);
   if (!opened_writer) std::abort();
-  cli::ReportWriter& writer = **opened_writer;
-  std::vector<cli::CaptureReport> reports(1);
-  cli::CaptureReport& report = reports.back();
+  report::ReportWriter& writer = **opened_writer;
+  std::vector<report::CaptureReport> reports(1);
+  report::CaptureReport& report = reports.back();
   report.path = path;
   writer.beginCapture(report);
   auto opened = CaptureReader::open(path);
@@ -64,7 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       fuzz::feedFrame(validator, record.link, record.frame, record.time_ns, record.data,
                       record.captured, frame);
       for (const Finding& f : validator.findings()) {
-        const cli::BaselineState state = report.tally(f);
+        const report::BaselineState state = report.tally(f);
         if (writer.keepsFindings()) report.findings.push_back(f);
         writer.finding(report, f, state);
       }

@@ -17,8 +17,9 @@
 #include "ncservo/wire/ethercat.hpp"
 #include "row_name.hpp"
 #include "status_text.hpp"
+#include "verdict.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 namespace {
 
 // "SE-001 axis0 2": a rule, an axis ("bus": none) and an ordinal.
@@ -269,11 +270,11 @@ TEST_P(Diff, CountsAndTheExitStatus) {
     by_group += g.added;
   }
   EXPECT_EQ(by_group, row.added);
-  const IncidentGate none = *parseIncidentGate("never");
-  EXPECT_EQ(diffFails(d, Severity::Error, false, none), row.fails);
-  EXPECT_FALSE(diffFails(d, Severity::Error, true, none));  // --fail-on never
-  const IncidentGate gate = *parseIncidentGate(row.incident_gate);
-  EXPECT_EQ(diffFails(d, Severity::Error, true, gate), row.incident_fails);
+  const cli::IncidentGate none = *cli::parseIncidentGate("never");
+  EXPECT_EQ(cli::diffFails(d, Severity::Error, false, none), row.fails);
+  EXPECT_FALSE(cli::diffFails(d, Severity::Error, true, none));  // --fail-on never
+  const cli::IncidentGate gate = *cli::parseIncidentGate(row.incident_gate);
+  EXPECT_EQ(cli::diffFails(d, Severity::Error, true, gate), row.incident_fails);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -491,4 +492,4 @@ INSTANTIATE_TEST_SUITE_P(
     test::rowName<SegmentRow>);
 
 }  // namespace
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

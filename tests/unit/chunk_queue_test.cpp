@@ -17,7 +17,7 @@
 
 #include "row_name.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 namespace {
 
 struct QueueCase {
@@ -108,4 +108,4 @@ TEST(ChunkQueue, PopAfterCloseGivesWhatWaitedThenNothing) {
 }
 
 }  // namespace
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

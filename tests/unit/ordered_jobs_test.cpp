@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-namespace ncservo::cli {
+namespace ncservo {
 namespace {
 
 struct Case {
@@ -52,4 +52,4 @@ TEST(OrderedJobs, ResultsInTaskOrder) {
 }
 
 }  // namespace
-}  // namespace ncservo::cli
+}  // namespace ncservo

@@ -13,7 +13,7 @@
 #include "row_name.hpp"
 #include "timeline_run.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 namespace {
 
 using test::kMs;
@@ -105,4 +105,4 @@ TEST(FindingTimelineCaps, FirstFindingsOfEachRuleAndAxisAreDrawnTheRestCounted) 
 }
 
 }  // namespace
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <string>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 namespace {
 
 // A report of one capture whose cycle series has the given numbers and one bin.
@@ -99,4 +99,4 @@ TEST(ReportMerge, ErrorsNameTheFileAndChangeNothing) {
 }
 
 }  // namespace
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

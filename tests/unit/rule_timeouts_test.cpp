@@ -106,7 +106,7 @@ TEST_P(TimedRules, CheckTextAndWindowMoveWithTheRowsTimeout) {
     // look-back.
     const auto drawn = std::find_if(
         r.timelines.drawn.begin(), r.timelines.drawn.end(),
-        [&](const cli::FindingTimeline& t) { return r.findings[t.finding].rule == rule.id; });
+        [&](const report::FindingTimeline& t) { return r.findings[t.finding].rule == rule.id; });
     ASSERT_NE(drawn, r.timelines.drawn.end());
     const std::int64_t since_ns = delayed ? -(timeout_ms + 1) * kMs : 0;
     EXPECT_EQ(drawn->since_ns, since_ns);

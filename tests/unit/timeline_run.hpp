@@ -15,14 +15,14 @@ namespace ncservo::test {
 
 struct Recorded {
   std::vector<Finding> findings;
-  cli::FindingTimelines timelines;
+  report::FindingTimelines timelines;
 };
 
 // `after_frame`, when given, sees the validator after each frame (its findings are that frame's).
 inline Recorded record(const Script& script,
                        const std::function<void(const Validator&)>& after_frame = nullptr) {
   std::optional<Validator> validator;
-  cli::TimelineRecorder recorder(script.ruleSettings());
+  report::TimelineRecorder recorder(script.ruleSettings());
   Recorded out;
   std::uint64_t number = 0;
   std::int64_t first_ns = 0;

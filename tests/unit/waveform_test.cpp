@@ -13,7 +13,7 @@
 #include "ncservo/report/axis_selection.hpp"
 #include "row_name.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 namespace {
 
 struct IdCase {
@@ -244,4 +244,4 @@ TEST(GtkwPath, BesideTheVcd) {
 }
 
 }  // namespace
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -23,6 +23,8 @@
 #include "ncservo/wire/frame_clock.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 struct AnnotateArgs : RuleArgs {

@@ -18,6 +18,8 @@
 
 namespace ncservo::cli {
 
+using namespace report;  // the report layer's names
+
 Result<CheckSetup> prepareCheck(const CheckArgs& o) {
   CheckSetup setup;
   Result<LayoutFiles> files = loadLayoutFiles(o.layout);
@@ -60,8 +62,8 @@ Status keepScope(CaptureReport& report) {
 }  // namespace
 
 int validateCapture(const std::string& path, const CheckSetup& setup,
-                    const cli::ReportWriter& writer, const CaptureOutput& output,
-                    cli::CaptureReport& report, CaptureThreads threads) {
+                    const report::ReportWriter& writer, const CaptureOutput& output,
+                    report::CaptureReport& report, CaptureThreads threads) {
   const RuleSettings& settings = setup.settings;
   const TimeWindow& time_window = setup.window;
   report.path = path;
@@ -77,7 +79,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   report.timestamp_digits = reader->timestampDigits();
   CapturePipeline pipeline({setup.layout, settings, time_window, setup.timestamps});
   pipeline.holdEniCycles(setup.eni_frames);
-  std::optional<cli::TimelineRecorder> timelines;
+  std::optional<report::TimelineRecorder> timelines;
   if (writer.drawsTimelines()) timelines.emplace(settings);
   const auto start = [&](const DecoderOptions&) {
     report.layout = pipeline.validator()->decoder().axes();  // names for findings as they come
@@ -90,7 +92,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   const auto keepFindings = [&](const std::vector<Finding>& findings) {
     for (const Finding& f : findings) {
       if (!report.scope.findings || !report.inScope(f.axis)) continue;
-      const cli::BaselineState state = report.tally(f);
+      const report::BaselineState state = report.tally(f);
       if (output.live == nullptr || writer.keepsFindings()) {
         report.findings.push_back(f);
         if (report.baseline) report.baseline_states.push_back(state);
@@ -104,7 +106,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   // records are counted only then.
   const bool progress_shown = output.messages == stderr && cli::progressWanted();
   std::atomic<std::uint64_t> records{0};
-  StreamStop stop{&cli::ReportWriter::interrupted(), false, progress_shown ? &records : nullptr};
+  StreamStop stop{&report::ReportWriter::interrupted(), false, progress_shown ? &records : nullptr};
   const Status status = [&] {
     const cli::Progress progress(path == "-" ? "standard input" : path, records, progress_shown);
     return streamCapture(*reader, pipeline, &stop, threads);
@@ -127,7 +129,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   warnIfTruncated(reader->path(), report.truncation, output.messages);
   if (report.startup_frames_cut > 0) {
     fmt::print(output.messages, "ncservo: {}: layout {}\n", reader->path(),
-               cli::describeStartupCut(report.startup_frames_cut));
+               report::describeStartupCut(report.startup_frames_cut));
   }
   report.capture_drops = reader->drops();
   if (!status) {
@@ -145,7 +147,7 @@ int validateCapture(const std::string& path, const CheckSetup& setup,
   }
   report.closeBaseline();
   if (output.live != nullptr) output.live->endCapture(report);
-  return writer.exitStatus(report);
+  return writer.judge().exitStatus(report);
 }
 
 }  // namespace ncservo::cli

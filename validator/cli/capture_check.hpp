@@ -41,13 +41,14 @@ Result<CheckSetup> prepareCheck(const CheckArgs& o);
 // a time), or, with `live` null, kept whole with its messages for the writer (captures in
 // parallel, written in argument order by presentCapture).
 struct CaptureOutput {
-  ReportWriter* live;
+  report::ReportWriter* live;
   std::FILE* messages;  // standard error, or the capture's own buffer
 };
 
 // Runs one capture through the validator. Returns the capture's exit status (0, 1, 3 or 4), or
 // 130 when Ctrl-C stopped it (its report unfinished, `frames` the frames read).
-int validateCapture(const std::string& path, const CheckSetup& setup, const ReportWriter& writer,
-                    const CaptureOutput& output, CaptureReport& report, CaptureThreads threads);
+int validateCapture(const std::string& path, const CheckSetup& setup,
+                    const report::ReportWriter& writer, const CaptureOutput& output,
+                    report::CaptureReport& report, CaptureThreads threads);
 
 }  // namespace ncservo::cli

@@ -17,6 +17,8 @@
 
 namespace ncservo::cli {
 
+using namespace report;  // the report layer's names
+
 CLI::Validator oneOf(std::vector<std::string> names) {
   const std::string choices = fmt::format("{{{}}}", fmt::join(names, ","));
   return CLI::Validator(
@@ -98,7 +100,7 @@ void addFailOnOption(CLI::App& command, FailOnArgs& fail_on) {
           "KINDS"));
 }
 
-void setFailOn(const FailOnArgs& fail_on, bool against_baseline, ReportPolicy& policy) {
+void setFailOn(const FailOnArgs& fail_on, bool against_baseline, VerdictPolicy& policy) {
   policy.never = fail_on.findings == "never";
   policy.fail_on = policy.never ? Severity::Error : *severityFromName(fail_on.findings);
   std::string incidents = fail_on.incidents;

@@ -21,6 +21,7 @@
 #include "ncservo/report/report.hpp"
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/rules.hpp"
+#include "verdict.hpp"
 
 namespace ncservo::cli {
 
@@ -77,7 +78,7 @@ struct FailOnArgs {
   std::string incidents;  // empty: not given
 };
 void addFailOnOption(CLI::App& command, FailOnArgs& fail_on);
-void setFailOn(const FailOnArgs& fail_on, bool against_baseline, ReportPolicy& policy);
+void setFailOn(const FailOnArgs& fail_on, bool against_baseline, VerdictPolicy& policy);
 
 // The layout files of every command that reads a capture (docs/protocol.md §9.1, §9.2).
 struct LayoutArgs {

@@ -31,6 +31,8 @@
 #include "ncservo/wire/frame_clock.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 std::string shortName(const char* filter) {
@@ -251,7 +253,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   CutRegions cut;
   auto write = [&] {
     if (!checked && !rows.empty()) {
-      selected = cli::checkAxisSelection(args.axes, decoderInUse().axes());
+      selected = report::checkAxisSelection(args.axes, decoderInUse().axes());
       checked = true;
     }
     if (!selected) {
@@ -264,7 +266,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
     }
     for (const CycleRow& row : rows) {
       const AxisInfo& axis = decoderInUse().axes().at(row.axis);
-      if (!cli::axisSelected(args.axes, axis)) continue;
+      if (!report::axisSelected(args.axes, axis)) continue;
       const std::int64_t since_first_ns = row.time_ns - *pipeline.run().first_time_ns;
       format.row(out, row, axis.name, static_cast<double>(since_first_ns) / 1e9);
     }
@@ -290,7 +292,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   const CaptureRun& run = pipeline.run();
   cycles.finish(rows);
   write();
-  if (selected) selected = cli::checkAxisSelection(args.axes, decoderInUse().axes());
+  if (selected) selected = report::checkAxisSelection(args.axes, decoderInUse().axes());
   if (header_due && selected) format.header(out);  // no rows: the header alone
   std::fflush(out);
   warnIfTruncated(reader->path(),
@@ -307,7 +309,7 @@ int decodeRows(const DecodeArgs& args, DecodeInput& input) {
   noteDecoded(*reader, pipeline, decoderInUse());
   if (pipeline.lateLayout().certain_at > 0) {
     fmt::print(stderr, "ncservo: {}: {}\n", reader->path(),
-               cli::describeLateLayout(pipeline.lateLayout()));
+               report::describeLateLayout(pipeline.lateLayout()));
   }
   if (pipeline.validator() != nullptr) printTiming(*reader, pipeline);
   if (!selected) {
@@ -333,7 +335,8 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   CapturePipeline pipeline({decoderOptions(input.files, args.layout), settings, input.window,
                             *timestampModeFromName(args.timestamps)});
   const bool to_stdout = input.out == stdout;
-  cli::WaveformWriter waveforms(input.out, to_stdout ? "standard output" : args.output, args.axes);
+  report::WaveformWriter waveforms(input.out, to_stdout ? "standard output" : args.output,
+                                   args.axes);
   Status written;
   std::int64_t end_ns = 0;
   std::int64_t frame_ns = 0;  // the last frame's, where its findings and the capture's last show
@@ -373,14 +376,14 @@ int decodeWaveforms(const DecodeArgs& args, DecodeInput& input) {
   }
   noteDecoded(reader, pipeline, validator.decoder());
   if (!to_stdout) {
-    const std::string save = cli::gtkwPathFor(args.output);
+    const std::string save = report::gtkwPathFor(args.output);
     std::FILE* file = std::fopen(save.c_str(), "w");
     if (file == nullptr) {
       fmt::print(stderr, "ncservo: {}: cannot write: {}\n", save, std::strerror(errno));
       return kExitUsage;
     }
-    cli::writeGtkwSave(file, std::filesystem::absolute(args.output).string(),
-                       std::filesystem::absolute(save).string(), waveforms.scopes());
+    report::writeGtkwSave(file, std::filesystem::absolute(args.output).string(),
+                          std::filesystem::absolute(save).string(), waveforms.scopes());
     std::fclose(file);
   }
   // No servo decoded (noteDecoded said why), as validate has it (docs/cli.md#exit-status).

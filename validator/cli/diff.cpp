@@ -12,11 +12,13 @@
 #include "ncservo/report/report.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 struct DiffArgs {
   std::string base, next;
-  std::string format = cli::diffFormatNames().front();
+  std::string format = report::diffFormatNames().front();
   std::string output;
   cli::FailOnArgs fail_on;
   CheckArgs check;
@@ -26,12 +28,12 @@ struct DiffArgs {
 // validate does. Exit status 3 when it cannot be read, 2 when a report holds several captures.
 struct DiffSide {
   int rc = kExitOk;
-  cli::ReportedCapture capture;
+  report::ReportedCapture capture;
 };
-DiffSide diffSide(const std::string& path, const CheckSetup& setup, const cli::ReportWriter& writer,
-                  const cli::ReportPolicy& policy, CaptureThreads threads) {
-  if (cli::looksLikeJsonReport(path)) {
-    Result<cli::ReportFile> report = cli::loadReportFile(path);
+DiffSide diffSide(const std::string& path, const CheckSetup& setup,
+                  const report::ReportWriter& writer, CaptureThreads threads) {
+  if (report::looksLikeJsonReport(path)) {
+    Result<report::ReportFile> report = report::loadReportFile(path);
     if (!report) {
       fmt::print(stderr, "ncservo diff: {}\n", report.error().text());
       return {kExitCapture, {}};
@@ -43,10 +45,10 @@ DiffSide diffSide(const std::string& path, const CheckSetup& setup, const cli::R
     }
     return {kExitOk, std::move(report->captures.front())};
   }
-  cli::CaptureReport report;
+  report::CaptureReport report;
   const int rc = validateCapture(path, setup, writer, {nullptr, stderr}, report, threads);
   if (rc == kExitCapture) return {rc, {}};
-  return {kExitOk, cli::reportedCaptureOf(report, cli::verdictOf(policy, report))};
+  return {kExitOk, report::reportedCaptureOf(report, writer.judge().verdict(report))};
 }
 
 int runDiff(const DiffArgs& o) {
@@ -59,28 +61,29 @@ int runDiff(const DiffArgs& o) {
     fmt::print(stderr, "ncservo diff: {}\n", setup.error().text());
     return kExitUsage;
   }
-  cli::ReportPolicy policy;
+  VerdictPolicy policy;
   cli::setFailOn(o.fail_on, true, policy);
-  policy.enabled = setup->settings.enabled;
+  const PolicyJudge judge(policy);
+  report::ReportOptions options;
+  options.enabled = setup->settings.enabled;
   Result<std::FILE*> out = openOutput(o.output, {o.base, o.next});
   if (!out) {
     fmt::print(stderr, "ncservo diff: {}\n", out.error().text());
     return kExitUsage;
   }
   // No report is written: the captures' findings are kept for the comparison.
-  auto writer = cli::ReportWriter::open({}, policy);
+  auto writer = report::ReportWriter::open({}, options, judge);
   const CaptureThreads threads = cli::captureThreads(o.check.read_thread, 1);
-  DiffSide base = diffSide(o.base, *setup, **writer, policy, threads);
-  DiffSide next =
-      base.rc == kExitOk ? diffSide(o.next, *setup, **writer, policy, threads) : DiffSide{};
+  DiffSide base = diffSide(o.base, *setup, **writer, threads);
+  DiffSide next = base.rc == kExitOk ? diffSide(o.next, *setup, **writer, threads) : DiffSide{};
   int rc = base.rc != kExitOk ? base.rc : next.rc;
   if (rc == kExitOk) {
-    cli::CaptureDiff diff = cli::diffCaptures(std::move(base.capture), std::move(next.capture));
+    report::CaptureDiff diff =
+        report::diffCaptures(std::move(base.capture), std::move(next.capture));
     diff.base_source = o.base;
     diff.next_source = o.next;
-    cli::writeDiff(*out, o.format, diff);
-    rc = cli::diffFails(diff, policy.fail_on, policy.never, policy.incidents) ? kExitFindings
-                                                                              : kExitOk;
+    report::writeDiff(*out, o.format, diff);
+    rc = diffFails(diff, policy.fail_on, policy.never, policy.incidents) ? kExitFindings : kExitOk;
   }
   const bool written = std::fflush(*out) == 0;
   if (*out != stdout) std::fclose(*out);
@@ -98,7 +101,7 @@ Handler diffCommand(CLI::App& command) {
   auto args = std::make_shared<DiffArgs>();
   command.add_option("BASE", args->base, "the capture or JSON report compared against")->required();
   command.add_option("NEW", args->next, "the capture or JSON report compared")->required();
-  addFormatOption(command, args->format, cli::diffFormatNames());
+  addFormatOption(command, args->format, report::diffFormatNames());
   command.add_option("-o,--output", args->output, "write here (default: standard output)");
   cli::addFailOnOption(command, args->fail_on);
   // A capture is validated as `validate` would, with the same options.

@@ -13,6 +13,8 @@
 #include "ncservo/rules/rules.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 std::string maskText(const FieldDef& f) {

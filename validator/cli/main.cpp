@@ -13,7 +13,6 @@
 
 #include "commands.hpp"
 #include "ncservo/base/text.hpp"
-#include "ncservo/report/report.hpp"
 
 namespace {
 

@@ -12,6 +12,8 @@
 #include "ncservo/report/report_merge.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 // The formats of the merged report: one row each.

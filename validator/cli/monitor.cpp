@@ -37,6 +37,8 @@
 #include "ncservo/wire/frame_clock.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 constexpr int kSnapLength = 262144;
@@ -320,12 +322,12 @@ Status checkMonitorArgs(const MonitorArgs& args) {
 
 // The text report of findings as they happen, or jsonl.
 Result<std::unique_ptr<ReportWriter>> openMonitorReport(const MonitorArgs& args,
-                                                        const RuleSettings& settings) {
-  ReportPolicy policy;
-  setFailOn(args.fail_on, false, policy);
-  policy.verbose = true;  // text: every finding as it happens
-  policy.enabled = settings.enabled;
-  return ReportWriter::open({{findReportFormat(args.format), ""}}, policy);
+                                                        const RuleSettings& settings,
+                                                        const PolicyJudge& judge) {
+  report::ReportOptions options;
+  options.verbose = true;  // text: every finding as it happens
+  options.enabled = settings.enabled;
+  return ReportWriter::open({{findReportFormat(args.format), ""}}, options, judge);
 }
 
 // Ctrl-C and SIGTERM end the capture of `handle` (null: as before).
@@ -494,7 +496,7 @@ int endReport(const std::string& interface, const LiveCapture& live, ReportWrite
     fmt::print(stderr, "ncservo monitor: {}\n", written.error().text());
     return kExitUsage;
   }
-  return writer.exitStatus(report);
+  return writer.judge().exitStatus(report);
 }
 
 // --metrics and --mqtt with their options, checked before capturing.
@@ -551,7 +553,10 @@ int runMonitor(const MonitorArgs& args) {
     return kExitCapture;
   }
   pcap_t* handle = live->get();
-  auto writer = openMonitorReport(args, settings);
+  VerdictPolicy policy;
+  setFailOn(args.fail_on, false, policy);
+  const PolicyJudge judge(policy);
+  auto writer = openMonitorReport(args, settings, judge);
   if (!writer) {
     fmt::print(stderr, "ncservo monitor: {}\n", writer.error().text());
     return kExitUsage;

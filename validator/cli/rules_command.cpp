@@ -12,6 +12,8 @@
 #include "ncservo/rules/rules.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 void printRuleText(const RuleDef& rule) {
@@ -38,7 +40,7 @@ const char* byDefaultName(ByDefault by_default) {
 void printRuleMarkdown(const RuleDef& rule) {
   // An anchor per rule: SARIF's helpUri (report.cpp) links each rule here.
   fmt::print("| <a id=\"{}\"></a>{} | `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-             cli::ruleAnchor(rule), rule.code, rule.slug, severityName(rule.severity),
+             report::ruleAnchor(rule), rule.code, rule.slug, severityName(rule.severity),
              byDefaultName(rule.by_default), partyName(rule.party), ruleKindName(rule.kind),
              describeReads(rule.reads), timeoutText(rule), rule.clause, rule.summary);
 }

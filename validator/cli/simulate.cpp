@@ -20,6 +20,8 @@
 #include "ncservo/wire/ecat_wire.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 // `simulate`'s capture formats; without --format the output file's extension chooses, else the

@@ -22,11 +22,13 @@
 #include "ncservo/report/report.hpp"
 
 namespace ncservo::cli {
+
+using namespace report;  // the report layer's names
 namespace {
 
 struct ValidateArgs : CheckArgs {
   std::vector<std::string> captures;
-  std::string format = cli::reportFormatNames().front();
+  std::string format = report::reportFormatNames().front();
   std::string output;
   cli::FailOnArgs fail_on;
   bool allow_empty = false;
@@ -40,24 +42,24 @@ struct ValidateArgs : CheckArgs {
 
 // A capture validated apart (CaptureOutput without `live`) given to the writer as if it had
 // been written as it came: its messages, its findings one by one, its end.
-void presentCapture(cli::ReportWriter& writer, const std::string& messages,
-                    cli::CaptureReport& report) {
+void presentCapture(report::ReportWriter& writer, const std::string& messages,
+                    report::CaptureReport& report) {
   std::fputs(messages.c_str(), stderr);
   writer.beginCapture(report);
   for (std::size_t i = 0; i < report.findings.size(); ++i) {
     writer.finding(report, report.findings[i],
-                   report.baseline ? report.baseline_states[i] : cli::BaselineState::None);
+                   report.baseline ? report.baseline_states[i] : report::BaselineState::None);
   }
   writer.endCapture(report);
   if (!writer.keepsFindings()) {
     std::vector<Finding>().swap(report.findings);
-    std::vector<cli::BaselineState>().swap(report.baseline_states);
+    std::vector<report::BaselineState>().swap(report.baseline_states);
   }
 }
 
 // docs/cli.md: with several captures the status is the most serious, in the order 2, 3, 1, 4, 0.
 int combine(int a, int b) {
-  return cli::moreSerious(a, b);
+  return moreSerious(a, b);
 }
 
 // Whether two paths name one file, however spelt (links, "./"), whether or not it exists yet.
@@ -73,16 +75,16 @@ bool sameFile(const std::string& a, const std::string& b) {
 // The reports of a run: --format to --output (standard output by default), then each
 // --report FORMAT:FILE. docs/cli.md: a report file that is one of the inputs, however named,
 // is a usage error, and so are two reports to one file; checked before anything is written.
-Result<std::vector<cli::ReportTarget>> reportTargets(const ValidateArgs& o) {
-  std::vector<cli::ReportTarget> targets{{cli::findReportFormat(o.format), o.output}};
+Result<std::vector<report::ReportTarget>> reportTargets(const ValidateArgs& o) {
+  std::vector<report::ReportTarget> targets{{report::findReportFormat(o.format), o.output}};
   std::vector<std::string> options{"--output"};
   for (const std::string& spec : o.reports) {
     const auto colon = spec.find(':');
-    const cli::ReportFormat* format =
-        colon == std::string::npos ? nullptr : cli::findReportFormat(spec.substr(0, colon));
+    const report::ReportFormat* format =
+        colon == std::string::npos ? nullptr : report::findReportFormat(spec.substr(0, colon));
     if (format == nullptr || colon + 1 == spec.size()) {
       return fail(fmt::format("--report {}: expected FORMAT:FILE, FORMAT one of {}", spec,
-                              choiceList(cli::reportFormatNames())));
+                              choiceList(report::reportFormatNames())));
     }
     const std::string path = spec.substr(colon + 1);
     if (path == "-") {
@@ -109,18 +111,18 @@ Result<std::vector<cli::ReportTarget>> reportTargets(const ValidateArgs& o) {
 }
 
 // docs/baselines.md: a baseline that cannot be read is a usage error, as a bad --config is.
-Result<std::optional<cli::ReportFile>> loadBaseline(const ValidateArgs& o) {
+Result<std::optional<report::ReportFile>> loadBaseline(const ValidateArgs& o) {
   if (o.baseline.empty()) return std::nullopt;
-  Result<cli::ReportFile> loaded = cli::loadReportFile(o.baseline);
+  Result<report::ReportFile> loaded = report::loadReportFile(o.baseline);
   if (!loaded) return fail(loaded.error());
   return std::move(*loaded);
 }
 
 // The reports to fill, one per capture, each with its capture's part of the baseline.
-std::vector<cli::CaptureReport> emptyReports(const ValidateArgs& o,
-                                             const std::optional<cli::ReportFile>& baseline) {
-  std::vector<cli::CaptureReport> reports(o.captures.size());
-  for (cli::CaptureReport& report : reports) {
+std::vector<report::CaptureReport> emptyReports(const ValidateArgs& o,
+                                                const std::optional<report::ReportFile>& baseline) {
+  std::vector<report::CaptureReport> reports(o.captures.size());
+  for (report::CaptureReport& report : reports) {
     report.zone = o.window.zone();
     report.scope.axes = o.axes;
     report.scope.findings = o.only != "incidents";
@@ -128,8 +130,8 @@ std::vector<cli::CaptureReport> emptyReports(const ValidateArgs& o,
   }
   if (baseline) {
     for (std::size_t i = 0; i < o.captures.size(); ++i) {
-      const cli::ReportedCapture* matched =
-          cli::baselineCaptureFor(*baseline, o.captures[i], o.captures.size());
+      const report::ReportedCapture* matched =
+          report::baselineCaptureFor(*baseline, o.captures[i], o.captures.size());
       if (matched == nullptr) {
         fmt::print(stderr,
                    "ncservo: {}: no capture of this file name in the baseline {}: each of its "
@@ -145,10 +147,10 @@ std::vector<cli::CaptureReport> emptyReports(const ValidateArgs& o,
 
 // Each capture validated in parallel, `jobs` at once, its messages kept with its report; each is
 // given to the writer in argument order as soon as the ones before it are.
-void validateInParallel(const ValidateArgs& o, const CheckSetup& setup, cli::ReportWriter& writer,
-                        unsigned jobs, CaptureThreads threads,
-                        std::vector<cli::CaptureReport>& reports, std::vector<int>& statuses) {
-  const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
+void validateInParallel(const ValidateArgs& o, const CheckSetup& setup,
+                        report::ReportWriter& writer, unsigned jobs, CaptureThreads threads,
+                        std::vector<report::CaptureReport>& reports, std::vector<int>& statuses) {
+  const std::atomic<bool>& interrupted = report::ReportWriter::interrupted();
   struct Validated {
     int rc;
     std::string messages;
@@ -174,17 +176,17 @@ void validateInParallel(const ValidateArgs& o, const CheckSetup& setup, cli::Rep
     }
     presentCapture(writer, validated.messages, reports[i]);
   };
-  cli::runInOrder(o.captures.size(), jobs, validate, present);
+  runInOrder(o.captures.size(), jobs, validate, present);
 }
 
 // docs/cli.md#interrupted: each capture's status; kExitInterrupted for one Ctrl-C stopped or kept
 // from starting (`reports[i].frames` then says how far it got).
 std::vector<int> validateCaptures(const ValidateArgs& o, const CheckSetup& setup,
-                                  cli::ReportWriter& writer,
-                                  std::vector<cli::CaptureReport>& reports) {
+                                  report::ReportWriter& writer,
+                                  std::vector<report::CaptureReport>& reports) {
   std::vector<int> statuses(o.captures.size(), kExitInterrupted);
   writer.stopOnInterrupt();
-  const std::atomic<bool>& interrupted = cli::ReportWriter::interrupted();
+  const std::atomic<bool>& interrupted = report::ReportWriter::interrupted();
   const unsigned jobs = o.jobs.value_or(std::max(1u, std::thread::hardware_concurrency()));
   const bool one_at_a_time = jobs <= 1 || o.captures.size() <= 1;
   // docs/cli.md#two-threads: the reading threads and --jobs share the cores.
@@ -205,9 +207,9 @@ std::vector<int> validateCaptures(const ValidateArgs& o, const CheckSetup& setup
 // Only finished captures are reported; where Ctrl-C stopped the others is said on stderr.
 // Returns the exit status of them all.
 int finishReports(const ValidateArgs& o, const std::vector<int>& statuses,
-                  std::vector<cli::CaptureReport>& reports, cli::ReportWriter& writer) {
+                  std::vector<report::CaptureReport>& reports, report::ReportWriter& writer) {
   int rc = kExitOk;
-  std::vector<cli::CaptureReport> finished;
+  std::vector<report::CaptureReport> finished;
   std::vector<std::string> unstarted;
   for (std::size_t i = 0; i < o.captures.size(); ++i) {
     if (statuses[i] != kExitInterrupted) {
@@ -223,7 +225,7 @@ int finishReports(const ValidateArgs& o, const std::vector<int>& statuses,
     }
   }
   // Before the reports were written, as the text says.
-  if (cli::ReportWriter::interrupted()) rc = kExitInterrupted;
+  if (report::ReportWriter::interrupted()) rc = kExitInterrupted;
   if (!unstarted.empty()) {
     fmt::print(stderr, "ncservo: interrupted before {}\n", fmt::join(unstarted, ", "));
   }
@@ -244,27 +246,29 @@ int runValidate(const ValidateArgs& o) {
     fmt::print(stderr, "ncservo: {}\n", setup.error().text());
     return kExitUsage;
   }
-  const Result<std::optional<cli::ReportFile>> baseline = loadBaseline(o);
+  const Result<std::optional<report::ReportFile>> baseline = loadBaseline(o);
   if (!baseline) {
     fmt::print(stderr, "ncservo: --baseline {}\n", baseline.error().text());
     return kExitUsage;
   }
-  const Result<std::vector<cli::ReportTarget>> targets = reportTargets(o);
+  const Result<std::vector<report::ReportTarget>> targets = reportTargets(o);
   if (!targets) {
     fmt::print(stderr, "ncservo: {}\n", targets.error().text());
     return kExitUsage;
   }
-  cli::ReportPolicy policy;
+  VerdictPolicy policy;
   cli::setFailOn(o.fail_on, !o.baseline.empty(), policy);
   policy.allow_empty = o.allow_empty;
-  policy.verbose = o.verbose;
-  policy.enabled = setup->settings.enabled;
-  auto writer = cli::ReportWriter::open(*targets, policy);
+  const PolicyJudge judge(policy);
+  report::ReportOptions options;
+  options.verbose = o.verbose;
+  options.enabled = setup->settings.enabled;
+  auto writer = report::ReportWriter::open(*targets, options, judge);
   if (!writer) {
     fmt::print(stderr, "ncservo: {}\n", writer.error().text());
     return kExitUsage;
   }
-  std::vector<cli::CaptureReport> reports = emptyReports(o, *baseline);
+  std::vector<report::CaptureReport> reports = emptyReports(o, *baseline);
   const std::vector<int> statuses = validateCaptures(o, *setup, **writer, reports);
   return finishReports(o, statuses, reports, **writer);
 }
@@ -276,7 +280,7 @@ Handler validateCommand(CLI::App& command) {
   command.add_option("CAPTURE", args->captures, "pcap or pcapng captures, - for standard input")
       ->required();
   addLayoutOptions(command, args->layout);
-  addFormatOption(command, args->format, cli::reportFormatNames());
+  addFormatOption(command, args->format, report::reportFormatNames());
   command.add_option("-o,--output", args->output,
                      "write the report here (default: standard output)");
   command

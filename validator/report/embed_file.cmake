@@ -7,10 +7,10 @@ string(REGEX REPLACE "([0-9a-f][0-9a-f])" "'\\\\x\\1'," bytes "${hex}")
 file(WRITE "${OUTPUT}.tmp"
   "// Generated from ${INPUT} by validator/report/embed_file.cmake.\n"
   "#include <cstddef>\n"
-  "namespace ncservo::cli {\n"
+  "namespace ncservo::report {\n"
   "extern const char ${SYMBOL}[];\n"
   "extern const std::size_t ${SYMBOL}Size;\n"
   "const char ${SYMBOL}[] = {${bytes}};\n"
   "const std::size_t ${SYMBOL}Size = ${size};\n"
-  "}  // namespace ncservo::cli\n")
+  "}  // namespace ncservo::report\n")
 file(RENAME "${OUTPUT}.tmp" "${OUTPUT}")

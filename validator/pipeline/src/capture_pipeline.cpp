@@ -179,6 +179,12 @@ void CapturePipeline::onWalkedFrame(std::uint64_t number, std::int64_t time_ns, 
                                     const ByteReader& bytes, const EcatFrame& frame, bool judged,
                                     bool probe_timed) {
   clock_stage_.onFrame(number, time_ns, link, bytes, frame, judged, probe_timed);
+  if (judge_held_ && rules_ && learning()) {
+    if (!held_judge_) held_judge_.emplace(window_.options(), *rules_);
+    held_judge_->onFrame(number, time_ns, frame, bytes);
+  } else {
+    held_judge_.reset();
+  }
 }
 
 void CapturePipeline::route(std::uint64_t number, std::int64_t time_ns, LinkType link,
@@ -194,6 +200,7 @@ void CapturePipeline::route(std::uint64_t number, std::int64_t time_ns, LinkType
 }
 
 void CapturePipeline::endLearning() {
+  held_judge_.reset();
   clock_stage_.finish();
   if (!window_.learning()) return;
   window_.finish();

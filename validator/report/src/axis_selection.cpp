@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace {
 bool names(const std::string& entry, const AxisInfo& axis) {
@@ -34,4 +34,4 @@ Status checkAxisSelection(const std::vector<std::string>& wanted,
                           known.empty() ? "none" : known));
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

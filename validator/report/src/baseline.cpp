@@ -17,7 +17,7 @@
 #include "ncservo/base/number.hpp"
 #include "ncservo/incidents/incident.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 using Json = nlohmann::ordered_json;
 
@@ -28,43 +28,6 @@ std::string fingerprintText(const Fingerprint& f) {
 std::string fingerprintText(const IncidentFingerprint& f) {
   return fmt::format("{} {} {} #{}", f.kind, f.axis ? *f.axis : std::string("bus"), f.cause,
                      f.ordinal);
-}
-
-bool IncidentGate::gates(std::string_view kind) const {
-  for (std::size_t k = 0; k < kinds.size(); ++k) {
-    if (kinds[k] && kind == incidentKindName(static_cast<IncidentKind>(k))) return true;
-  }
-  return false;
-}
-
-std::string incidentGateText(const IncidentGate& gate) {
-  if (!gate.any()) return "never";
-  if (gate.kinds[0] && gate.kinds[1] && gate.kinds[2]) return "any";
-  std::vector<std::string> kinds;
-  for (std::size_t k = 0; k < gate.kinds.size(); ++k) {
-    if (gate.kinds[k]) kinds.emplace_back(incidentKindName(static_cast<IncidentKind>(k)));
-  }
-  return fmt::format("{}", fmt::join(kinds, ","));
-}
-
-Result<IncidentGate> parseIncidentGate(std::string_view text) {
-  if (text == "any") return IncidentGate{};
-  IncidentGate gate{{false, false, false}};
-  if (text == "never") return gate;
-  for (std::size_t comma = 0; comma != std::string_view::npos;) {
-    comma = text.find(',');
-    const std::string_view word = text.substr(0, comma);
-    bool known = false;
-    for (std::size_t k = 0; k < gate.kinds.size(); ++k) {
-      if (word == incidentKindName(static_cast<IncidentKind>(k))) known = gate.kinds[k] = true;
-    }
-    if (!known) {
-      return fail(fmt::format(
-          "'{}' is no kind of incident (drive-fault, bus-outage, esm; or any, never)", word));
-    }
-    if (comma != std::string_view::npos) text.remove_prefix(comma + 1);
-  }
-  return gate;
 }
 
 const char* baselineStateName(BaselineState state) {
@@ -321,15 +284,4 @@ CaptureDiff diffCaptures(ReportedCapture base, ReportedCapture next) {
   return diff;
 }
 
-bool diffFails(const CaptureDiff& diff, Severity fail_on, bool never,
-               const IncidentGate& incidents) {
-  const bool finding =
-      !never && std::any_of(diff.added.begin(), diff.added.end(),
-                            [&](const ReportedFinding& f) { return f.severity >= fail_on; });
-  return finding || std::any_of(diff.incidents_added.begin(), diff.incidents_added.end(),
-                                [&](const ReportedIncident& i) {
-                                  return incidents.gates(i.fingerprint.kind);
-                                });
-}
-
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

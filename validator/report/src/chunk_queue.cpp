@@ -2,7 +2,7 @@
 
 #include <utility>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 Status ChunkQueue::push(Chunk chunk) {
   if (queue_.push(std::move(chunk))) return {};
@@ -25,4 +25,4 @@ void ChunkQueue::stop(Error error) {
   queue_.stop();
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

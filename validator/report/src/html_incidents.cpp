@@ -6,7 +6,7 @@
 #include "ncservo/incidents/causes.hpp"
 #include "report_format.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 namespace {
 double msFrom(const Stamp& at, const Stamp& from) {
@@ -105,4 +105,4 @@ function incidentCards(capture, section, index) {
 }
 )js";
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail

@@ -9,7 +9,7 @@
 #include "ncservo/report/report.hpp"
 #include "report_format.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace {
 using detail::Json;
@@ -397,7 +397,7 @@ void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports
   Json captures = Json::array();
   std::size_t total[3] = {0, 0, 0};
   for (const CaptureReport& r : reports) {
-    Json capture = captureJson(r, verdictOf(sink.policy, r));
+    Json capture = captureJson(r, sink.judge.verdict(r));
     capture["end"] = static_cast<double>(r.last_time_ns - r.first_time_ns) / 1e9;
     captures.push_back(std::move(capture));
     for (std::size_t s = 0; s < 3; ++s) total[s] += r.counts[s];
@@ -427,4 +427,4 @@ void writeHtml(const ReportSink& sink, const std::vector<CaptureReport>& reports
              detail::kIncidentScript);
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -18,7 +18,7 @@
 #include "ncservo/base/wall_time.hpp"
 #include "ncservo/incidents/causes.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace {
 
@@ -121,117 +121,9 @@ void CaptureReport::closeBaseline() {
   baseline_absent_incidents = baseline->absentIncidents();
 }
 
-bool CaptureReport::incidentGated(std::size_t index, const IncidentGate& gate) const {
-  const bool new_or_unmatched =
-      index >= incident_states.size() || incident_states[index] != BaselineState::Unchanged;
-  return new_or_unmatched && gate.kinds[static_cast<std::size_t>(incidents[index].kind)];
-}
-
-std::size_t CaptureReport::gatedIncidents(const IncidentGate& gate) const {
-  std::size_t gated = 0;
-  for (std::size_t i = 0; i < incidents.size(); ++i) gated += incidentGated(i, gate) ? 1 : 0;
-  return gated;
-}
-
 std::string describeBaseline(const CaptureReport& r) {
   return fmt::format("{} new, {} unchanged, {} absent", r.newCount(), r.unchanged,
                      r.baseline_absent.size());
-}
-
-CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& r) {
-  // The findings the verdict is about: all of them, or the new ones against a baseline
-  // (docs/baselines.md).
-  const auto reaches = [&](Severity level) { return r.reaches(level); };
-  // What --fail-on and --fail-on-incident fail.
-  const bool gate =
-      (!policy.never && reaches(policy.fail_on)) || r.gatedIncidents(policy.incidents) > 0;
-  const bool checked = r.coverage.complete();
-  if (r.error) return {Verdict::Unreadable, kExitCapture};
-  const int status = gate                              ? kExitFindings
-                     : !checked && !policy.allow_empty ? kExitNoServo
-                                                       : kExitOk;
-  // The words describe the capture (docs/cli.md#verdicts): an error is a FAIL whatever --fail-on
-  // says, and so is a finding that fails the gate when --fail-on is stricter.
-  if (gate || reaches(Severity::Error)) return {Verdict::Fail, status};
-  if (!checked) return {Verdict::NoServo, status};
-  if (reaches(Severity::Warning)) return {Verdict::Warn, status};
-  return {Verdict::Pass, status};
-}
-
-int moreSerious(int a, int b) {
-  constexpr int kOrder[] = {kExitInterrupted, kExitUsage,   kExitCapture,
-                            kExitFindings,    kExitNoServo, kExitOk};
-  auto rank = [&](int rc) { return std::find(std::begin(kOrder), std::end(kOrder), rc) - kOrder; };
-  return rank(a) <= rank(b) ? a : b;
-}
-
-namespace {
-
-// What made the exit status 1: findings at or above --fail-on, incidents --fail-on-incident
-// gates, or both.
-std::string gateReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports) {
-  bool findings = false;
-  std::size_t incidents = 0;
-  for (const CaptureReport& r : reports) {
-    findings = findings || (!policy.never && r.reaches(policy.fail_on));
-    incidents += r.gatedIncidents(policy.incidents);
-  }
-  std::vector<std::string> why;
-  if (findings) {
-    why.push_back(fmt::format("findings at or above --fail-on {}", severityName(policy.fail_on)));
-  }
-  if (incidents > 0) {
-    why.push_back(fmt::format("{} incident{} under --fail-on-incident {}", incidents,
-                              incidents == 1 ? "" : "s", incidentGateText(policy.incidents)));
-  }
-  return fmt::format("{}", fmt::join(why, ", "));
-}
-
-}  // namespace
-
-std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports,
-                       int exit_status) {
-  const std::string fail_on = policy.never ? "never" : severityName(policy.fail_on);
-  switch (exit_status) {
-    case kExitCapture:
-      return "a capture could not be read to its end";
-    case kExitFindings:
-      return gateReason(policy, reports);
-    case kExitNoServo:
-      return "no servo checked";
-    case kExitOk:
-      break;
-    default:
-      return "";
-  }
-  bool findings = false;
-  std::size_t ungated = 0;    // incidents of kinds --fail-on-incident leaves out
-  std::size_t unchanged = 0;  // incidents the baseline had
-  bool unchecked = false;
-  for (const CaptureReport& r : reports) {
-    findings = findings || r.reaches(Severity::Info);
-    for (std::size_t i = 0; i < r.incidents.size(); ++i) {
-      const bool same =
-          i < r.incident_states.size() && r.incident_states[i] == BaselineState::Unchanged;
-      (same ? unchanged : ungated) += 1;
-    }
-    unchecked = unchecked || (!r.unopened() && !r.coverage.complete());
-  }
-  std::vector<std::string> why;
-  if (findings) {
-    why.push_back(policy.never ? std::string("--fail-on never")
-                               : fmt::format("nothing at or above --fail-on {}", fail_on));
-  }
-  // --fail-on never alone gates no incident either: said once.
-  if (ungated > 0 && !(policy.never && !policy.incidents.any())) {
-    why.push_back(fmt::format("{} incident{} not gated (--fail-on-incident {})", ungated,
-                              ungated == 1 ? "" : "s", incidentGateText(policy.incidents)));
-  }
-  if (unchanged > 0) {
-    why.push_back(fmt::format("{} unchanged incident{}", unchanged, unchanged == 1 ? "" : "s"));
-  }
-  if (unchecked && policy.allow_empty) why.emplace_back("--allow-empty");
-  return fmt::format("{}", fmt::join(why, ", "));
 }
 
 BaselineState CaptureReport::tally(const Finding& f) {
@@ -295,8 +187,9 @@ char* writeSeconds(std::int64_t ns, char* out) {
 }
 
 Result<std::unique_ptr<ReportWriter>> ReportWriter::open(const std::vector<ReportTarget>& targets,
-                                                         const ReportPolicy& policy) {
-  std::unique_ptr<ReportWriter> writer(new ReportWriter(policy));
+                                                         const ReportOptions& options,
+                                                         const Judge& judge) {
+  std::unique_ptr<ReportWriter> writer(new ReportWriter(options, judge));
   for (const ReportTarget& target : targets) {
     Output output{target.format, stdout, {}, {}};
     std::error_code ec;
@@ -390,26 +283,28 @@ bool ReportWriter::locatesFrames() const {
 
 void ReportWriter::beginCapture(const CaptureReport& report) {
   for (const Output& o : outputs_) {
-    if (o.format->begin_capture != nullptr) o.format->begin_capture({o.out, policy_}, report);
+    if (o.format->begin_capture != nullptr)
+      o.format->begin_capture({o.out, options_, judge_}, report);
   }
 }
 
 void ReportWriter::finding(const CaptureReport& report, const Finding& f, BaselineState state) {
   for (const Output& o : outputs_) {
-    if (o.format->finding != nullptr) o.format->finding({o.out, policy_}, report, f, state);
+    if (o.format->finding != nullptr)
+      o.format->finding({o.out, options_, judge_}, report, f, state);
   }
 }
 
 void ReportWriter::endCapture(const CaptureReport& report) {
   for (const Output& o : outputs_) {
-    if (o.format->end_capture != nullptr) o.format->end_capture({o.out, policy_}, report);
+    if (o.format->end_capture != nullptr) o.format->end_capture({o.out, options_, judge_}, report);
   }
 }
 
 Status ReportWriter::finish(const std::vector<CaptureReport>& reports) {
   Status status;
   for (Output& o : outputs_) {
-    if (o.format->finish != nullptr) o.format->finish({o.out, policy_}, reports);
+    if (o.format->finish != nullptr) o.format->finish({o.out, options_, judge_}, reports);
     if (o.temporary.empty()) {
       const bool written = std::fflush(o.out) == 0;
       const bool closed = o.out == stdout || std::fclose(o.out) == 0;
@@ -432,4 +327,4 @@ Status ReportWriter::finish(const std::vector<CaptureReport>& reports) {
   return status;
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

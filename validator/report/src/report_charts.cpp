@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace {
 // A field's value in a word: its bits shifted down (a whole word's row: the word).
@@ -133,4 +133,4 @@ FindingTimelines TimelineRecorder::finish() {
   return std::move(out_);
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

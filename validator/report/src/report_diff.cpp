@@ -7,7 +7,7 @@
 #include "ncservo/report/baseline.hpp"
 #include "report_format.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 using detail::Json;
 
@@ -284,4 +284,4 @@ void writeDiff(std::FILE* out, std::string_view format, const CaptureDiff& diff)
   }
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cctype>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace detail {
 
@@ -142,4 +142,4 @@ const ReportFormat* findReportFormat(std::string_view name) {
   return nullptr;
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

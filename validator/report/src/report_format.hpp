@@ -12,7 +12,7 @@
 
 #include "ncservo/report/report.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 using Json = nlohmann::ordered_json;
 
@@ -86,4 +86,4 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
 // html_report.cpp: the page's style, which `diff --format html` shares.
 const char* htmlStyle();
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail

@@ -8,7 +8,7 @@
 #include "ncservo/wire/diagnosis_texts.hpp"
 #include "report_format.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 namespace {
 
@@ -625,9 +625,9 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
   return c;
 }
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict) {
   // The one reading of a capture's JSON: a capture validated now is what its report would hold.
@@ -642,18 +642,17 @@ ReportedCapture reportedCaptureOf(const CaptureReport& report, Verdict verdict) 
   return std::move(read->captures.front());
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 void writeJson(const ReportSink& sink, const std::vector<CaptureReport>& reports) {
   Json j;
   j["tool"] = {{"name", "ncservo"}, {"version", NCSERVO_VERSION}};
   Json captures = Json::array();
-  for (const CaptureReport& r : reports)
-    captures.push_back(captureJson(r, verdictOf(sink.policy, r)));
+  for (const CaptureReport& r : reports) captures.push_back(captureJson(r, sink.judge.verdict(r)));
   j["captures"] = std::move(captures);
   std::fputs((j.dump(2) + "\n").c_str(), sink.out);
 }
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail

@@ -5,7 +5,7 @@
 
 #include "report_format.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 std::string findingJsonLine(const CaptureReport& report, const Finding& finding,
                             BaselineState state) {
@@ -33,9 +33,8 @@ void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Fin
 void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   // Nothing was read: one line, its verdict and why (docs/cli.md#verdicts).
   if (r.unopened()) {
-    const Json j{{"capture", r.path},
-                 {"verdict", verdictName(verdictOf(sink.policy, r))},
-                 {"reason", *r.error}};
+    const Json j{
+        {"capture", r.path}, {"verdict", verdictName(sink.judge.verdict(r))}, {"reason", *r.error}};
     std::fputs((j.dump() + "\n").c_str(), sink.out);
     return;
   }
@@ -86,7 +85,7 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
       !r.truncation.any()) {
     return;
   }
-  Json j{{"capture", r.path}, {"verdict", verdictName(verdictOf(sink.policy, r))}};
+  Json j{{"capture", r.path}, {"verdict", verdictName(sink.judge.verdict(r))}};
   if (!r.coverage.complete()) j["reason"] = r.coverage.reason;
   if (!r.coverage.missing.empty()) j["missing_axes"] = r.coverage.missing;
   if (r.segment_count > 1) j["segments"] = segmentsJson(r);
@@ -96,4 +95,4 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
 }
 
 }  // namespace detail
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

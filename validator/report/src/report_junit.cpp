@@ -7,7 +7,7 @@
 
 #include "report_format.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 namespace {
 
@@ -32,7 +32,7 @@ Fired firedBy(const CaptureReport& r, const RuleDef& rule) {
 // that did not fire) a capture where not every configured servo was decoded. "" when judged.
 std::string notJudgedReason(const ReportSink& sink, const CaptureReport& r, const RuleDef& rule,
                             bool fired) {
-  if (!sink.policy.enabled[static_cast<std::size_t>(rule.id)]) {
+  if (!sink.options.enabled[static_cast<std::size_t>(rule.id)]) {
     return rule.by_default == ByDefault::Off
                ? "off by default (--enable or the configuration's [rules] enable)"
                : "disabled (--disable or the configuration's [rules])";
@@ -56,7 +56,7 @@ CaseResult writeFindings(pugi::xml_node testcase, const ReportSink& sink, const 
     const BaselineState state = fired.states[i];
     const bool counts = state != BaselineState::Unchanged;
     added += state == BaselineState::New ? 1 : 0;
-    failing = failing || (counts && !sink.policy.never && f->severity >= sink.policy.fail_on);
+    failing = failing || (counts && sink.judge.failsFinding(f->severity));
     body += fmt::format(
         "frame {} (since {}) t={:.6f}s {} {} [{}]{}: {}\n", f->at.frame, f->since.frame,
         seconds(r, f->at), utcOf(r, f->at), axisLabel(r, f->axis), severityName(f->severity),
@@ -122,7 +122,7 @@ CaseResult writeIncidentCase(pugi::xml_node suite, const ReportSink& sink, const
   testcase.append_attribute("name") =
       fmt::format("{} {}", rule, fingerprintText(r.fingerprintOf(incident))).c_str();
   testcase.append_attribute("time") = "0";
-  const bool failing = r.incidentGated(index, sink.policy.incidents);
+  const bool failing = sink.judge.failsIncident(r, index);
   const BaselineState state =
       index < r.incident_states.size() ? r.incident_states[index] : BaselineState::None;
   const std::string body = fmt::format(
@@ -210,4 +210,4 @@ void writeJunit(const ReportSink& sink, const std::vector<CaptureReport>& report
   std::fputs(text.str().c_str(), sink.out);
 }
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail

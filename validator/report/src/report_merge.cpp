@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace {
 
@@ -254,4 +254,4 @@ std::string mergedText(const MergedReport& m) {
   return text;
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

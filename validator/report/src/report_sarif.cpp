@@ -9,7 +9,7 @@
 #include "ncservo/incidents/causes.hpp"
 #include "report_format.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 namespace {
 
@@ -73,7 +73,7 @@ void addNotifications(const ReportSink& sink, const CaptureReport& r, std::size_
   if (!r.unopened() && !r.coverage.complete()) {
     notifications.push_back(
         {{"descriptor", {{"id", "NO-SERVO"}}},
-         {"level", exitStatusOf(sink.policy, r) == kExitNoServo ? "error" : "note"},
+         {"level", sink.judge.failsUnchecked(r) ? "error" : "note"},
          {"message", {{"text", fmt::format("{}: NO SERVO: {}", r.path, r.coverage.reason)}}},
          {"locations", where}});
   }
@@ -132,7 +132,7 @@ void addIncidentResults(const ReportSink& sink, const CaptureReport& r, std::siz
     const std::string fingerprint = fingerprintText(r.fingerprintOf(incident));
     Json result{{"ruleId", incidentRuleId(incident.cause)},
                 {"ruleIndex", incidentRuleIndex(incident.cause)},
-                {"level", r.incidentGated(i, sink.policy.incidents) ? "error" : "warning"},
+                {"level", sink.judge.failsIncident(r, i) ? "error" : "warning"},
                 {"message", {{"text", incidentSummary(r, incident)}}}};
     result["locations"] = sarifPlace(r, artifact, incident.at.frame, result);
     result["partialFingerprints"] = {{"ncservoIncident/v1", fingerprint}};
@@ -268,4 +268,4 @@ void writeSarif(const ReportSink& sink, const std::vector<CaptureReport>& report
   std::fputs((sarif.dump(2) + "\n").c_str(), sink.out);
 }
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail

@@ -18,7 +18,7 @@
 #include "ncservo/model/timing_text.hpp"
 #include "report_format.hpp"
 
-namespace ncservo::cli::detail {
+namespace ncservo::report::detail {
 
 namespace {
 
@@ -52,12 +52,12 @@ const char* verdictHeadline(Verdict v) {
 
 // The run's word: its most serious capture's, in this order; an error found before a capture's
 // damage fails the run as well.
-Verdict runVerdict(const ReportPolicy& policy, const std::vector<CaptureReport>& reports) {
+Verdict runVerdict(const Judge& judge, const std::vector<CaptureReport>& reports) {
   constexpr Verdict kOrder[] = {Verdict::Fail, Verdict::Unreadable, Verdict::NoServo, Verdict::Warn,
                                 Verdict::Pass};
   std::size_t worst = std::size(kOrder) - 1;
   for (const CaptureReport& r : reports) {
-    const Verdict v = r.counted(Severity::Error) > 0 ? Verdict::Fail : verdictOf(policy, r);
+    const Verdict v = r.counted(Severity::Error) > 0 ? Verdict::Fail : judge.verdict(r);
     worst = std::min<std::size_t>(
         worst, std::find(std::begin(kOrder), std::end(kOrder), v) - std::begin(kOrder));
   }
@@ -325,7 +325,7 @@ void writeTextHeading(const ReportSink& sink, const CaptureReport& r) {
 
 void writeTextFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
                       BaselineState state) {
-  if (!sink.policy.verbose) return;
+  if (!sink.options.verbose) return;
   // One buffer, no temporary strings: a storm of findings writes thousands of these lines a
   // second, and the monitor must keep up with the bus meanwhile (docs/benchmarks.md).
   fmt::memory_buffer line;
@@ -381,7 +381,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
   for (const std::string& warning : r.layout_warnings) {
     fmt::print(out, "warning: layout does not fit: {}\n", warning);
   }
-  if (!sink.policy.verbose) writeTextGroups(sink, r);
+  if (!sink.options.verbose) writeTextGroups(sink, r);
   fmt::print(out, "{}: {} frames, {} cycles", r.path, r.frames, r.cycles);
   if (r.cycle_time.median_us) {
     fmt::print(out, ", cycle {:.1f} us (p99 {:.1f}, max {:.1f})", *r.cycle_time.median_us,
@@ -443,7 +443,7 @@ void writeTextSummary(const ReportSink& sink, const CaptureReport& r) {
       r.capture_drops && r.capture_drops->dropped() > 0
           ? fmt::format("; the capture dropped {} frames", r.capture_drops->dropped())
           : std::string();
-  fmt::print(out, "capture verdict: {} - {} ({}{})\n", verdictHeadline(verdictOf(sink.policy, r)),
+  fmt::print(out, "capture verdict: {} - {} ({}{})\n", verdictHeadline(sink.judge.verdict(r)),
              countedText(r.baseline ? r.new_counts : r.counts, r.baseline.has_value()), r.path,
              dropped);
 }
@@ -455,7 +455,6 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
   std::size_t unopened = 0;   // captures of which nothing could be read
   std::size_t unread = 0;     // captures read in part: not to their end
   std::size_t unchecked = 0;  // captures read where not every axis was checked
-  int status = kExitOk;
   for (const CaptureReport& r : reports) {
     for (std::size_t s = 0; s < 3; ++s) counts[s] += r.counted(static_cast<Severity>(s));
     added += r.newCount();
@@ -464,9 +463,7 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
     unopened += r.unopened() ? 1 : 0;
     unread += r.error && !r.unopened() ? 1 : 0;
     unchecked += r.unopened() || r.coverage.complete() ? 0 : 1;
-    status = moreSerious(status, exitStatusOf(sink.policy, r));
   }
-  if (ReportWriter::interrupted()) status = kExitInterrupted;
   std::string notes;
   if (unopened > 0) notes += fmt::format(", {} unreadable", unopened);
   if (unread > 0) notes += fmt::format(", {} not read to the end", unread);
@@ -476,19 +473,20 @@ void writeTextVerdict(const ReportSink& sink, const std::vector<CaptureReport>& 
     notes += fmt::format(", against the baseline: {} new, {} unchanged, {} absent", added,
                          unchanged, absent);
   }
-  const bool interrupted = status == kExitInterrupted;
-  const std::string reason = interrupted ? std::string("Ctrl-C; only the captures finished")
-                                         : exitReason(sink.policy, reports, status);
+  const RunStatus status = sink.judge.runStatus(reports);
+  const bool interrupted = status.interrupted;
+  const std::string& reason = status.reason;
   // docs/cli.md#verdicts: the word describes the captures; the exit status and why close the line.
   fmt::print(sink.out, "verdict: {} - {} in {} capture{}{}{} (exit {}{}{})\n",
-             interrupted ? "INTERRUPTED" : verdictHeadline(runVerdict(sink.policy, reports)),
+             interrupted ? "INTERRUPTED" : verdictHeadline(runVerdict(sink.judge, reports)),
              countedText(counts, baseline), reports.size(), reports.size() == 1 ? "" : "s",
-             interrupted ? " finished" : "", notes, status, reason.empty() ? "" : ": ", reason);
+             interrupted ? " finished" : "", notes, status.exit_status, reason.empty() ? "" : ": ",
+             reason);
 }
 
-}  // namespace ncservo::cli::detail
+}  // namespace ncservo::report::detail
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 using detail::incidentDetails;
 using detail::incidentRuleId;
@@ -516,4 +514,4 @@ bool isIncidentComment(std::string_view comment) {
          findCause(comment.substr(kPrefix.size(), space - kPrefix.size())).has_value();
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -10,7 +10,7 @@
 #include "ncservo/report/axis_selection.hpp"
 #include "ncservo/rules/rules.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 namespace {
 
@@ -731,4 +731,4 @@ void writeGtkwSave(std::FILE* out, const std::string& vcd_path, const std::strin
   std::fputs(text.c_str(), out);
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

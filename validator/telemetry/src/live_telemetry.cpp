@@ -31,11 +31,12 @@ void LiveTelemetry::onFrame(const Validator& validator) {
 }
 
 void LiveTelemetry::onFindings(const std::vector<Finding>& findings,
-                               const cli::CaptureReport& report) {
+                               const report::CaptureReport& report) {
   metrics_.onFindings(findings);
   if (!mqtt_) return;
   for (const Finding& f : findings) {
-    mqtt_->publish(MqttTopic::Finding, cli::findingJsonLine(report, f, cli::BaselineState::None));
+    mqtt_->publish(MqttTopic::Finding,
+                   report::findingJsonLine(report, f, report::BaselineState::None));
   }
 }
 
@@ -46,11 +47,11 @@ void LiveTelemetry::onEvent(MqttTopic topic, std::string json_line) {
 // An incident's object is final once it ended (its recovery known) and its cause is (a read of
 // the links' counters can still make it link-fault); the rest wait for the end.
 void LiveTelemetry::publishIncidents(const std::vector<Incident>& incidents,
-                                     const cli::CaptureReport& report, bool all,
+                                     const report::CaptureReport& report, bool all,
                                      const IncidentDetector* detector) {
   if (!mqtt_) return;
   if (incident_published_.size() < incidents.size()) incident_published_.resize(incidents.size());
-  cli::CaptureReport lent;  // incidentJsonLine reads a report's incidents: this one's copy
+  report::CaptureReport lent;  // incidentJsonLine reads a report's incidents: this one's copy
   for (std::size_t i = 0; i < incidents.size(); ++i) {
     if (incident_published_[i]) continue;
     if (!all && !(incidents[i].ended && detector->causeFinal(i))) continue;
@@ -61,12 +62,12 @@ void LiveTelemetry::publishIncidents(const std::vector<Incident>& incidents,
       lent.layout = report.layout;
       lent.incidents = incidents;
     }
-    mqtt_->publish(MqttTopic::Incident, cli::incidentJsonLine(lent, i));
+    mqtt_->publish(MqttTopic::Incident, report::incidentJsonLine(lent, i));
     incident_published_[i] = true;
   }
 }
 
-void LiveTelemetry::update(const CapturePipeline& pipeline, const cli::CaptureReport& report,
+void LiveTelemetry::update(const CapturePipeline& pipeline, const report::CaptureReport& report,
                            std::uint64_t frames, std::uint64_t capture_dropped) {
   if (const IncidentDetector* detector = pipeline.incidents()) {
     publishIncidents(detector->incidents(), report, false, detector);
@@ -79,7 +80,7 @@ void LiveTelemetry::update(const CapturePipeline& pipeline, const cli::CaptureRe
 }
 
 std::vector<std::string> LiveTelemetry::finish(const CapturePipeline& pipeline,
-                                               const cli::CaptureReport& report,
+                                               const report::CaptureReport& report,
                                                std::uint64_t frames,
                                                std::uint64_t capture_dropped) {
   std::vector<std::string> said;

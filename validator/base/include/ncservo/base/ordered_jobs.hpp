@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-namespace ncservo::cli {
+namespace ncservo {
 
 // Runs task(i) for every i below `count` on up to `jobs` threads and hands each result to
 // deliver(i, result) on the calling thread, in order of i, as soon as it and all before it are
@@ -63,4 +63,4 @@ void runInOrder(std::size_t count, unsigned jobs, const std::function<T(std::siz
   for (std::thread& thread : threads) thread.join();
 }
 
-}  // namespace ncservo::cli
+}  // namespace ncservo

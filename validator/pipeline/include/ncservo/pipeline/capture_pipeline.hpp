@@ -150,6 +150,13 @@ class CapturePipeline {
   void onWalkedFrame(std::uint64_t number, std::int64_t time_ns, LinkType link,
                      const ByteReader& bytes, const EcatFrame& frame, bool judged = true,
                      bool probe_timed = false);
+  // A face that shows each frame as it comes (the plugin's single pass) has the frames held back
+  // judged at once, for the findings whose rules read no process data (standsWithoutLayout):
+  // by a validator of the layout known so far, dropped once frames are delivered
+  // (docs/layout.md). Given before the first frame.
+  void judgeHeldFrames() { judge_held_ = true; }
+  // That validator while the last frame given was held (its findings are that frame's), else null.
+  const Validator* heldJudge() const { return held_judge_ ? &*held_judge_ : nullptr; }
   // The frames ended while learning: the window decides with what it held and delivers it.
   void endLearning();
   // The capture ended: endLearning, then the validator's end-of-capture judgement, whose
@@ -213,6 +220,8 @@ class CapturePipeline {
   bool clock_told_ = false;  // the validator knows which clock times it
   LayoutWindow window_;
   std::optional<Validator> validator_;
+  bool judge_held_ = false;
+  std::optional<Validator> held_judge_;        // while frames are held, with judge_held_
   std::optional<IncidentDetector> incidents_;  // beside the validator
   std::optional<LayoutFit> fit_;               // a configured or ENI layout, judged
   std::vector<EniCyclicFrame> eni_frames_;

@@ -8,7 +8,7 @@
 #include "ncservo/base/error.hpp"
 #include "ncservo/layout/decoder.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 // Whether `axis` is one of `wanted`; every axis is when nothing is wanted.
 bool axisSelected(const std::vector<std::string>& wanted, const AxisInfo& axis);
@@ -17,4 +17,4 @@ bool axisSelected(const std::vector<std::string>& wanted, const AxisInfo& axis);
 Status checkAxisSelection(const std::vector<std::string>& wanted,
                           const std::vector<AxisInfo>& axes);
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

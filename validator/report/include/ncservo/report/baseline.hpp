@@ -16,7 +16,7 @@
 #include "ncservo/base/error.hpp"
 #include "ncservo/rules/rules.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 // What a finding is matched by (docs/baselines.md#fingerprints): its rule, its axis's name (none:
 // the bus) and its ordinal among that rule's findings on that axis in its capture segment.
@@ -181,26 +181,8 @@ struct CaptureDiff {
   std::size_t incidents_unchanged = 0;
 };
 CaptureDiff diffCaptures(ReportedCapture base, ReportedCapture next);
-// The kinds of incident that fail a run (--fail-on-incident, docs/cli.md#exit-status), by
-// IncidentKind.
-struct IncidentGate {
-  std::array<bool, 3> kinds{true, true, true};
-  bool any() const { return kinds[0] || kinds[1] || kinds[2]; }
-  bool gates(std::string_view kind) const;
-};
-// "any", "never", or kinds joined by commas ("drive-fault,esm"); what the option was given.
-std::string incidentGateText(const IncidentGate& gate);
-// Parses the option's value: any, never, or a comma-separated list of kinds; fails naming the
-// word it does not know.
-Result<IncidentGate> parseIncidentGate(std::string_view text);
-
-// Whether NEW has a finding at or above `fail_on` that BASE does not (never: false), or an
-// incident of a kind `incidents` gates.
-bool diffFails(const CaptureDiff& diff, Severity fail_on, bool never,
-               const IncidentGate& incidents);
-
 // `diff --format`: text, json or html.
 std::vector<std::string> diffFormatNames();
 void writeDiff(std::FILE* out, std::string_view format, const CaptureDiff& diff);
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -4,7 +4,7 @@
 
 #include <cstddef>
 
-namespace ncservo::cli {
+namespace ncservo::report {
 extern const char kChartJs[];
 extern const std::size_t kChartJsSize;
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

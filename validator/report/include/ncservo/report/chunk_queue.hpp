@@ -12,7 +12,7 @@
 #include "ncservo/base/bounded_queue.hpp"
 #include "ncservo/base/error.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 class ChunkQueue {
  public:
@@ -49,4 +49,4 @@ class ChunkQueue {
   std::optional<Error> error_;  // why the consumer stopped
 };
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -27,17 +27,7 @@
 #include "ncservo/rules/validator.hpp"
 #include "ncservo/wire/frame_clock.hpp"
 
-namespace ncservo::cli {
-
-// The exit statuses of every command (docs/cli.md#exit-status).
-enum ExitCode {
-  kExitOk = 0,
-  kExitFindings = 1,
-  kExitUsage = 2,
-  kExitCapture = 3,
-  kExitNoServo = 4,
-  kExitInterrupted = 130,  // 128 + SIGINT, as a shell reports a run Ctrl-C ended
-};
+namespace ncservo::report {
 
 // What a capture is, as a person reads it (docs/cli.md#verdicts): it describes the capture, not
 // the gate --fail-on sets, which only decides the exit status.
@@ -121,11 +111,6 @@ struct CaptureReport : CaptureResult {
   // The capture's findings and incidents have all come: the incidents are matched, and the
   // baseline's not seen again are absent.
   void closeBaseline();
-  // The incidents that count for the exit status under `gate`: all of its kinds, or with a
-  // baseline the new ones.
-  std::size_t gatedIncidents(const IncidentGate& gate) const;
-  // Whether incident `index` fails the run under `gate`.
-  bool incidentGated(std::size_t index, const IncidentGate& gate) const;
   // The capture could not be read at all: nothing in it was checked.
   bool unopened() const { return error.has_value() && frames == 0; }
   // Whether any finding that counts is at or above `level`.
@@ -173,41 +158,42 @@ std::string findingJsonLine(const CaptureReport& report, const Finding& finding,
                             BaselineState state);
 std::string incidentJsonLine(const CaptureReport& report, std::size_t index);
 
-// When a capture's findings fail it: at or above `fail_on`, unless `never`; a capture where not
-// every axis was checked is "no servo" unless `allow_empty`.
-struct ReportPolicy {
-  Severity fail_on = Severity::Error;
-  bool never = false;
-  IncidentGate incidents;  // --fail-on-incident
-  bool allow_empty = false;
+// How a report is written: every finding or one line per rule and axis, and the rules switched
+// on (which JUnit lists as test cases).
+struct ReportOptions {
   bool verbose = false;  // text: every finding, not one line per rule and axis
   std::array<bool, kRuleCount> enabled{};
 };
-// A capture's verdict and its exit status (docs/cli.md#exit-status: 3, 1, 4 or 0), both from
-// the findings counted here: the one place that decides them.
-struct CaptureVerdict {
-  Verdict verdict;
-  int exit_status;
-};
-CaptureVerdict judgeCapture(const ReportPolicy& policy, const CaptureReport& report);
-inline Verdict verdictOf(const ReportPolicy& policy, const CaptureReport& report) {
-  return judgeCapture(policy, report).verdict;
-}
-inline int exitStatusOf(const ReportPolicy& policy, const CaptureReport& report) {
-  return judgeCapture(policy, report).exit_status;
-}
-// docs/cli.md#exit-status: with several captures the status is the most serious, in the order
-// 2, 3, 1, 4, 0 (130, an interrupted run, before them all).
-int moreSerious(int a, int b);
-// Why a run's exit status is what it is, for the text report's last line: "--fail-on never",
-// "findings at or above --fail-on warning", …
-std::string exitReason(const ReportPolicy& policy, const std::vector<CaptureReport>& reports,
-                       int exit_status);
 
-// Where a report goes, and its policy.
+// The exit status of a run and why, for the text report's last line.
+struct RunStatus {
+  int exit_status = 0;
+  bool interrupted = false;  // Ctrl-C stopped the run (docs/cli.md#interrupted)
+  std::string reason;        // "findings at or above --fail-on warning", …; may be empty
+};
+
+// What the command decides of a capture and of a run (docs/cli.md#verdicts, #exit-status): the
+// formats show its decisions and take none. The command's --fail-on, --fail-on-incident and
+// --allow-empty decide them (ncservo's cli/verdict.hpp).
+class Judge {
+ public:
+  virtual ~Judge() = default;
+  virtual Verdict verdict(const CaptureReport& report) const = 0;
+  virtual int exitStatus(const CaptureReport& report) const = 0;
+  // The capture fails the run because not every axis was checked.
+  virtual bool failsUnchecked(const CaptureReport& report) const = 0;
+  // A finding of that severity fails the run.
+  virtual bool failsFinding(Severity severity) const = 0;
+  // Incident `index` of the capture fails the run.
+  virtual bool failsIncident(const CaptureReport& report, std::size_t index) const = 0;
+  virtual RunStatus runStatus(const std::vector<CaptureReport>& reports) const = 0;
+};
+
+// Where a report goes, how it is written, and the decisions it shows.
 struct ReportSink {
   std::FILE* out;
-  const ReportPolicy& policy;
+  const ReportOptions& options;
+  const Judge& judge;
 };
 
 // One output format of `validate` (docs/cli.md): its name and its writers, called in the order
@@ -249,8 +235,10 @@ struct ReportTarget {
 // it by finish(), so an interrupted run leaves no half report; one never finished is removed.
 class ReportWriter {
  public:
+  // `judge` outlives the writer.
   static Result<std::unique_ptr<ReportWriter>> open(const std::vector<ReportTarget>& targets,
-                                                    const ReportPolicy& policy);
+                                                    const ReportOptions& options,
+                                                    const Judge& judge);
   ~ReportWriter();
   ReportWriter(const ReportWriter&) = delete;
   ReportWriter& operator=(const ReportWriter&) = delete;
@@ -262,8 +250,7 @@ class ReportWriter {
   bool keepsFindings() const;
   bool locatesFrames() const;
   bool drawsTimelines() const;
-  Verdict verdict(const CaptureReport& report) const { return verdictOf(policy_, report); }
-  int exitStatus(const CaptureReport& report) const { return exitStatusOf(policy_, report); }
+  const Judge& judge() const { return judge_; }
 
   // docs/cli.md#interrupted: from here on the first Ctrl-C (SIGINT) only asks the run to stop
   // (interrupted() turns true), so that the reports of the captures finished can still be
@@ -278,9 +265,11 @@ class ReportWriter {
     std::string path;       // the report's file; empty for standard output
     std::string temporary;  // where it is written until finish()
   };
-  explicit ReportWriter(const ReportPolicy& policy) : policy_(policy) {}
-  ReportPolicy policy_;
+  ReportWriter(const ReportOptions& options, const Judge& judge)
+      : options_(options), judge_(judge) {}
+  ReportOptions options_;
+  const Judge& judge_;
   std::vector<Output> outputs_;
 };
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -16,7 +16,7 @@
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 // One field-table row a finding's rule reads, over the finding's window: its value at the
 // window's start, then each change (time in ns relative to the finding's frame).
@@ -93,4 +93,4 @@ class TimelineRecorder {
   FindingTimelines out_;
 };
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

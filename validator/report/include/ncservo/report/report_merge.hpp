@@ -15,7 +15,7 @@
 
 #include "ncservo/base/error.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 // A timing series over many captures, in microseconds.
 struct MergedSeries {
@@ -56,4 +56,4 @@ Status mergeReportText(const std::string& text, const std::string& path, MergedR
 std::string mergedJson(const MergedReport& merged);
 std::string mergedText(const MergedReport& merged);
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

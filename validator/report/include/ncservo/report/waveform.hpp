@@ -21,7 +21,7 @@
 #include "ncservo/rules/finding.hpp"
 #include "ncservo/rules/validator.hpp"
 
-namespace ncservo::cli {
+namespace ncservo::report {
 
 // The identifier code of the n-th variable: printable ASCII '!'..'~' (IEEE 1364 §18.2.1),
 // every one-character code before the first two-character one.
@@ -180,4 +180,4 @@ void writeGtkwSave(std::FILE* out, const std::string& vcd_path, const std::strin
 // OUT.vcd -> OUT.gtkw (any other name gets ".gtkw" added).
 std::string gtkwPathFor(const std::string& vcd_path);
 
-}  // namespace ncservo::cli
+}  // namespace ncservo::report

@@ -22,4 +22,10 @@ struct Finding {
   std::uint32_t ordinal = 0;
 };
 
+// Whether a finding stands whatever layout the learning window decides: the rules on the slaves'
+// state machines and registers read no process data (docs/layout.md).
+inline bool standsWithoutLayout(const Finding& finding) {
+  return ruleDef(finding.rule).kind == RuleKind::Slave;
+}
+
 }  // namespace ncservo

@@ -36,7 +36,7 @@ class LiveTelemetry {
   // A frame delivered and judged.
   void onFrame(const Validator& validator);
   // The findings of a frame, as `report` names them.
-  void onFindings(const std::vector<Finding>& findings, const cli::CaptureReport& report);
+  void onFindings(const std::vector<Finding>& findings, const report::CaptureReport& report);
   // Where issue 37 (drive messages, link faults, ESC error counters) plugs in: an object of its
   // as its JSON Lines line, on PREFIX/drive-message or PREFIX/link-fault; the counters as read
   // last, for ncservo_esc_errors_total. Nothing calls them yet.
@@ -46,12 +46,13 @@ class LiveTelemetry {
   }
   // Now and then (every 100 ms of the capture loop): the gauges and totals refreshed and handed
   // to the scrapes, the incidents that ended published. `report` lends its names and clock.
-  void update(const CapturePipeline& pipeline, const cli::CaptureReport& report,
+  void update(const CapturePipeline& pipeline, const report::CaptureReport& report,
               std::uint64_t frames, std::uint64_t capture_dropped);
   // The capture ended and `report` holds its result: the incidents not yet published, the last
   // snapshot, the queue given time to drain. Returns what to say (messages left, dropped).
-  std::vector<std::string> finish(const CapturePipeline& pipeline, const cli::CaptureReport& report,
-                                  std::uint64_t frames, std::uint64_t capture_dropped);
+  std::vector<std::string> finish(const CapturePipeline& pipeline,
+                                  const report::CaptureReport& report, std::uint64_t frames,
+                                  std::uint64_t capture_dropped);
   // Lines to print (the broker connected or lost, the queue dropping), since the last call.
   std::vector<std::string> notes();
   // The port --metrics listens on (the system's pick for 0); none without --metrics.
@@ -63,7 +64,7 @@ class LiveTelemetry {
  private:
   LiveTelemetry(const RuleSettings& settings, std::chrono::milliseconds mqtt_flush);
   // `detector`: whose causes are final (null with `all`: every one is).
-  void publishIncidents(const std::vector<Incident>& incidents, const cli::CaptureReport& report,
+  void publishIncidents(const std::vector<Incident>& incidents, const report::CaptureReport& report,
                         bool all, const IncidentDetector* detector);
 
   LiveMetrics metrics_;
