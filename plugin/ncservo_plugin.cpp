@@ -22,6 +22,7 @@
 #include <array>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -34,6 +35,8 @@
 #include "ncservo/incidents/causes.hpp"
 #include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_inference.hpp"
+#include "ncservo/model/esc_errors.hpp"
+#include "ncservo/model/mailbox_tracker.hpp"
 #include "ncservo/model/timing_text.hpp"
 #include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/pipeline/expert_notes.hpp"
@@ -41,6 +44,7 @@
 #include "ncservo/protocol/pdo.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/frame_clock.hpp"
 #include "ws_compat.hpp"
@@ -184,6 +188,23 @@ struct IncidentRecord {
   const char* text;         // "communication-loss: 12 cycles lost ...", in file scope
   const guint32* evidence;  // evidence_count frame numbers, in file scope
 };
+// What a drive or an ESC said in a frame (docs/drive-messages.md), as the first pass read it.
+enum class SaidKind : guint8 { Emergency, SdoUpload, SdoDownload, SdoAbort, EscRise, LinkFault };
+struct SaidRecord {
+  SaidKind kind;
+  bool has_station;  // else `slave` is the ring position
+  bool has_value;    // an SDO's value (at most 8 bytes)
+  guint8 subindex;
+  guint16 slave;          // the station address of the slave that said it
+  guint16 index;          // SDO
+  guint16 code;           // emergency: its error code; ESC: the counter (diag::EscCounter)
+  guint8 error_register;  // emergency; ESC: the port
+  guint8 data[5];         // emergency
+  guint32 number;         // SDO abort: its code; ESC: the rise
+  guint32 request_frame;  // SDO: 0 when the capture did not hold it
+  guint64 value;          // SDO
+  const char* text;       // link fault: the link named, in file scope
+};
 // Why the first pass saw a frame held: the capture's clock was being judged, or the layout learned.
 enum HeldFor : guint8 {
   kNotHeld = 0,
@@ -200,10 +221,12 @@ struct FrameRecord {
   const AxisRecord* axes;  // axis_count entries, in file scope; frames alike share one array
   const FindingRecord* findings;
   const IncidentRecord* incidents;
+  const SaidRecord* said;  // said_count entries in file scope, grouped by slave
   const char* info;  // the Info column's text, in file scope; null: nothing decoded in the frame
   guint16 axis_count;
   guint16 finding_count;
   guint16 incident_count;
+  guint16 said_count;
   guint8 copy;
   guint8 timing;  // TimingFlags
   // Held when the first pass saw it (HeldFor): in a single pass, shown before the layout or the
@@ -311,6 +334,67 @@ void fillHeader(header_field_info& h, const char* name, const char* abbrev, ften
 }
 
 // The hf_register_info array, generated from the field table.
+// A code table of the wire layer's as Wireshark's value names (docs/drive-messages.md).
+template <std::size_t N>
+const value_string* makeCodeNames(const std::array<diag::CodeText, N>& table) {
+  auto* names = g_new0(value_string, N + 1);
+  for (std::size_t i = 0; i < N; ++i) names[i] = {table[i].code, table[i].text};
+  return names;
+}
+
+const value_string* derivedNames(DerivedNames names) {
+  switch (names) {
+    case DerivedNames::ErrorCodes:
+      return makeCodeNames(diag::kErrorCodes);
+    case DerivedNames::AbortCodes:
+      return makeCodeNames(diag::kAbortCodes);
+    case DerivedNames::None:
+      break;
+  }
+  return nullptr;
+}
+
+void fillDerivedHeader(header_field_info& h, const DerivedFieldDef& d) {
+  const value_string* names = derivedNames(d.names);
+  const auto* vals = names != nullptr ? VALS(names) : nullptr;
+  switch (d.kind) {
+    case DerivedKind::Index:
+      fillHeader(h, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
+      break;
+    case DerivedKind::FrameNumber:
+      fillHeader(h, d.label, d.filter, FT_FRAMENUM, BASE_NONE, FRAMENUM_TYPE(FT_FRAMENUM_NONE), 0,
+                 d.blurb);
+      break;
+    case DerivedKind::Microseconds:
+      fillHeader(h, d.label, d.filter, FT_DOUBLE, BASE_NONE, nullptr, 0, d.blurb);
+      break;
+    case DerivedKind::Unsigned:
+      fillHeader(h, d.label, d.filter, FT_UINT32, BASE_DEC, vals, 0, d.blurb);
+      break;
+    case DerivedKind::Hex8:
+      fillHeader(h, d.label, d.filter, FT_UINT8, BASE_HEX, vals, 0, d.blurb);
+      break;
+    case DerivedKind::Hex16:
+      fillHeader(h, d.label, d.filter, FT_UINT16, BASE_HEX, vals, 0, d.blurb);
+      break;
+    case DerivedKind::Hex32:
+      fillHeader(h, d.label, d.filter, FT_UINT32, BASE_HEX, vals, 0, d.blurb);
+      break;
+    case DerivedKind::Value:
+      fillHeader(h, d.label, d.filter, FT_UINT64, BASE_HEX, nullptr, 0, d.blurb);
+      break;
+    case DerivedKind::Flag:
+      fillHeader(h, d.label, d.filter, FT_BOOLEAN, 8, nullptr, d.mask, d.blurb);
+      break;
+    case DerivedKind::Bytes:
+      fillHeader(h, d.label, d.filter, FT_BYTES, BASE_NONE, nullptr, 0, d.blurb);
+      break;
+    case DerivedKind::Text:
+      fillHeader(h, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
+      break;
+  }
+}
+
 hf_register_info* buildFieldRegistrations(std::size_t& count) {
   count = kFieldCount + kDerivedCount;
   auto* hf = g_new0(hf_register_info, count);
@@ -345,21 +429,7 @@ hf_register_info* buildFieldRegistrations(std::size_t& count) {
     hf_derived[i] = -1;
     hf_register_info& r = hf[kFieldCount + i];
     r.p_id = &hf_derived[i];
-    switch (d.kind) {
-      case DerivedKind::Index:
-        fillHeader(r.hfinfo, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
-        break;
-      case DerivedKind::FrameNumber:
-        fillHeader(r.hfinfo, d.label, d.filter, FT_FRAMENUM, BASE_NONE,
-                   FRAMENUM_TYPE(FT_FRAMENUM_NONE), 0, d.blurb);
-        break;
-      case DerivedKind::Microseconds:
-        fillHeader(r.hfinfo, d.label, d.filter, FT_DOUBLE, BASE_NONE, nullptr, 0, d.blurb);
-        break;
-      case DerivedKind::Text:
-        fillHeader(r.hfinfo, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
-        break;
-    }
+    fillDerivedHeader(r.hfinfo, d);
   }
   return hf;
 }
@@ -574,6 +644,45 @@ const char* stateLabel(guint8 state) {
   return state == kNoState ? "no state" : driveStateName(static_cast<DriveState>(state));
 }
 
+// What the drives and ESCs said, after the rules: "| 0x03E9 emergency 0x8611, SDO abort
+// 0x1003:2"; the first kNamedSaid named, the rest counted.
+constexpr guint kNamedSaid = 3;
+void appendSaid(wmem_strbuf_t* text, const FrameRecord& record) {
+  for (guint i = 0; i < record.said_count && i < kNamedSaid; ++i) {
+    const SaidRecord& r = record.said[i];
+    const bool new_slave = i == 0 || r.slave != record.said[i - 1].slave;
+    if (new_slave) {
+      wmem_strbuf_append_printf(text, " | %s0x%04X ", r.has_station ? "" : "position ", r.slave);
+    } else {
+      wmem_strbuf_append(text, ", ");
+    }
+    switch (r.kind) {
+      case SaidKind::Emergency:
+        wmem_strbuf_append_printf(text, "emergency 0x%04X", r.code);
+        break;
+      case SaidKind::SdoUpload:
+      case SaidKind::SdoDownload:
+        wmem_strbuf_append_printf(text, "SDO %s 0x%04X:%u",
+                                  r.kind == SaidKind::SdoUpload ? "upload" : "download", r.index,
+                                  r.subindex);
+        break;
+      case SaidKind::SdoAbort:
+        wmem_strbuf_append_printf(text, "SDO abort 0x%04X:%u", r.index, r.subindex);
+        break;
+      case SaidKind::EscRise:
+        wmem_strbuf_append_printf(
+            text, "%s +%u", diag::escCounterName(static_cast<diag::EscCounter>(r.code)), r.number);
+        break;
+      case SaidKind::LinkFault:
+        wmem_strbuf_append(text, "link fault");
+        break;
+    }
+  }
+  if (record.said_count > kNamedSaid) {
+    wmem_strbuf_append_printf(text, " +%u more", record.said_count - kNamedSaid);
+  }
+}
+
 const char* infoText(const FrameRecord& record) {
   auto stateOf = [&record](guint i) {
     const AxisRecord& r = record.axes[i];
@@ -628,6 +737,7 @@ const char* infoText(const FrameRecord& record) {
                               ruleDef(static_cast<RuleId>(rule)).code);
     if (count > 1) wmem_strbuf_append_printf(text, " \u00d7%u", count);
   }
+  appendSaid(text, record);
   wmem_strbuf_append_c(text, ']');
   return wmem_strbuf_finalize(text);
 }
@@ -768,6 +878,81 @@ void keepIncidents(FrameRecord& record) {
   record.incident_count = static_cast<guint16>(std::min<std::size_t>(count, 0xFFFF));
 }
 
+// One thing said, from the library's record of it.
+SaidRecord saidOf(const DriveMessage& m) {
+  SaidRecord r{};
+  r.kind = m.kind == DriveMessage::Kind::Emergency     ? SaidKind::Emergency
+           : m.kind == DriveMessage::Kind::SdoUpload   ? SaidKind::SdoUpload
+           : m.kind == DriveMessage::Kind::SdoDownload ? SaidKind::SdoDownload
+                                                       : SaidKind::SdoAbort;
+  r.has_station = m.slave.station.has_value();
+  r.slave = m.slave.station.value_or(m.slave.position.value_or(0));
+  r.index = m.index;
+  r.subindex = m.subindex;
+  r.code = m.emergency.code;
+  r.error_register = m.emergency.error_register;
+  std::copy(m.emergency.data.begin(), m.emergency.data.end(), r.data);
+  r.number = m.abort_code;
+  r.request_frame = static_cast<guint32>(m.request_frame.value_or(0));
+  r.has_value = m.value.has_value();
+  r.value = m.value.value_or(0);
+  return r;
+}
+
+SaidRecord saidOf(const EscErrorDelta& d) {
+  SaidRecord r{};
+  r.kind = SaidKind::EscRise;
+  r.has_station = d.slave.station.has_value();
+  r.slave = d.slave.station.value_or(d.slave.position.value_or(0));
+  r.code = static_cast<guint16>(d.counter);
+  r.error_register = d.port;
+  r.number = d.delta;
+  return r;
+}
+
+SaidRecord saidOf(const LinkFault& f) {
+  SaidRecord r{};
+  r.kind = SaidKind::LinkFault;
+  r.has_station = f.reported.station.has_value();
+  r.slave = f.reported.station.value_or(f.reported.position.value_or(0));
+  r.error_register = f.reported_port;
+  r.number = f.errors;
+  r.text = wmem_strdup(wmem_file_scope(), linkFaultText(f).c_str());
+  return r;
+}
+
+// What the drives and the ESCs said in the frame, as `by` read it, kept in file scope and grouped
+// by slave (one layer each).
+void keepSaid(FrameRecord& record, const Validator& by) {
+  const std::vector<DriveMessage>& messages = by.mailbox().frameMessages();
+  const std::vector<EscErrorDelta>& deltas = by.escErrors().frameDeltas();
+  const std::vector<LinkFault>& faults = by.escErrors().frameLinkFaults();
+  const std::size_t count = std::min<std::size_t>(messages.size() + deltas.size() + faults.size(),
+                                                  std::numeric_limits<guint16>::max());
+  if (count == 0) return;
+  auto* out = static_cast<SaidRecord*>(wmem_alloc0(wmem_file_scope(), count * sizeof(SaidRecord)));
+  std::size_t n = 0;
+  for (const DriveMessage& m : messages) {
+    if (n < count) out[n++] = saidOf(m);
+  }
+  for (const EscErrorDelta& d : deltas) {
+    if (n < count) out[n++] = saidOf(d);
+  }
+  for (const LinkFault& f : faults) {
+    if (n < count) out[n++] = saidOf(f);
+  }
+  std::stable_sort(out, out + n, [](const SaidRecord& a, const SaidRecord& b) {
+    return a.has_station != b.has_station ? a.has_station : a.slave < b.slave;
+  });
+  record.said = out;
+  record.said_count = static_cast<guint16>(n);
+}
+
+bool saysAnything(const Validator& by) {
+  return !by.mailbox().frameMessages().empty() || !by.escErrors().frameDeltas().empty() ||
+         !by.escErrors().frameLinkFaults().empty();
+}
+
 // Keeps what the validator found in one frame, by frame number.
 void validateFrame(const PipelineFrame& delivered) {
   const std::uint64_t number = delivered.number;
@@ -778,7 +963,8 @@ void validateFrame(const PipelineFrame& delivered) {
   const IncidentDetector* detector = g_pipeline->incidents();
   const bool any_incidents =
       detector->incidents().size() > g_incidents_kept || !detector->revised().empty();
-  if (decode.axis_count == 0 && !any_findings && !any_incidents) {
+  const bool any_said = saysAnything(by);
+  if (decode.axis_count == 0 && !any_findings && !any_incidents && !any_said) {
     if (FrameRecord* kept = frameSlot(number)) *kept = FrameRecord{};
     return;
   }
@@ -797,7 +983,8 @@ void validateFrame(const PipelineFrame& delivered) {
   record.clock = static_cast<guint8>(g_pipeline->clockStage().choice().source);
   keepFindings(record, by, nullptr);
   keepIncidents(record);
-  if (shared == nullptr || any_findings) {
+  if (any_said) keepSaid(record, by);
+  if (shared == nullptr || any_findings || any_said) {
     record.info = infoText(record);
   } else {
     if (shared->info == nullptr) shared->info = infoText(record);
@@ -820,13 +1007,15 @@ void keepHeldFrame(std::uint64_t number, const EcatFrame& frame) {
   const std::vector<Finding>& findings = judge != nullptr ? judge->findings() : kNone;
   const bool held = frame.mayCarryProcessData();
   const bool any_findings = std::any_of(findings.begin(), findings.end(), standsWithoutLayout);
-  if (!held && !any_findings) return;
+  const bool any_said = judge != nullptr && saysAnything(*judge);
+  if (!held && !any_findings && !any_said) return;
   FrameRecord& record = freshRecord(number);
   record.held = !held                                  ? kNotHeld
                 : g_pipeline->clockStage().assessing() ? kHeldForClock
                                                        : kHeldForLayout;
   if (judge != nullptr) keepFindings(record, *judge, standsWithoutLayout);
-  if (any_findings) {
+  if (any_said) keepSaid(record, *judge);
+  if (any_findings || any_said) {
     record.info = infoText(record);
   } else {
     if (g_held_info == nullptr) g_held_info = infoText(record);
@@ -1083,7 +1272,9 @@ struct LayerData {
   const AxisRecord* axis;  // null: a layer only for findings about the bus
   bool first;              // the frame's first layer, which carries the bus's findings
   const FrameWants* wants;
-  ByteReader bytes;  // the frame's captured bytes
+  ByteReader bytes;        // the frame's captured bytes
+  const SaidRecord* said;  // what one slave said in the frame, when the layer is that slave's
+  guint said_count;
 };
 
 // Findings and incidents about the bus, or about an axis this frame does not carry.
@@ -1216,6 +1407,119 @@ void addCaptureNotes(packet_info* pinfo, proto_item* root) {
   }
 }
 
+void addDerivedUint(proto_tree* tree, tvbuff_t* tvb, const FrameWants& wants, Derived id,
+                    guint32 value) {
+  if (wants.is(id))
+    proto_item_set_generated(proto_tree_add_uint(tree, derivedHf(id), tvb, 0, 0, value));
+}
+
+// An emergency's code, its error register with 1001h's bits below it, and its data.
+void addEmergencyItems(proto_tree* tree, tvbuff_t* tvb, const SaidRecord& r,
+                       const FrameWants& wants) {
+  addDerivedUint(tree, tvb, wants, Derived::EmcyCode, r.code);
+  constexpr auto kFirstBit = static_cast<std::size_t>(Derived::EmcyRegisterGeneric);
+  constexpr auto kLastBit = static_cast<std::size_t>(Derived::EmcyRegisterManufacturer);
+  bool bits_wanted = false;
+  for (std::size_t b = kFirstBit; b <= kLastBit; ++b) bits_wanted = bits_wanted || wants.derived[b];
+  if (wants.is(Derived::EmcyRegister) || bits_wanted) {
+    proto_item* item =
+        proto_tree_add_uint(tree, derivedHf(Derived::EmcyRegister), tvb, 0, 0, r.error_register);
+    proto_item_set_generated(item);
+    if (bits_wanted) {
+      proto_tree* bits = proto_item_add_subtree(item, ett_finding);
+      for (std::size_t b = kFirstBit; b <= kLastBit; ++b) {
+        proto_item_set_generated(
+            proto_tree_add_boolean(bits, hf_derived[b], tvb, 0, 0, r.error_register));
+      }
+    }
+  }
+  if (wants.is(Derived::EmcyData)) {
+    proto_item_set_generated(proto_tree_add_bytes_with_length(tree, derivedHf(Derived::EmcyData),
+                                                              tvb, 0, 0, r.data, sizeof r.data));
+  }
+}
+
+// An SDO answer or abort: the object, the value or the abort code, the request's frame, and a
+// 1003h entry's parts (seed 002's layout).
+void addSdoItems(proto_tree* tree, tvbuff_t* tvb, const SaidRecord& r, const FrameWants& wants) {
+  addDerivedUint(tree, tvb, wants, Derived::SdoIndex, r.index);
+  addDerivedUint(tree, tvb, wants, Derived::SdoSubindex, r.subindex);
+  if (r.kind == SaidKind::SdoAbort) addDerivedUint(tree, tvb, wants, Derived::SdoAbort, r.number);
+  if (r.has_value && wants.is(Derived::SdoValue)) {
+    proto_item_set_generated(
+        proto_tree_add_uint64(tree, derivedHf(Derived::SdoValue), tvb, 0, 0, r.value));
+  }
+  const char* object = diag::objectName(r.index);
+  if (object != nullptr && wants.is(Derived::SdoObject)) {
+    proto_item_set_generated(
+        proto_tree_add_string(tree, derivedHf(Derived::SdoObject), tvb, 0, 0, object));
+  }
+  if (r.request_frame != 0) {
+    addDerivedUint(tree, tvb, wants, Derived::SdoRequestIn, r.request_frame);
+  }
+  if (r.kind != SaidKind::SdoAbort && r.index == diag::kPredefinedErrorField && r.subindex >= 1 &&
+      r.has_value) {
+    const diag::ErrorFieldEntry entry = diag::errorFieldEntry(static_cast<std::uint32_t>(r.value));
+    addDerivedUint(tree, tvb, wants, Derived::ErrhistNumber, entry.number);
+    addDerivedUint(tree, tvb, wants, Derived::ErrhistClass, entry.error_class);
+    addDerivedUint(tree, tvb, wants, Derived::ErrhistCode, entry.code);
+  }
+}
+
+// What one slave said in the frame, with expert info for emergencies, aborts and link faults.
+void addSaidItems(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, proto_item* root,
+                  const LayerData& layer) {
+  const FrameWants& wants = *layer.wants;
+  for (guint i = 0; i < layer.said_count; ++i) {
+    const SaidRecord& r = layer.said[i];
+    switch (r.kind) {
+      case SaidKind::Emergency:
+        addEmergencyItems(tree, tvb, r, wants);
+        expert_add_info(pinfo, root, noteEi(ExpertNote::DriveEmergency));
+        break;
+      case SaidKind::SdoUpload:
+      case SaidKind::SdoDownload:
+        addSdoItems(tree, tvb, r, wants);
+        break;
+      case SaidKind::SdoAbort:
+        addSdoItems(tree, tvb, r, wants);
+        expert_add_info(pinfo, root, noteEi(ExpertNote::SdoAborted));
+        break;
+      case SaidKind::EscRise:
+        if (r.has_station) addDerivedUint(tree, tvb, wants, Derived::EscStation, r.slave);
+        addDerivedUint(tree, tvb, wants, Derived::EscPort, r.error_register);
+        if (wants.is(Derived::EscCounter)) {
+          proto_item_set_generated(
+              proto_tree_add_string(tree, derivedHf(Derived::EscCounter), tvb, 0, 0,
+                                    diag::escCounterName(static_cast<diag::EscCounter>(r.code))));
+        }
+        addDerivedUint(tree, tvb, wants, Derived::EscDelta, r.number);
+        break;
+      case SaidKind::LinkFault:
+        if (wants.is(Derived::LinkFault)) {
+          proto_item_set_generated(
+              proto_tree_add_string(tree, derivedHf(Derived::LinkFault), tvb, 0, 0, r.text));
+        }
+        expert_add_info_format(pinfo, root, noteEi(ExpertNote::LinkFaultNamed), "%s", r.text);
+        break;
+    }
+  }
+}
+
+// The expert info of what was said, without a tree (the packet list).
+void addSaidExpertOnly(packet_info* pinfo, const FrameRecord& record) {
+  for (guint i = 0; i < record.said_count; ++i) {
+    const SaidRecord& r = record.said[i];
+    if (r.kind == SaidKind::Emergency)
+      expert_add_info(pinfo, nullptr, noteEi(ExpertNote::DriveEmergency));
+    if (r.kind == SaidKind::SdoAbort)
+      expert_add_info(pinfo, nullptr, noteEi(ExpertNote::SdoAborted));
+    if (r.kind == SaidKind::LinkFault) {
+      expert_add_info_format(pinfo, nullptr, noteEi(ExpertNote::LinkFaultNamed), "%s", r.text);
+    }
+  }
+}
+
 // One layer of the protocol per axis, so that Wireshark's layer operator selects an axis:
 // `ncservo.state#3` is the third axis of the frame (docs/plugin.md).
 int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data) {
@@ -1230,7 +1534,8 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
       (tree != nullptr && layer.axis != nullptr &&
        ((layer.axis->flags & (kRxMalformed | kTxMalformed)) != 0 || structure_only_note)) ||
       (tree != nullptr && (record.held != kNotHeld || record.duplicate)) ||
-      (tree != nullptr && layer.first && notesFrame(pinfo));
+      (tree != nullptr && layer.first && notesFrame(pinfo)) ||
+      (tree != nullptr && layer.said_count > 0);
   proto_item* root = nullptr;
   proto_tree* layer_tree = tree;
   guint start = 0;
@@ -1273,9 +1578,14 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     }
     if (structure_only_note) expert_add_info(pinfo, root, noteEi(ExpertNote::StructureOnly));
   } else if (protocol_item) {
-    root = proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
+    root = layer.said_count > 0
+               ? proto_tree_add_protocol_format(
+                     tree, proto_ncservo, tvb, 0, 0, "NC-Servo %s0x%04X",
+                     layer.said[0].has_station ? "station " : "position ", layer.said[0].slave)
+               : proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
   }
+  if (layer.said_count > 0) addSaidItems(layer_tree, tvb, pinfo, root, layer);
   if (layer.first) {
     addCaptureNotes(pinfo, root);
     if (record.held == kHeldForLayout)
@@ -1319,6 +1629,7 @@ void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   for (guint i = 0; i < record.finding_count; ++i) {
     expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);
   }
+  addSaidExpertOnly(pinfo, record);
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
@@ -1349,15 +1660,34 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   static FrameWants wants;  // dissection is single-threaded
   gatherWants(tree, wants);
   const guint length = tvb_captured_length(tvb);
-  LayerData layer{record, nullptr, true, &wants,
-                  ByteReader(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length)};
-  if (record->axis_count == 0) {
+  LayerData layer{record,
+                  nullptr,
+                  true,
+                  &wants,
+                  ByteReader(length > 0 ? tvb_get_ptr(tvb, 0, length) : nullptr, length),
+                  nullptr,
+                  0};
+  if (record->axis_count == 0 && record->said_count == 0) {
     call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
   }
   for (guint i = 0; i < record->axis_count; ++i) {
     layer.axis = &record->axes[i];
     layer.first = i == 0;
     call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
+  }
+  // One layer per slave that said something (docs/drive-messages.md).
+  layer.axis = nullptr;
+  for (guint i = 0; i < record->said_count;) {
+    guint end = i + 1;
+    while (end < record->said_count && record->said[end].slave == record->said[i].slave &&
+           record->said[end].has_station == record->said[i].has_station) {
+      ++end;
+    }
+    layer.first = record->axis_count == 0 && i == 0;
+    layer.said = &record->said[i];
+    layer.said_count = end - i;
+    call_dissector_only(layer_handle, tvb, pinfo, tree, &layer);
+    i = end;
   }
   return static_cast<int>(tvb_captured_length(tvb));
 }

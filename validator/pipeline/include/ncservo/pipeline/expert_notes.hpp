@@ -18,6 +18,9 @@ enum class ExpertNote : std::uint8_t {
   StructureOnly,
   LayoutMisfit,
   PreferenceError,
+  DriveEmergency,
+  SdoAborted,
+  LinkFaultNamed,
 };
 
 // Wireshark's expert groups and severities the notes use (the plugin maps them to PI_*).
@@ -50,6 +53,13 @@ inline constexpr ExpertNoteDef kExpertNotes[] = {
     // could not be used, so the layout and rules come from elsewhere (docs/plugin.md).
     {ExpertNote::PreferenceError, "ncservo.preference_error", NoteGroup::Protocol, NoteLevel::Error,
      "NCSERVO preference not used"},
+    // What the drives and ESCs said (docs/drive-messages.md), on the frame that carried it.
+    {ExpertNote::DriveEmergency, "ncservo.emcy.expert", NoteGroup::Protocol, NoteLevel::Warn,
+     "a drive sent a CoE emergency"},
+    {ExpertNote::SdoAborted, "ncservo.sdo.abort.expert", NoteGroup::Protocol, NoteLevel::Note,
+     "an SDO request was aborted"},
+    {ExpertNote::LinkFaultNamed, "ncservo.link_fault.expert", NoteGroup::Protocol, NoteLevel::Warn,
+     "the ESC error counters name a faulty link"},
 };
 inline constexpr std::size_t kExpertNoteCount = std::size(kExpertNotes);
 
