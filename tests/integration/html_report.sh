@@ -49,6 +49,17 @@ grep -q '"rule": *"COM-005"' "$WORK/sim.json" || fail "captures/sim-faults-4axis
 "$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/sim.html" "$WORK/sim.json" "$WORK/reads.json" "$marker" ||
   fail "the HTML report of the simulated faults capture in Chromium"
 
+# What the drives and ESCs said (docs/drive-messages.md): the independent generator's SDO reads,
+# aborts and a link fault, each a row of the page.
+python3 "$SRC/tests/tools/gen_capture.py" --axes 4 --cycles 3000 --seed 5 --inject SE-001 --inject MBX-003 \
+  --inject ERH-001 --incident link-fault -o "$WORK/mailbox.pcap" >/dev/null || fail "gen_capture.py exited $?"
+"$NCSERVO" validate --format html -o "$WORK/mailbox.html" --report json:"$WORK/mailbox.json" \
+  "$WORK/mailbox.pcap" >/dev/null 2>&1 || [ $? = 1 ] || fail "validate exited $?"
+python3 -c 'import json, sys; c = json.load(open(sys.argv[1]))["captures"][0]; sys.exit(not (c["link_faults"] and c["drive_messages"]))' \
+  "$WORK/mailbox.json" || fail "the generated capture has no link fault or no drive message"
+"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/mailbox.html" "$WORK/mailbox.json" "$WORK/reads.json" "$marker" ||
+  fail "the HTML report of drive messages and a link fault in Chromium"
+
 # A report of several captures, one of them unreadable, also loads without a console error.
 printf 'not a capture\n' >"$WORK/text.pcap"
 "$NCSERVO" validate --format html -o "$WORK/two.html" --report json:"$WORK/two.json" \

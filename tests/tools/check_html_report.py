@@ -7,7 +7,7 @@ RULES.json maps each rule ID to the field-table rows it reads, as `ncservo rules
 them. The page is loaded from file:// with the network switched off; it must log no console
 error, list one table row per finding of the JSON report (same rule, axis and frame, in order),
 draw a timeline for some findings, and draw in each timeline exactly the rows its rule reads, each
-with data. A finding whose rule reads no row gets no timeline and no link; every link leads to a
+with data; one row per drive message and per link fault of the JSON report. A finding whose rule reads no row gets no timeline and no link; every link leads to a
 drawn timeline. Measured in the browser as each chart is drawn again: no two texts (tick labels,
 titles) of a timeline or an axis's state chart overlap, and a line at the finding's time spans the plot in MARKER's style
 ("dashed black", as docs/html-report.md says; default that).
@@ -152,6 +152,21 @@ def main():
                 if not any(marker_matches(m, marker_style) for m in figure["markers"]):
                     problems.append(f"{name}: no {marker_style} line at the finding's time; lines"
                                     f" there: {figure['markers']}")
+            # What the drives said and the links the counters name (docs/drive-messages.md): one
+            # row each, in the axis's card or, for a slave that is no axis, under the bus.
+            said = driver.execute_script(
+                "return [...document.querySelectorAll(arguments[0])].map(tr =>"
+                " Number(tr.cells[0].textContent))", f"#capture-{index} table.said tr:not(:first-of-type)")
+            want_said = [m["frame"] for m in capture.get("drive_messages", [])]
+            if sorted(said) != sorted(want_said):
+                problems.append(f"capture {index}: drive-message rows at frames {said[:5]}…, the JSON"
+                                f" has {want_said[:5]}… ({len(said)} against {len(want_said)})")
+            links = driver.execute_script(
+                "return [...document.querySelectorAll(arguments[0])].map(tr =>"
+                " tr.cells[1].textContent)", f"#capture-{index} table.links tr:not(:first-of-type)")
+            want_links = [f["text"] for f in capture.get("link_faults", [])]
+            if links != want_links:
+                problems.append(f"capture {index}: link rows {links}, the JSON has {want_links}")
             # The axes' state charts: their state names and seconds must not overlap either.
             for chart in driver.execute_script(MEASURE_JS, f"#capture-{index} div.axis"):
                 texts = chart["texts"]

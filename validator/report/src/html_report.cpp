@@ -14,6 +14,8 @@ namespace ncservo::report {
 namespace {
 using detail::Json;
 using detail::seconds;
+using detail::slaveIsAxis;
+using detail::slaveOfAxis;
 
 // The findings listed in the table, per capture; past it the page says how many were left out.
 constexpr std::size_t kHtmlMaxTableRows = 20000;
@@ -64,6 +66,25 @@ Json timelineJson(const FindingTimeline& t) {
   return j;
 }
 
+Json saidJson(const DriveMessage& m) {
+  return {m.frame, describeDriveMessage(m),
+          m.request_frame ? Json(*m.request_frame) : Json(nullptr)};
+}
+
+// docs/drive-messages.md: the links the ESC counters name and what slaves that are no axis said.
+Json busSaidJson(const CaptureReport& r) {
+  Json links = Json::array();
+  for (const LinkFault& f : r.link_faults) links.push_back({f.frame, linkFaultText(f), f.errors});
+  Json others = Json::array();
+  for (const DriveMessage& m : r.drive_messages) {
+    if (slaveIsAxis(r, m.slave)) continue;
+    Json row = saidJson(m);
+    row.push_back(slaveName(m.slave));
+    others.push_back(std::move(row));
+  }
+  return {{"links", std::move(links)}, {"others", std::move(others)}};
+}
+
 Json captureJson(const CaptureReport& r, Verdict verdict) {
   Json findings = Json::array();
   for (std::size_t i = 0; i < r.findings.size() && i < kHtmlMaxTableRows; ++i) {
@@ -87,11 +108,17 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
       errors.push_back({seconds(r, e.at), sewCauseText(*e.cause),
                         fmt::format("0x{:04X}", e.cause->canopen), e.at.frame});
     }
+    // docs/drive-messages.md: what the drive itself said, beside the history kept from SEW.
+    Json said = Json::array();
+    for (const DriveMessage& m : r.drive_messages) {
+      if (slaveOfAxis(r, a.index, m.slave)) said.push_back(saidJson(m));
+    }
     axes.push_back({{"name", a.name},
                     {"state", a.state ? Json(driveStateName(*a.state)) : Json(nullptr)},
                     {"states", std::move(states)},
                     {"states_omitted", a.timeline_omitted},
-                    {"errors", std::move(errors)}});
+                    {"errors", std::move(errors)},
+                    {"said", std::move(said)}});
   }
   // The timing statistics' deviation histograms (docs/timing.md), in µs from the nominal.
   const auto histogram = [](const std::optional<SeriesSummary>& series) {
@@ -131,6 +158,7 @@ Json captureJson(const CaptureReport& r, Verdict verdict) {
       {"timelines_omitted", r.timelines.omitted},
       {"axes", std::move(axes)},
       {"incidents", detail::incidentsHtmlJson(r)},
+      {"bus_said", busSaidJson(r)},
       {"cycle_histogram", histogram(r.timing.cycle)},
       {"latency_histogram", histogram(r.timing.latency)}};
 }
@@ -162,6 +190,8 @@ th.sortable{cursor:pointer;background:#f3f3f3}th.sortable:hover{background:#e6e6
 figure.timeline{margin:0;border:1px solid #ddd;padding:.5em;width:520px}
 figure.timeline figcaption{font-size:.9em;margin-bottom:.3em}
 .axis{border-top:1px solid #ddd;margin-top:1em}
+.history{display:flex;flex-wrap:wrap;gap:1.5em;align-items:flex-start}
+caption{text-align:left;font-weight:bold;font-size:.9em;padding:.2em 0}
 )css";
 
 // The page's own code: the table's sorting and filtering, and what each chart is given. Drawing is
@@ -315,6 +345,14 @@ function findingsTable(capture, section, index) {
     section.appendChild(el('p', {class: 'note'}, `The first ${capture.findings.length} of ${capture.findings_total} findings are listed (the JSON report has them all).`));
   }
 }
+// A small table with a caption: its class, the column heads and the rows' cells.
+function table(cls, caption, heads, rows) {
+  const t = el('table', {class: cls});
+  t.appendChild(el('caption', {}, caption));
+  const h = el('tr'); heads.forEach(x => h.appendChild(el('th', {}, x))); t.appendChild(h);
+  for (const row of rows) { const r = el('tr'); row.forEach(x => r.appendChild(el('td', {}, String(x)))); t.appendChild(r); }
+  return t;
+}
 function captureSection(capture, index) {
   const section = el('section', {class: 'capture', id: `capture-${index}`});
   section.appendChild(el('h2', {}, capture.path));
@@ -349,16 +387,24 @@ function captureSection(capture, index) {
     const canvas = el('canvas', {width: 900, height: 220});
     div.appendChild(canvas);
     if (axis.states_omitted) div.appendChild(el('p', {class: 'note'}, `${axis.states_omitted} later state changes not kept.`));
+    const history = el('div', {class: 'history'});
     if (axis.errors.length) {
-      const t = el('table', {class: 'errors'});
-      const h = el('tr'); ['time (s)', 'error', 'CANopen', 'frame'].forEach(x => h.appendChild(el('th', {}, x))); t.appendChild(h);
-      for (const e of axis.errors) { const r = el('tr'); [e[0].toFixed(6), e[1], e[2], e[3]].forEach(x => r.appendChild(el('td', {}, String(x)))); t.appendChild(r); }
-      div.appendChild(t);
+      history.appendChild(table('errors', 'Errors ncservo read from SEW', ['time (s)', 'error', 'CANopen', 'frame'], axis.errors.map(e => [e[0].toFixed(6), e[1], e[2], e[3]])));
     } else {
-      div.appendChild(el('p', {class: 'note'}, 'No drive errors.'));
+      history.appendChild(el('p', {class: 'note'}, 'No drive errors.'));
     }
+    if (axis.said.length) {
+      history.appendChild(table('said', 'What the drive said (docs/drive-messages.md)', ['frame', 'message', 'request frame'], axis.said.map(m => [m[0], m[1], m[2] === null ? '' : m[2]])));
+    }
+    div.appendChild(history);
     section.appendChild(div);
     drawStates(canvas, axis, capture.end);
+  }
+  const bus = capture.bus_said;
+  if (bus.links.length || bus.others.length) {
+    section.appendChild(el('h3', {}, 'Links and other slaves'));
+    if (bus.links.length) section.appendChild(table('links', 'Links the ESC error counters name', ['frame', 'link', 'errors'], bus.links));
+    if (bus.others.length) section.appendChild(table('said', 'What slaves that are no axis said', ['frame', 'message', 'request frame', 'slave'], bus.others.map(m => [m[0], m[1], m[2] === null ? '' : m[2], m[3]])));
   }
   section.appendChild(el('h3', {}, 'Cycle time'));
   const ct = capture.cycle_time_us;

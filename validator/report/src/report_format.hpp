@@ -59,6 +59,11 @@ std::string incidentRuleId(CauseId cause);
 // The baseline's incidents not seen again (JSON `baseline_absent_incidents`).
 Json baselineAbsentIncidentsJson(const CaptureReport& r);
 
+// docs/drive-messages.md: whether `slave` is the drive of axis `axis` in the layout (a drive of
+// several axes is each one's), and whether it is any axis's drive.
+bool slaveOfAxis(const CaptureReport& r, std::uint16_t axis, const SlaveRef& slave);
+bool slaveIsAxis(const CaptureReport& r, const SlaveRef& slave);
+
 // html_incidents.cpp: the HTML page's incident cards — their data, style and script
 // (incidentCards(capture, section, index)).
 Json incidentsHtmlJson(const CaptureReport& r);

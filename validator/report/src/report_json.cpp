@@ -1,6 +1,7 @@
 // `validate --format json`: one document for all captures; its parts are JSON Lines' too.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -414,6 +415,21 @@ const AxisInfo* axisOfSlave(const CaptureReport& r, const SlaveRef& slave) {
   }
   return nullptr;
 }
+
+}  // namespace
+
+bool slaveOfAxis(const CaptureReport& r, std::uint16_t axis, const SlaveRef& slave) {
+  if (!slave.station) return false;
+  return std::any_of(r.layout.begin(), r.layout.end(), [&](const AxisInfo& info) {
+    return info.index == axis && info.has_station && info.station == *slave.station;
+  });
+}
+
+bool slaveIsAxis(const CaptureReport& r, const SlaveRef& slave) {
+  return axisOfSlave(r, slave) != nullptr;
+}
+
+namespace {
 
 void putSlave(Json& j, const CaptureReport& r, const SlaveRef& slave) {
   j["station"] = slave.station ? Json(*slave.station) : Json(nullptr);

@@ -176,13 +176,8 @@ void writeTextAxes(std::FILE* out, const CaptureReport& r) {
                  dayTimeOf(r, e.at));
     }
     // docs/drive-messages.md: what the drive itself said, beside the history kept from SEW.
-    const AxisInfo* info = nullptr;
-    for (const AxisInfo& candidate : r.layout) {
-      if (candidate.index == a.index && candidate.has_station) info = &candidate;
-    }
-    if (info == nullptr) continue;
     for (const DriveMessage& m : r.drive_messages) {
-      if (m.slave.station != info->station) continue;
+      if (!slaveOfAxis(r, a.index, m.slave)) continue;
       fmt::print(out, "    drive said: {} at frame {}", describeDriveMessage(m), m.frame);
       if (m.request_frame) fmt::print(out, " (request frame {})", *m.request_frame);
       fmt::print(out, "\n");
@@ -207,10 +202,7 @@ void writeBusDiagnosis(std::FILE* out, const CaptureReport& r) {
     fmt::print(out, "mailbox: {} at frame {}: {}\n", slaveName(n.slave), n.frame, n.text);
   }
   for (const DriveMessage& m : r.drive_messages) {
-    bool axis = false;
-    for (const AxisInfo& info : r.layout)
-      axis = axis || (info.has_station && m.slave.station == info.station);
-    if (axis) continue;
+    if (slaveIsAxis(r, m.slave)) continue;
     fmt::print(out, "{} said: {} at frame {}\n", slaveName(m.slave), describeDriveMessage(m),
                m.frame);
   }
