@@ -520,10 +520,12 @@ void applyPreferences() {
   auto* settings = new RuleSettings();
   std::optional<Config> config;
   std::vector<AxisConfig> eni_axes;
+  std::vector<MailboxArea> eni_mailboxes;
   if (pref_eni_path != nullptr && pref_eni_path[0] != '\0') {
     Result<EniLayout> eni = loadEni(pref_eni_path);
     if (eni) {
       eni_axes = std::move(eni->axes);
+      eni_mailboxes = std::move(eni->mailboxes);
     } else {
       preferenceFailed(eni.error().text());
     }
@@ -547,6 +549,7 @@ void applyPreferences() {
   }
   auto* options = new DecoderOptions(
       layoutOptions(config ? &*config : nullptr, &eni_axes, pref_default_layout != 0));
+  options->mailbox_areas = std::move(eni_mailboxes);
   delete g_options;
   g_options = options;
   delete g_settings;

@@ -111,5 +111,39 @@ TEST(EniTasks, EachFrameHasItsTasksCycleTime) {
   EXPECT_EQ(eni->axes.size(), 2u);
 }
 
+// ETG.2100's Slave/Mailbox/Send and Recv starts: SM0 and SM1 of every slave that has a station
+// address and both; a slave without them has none (docs/drive-messages.md).
+TEST(EniMailboxes, EachSlavesAreas) {
+  const std::string xml =
+      "<EtherCATConfig><Config>\n"
+      "<Slave><Info><Name>A</Name><PhysAddr>1001</PhysAddr></Info>"
+      "<Mailbox><Send><Start>#x1000</Start><Length>128</Length></Send>"
+      "<Recv><Start>4224</Start><Length>128</Length></Recv></Mailbox></Slave>\n"
+      "<Slave><Info><Name>B</Name><PhysAddr>1002</PhysAddr></Info></Slave>\n"
+      "<Slave><Info><Name>C</Name></Info>"
+      "<Mailbox><Send><Start>#x1800</Start></Send><Recv><Start>#x1C00</Start></Recv></Mailbox>"
+      "</Slave>\n"
+      "</Config></EtherCATConfig>";
+  const Result<EniLayout> eni = parseEni(xml, "eni.xml");
+  ASSERT_TRUE(eni.has_value()) << eni.error().text();
+  EXPECT_EQ(eni->slaves, 3u);
+  ASSERT_EQ(eni->mailboxes.size(), 1u);
+  EXPECT_EQ(eni->mailboxes[0].station, 1001);
+  EXPECT_EQ(eni->mailboxes[0].out_start, 0x1000);
+  EXPECT_EQ(eni->mailboxes[0].in_start, 0x1080);
+}
+
+TEST(EniMailboxes, AStartThatIsNoNumberNamesItsLine) {
+  const Result<EniLayout> eni = parseEni(
+      "<EtherCATConfig><Config>\n<Slave><Info><PhysAddr>1001</PhysAddr></Info><Mailbox>\n"
+      "<Send><Start>x</Start></Send><Recv><Start>1</Start></Recv></Mailbox></Slave>"
+      "</Config></EtherCATConfig>",
+      "eni.xml");
+  ASSERT_FALSE(eni.has_value());
+  EXPECT_EQ(eni.error().line, 3u);
+  EXPECT_NE(eni.error().text().find("<Start> is not a number"), std::string::npos)
+      << eni.error().text();
+}
+
 }  // namespace
 }  // namespace ncservo

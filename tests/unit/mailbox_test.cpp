@@ -380,6 +380,27 @@ TEST(MailboxTracker, AreasSeenInUse) {
   EXPECT_EQ(h.tracker.messages()[0].request_frame, 1u);
 }
 
+// PROTOCOL.md §11: the start-up's SM writes, else the ENI's areas, else seen in use.
+TEST(MailboxTracker, AreasFromTheEni) {
+  Harness without;  // no start-up, no write seen: a read alone is nobody's mailbox
+  without.read(mbx(3, 1, coe(1, emcy(0x8611, 0x21, {0x0D, 0, 0, 0, 0}))));
+  EXPECT_TRUE(without.tracker.messages().empty());
+  Harness h;
+  h.tracker.configure({MailboxArea{kStation, kOut, kIn}});
+  h.read(mbx(3, 1, coe(1, emcy(0x8611, 0x21, {0x0D, 0, 0, 0, 0}))));
+  ASSERT_EQ(h.tracker.messages().size(), 1u);
+  EXPECT_EQ(h.tracker.messages()[0].emergency.code, 0x8611);
+  EXPECT_EQ(h.tracker.messages()[0].slave.station, kStation);
+}
+
+TEST(MailboxTracker, TheStartUpsAreasWinOverTheEnis) {
+  Harness h;
+  h.tracker.configure({MailboxArea{kStation, 0x1800, 0x1880}});
+  h.startUp();
+  h.read(mbx(3, 1, coe(1, emcy(0x8611, 0x21, {0x0D, 0, 0, 0, 0}))));
+  EXPECT_EQ(h.tracker.messages().size(), 1u);
+}
+
 TEST(MailboxTracker, ProcessDataIsNotAMailbox) {
   Harness h;
   h.startUp();

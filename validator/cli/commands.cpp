@@ -137,8 +137,11 @@ Result<LayoutFiles> loadLayoutFiles(const LayoutArgs& args) {
 }
 
 DecoderOptions decoderOptions(const LayoutFiles& files, const LayoutArgs& args) {
-  return layoutOptions(files.config ? &*files.config : nullptr,
-                       files.eni ? &files.eni->axes : nullptr, !args.no_default_layout);
+  DecoderOptions options =
+      layoutOptions(files.config ? &*files.config : nullptr, files.eni ? &files.eni->axes : nullptr,
+                    !args.no_default_layout);
+  if (files.eni) options.mailbox_areas = files.eni->mailboxes;
+  return options;
 }
 
 void addRuleOptions(CLI::App& command, RuleArgs& rules) {

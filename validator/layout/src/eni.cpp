@@ -3,6 +3,7 @@
 //   Slave/Info/{Name, PhysAddr, AutoIncAddr}
 //   Slave/ProcessData/Send|Recv/{BitStart, BitLength}     outputs | inputs, in image bits
 //   Slave/ProcessData/Sm2|Sm3/DefaultSize                   the sync managers' sizes, bytes
+//   Slave/Mailbox/Send|Recv/Start                           SM0 | SM1, the mailbox areas
 //   Cyclic/CycleTime                                        each task's cycle, µs
 //   Cyclic/Frame/Cmd/{Cmd, Addr, DataLength, OutputOffs, InputOffs, Cnt}
 // Every <Cyclic> element is read: a second task has one of its own.
@@ -203,6 +204,20 @@ Result<std::optional<AxisConfig>> servoAxis(const pugi::xml_node& slave, Reader&
 
 }  // namespace
 
+// The slave's mailbox areas, when it has a station address and a <Mailbox> with both starts.
+std::optional<MailboxArea> mailboxArea(const pugi::xml_node& slave, Reader& reader) {
+  const pugi::xml_node mailbox = slave.child("Mailbox");
+  if (!mailbox) return std::nullopt;
+  const auto station = reader.number(slave.child("Info"), "PhysAddr", false);
+  const auto out = reader.number(mailbox.child("Send"), "Start", false);
+  const auto in = reader.number(mailbox.child("Recv"), "Start", false);
+  constexpr std::int64_t kMax = 0xFFFF;
+  const auto fits = [](const std::optional<std::int64_t>& v) { return v && *v >= 0 && *v <= kMax; };
+  if (!fits(station) || !fits(out) || !fits(in)) return std::nullopt;
+  return MailboxArea{static_cast<std::uint16_t>(*station), static_cast<std::uint16_t>(*out),
+                     static_cast<std::uint16_t>(*in)};
+}
+
 Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
   EniLayout layout;
   Reader reader(path, xml);
@@ -224,6 +239,10 @@ Result<EniLayout> parseEni(std::string_view xml, const std::string& path) {
         servoAxis(slave, reader, *commands, layout.axes.size());
     if (!axis) return fail(axis.error());
     if (*axis) layout.axes.push_back(std::move(**axis));
+    if (const std::optional<MailboxArea> area = mailboxArea(slave, reader)) {
+      layout.mailboxes.push_back(*area);
+    }
+    if (reader.failed()) return fail(reader.firstError());
   }
   return layout;
 }

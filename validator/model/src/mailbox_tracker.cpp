@@ -96,12 +96,23 @@ void MailboxTracker::MbxData::absorb(const MbxData& other) {
   }
 }
 
-std::optional<std::uint16_t> MailboxTracker::areaOf(const MbxData& data, bool in) {
+const MailboxArea* MailboxTracker::configuredFor(std::uint16_t station) const {
+  for (const MailboxArea& area : configured_) {
+    if (area.station == station) return &area;
+  }
+  return nullptr;
+}
+
+std::optional<std::uint16_t> MailboxTracker::areaOf(const Slave& slave, bool in) const {
+  const MbxData& data = slave.data;
   const std::size_t at = in ? ecat::kSyncManagerStride : 0;
   bool known = true;
   for (std::size_t i = at; i <= at + ecat::kSmControlAt; ++i) known = known && data.sm_known[i];
   if (known && (data.sm[at + ecat::kSmControlAt] & ecat::kSmModeMask) == ecat::kSmModeMailbox) {
     return static_cast<std::uint16_t>(loadLe<2>(data.sm.data() + at + ecat::kSmStartAt));
+  }
+  if (const MailboxArea* area = slave.station ? configuredFor(*slave.station) : nullptr) {
+    return in ? area->in_start : area->out_start;
   }
   return in ? data.in_seen : data.out_seen;
 }
@@ -149,9 +160,14 @@ void MailboxTracker::onFrame(const EcatFrame& frame, const ByteReader& bytes,
     }
     std::size_t s = address.target == SlaveTarget::Station ? directory_.findStation(address.value)
                                                            : directory_.findPosition(address.value);
-    const MbxData* data = s == directory_.kNone ? nullptr : &directory_.slaves()[s].data;
-    const std::optional<std::uint16_t> out_at = data ? areaOf(*data, false) : std::nullopt;
-    const std::optional<std::uint16_t> in_at = data ? areaOf(*data, true) : std::nullopt;
+    // A slave the ENI gives areas for is known from its first datagram on.
+    if (s == directory_.kNone && address.target == SlaveTarget::Station &&
+        configuredFor(address.value) != nullptr) {
+      s = directory_.slaveFor(address);
+    }
+    const Slave* slave = s == directory_.kNone ? nullptr : &directory_.slaves()[s];
+    const std::optional<std::uint16_t> out_at = slave ? areaOf(*slave, false) : std::nullopt;
+    const std::optional<std::uint16_t> in_at = slave ? areaOf(*slave, true) : std::nullopt;
     const bool has_out = out_at.has_value();
     const std::size_t out_start = out_at.value_or(0);
     const bool has_in = in_at.has_value();

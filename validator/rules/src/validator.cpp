@@ -15,6 +15,7 @@ Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fas
   for (const RuleDef& rule : kRules) {
     if (rule.event != kNoEvent && settings_.isEnabled(rule.id)) judged_events_[rule.event] = true;
   }
+  mailbox_.configure(decoder_.mailboxAreas());
 }
 
 // What the fast path compares, derived from what the axis model and the enabled axis rules

@@ -8,6 +8,15 @@
 
 namespace ncservo {
 
+// A slave's mailbox areas as a configuration tool set them (the ENI's Slave/Mailbox/Send and
+// Recv starts): SM0, where the master writes its requests, and SM1, where it reads the answers
+// (docs/drive-messages.md).
+struct MailboxArea {
+  std::uint16_t station = 0;
+  std::uint16_t out_start = 0;
+  std::uint16_t in_start = 0;
+};
+
 struct AxisConfig {
   std::string name;
   // Logical addresses of the 10-byte RxPDO and the 40-byte TxPDO (LRW/LRD/LWR exchange) ...

@@ -101,6 +101,9 @@ struct DecoderOptions {
   bool default_layout = true;
   // Why the inference refused to decide (for noServoReason); empty when it did not run.
   std::string inference_refusal;
+  // The slaves' mailbox areas an ENI gave (docs/drive-messages.md): used where the capture holds
+  // no start-up writing the sync managers.
+  std::vector<MailboxArea> mailbox_areas;
 };
 
 class Decoder {
@@ -121,6 +124,8 @@ class Decoder {
   std::string noServoReason() const;
   // No axis was found, and a --config file would give them (layoutConfigExample shows one).
   bool noServoWantsLayout() const { return axes_.empty() && !startupShowsNoServo(); }
+  // The mailbox areas an ENI gave (DecoderOptions::mailbox_areas).
+  const std::vector<MailboxArea>& mailboxAreas() const { return options_.mailbox_areas; }
 
  private:
   // `signature`: of the datagram list; `any_wkc`: some WKC is above zero.

@@ -32,6 +32,8 @@ struct EniLayout {
   std::vector<AxisConfig> axes;
   std::size_t slaves = 0;  // slaves in the file, servos or not
   std::vector<EniCyclicFrame> frames;
+  // Every slave's (servo or not) with a station address and both mailbox starts.
+  std::vector<MailboxArea> mailboxes;
 };
 
 // An error names the file and, when it is about one element, its line: "FILE:LINE: MESSAGE".

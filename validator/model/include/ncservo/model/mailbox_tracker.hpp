@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ncservo/base/byte_reader.hpp"
+#include "ncservo/layout/axis_config.hpp"
 #include "ncservo/model/bus_events.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/mailbox.hpp"
@@ -72,6 +73,10 @@ class MailboxTracker {
   static constexpr std::size_t kMaxMessages = 10'000;
   static constexpr std::size_t kMaxNotes = 64;
 
+  // The mailbox areas a configuration tool set (an ENI), used for a slave whose start-up the
+  // capture does not hold (PROTOCOL.md §11: the start-up's SM writes, else these, else seen).
+  void configure(std::vector<MailboxArea> areas) { configured_ = std::move(areas); }
+
   // Every walked frame (Ok or Truncated) in capture order, `addressing.beginFrame` called for it.
   // Events for the rules (emergencies, aborts, 1003h shrinking) are appended to `out`.
   // `now` on the segment's clock (the events'), `time_ns` the frame's own timestamp (the
@@ -122,8 +127,10 @@ class MailboxTracker {
   };
   using Slave = SlaveDirectory<MbxData>::Slave;
 
-  // The SM0 (`in` false) or SM1 start the start-up configured as a mailbox, else the one seen.
-  static std::optional<std::uint16_t> areaOf(const MbxData& data, bool in);
+  // The SM0 (`in` false) or SM1 start the start-up configured as a mailbox, else the ENI's, else
+  // the one seen.
+  std::optional<std::uint16_t> areaOf(const Slave& slave, bool in) const;
+  const MailboxArea* configuredFor(std::uint16_t station) const;
   void onSmWrite(MbxData& data, const Datagram& dg, const ByteReader& bytes);
   void onMailbox(Slave& slave, const MailboxMessage& m, const ByteReader& bytes, bool in,
                  std::vector<BusEvent>& out);
@@ -140,6 +147,7 @@ class MailboxTracker {
   SlaveRef refOf(const Slave& slave) const { return SlaveRef{slave.station, slave.position}; }
 
   SlaveDirectory<MbxData> directory_;
+  std::vector<MailboxArea> configured_;
   std::vector<DriveMessage> messages_;
   std::uint64_t omitted_ = 0;
   std::vector<DriveMessage> frame_messages_;
