@@ -289,12 +289,8 @@ void Validator::reportEvents() {
     event_findings_.clear();
     judgeEvent(event, settings_, runs_, event_findings_);
     for (EventFinding& f : event_findings_) {
-      std::optional<std::uint16_t> axis;
-      for (const AxisInfo& info : decoder().axes()) {
-        if (info.has_station && f.slave.station && info.station == *f.slave.station) {
-          axis = info.index;
-        }
-      }
+      const std::optional<std::uint16_t> axis =
+          f.slave.station ? decoder_.axisOfStation(*f.slave.station) : std::nullopt;
       report(f.rule, axis, event.since, std::move(f.message));
     }
   }
