@@ -264,6 +264,14 @@ TEST_P(DriveWordsRules, Judged) {
   if (!found.empty()) {
     EXPECT_NE(found[0]->message.find(row.says), std::string::npos) << found[0]->message;
   }
+  // The rows declare what they read (sew, mailbox): the fast path changes nothing.
+  const test::Recorded slow = test::record(row.script, nullptr, FastPath::Off);
+  ASSERT_EQ(slow.findings.size(), r.findings.size());
+  for (std::size_t i = 0; i < r.findings.size(); ++i) {
+    EXPECT_EQ(slow.findings[i].rule, r.findings[i].rule) << i;
+    EXPECT_EQ(slow.findings[i].at.frame, r.findings[i].at.frame) << i;
+    EXPECT_EQ(slow.findings[i].message, r.findings[i].message) << i;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Rows, DriveWordsRules, ::testing::ValuesIn(wordsRows()),

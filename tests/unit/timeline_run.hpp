@@ -20,7 +20,8 @@ struct Recorded {
 
 // `after_frame`, when given, sees the validator after each frame (its findings are that frame's).
 inline Recorded record(const Script& script,
-                       const std::function<void(const Validator&)>& after_frame = nullptr) {
+                       const std::function<void(const Validator&)>& after_frame = nullptr,
+                       FastPath fast_path = FastPath::On) {
   std::optional<Validator> validator;
   report::TimelineRecorder recorder(script.ruleSettings());
   Recorded out;
@@ -36,7 +37,7 @@ inline Recorded record(const Script& script,
         for (std::size_t a = 0; a < options.axes.size() && script.firstStation(); ++a) {
           options.axes[a].station = static_cast<std::uint16_t>(*script.firstStation() + a);
         }
-        validator.emplace(options, script.ruleSettings());
+        validator.emplace(options, script.ruleSettings(), fast_path);
         first_ns = script.timeOf(at);
       }
       const Observation& frame =
