@@ -213,6 +213,10 @@ TEST(RuleTable, TimedRulesSayWhatTheTimeoutIsAxisRulesCheckAndDescribe) {
     EXPECT_NE(rule.describe, nullptr);
     EXPECT_EQ(rule.kind == RuleKind::Axis, rule.reads.any() || rule.id == RuleId::Com005)
         << "an axis rule declares what it reads (COM-005 reads only the failure counter)";
+    EXPECT_TRUE(rule.began == nullptr || rule.kind == RuleKind::Axis)
+        << "only an axis rule's episode begins at a stamped event";
+    EXPECT_EQ(rule.began != nullptr, rule.reads.mailbox)
+        << "the rules on what a drive said time it from the message or the fault it answers";
   }
 }
 
