@@ -10,6 +10,7 @@ SRC=$1 BUILD=$2 SEEDS=${3:-1}
 source "$SRC/tests/integration/lib.sh"
 # The generator's rules in the order of the rule table.
 mapfile -t injectable < <(python3 "$GEN" --list-rules)
+mapfile -t station_rules < <(python3 "$GEN" --list-station-rules)
 RULES=()
 for rule in $("$NCSERVO" rules | awk '{ print $1 }'); do
   if [[ " ${injectable[*]} " == *" $rule "* ]]; then RULES+=("$rule"); fi
@@ -39,11 +40,15 @@ for seed in $(seq 1 "$SEEDS"); do
     setup="$inject, $axes axes, $encap, $format, Servo_Ready_Mode $ready, seed $seed"
     python3 "$GEN" --axes "$axes" --cycles $((2500 + seed * 100)) --seed $((seed * 1000 + cases)) \
       --encap "$encap" --format "$format" --ready-mode "$ready" --inject "$inject" \
-      -o "$WORK/capture.$format" --findings "$WORK/expected.json" >"$WORK/gen.log" 2>&1 ||
+      -o "$WORK/capture.$format" --findings "$WORK/expected.json" \
+      --layout-config "$WORK/layout.toml" >"$WORK/gen.log" 2>&1 ||
       fail "generator ($setup): $(tail -1 "$WORK/gen.log")"
+    # A rule judged on the axis whose drive said it needs the layout's stations.
+    layout=()
+    [[ " ${station_rules[*]} " == *" $rule "* ]] && layout=(--config "$WORK/layout.toml")
     set +e
-    "$NCSERVO" validate --format json --servo-ready-mode "$ready" "$WORK/capture.$format" \
-      >"$WORK/report.json" 2>"$WORK/err.txt"
+    "$NCSERVO" validate --format json --servo-ready-mode "$ready" "${layout[@]}" \
+      "$WORK/capture.$format" >"$WORK/report.json" 2>"$WORK/err.txt"
     rc=$?
     set -e
     if { [ $rc != 0 ] && [ $rc != 1 ]; } ||

@@ -8,18 +8,25 @@
 SRC=$1 BUILD=$2 RULE=$3
 shift 3
 source "$SRC/tests/integration/lib.sh"
+# A rule judged on the axis whose drive said it needs the layout's stations: the generator's
+# layout file names them, for the validator and the plugin alike.
+layout=() plugin_layout=()
+if python3 "$GEN" --list-station-rules | grep -x "$RULE" >/dev/null; then
+  layout=(--config "$WORK/layout.toml") plugin_layout=(-o "ncservo.config:$WORK/layout.toml")
+fi
 python3 "$GEN" --axes 3 --cycles 1500 --inject "$RULE" "$@" -o "$WORK/capture.pcap" \
-  --findings "$WORK/expected.json"
-chmod a+r "$WORK/capture.pcap"
+  --findings "$WORK/expected.json" --layout-config "$WORK/layout.toml"
+chmod a+r "$WORK/capture.pcap" "$WORK/layout.toml"
 set +e
-"$NCSERVO" validate --format json "$WORK/capture.pcap" >"$WORK/report.json" 2>"$WORK/err.txt"
+"$NCSERVO" validate --format json "${layout[@]}" "$WORK/capture.pcap" >"$WORK/report.json" \
+  2>"$WORK/err.txt"
 rc=$?
 set -e
 [ $rc = 0 ] || [ $rc = 1 ] || fail "validate exit $rc: $(cat "$WORK/err.txt")"
 python3 "$SRC/tests/tools/check_findings.py" "$WORK/report.json" "$WORK/expected.json" ||
   fail "$RULE: findings differ from the injection"
 
-rule_frames "$RULE" "$WORK/capture.pcap" "$WORK/plugin.txt"
+rule_frames "$RULE" "$WORK/capture.pcap" "$WORK/plugin.txt" "${plugin_layout[@]}"
 python3 - "$WORK/report.json" "$WORK/plugin.txt" "$RULE" <<'PY' || fail "$RULE: plugin and validator disagree"
 import json, sys
 findings = json.load(open(sys.argv[1]))["captures"][0]["findings"]

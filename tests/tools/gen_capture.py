@@ -129,13 +129,25 @@ It is also the oracle for the rule engine (`ncservo validate`):
               (one finding each)
       DC-001  the drive reads -5.0, -5.2 and -4.9 us in a row after 3 reads in sync, then in
               sync again: one finding, on the first
+    A drive's own words against its SEW (the same mailbox; injected on the axis like the
+    drive rules, starting when it is idle).  The validator judges them on the axis whose
+    station it knows: --layout-config then names each axis's station (--list-station-rules).
+      MBX-001 the NC reads 1003h:00 (the mailbox is found from use), then the drive sends an
+              emergency 0x8611 with no SEW cause bit for 2 x drive_response; from then on it
+              sends an emergency after the cycle that shows each cause bit rising
+      MBX-002 the NC reads 1003h:00; the drive, sending an emergency for each fault, has a
+              following error (0x8611 after its cycle), the NC recovers, then a second
+              following error with no emergency (later faults reported again)
+      ERH-002 a following error (0x8611 in PROTOCOL.md section 7); the NC reads 1003h:01 and
+              the newest entry carries 0x2300 (number 2, class 0x03): on that read
 --findings FILE
     write the findings the injections must produce, as JSON:
       {"expected": [{"rule": "SE-001", "axis": 0, "first_frame": N, "last_frame": M,
                      "due_frame": D}, ...],
        "companions": {"COM-003": ["COM-004"], ...}}
     axis is null for COM-001, COM-002, COM-004 and the §11 rules (MBX-003, ERH-001, LNK-001,
-    LNK-002, DC-001: without a start-up the validator does not know an axis's station).  Frames
+    LNK-002, DC-001: without a start-up the validator does not know an axis's station); MBX-001,
+    MBX-002 and ERH-002 name their axis (the layout file names the stations).  Frames
     are 1-based, counting every record.
     The window [first_frame, last_frame] is where the validator may report the finding:
     an immediate finding exactly on the frame that first shows it (the master copy for NC
@@ -146,7 +158,9 @@ It is also the oracle for the rule engine (`ncservo validate`):
     missing.  COM-005: from the master frame of the fourth failed cycle to the returned copy of
     the next.  COM-003: timed like the others, due on the first frame more than drive_response
     after the returned copy of the first master frame after the outage.  The §11 rules: exactly
-    the returned copy of the acyclic frame that shows them.
+    the returned copy of the acyclic frame that shows them (ERH-002: the read of 1003h:01);
+    MBX-001 timed from the cycle after which the emergency is read, MBX-002 from the returned
+    copy showing the unreported cause bit.
     companions lists, per injected rule, other rules it necessarily causes as well (see
     COMPANIONS).  check_findings.py compares a validator's JSON report with this file.
 --incident KIND[@SECONDS][:AXIS]   (repeatable)
@@ -268,7 +282,13 @@ DC_DIFFERENCE = 0x092C
 DC_SMALLER = 1 << 31  # sign and magnitude: set when the slave's copy is smaller
 MBX_OUT, MBX_IN, MBX_SIZE = 0x1000, 0x1080, 128  # SM0 (master -> drive) and SM1 areas
 MBX_COE = 3
-COE_SDO_REQUEST, COE_SDO_RESPONSE = 2, 3
+COE_EMERGENCY, COE_SDO_REQUEST, COE_SDO_RESPONSE = 1, 2, 3
+# PROTOCOL.md section 7: the CANopen code of each SEW cause bit, as this project maps it
+CANOPEN_CODE = {1 << bit: code for bits, code in (
+    ((1,), 0x7305), ((2,), 0x4200), ((3, 13, 14, 22), 0x8100), ((5,), 0x3100),
+    ((6, 7, 16, 20, 24), 0x2300), ((8, 9), 0x7306), ((10,), 0x6010), ((11, 12, 15), 0x8130),
+    ((17,), 0x6320), ((18,), 0x6100), ((19,), 0x8611), ((21,), 0x7600), ((23,), 0x8400))
+    for bit in bits}
 SDO_DOWNLOAD, SDO_UPLOAD, SDO_ABORT = 1 << 5, 2 << 5, 4 << 5  # request specifiers
 SDO_UPLOADED, SDO_DOWNLOADED = 2 << 5, 3 << 5  # response specifiers
 SDO_EXPEDITED, SDO_SIZE_INDICATED = 0x02, 0x01
@@ -814,12 +834,19 @@ INJECTABLE = {
     "LNK-001": (None, 0.35, 1),
     "DC-001": (None, 0.40, 1),
     "LNK-002": (None, 0.50, -1),  # the last slave: the end of the line
+    # a drive's own words against its SEW (axis injections with mailbox traffic)
+    "ERH-002": (None, 0.20, 1),
+    "MBX-001": ("drive_response", 0.45, 1),
+    "MBX-002": ("drive_response", 0.55, 0),
 }
 BUS_RULES = frozenset(("COM-001", "COM-002", "COM-003", "COM-004", "COM-005"))
 # Shown by the master's acyclic frames between the cycles (PROTOCOL.md §11), not by the process
 # data: they run whatever the axes do.  Their findings have axis null: without a start-up the
 # validator does not know which station an axis is.
 ACYCLIC_RULES = frozenset(("MBX-003", "ERH-001", "LNK-001", "LNK-002", "DC-001"))
+# Judged on the axis whose drive said it (its emergencies, its 1003h against its SEW): the
+# validator must know the axis's station, which --layout-config then names.
+STATION_RULES = frozenset(("MBX-001", "MBX-002", "ERH-002"))
 # What a capture with only one copy of each frame can show (inputs and WKC live in the
 # returned copy; "not returned" needs the master copy).
 NEEDS_BOTH_COPIES = frozenset(("COM-003", "COM-004", "COM-005"))
@@ -1249,6 +1276,64 @@ class Injector:
         nc.table = table  # back, followed in time
         yield from self.until(lambda: nc.active_table() == nc.table)
 
+    # --- a drive's own words against its SEW (STATION_RULES; PROTOCOL.md section 11) ---
+    def _send(self, script):
+        """An acyclic script's frames, each step's after its cycle's frame."""
+        for frames in script:
+            self.session.acyclic.queue += frames or []
+            yield
+
+    def _mailbox_found(self):
+        """The NC reads 1003h:00: the validator finds the drive's mailbox areas from use."""
+        acyclic = self.session.acyclic
+        mailbox = acyclic.mailbox(self.inj.axis)
+        yield from self._send(acyclic._upload_count(mailbox, self.inj.axis))
+        return mailbox
+
+    def _mbx_001(self):
+        """The drive sends an emergency (0x8611 following error) while its SEW shows nothing,
+        then nothing for 2 x drive_response; from then on it reports each fault with one."""
+        mailbox = yield from self._mailbox_found()
+        self.session.acyclic.queue.append(mailbox.emergency(0x8611, 0x21))
+        self.session.acyclic.reporting.add(self.inj.axis)
+        self.expect_now(RETURNED, "drive_response")
+        yield
+        yield from self.wait_ns(self.t() + 2 * self.timeout_ns("drive_response"))
+
+    def _mbx_002(self):
+        """A drive that reports each fault with an emergency (after the cycle that shows the
+        cause bit): a following error reported so; after the NC's recovery, a second one with
+        none; later faults reported again."""
+        nc, acyclic = self.nc, self.session.acyclic
+        yield from self._mailbox_found()
+        acyclic.reporting.add(self.inj.axis)
+        recoveries = nc.recoveries
+        self.drive.fault(SEW_FOLLOWING)
+        yield
+        yield from self._until_fault_recovered(nc, recoveries)
+        yield from self.until(nc.settled)
+        recoveries = nc.recoveries
+        acyclic.silent.add(self.inj.axis)
+        self.drive.fault(SEW_FOLLOWING)
+        self.expect_now(RETURNED, "drive_response")
+        yield
+        yield from self._until_fault_recovered(nc, recoveries)
+
+    def _erh_002(self):
+        """A following error (0x8611 in section 7); the NC reads 1003h:01, and the drive's
+        newest entry carries 0x2300 (current), error number 2, class 0x03."""
+        nc, acyclic = self.nc, self.session.acyclic
+        mailbox = acyclic.mailbox(self.inj.axis)
+        recoveries = nc.recoveries
+        self.drive.fault(SEW_FOLLOWING)
+        yield
+        entry = 2 << 24 | 0x03 << 16 | CANOPEN_CODE[SEW_OVERLOAD]
+        yield from self._send(acyclic._sdo(
+            mailbox, (SDO_UPLOAD, ERROR_FIELD, 1),
+            (COE_SDO_RESPONSE, SDO_UPLOADED | SDO_EXPEDITED | SDO_SIZE_INDICATED, ERROR_FIELD, 1,
+             entry), [(self.inj.rule, self.inj.axis)]))
+        yield from self._until_fault_recovered(nc, recoveries)
+
     # --- incident chains (--incident) ---
     def _until_fault_recovered(self, nc, recoveries):
         """The drive's fault reaches the NC, which clears it and enables the axis again (its
@@ -1491,6 +1576,16 @@ class Mailbox:
         message = mailbox_message(self.sent, COE_SDO_REQUEST, command, index, subindex, data)
         return AcyclicFrame([(CMD_FPWR, self.station, MBX_OUT, message, message, 1)])
 
+    def emergency(self, code, register, shows=()):
+        """A read of SM1 holding the drive's CoE emergency: error code, error register (1001h),
+        5 bytes of manufacturer data (PROTOCOL.md section 11)."""
+        self.answered = self.answered % 7 + 1
+        body = struct.pack("<HHB5s", COE_EMERGENCY << 12, code, register, bytes(5))
+        header = struct.pack("<HHBB", len(body), 0, 0, MBX_COE | self.answered << 4)
+        message = (header + body).ljust(MBX_SIZE, b"\0")
+        empty = bytes(MBX_SIZE)
+        return AcyclicFrame([(CMD_FPRD, self.station, MBX_IN, empty, message, 1)], shows)
+
     def read(self, answer=None, shows=()):
         """A read of SM1; without an answer (service, command, index, subindex, data) it is
         still empty and the read is not done (WKC 0)."""
@@ -1612,6 +1707,10 @@ class Acyclic:
                                                  for inj in injections) else 0
                         for axis in range(n)]
         self.sew = [0] * n
+        self.queue = []  # frames an axis injection sends after this cycle's
+        # drives that report each rise of a SEW cause bit with an emergency (MBX-001, MBX-002's),
+        # and those whose next fault goes unreported (MBX-002)
+        self.reporting, self.silent = set(), set()
 
     def observe(self, inputs):
         for axis, values in enumerate(inputs):
@@ -1619,6 +1718,12 @@ class Acyclic:
             self.sew[axis] = values[2]
             if rose:
                 self.entries[axis] = min(MAX_ENTRIES, self.entries[axis] + bin(rose).count("1"))
+            if rose and axis in self.reporting:
+                if axis in self.silent:
+                    self.silent.discard(axis)
+                else:  # after the cycle that shows it
+                    lowest = rose & -rose
+                    self.queue.append(self.mailbox(axis).emergency(CANOPEN_CODE[lowest], 0x01))
 
     def _cycles(self, ns):
         """Fewest cycles that last at least ns."""
@@ -1651,6 +1756,8 @@ class Acyclic:
                 frames += next(entry[1]) or []
             except StopIteration:
                 self.running.remove(entry)
+        frames += self.queue
+        self.queue = []
         return frames + self.counters.step(k) + self.dc.step(k)
 
     def unfinished(self):
@@ -1886,8 +1993,9 @@ class AcyclicBuilder:
         return prefix + body + bytes(max(0, 60 - len(prefix) - len(body)))
 
 
-def write_layout_config(path, n_axes, neighbours, ready_mode):
-    """The exact layout, for `ncservo validate --config` and the plugin's ncservo.config."""
+def write_layout_config(path, n_axes, neighbours, ready_mode, first_station=None):
+    """The exact layout, for `ncservo validate --config` and the plugin's ncservo.config; with
+    first_station, each axis's slave's station address too (STATION_RULES need it)."""
     with open(path, "w", encoding="ascii") as f:
         f.write("# The layout of gen_capture.py's capture.\n")
         f.write(f"servo_ready_mode = {ready_mode}\n")
@@ -1895,6 +2003,8 @@ def write_layout_config(path, n_axes, neighbours, ready_mode):
             f.write(f"\n[[axis]]\nname = 'axis{a}'\n"
                     f"outputs = 0x{neighbours.servo_outputs(a):X}\n"
                     f"inputs = 0x{neighbours.servo_inputs(a, n_axes):X}\n")
+            if first_station is not None:
+                f.write(f"station = 0x{first_station + a:X}\n")
 
 
 class PcapWriter:
@@ -2132,7 +2242,8 @@ class Session:
         acyclic = [inj for inj in injections if inj.acyclic]
         first_servo = args.io_terminals + args.cia402  # the neighbours come first in the ring
         # --incident link-fault polls the counters too
-        polled = acyclic or any(inj.rule == "link-fault" for inj in injections)
+        polled = acyclic or any(inj.rule in ("link-fault",) + tuple(STATION_RULES)
+                                for inj in injections)
         self.acyclic = (Acyclic(acyclic, self, first_servo, first_servo + args.axes)
                         if polled else None)
         self.acyclic_frames = []  # this cycle's, sent after its frame
@@ -2364,6 +2475,9 @@ def parse_args(argv):
                         "(on with --findings)")
     p.add_argument("--list-rules", action="store_true",
                    help="print the rules --inject can violate, one per line, and exit")
+    p.add_argument("--list-station-rules", action="store_true",
+                   help="print the rules whose injection the validator judges only with the "
+                        "layout's stations (--layout-config names them), one per line, and exit")
     p.add_argument("--io-terminals", type=int, default=0, metavar="N",
                    help="N I/O terminals (1 output and 1 input byte, inputs changing every "
                         "cycle) before the servos in their LRW (default 0)")
@@ -2389,7 +2503,7 @@ def parse_args(argv):
     p.add_argument("-o", "--output", help="capture file to write (required)")
     p.add_argument("--truth", help="JSON Lines truth file to write")
     args = p.parse_args(argv)
-    if args.list_rules:
+    if args.list_rules or args.list_station_rules:
         return args
     if not args.output:
         p.error("the following arguments are required: -o/--output")
@@ -2442,9 +2556,14 @@ def main(argv=None):
     if args.list_rules:
         print("\n".join(sorted(INJECTABLE)))
         return 0
+    if args.list_station_rules:
+        print("\n".join(sorted(STATION_RULES)))
+        return 0
     if args.layout_config:
+        stations = any(inj.rule in STATION_RULES for inj in args.inject)
         write_layout_config(args.layout_config, args.axes,
-                            Neighbours(args.io_terminals, args.cia402), args.ready_mode)
+                            Neighbours(args.io_terminals, args.cia402), args.ready_mode,
+                            FIRST_STATION + args.io_terminals + args.cia402 if stations else None)
     truth_out = open(args.truth, "w", encoding="ascii", buffering=1 << 20) if args.truth else None
     expect = Expectations(args.cycle_us * 1000, args.return_delay_us * 1000) \
         if args.findings else None

@@ -1,11 +1,14 @@
 // The rules on what the drives and the ESCs say themselves (docs/rules.md MBX-003, ERH-001,
 // LNK-001, LNK-002, DC-001): each row an event the slave trackers give, and whether and how
-// the rule judges it; then DC-001's runs on 0x092C reads built byte by byte.
+// the rule judges it; then DC-001's runs on 0x092C reads built byte by byte; then the rules on a
+// drive's own words against its SEW (MBX-001, MBX-002, ERH-002), each row a script of cycles
+// and mailbox reads through the validator.
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "frame_builder.hpp"
@@ -13,6 +16,7 @@
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/wire/slave_directory.hpp"
 #include "row_name.hpp"
+#include "timeline_run.hpp"
 
 namespace ncservo {
 namespace {
@@ -158,6 +162,134 @@ TEST(DcOutOfSync, OneFindingPerRunOnItsFirstRead) {
     }
   }
   EXPECT_EQ(fired, (std::vector<std::uint64_t>{4, 7}));
+}
+
+// --- A drive's own words against its SEW (docs/drive-messages.md#the-rules) ---
+
+using test::kEncoderErr;
+using test::kEnd;
+using test::kSummary;
+using test::M;
+using test::R;
+using test::Script;
+constexpr std::uint32_t kFault = kSummary | kEncoderErr;  // E01 EncoderErr: 0x7305 (§7)
+
+struct WordsRow {
+  const char* name;
+  Script script;
+  // The findings of MBX-001, MBX-002 and ERH-002, in order: rule, frame, since.
+  std::vector<std::tuple<RuleId, test::At, test::At>> expected;
+  const char* says = "";  // a part of the first one's message
+};
+
+std::vector<WordsRow> wordsRows() {
+  const Script drive = Script(80).stations(0x1001);
+  // A drive that reported a fault with an emergency (cycle 3), cleared at 6.
+  const Script reporting = Script(drive).emergency(3, 0x7305).sew(3, 6, kFault);
+  return {
+      // MBX-001: drive_response (20 ms) after the emergency, on the first frame past it.
+      {"EmergencyWithNoFault",
+       Script(drive).emergency(10, 0x8611),
+       {{RuleId::Mbx001, M(31), R(10)}},
+       "the drive sent emergency 0x8611 (following error too large), but no SEW cause bit rose "
+       "within 20 ms before or after it"},
+      {"EmergencyAnsweredAfter", Script(drive).emergency(10, 0x7305).sew(25, kEnd, kFault), {}},
+      {"EmergencyAnsweredBefore", Script(drive).sew(10, kEnd, kFault).emergency(25, 0x7305), {}},
+      {"EmergencyInTheFaultsFrame", Script(drive).sew(10, kEnd, kFault).emergency(10, 0x7305), {}},
+      {"ErrorResetIsNoFault", Script(drive).emergency(10, 0x0000), {}},
+      {"FaultLongerBefore",
+       Script(drive).sew(5, kEnd, kFault).emergency(30, 0x7305),
+       {{RuleId::Mbx001, M(51), R(30)}},
+       "; the last rose 25.000 ms before it (frame 12)"},
+      // Neither answers the other: each is a finding.
+      {"AnswerTooLate",
+       Script(drive).emergency(10, 0x7305).sew(35, kEnd, kFault),
+       {{RuleId::Mbx001, M(31), R(10)}, {RuleId::Mbx002, M(56), R(35)}}},
+      {"TwoEmergenciesTwoFindings",
+       Script(drive).emergency(10, 0x8611).emergency(40, 0x8611),
+       {{RuleId::Mbx001, M(31), R(10)}, {RuleId::Mbx001, M(61), R(40)}}},
+      {"WindowOpenAtTheEnd", Script(drive).emergency(70, 0x8611), {}},
+      // MBX-002: a drive that sent an emergency before faults again without one.
+      {"FaultWithoutEmergency",
+       Script(reporting).sew(30, kEnd, kFault),
+       {{RuleId::Mbx002, M(51), R(30)}},
+       "SEW E01 EncoderErr (0x7305) rose, but the drive, which sent an emergency in frame 8, "
+       "sent none within 20 ms before or after it"},
+      {"FaultAnsweredAfter", Script(reporting).sew(30, kEnd, kFault).emergency(45, 0x7305), {}},
+      {"FaultAnsweredBefore", Script(reporting).emergency(20, 0x7305).sew(30, kEnd, kFault), {}},
+      {"NoEmergencyEverSent", Script(drive).sew(30, kEnd, kFault), {}},
+      {"ResetCountsAsSent",
+       Script(drive).sew(3, 6, kFault).emergency(8, 0x0000).sew(30, kEnd, kFault),
+       {{RuleId::Mbx002, M(51), R(30)}}},
+      // ERH-002: the newest entry read after a fault, judged on the read.
+      {"HistoryDisagrees",
+       Script(drive).sew(10, kEnd, kFault).historyRead(15, 0x0D218611),
+       {{RuleId::Erh002, R(15), R(15)}},
+       "1003h:01 read 0x0D218611, code 0x8611 (following error too large), after the fault in "
+       "frame 22 raised SEW E01 EncoderErr (0x7305)"},
+      {"HistoryAgrees", Script(drive).sew(10, kEnd, kFault).historyRead(15, 0x07017305), {}},
+      {"ReadBeforeAnyFault", Script(drive).historyRead(5, 0x0D218611).sew(10, kEnd, kFault), {}},
+      {"OnlyTheFirstReadAfterAFault",
+       Script(drive).sew(10, kEnd, kFault).historyRead(15, 0x0D218611).historyRead(20, 0x07017305),
+       {{RuleId::Erh002, R(15), R(15)}}},
+      {"EachFaultItsRead",
+       Script(drive)
+           .sew(10, 20, kFault)
+           .historyRead(15, 0x0D218611)
+           .sew(30, kEnd, kFault)
+           .historyRead(35, 0x0D218611),
+       {{RuleId::Erh002, R(15), R(15)}, {RuleId::Erh002, R(35), R(35)}}},
+  };
+}
+
+class DriveWordsRules : public ::testing::TestWithParam<WordsRow> {};
+
+TEST_P(DriveWordsRules, Judged) {
+  const WordsRow& row = GetParam();
+  const test::Recorded r = test::record(row.script);
+  std::vector<const Finding*> found;
+  for (const Finding& f : r.findings) {
+    if (f.rule == RuleId::Mbx001 || f.rule == RuleId::Mbx002 || f.rule == RuleId::Erh002) {
+      found.push_back(&f);
+    }
+  }
+  ASSERT_EQ(found.size(), row.expected.size()) << (found.empty() ? "" : found[0]->message);
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    const auto& [rule, at, since] = row.expected[i];
+    EXPECT_EQ(found[i]->rule, rule) << i;
+    EXPECT_EQ(found[i]->axis, 0) << i;
+    EXPECT_EQ(found[i]->at.frame, test::recordedFrame(at)) << i << ": " << found[i]->message;
+    EXPECT_EQ(found[i]->since.frame, test::recordedFrame(since)) << i;
+  }
+  if (!found.empty()) {
+    EXPECT_NE(found[0]->message.find(row.says), std::string::npos) << found[0]->message;
+  }
+  // The rows declare what they read (sew, mailbox): the fast path changes nothing.
+  const test::Recorded slow = test::record(row.script, nullptr, FastPath::Off);
+  ASSERT_EQ(slow.findings.size(), r.findings.size());
+  for (std::size_t i = 0; i < r.findings.size(); ++i) {
+    EXPECT_EQ(slow.findings[i].rule, r.findings[i].rule) << i;
+    EXPECT_EQ(slow.findings[i].at.frame, r.findings[i].at.frame) << i;
+    EXPECT_EQ(slow.findings[i].message, r.findings[i].message) << i;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Rows, DriveWordsRules, ::testing::ValuesIn(wordsRows()),
+                         test::rowName<WordsRow>);
+
+TEST(DriveWordsRules, DisabledNotJudged) {
+  RuleSettings settings;
+  ASSERT_TRUE(settings.disable("MBX-001"));
+  const test::Recorded r =
+      test::record(Script(80).stations(0x1001).emergency(10, 0x8611).settings(settings));
+  for (const Finding& f : r.findings) EXPECT_NE(f.rule, RuleId::Mbx001) << f.message;
+}
+
+TEST(DriveWordsRules, AnEmergencyIsAnsweredAroundIt) {
+  const std::optional<AllowedWindow> w = allowedWindow(ruleDef(RuleId::Mbx001), RuleSettings{});
+  ASSERT_TRUE(w.has_value());
+  EXPECT_EQ(w->from_ns, -20 * test::kMs);
+  EXPECT_EQ(w->to_ns, 20 * test::kMs);
 }
 
 }  // namespace

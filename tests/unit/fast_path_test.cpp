@@ -14,6 +14,7 @@
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/layout/layout_window.hpp"
 #include "ncservo/rules/validator.hpp"
+#include "ncservo/sim/faults.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "row_name.hpp"
 #include "status_text.hpp"
@@ -174,7 +175,12 @@ std::vector<sim::FaultRequest> faultsOneAfterAnother(double first_s, double ever
                                                      bool (*wanted)(const RuleDef&)) {
   std::vector<sim::FaultRequest> faults;
   for (const RuleDef& rule : kRules) {
-    if (rule.kind != RuleKind::Axis || !wanted(rule)) continue;
+    // only the axis rules the simulator injects (not MBX-001, MBX-002, ERH-002: no mailbox)
+    const sim::FaultRecipe* recipe = sim::faultRecipe(rule.id);
+    if (rule.kind != RuleKind::Axis || !wanted(rule) || recipe == nullptr ||
+        !recipe->injectable()) {
+      continue;
+    }
     sim::FaultRequest fault;
     fault.rule = rule.id;
     fault.at_s = first_s + every_s * static_cast<double>(faults.size());

@@ -72,7 +72,9 @@ TEST_P(TimedRules, CheckTextAndWindowMoveWithTheRowsTimeout) {
   const TimedRow& row = GetParam();
   const RuleDef& rule = ruleOf(row);
   ASSERT_TRUE(rule.timeout.has_value());
-  const bool delayed = rule.timeout_use == TimeoutUse::Delay;
+  // An event answered around it (MBX-001, MBX-002) is reported as a delay is.
+  const bool around = rule.timeout_use == TimeoutUse::Around;
+  const bool delayed = rule.timeout_use == TimeoutUse::Delay || around;
   ASSERT_TRUE(delayed || rule.timeout_use == TimeoutUse::LookBack);
   // A delayed rule at two timeouts; a look-back rule just under and at how long ago its answer
   // ended: it fires, then it does not.
@@ -103,7 +105,7 @@ TEST_P(TimedRules, CheckTextAndWindowMoveWithTheRowsTimeout) {
       EXPECT_NE(f.message.find(named), std::string::npos) << f.message;
     }
     // The window, in ns from the finding's frame: after `since` for a delay, before it for a
-    // look-back.
+    // look-back, both for an event answered around it.
     const auto drawn = std::find_if(
         r.timelines.drawn.begin(), r.timelines.drawn.end(),
         [&](const report::FindingTimeline& t) { return r.findings[t.finding].rule == rule.id; });
@@ -111,8 +113,9 @@ TEST_P(TimedRules, CheckTextAndWindowMoveWithTheRowsTimeout) {
     const std::int64_t since_ns = delayed ? -(timeout_ms + 1) * kMs : 0;
     EXPECT_EQ(drawn->since_ns, since_ns);
     const std::pair<std::int64_t, std::int64_t> window =
-        delayed ? std::pair{since_ns, since_ns + timeout_ms * kMs}
-                : std::pair{since_ns - timeout_ms * kMs, since_ns};
+        around    ? std::pair{since_ns - timeout_ms * kMs, since_ns + timeout_ms * kMs}
+        : delayed ? std::pair{since_ns, since_ns + timeout_ms * kMs}
+                  : std::pair{since_ns - timeout_ms * kMs, since_ns};
     EXPECT_EQ(drawn->allowed_ns, window);
   }
 }
@@ -123,7 +126,8 @@ TEST_P(TimedRules, CheckAndTextReadTheRowTheyAreGiven) {
   const TimedRow& row = GetParam();
   const RuleDef& rule = ruleOf(row);
   ASSERT_TRUE(rule.timeout.has_value());
-  const bool delayed = rule.timeout_use == TimeoutUse::Delay;
+  const bool delayed =
+      rule.timeout_use == TimeoutUse::Delay || rule.timeout_use == TimeoutUse::Around;
   RuleDef moved = rule;
   moved.timeout =
       *rule.timeout == Timeout::DriveResponse ? Timeout::NcRelease : Timeout::DriveResponse;
@@ -220,6 +224,14 @@ const TimedRow kTimedRows[] = {
      "expected ServoEn 0 within {} ms"},
     {"PT-001", Script().scw(5, kEnd, test::kScwRunning | 0x10), M(5), "(limit {} ms)"},
     {"COM-003", Script().wkc(10, 13, 0), R(13), "did not rise within {} ms"},
+    // Around: an emergency no SEW cause bit answers; a fault of a drive that sent an emergency
+    // 37 ms before it (more than any timeout set here), answered by none.
+    {"MBX-001", Script().stations(0x1001).emergency(10, 0x8611), R(10),
+     "no SEW cause bit rose within {} ms"},
+    {"MBX-002",
+     Script().stations(0x1001).emergency(3, 0x8611).sew(3, 6, test::kSummary | test::kEncoderErr)
+         .sew(40, kEnd, test::kSummary | test::kEncoderErr),
+     R(40), "sent none within {} ms"},
 };
 // clang-format on
 

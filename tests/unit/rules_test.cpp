@@ -34,6 +34,7 @@ constexpr std::optional<Timeout> kDrive{Timeout::DriveResponse};
 constexpr auto NONE = TimeoutUse::None;
 constexpr auto DELAY = TimeoutUse::Delay;
 constexpr auto BACK = TimeoutUse::LookBack;
+constexpr auto AROUND = TimeoutUse::Around;
 
 struct SpecRow {
   const char* code;
@@ -42,7 +43,8 @@ struct SpecRow {
   Party party;
   std::optional<Timeout> timeout;  // the timeout its text names
   // DELAY: "longer than T", reported once the condition outlasts T; BACK: an edge with nothing
-  // answering it within T before
+  // answering it within T before; AROUND: an event with nothing answering it within T before or
+  // after it
   TimeoutUse use;
   RuleKind kind;                         // judged on an axis's model, the bus's events or a slave's
   ByDefault by_default = ByDefault::On;  // "off by default" in its text: run only when enabled
@@ -86,8 +88,11 @@ const SpecRow kSpec[] = {
     {"ESM-003", "al-error", E, DRIVE, kNoTimeout, NONE, SLAVE},
     {"ESM-004", "al-error-at-init", I, DRIVE, kNoTimeout, NONE, SLAVE},
     // What the drives and the ESCs say themselves
+    {"MBX-001", "emergency-without-fault", W, DRIVE, kDrive, AROUND, AXIS},
+    {"MBX-002", "fault-without-emergency", I, DRIVE, kDrive, AROUND, AXIS},
     {"MBX-003", "sdo-abort", I, DRIVE, kNoTimeout, NONE, SLAVE},
     {"ERH-001", "error-history-shrunk", W, DRIVE, kNoTimeout, NONE, SLAVE},
+    {"ERH-002", "error-history-disagrees", I, DRIVE, kNoTimeout, NONE, AXIS},
     {"LNK-001", "link-rx-errors", W, BUS, kNoTimeout, NONE, SLAVE},
     {"LNK-002", "link-lost", E, BUS, kNoTimeout, NONE, SLAVE},
     {"DC-001", "dc-out-of-sync", W, BUS, kNoTimeout, NONE, SLAVE, ByDefault::On,
@@ -208,6 +213,10 @@ TEST(RuleTable, TimedRulesSayWhatTheTimeoutIsAxisRulesCheckAndDescribe) {
     EXPECT_NE(rule.describe, nullptr);
     EXPECT_EQ(rule.kind == RuleKind::Axis, rule.reads.any() || rule.id == RuleId::Com005)
         << "an axis rule declares what it reads (COM-005 reads only the failure counter)";
+    EXPECT_TRUE(rule.began == nullptr || rule.kind == RuleKind::Axis)
+        << "only an axis rule's episode begins at a stamped event";
+    EXPECT_EQ(rule.began != nullptr, rule.reads.mailbox)
+        << "the rules on what a drive said time it from the message or the fault it answers";
   }
 }
 
@@ -223,7 +232,7 @@ TEST(RuleTable, TimeoutsAndTheRulesThatUseThem) {
       {"drive_response",
        20,
        {RuleId::Se002, RuleId::Se003, RuleId::Zp001, RuleId::Zp002, RuleId::Ec001, RuleId::Ec003,
-        RuleId::Sew002, RuleId::Rdy001, RuleId::Com003}},
+        RuleId::Sew002, RuleId::Rdy001, RuleId::Com003, RuleId::Mbx001, RuleId::Mbx002}},
       {"nc_release", 50, {RuleId::Ec002}},
       {"enable_response", 100, {RuleId::Se004}},
       {"clear_response", 100, {RuleId::Ec004}},

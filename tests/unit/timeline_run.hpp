@@ -20,22 +20,24 @@ struct Recorded {
 
 // `after_frame`, when given, sees the validator after each frame (its findings are that frame's).
 inline Recorded record(const Script& script,
-                       const std::function<void(const Validator&)>& after_frame = nullptr) {
+                       const std::function<void(const Validator&)>& after_frame = nullptr,
+                       FastPath fast_path = FastPath::On) {
   std::optional<Validator> validator;
   report::TimelineRecorder recorder(script.ruleSettings());
   Recorded out;
   std::uint64_t number = 0;
   std::int64_t first_ns = 0;
   for (std::int64_t k = 0; k < script.cycles(); ++k) {
-    std::vector<AxisCycle> values;
-    for (std::size_t a = 0; a < script.axisCount(); ++a) values.push_back(script.valuesOf(k, a));
     for (Copy copy : {Copy::Master, Copy::Returned}) {
       const At at{copy, k};
-      const Bytes bytes =
-          cyclicFrame(values, copy == Copy::Returned, script.wkcOf(k), script.indexOf(k));
+      const Bytes bytes = scriptFrame(script, at);
       const Walked w = walk(bytes);
       if (!validator) {
-        validator.emplace(defaultLayoutOf(*w.frame, DecoderOptions{}), script.ruleSettings());
+        DecoderOptions options = defaultLayoutOf(*w.frame, DecoderOptions{});
+        for (std::size_t a = 0; a < options.axes.size() && script.firstStation(); ++a) {
+          options.axes[a].station = static_cast<std::uint16_t>(*script.firstStation() + a);
+        }
+        validator.emplace(options, script.ruleSettings(), fast_path);
         first_ns = script.timeOf(at);
       }
       const Observation& frame =

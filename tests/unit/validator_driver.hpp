@@ -151,6 +151,29 @@ class Script {
     settings_ = std::move(s);
     return *this;
   }
+  // Axis k's slave has the station address `first` + k, which the layout names; then every
+  // cycle's frame also writes each drive's mailbox areas (SM0, SM1) and reads its SM1
+  // (docs/drive-messages.md), with WKC 1 in the returned copy where the drive answers.
+  Script& stations(std::uint16_t first) {
+    first_station_ = first;
+    return *this;
+  }
+  // The returned copy of `cycle` reads a CoE emergency from the axis's drive.
+  Script& emergency(std::int64_t cycle, std::uint16_t code, std::size_t axis = 0) {
+    return message(cycle, axis, coe(1, emcy(code, 0x01, Bytes(5, 0))));
+  }
+  // The returned copy of `cycle` reads the answer to an upload of 1003h:01 (expedited, 4 bytes).
+  Script& historyRead(std::int64_t cycle, std::uint32_t value, std::size_t axis = 0) {
+    return message(cycle, axis, coe(3, sdo(0x43, 0x1003, 1, value)));
+  }
+  std::optional<std::uint16_t> firstStation() const { return first_station_; }
+  // The mailbox the axis's drive answers with in `cycle`'s returned copy, if any.
+  const Bytes* mailboxOf(std::int64_t cycle, std::size_t axis) const {
+    for (const Message& m : messages_) {
+      if (m.cycle == cycle && m.axis == axis) return &m.mailbox;
+    }
+    return nullptr;
+  }
 
   std::int64_t cycles() const { return cycles_; }
   std::uint8_t indexOf(std::int64_t cycle) const {
@@ -226,7 +249,21 @@ class Script {
     return *this;
   }
 
+  struct Message {
+    std::int64_t cycle;
+    std::size_t axis;
+    Bytes mailbox;
+  };
+  Script& message(std::int64_t cycle, std::size_t axis, const Bytes& body) {
+    std::uint8_t counter = 1;  // 1..7, each message of a drive the next (a repeat has the same)
+    for (const Message& m : messages_) counter = m.axis == axis ? counter % 7 + 1 : counter;
+    messages_.push_back(Message{cycle, axis, mbx(3, counter, body)});
+    return *this;
+  }
+
   std::int64_t cycles_;
+  std::optional<std::uint16_t> first_station_;
+  std::vector<Message> messages_;
   std::size_t axes_ = 1;
   std::int64_t delay_ns_ = 0;
   std::int64_t shift_from_ = kEnd;
@@ -241,8 +278,8 @@ class Script {
 // The default layout's cyclic LRW of all axes: n RxPDOs then n TxPDOs. `index` is the datagram
 // index; a master that numbers its frames (as SOEM does) makes consecutive cycles' datagram lists
 // differ, so that a master copy never looks like the returned copy of the one before (§8).
-inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std::uint16_t wkc,
-                         std::uint8_t index = 0x80) {
+// Its data: n RxPDOs then n TxPDOs (inputs zero in the master's copy).
+inline Bytes lrwData(const std::vector<AxisCycle>& axes, bool returned) {
   Bytes data;
   for (std::size_t k = 0; k < axes.size(); ++k) {
     const Bytes rx = rxPdo(axes[k].ssp.value_or(static_cast<std::int32_t>(100 + k)), axes[k].scw);
@@ -252,9 +289,45 @@ inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std:
     const Bytes tx = returned ? txPdo(TxValues(0, a.ssw, a.sew, a.msg, a.msg_data)) : Bytes(40, 0);
     data.insert(data.end(), tx.begin(), tx.end());
   }
+  return data;
+}
+// The frame.
+inline Bytes cyclicFrame(const std::vector<AxisCycle>& axes, bool returned, std::uint16_t wkc,
+                         std::uint8_t index = 0x80) {
   FrameBuilder builder;
-  builder.add(
-      Dg{ecat::kLrw, index, kLrwAddress, std::move(data), returned ? wkc : std::uint16_t{0}});
+  builder.add(Dg{ecat::kLrw, index, kLrwAddress, lrwData(axes, returned),
+                 returned ? wkc : std::uint16_t{0}});
+  return builder.bytes();
+}
+
+// The drives' mailbox areas in a script with stations (Script::stations).
+inline constexpr std::uint16_t kMailboxOut = 0x1000;
+inline constexpr std::uint16_t kMailboxIn = 0x1080;
+
+// A script's frame at `at`: its cycle's LRW and, with stations, per axis the write of its
+// drive's SM0 and SM1 (mailbox mode) and the read of its SM1.
+inline Bytes scriptFrame(const Script& script, At at) {
+  std::vector<AxisCycle> values;
+  for (std::size_t a = 0; a < script.axisCount(); ++a)
+    values.push_back(script.valuesOf(at.cycle, a));
+  const bool returned = at.copy == Copy::Returned;
+  if (!script.firstStation()) {
+    return cyclicFrame(values, returned, script.wkcOf(at.cycle), script.indexOf(at.cycle));
+  }
+  FrameBuilder builder;
+  builder.add(Dg{ecat::kLrw, script.indexOf(at.cycle), kLrwAddress, lrwData(values, returned),
+                 returned ? script.wkcOf(at.cycle) : std::uint16_t{0}});
+  for (std::size_t a = 0; a < script.axisCount(); ++a) {
+    const auto station = static_cast<std::uint16_t>(*script.firstStation() + a);
+    const Bytes sms =
+        concat({smBlock(kMailboxOut, kMailboxArea, 0x26), smBlock(kMailboxIn, kMailboxArea, 0x22)});
+    builder.add(Dg{ecat::kFpwr, 0, physical(station, ecat::kRegSyncManager0), sms,
+                   static_cast<std::uint16_t>(returned ? 1 : 0)});
+    const Bytes* mailbox = returned ? script.mailboxOf(at.cycle, a) : nullptr;
+    builder.add(Dg{ecat::kFprd, 0, physical(station, kMailboxIn),
+                   mailbox != nullptr ? *mailbox : Bytes(kMailboxArea, 0),
+                   static_cast<std::uint16_t>(mailbox != nullptr ? 1 : 0)});
+  }
   return builder.bytes();
 }
 

@@ -118,7 +118,10 @@ void explainRule(const RuleDef& rule) {
                t.default_ms, t.name, t.name);
   }
   fmt::print("  reported:    {}\n",
-             rule.delayed()                ? "once the condition has held longer than the timeout"
+             rule.timeout_use == TimeoutUse::Around
+                 ? "once the timeout has passed after the event, when nothing answered it within "
+                   "the timeout before or after it"
+             : rule.delayed()              ? "once the condition has held longer than the timeout"
              : rule.reported != nullptr    ? rule.reported
              : rule.kind == RuleKind::Axis ? "on the frame where the condition begins"
                                            : "on the frame of the event");

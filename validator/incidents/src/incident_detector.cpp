@@ -19,15 +19,6 @@ namespace ncservo {
 
 namespace {
 
-// The axis whose slave has this station address (configuration, ENI or start-up), if any.
-std::optional<std::uint16_t> axisOfStation(const Validator& validator, std::uint16_t station) {
-  std::optional<std::uint16_t> axis;
-  for (const AxisInfo& info : validator.decoder().axes()) {
-    if (info.has_station && info.station == station) axis = info.index;
-  }
-  return axis;
-}
-
 // A slave by its station address, else by its ring position.
 std::uint32_t alCodeKey(const SlaveRef& slave) {
   return slave.station ? *slave.station : 0x10000u + slave.position.value_or(0xFFFF);
@@ -178,7 +169,7 @@ void IncidentDetector::takeDriveWords(const Validator& validator, const Mark& at
   for (const DriveMessage& m : validator.mailbox().frameMessages()) {
     if (m.frame != at.frame) break;  // an earlier frame's: this one read no mailbox
     if (!driveWord(m) || !m.slave.station) continue;
-    const std::optional<std::uint16_t> axis = axisOfStation(validator, *m.slave.station);
+    const std::optional<std::uint16_t> axis = validator.decoder().axisOfStation(*m.slave.station);
     if (!axis) continue;
     AxisTrack& a = track(*axis);
     a.words.push(DriveWordMark{at, "drive: " + describeDriveMessage(m)});
@@ -471,7 +462,8 @@ void IncidentDetector::checkOutage(const Validator& validator) {
 void IncidentDetector::takeAlChanges(const Validator& validator) {
   for (const AlOpChange& change : validator.al().opChanges()) {
     const std::optional<std::uint16_t> axis =
-        change.slave.station ? axisOfStation(validator, *change.slave.station) : std::nullopt;
+        change.slave.station ? validator.decoder().axisOfStation(*change.slave.station)
+                             : std::nullopt;
     if (change.to == ecat::kAlOp) {
       for (auto it = incidents_.rbegin(); it != incidents_.rend(); ++it) {
         if (it->kind != IncidentKind::Esm || it->ended || it->station != change.slave.station ||

@@ -76,6 +76,14 @@ const char* layoutSourceName(LayoutSource source) {
   return "none";
 }
 
+std::optional<std::uint16_t> Decoder::axisOfStation(std::uint16_t station) const {
+  std::optional<std::uint16_t> axis;
+  for (const AxisInfo& info : axes_) {
+    if (info.has_station && info.station == station) axis = info.index;
+  }
+  return axis;
+}
+
 const char* copyKindName(CopyKind copy) {
   return copy == CopyKind::Master ? "master" : "returned";
 }

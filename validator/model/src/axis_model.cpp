@@ -6,6 +6,7 @@
 
 #include "ncservo/protocol/fields.hpp"
 #include "ncservo/protocol/word_bits.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 
 namespace ncservo {
 
@@ -183,8 +184,35 @@ std::string transitionText(const StateChange& change) {
   return fmt::format("{} → {}", driveStateName(*change.from), driveStateName(change.state));
 }
 
+bool Answered::within(std::int64_t window_ns) const {
+  if (!at) return false;
+  return (before && at->time_ns - before->time_ns <= window_ns) ||
+         (after && after->time_ns - at->time_ns <= window_ns);
+}
+
+void AxisModel::takeEmergency(std::uint16_t code, const Stamp& at) {
+  ++revision_;
+  if (!first_emergency_) first_emergency_ = at;
+  if (code == diag::kErrorReset) return;
+  emergencies_ = Answered{at, faults_.at, std::nullopt};
+  emergency_code_ = code;
+  if (faults_.at && !faults_.after) faults_.after = at;
+}
+
+bool AxisModel::takeHistoryRead(std::uint32_t value, const Stamp& at) {
+  if (!faults_.at || history_read_) return false;
+  ++revision_;
+  history_read_ = HistoryRead{at, value};
+  return true;
+}
+
 void AxisModel::startSegment() {
   ++revision_;
+  // A window does not span a discontinuity (docs/timing.md#rule-time).
+  emergencies_ = {};
+  faults_ = {};
+  fault_causes_ = 0;
+  history_read_.reset();
   measurements_.reset();
   for (Signal* s : {&se_, &emgon_, &brake_, &zpulse_request_, &error_clear_, &servo_en_,
                     &servo_rdy_, &zpulse_ack_, &err_clear_ack_, &servo_errors_, &ecat_timeout_}) {
@@ -249,6 +277,13 @@ void AxisModel::observeInputs(const PdoValues& values, const Stamp& now) {
   // is first seen are entered too.
   const std::uint32_t rising = sew & ~previous_sew_ & kSewCauseMask;
   previous_sew_ = sew;
+  if (rising != 0) {
+    // docs/rules.md#mbx-001, #mbx-002: a fault and the emergencies around it.
+    faults_ = Answered{now, emergencies_.at, std::nullopt};
+    if (emergencies_.at && !emergencies_.after) emergencies_.after = now;
+    fault_causes_ = rising;
+    history_read_.reset();
+  }
   for (const SewCause& cause : kSewCauses) {
     if (!(rising & cause.mask)) continue;
     error_history_.insert(error_history_.begin(), ErrorHistoryEntry{&cause, now});

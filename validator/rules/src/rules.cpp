@@ -452,6 +452,90 @@ std::string mbx003Text(const SdoAbortEvent& e, const Stamp&, const RuleContext&)
       e.request_frame ? fmt::format(", the request in frame {}", *e.request_frame) : std::string{});
 }
 
+// --- The drive's own words against its SEW (docs/drive-messages.md#the-rules) ---
+std::string codeText(std::uint16_t code) {
+  const char* text = diag::errorCodeText(code);
+  return fmt::format("0x{:04X} ({})", code,
+                     text != nullptr ? text : "a code CiA 301 does not list");
+}
+// "E09 FollowerErr (0x8611)", for each SEW cause bit in `causes`.
+std::string causesText(std::uint32_t causes) {
+  std::string out;
+  for (const SewCause& cause : kSewCauses) {
+    if (!(causes & cause.mask)) continue;
+    out +=
+        fmt::format("{}{} (0x{:04X})", out.empty() ? "" : ", ", sewCauseText(cause), cause.canopen);
+  }
+  return out;
+}
+// ", the nearest 25.000 ms before it (frame 12)": where the nearest answers came, if any.
+std::string nearestText(const Answered& e, const char* what) {
+  std::string out;
+  if (e.before) {
+    out += fmt::format("; the last {} {:.3f} ms before it (frame {})", what,
+                       heldMs(e.at->time_ns - e.before->time_ns), e.before->frame);
+  }
+  if (e.after) {
+    out += fmt::format("; the next {} {:.3f} ms after it (frame {})", what,
+                       heldMs(e.after->time_ns - e.at->time_ns), e.after->frame);
+  }
+  return out;
+}
+
+bool mbx001(const AxisModel& a, const RuleContext& c) {
+  return a.emergencies().at && !a.emergencies().within(c.timeoutNs());
+}
+std::optional<Stamp> mbx001Began(const AxisModel& a) {
+  return a.emergencies().at;
+}
+std::string mbx001Text(const AxisModel& a, const RuleContext& c, std::int64_t) {
+  return fmt::format(
+      "the drive sent emergency {}, but no SEW cause bit rose within {} ms before "
+      "or after it{}",
+      codeText(a.emergencyCode()), c.timeoutMs(), nearestText(a.emergencies(), "rose"));
+}
+
+// A drive that reports faults with emergencies: it sent one before this fault.
+bool mbx002(const AxisModel& a, const RuleContext& c) {
+  const Answered& f = a.faults();
+  const std::optional<Stamp>& first = a.firstEmergency();
+  return f.at && first && first->frame < f.at->frame && !f.within(c.timeoutNs());
+}
+std::optional<Stamp> mbx002Began(const AxisModel& a) {
+  return a.faults().at;
+}
+std::string mbx002Text(const AxisModel& a, const RuleContext& c, std::int64_t) {
+  return fmt::format(
+      "SEW {} rose, but the drive, which sent an emergency in frame {}, sent none within {} ms "
+      "before or after it{}",
+      causesText(a.faultCauses()), a.firstEmergency().value_or(Stamp{}).frame, c.timeoutMs(),
+      nearestText(a.faults(), "came"));
+}
+
+// docs/protocol.md §7: the code this project maps the fault's cause bits to.
+bool faultRaised(const AxisModel& a, std::uint16_t code) {
+  for (const SewCause& cause : kSewCauses) {
+    if ((a.faultCauses() & cause.mask) && cause.canopen == code) return true;
+  }
+  return false;
+}
+bool erh002(const AxisModel& a, const RuleContext&) {
+  const std::optional<HistoryRead>& read = a.historyRead();
+  return read && !faultRaised(a, diag::errorFieldEntry(read->value).code);
+}
+std::optional<Stamp> erh002Began(const AxisModel& a) {
+  const std::optional<HistoryRead>& read = a.historyRead();
+  return read ? std::optional<Stamp>{read->at} : std::nullopt;
+}
+std::string erh002Text(const AxisModel& a, const RuleContext&, std::int64_t) {
+  const HistoryRead read = a.historyRead().value_or(HistoryRead{});
+  return fmt::format(
+      "1003h:01 read 0x{:08X}, code {}, after the fault in frame {} raised SEW {} "
+      "(docs/protocol.md §7's codes)",
+      read.value, codeText(diag::errorFieldEntry(read.value).code),
+      a.faults().at.value_or(Stamp{}).frame, causesText(a.faultCauses()));
+}
+
 bool erh001(const ErrorHistoryShrunkEvent&, const RuleContext&) {
   return true;
 }
@@ -513,6 +597,10 @@ template <std::string (*F)(const AxisModel&, const RuleContext&, std::int64_t)>
 std::string describeAxis(const RuleSubject& s, const RuleContext& context, std::int64_t held) {
   return F(*s.axis, context, held);
 }
+template <std::optional<Stamp> (*F)(const AxisModel&)>
+std::optional<Stamp> beganOnAxis(const RuleSubject& s) {
+  return F(*s.axis);
+}
 template <class Event, bool (*F)(const Event&, const RuleContext&)>
 bool onEvent(const RuleSubject& s, const RuleContext& context) {
   const Event* e = std::get_if<Event>(&s.event->data);
@@ -532,6 +620,7 @@ std::string describeEvent(const RuleSubject& s, const RuleContext& context, std:
 }  // namespace
 
 #define NCSERVO_AXIS(name) .check = onAxis<name>, .describe = describeAxis<name##Text>
+#define NCSERVO_AXIS_EVENT(name) NCSERVO_AXIS(name), .began = beganOnAxis<name##Began>
 #define NCSERVO_EVENT(type, name, text) \
   .event = eventIndex<type>(), .check = onEvent<type, name>, .describe = describeEvent<type, text>
 #define NCSERVO_MEASUREMENT(type, name, text)                      \
@@ -880,6 +969,30 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .clause = "docs/protocol.md §8 AL status",
      NCSERVO_EVENT(AlErrorEvent, esm004, alErrorText),
      .summary = "AL status shows the error indicator at INIT"},
+    {.id = RuleId::Mbx001,
+     .code = "MBX-001",
+     .slug = "emergency-without-fault",
+     .severity = Severity::Warning,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/drive-messages.md emergencies; docs/protocol.md §4",
+     .timeout = Timeout::DriveResponse,
+     .timeout_use = TimeoutUse::Around,
+     .reads = readsWithMailbox({"ncservo.sew"}),
+     NCSERVO_AXIS_EVENT(mbx001),
+     .summary = "an emergency (not an error reset) with no SEW cause bit rising around it"},
+    {.id = RuleId::Mbx002,
+     .code = "MBX-002",
+     .slug = "fault-without-emergency",
+     .severity = Severity::Info,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/drive-messages.md emergencies; docs/protocol.md §4",
+     .timeout = Timeout::DriveResponse,
+     .timeout_use = TimeoutUse::Around,
+     .reads = readsWithMailbox({"ncservo.sew"}),
+     NCSERVO_AXIS_EVENT(mbx002),
+     .summary = "a drive that sent emergencies faults and sends none around it"},
     {.id = RuleId::Mbx003,
      .code = "MBX-003",
      .slug = "sdo-abort",
@@ -898,6 +1011,17 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .clause = "docs/drive-messages.md error history 1003h",
      NCSERVO_EVENT(ErrorHistoryShrunkEvent, erh001, erh001Text),
      .summary = "1003h:00 read lower than before with no write of 0 between"},
+    {.id = RuleId::Erh002,
+     .code = "ERH-002",
+     .slug = "error-history-disagrees",
+     .severity = Severity::Info,
+     .party = Party::Drive,
+     .kind = RuleKind::Axis,
+     .clause = "docs/drive-messages.md error history 1003h; docs/protocol.md §7",
+     .reported = "on the frame that reads 1003h:01, the first read of it since the fault",
+     .reads = readsWithMailbox({"ncservo.sew"}),
+     NCSERVO_AXIS_EVENT(erh002),
+     .summary = "the newest 1003h entry read after a fault lacks the code of its SEW cause"},
     {.id = RuleId::Lnk001,
      .code = "LNK-001",
      .slug = "link-rx-errors",
@@ -928,6 +1052,7 @@ const std::array<RuleDef, kRuleCount> kRules{{
      .summary = "a slave's system time difference (0x092C) exceeds dc_sync_limit_ns"},
 }};
 #undef NCSERVO_AXIS
+#undef NCSERVO_AXIS_EVENT
 #undef NCSERVO_EVENT
 #undef NCSERVO_MEASUREMENT
 
@@ -1028,6 +1153,7 @@ std::string describeReads(const Reads& reads) {
     add(read.field->filter, read.through_class ? " (its class)" : "");
   }
   if (reads.al_state) add("ncservo.al_state", "");
+  if (reads.mailbox) add("ncservo.mailbox", "");
   return out.empty() ? "-" : out;
 }
 
@@ -1086,6 +1212,8 @@ std::optional<AllowedWindow> allowedWindow(const RuleDef& rule, const RuleSettin
       return AllowedWindow{0, timeout};
     case TimeoutUse::LookBack:
       return AllowedWindow{-timeout, 0};
+    case TimeoutUse::Around:
+      return AllowedWindow{-timeout, timeout};
     case TimeoutUse::None:
       break;
   }

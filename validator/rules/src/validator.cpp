@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "ncservo/wire/diagnosis_texts.hpp"
+
 namespace ncservo {
 
 Validator::Validator(DecoderOptions options, RuleSettings settings, FastPath fast_path)
@@ -26,6 +28,7 @@ Validator::Judged Validator::judgedBits(const RuleSettings& settings, FastPath f
     if (rule.kind == RuleKind::Axis && settings.isEnabled(rule.id)) reads = reads | rule.reads;
   }
   Judged judged;
+  judged.mailbox = reads.mailbox;  // not a fast path: whether the models take the messages
   if (fast_path == FastPath::Off) return judged;
   for (const WordDef& def : kWords) {
     const std::uint64_t bits = reads.bits[static_cast<std::size_t>(def.word)];
@@ -120,6 +123,7 @@ const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t t
     events_.clear();
     dc_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
     mailbox_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
+    if (judged_.mailbox) takeDriveMessages();
     esc_.onFrame(frame, bytes, addressing_, now_, events_);
     if (!events_.empty()) reportEvents();
   }
@@ -241,12 +245,15 @@ void Validator::syncAlState(const AxisPlacement& placement, AxisSlot& slot) {
 
 // docs/timing.md#rule-time: a condition is reported once per episode — when it begins, or for a
 // delayed rule on the first frame past its timeout after it began — and again only after it ended.
-void Validator::evaluateAxis(AxisSlot& s) {
+// A rule about a stamped event (RuleDef::began) times it from the event, and a new event after a
+// reported one is a new episode.
+void Validator::evaluateAxis(AxisSlot& s, bool mailbox_only) {
   const AxisModel& model = *s.model;
   const RuleSubject subject{&model, nullptr};
-  s.pending_until_ns = std::numeric_limits<std::int64_t>::max();
+  if (!mailbox_only) s.pending_until_ns = std::numeric_limits<std::int64_t>::max();
   for (const RuleDef& rule : kRules) {
     if (rule.kind != RuleKind::Axis || !settings_.isEnabled(rule.id)) continue;
+    if (mailbox_only && !rule.reads.mailbox) continue;
     Episode& episode = s.episodes[static_cast<std::size_t>(rule.id)];
     const bool was_pending = episode.active && !episode.reported;
     const RuleContext context{rule, settings_};
@@ -255,7 +262,10 @@ void Validator::evaluateAxis(AxisSlot& s) {
       episode.active = false;
       continue;
     }
-    if (!episode.active) episode = Episode{true, false, now_};
+    const std::optional<Stamp> began = rule.began ? rule.began(subject) : std::nullopt;
+    if (!episode.active || (episode.reported && began && began->frame != episode.began.frame)) {
+      episode = Episode{true, false, began.value_or(now_)};
+    }
     if (episode.reported) continue;
     const std::int64_t held = now_.time_ns - episode.began.time_ns;
     const std::int64_t timeout = rule.delayed() ? context.timeoutNs() : 0;
@@ -268,6 +278,26 @@ void Validator::evaluateAxis(AxisSlot& s) {
     if (was_pending) --s.pending;
     episode.reported = true;
     report(rule.id, model.index(), episode.began, rule.describe(subject, context, held));
+  }
+}
+
+// docs/drive-messages.md#the-rules: what an axis's drive said in this frame, to its model (an
+// axis seen in the PDOs, whose station is known), and the rules that read it judged at once.
+void Validator::takeDriveMessages() {
+  for (const DriveMessage& m : mailbox_.frameMessages()) {
+    if (m.frame != now_.frame || !m.slave.station) continue;
+    const std::optional<std::uint16_t> axis = decoder_.axisOfStation(*m.slave.station);
+    if (!axis || *axis >= axes_.size() || !axes_[*axis].model) continue;
+    AxisSlot& s = axes_[*axis];
+    bool took = false;
+    if (m.kind == DriveMessage::Kind::Emergency) {
+      s.model->takeEmergency(m.emergency.code, now_);
+      took = true;
+    } else if (m.kind == DriveMessage::Kind::SdoUpload && m.index == diag::kPredefinedErrorField &&
+               m.subindex == 1 && m.value) {
+      took = s.model->takeHistoryRead(static_cast<std::uint32_t>(*m.value), now_);
+    }
+    if (took) evaluateAxis(s, true);
   }
 }
 
@@ -290,12 +320,8 @@ void Validator::reportEvents() {
     event_findings_.clear();
     judgeEvent(event, settings_, runs_, event_findings_);
     for (EventFinding& f : event_findings_) {
-      std::optional<std::uint16_t> axis;
-      for (const AxisInfo& info : decoder().axes()) {
-        if (info.has_station && f.slave.station && info.station == *f.slave.station) {
-          axis = info.index;
-        }
-      }
+      const std::optional<std::uint16_t> axis =
+          f.slave.station ? decoder_.axisOfStation(*f.slave.station) : std::nullopt;
       report(f.rule, axis, event.since, std::move(f.message));
     }
   }

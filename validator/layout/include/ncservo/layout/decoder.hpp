@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -116,6 +117,9 @@ class Decoder {
 
   LayoutSource source() const;
   const std::vector<AxisInfo>& axes() const { return axes_; }
+  // The axis whose slave has this station address (configuration, ENI or start-up), if any: the
+  // one place a slave's message or finding is given its axis (docs/drive-messages.md).
+  std::optional<std::uint16_t> axisOfStation(std::uint16_t station) const;
   // A start-up configured slaves' sync managers and none is a servo of this protocol.
   bool startupShowsNoServo() const { return learner_.sawConfiguration() && !learner_.sawServo(); }
   // What the start-up showed of every slave (learned whatever the layout source).

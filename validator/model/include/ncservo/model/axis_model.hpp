@@ -50,6 +50,23 @@ struct ErrorHistoryEntry {
   Stamp at;
 };
 
+// The last event of one kind with the nearest of another kind at or before it and the first after
+// it: a drive's emergency and a rise of a SEW cause bit answer each other (docs/rules.md#mbx-001,
+// #mbx-002). Stamps on the segment's clock.
+struct Answered {
+  std::optional<Stamp> at;      // the last event
+  std::optional<Stamp> before;  // the last answer at or before it
+  std::optional<Stamp> after;   // the first answer after it
+  // Whether an answer came within `window_ns` before or after the event.
+  bool within(std::int64_t window_ns) const;
+};
+
+// A read of 1003h:01, the newest entry of the drive's own error history (docs/rules.md#erh-002).
+struct HistoryRead {
+  Stamp at;
+  std::uint32_t value = 0;  // number << 24 | class << 16 | code (docs/drive-messages.md)
+};
+
 struct StateChange {
   DriveState state{};
   const char* transition = nullptr;  // docs/protocol.md §6's name, where it has one
@@ -109,6 +126,12 @@ class AxisModel {
     }
     al_state_ = state;
   }
+  // What the axis's drive said over its mailbox, given by the validator where the axis's station
+  // is known (docs/drive-messages.md#the-rules). An error reset (code 0x0000) reports no fault.
+  void takeEmergency(std::uint16_t code, const Stamp& at);
+  // A read of 1003h:01: taken when it is the first since the last fault (ERH-002); returns
+  // whether it was.
+  bool takeHistoryRead(std::uint32_t value, const Stamp& at);
   // Inputs were exchanged since the AL state last changed (ESM-002).
   bool inputsInAlState() const { return inputs_in_al_state_; }
   // Counts changes made other than by observe(): an unchanged revision and unchanged read bits
@@ -178,6 +201,17 @@ class AxisModel {
   // seen since; 0 when none. COM-003 judges how many.
   std::uint32_t unansweredOutageCycles() const { return unanswered_outage_cycles_; }
 
+  // The last emergency reporting a fault and the SEW cause rises nearest it (MBX-001), with its
+  // code; the last rise of a SEW cause bit and the fault emergencies nearest it (MBX-002), with
+  // the bits that rose; the drive's first emergency, of any code, in the capture.
+  const Answered& emergencies() const { return emergencies_; }
+  std::uint16_t emergencyCode() const { return emergency_code_; }
+  const Answered& faults() const { return faults_; }
+  std::uint32_t faultCauses() const { return fault_causes_; }
+  const std::optional<Stamp>& firstEmergency() const { return first_emergency_; }
+  // The first read of 1003h:01 since the last fault (ERH-002).
+  const std::optional<HistoryRead>& historyRead() const { return history_read_; }
+
   std::optional<DriveState> state() const { return state_; }
   // The edges of the observation taken in `frame`; empty when none was taken there.
   const std::vector<FieldEdge>& edgesIn(std::uint64_t frame) const {
@@ -236,6 +270,12 @@ class AxisModel {
   std::uint64_t timeline_omitted_ = 0;
   std::vector<ErrorHistoryEntry> error_history_;
   AxisMeasurements measurements_;
+
+  Answered emergencies_, faults_;
+  std::uint16_t emergency_code_ = 0;
+  std::uint32_t fault_causes_ = 0;
+  std::optional<Stamp> first_emergency_;
+  std::optional<HistoryRead> history_read_;
 };
 
 }  // namespace ncservo

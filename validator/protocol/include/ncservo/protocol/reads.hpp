@@ -26,6 +26,9 @@ struct Reads {
   // The slave's AL state, and outside the states that exchange inputs (ecat::exchangesInputs)
   // which PDOs each frame carries.
   bool al_state = false;
+  // What the axis's drive said over its mailbox (its emergencies, its 1003h read), where the
+  // axis's station is known (docs/drive-messages.md#the-rules).
+  bool mailbox = false;
 
   constexpr Reads operator|(const Reads& other) const {
     Reads out = *this;
@@ -39,13 +42,14 @@ struct Reads {
       }
     }
     out.al_state = al_state || other.al_state;
+    out.mailbox = mailbox || other.mailbox;
     return out;
   }
   constexpr bool any() const {
     for (std::size_t w = 0; w < kWordCount; ++w) {
       if (bits[w] != 0 || classes[w] != nullptr) return true;
     }
-    return al_state;
+    return al_state || mailbox;
   }
 };
 // The fields of the field table named by their filter names (a whole word for a word's row);
@@ -65,11 +69,19 @@ struct FieldRead {
   const FieldDef* field;
   bool through_class;  // the word is read only through its class
 };
-// The rows a declaration covers, in field-table order (the AL state is no row: Reads::al_state).
+// The rows a declaration covers, in field-table order (the AL state and the mailbox are no rows:
+// Reads::al_state, Reads::mailbox).
 std::vector<FieldRead> fieldsRead(const Reads& reads);
 // "scw.se, ssw.servo_en, msg_code (its class)": the field-table rows a declaration covers, for
 // the rule reference; "-" for none.
 std::string describeReads(const Reads& reads);
+
+// The fields named (as readsOf) and what the axis's drive said over its mailbox.
+constexpr Reads readsWithMailbox(std::initializer_list<std::string_view> filters) {
+  Reads out = readsOf(filters);
+  out.mailbox = true;
+  return out;
+}
 
 // A word (by its row's filter name) read only through `word_class`.
 constexpr Reads readsThrough(std::string_view filter, WordClass word_class) {

@@ -93,13 +93,16 @@ enum class RuleId : std::uint8_t {
   Esm002,
   Esm003,
   Esm004,
+  Mbx001,
+  Mbx002,
   Mbx003,
   Erh001,
+  Erh002,
   Lnk001,
   Lnk002,
   Dc001,
 };
-inline constexpr std::size_t kRuleCount = 36;
+inline constexpr std::size_t kRuleCount = 39;
 
 // docs/rules.md#com-006, COM-007, DC-001: the limits of the rules whose right value depends on the
 // machine. A rule's row names the limit it uses (RuleDef::limit).
@@ -201,12 +204,18 @@ using RuleCheck = bool (*)(const RuleSubject& subject, const RuleContext& contex
 // What was seen and what was expected; `held_ns` is how long the condition has held.
 using RuleDescribe = std::string (*)(const RuleSubject& subject, const RuleContext& context,
                                      std::int64_t held_ns);
+// Where an axis rule's condition began, for a rule whose condition is about a stamped event (an
+// emergency, a fault, a read of the drive's history) rather than the frame it is first seen on:
+// the validator times it from there, and a new event after a reported one is a new episode.
+using RuleBegan = std::optional<Stamp> (*)(const RuleSubject& subject);
 
 // What a rule's timeout is to it (docs/timing.md#rule-time).
 enum class TimeoutUse : std::uint8_t {
   None,      // the rule has no timeout
   Delay,     // reported once the condition has held longer than the timeout
   LookBack,  // the condition is an edge that nothing answered within the timeout before it
+  Around,    // the condition is an event that nothing answered within the timeout before or
+             // after it: reported once the timeout has passed after it
 };
 
 struct RuleDef {
@@ -228,9 +237,13 @@ struct RuleDef {
   std::size_t event = kNoEvent;  // bus and slave rules: the BusEventData alternative judged
   RuleCheck check;
   RuleDescribe describe;
-  const char* summary;  // one line, for `ncservo rules` and the expert item
+  RuleBegan began = nullptr;  // axis rules about a stamped event only
+  const char* summary;        // one line, for `ncservo rules` and the expert item
 
-  bool delayed() const { return timeout_use == TimeoutUse::Delay; }
+  // Judged once its timeout has passed after the condition began.
+  bool delayed() const {
+    return timeout_use == TimeoutUse::Delay || timeout_use == TimeoutUse::Around;
+  }
 };
 
 // Defined in rules.cpp, next to the checks the table names.
@@ -245,7 +258,8 @@ Result<const RuleDef*> findRule(std::string_view code);
 std::string ruleFilterName(const RuleDef& rule);
 
 // The window a rule's timeout allows, in ns from where its condition began: the timeout after it
-// for a delay, before it for a look-back; none for a rule without a timeout.
+// for a delay, before it for a look-back, both for an event answered around it; none for a rule
+// without a timeout.
 struct AllowedWindow {
   std::int64_t from_ns;
   std::int64_t to_ns;

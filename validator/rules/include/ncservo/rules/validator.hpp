@@ -119,6 +119,7 @@ class Validator {
   struct Judged {
     JudgedPdo rx, tx;
     bool al_state = false;  // an enabled rule reads the AL state (Reads::al_state)
+    bool mailbox = false;   // an enabled rule reads what the drives said (Reads::mailbox)
   };
   static Judged judgedBits(const RuleSettings& settings, FastPath fast_path);
   void applyAccounts();
@@ -127,7 +128,10 @@ class Validator {
   void report(RuleId rule, std::optional<std::uint16_t> axis, const Stamp& since,
               std::string message);
   AxisSlot& slot(std::uint16_t axis);
-  void evaluateAxis(AxisSlot& axis);
+  // `mailbox_only`: only the rules that read the mailbox, on a frame that gave the axis a
+  // message (its PDOs need not be in it).
+  void evaluateAxis(AxisSlot& axis, bool mailbox_only = false);
+  void takeDriveMessages();
   void observeAl(const EcatFrame& frame, const ByteReader& bytes);  // addressing_ begun
   void reportEvents();
   void syncAlState(const AxisPlacement& placement, AxisSlot& slot);
