@@ -330,9 +330,12 @@ void IncidentDetector::onFrame(const Validator& validator, const Observation& ob
     }
   }
   if (!revised_.empty()) revised_.clear();
-  takeAlCodes(validator, at);
-  takeLinks(validator, at);
-  takeDriveWords(validator, at);
+  // What slaves said comes only in frames with register commands; a wait for it still expires.
+  if (observation.decode.registers || !awaited_.empty() || !awaited_words_.empty()) {
+    takeAlCodes(validator, at);
+    takeLinks(validator, at);
+    takeDriveWords(validator, at);
+  }
   takeFaults(validator, observation);
   checkOutage(validator);
   takeAlChanges(validator);

@@ -122,9 +122,16 @@ const Observation& Validator::onFrame(std::uint64_t frame_number, std::int64_t t
     observeAl(frame, bytes);
     events_.clear();
     dc_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
-    mailbox_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
-    if (judged_.mailbox) takeDriveMessages();
-    esc_.onFrame(frame, bytes, addressing_, now_, events_);
+    // Mailboxes and ESC counters are read by register commands only: a frame of nothing but
+    // process data and the DC clock's FRMW skips both (docs/benchmarks.md).
+    if (decode.registers) {
+      mailbox_.onFrame(frame, bytes, addressing_, now_, time_ns, events_);
+      if (judged_.mailbox) takeDriveMessages();
+      esc_.onFrame(frame, bytes, addressing_, now_, events_);
+    } else {
+      mailbox_.quietFrame();
+      esc_.quietFrame();
+    }
     if (!events_.empty()) reportEvents();
   }
   // Only a frame that reaches slave registers moves an AL state or gives an axis its station.

@@ -54,6 +54,13 @@ class EscErrorTracker {
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, const FrameAddressing& addressing,
                const Stamp& now, std::vector<BusEvent>& out);
 
+  // A frame with no register command: no counter read in it.
+  void quietFrame() {
+    if (!frame_deltas_.empty()) frame_deltas_.clear();
+    if (!frame_faults_.empty()) frame_faults_.clear();
+    if (!frame_events_.empty()) frame_events_.clear();
+  }
+
   const std::vector<EscErrorDelta>& deltas() const { return deltas_; }
   const std::vector<LinkFault>& linkFaults() const { return faults_; }
   std::uint64_t omitted() const { return omitted_; }

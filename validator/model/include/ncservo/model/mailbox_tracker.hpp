@@ -84,6 +84,11 @@ class MailboxTracker {
   void onFrame(const EcatFrame& frame, const ByteReader& bytes, const FrameAddressing& addressing,
                const Stamp& now, std::int64_t time_ns, std::vector<BusEvent>& out);
 
+  // A frame with no register command: nothing said in it.
+  void quietFrame() {
+    if (!frame_messages_.empty()) frame_messages_.clear();
+  }
+
   // The messages, in frame order (at most kMaxMessages, the rest counted in omitted()).
   const std::vector<DriveMessage>& messages() const { return messages_; }
   std::uint64_t omitted() const { return omitted_; }
