@@ -354,45 +354,48 @@ const value_string* derivedNames(DerivedNames names) {
   return nullptr;
 }
 
-void fillDerivedHeader(header_field_info& h, const DerivedFieldDef& d) {
-  const value_string* names = derivedNames(d.names);
-  const auto* vals = names != nullptr ? VALS(names) : nullptr;
-  switch (d.kind) {
-    case DerivedKind::Index:
-      fillHeader(h, d.label, d.filter, FT_UINT16, BASE_DEC, nullptr, 0, d.blurb);
-      break;
-    case DerivedKind::FrameNumber:
-      fillHeader(h, d.label, d.filter, FT_FRAMENUM, BASE_NONE, FRAMENUM_TYPE(FT_FRAMENUM_NONE), 0,
-                 d.blurb);
-      break;
-    case DerivedKind::Microseconds:
-      fillHeader(h, d.label, d.filter, FT_DOUBLE, BASE_NONE, nullptr, 0, d.blurb);
-      break;
-    case DerivedKind::Unsigned:
-      fillHeader(h, d.label, d.filter, FT_UINT32, BASE_DEC, vals, 0, d.blurb);
-      break;
-    case DerivedKind::Hex8:
-      fillHeader(h, d.label, d.filter, FT_UINT8, BASE_HEX, vals, 0, d.blurb);
-      break;
-    case DerivedKind::Hex16:
-      fillHeader(h, d.label, d.filter, FT_UINT16, BASE_HEX, vals, 0, d.blurb);
-      break;
-    case DerivedKind::Hex32:
-      fillHeader(h, d.label, d.filter, FT_UINT32, BASE_HEX, vals, 0, d.blurb);
-      break;
-    case DerivedKind::Value:
-      fillHeader(h, d.label, d.filter, FT_UINT64, BASE_HEX, nullptr, 0, d.blurb);
-      break;
-    case DerivedKind::Flag:
-      fillHeader(h, d.label, d.filter, FT_BOOLEAN, 8, nullptr, d.mask, d.blurb);
-      break;
-    case DerivedKind::Bytes:
-      fillHeader(h, d.label, d.filter, FT_BYTES, BASE_NONE, nullptr, 0, d.blurb);
-      break;
-    case DerivedKind::Text:
-      fillHeader(h, d.label, d.filter, FT_STRING, BASE_NONE, nullptr, 0, d.blurb);
-      break;
+// The emergency register's bit fields are 1001h's bits of the wire layer's table, in its order.
+constexpr bool registerBitsAsTheWireLayers() {
+  constexpr auto kFirst = static_cast<std::size_t>(Derived::EmcyRegisterGeneric);
+  for (std::size_t i = 0; i < diag::kErrorRegisterBits.size(); ++i) {
+    if (kDerivedFields[kFirst + i].kind != DerivedKind::Flag ||
+        kDerivedFields[kFirst + i].mask != diag::kErrorRegisterBits[i].mask) {
+      return false;
+    }
   }
+  return kFirst + diag::kErrorRegisterBits.size() - 1 ==
+         static_cast<std::size_t>(Derived::EmcyRegisterManufacturer);
+}
+static_assert(registerBitsAsTheWireLayers());
+
+// Each DerivedKind's Wireshark type and display, in the enum's order.
+struct DerivedType {
+  ftenum type;
+  int display;
+};
+constexpr DerivedType kDerivedTypes[] = {
+    {FT_STRING, BASE_NONE},    // Text
+    {FT_UINT16, BASE_DEC},     // Index
+    {FT_FRAMENUM, BASE_NONE},  // FrameNumber
+    {FT_DOUBLE, BASE_NONE},    // Microseconds
+    {FT_UINT32, BASE_DEC},     // Unsigned
+    {FT_UINT8, BASE_HEX},      // Hex8
+    {FT_UINT16, BASE_HEX},     // Hex16
+    {FT_UINT32, BASE_HEX},     // Hex32
+    {FT_UINT64, BASE_HEX},     // Value
+    {FT_BOOLEAN, 8},           // Flag: one bit of an 8-bit parent
+    {FT_BYTES, BASE_NONE},     // Bytes
+};
+static_assert(std::size(kDerivedTypes) == static_cast<std::size_t>(DerivedKind::Bytes) + 1);
+
+void fillDerivedHeader(header_field_info& h, const DerivedFieldDef& d) {
+  const DerivedType& t = kDerivedTypes[static_cast<std::size_t>(d.kind)];
+  const value_string* names = derivedNames(d.names);
+  const void* strings = d.kind == DerivedKind::FrameNumber ? FRAMENUM_TYPE(FT_FRAMENUM_NONE)
+                        : names != nullptr                 ? VALS(names)
+                                                           : nullptr;
+  fillHeader(h, d.label, d.filter, t.type, t.display, strings,
+             d.kind == DerivedKind::Flag ? d.mask : 0, d.blurb);
 }
 
 hf_register_info* buildFieldRegistrations(std::size_t& count) {

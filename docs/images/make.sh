@@ -4,6 +4,9 @@
 #   docs/images/html-report.png  the HTML report (validate --format html) in headless Chromium
 #   docs/images/gtkwave.png      GTKWave under Xvfb with decode --format vcd's save file, zoomed
 #                                onto the first illegal-enable finding (SE-001)
+#   docs/images/drive-messages.png  an axis card of the HTML report with the drive's emergency
+#                                beside the errors read from SEW, and the link the ESC counters
+#                                name (the generator's capture, docs/drive-messages.md)
 # and beside each the text it shows (html-report.txt, gtkwave.txt, from docs/images/shown.sh), which
 # tests/integration/readme_pictures.sh compares with today's output.
 # Needs Debian's chromium, gtkwave, xvfb and imagemagick (.ci/setup installs them).
@@ -59,4 +62,29 @@ TCL
 [ -s "$work/gtkwave.png" ] || { echo "make.sh: GTKWave gave no screenshot" >&2; exit 1; }
 convert "$work/gtkwave.png" -trim +repage -strip "$images/gtkwave.png"  # the window, not the screen
 "$images/shown.sh" gtkwave.png "$build" >"$images/gtkwave.txt"
-echo "make.sh: wrote $images/html-report.png and $images/gtkwave.png ($axis, SE-001 at $at_ns ns)"
+# What the drives said (docs/drive-messages.md): the first axis card with the drive's own words,
+# and the links the ESC counters name under it, each cut out of the page in Chromium.
+NCSERVO_SHOWN_PAGE="$work/drive-messages.html" "$images/shown.sh" drive-messages.png "$build" \
+  >"$images/drive-messages.txt"
+/usr/bin/python3 - "$work/drive-messages.html" "$work/drive-messages.png" "$root/tests/tools" <<'PY'
+import pathlib, subprocess, sys
+sys.path.insert(0, sys.argv[3])
+from check_html_report import browser  # Debian's chromium and chromedriver, no network
+page, out = pathlib.Path(sys.argv[1]), sys.argv[2]
+driver = browser()
+try:
+    driver.set_window_size(1400, 1000)
+    driver.get(page.resolve().as_uri())
+    card = driver.execute_script(
+        "return [...document.querySelectorAll('div.axis')].find(d => d.querySelector('table.said'))")
+    links = driver.execute_script("return document.querySelector('table.links')")
+    card.screenshot(out + ".card.png")
+    links.screenshot(out + ".links.png")
+finally:
+    driver.quit()
+subprocess.run(["convert", "-background", "white", out + ".card.png", out + ".links.png",
+                "-gravity", "west", "-splice", "12x0", "-append", "-strip", out], check=True)
+PY
+cp "$work/drive-messages.png" "$images/drive-messages.png"
+echo "make.sh: wrote $images/html-report.png, $images/gtkwave.png ($axis, SE-001 at $at_ns ns)" \
+  "and $images/drive-messages.png"

@@ -5,6 +5,10 @@
 #   gtkwave.png            the finding the marker is on and the signals of the save file
 #   wireshark-finding.png  the findings of the frames listed and frame 1203's axes (tshark -2 with
 #                          the plugin)
+#   drive-messages.png     the axis cards with what the drive said beside the errors read from SEW,
+#                          and the links under the bus, from the data inside the page (validate
+#                          --format html on the generator's capture with a drive's emergency and a
+#                          bad link; NCSERVO_SHOWN_PAGE=FILE keeps the page for make.sh)
 # make.sh and make-wireshark.sh keep it beside each picture (PICTURE.txt) when they draw it;
 # tests/integration/readme_pictures.sh makes it again and compares, so a picture whose text the
 # tool no longer prints fails the tests until it is drawn again.
@@ -16,7 +20,7 @@ export LC_ALL=C
 picture=${1:?usage: shown.sh PICTURE [BUILD_DIR]}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 build=${2:-$root/build}
-ncservo=$build/validator/ncservo
+ncservo=$(realpath -m "$build/validator/ncservo")  # absolute: some cases run in a folder of their own
 cd "$root"
 capture=captures/faults-4axis.pcap  # relative: the page shows the path as given (make.sh)
 work=$(mktemp -d)
@@ -74,8 +78,33 @@ PY
       -E aggregator='|' -e frame.number -e ncservo.axis_name -e ncservo.state -e ncservo.scw \
       -e ncservo.ssw -e ncservo.sew -e ncservo.finding -e ncservo.since_frame | sed 's/^/Frame /'
     ;;
+  drive-messages.png)
+    # Deterministic: the independent generator's capture, its layout naming the stations.
+    (cd "$work" && python3 "$root/tests/tools/gen_capture.py" --axes 3 --cycles 3000 --seed 5 \
+      --inject MBX-002 --incident link-fault --layout-config layout.toml -o drive-messages.pcap &&
+      { "$ncservo" validate --config layout.toml --format html -o page.html drive-messages.pcap \
+        >/dev/null 2>&1 || [ $? = 1 ]; })
+    [ -z "${NCSERVO_SHOWN_PAGE:-}" ] || cp "$work/page.html" "$NCSERVO_SHOWN_PAGE"
+    python3 - "$work/page.html" <<'PY'
+import json, re, sys
+page = open(sys.argv[1], encoding="utf-8").read()
+data = json.loads(re.search(r'<script type="application/json" id="ncservo-data">(.*?)</script>',
+                            page, re.S).group(1))
+for capture in data["captures"]:
+    for axis in capture["axes"]:
+        if not axis["said"]:
+            continue
+        for time, error, code, frame in axis["errors"]:
+            print(f"{axis['name']} error {error} {code} frame {frame}")
+        for frame, message, request in axis["said"]:
+            print(f"{axis['name']} said at frame {frame}: {message}")
+    for frame, link, errors in capture["bus_said"]["links"]:
+        print(f"link at frame {frame}: {link}: {errors} errors")
+PY
+    ;;
   *)
-    echo "shown.sh: no picture $picture (html-report.png, gtkwave.png, wireshark-finding.png)" >&2
+    echo "shown.sh: no picture $picture (html-report.png, gtkwave.png, wireshark-finding.png," \
+      "drive-messages.png)" >&2
     exit 2
     ;;
 esac

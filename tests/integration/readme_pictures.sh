@@ -7,7 +7,7 @@
 SRC=$1 BUILD=$2
 source "$SRC/tests/integration/lib.sh"
 
-pictures=(html-report.png gtkwave.png wireshark-finding.png)
+pictures=(html-report.png gtkwave.png wireshark-finding.png drive-messages.png)
 for picture in "${pictures[@]}"; do
   kept="$SRC/docs/images/${picture%.png}.txt"
   [ -s "$kept" ] || fail "no $kept: draw $picture with docs/images/make.sh or make-wireshark.sh"
