@@ -1446,7 +1446,7 @@ void addEmergencyItems(proto_tree* tree, tvbuff_t* tvb, const SaidRecord& r,
 }
 
 // An SDO answer or abort: the object, the value or the abort code, the request's frame, and a
-// 1003h entry's parts (seed 002's layout).
+// 1003h entry's parts (docs/drive-messages.md).
 void addSdoItems(proto_tree* tree, tvbuff_t* tvb, const SaidRecord& r, const FrameWants& wants) {
   addDerivedUint(tree, tvb, wants, Derived::SdoIndex, r.index);
   addDerivedUint(tree, tvb, wants, Derived::SdoSubindex, r.subindex);

@@ -72,7 +72,8 @@ for packet in ET.parse(pdml).getroot().iter("packet"):
             if starts:
                 records.append({})
             if records and key.startswith(("ncservo.emcy", "ncservo.sdo", "ncservo.esc", "ncservo.link_fault")):
-                records[-1].setdefault(key, f.get("value") if key == "ncservo.emcy.data" else show)
+                # bytes show as 00:0d:..., the JSON's data as 000d...
+                records[-1].setdefault(key, show.replace(":", "") if key == "ncservo.emcy.data" else show)
         for r in records:
             num = lambda k: int(r[k], 0) if k in r else None
             if "ncservo.emcy.code" in r:
@@ -91,6 +92,13 @@ for packet in ET.parse(pdml).getroot().iter("packet"):
             else:
                 plugin.append((frame, slave, "esc", num("ncservo.esc.port"), r.get("ncservo.esc.counter"),
                                num("ncservo.esc.delta")))
+
+# The fields the plugin showed, for the check that every one of them shows somewhere.
+with open(pdml + ".shown", "a") as shown:
+    for field in ET.parse(pdml).getroot().iter("field"):
+        if (field.get("name") or "").startswith(("ncservo.emcy", "ncservo.sdo", "ncservo.errhist",
+                                                 "ncservo.esc", "ncservo.link_fault")):
+            shown.write(field.get("name") + "\n")
 
 key = lambda t: tuple(str(x) for x in t)
 if sorted(cli, key=key) != sorted(plugin, key=key):
@@ -140,6 +148,17 @@ compare "gen-mailbox" "$WORK/gen-mailbox.pcap" "sdo abort esc link"
 python3 "$gen" --axes 6 --cycles 3000 --seed 9 --format pcapng --inject LNK-001:1 --inject MBX-003:4 \
   -o "$WORK/gen-link.pcapng" >/dev/null || fail "gen_capture.py exited $?"
 compare "gen-link" "$WORK/gen-link.pcapng" "esc link abort"
+# A drive that reports its faults with emergencies, and the NC reading its newest 1003h entry: the
+# rules that judge them name the axis by its station, which the layout file gives.
+python3 "$gen" --axes 3 --cycles 3000 --seed 7 --inject MBX-002 --inject ERH-002 \
+  --layout-config "$WORK/gen-drive.toml" -o "$WORK/gen-drive.pcap" >/dev/null || fail "gen_capture.py exited $?"
+compare "gen-drive" "$WORK/gen-drive.pcap" "emergency sdo"
+# Every field of what was said (`ncservo fields`) showed on one of the generated captures.
+"$NCSERVO" fields | awk -F'\t' '$3 !~ /^\(expert/ {print $1}' |
+  grep -E '^ncservo\.(emcy|sdo|errhist|esc)\.|^ncservo\.link_fault$' | sort >"$WORK/wanted.txt"
+sort -u "$WORK/plugin.pdml.shown" >"$WORK/shown.txt"
+missing=$(comm -23 "$WORK/wanted.txt" "$WORK/shown.txt" | tr '\n' ' ')
+[ -z "$missing" ] || fail "fields never shown on the generated captures: $missing"
 require_path "$REAL_CAPTURES" "real captures" "the generated captures passed"
 for capture in "$REAL_CAPTURES"/*.pcap "$REAL_CAPTURES"/*.pcapng "$REAL_CAPTURES"/*.cap; do
   [ -f "$capture" ] || continue

@@ -2,7 +2,8 @@
 # real_captures.sh SRC BUILD
 # Over real EtherCAT captures from other people's hardware (none holds a servo of this protocol),
 # tshark with the plugin exits 0, prints nothing on stderr and shows no axis field, the only
-# NC-Servo items are the bus findings `ncservo validate` reports on the same frames, validate
+# NC-Servo items are the bus findings `ncservo validate` reports on the same frames and what the
+# slaves said where validate lists it (docs/drive-messages.md), validate
 # ends NO SERVO (exit 4; 0 with --allow-empty), and `ncservo decode` finds no axis, says so and
 # exits 4 too.
 SRC=$1 BUILD=$2
@@ -21,7 +22,8 @@ for capture in "$real"/*.pcap "$real"/*.pcapng "$real"/*.cap; do
   fi
   "$TSHARK" "$PLUGIN" -2 -r "$WORK/capture" -V >"$WORK/verbose.txt" 2>"$WORK/err.txt" || fail "tshark -V exit $?"
   [ ! -s "$WORK/err.txt" ] || fail "$(basename "$capture"): stderr: $(head -3 "$WORK/err.txt")"
-  # The only NC-Servo items are bus findings (ESM-*, COM-*), on the frames where the validator reports them.
+  # The only NC-Servo items are bus findings (ESM-*, COM-*) and what slaves said, on the frames
+  # where the validator reports them.
   "$TSHARK" "$PLUGIN" -2 -r "$WORK/capture" -Y ncservo -T fields -e frame.number >"$WORK/plugin.txt"
   set +e
   "$NCSERVO" validate --format json --fail-on never "$WORK/capture" >"$WORK/report.json"
@@ -40,7 +42,11 @@ errors = any(f["severity"] == "error" for f in c["findings"])
 assert c["verdict"] == ("fail" if errors else "no servo"), c["verdict"]
 assert "no servo of this protocol" in c["reason"], c["reason"]
 assert all(f["rule"].split("-")[0] in ("ESM", "COM") and f["axis"] is None for f in c["findings"]), c["findings"]
-frames = sorted({f["frame"] for f in c["findings"]})
+# ... and what the slaves said (docs/drive-messages.md: the SOEM and Beckhoff start-ups' SDOs), on
+# the frames that carried it.
+said = [m["frame"] for m in c["drive_messages"]] + [e["frame"] for e in c["esc_errors"]] + \
+    [f["frame"] for f in c["link_faults"]]
+frames = sorted({f["frame"] for f in c["findings"]} | set(said))
 shown = sorted({int(l) for l in open(sys.argv[2]) if l.strip()})
 assert frames == shown, (frames, shown)
 PY

@@ -52,10 +52,12 @@ grep -q "^layout: inferred, 5 axes" "$WORK/plain.txt" || fail "default layout: $
 chmod a+r "$WORK/fields.pcap" "$WORK/fields.toml"
 # (but those only a finding carries: a conforming capture has none; plugin_views.sh shows them;
 # and an incident's evidence, which its following error lacks here: incidents_plugin.sh shows it;
-# and a duplicate record's mark, which a capture without copies lacks: capture_clock.sh shows it)
+# and a duplicate record's mark, which a capture without copies lacks: capture_clock.sh shows it;
+# and what drives and ESCs say over the mailbox and in their counters, which the simulator does
+# not write: plugin_drive_messages.sh shows them on the generator's captures)
 mapfile -t fields < <("$NCSERVO" fields | awk -F'\t' '$3 !~ /^\(expert/ {print $1}' |
   grep -v -x -e ncservo.finding -e ncservo.since_frame -e ncservo.incident.evidence \
-    -e ncservo.duplicate)
+    -e ncservo.duplicate | grep -v -E '^ncservo\.(emcy|sdo|errhist|esc)\.|^ncservo\.link_fault$')
 # the same with the layout learned from the start-up (no preference set)
 "$TSHARK" "$PLUGIN" -r "$WORK/fields.pcap" -T fields -e ncservo.axis -e ncservo.sew -Y ncservo.sew \
   >"$WORK/learned.tsv" 2>"$WORK/tshark.err" || fail "tshark exit $?"
