@@ -190,9 +190,11 @@ struct IncidentRecord {
 };
 // What a drive or an ESC said in a frame (docs/drive-messages.md), as the first pass read it.
 enum class SaidKind : guint8 { Emergency, SdoUpload, SdoDownload, SdoAbort, EscRise, LinkFault };
+// Who said it: a station address, a ring position, or every slave (a BRD's sum of counters).
+enum SaidSlave : guint8 { kByStation, kByPosition, kAllSlaves };
 struct SaidRecord {
   SaidKind kind;
-  bool has_station;  // else `slave` is the ring position
+  guint8 addressed;  // SaidSlave: what `slave` is
   bool has_value;    // an SDO's value (at most 8 bytes)
   guint8 subindex;
   guint16 slave;          // the station address of the slave that said it
@@ -658,7 +660,12 @@ void appendSaid(wmem_strbuf_t* text, const FrameRecord& record) {
     const SaidRecord& r = record.said[i];
     const bool new_slave = i == 0 || r.slave != record.said[i - 1].slave;
     if (new_slave) {
-      wmem_strbuf_append_printf(text, " | %s0x%04X ", r.has_station ? "" : "position ", r.slave);
+      if (r.addressed == kAllSlaves) {
+        wmem_strbuf_append(text, " | all slaves ");
+      } else {
+        wmem_strbuf_append_printf(text, " | %s0x%04X ",
+                                  r.addressed == kByStation ? "" : "position ", r.slave);
+      }
     } else {
       wmem_strbuf_append(text, ", ");
     }
@@ -891,7 +898,7 @@ SaidRecord saidOf(const DriveMessage& m) {
            : m.kind == DriveMessage::Kind::SdoUpload   ? SaidKind::SdoUpload
            : m.kind == DriveMessage::Kind::SdoDownload ? SaidKind::SdoDownload
                                                        : SaidKind::SdoAbort;
-  r.has_station = m.slave.station.has_value();
+  r.addressed = m.slave.station ? kByStation : kByPosition;
   r.slave = m.slave.station.value_or(m.slave.position.value_or(0));
   r.index = m.index;
   r.subindex = m.subindex;
@@ -908,7 +915,7 @@ SaidRecord saidOf(const DriveMessage& m) {
 SaidRecord saidOf(const EscErrorDelta& d) {
   SaidRecord r{};
   r.kind = SaidKind::EscRise;
-  r.has_station = d.slave.station.has_value();
+  r.addressed = d.broadcast ? kAllSlaves : d.slave.station ? kByStation : kByPosition;
   r.slave = d.slave.station.value_or(d.slave.position.value_or(0));
   r.code = static_cast<guint16>(d.counter);
   r.error_register = d.port;
@@ -919,7 +926,7 @@ SaidRecord saidOf(const EscErrorDelta& d) {
 SaidRecord saidOf(const LinkFault& f) {
   SaidRecord r{};
   r.kind = SaidKind::LinkFault;
-  r.has_station = f.reported.station.has_value();
+  r.addressed = f.reported.station ? kByStation : kByPosition;
   r.slave = f.reported.station.value_or(f.reported.position.value_or(0));
   r.error_register = f.reported_port;
   r.number = f.errors;
@@ -948,7 +955,7 @@ void keepSaid(FrameRecord& record, const Validator& by) {
     if (n < count) out[n++] = saidOf(f);
   }
   std::stable_sort(out, out + n, [](const SaidRecord& a, const SaidRecord& b) {
-    return a.has_station != b.has_station ? a.has_station : a.slave < b.slave;
+    return a.addressed != b.addressed ? a.addressed < b.addressed : a.slave < b.slave;
   });
   record.said = out;
   record.said_count = static_cast<guint16>(n);
@@ -1492,7 +1499,9 @@ void addSaidItems(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, proto_ite
         expert_add_info(pinfo, root, noteEi(ExpertNote::SdoAborted));
         break;
       case SaidKind::EscRise:
-        if (r.has_station) addDerivedUint(tree, tvb, wants, Derived::EscStation, r.slave);
+        if (r.addressed == kByStation) {
+          addDerivedUint(tree, tvb, wants, Derived::EscStation, r.slave);
+        }
         addDerivedUint(tree, tvb, wants, Derived::EscPort, r.error_register);
         if (wants.is(Derived::EscCounter)) {
           proto_item_set_generated(
@@ -1584,11 +1593,14 @@ int dissectLayer(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void* data
     }
     if (structure_only_note) expert_add_info(pinfo, root, noteEi(ExpertNote::StructureOnly));
   } else if (protocol_item) {
-    root = layer.said_count > 0
-               ? proto_tree_add_protocol_format(
+    root = layer.said_count == 0 ? proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA)
+           : layer.said[0].addressed == kAllSlaves
+               ? proto_tree_add_protocol_format(tree, proto_ncservo, tvb, 0, 0,
+                                                "NC-Servo all slaves (a broadcast read's sum)")
+               : proto_tree_add_protocol_format(
                      tree, proto_ncservo, tvb, 0, 0, "NC-Servo %s0x%04X",
-                     layer.said[0].has_station ? "station " : "position ", layer.said[0].slave)
-               : proto_tree_add_item(tree, proto_ncservo, tvb, 0, 0, ENC_NA);
+                     layer.said[0].addressed == kByStation ? "station " : "position ",
+                     layer.said[0].slave);
     layer_tree = proto_item_add_subtree(root, ett_ncservo);
   }
   if (layer.said_count > 0) addSaidItems(layer_tree, tvb, pinfo, root, layer);
@@ -1686,7 +1698,7 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   for (guint i = 0; i < record->said_count;) {
     guint end = i + 1;
     while (end < record->said_count && record->said[end].slave == record->said[i].slave &&
-           record->said[end].has_station == record->said[i].has_station) {
+           record->said[end].addressed == record->said[i].addressed) {
       ++end;
     }
     layer.first = record->axis_count == 0 && i == 0;

@@ -32,7 +32,10 @@ name, report, pdml, stock_file, kinds = sys.argv[1:]
 capture = json.load(open(report))["captures"][0]
 
 def slave_of(j):
-    return ("station", j["station"]) if j.get("station") is not None else ("position", j.get("position"))
+    if j.get("station") is not None:
+        return ("station", j["station"])
+    # a broadcast read's sum of every slave's counters names no slave
+    return ("position", j["position"]) if j.get("position") is not None else ("all", None)
 
 cli = []
 for m in capture["drive_messages"]:
@@ -62,7 +65,8 @@ for packet in ET.parse(pdml).getroot().iter("packet"):
             continue
         label = proto.get("showname") or ""
         words = label.split()
-        slave = (words[1], int(words[2], 16)) if len(words) >= 3 and words[1] in ("station", "position") else None
+        slave = (words[1], int(words[2], 16)) if len(words) >= 3 and words[1] in ("station", "position") \
+            else ("all", None) if len(words) >= 2 and words[1] == "all" else None
         records = []
         for f in proto.iter("field"):
             key = f.get("name")
