@@ -9,6 +9,7 @@
 # fingerprint and frame. The status topic says "online", then "offline" (retained) at the end,
 # and the broker's last will says it for a monitor killed outright. mqtts:// with a CA and a
 # client certificate reaches a broker that requires one, and without the certificate does not.
+# What the drives and ESCs said is published on its topics as validate reports it.
 # With no broker at all, a queue of --mqtt-queue messages keeps that many and counts the rest.
 # Needs root, tcpreplay, mosquitto and openssl: otherwise exit 77 with the reason (under CI:
 # fails).
@@ -119,6 +120,56 @@ status = by_topic[prefix + "/status"]
 assert status and status[0] == "online" and status[-1] == "offline", f"status: {status}"
 print(f"ok {len(findings)} findings and {len(incidents)} incidents received, none lost "
       f"({fdups + idups} received twice after the restart, the same objects); status {status}")
+PY
+
+# What the drives and ESCs said (docs/drive-messages.md): the independent generator's SDO answers,
+# aborts and a bad link, each published on its topic as the JSON Lines object validate gives for
+# the monitor's recording.
+python3 "$SRC/tests/tools/gen_capture.py" --axes 3 --cycles 3000 --seed 5 --inject MBX-003 \
+  --incident link-fault -o said.pcap >/dev/null || fail "gen_capture.py exited $?"
+mosquitto_sub -h 127.0.0.1 -p "$port" -q 1 -v -t "$prefix/drive-message" -t "$prefix/link-fault" \
+  -t "$prefix/said-probe" >said.txt 2>said-sub.err &
+sub=$!
+said_subscribed() {
+  mosquitto_pub -p "$port" -q 1 -t "$prefix/said-probe" -m hello && grep -q "said-probe hello" said.txt
+}
+wait_for 50 said_subscribed || fail "the subscriber never got a message: $(cat said-sub.err)"
+rm -rf said-rec && mkdir said-rec
+"$NCSERVO" monitor -i "$host" --mqtt "mqtt://127.0.0.1:$port/$prefix" --mqtt-client-id ncservo-said \
+  --record said-rec --record-window 60 >/dev/null 2>said.err &
+monitor=$!
+wait_for 50 grep -q "connected to" said.err || fail "the monitor did not connect: $(cat said.err)"
+replay_into_peer said.pcap || fail "tcpreplay failed"
+sleep 1
+kill -INT "$monitor"
+wait "$monitor" || true
+sleep 0.5
+kill -INT "$sub"
+wait "$sub" || true
+said_recordings=(said-rec/*.pcapng)
+"$NCSERVO" validate --format jsonl --fail-on never "${said_recordings[0]}" >said-rec.jsonl
+python3 - said.txt said-rec.jsonl "$prefix" <<'PY' || fail "the drive messages and link faults published differ"
+import json, sys
+received, rec, prefix = sys.argv[1:]
+got = {"drive_message": [], "link_fault": []}
+for line in open(received):
+    topic, _, payload = line.rstrip("\n").partition(" ")
+    if topic.endswith("/said-probe"):
+        continue
+    j = json.loads(payload)
+    key = "drive_message" if topic == prefix + "/drive-message" else "link_fault"
+    got[key].append(j[key])
+want = {"drive_message": [], "link_fault": []}
+for line in open(rec):
+    j = json.loads(line)
+    for key in want:
+        if key in j:
+            want[key].append(j[key])
+assert len(want["drive_message"]) >= 3 and want["link_fault"], f"the capture was to hold them: {want}"
+for key in want:
+    assert got[key] == want[key], f"{key}: published {got[key][:3]}, validate of the recording {want[key][:3]}"
+print(f"ok {len(got['drive_message'])} drive messages and {len(got['link_fault'])} link faults published"
+      " as validate reports them")
 PY
 
 # The last will: a monitor killed outright is "offline" by the broker's word.

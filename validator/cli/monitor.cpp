@@ -592,7 +592,7 @@ int runMonitor(const MonitorArgs& args) {
   };
   const auto frame = [&](const PipelineFrame&) {
     report.first_time_ns = *pipeline.run().first_time_ns;
-    if (output.telemetry) output.telemetry->onFrame(*pipeline.validator());
+    if (output.telemetry) output.telemetry->onFrame(*pipeline.validator(), report);
   };
   const auto findings = [&](const std::vector<Finding>& found) {
     reportFindings(found, pipeline, **writer, report, output);

@@ -20,6 +20,17 @@ std::string incidentJsonLine(const CaptureReport& report, std::size_t index) {
       .dump();
 }
 
+std::string driveMessageJsonLine(const CaptureReport& report, const DriveMessage& message) {
+  return detail::Json{{"capture", report.path},
+                      {"drive_message", detail::driveMessageJson(report, message)}}
+      .dump();
+}
+
+std::string linkFaultJsonLine(const CaptureReport& report, const LinkFault& fault) {
+  return detail::Json{{"capture", report.path}, {"link_fault", detail::linkFaultJson(fault)}}
+      .dump();
+}
+
 namespace detail {
 
 void writeJsonlFinding(const ReportSink& sink, const CaptureReport& r, const Finding& f,
@@ -65,16 +76,14 @@ void writeJsonlCoverage(const ReportSink& sink, const CaptureReport& r) {
   }
   // docs/drive-messages.md: one line per drive message, counter rise and link fault.
   for (const DriveMessage& m : r.drive_messages) {
-    const Json j{{"capture", r.path}, {"drive_message", driveMessageJson(r, m)}};
-    std::fputs((j.dump() + "\n").c_str(), sink.out);
+    std::fputs((driveMessageJsonLine(r, m) + "\n").c_str(), sink.out);
   }
   for (const EscErrorDelta& d : r.esc_errors) {
     const Json j{{"capture", r.path}, {"esc_error", escErrorJson(r, d)}};
     std::fputs((j.dump() + "\n").c_str(), sink.out);
   }
   for (const LinkFault& f : r.link_faults) {
-    const Json j{{"capture", r.path}, {"link_fault", linkFaultJson(f)}};
-    std::fputs((j.dump() + "\n").c_str(), sink.out);
+    std::fputs((linkFaultJsonLine(r, f) + "\n").c_str(), sink.out);
   }
   const Json timing{{"capture", r.path},
                     {"timing", timingJson(r)},

@@ -26,8 +26,15 @@ Result<std::unique_ptr<LiveTelemetry>> LiveTelemetry::start(const TelemetryOptio
   return telemetry;
 }
 
-void LiveTelemetry::onFrame(const Validator& validator) {
+void LiveTelemetry::onFrame(const Validator& validator, const report::CaptureReport& report) {
   if (server_) metrics_.onFrame(validator);
+  if (!mqtt_) return;
+  for (const DriveMessage& m : validator.mailbox().frameMessages()) {
+    mqtt_->publish(MqttTopic::DriveMessage, report::driveMessageJsonLine(report, m));
+  }
+  for (const LinkFault& f : validator.escErrors().frameLinkFaults()) {
+    mqtt_->publish(MqttTopic::LinkFault, report::linkFaultJsonLine(report, f));
+  }
 }
 
 void LiveTelemetry::onFindings(const std::vector<Finding>& findings,

@@ -157,6 +157,9 @@ std::string ruleHelpUri(const RuleDef& rule);
 std::string findingJsonLine(const CaptureReport& report, const Finding& finding,
                             BaselineState state);
 std::string incidentJsonLine(const CaptureReport& report, std::size_t index);
+// What a drive said and a link fault, likewise (docs/drive-messages.md).
+std::string driveMessageJsonLine(const CaptureReport& report, const DriveMessage& message);
+std::string linkFaultJsonLine(const CaptureReport& report, const LinkFault& fault);
 
 // How a report is written: every finding or one line per rule and axis, and the rules switched
 // on (which JUnit lists as test cases).

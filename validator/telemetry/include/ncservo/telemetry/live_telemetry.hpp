@@ -34,7 +34,9 @@ class LiveTelemetry {
                                                       const RuleSettings& settings);
 
   // A frame delivered and judged.
-  void onFrame(const Validator& validator);
+  // Each frame: the metrics, and what the drives and ESCs said in it to MQTT
+  // (docs/drive-messages.md), as JSON Lines objects of `report`'s capture.
+  void onFrame(const Validator& validator, const report::CaptureReport& report);
   // The findings of a frame, as `report` names them.
   void onFindings(const std::vector<Finding>& findings, const report::CaptureReport& report);
   // Where issue 37 (drive messages, link faults, ESC error counters) plugs in: an object of its

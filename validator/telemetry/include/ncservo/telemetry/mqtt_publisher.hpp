@@ -32,8 +32,9 @@ inline constexpr std::array<MqttTopicRow, 5> kMqttTopics{{
     {MqttTopic::Incident, "incident",
      "each incident once it ended (recovered, or the next fault came) or the capture did, JSON "
      "Lines' incident object"},
-    {MqttTopic::DriveMessage, "drive-message", "each drive message (issue 37; none yet)"},
-    {MqttTopic::LinkFault, "link-fault", "each link fault (issue 37; none yet)"},
+    {MqttTopic::DriveMessage, "drive-message",
+     "each emergency, SDO answer and abort, JSON Lines' drive_message object"},
+    {MqttTopic::LinkFault, "link-fault", "each link fault, JSON Lines' link_fault object"},
     {MqttTopic::Presence, "status",
      "\"online\" once connected, \"offline\" at the end or as the broker's last will; retained"},
 }};
