@@ -68,10 +68,9 @@ std::string describeDriveMessage(const DriveMessage& m) {
       }
       if (const char* object = diag::objectName(m.index)) {
         out += fmt::format(" ({}", object);
-        if (m.index == diag::kPredefinedErrorField && m.subindex >= 1 && m.value) {
-          const auto e = diag::errorFieldEntry(static_cast<std::uint32_t>(*m.value));
-          out += fmt::format(": error {}, class 0x{:02X}, 0x{:04X}{}", e.number, e.error_class,
-                             e.code, text(diag::errorCodeText(e.code)));
+        if (const std::optional<diag::ErrorFieldEntry> e = errorHistoryEntry(m)) {
+          out += fmt::format(": error {}, class 0x{:02X}, 0x{:04X}{}", e->number, e->error_class,
+                             e->code, text(diag::errorCodeText(e->code)));
         }
         out += ")";
       }
@@ -79,6 +78,14 @@ std::string describeDriveMessage(const DriveMessage& m) {
     }
   }
   return "unknown";
+}
+
+std::optional<diag::ErrorFieldEntry> errorHistoryEntry(const DriveMessage& m) {
+  if (m.kind == DriveMessage::Kind::SdoAbort || m.index != diag::kPredefinedErrorField ||
+      m.subindex < 1 || !m.value) {
+    return std::nullopt;
+  }
+  return diag::errorFieldEntry(static_cast<std::uint32_t>(*m.value));
 }
 
 void MailboxTracker::MbxData::absorb(const MbxData& other) {

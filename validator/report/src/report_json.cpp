@@ -476,12 +476,11 @@ Json driveMessageJson(const CaptureReport& r, const DriveMessage& m) {
       j["value"] = m.value ? Json(*m.value) : Json(nullptr);
       if (!m.value) j["size"] = m.size;
       if (const char* object = diag::objectName(m.index)) j["object"] = object;
-      if (m.index == diag::kPredefinedErrorField && m.subindex >= 1 && m.value) {
-        const diag::ErrorFieldEntry e = diag::errorFieldEntry(static_cast<std::uint32_t>(*m.value));
-        j["entry"] = {{"number", e.number},
-                      {"class", e.error_class},
-                      {"code", e.code},
-                      {"text", textOrNull(diag::errorCodeText(e.code))}};
+      if (const std::optional<diag::ErrorFieldEntry> e = errorHistoryEntry(m)) {
+        j["entry"] = {{"number", e->number},
+                      {"class", e->error_class},
+                      {"code", e->code},
+                      {"text", textOrNull(diag::errorCodeText(e->code))}};
       }
       break;
   }

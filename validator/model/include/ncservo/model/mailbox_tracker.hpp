@@ -21,6 +21,7 @@
 #include "ncservo/base/byte_reader.hpp"
 #include "ncservo/layout/axis_config.hpp"
 #include "ncservo/model/bus_events.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
 #include "ncservo/wire/ethercat.hpp"
 #include "ncservo/wire/mailbox.hpp"
 #include "ncservo/wire/slave_directory.hpp"
@@ -47,6 +48,8 @@ const char* driveMessageKindName(DriveMessage::Kind kind);  // "emergency", "sdo
 // 0d00000000)", "SDO upload 0x1003:1 = 0x0D218611 (pre-defined error field: error 13, class 0x21,
 // 0x8611 following error too large)", "SDO abort 0x1003:2: 0x08000024 no data available".
 std::string describeDriveMessage(const DriveMessage& message);
+// The error history entry an answer carries: a value of 1003h:01..08 (docs/drive-messages.md).
+std::optional<diag::ErrorFieldEntry> errorHistoryEntry(const DriveMessage& message);
 
 // What could not be decoded as it should (hostile or damaged input).
 struct MailboxNote {
