@@ -196,6 +196,7 @@ struct SaidRecord {
   SaidKind kind;
   guint8 addressed;  // SaidSlave: what `slave` is
   bool has_value;    // an SDO's value (at most 8 bytes)
+  bool history;      // the value is an error history entry (errorHistoryEntry)
   guint8 subindex;
   guint16 slave;          // the station address of the slave that said it
   guint16 index;          // SDO
@@ -652,13 +653,17 @@ const char* stateLabel(guint8 state) {
   return state == kNoState ? "no state" : driveStateName(static_cast<DriveState>(state));
 }
 
+bool sameSlave(const SaidRecord& a, const SaidRecord& b) {
+  return a.addressed == b.addressed && a.slave == b.slave;
+}
+
 // What the drives and ESCs said, after the rules: "| 0x03E9 emergency 0x8611, SDO abort
 // 0x1003:2"; the first kNamedSaid named, the rest counted.
 constexpr guint kNamedSaid = 3;
 void appendSaid(wmem_strbuf_t* text, const FrameRecord& record) {
   for (guint i = 0; i < record.said_count && i < kNamedSaid; ++i) {
     const SaidRecord& r = record.said[i];
-    const bool new_slave = i == 0 || r.slave != record.said[i - 1].slave;
+    const bool new_slave = i == 0 || !sameSlave(r, record.said[i - 1]);
     if (new_slave) {
       if (r.addressed == kAllSlaves) {
         wmem_strbuf_append(text, " | all slaves ");
@@ -909,6 +914,7 @@ SaidRecord saidOf(const DriveMessage& m) {
   r.request_frame = static_cast<guint32>(m.request_frame.value_or(0));
   r.has_value = m.value.has_value();
   r.value = m.value.value_or(0);
+  r.history = errorHistoryEntry(m).has_value();
   return r;
 }
 
@@ -1470,8 +1476,7 @@ void addSdoItems(proto_tree* tree, tvbuff_t* tvb, const SaidRecord& r, const Fra
   if (r.request_frame != 0) {
     addDerivedUint(tree, tvb, wants, Derived::SdoRequestIn, r.request_frame);
   }
-  if (r.kind != SaidKind::SdoAbort && r.index == diag::kPredefinedErrorField && r.subindex >= 1 &&
-      r.has_value) {
+  if (r.history) {
     const diag::ErrorFieldEntry entry = diag::errorFieldEntry(static_cast<std::uint32_t>(r.value));
     addDerivedUint(tree, tvb, wants, Derived::ErrhistNumber, entry.number);
     addDerivedUint(tree, tvb, wants, Derived::ErrhistClass, entry.error_class);
@@ -1479,7 +1484,17 @@ void addSdoItems(proto_tree* tree, tvbuff_t* tvb, const SaidRecord& r, const Fra
   }
 }
 
-// What one slave said in the frame, with expert info for emergencies, aborts and link faults.
+// Emergencies, aborts and link faults are expert info, on `item` (null without a tree).
+void addSaidExpert(packet_info* pinfo, proto_item* item, const SaidRecord& r) {
+  if (r.kind == SaidKind::Emergency)
+    expert_add_info(pinfo, item, noteEi(ExpertNote::DriveEmergency));
+  if (r.kind == SaidKind::SdoAbort) expert_add_info(pinfo, item, noteEi(ExpertNote::SdoAborted));
+  if (r.kind == SaidKind::LinkFault) {
+    expert_add_info_format(pinfo, item, noteEi(ExpertNote::LinkFaultNamed), "%s", r.text);
+  }
+}
+
+// What one slave said in the frame, with its expert info.
 void addSaidItems(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, proto_item* root,
                   const LayerData& layer) {
   const FrameWants& wants = *layer.wants;
@@ -1488,15 +1503,11 @@ void addSaidItems(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, proto_ite
     switch (r.kind) {
       case SaidKind::Emergency:
         addEmergencyItems(tree, tvb, r, wants);
-        expert_add_info(pinfo, root, noteEi(ExpertNote::DriveEmergency));
         break;
       case SaidKind::SdoUpload:
       case SaidKind::SdoDownload:
-        addSdoItems(tree, tvb, r, wants);
-        break;
       case SaidKind::SdoAbort:
         addSdoItems(tree, tvb, r, wants);
-        expert_add_info(pinfo, root, noteEi(ExpertNote::SdoAborted));
         break;
       case SaidKind::EscRise:
         if (r.addressed == kByStation) {
@@ -1515,23 +1526,9 @@ void addSaidItems(proto_tree* tree, tvbuff_t* tvb, packet_info* pinfo, proto_ite
           proto_item_set_generated(
               proto_tree_add_string(tree, derivedHf(Derived::LinkFault), tvb, 0, 0, r.text));
         }
-        expert_add_info_format(pinfo, root, noteEi(ExpertNote::LinkFaultNamed), "%s", r.text);
         break;
     }
-  }
-}
-
-// The expert info of what was said, without a tree (the packet list).
-void addSaidExpertOnly(packet_info* pinfo, const FrameRecord& record) {
-  for (guint i = 0; i < record.said_count; ++i) {
-    const SaidRecord& r = record.said[i];
-    if (r.kind == SaidKind::Emergency)
-      expert_add_info(pinfo, nullptr, noteEi(ExpertNote::DriveEmergency));
-    if (r.kind == SaidKind::SdoAbort)
-      expert_add_info(pinfo, nullptr, noteEi(ExpertNote::SdoAborted));
-    if (r.kind == SaidKind::LinkFault) {
-      expert_add_info_format(pinfo, nullptr, noteEi(ExpertNote::LinkFaultNamed), "%s", r.text);
-    }
+    addSaidExpert(pinfo, root, r);
   }
 }
 
@@ -1647,7 +1644,7 @@ void addExpertOnly(packet_info* pinfo, const FrameRecord& record) {
   for (guint i = 0; i < record.finding_count; ++i) {
     expert_add_info(pinfo, nullptr, &ei_rule[record.findings[i].rule]);
   }
-  addSaidExpertOnly(pinfo, record);
+  for (guint i = 0; i < record.said_count; ++i) addSaidExpert(pinfo, nullptr, record.said[i]);
 }
 
 int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
@@ -1697,10 +1694,7 @@ int dissectNcservo(tvbuff_t* tvb, packet_info* pinfo, proto_tree* tree, void*) {
   layer.axis = nullptr;
   for (guint i = 0; i < record->said_count;) {
     guint end = i + 1;
-    while (end < record->said_count && record->said[end].slave == record->said[i].slave &&
-           record->said[end].addressed == record->said[i].addressed) {
-      ++end;
-    }
+    while (end < record->said_count && sameSlave(record->said[end], record->said[i])) ++end;
     layer.first = record->axis_count == 0 && i == 0;
     layer.said = &record->said[i];
     layer.said_count = end - i;
