@@ -140,4 +140,38 @@ print(f"ok {checks} PromQL answers = validate's counts of the recording "
       f"({int(scalar('ncservo_frames_total'))} frames, {len(capture['findings'])} findings, "
       f"{len(capture['incidents'])} incidents, {t['lost_cycles']} lost cycles)")
 PY
+
+# The ESC counters' rises (docs/drive-messages.md): the generator's lost link and bad cable, per
+# slave, port and counter, as validate of the monitor's recording lists them.
+python3 "$SRC/tests/tools/gen_capture.py" --axes 3 --cycles 3000 --seed 5 --inject LNK-002 \
+  --incident link-fault -o links.pcap >/dev/null || fail "gen_capture.py exited $?"
+esc_port=$(free_port)
+rm -rf esc-rec && mkdir esc-rec
+"$NCSERVO" monitor -i "$host" --metrics "127.0.0.1:$esc_port" --record esc-rec --record-window 60 \
+  >/dev/null 2>esc.err &
+monitor=$!
+wait_for 50 curl -sf "http://127.0.0.1:$esc_port/metrics" -o /dev/null || fail "no /metrics: $(cat esc.err)"
+replay_into_peer links.pcap || fail "tcpreplay failed"
+sleep 1
+curl -sf "http://127.0.0.1:$esc_port/metrics" >esc-scrape.txt || fail "no /metrics"
+kill -INT "$monitor"
+wait "$monitor" || true
+esc_recordings=(esc-rec/*.pcapng)
+"$NCSERVO" validate --format json --fail-on never "${esc_recordings[0]}" >esc.json
+python3 - esc-scrape.txt esc.json <<'PY' || fail "ncservo_esc_errors_total"
+import collections, json, re, sys
+scrape, report = sys.argv[1:]
+got = {}
+for line in open(scrape):
+    m = re.match(r'ncservo_esc_errors_total\{station="(0x[0-9A-F]+)",port="(\d+)",counter="([a-z-]+)"\} (\S+)', line)
+    if m:
+        got[(m[1], int(m[2]), m[3])] = float(m[4])
+want = collections.Counter()
+for e in json.load(open(report))["captures"][0]["esc_errors"]:
+    if e["station"] is not None:
+        want[(f"0x{e['station']:04X}", e["port"], e["counter"])] += e["delta"]
+assert want, "the capture was to hold counter rises"
+assert got == {k: float(v) for k, v in want.items()}, f"scraped {got}, validate of the recording {dict(want)}"
+print(f"ok ncservo_esc_errors_total: {len(got)} series = validate's esc_errors of the recording")
+PY
 echo PASS

@@ -81,6 +81,20 @@ void LiveMetrics::onFrame(const Validator& validator) {
   const FrameTiming& timing = validator.frameTiming();
   if (timing.interval_ns) snapshot_.cycle.observe(static_cast<double>(*timing.interval_ns) / 1e9);
   if (timing.latency_ns) snapshot_.latency.observe(static_cast<double>(*timing.latency_ns) / 1e9);
+  // docs/drive-messages.md: each counter's rises, per slave and port (a broadcast read's sum
+  // names no slave, and is left out).
+  for (const EscErrorDelta& d : validator.escErrors().frameDeltas()) {
+    if (d.broadcast || !d.slave.station) continue;
+    const char* counter = diag::escCounterName(d.counter);
+    auto it = std::find_if(snapshot_.esc.begin(), snapshot_.esc.end(), [&](const EscErrorCount& e) {
+      return e.station == *d.slave.station && e.port == d.port && e.counter == counter;
+    });
+    if (it == snapshot_.esc.end()) {
+      it = snapshot_.esc.insert(snapshot_.esc.end(),
+                                EscErrorCount{*d.slave.station, d.port, counter, 0});
+    }
+    it->count += d.delta;
+  }
 }
 
 void LiveMetrics::onFindings(const std::vector<Finding>& findings) {
@@ -216,7 +230,7 @@ void exposeSlaves(const MetricsSnapshot& s, Exposition& out) {
     out.sample({{"station", stationLabel(dc.station)}}, dc.seconds);
   }
   out.family(name("esc_errors_total"), MetricType::Counter,
-             "ESC error counters per slave, port and counter (none yet: issue 37 feeds them)");
+             "Rises of the ESC error counters read, per slave, port and counter");
   for (const EscErrorCount& esc : s.esc) {
     const std::string port = fmt::format("{}", esc.port);
     out.sample({{"station", stationLabel(esc.station)}, {"port", port}, {"counter", esc.counter}},

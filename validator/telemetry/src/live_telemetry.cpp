@@ -47,10 +47,6 @@ void LiveTelemetry::onFindings(const std::vector<Finding>& findings,
   }
 }
 
-void LiveTelemetry::onEvent(MqttTopic topic, std::string json_line) {
-  if (mqtt_) mqtt_->publish(topic, std::move(json_line));
-}
-
 // An incident's object is final once it ended (its recovery known) and its cause is (a read of
 // the links' counters can still make it link-fault); the rest wait for the end.
 void LiveTelemetry::publishIncidents(const std::vector<Incident>& incidents,

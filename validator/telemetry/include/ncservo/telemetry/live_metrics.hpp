@@ -82,7 +82,7 @@ struct MetricsSnapshot {
   std::array<bool, kRuleCount> enabled{};
   std::array<Severity, kRuleCount> severity{};
   std::vector<DcDifference> dc;
-  std::vector<EscErrorCount> esc;  // issue 37
+  std::vector<EscErrorCount> esc;  // the ESC counters' rises (docs/drive-messages.md)
   std::uint64_t mqtt_dropped = 0;  // monitor --mqtt: messages the full queue dropped
 };
 
@@ -104,7 +104,6 @@ class LiveMetrics {
                std::uint64_t capture_dropped);
   void setMqttDropped(std::uint64_t dropped) { snapshot_.mqtt_dropped = dropped; }
   // The ESC error counters as last read (issue 37 feeds them).
-  void setEscErrors(std::vector<EscErrorCount> counters) { snapshot_.esc = std::move(counters); }
   const MetricsSnapshot& snapshot() const { return snapshot_; }
 
  private:

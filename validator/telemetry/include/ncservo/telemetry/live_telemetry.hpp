@@ -33,19 +33,11 @@ class LiveTelemetry {
   static Result<std::unique_ptr<LiveTelemetry>> start(const TelemetryOptions& options,
                                                       const RuleSettings& settings);
 
-  // A frame delivered and judged.
-  // Each frame: the metrics, and what the drives and ESCs said in it to MQTT
+  // A frame delivered and judged: the metrics, and what the drives and ESCs said in it to MQTT
   // (docs/drive-messages.md), as JSON Lines objects of `report`'s capture.
   void onFrame(const Validator& validator, const report::CaptureReport& report);
   // The findings of a frame, as `report` names them.
   void onFindings(const std::vector<Finding>& findings, const report::CaptureReport& report);
-  // Where issue 37 (drive messages, link faults, ESC error counters) plugs in: an object of its
-  // as its JSON Lines line, on PREFIX/drive-message or PREFIX/link-fault; the counters as read
-  // last, for ncservo_esc_errors_total. Nothing calls them yet.
-  void onEvent(MqttTopic topic, std::string json_line);
-  void setEscErrors(std::vector<EscErrorCount> counters) {
-    metrics_.setEscErrors(std::move(counters));
-  }
   // Now and then (every 100 ms of the capture loop): the gauges and totals refreshed and handed
   // to the scrapes, the incidents that ended published. `report` lends its names and clock.
   void update(const CapturePipeline& pipeline, const report::CaptureReport& report,
