@@ -85,6 +85,8 @@ struct SimulateArgs {
   std::string eni;
   std::string incidents_truth;
   std::string faults_truth;
+  std::string diagnosis_truth;
+  std::vector<std::string> bad_links;
   std::string io_inputs = "slow";
   std::string idle;            // SECONDS or all; empty: none
   std::string start_in;        // empty: the capture starts with the session
@@ -178,12 +180,24 @@ bool simulationOptions(SimulateArgs& args) {
       into->push_back(std::move(*parsed));
     }
   }
+  for (const std::string& text : args.bad_links) {
+    Result<sim::BadLink> link = sim::parseBadLink(text);
+    if (!link) {
+      fmt::print(stderr, "ncservo simulate: {}\n", link.error().text());
+      return false;
+    }
+    o.bad_links.push_back(std::move(*link));
+  }
   if (!args.incidents_truth.empty() && o.scenario != sim::Scenario::Incidents) {
     fmt::print(stderr, "ncservo simulate: --incidents-truth needs --scenario incidents\n");
     return false;
   }
   if (Status resolved = sim::resolveOptions(o); !resolved) {
     fmt::print(stderr, "ncservo simulate: {}\n", resolved.error().text());
+    return false;
+  }
+  if (!args.diagnosis_truth.empty() && !o.diagnosis) {
+    fmt::print(stderr, "ncservo simulate: --diagnosis-truth needs --diagnosis (or --bad-link)\n");
     return false;
   }
   return true;
@@ -273,6 +287,16 @@ int runSimulate(SimulateArgs& args) {
       return kExitUsage;
     }
   }
+  if (!args.diagnosis_truth.empty()) {
+    const Result<sim::DiagnosisTruth> said = simulator.diagnosis();
+    if (!said) {
+      fmt::print(stderr, "ncservo simulate: --diagnosis-truth: {}\n", said.error().text());
+      return kExitUsage;
+    }
+    if (!writeBesideCapture(args.diagnosis_truth, sim::diagnosisJson(*said), "diagnosis truth")) {
+      return kExitUsage;
+    }
+  }
   if (!args.incidents_truth.empty()) {
     const Result<std::vector<sim::IncidentTruth>> incidents = simulator.incidents();
     if (!incidents) {
@@ -354,6 +378,13 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--fault", sa.faults,
                      "RULE[@SECONDS][:AXIS]: make that rule fire (repeatable; see --list-faults)");
   command.add_option("--ready-mode", sa.options.ready_mode, "the drives' Servo_Ready_Mode, 0 or 1");
+  command.add_flag("--diagnosis", sa.options.diagnosis,
+                   "the drives' mailboxes: emergencies and error history, the NC's reads of "
+                   "1001h and 1003h after a fault, the master's polls of the ESC error counters, "
+                   "AL status and DC time differences (docs/simulate.md#diagnosis)");
+  command.add_option("--bad-link", sa.bad_links,
+                     "STATION:PORT@SECONDS[xFRAMES]: FRAMES frames (default 2) cross the cable "
+                     "at that port corrupted from SECONDS on (repeatable; implies --diagnosis)");
   addBusTimingOptions(command, sa);
   command
       .add_option(
@@ -393,6 +424,9 @@ Handler simulateCommand(CLI::App& command) {
                      "as JSON (kind, axis, frame, cause)");
   command.add_option("--faults-truth", sa.faults_truth,
                      "also write the findings the faults must give (rule, axis, frames), as JSON");
+  command.add_option("--diagnosis-truth", sa.diagnosis_truth,
+                     "with --diagnosis: also write what the drives and ESCs said, by frame, as "
+                     "JSON (drive_messages, esc_errors, link_faults)");
   command.add_flag("--list-faults", sa.list_faults, "list what --fault does for each rule");
   return [args] { return runSimulate(*args); };
 }

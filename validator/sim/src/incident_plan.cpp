@@ -16,8 +16,8 @@ constexpr std::uint16_t kAlCodeSyncError = 0x001A;
 // Each chain stays clear of the other rows' evidence: no set-point step, NC violation, lost
 // cycle or temperature rise within the windows of another incident; the overtemperature comes
 // last on its axis, so that no later fault there has a warm motor in its minute.
-const std::vector<IncidentRow>& incidentRows() {
-  static const std::vector<IncidentRow> table = {
+const std::vector<IncidentRow>& incidentRows(bool diagnosis) {
+  static const std::vector<IncidentRow> all = {
       {.cause = "following-error",
        .kind = IncidentKind::DriveFault,
        .axis = 0,
@@ -111,6 +111,14 @@ const std::vector<IncidentRow>& incidentRows() {
                       "master's AL status poll (every 10 ms) sees it, acknowledges it and "
                       "requests OP; the NC enables the axis again",
        .apply = [](IncidentActions& a) { a.fallFromOp(0, kAlCodeSyncError); }},
+      {.cause = "link-fault",
+       .kind = IncidentKind::DriveFault,
+       .axis = 3,
+       .description = "with --diagnosis: the cable into port 0 of the axis's slave corrupts 3 "
+                      "frames; the drives from that slave on raise ECatTErr (E15), and the "
+                      "master's next read of the error counters names the link",
+       .apply = [](IncidentActions& a) { a.badLink(0, kTelegramFailureLimit); },
+       .diagnosis = true},
       {.cause = "communication-loss",
        .kind = IncidentKind::BusOutage,
        .axis = -1,
@@ -133,11 +141,17 @@ const std::vector<IncidentRow>& incidentRows() {
                                   .cause = bits::kI2tEndat});
            }},
   };
-  return table;
+  static const std::vector<IncidentRow> without = [] {
+    std::vector<IncidentRow> rows;
+    for (const IncidentRow& row : all) {
+      if (!row.diagnosis) rows.push_back(row);
+    }
+    return rows;
+  }();
+  return diagnosis ? all : without;
 }
 
-double incidentTime(std::size_t row, double duration_s) {
-  const std::size_t rows = incidentRows().size();
+double incidentTime(std::size_t row, std::size_t rows, double duration_s) {
   const double span = duration_s - kFirstIncidentS - kAfterLastIncidentS;
   return kFirstIncidentS + span * static_cast<double>(row) / static_cast<double>(rows - 1);
 }

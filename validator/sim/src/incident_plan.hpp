@@ -21,6 +21,9 @@ class IncidentActions {
   virtual void drift(std::int64_t offset_ns, Drift drift) = 0;  // drift.from_ns: unused
   virtual void bus(std::int64_t offset_ns, BusFault fault) = 0;
   virtual void fallFromOp(std::int64_t offset_ns, std::uint16_t al_status_code) = 0;
+  // The cable into port 0 of the axis's slave corrupts `frames` frames (--bad-link): the drives
+  // from that slave on miss them.
+  virtual void badLink(std::int64_t offset_ns, int frames) = 0;
 
  protected:
   ~IncidentActions() = default;
@@ -38,14 +41,15 @@ struct IncidentRow {
   int axis;                 // -1: the whole bus
   const char* description;  // the chain, for docs/simulate.md
   void (*apply)(IncidentActions& actions);
+  bool diagnosis = false;  // only with --diagnosis: its evidence is what the ESCs said
 };
 
-// In the order they happen, evenly spaced over the run's quiet part.
-const std::vector<IncidentRow>& incidentRows();
+// In the order they happen, evenly spaced over the run's quiet part; with --diagnosis or not.
+const std::vector<IncidentRow>& incidentRows(bool diagnosis);
 
 // The scenario's shortest run, and where its incidents fall (seconds of capture time).
 inline constexpr double kIncidentsMinDuration = 6.0;
-double incidentTime(std::size_t row, double duration_s);
+double incidentTime(std::size_t row, std::size_t rows, double duration_s);
 
 // The telegram failure limit the bus outage exceeds (docs/rules.md COM-005's default).
 inline constexpr int kTelegramFailureLimit = 3;

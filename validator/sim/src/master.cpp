@@ -85,6 +85,7 @@ bool Master::emit(const FrameSink& sink, const std::vector<RingDatagram>& frame,
   }
   encoder.finish();
   ++frames_;
+  last_frame_ns_ = t_ns;
   return sink(SimFrame{kEpochNs + t_ns, bytes_.data(), bytes_.size(), returned});
 }
 
@@ -93,8 +94,12 @@ bool Master::exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, s
   if (came_back != nullptr) *came_back = false;
   if (!emit(sink, frame, false, t_ns)) return false;
   if (lost_before) return true;
-  segment_.pass(frame, kEpochNs + t_ns);
-  if (lost_after) return true;
+  std::optional<std::size_t> corrupted;
+  if (corrupt_frames_left_ > 0) {
+    --corrupt_frames_left_;
+    corrupted = corrupt_into_;
+  }
+  if (!segment_.pass(frame, kEpochNs + t_ns, corrupted) || lost_after) return true;
   if (came_back != nullptr) *came_back = true;
   return emit(sink, frame, true, t_ns + return_delay_ns_ + return_late_ns_);
 }
@@ -147,6 +152,26 @@ bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
     if (walk.finished()) walk.active = false;
   }
   return true;
+}
+
+bool Master::mailboxFrame(const FrameSink& sink, std::int64_t t_ns) {
+  // SM0 written by the master, SM1 read by it, both in mailbox mode (ETG.1000.4).
+  constexpr std::uint8_t kSmMailboxOut = 0x26, kSmMailboxIn = 0x22;
+  std::vector<RingDatagram> frame;
+  for (std::size_t s = 0; s < segment_.escs.size(); ++s) {
+    if (!segment_.escs[s].servo()) continue;
+    RingDatagram dg = registerDatagram(ecat::kFpwr, static_cast<std::uint16_t>(kFirstStation + s),
+                                       ecat::kRegSyncManager0, 2 * ecat::kSyncManagerStride);
+    for (std::size_t sm = 0; sm < 2; ++sm) {
+      std::uint8_t* regs = &dg.data[sm * ecat::kSyncManagerStride];
+      storeLe(regs + ecat::kSmStartAt, sm == 0 ? kMailboxOutPhys : kMailboxInPhys, 2);
+      storeLe(regs + ecat::kSmLengthAt, kMailboxBytes, 2);
+      regs[ecat::kSmControlAt] = sm == 0 ? kSmMailboxOut : kSmMailboxIn;
+      regs[ecat::kSmActivateAt] = 0x01;
+    }
+    frame.push_back(std::move(dg));
+  }
+  return frame.empty() || exchange(sink, frame, t_ns);
 }
 
 bool Master::configFrame(const FrameSink& sink, bool sync_managers, std::int64_t t_ns) {
@@ -242,6 +267,11 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
   for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
     if (!alFrame(sink, walk, t)) return false;
   }
+  // the mailboxes, in INIT (a slave answers its mailbox from PRE-OP on)
+  if (mailboxes_) {
+    if (!mailboxFrame(sink, t)) return false;
+    next();
+  }
   // 5. PRE-OP, 6. sync managers and FMMUs, 7. SAFE-OP
   walk.start(ecat::kAlPreOp, n, true);
   for (int polls = 0; walk.active && polls < kMaxPolls; ++polls, next()) {
@@ -264,6 +294,7 @@ bool Master::startup(const FrameSink& sink, std::int64_t& t, std::int64_t step_n
 bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle,
                    const std::vector<RxPdo>& outputs, bool lost_before, bool lost_after,
                    std::vector<std::optional<TxPdo>>& inputs) {
+  last_cycle_returned_ = true;
   std::size_t last_sent = 0;  // the cycle's last frame (a slower task's frame is not in every one)
   for (std::size_t g = 0; g < segment_.groups.size(); ++g) {
     if (cycle % segment_.groups[g].every_cycles == 0) last_sent = g;
@@ -323,7 +354,10 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
     const bool exchanged = exchange(sink, frame, at_ns, lost_before, lost_after, &came_back);
     return_late_ns_ = 0;
     if (!exchanged) return false;
-    if (!came_back) continue;
+    if (!came_back) {
+      last_cycle_returned_ = false;
+      continue;
+    }
     for (std::size_t d = 0; d < fg.datagrams.size(); ++d) {
       // the inputs the slaves wrote
       if (frame[d].wkc > 0) images[d].assign(frame[d].data.begin(), frame[d].data.end());

@@ -49,13 +49,34 @@ class Master {
   // One step of an AL walk: acknowledgements, requests, or a poll of the AL status.
   bool alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns);
 
+  // The start-up configures each servo's SM0 and SM1 as its mailbox (docs/simulate.md#diagnosis).
+  void configureMailboxes() { mailboxes_ = true; }
+  // A bad link: the next `frames` frames reach the slave at ring position `into` corrupted
+  // (Segment::pass) and do not come back.
+  void corruptFrames(std::size_t into, int frames) {
+    corrupt_into_ = into;
+    corrupt_frames_left_ = frames;
+  }
+  // Whether every frame of the last cycle came back.
+  bool lastCycleReturned() const { return last_cycle_returned_; }
+  // A datagram of the master's register access, numbered in turn.
+  RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
+                                std::size_t length);
+  // A frame of register datagrams between the cycles (the mailbox, the diagnosis polls); its
+  // datagrams then hold what the slaves answered, when `came_back`. False if the sink stopped.
+  bool acyclic(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
+               bool& came_back) {
+    return exchange(sink, frame, t_ns, false, false, &came_back);
+  }
+
   std::uint64_t frames() const { return frames_; }
+  // The time of the last frame captured, since the capture's start.
+  std::int64_t lastFrameNs() const { return last_frame_ns_; }
   // The number (from 1) of the returned frame the axis's inputs last came in.
   std::uint64_t inputFrame(int axis) const { return input_frames_[static_cast<std::size_t>(axis)]; }
 
  private:
-  RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
-                                std::size_t length);
+  bool mailboxFrame(const FrameSink& sink, std::int64_t t_ns);
   bool configFrame(const FrameSink& sink, bool sync_managers, std::int64_t t_ns);
   // Sends a frame round the ring and captures both copies. `came_back` (when given) says
   // whether the returned copy reached the master.
@@ -73,6 +94,11 @@ class Master {
   std::uint8_t datagram_index_ = 0;
   std::vector<std::uint8_t> bytes_;
   std::uint64_t frames_ = 0;
+  std::int64_t last_frame_ns_ = 0;
+  bool mailboxes_ = false;
+  std::size_t corrupt_into_ = 0;
+  int corrupt_frames_left_ = 0;
+  bool last_cycle_returned_ = true;
   std::vector<std::uint64_t> input_frames_;  // per axis
   // Per frame group, reused every cycle: a long run allocates nothing.
   std::vector<std::vector<std::vector<std::uint8_t>>> images_;  // per datagram of each group

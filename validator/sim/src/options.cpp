@@ -9,6 +9,7 @@
 #include <string>
 
 #include "incident_plan.hpp"
+#include "segment.hpp"
 #include "ncservo/base/number.hpp"
 #include "ncservo/sim/faults.hpp"
 
@@ -182,7 +183,83 @@ Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::str
   return d;
 }
 
+Result<BadLink> parseBadLink(std::string_view text) {
+  BadLink link;
+  link.text = std::string(text);
+  auto malformed = [&] {
+    return fail(fmt::format(
+        "--bad-link {}: expected STATION:PORT@SECONDS[xFRAMES] (e.g. 0x3EB:0@1.2 or 1004:1@2x6)",
+        text));
+  };
+  const std::size_t at = text.find('@');
+  const std::size_t colon = text.find(':');
+  if (at == std::string_view::npos || colon == std::string_view::npos || colon > at) {
+    return malformed();
+  }
+  const std::string_view station = text.substr(0, colon);
+  const std::string_view port = text.substr(colon + 1, at - colon - 1);
+  std::string_view when = text.substr(at + 1);
+  std::string_view frames;
+  if (const std::size_t x = when.find('x'); x != std::string_view::npos) {
+    frames = when.substr(x + 1);
+    when = when.substr(0, x);
+  }
+  const Result<std::uint64_t> number =
+      station.starts_with("0x") || station.starts_with("0X")
+          ? parseNumber<std::uint64_t>(station.substr(2), 16)
+          : parseNumber<std::uint64_t>(station);
+  const Result<int> port_number = parseNumber<int>(port);
+  const Result<double> seconds = parseNumber<double>(when);
+  if (!number || *number > 0xFFFF || !port_number || !seconds) return malformed();
+  link.station = static_cast<std::uint16_t>(*number);
+  link.port = static_cast<std::uint8_t>(std::clamp(*port_number, 0, 255));
+  link.at_s = *seconds;
+  if (*port_number != 0 && *port_number != 1) {
+    return fail(fmt::format("--bad-link {}: port 0 (the cable from the slave before) or 1 (the "
+                            "cable to the slave after)",
+                            text));
+  }
+  if (!frames.empty()) {
+    const Result<int> count = parseNumber<int>(frames);
+    if (!count || *count < 1 || *count > 1000) {
+      return fail(fmt::format("--bad-link {}: FRAMES from 1 to 1000", text));
+    }
+    link.frames = *count;
+  }
+  return link;
+}
+
 namespace {
+
+// The bad links' slaves and times (docs/simulate.md#diagnosis); each turns --diagnosis on.
+Status checkBadLinks(SimOptions& o) {
+  const int slaves = o.axes + *o.io_slaves + o.cia402_drives;
+  const double earliest = (o.startup ? kStartupSeconds : 0.0) + 0.45;
+  for (const BadLink& link : o.bad_links) {
+    const int position = link.station - kFirstStation;
+    if (position < 0 || position >= slaves) {
+      return fail(fmt::format("--bad-link {}: station {} is not in the ring (0x{:04X} to 0x{:04X})",
+                              link.text, link.station, kFirstStation,
+                              kFirstStation + slaves - 1));
+    }
+    if (link.port == 1 && position == slaves - 1) {
+      return fail(fmt::format("--bad-link {}: the last slave's port 1 has no cable", link.text));
+    }
+    if (link.at_s < earliest || link.at_s > *o.duration_s - 0.4) {
+      return fail(fmt::format("--bad-link {}: {} s is outside the quiet part of the run ({:g} s "
+                              "to {:g} s)",
+                              link.text, link.at_s, earliest, *o.duration_s - 0.4));
+    }
+    if (o.mid_start != MidStart::None || o.scenario == Scenario::Incidents) {
+      return fail(fmt::format(
+          "--bad-link {}: not with --start-in or --scenario incidents (which has one with "
+          "--diagnosis)",
+          link.text));
+    }
+    o.diagnosis = true;
+  }
+  return {};
+}
 
 // The shapes of a machine's bus (docs/simulate.md#shapes), each within its range.
 Status checkShapeOptions(const SimOptions& o) {
@@ -399,6 +476,7 @@ Status resolveOptions(SimOptions& o) {
   if (Status duration = checkDuration(o); !duration) return duration;
   const Result<std::optional<double>> begins_s = placeStartFault(o);
   if (!begins_s) return fail(begins_s.error());
+  if (Status links = checkBadLinks(o); !links) return links;
   const std::size_t placed_already = o.mid_start == MidStart::InFault ? 1 : 0;
   for (std::size_t i = placed_already; i < o.faults.size(); ++i) {
     if (Status placed = placeFault(o.faults[i], o, *begins_s); !placed) return placed;

@@ -307,6 +307,69 @@ void Esc::endOfFrame() {
   }
 }
 
+void Esc::countError(diag::EscCounter counter, std::uint8_t port) {
+  std::size_t reg = 0;
+  switch (counter) {
+    case diag::EscCounter::Invalid:
+      reg = ecat::kRegInvalidFrame0 + 2u * port;
+      break;
+    case diag::EscCounter::Rx:
+      reg = ecat::kRegRxError0 + 2u * port;
+      break;
+    case diag::EscCounter::Forwarded:
+      reg = ecat::kRegForwardedRxError0 + port;
+      break;
+    case diag::EscCounter::LostLink:
+      reg = ecat::kRegLostLink0 + port;
+      break;
+    case diag::EscCounter::Processing:
+      reg = ecat::kRegProcessingUnitError;
+      break;
+    case diag::EscCounter::Pdi:
+      reg = ecat::kRegPdiError;
+      break;
+  }
+  if (mem[reg] < 0xFF) ++mem[reg];
+  ++counted[reg - ecat::kRegErrorCounters];
+}
+
+void Esc::setTimeDifference(std::int32_t ns) {
+  // sign and magnitude: bit 31 set when the slave's copy is smaller (docs/protocol.md §11)
+  const std::uint32_t magnitude = static_cast<std::uint32_t>(ns < 0 ? -ns : ns) & 0x7FFFFFFFu;
+  storeLe(&mem[ecat::kRegDcSystemTimeDifference],
+          magnitude | (ns < 0 ? ecat::kDcDifferenceSignBit : 0u), 4);
+}
+
+std::optional<std::uint16_t> Esc::mailboxArea(std::size_t sm) const {
+  const std::uint8_t* regs = &mem[ecat::kRegSyncManager0 + sm * ecat::kSyncManagerStride];
+  if ((regs[ecat::kSmControlAt] & ecat::kSmModeMask) != ecat::kSmModeMailbox ||
+      (regs[ecat::kSmActivateAt] & 1) == 0) {
+    return std::nullopt;
+  }
+  return static_cast<std::uint16_t>(loadLe(regs + ecat::kSmStartAt, 2));
+}
+
+bool Esc::mailboxAccess(RingDatagram& dg) {
+  if (dg.ado < ecat::kProcessRam) return false;
+  const bool write = dg.command == ecat::kFpwr || dg.command == ecat::kApwr;
+  const std::optional<std::uint16_t> area = mailboxArea(write ? ecat::kMailboxOutSm
+                                                              : ecat::kMailboxInSm);
+  if (!area || dg.ado != *area) return false;
+  if (write) {
+    mailbox_written.push_back(dg.data);
+    ++dg.wkc;
+  } else if (!mailbox_answers.empty()) {
+    // SM1 full: the read takes the message, and the SM is empty again
+    const std::vector<std::uint8_t>& answer = mailbox_answers.front().bytes;
+    std::fill(dg.data.begin(), dg.data.end(), 0);
+    std::copy_n(answer.begin(), std::min(answer.size(), dg.data.size()), dg.data.begin());
+    mailbox_taken.push_back(std::move(mailbox_answers.front()));
+    mailbox_answers.pop_front();
+    ++dg.wkc;
+  }
+  return true;
+}
+
 void Esc::readRegisters(RingDatagram& dg) const {
   for (std::size_t i = 0; i < dg.data.size(); ++i) {
     const std::size_t reg = dg.ado + i;
@@ -318,6 +381,11 @@ void Esc::writeRegisters(const RingDatagram& dg) {
     const std::size_t reg = dg.ado + i;
     if (reg >= kEscMemory ||
         (reg >= ecat::kRegAlStatus && reg < ecat::kRegAlStatus + kAlStatusRegisters)) {
+      continue;
+    }
+    // a write to the first error counters clears them all (ESC datasheets)
+    if (reg >= ecat::kRegErrorCounters && reg < ecat::kRegErrorCountersClearedEnd) {
+      std::fill_n(&mem[ecat::kRegErrorCounters], ecat::kErrorCountersSize, 0);
       continue;
     }
     mem[reg] = dg.data[i];
@@ -373,6 +441,7 @@ void Esc::process(RingDatagram& dg) {
     case ecat::kFprd:
     case ecat::kFpwr:
       if (dg.adp == station()) {
+        if (mailboxAccess(dg)) break;
         if (dg.command == ecat::kFprd)
           readRegisters(dg);
         else
@@ -617,17 +686,33 @@ std::vector<AxisConfig> Segment::axisLayout() const {
   return layout;
 }
 
-void Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns) {
+bool Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns,
+                   std::optional<std::size_t> corrupted_into) {
   // The slaves keep the reference clock's time (the FRMW distributes it), which runs
   // dc_drift_ppm fast against the master's clock, the one the capture's stamps follow.
   const std::int64_t since_epoch_ns = now_ns - kEpochNs;
   const std::int64_t system_time_ns =
       since_epoch_ns + std::llround(static_cast<double>(since_epoch_ns) * dc_drift_ppm * 1e-6);
-  for (Esc& esc : escs) {
+  for (std::size_t pos = 0; pos < escs.size(); ++pos) {
+    Esc& esc = escs[pos];
     storeLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(system_time_ns), 8);
+    if (corrupted_into && pos >= *corrupted_into) {
+      // The frame's CRC fails: the slave at the bad link counts an invalid frame, every slave
+      // after it one that came marked, as forwarded (docs/drive-messages.md#the-esc-error-counters).
+      esc.countError(diag::EscCounter::Invalid, 0);
+      if (pos != *corrupted_into) esc.countError(diag::EscCounter::Forwarded, 0);
+      continue;
+    }
     for (RingDatagram& dg : frame) esc.process(dg);
     esc.endOfFrame();
   }
+  if (!corrupted_into) return true;
+  // On its way back every slave but the last receives the marked frame at port 1.
+  for (std::size_t pos = 0; pos + 1 < escs.size(); ++pos) {
+    escs[pos].countError(diag::EscCounter::Invalid, 1);
+    escs[pos].countError(diag::EscCounter::Forwarded, 1);
+  }
+  return false;
 }
 
 }  // namespace ncservo::sim

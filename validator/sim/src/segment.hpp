@@ -4,7 +4,9 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,6 +15,9 @@
 #include "ncservo/model/al_tracker.hpp"
 #include "ncservo/sim/models.hpp"
 #include "ncservo/sim/options.hpp"
+#include "ncservo/sim/simulator.hpp"
+#include "ncservo/wire/diagnosis_texts.hpp"
+#include "ncservo/wire/ecat_wire.hpp"
 
 namespace ncservo::sim {
 
@@ -57,6 +62,12 @@ struct RingDatagram {
   }
 };
 
+// A servo's mailbox areas (docs/simulate.md#diagnosis): SM0 for the master's requests, SM1 for
+// the drive's answers, right below its process data.
+inline constexpr std::uint16_t kMailboxOutPhys = 0x1000;
+inline constexpr std::uint16_t kMailboxInPhys = 0x1080;
+inline constexpr std::uint16_t kMailboxBytes = 128;
+
 class Esc {
  public:
   const SlaveModel* model = &servoModel();
@@ -96,11 +107,31 @@ class Esc {
   void process(RingDatagram& dg);
   void endOfFrame();
 
+  // The mailbox, once the master configured SM0 and SM1 in mailbox mode: what it wrote into SM0
+  // waits here for the drive; what the drive answers waits for the master's read of SM1, one
+  // message per read (a read of an empty SM1 is not counted in the WKC).
+  struct MailboxAnswer {
+    std::vector<std::uint8_t> bytes;
+    DriveSaid said;  // the truth of it
+  };
+  std::vector<std::vector<std::uint8_t>> mailbox_written;
+  std::deque<MailboxAnswer> mailbox_answers;
+  std::vector<MailboxAnswer> mailbox_taken;  // read by the master in the last frames
+  // The error counters (0x0300-0x0313): each rises by one and stays at 0xFF. `counted` keeps
+  // what rose since the last read of them, the truth a read must show.
+  void countError(diag::EscCounter counter, std::uint8_t port);
+  std::array<std::uint32_t, ecat::kErrorCountersSize> counted{};
+  // The system time difference (0x092C) the slave's DC unit shows, in ns.
+  void setTimeDifference(std::int32_t ns);
+
  private:
   void onAlControl(std::uint16_t value);
   void readRegisters(RingDatagram& dg) const;
   void writeRegisters(const RingDatagram& dg);
   std::uint16_t logicalAccess(RingDatagram& dg);  // the WKC increment
+  // The start of an SM configured in mailbox mode, if it is.
+  std::optional<std::uint16_t> mailboxArea(std::size_t sm) const;
+  bool mailboxAccess(RingDatagram& dg);  // a read or write of SM0/SM1; false: not the mailbox
 
   bool error_ = false;
   std::uint16_t code_ = 0;
@@ -153,8 +184,11 @@ struct Segment {
     return escs[static_cast<std::size_t>(servo_slave[static_cast<std::size_t>(axis)])];
   }
   std::vector<AxisConfig> axisLayout() const;
-  // A frame round the ring at this time (since the Unix epoch).
-  void pass(std::vector<RingDatagram>& frame, std::int64_t now_ns);
+  // A frame round the ring at this time (since the Unix epoch). `corrupted_into`: the ring
+  // position whose port 0 receives it corrupted (a bad link): the slaves from there on count it
+  // and do not process it, and it does not come back. False when it does not come back.
+  bool pass(std::vector<RingDatagram>& frame, std::int64_t now_ns,
+            std::optional<std::size_t> corrupted_into = std::nullopt);
 };
 
 }  // namespace ncservo::sim

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "capture_shaper.hpp"
+#include "drive_mailbox.hpp"
 #include "esl_probe.hpp"
 #include "fault_plan.hpp"
 #include "incident_plan.hpp"
@@ -27,6 +28,13 @@ namespace {
 constexpr std::int64_t kSoakPeriodNs = 10 * kSecond;
 // The incidents scenario's master reads every slave's AL status this often (docs/simulate.md).
 constexpr std::int64_t kStatusPollNs = 10 * kMs;
+// With --diagnosis the master reads the servos' mailboxes, and every slave's error counters and
+// system time difference, this often (docs/simulate.md#diagnosis).
+constexpr std::int64_t kMailboxPollNs = 2 * kMs;
+constexpr std::int64_t kCountersPollNs = 100 * kMs;
+// A frame of register datagrams holds at most this much (header and WKC included).
+constexpr std::size_t kAcyclicFrameBytes = 1400;
+constexpr std::size_t kDatagramOverhead = 12;
 // An incident the plan says must happen, matched with what the capture shows.
 struct PlannedIncident {
   IncidentKind kind;
@@ -54,6 +62,43 @@ std::string faultsJson(const std::vector<FaultTruth>& faults) {
     companions[f.rule] = others;
   }
   return nlohmann::ordered_json{{"expected", expected}, {"companions", companions}}.dump(1) + "\n";
+}
+
+std::string diagnosisJson(const DiagnosisTruth& truth) {
+  using Json = nlohmann::ordered_json;
+  auto optional = [](const auto& value) { return value ? Json(*value) : Json(); };
+  Json messages = Json::array();
+  for (const DriveSaid& m : truth.drive_messages) {
+    Json item = {{"frame", m.frame},
+                 {"request_frame", optional(m.request_frame)},
+                 {"station", m.station},
+                 {"kind", m.kind}};
+    if (std::string_view(m.kind) == "emergency") {
+      item["code"] = m.code;
+      item["register"] = m.error_register;
+    } else {
+      item["index"] = m.index;
+      item["subindex"] = m.subindex;
+      if (m.value) item["value"] = *m.value;
+      if (std::string_view(m.kind) == "sdo-abort") item["abort"] = m.abort_code;
+    }
+    messages.push_back(std::move(item));
+  }
+  Json errors = Json::array();
+  for (const EscErrorTruth& e : truth.esc_errors) {
+    errors.push_back({{"frame", e.frame},
+                      {"station", e.station},
+                      {"port", e.port},
+                      {"counter", e.counter},
+                      {"delta", e.delta}});
+  }
+  Json links = Json::array();
+  for (const LinkFaultTruth& l : truth.link_faults) {
+    links.push_back(
+        {{"frame", l.frame}, {"station", l.station}, {"port", l.port}, {"errors", l.errors}});
+  }
+  return Json{{"drive_messages", messages}, {"esc_errors", errors}, {"link_faults", links}}.dump(1) +
+         "\n";
 }
 
 std::string incidentsJson(const std::vector<IncidentTruth>& incidents) {
@@ -111,6 +156,21 @@ struct Simulator::Impl {
   AlWalk status_check;
   int failed_cycles = 0;  // consecutive cycles every axis failed
   bool outage_due = false;
+  // --diagnosis (docs/simulate.md#diagnosis): each drive's mailbox and its NC's reads, the bad
+  // links still to come, and what was said, as the truth.
+  struct LinkBurst {
+    std::int64_t at_ns;
+    std::size_t into;  // the ring position whose port 0 receives the corrupted frames
+    int frames;
+    bool done = false;
+  };
+  std::vector<DriveMailbox> drive_mailboxes;
+  std::vector<NcMailbox> nc_mailboxes;
+  std::vector<bool> nc_saw_error;                      // per axis
+  std::vector<std::optional<std::uint64_t>> requests;  // per axis: the open request's frame
+  std::vector<bool> counters_read;                     // per slave: its baseline was read
+  std::vector<LinkBurst> bursts;
+  DiagnosisTruth said;
 
   explicit Impl(const SimOptions& options)
       : o(options),
@@ -135,6 +195,19 @@ struct Simulator::Impl {
     }
     latest_inputs.assign(static_cast<std::size_t>(o.axes), std::nullopt);
     outputs.assign(static_cast<std::size_t>(o.axes), RxPdo{});
+    if (o.diagnosis) {
+      master.configureMailboxes();
+      drive_mailboxes.resize(static_cast<std::size_t>(o.axes));
+      nc_mailboxes.resize(static_cast<std::size_t>(o.axes));
+      nc_saw_error.assign(static_cast<std::size_t>(o.axes), false);
+      requests.assign(static_cast<std::size_t>(o.axes), std::nullopt);
+      counters_read.assign(segment.escs.size(), false);
+      for (const BadLink& link : o.bad_links) {
+        bursts.push_back({at(link.at_s), static_cast<std::size_t>(link.station - kFirstStation) +
+                                             (link.port == 1 ? 1u : 0u),
+                          link.frames});
+      }
+    }
     planScenario();
     for (const FaultRequest& f : o.faults) {
       faults.inject(f.rule, f.at_s.value_or(-1), f.axis.value_or(-1));
@@ -214,6 +287,16 @@ struct Simulator::Impl {
     void fallFromOp(std::int64_t offset_ns, std::uint16_t code) override {
       impl_.falls.push_back({at_ns_ + offset_ns, axis_, code});
     }
+    void badLink(std::int64_t offset_ns, int frames) override {
+      const auto into = static_cast<std::size_t>(impl_.segment.servo_slave[index()]);
+      impl_.bursts.push_back({at_ns_ + offset_ns, into, frames});
+      // the drives behind the link miss the frames too: each an incident of this cause
+      for (int a = 0; a < impl_.o.axes; ++a) {
+        if (a != axis_ && static_cast<std::size_t>(impl_.segment.servo_slave[static_cast<std::size_t>(a)]) >= into) {
+          impl_.planned.push_back({IncidentKind::DriveFault, a, "link-fault", at_ns_ + offset_ns});
+        }
+      }
+    }
 
    private:
     std::size_t index() const { return static_cast<std::size_t>(axis_); }
@@ -223,10 +306,10 @@ struct Simulator::Impl {
   };
 
   void planIncidents() {
-    const std::vector<IncidentRow>& rows = incidentRows();
+    const std::vector<IncidentRow>& rows = incidentRows(o.diagnosis);
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const IncidentRow& row = rows[r];
-      const std::int64_t t = at(incidentTime(r, *o.duration_s));
+      const std::int64_t t = at(incidentTime(r, rows.size(), *o.duration_s));
       const std::int64_t slot = (t + cycle_ns - 1) / cycle_ns * cycle_ns;
       Chain chain(*this, slot, row.axis);
       row.apply(chain);
@@ -300,6 +383,152 @@ struct Simulator::Impl {
     return true;
   }
 
+  // --- diagnosis (docs/simulate.md#diagnosis) ---
+
+  // The NC reads a drive's diagnosis objects after each fault its inputs show.
+  void watchFaultsForReads() {
+    for (std::size_t a = 0; a < latest_inputs.size(); ++a) {
+      if (!latest_inputs[a]) continue;
+      const bool error = (latest_inputs[a]->sew & bits::kServoErrors) != 0;
+      if (error && !nc_saw_error[a]) nc_mailboxes[a].faultSeen();
+      nc_saw_error[a] = error;
+    }
+  }
+
+  // The cycles between two polls of `period`.
+  std::uint64_t every(std::int64_t period_ns) const {
+    return static_cast<std::uint64_t>(std::max<std::int64_t>(1, period_ns / cycle_ns));
+  }
+
+  // Register datagrams in as few frames as they fit in, one after the other from `t_ns`;
+  // `returned(frame)` for each frame that came back.
+  template <typename Returned>
+  bool sendAcyclic(const FrameSink& sink, std::vector<RingDatagram>& datagrams,
+                   std::int64_t& t_ns, Returned&& returned) {
+    std::vector<RingDatagram> frame;
+    std::size_t bytes = 0;
+    auto flush = [&] {
+      if (frame.empty()) return true;
+      bool came_back = false;
+      if (!master.acyclic(sink, frame, t_ns, came_back)) return false;
+      t_ns = master.lastFrameNs() + kUs;
+      if (came_back) returned(frame);
+      frame.clear();
+      bytes = 0;
+      return true;
+    };
+    for (RingDatagram& dg : datagrams) {
+      if (bytes + dg.data.size() + kDatagramOverhead > kAcyclicFrameBytes && !flush()) {
+        return false;
+      }
+      bytes += dg.data.size() + kDatagramOverhead;
+      frame.push_back(std::move(dg));
+    }
+    return flush();
+  }
+
+  // The servos' mailboxes: the NC's requests written into SM0, every SM1 read; what came back
+  // is the truth of what the drives said.
+  bool mailboxFrames(const FrameSink& sink, std::int64_t& t_ns) {
+    std::vector<RingDatagram> datagrams;
+    for (int a = 0; a < o.axes; ++a) {
+      const std::uint16_t station = segment.servo(a).station();
+      if (std::optional<std::vector<std::uint8_t>> request =
+              nc_mailboxes[static_cast<std::size_t>(a)].takeRequest()) {
+        RingDatagram dg = master.registerDatagram(ecat::kFpwr, station, kMailboxOutPhys,
+                                                  kMailboxBytes);
+        dg.data = std::move(*request);
+        datagrams.push_back(std::move(dg));
+      }
+      datagrams.push_back(
+          master.registerDatagram(ecat::kFprd, station, kMailboxInPhys, kMailboxBytes));
+    }
+    return sendAcyclic(sink, datagrams, t_ns, [&](const std::vector<RingDatagram>& frame) {
+      for (const RingDatagram& dg : frame) {
+        if (dg.command != ecat::kFpwr || dg.wkc == 0) continue;
+        // the request's frame is the master's copy, the one before the returned copy
+        const auto s = static_cast<std::size_t>(dg.adp - kFirstStation);
+        requests[static_cast<std::size_t>(segment.escs[s].axis)] = master.frames() - 1;
+      }
+      for (int a = 0; a < o.axes; ++a) {
+        Esc& esc = segment.servo(a);
+        for (Esc::MailboxAnswer& taken : esc.mailbox_taken) {
+          taken.said.frame = master.frames();
+          if (std::string_view(taken.said.kind) != "emergency") {
+            taken.said.request_frame = requests[static_cast<std::size_t>(a)];
+          }
+          nc_mailboxes[static_cast<std::size_t>(a)].answered(taken.bytes);
+          said.drive_messages.push_back(taken.said);
+        }
+        esc.mailbox_taken.clear();
+      }
+    });
+  }
+
+  // Every slave's error counters and system time difference; the rises each read shows since
+  // the slave's last read (its first is the baseline) and the links they name are the truth.
+  bool counterFrames(const FrameSink& sink, std::uint64_t cycle, std::int64_t& t_ns) {
+    std::vector<RingDatagram> datagrams;
+    for (std::size_t s = 0; s < segment.escs.size(); ++s) {
+      Esc& esc = segment.escs[s];
+      esc.setTimeDifference(timeDifference(s, cycle));
+      datagrams.push_back(master.registerDatagram(ecat::kFprd, esc.station(),
+                                                  ecat::kRegErrorCounters,
+                                                  ecat::kErrorCountersSize));
+      datagrams.push_back(
+          master.registerDatagram(ecat::kFprd, esc.station(), ecat::kRegDcSystemTimeDifference, 4));
+    }
+    return sendAcyclic(sink, datagrams, t_ns, [&](const std::vector<RingDatagram>& frame) {
+      for (const RingDatagram& dg : frame) {
+        if (dg.ado != ecat::kRegErrorCounters || dg.wkc == 0) continue;
+        const auto s = static_cast<std::size_t>(dg.adp - kFirstStation);
+        Esc& esc = segment.escs[s];
+        if (counters_read[s]) countersRead(esc, master.frames());
+        counters_read[s] = true;
+        esc.counted.fill(0);
+      }
+    });
+  }
+
+  // What the counters of one slave rose by since its last read (docs/protocol.md §11's offsets).
+  void countersRead(const Esc& esc, std::uint64_t frame) {
+    using diag::EscCounter;
+    auto rise = [&](std::size_t offset, EscCounter counter, std::uint8_t port) {
+      if (esc.counted[offset] == 0) return;
+      said.esc_errors.push_back(
+          {frame, esc.station(), port, diag::escCounterName(counter), esc.counted[offset]});
+    };
+    for (std::uint8_t port = 0; port < ecat::kEscPorts; ++port) {
+      const std::size_t invalid = ecat::kRegInvalidFrame0 + 2u * port - ecat::kRegErrorCounters;
+      const std::size_t rx = ecat::kRegRxError0 + 2u * port - ecat::kRegErrorCounters;
+      const std::size_t forwarded = ecat::kRegForwardedRxError0 + port - ecat::kRegErrorCounters;
+      rise(invalid, EscCounter::Invalid, port);
+      rise(rx, EscCounter::Rx, port);
+      rise(forwarded, EscCounter::Forwarded, port);
+      rise(ecat::kRegLostLink0 + port - ecat::kRegErrorCounters, EscCounter::LostLink, port);
+      const std::uint32_t received = esc.counted[invalid] + esc.counted[rx];
+      if (received > esc.counted[forwarded]) {
+        said.link_faults.push_back({frame, esc.station(), port, received - esc.counted[forwarded]});
+      }
+    }
+    rise(ecat::kRegProcessingUnitError - ecat::kRegErrorCounters, EscCounter::Processing, 0);
+    rise(ecat::kRegPdiError - ecat::kRegErrorCounters, EscCounter::Pdi, 0);
+  }
+
+  // A slave's system time difference at a read: within a few tens of ns of the reference.
+  std::int32_t timeDifference(std::size_t slave, std::uint64_t cycle) const {
+    const std::uint64_t x = (cycle * 0x9E3779B97F4A7C15ULL) ^ (slave * 0xBF58476D1CE4E5B9ULL);
+    return static_cast<std::int32_t>((x >> 33) % 61) - 30;
+  }
+
+  // Between two cycles: the mailboxes every kMailboxPollNs, the counters every kCountersPollNs.
+  bool diagnosisFrames(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot) {
+    std::int64_t t_ns = std::max(slot + cycle_ns / 2, master.lastFrameNs() + kUs);
+    if (cycle % every(kMailboxPollNs) == 0 && !mailboxFrames(sink, t_ns)) return false;
+    const std::uint64_t counters = every(kCountersPollNs);
+    return cycle % counters != counters / 2 || counterFrames(sink, cycle, t_ns);
+  }
+
   // Soak: a 10 s pattern repeated, planned a period ahead (constant memory).
   void planSoak(std::int64_t now_ns) {
     if (o.idle_all) return;
@@ -343,6 +572,7 @@ struct Simulator::Impl {
         drive.step(nullptr, now_ns);
       }
       encodeTx(drive.inputs(), &esc.mem[esc.inputsPhysical()]);
+      if (o.diagnosis) drive_mailboxes[static_cast<std::size_t>(a)].step(drive.inputs().sew, esc);
     }
     for (Esc& esc : segment.escs) {
       if (!esc.servo()) esc.updateTerminalInputs(now_ns);
@@ -437,6 +667,11 @@ struct Simulator::Impl {
         f.done = true;
       }
       bool failed = true;  // every axis: the cycle's frames lost or not sent
+      for (LinkBurst& burst : bursts) {
+        if (burst.done || slot < burst.at_ns) continue;
+        master.corruptFrames(burst.into, burst.frames);
+        burst.done = true;
+      }
       if (!faults.takeSkippedCycle() && !lost) {
         const bool lost_before = faults.takeLossBeforeSlaves();
         const bool lost_after =
@@ -459,13 +694,18 @@ struct Simulator::Impl {
                           outputs, lost_before, lost_after, latest_inputs)) {
           return std::nullopt;
         }
+        failed = failed || !master.lastCycleReturned();
       }
       stepDrives(slot);
       if (o.scenario == Scenario::Incidents) {
         watchDriveFaults(slot);
         failed_cycles = failed ? failed_cycles + 1 : 0;
         if (failed_cycles == kTelegramFailureLimit + 1) outage_due = true;
-        if (operational && !failed && !checkAlStatus(sink, cycle, slot)) return std::nullopt;
+      }
+      if (o.diagnosis) watchFaultsForReads();
+      if ((o.scenario == Scenario::Incidents || o.diagnosis) && operational && !failed) {
+        if (!checkAlStatus(sink, cycle, slot)) return std::nullopt;
+        if (o.diagnosis && !diagnosisFrames(sink, cycle, slot)) return std::nullopt;
       }
       if (!operational) {
         if (!walk.active && cycle + 1 == safe_op_cycles) {
@@ -515,6 +755,16 @@ Result<std::vector<FaultTruth>> Simulator::faults() const {
     }
   }
   return out;
+}
+
+Result<DiagnosisTruth> Simulator::diagnosis() const {
+  const Impl& impl = *impl_;
+  if (impl.shaper.active() || impl.o.mid_start != MidStart::None || impl.o.capture_loss > 0) {
+    return fail(
+        "the capture's records are not the bus's frames (a capture shape, --start-in or "
+        "--capture-loss): no diagnosis truth");
+  }
+  return impl.said;
 }
 
 Result<std::vector<IncidentTruth>> Simulator::incidents() const {

@@ -137,6 +137,18 @@ struct CycleDisturbance {
 };
 Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::string_view text);
 
+// --bad-link STATION:PORT@SECONDS[xFRAMES]: from SECONDS on, the next FRAMES frames (default 2)
+// that cross the cable at the slave's port reach the slave behind it corrupted
+// (docs/simulate.md#diagnosis).
+struct BadLink {
+  std::uint16_t station = 0;
+  std::uint8_t port = 0;
+  double at_s = 0;
+  int frames = 2;
+  std::string text;  // as given, for messages
+};
+Result<BadLink> parseBadLink(std::string_view text);
+
 struct SimOptions {
   Scenario scenario = Scenario::Commissioning;
   int axes = 4;                      // servos, 1..32
@@ -156,6 +168,11 @@ struct SimOptions {
   std::vector<CycleDisturbance> late_cycles;
   std::vector<CycleDisturbance> lost_cycles;
   std::vector<FaultRequest> faults;
+  // What the drives and the ESCs say besides the process data (docs/simulate.md#diagnosis): the
+  // servos' mailboxes, the drives' emergencies and error history, the NC's reads of it after a
+  // fault, the master's polls of the error counters, AL status and system time differences.
+  bool diagnosis = false;
+  std::vector<BadLink> bad_links;
   // Shapes of a machine's bus (docs/simulate.md#shapes); the defaults add none.
   TerminalInputs terminal_inputs = TerminalInputs::Slow;
   int cia402_drives = 0;  // neighbours of another protocol with 10/40-byte PDOs, 0..32
