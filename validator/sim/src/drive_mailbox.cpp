@@ -109,7 +109,7 @@ void DriveMailbox::quirk(MailboxQuirk quirk) {
       wrong_code_next_ = true;
       break;
     case MailboxQuirk::LoseHistory:
-      if (history_.size() > 1) history_.resize(1);
+      history_.clear();
       break;
     case MailboxQuirk::EmergencyWithoutFault:
     case MailboxQuirk::ErrorResetNow:

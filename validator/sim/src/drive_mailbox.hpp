@@ -10,20 +10,11 @@
 #include <optional>
 #include <vector>
 
+#include "ncservo/sim/faults.hpp"
 #include "ncservo/sim/simulator.hpp"
 #include "segment.hpp"
 
 namespace ncservo::sim {
-
-// How a drive's mailbox breaks what the rules expect (the faults of MBX-001, MBX-002, ERH-001,
-// ERH-002; faults.cpp).
-enum class MailboxQuirk : std::uint8_t {
-  EmergencyWithoutFault,  // an emergency 0x8611 with no cause bit rising (MBX-001)
-  ErrorResetNow,          // an error reset emergency now, the drive's first word (MBX-002)
-  SilentFault,            // the next fault without an emergency (MBX-002)
-  WrongHistoryCode,       // the next history entry carries 0x1000, not the cause's code (ERH-002)
-  LoseHistory,            // the history loses every entry but the newest (ERH-001)
-};
 
 class DriveMailbox {
  public:

@@ -15,10 +15,11 @@ void FaultPlan::inject(RuleId rule, double at_s, int axis) {
   recipe->apply(*this);
 }
 
-void FaultPlan::injectScenario() {
+void FaultPlan::injectScenario(bool diagnosis) {
   // A rule off by default would not be reported by a plain `validate` of the scenario.
   for (const FaultRecipe& recipe : faultRecipes()) {
-    if (recipe.injectable() && ruleDef(recipe.rule).by_default == ByDefault::On) {
+    if (recipe.injectable() && ruleDef(recipe.rule).by_default == ByDefault::On &&
+        (diagnosis || !recipe.diagnosis)) {
       inject(recipe.rule, recipe.scenario.at_s, recipe.scenario.axis);
     }
   }
@@ -43,6 +44,9 @@ void FaultPlan::driveFault() {
 }
 void FaultPlan::bus(BusFault fault) {
   bus_faults_.push_back({fault, at_ns_, axis_});
+}
+void FaultPlan::diagnosis(const DiagnosisFault& fault) {
+  diagnosis_faults_.push_back({fault, axis_, at_ns_ + fault.offset_ns});
 }
 void FaultPlan::startup(StartupFault fault) {
   const auto slave = static_cast<std::size_t>(segment_.servo_slave[axisIndex()]);

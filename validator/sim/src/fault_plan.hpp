@@ -20,8 +20,8 @@ class FaultPlan final : public FaultActions {
   // The rule's recipe at `at_s` seconds of capture time (a start-up fault: unused) on an axis
   // (-1: the whole bus).
   void inject(RuleId rule, double at_s, int axis);
-  // Every injectable rule where the `faults` scenario puts it.
-  void injectScenario();
+  // Every injectable rule where the `faults` scenario puts it (those of --diagnosis with it).
+  void injectScenario(bool diagnosis);
   // A drive fault of a scenario's plan (not a rule's fault).
   void scheduleDriveFault(std::int64_t at_ns, int axis, std::uint32_t cause);
   // A bus fault of a scenario's plan, on an axis (-1: the whole bus).
@@ -41,6 +41,14 @@ class FaultPlan final : public FaultActions {
   double takeReturnDelayCycles();
 
   std::optional<std::size_t> opRequestSlave() const { return op_request_slave_; }
+  // The diagnosis faults, each with its axis and time; the simulator marks them done.
+  struct TimedDiagnosis {
+    DiagnosisFault fault;
+    int axis;
+    std::int64_t at_ns;
+    bool done = false;
+  };
+  std::vector<TimedDiagnosis>& diagnosisFaults() { return diagnosis_faults_; }
 
   // Each fault as the plan placed it: the rule, its axis (-1: the whole bus), its time and
   // whether it is the start-up's.
@@ -58,6 +66,7 @@ class FaultPlan final : public FaultActions {
   void driveFault() override;
   void bus(BusFault fault) override;
   void startup(StartupFault fault) override;
+  void diagnosis(const DiagnosisFault& fault) override;
 
   struct TimedBusFault {
     BusFault fault;
@@ -83,6 +92,7 @@ class FaultPlan final : public FaultActions {
   std::vector<Placed> placed_;
   std::vector<TimedBusFault> bus_faults_;
   std::vector<DriveFaultEvent> drive_faults_;
+  std::vector<TimedDiagnosis> diagnosis_faults_;
   int skip_cycles_ = 0;                          // COM-002
   int lose_before_slaves_ = 0;                   // COM-003, COM-005
   bool lose_after_slaves_ = false;               // COM-004

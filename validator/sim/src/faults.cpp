@@ -4,6 +4,7 @@ namespace ncservo::sim {
 
 namespace {
 using Bus = BusFault::Kind;
+using Said = DiagnosisFault::Kind;
 constexpr ScenarioSlot kInStartup(int axis) {
   return {-1, axis};
 }
@@ -296,63 +297,102 @@ const std::vector<FaultRecipe>& faultRecipes() {
        .apply = [](FaultActions& f) { f.startup(StartupFault::PowerUpError); }},
       {.rule = RuleId::Mbx001,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's drives send no emergency, with or without "
-                      "a fault",
-       .apply = nullptr},
+       .scenario = {2.70, 0},
+       .description = "the drive sends an emergency 0x8611 (following error) with no SEW cause bit",
+       .apply =
+           [](FaultActions& f) {
+             f.diagnosis({.kind = Said::Mailbox, .quirk = MailboxQuirk::EmergencyWithoutFault});
+           },
+       .diagnosis = true},
       {.rule = RuleId::Mbx002,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's drives send no emergency, so none is "
-                      "missing at a fault",
-       .apply = nullptr},
+       .scenario = {2.70, 1},
+       .description = "the drive sends an error reset emergency, then 200 ms later faults (E09) "
+                      "without an emergency",
+       .apply =
+           [](FaultActions& f) {
+             f.diagnosis({.kind = Said::Mailbox,
+                          .offset_ns = -200 * kMs,
+                          .quirk = MailboxQuirk::ErrorResetNow});
+             f.diagnosis({.kind = Said::Mailbox, .quirk = MailboxQuirk::SilentFault});
+             f.driveFault();
+           },
+       .diagnosis = true},
       {.rule = RuleId::Mbx003,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's NC reads no SDO, so no drive aborts one",
-       .apply = nullptr},
+       .scenario = {2.70, 3},
+       .description = "the NC reads object 2000h:00, which the drive does not have (aborted "
+                      "0x06020000)",
+       .apply =
+           [](FaultActions& f) {
+             f.diagnosis({.kind = Said::NcRead, .index = 0x2000, .subindex = 0});
+           },
+       .diagnosis = true},
       {.rule = RuleId::Erh001,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's NC reads no error history (1003h)",
-       .apply = nullptr},
+       .scenario = {2.20, 0},
+       .description = "a drive fault (E09) the NC reads 1003h of; 150 ms later the drive loses "
+                      "its history, and the NC reads 1003h:00 again",
+       .apply =
+           [](FaultActions& f) {
+             f.driveFault();
+             f.diagnosis({.kind = Said::Mailbox,
+                          .offset_ns = 150 * kMs,
+                          .quirk = MailboxQuirk::LoseHistory});
+             f.diagnosis({.kind = Said::NcRead,
+                          .offset_ns = 200 * kMs,
+                          .index = 0x1003,
+                          .subindex = 0});
+           },
+       .diagnosis = true},
       {.rule = RuleId::Erh002,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's NC reads no 1003h entry after a fault",
-       .apply = nullptr},
+       .scenario = {2.70, 2},
+       .description = "a drive fault (E09) whose 1003h entry carries 0x1000, not 0x8611",
+       .apply =
+           [](FaultActions& f) {
+             f.diagnosis({.kind = Said::Mailbox, .quirk = MailboxQuirk::WrongHistoryCode});
+             f.driveFault();
+           },
+       .diagnosis = true},
       {.rule = RuleId::Lnk001,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
-       .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's master polls no ESC error counters (0x0300)",
-       .apply = nullptr},
+       .need = AxisNeed::Any,
+       .companions = {RuleId::Com004},
+       .scenario = {2.80, 2},
+       .description = "the cable into port 0 of the axis's slave corrupts 2 frames (--bad-link)",
+       .apply = [](FaultActions& f) { f.diagnosis({.kind = Said::CorruptFrames, .amount = 2}); },
+       .diagnosis = true},
       {.rule = RuleId::Lnk002,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description = "not injectable: the simulator's master polls no lost-link counters (0x0310)",
-       .apply = nullptr},
+       .scenario = {2.20, 1},
+       .description = "the cable into port 0 of the axis's slave goes down and up between two "
+                      "frames: both ends count a lost link",
+       .apply = [](FaultActions& f) { f.diagnosis({.kind = Said::LinkDown}); },
+       .diagnosis = true},
       {.rule = RuleId::Dc001,
        .phase = FaultPhase::Cycle,
-       .need = AxisNeed::None,
+       .need = AxisNeed::Any,
        .companions = {},
-       .scenario = {0, -1},
-       .description =
-           "not injectable: the simulator's master reads no system time difference (0x092C)",
-       .apply = nullptr},
+       .scenario = {2.20, 3},
+       .description = "the axis's slave's system time difference (0x092C) is -5000 ns for 250 ms",
+       .apply =
+           [](FaultActions& f) {
+             f.diagnosis({.kind = Said::TimeDifference, .amount = -5000, .for_ns = 250 * kMs});
+           },
+       .diagnosis = true},
   };
   return table;
 }

@@ -155,20 +155,12 @@ bool Master::alFrame(const FrameSink& sink, AlWalk& walk, std::int64_t t_ns) {
 }
 
 bool Master::mailboxFrame(const FrameSink& sink, std::int64_t t_ns) {
-  // SM0 written by the master, SM1 read by it, both in mailbox mode (ETG.1000.4).
-  constexpr std::uint8_t kSmMailboxOut = 0x26, kSmMailboxIn = 0x22;
   std::vector<RingDatagram> frame;
   for (std::size_t s = 0; s < segment_.escs.size(); ++s) {
     if (!segment_.escs[s].servo()) continue;
     RingDatagram dg = registerDatagram(ecat::kFpwr, static_cast<std::uint16_t>(kFirstStation + s),
-                                       ecat::kRegSyncManager0, 2 * ecat::kSyncManagerStride);
-    for (std::size_t sm = 0; sm < 2; ++sm) {
-      std::uint8_t* regs = &dg.data[sm * ecat::kSyncManagerStride];
-      storeLe(regs + ecat::kSmStartAt, sm == 0 ? kMailboxOutPhys : kMailboxInPhys, 2);
-      storeLe(regs + ecat::kSmLengthAt, kMailboxBytes, 2);
-      regs[ecat::kSmControlAt] = sm == 0 ? kSmMailboxOut : kSmMailboxIn;
-      regs[ecat::kSmActivateAt] = 0x01;
-    }
+                                       ecat::kRegSyncManager0, kMailboxSyncManagers);
+    writeMailboxSyncManagers(dg.data.data());
     frame.push_back(std::move(dg));
   }
   return frame.empty() || exchange(sink, frame, t_ns);

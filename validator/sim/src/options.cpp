@@ -481,6 +481,9 @@ Status resolveOptions(SimOptions& o) {
   for (std::size_t i = placed_already; i < o.faults.size(); ++i) {
     if (Status placed = placeFault(o.faults[i], o, *begins_s); !placed) return placed;
   }
+  for (const FaultRequest& f : o.faults) {
+    if (faultRecipe(f.rule)->diagnosis) o.diagnosis = true;
+  }
   return {};
 }
 

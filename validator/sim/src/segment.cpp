@@ -307,6 +307,18 @@ void Esc::endOfFrame() {
   }
 }
 
+void writeMailboxSyncManagers(std::uint8_t* registers) {
+  // SM0 written by the master, SM1 read by it, both in mailbox mode (ETG.1000.4)
+  constexpr std::uint8_t kSmMailboxOut = 0x26, kSmMailboxIn = 0x22;
+  for (std::size_t sm = 0; sm < 2; ++sm) {
+    std::uint8_t* regs = registers + sm * ecat::kSyncManagerStride;
+    storeLe(regs + ecat::kSmStartAt, sm == 0 ? kMailboxOutPhys : kMailboxInPhys, 2);
+    storeLe(regs + ecat::kSmLengthAt, kMailboxBytes, 2);
+    regs[ecat::kSmControlAt] = sm == 0 ? kSmMailboxOut : kSmMailboxIn;
+    regs[ecat::kSmActivateAt] = 0x01;
+  }
+}
+
 void Esc::countError(diag::EscCounter counter, std::uint8_t port) {
   std::size_t reg = 0;
   switch (counter) {

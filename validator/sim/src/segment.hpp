@@ -67,6 +67,9 @@ struct RingDatagram {
 inline constexpr std::uint16_t kMailboxOutPhys = 0x1000;
 inline constexpr std::uint16_t kMailboxInPhys = 0x1080;
 inline constexpr std::uint16_t kMailboxBytes = 128;
+// SM0 and SM1 as the master configures them for the mailbox: 16 bytes from 0x0800.
+inline constexpr std::size_t kMailboxSyncManagers = 2 * ecat::kSyncManagerStride;
+void writeMailboxSyncManagers(std::uint8_t* registers);
 
 class Esc {
  public:
@@ -103,6 +106,8 @@ class Esc {
   // In OP with the station address and FMMUs the master's start-up would have written (a
   // capture that begins with the segment running).
   void startInOp(std::uint16_t station);
+  // Its mailbox configured as the start-up would have done (a capture without it).
+  void startWithMailbox() { writeMailboxSyncManagers(&mem[ecat::kRegSyncManager0]); }
   // One datagram passing through, then (once per frame) the end of the frame.
   void process(RingDatagram& dg);
   void endOfFrame();

@@ -212,7 +212,7 @@ struct Simulator::Impl {
     for (const FaultRequest& f : o.faults) {
       faults.inject(f.rule, f.at_s.value_or(-1), f.axis.value_or(-1));
     }
-    if (o.scenario == Scenario::Faults) faults.injectScenario();
+    if (o.scenario == Scenario::Faults) faults.injectScenario(o.diagnosis);
     for (const FaultPlan::Placed& fault : faults.placed()) fault_windows.push_back({fault});
   }
 
@@ -395,6 +395,33 @@ struct Simulator::Impl {
     }
   }
 
+  // The diagnosis faults due by this cycle (a time difference stands for its time).
+  void applyDiagnosisFaults(std::int64_t slot) {
+    for (FaultPlan::TimedDiagnosis& d : faults.diagnosisFaults()) {
+      if (d.done || slot < d.at_ns) continue;
+      const auto axis = static_cast<std::size_t>(d.axis);
+      const auto position = static_cast<std::size_t>(segment.servo_slave[axis]);
+      switch (d.fault.kind) {
+        case DiagnosisFault::Kind::Mailbox:
+          drive_mailboxes[axis].quirk(d.fault.quirk);
+          break;
+        case DiagnosisFault::Kind::NcRead:
+          nc_mailboxes[axis].upload(d.fault.index, d.fault.subindex);
+          break;
+        case DiagnosisFault::Kind::CorruptFrames:
+          bursts.push_back({slot, position, d.fault.amount});
+          break;
+        case DiagnosisFault::Kind::LinkDown:
+          segment.escs[position].countError(diag::EscCounter::LostLink, 0);
+          if (position > 0) segment.escs[position - 1].countError(diag::EscCounter::LostLink, 1);
+          break;
+        case DiagnosisFault::Kind::TimeDifference:
+          continue;  // read by timeDifference while it stands
+      }
+      d.done = true;
+    }
+  }
+
   // The cycles between two polls of `period`.
   std::uint64_t every(std::int64_t period_ns) const {
     return static_cast<std::uint64_t>(std::max<std::int64_t>(1, period_ns / cycle_ns));
@@ -467,11 +494,12 @@ struct Simulator::Impl {
 
   // Every slave's error counters and system time difference; the rises each read shows since
   // the slave's last read (its first is the baseline) and the links they name are the truth.
-  bool counterFrames(const FrameSink& sink, std::uint64_t cycle, std::int64_t& t_ns) {
+  bool counterFrames(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot,
+                     std::int64_t& t_ns) {
     std::vector<RingDatagram> datagrams;
     for (std::size_t s = 0; s < segment.escs.size(); ++s) {
       Esc& esc = segment.escs[s];
-      esc.setTimeDifference(timeDifference(s, cycle));
+      esc.setTimeDifference(timeDifference(s, cycle, slot));
       datagrams.push_back(master.registerDatagram(ecat::kFprd, esc.station(),
                                                   ecat::kRegErrorCounters,
                                                   ecat::kErrorCountersSize));
@@ -515,8 +543,17 @@ struct Simulator::Impl {
     rise(ecat::kRegPdiError - ecat::kRegErrorCounters, EscCounter::Pdi, 0);
   }
 
-  // A slave's system time difference at a read: within a few tens of ns of the reference.
-  std::int32_t timeDifference(std::size_t slave, std::uint64_t cycle) const {
+  // A slave's system time difference at a read: within a few tens of ns of the reference, but
+  // where a fault (DC-001) puts it.
+  std::int32_t timeDifference(std::size_t slave, std::uint64_t cycle, std::int64_t slot) {
+    for (const FaultPlan::TimedDiagnosis& d : faults.diagnosisFaults()) {
+      if (d.fault.kind == DiagnosisFault::Kind::TimeDifference &&
+          static_cast<std::size_t>(segment.servo_slave[static_cast<std::size_t>(d.axis)]) ==
+              slave &&
+          slot >= d.at_ns && slot < d.at_ns + d.fault.for_ns) {
+        return d.fault.amount;
+      }
+    }
     const std::uint64_t x = (cycle * 0x9E3779B97F4A7C15ULL) ^ (slave * 0xBF58476D1CE4E5B9ULL);
     return static_cast<std::int32_t>((x >> 33) % 61) - 30;
   }
@@ -526,7 +563,7 @@ struct Simulator::Impl {
     std::int64_t t_ns = std::max(slot + cycle_ns / 2, master.lastFrameNs() + kUs);
     if (cycle % every(kMailboxPollNs) == 0 && !mailboxFrames(sink, t_ns)) return false;
     const std::uint64_t counters = every(kCountersPollNs);
-    return cycle % counters != counters / 2 || counterFrames(sink, cycle, t_ns);
+    return cycle % counters != counters / 2 || counterFrames(sink, cycle, slot, t_ns);
   }
 
   // Soak: a 10 s pattern repeated, planned a period ahead (constant memory).
@@ -627,6 +664,7 @@ struct Simulator::Impl {
     } else {
       for (std::size_t s = 0; s < segment.escs.size(); ++s) {
         segment.escs[s].startInOp(static_cast<std::uint16_t>(kFirstStation + s));
+        if (o.diagnosis && segment.escs[s].servo()) segment.escs[s].startWithMailbox();
       }
       stepDrives(0);
     }
@@ -667,6 +705,7 @@ struct Simulator::Impl {
         f.done = true;
       }
       bool failed = true;  // every axis: the cycle's frames lost or not sent
+      if (o.diagnosis) applyDiagnosisFaults(slot);
       for (LinkBurst& burst : bursts) {
         if (burst.done || slot < burst.at_ns) continue;
         master.corruptFrames(burst.into, burst.frames);
@@ -749,6 +788,12 @@ Result<std::vector<FaultTruth>> Simulator::faults() const {
       for (int a = 0; a < impl.o.axes; ++a) axes.push_back(a);
     } else {
       axes.push_back(w.fault.axis);
+      // a link down is counted at both ends: port 1 of the slave before too, when there is one
+      const int position = impl.segment.servo_slave[static_cast<std::size_t>(w.fault.axis)];
+      if (w.fault.rule == RuleId::Lnk002 && position > 0) {
+        const int before = impl.segment.escs[static_cast<std::size_t>(position - 1)].axis;
+        axes.push_back(before < 0 ? std::nullopt : std::optional<int>(before));
+      }
     }
     for (const std::optional<int>& axis : axes) {
       out.push_back({rule.code, axis, w.first, w.last});

@@ -39,6 +39,34 @@ enum class StartupFault : std::uint8_t {
   PowerUpError,        // the slave powers up with an AL error
 };
 
+// How a drive's mailbox breaks what the rules expect (docs/simulate.md#diagnosis).
+enum class MailboxQuirk : std::uint8_t {
+  EmergencyWithoutFault,  // an emergency 0x8611 with no cause bit rising (MBX-001)
+  ErrorResetNow,          // an error reset emergency now, the drive's first word (MBX-002)
+  SilentFault,            // the next fault without an emergency (MBX-002)
+  WrongHistoryCode,       // the next history entry carries 0x1000, not the cause's code (ERH-002)
+  LoseHistory,            // the history loses its entries (ERH-001)
+};
+
+// What the master, the NC and the slaves say besides the process data, at a time after the
+// fault's (--diagnosis; each recipe that does one needs it).
+struct DiagnosisFault {
+  enum class Kind : std::uint8_t {
+    Mailbox,         // `quirk` in the axis's drive's mailbox
+    NcRead,          // the NC reads `index`:`subindex` of the axis's drive
+    CorruptFrames,   // the cable into the axis's slave's port 0 corrupts `amount` frames
+    LinkDown,        // that cable goes down and up between two frames (lost links at both ends)
+    TimeDifference,  // the axis's slave's system time difference is `amount` ns for `for_ns`
+  };
+  Kind kind;
+  std::int64_t offset_ns = 0;
+  MailboxQuirk quirk = MailboxQuirk::EmergencyWithoutFault;
+  std::uint16_t index = 0;
+  std::uint8_t subindex = 0;
+  std::int32_t amount = 0;
+  std::int64_t for_ns = 0;
+};
+
 // What a recipe can do, at the fault's time and on its axis.
 class FaultActions {
  public:
@@ -48,6 +76,7 @@ class FaultActions {
   virtual void driveFault() = 0;             // E09 (following error) in the axis's drive
   virtual void bus(BusFault fault) = 0;
   virtual void startup(StartupFault fault) = 0;
+  virtual void diagnosis(const DiagnosisFault& fault) = 0;
 
  protected:
   ~FaultActions() = default;
@@ -71,6 +100,8 @@ struct FaultRecipe {
   // (--start-in fault:RULE, docs/simulate.md#shapes); 0: it has no condition to begin inside
   // from its time (a moment, or one that comes later).
   std::int64_t standing_ns = 0;
+  // It needs the mailboxes and the master's polls of --diagnosis (turned on with it).
+  bool diagnosis = false;
   bool injectable() const { return apply != nullptr; }
 };
 
