@@ -21,7 +21,10 @@
 #include "ncservo/capture/capture_reader.hpp"
 #include "ncservo/capture/capture_writer.hpp"
 #include "ncservo/config/config.hpp"
+#include "ncservo/layout/eni.hpp"
 #include "ncservo/layout/layout_learner.hpp"
+#include "ncservo/model/esc_errors.hpp"
+#include "ncservo/model/mailbox_tracker.hpp"
 #include "ncservo/pipeline/capture_pipeline.hpp"
 #include "ncservo/rules/rules.hpp"
 #include "ncservo/rules/validator.hpp"
@@ -448,7 +451,8 @@ INSTANTIATE_TEST_SUITE_P(
 
 std::set<std::string> documentedCompanions(const char* code) {
   const std::map<std::string, std::set<std::string>> table = {
-      {"ESM-001", {"ESM-003"}}, {"COM-003", {"COM-004"}}, {"COM-005", {"COM-004"}}};
+      {"ESM-001", {"ESM-003"}}, {"COM-003", {"COM-004"}}, {"COM-005", {"COM-004"}},
+      {"LNK-001", {"COM-004"}}};
   const auto it = table.find(code);
   return it == table.end() ? std::set<std::string>{} : it->second;
 }
@@ -522,6 +526,14 @@ const std::vector<StreamRow>& streamRows() {
   rows.push_back({"no_startup_5", nostart});
   rows.push_back({"faults_4", options(Scenario::Faults, 4, 4.3)});
   rows.push_back({"commissioning_32", options(Scenario::Commissioning, 32, 1.0)});
+  SimOptions said = options(Scenario::Commissioning, 4, 3.0);
+  said.diagnosis = true;
+  said.bad_links.push_back({.station = 0x03EB, .port = 0, .at_s = 1.2, .frames = 3});
+  rows.push_back({"diagnosis_bad_link", said});
+  SimOptions said_32 = options(Scenario::Commissioning, 32, 1.0);
+  said_32.diagnosis = true;
+  said_32.io_slaves = 8;
+  rows.push_back({"diagnosis_32_io_8", said_32});
   return rows;
 }
 class Stream : public ::testing::TestWithParam<std::size_t> {};
@@ -800,6 +812,156 @@ std::string findingsText(const std::vector<Finding>& findings) {
             ": " + f.message + "\n";
   }
   return text;
+}
+
+// --- what the drives and the ESCs said (--diagnosis, docs/simulate.md#diagnosis) ---
+
+struct DiagnosisRow {
+  const char* name;
+  SimOptions options;
+};
+std::vector<DiagnosisRow> diagnosisRows() {
+  std::vector<DiagnosisRow> rows;
+  SimOptions bad_link = options(Scenario::Commissioning, 4, 3.0);
+  bad_link.bad_links.push_back({.station = 0x03EB, .port = 0, .at_s = 1.2, .frames = 3});
+  bad_link.faults.push_back({.rule = RuleId::Mbx003, .at_s = 0.9, .axis = 0, .text = "MBX-003"});
+  bad_link.faults.push_back({.rule = RuleId::Dc001, .at_s = 1.0, .axis = 3, .text = "DC-001"});
+  rows.push_back({"commissioning_bad_link", bad_link});
+  SimOptions far_port = options(Scenario::Commissioning, 3, 3.0);
+  far_port.image = ImageStyle::TwinCat;
+  far_port.bad_links.push_back({.station = 0x03EA, .port = 1, .at_s = 1.2, .frames = 6});
+  rows.push_back({"twincat_port_1_outage", far_port});
+  SimOptions incidents = options(Scenario::Incidents, 4, 6.0);
+  incidents.cycle_us = 5000;
+  incidents.diagnosis = true;
+  rows.push_back({"incidents", incidents});
+  SimOptions running = options(Scenario::Commissioning, 4, 3.0);
+  running.startup = false;
+  running.faults.push_back({.rule = RuleId::Erh002, .at_s = 1.0, .axis = 1, .text = "ERH-002"});
+  rows.push_back({"no_startup_history", running});
+  SimOptions faults = options(Scenario::Faults, 4, 4.3);
+  faults.cycle_us = 2000;
+  faults.diagnosis = true;
+  rows.push_back({"faults", faults});
+  return rows;
+}
+class DiagnosisRun : public ::testing::TestWithParam<DiagnosisRow> {};
+
+// Every emergency, SDO answer and abort, counter rise and link fault the simulator wrote is what
+// the capture pipeline decodes, on the same frame, and nothing else.
+TEST_P(DiagnosisRun, TheValidatorDecodesWhatTheSimulatorSaid) {
+  SimOptions o = GetParam().options;
+  ASSERT_EQ(test::statusText(resolveOptions(o)), "");
+  ASSERT_TRUE(o.diagnosis);
+  Simulator simulator(o);
+  DecoderOptions decoder;
+  if (!o.startup) {  // without it, the ENI gives the mailboxes' areas
+    const Result<EniLayout> eni = parseEni(simulator.eni(), "sim.xml");
+    ASSERT_TRUE(eni.has_value());
+    decoder.mailbox_areas = eni->mailboxes;
+    EXPECT_EQ(decoder.mailbox_areas.size(), static_cast<std::size_t>(o.axes));
+  }
+  CapturePipeline pipeline({decoder, RuleSettings{}, TimeWindow{}, TimestampMode::Capture});
+  std::uint64_t number = 0;
+  EcatFrame frame;
+  ASSERT_TRUE(simulator.run([&](const SimFrame& f) {
+    const ByteReader bytes(f.data, f.size);
+    walkPacket(LinkType::Ethernet, bytes, frame);
+    pipeline.onWalkedFrame(++number, f.time_ns, LinkType::Ethernet, bytes, frame);
+    return true;
+  }));
+  pipeline.finish();
+  const CaptureResult result = pipeline.result();
+  const Result<DiagnosisTruth> truth = simulator.diagnosis();
+  ASSERT_TRUE(truth.has_value());
+
+  std::vector<std::string> said, decoded;
+  for (const DriveSaid& m : truth->drive_messages) {
+    said.push_back(fmt::format("{} {} {} {:04X}:{} v{} rq{} c{:04X} r{:02X} a{:08X}", m.frame,
+                               m.station, m.kind, m.index, m.subindex, m.value.value_or(~0ULL),
+                               m.request_frame.value_or(0), m.code, m.error_register,
+                               m.abort_code));
+  }
+  for (const DriveMessage& m : result.drive_messages) {
+    const bool emergency = m.kind == DriveMessage::Kind::Emergency;
+    decoded.push_back(fmt::format(
+        "{} {} {} {:04X}:{} v{} rq{} c{:04X} r{:02X} a{:08X}", m.frame, m.slave.station.value_or(0),
+        driveMessageKindName(m.kind), m.index, m.subindex, m.value.value_or(~0ULL),
+        m.request_frame.value_or(0), emergency ? m.emergency.code : 0,
+        emergency ? m.emergency.error_register : 0, m.abort_code));
+  }
+  EXPECT_EQ(decoded, said) << GetParam().name;
+  EXPECT_FALSE(said.empty()) << GetParam().name;
+
+  std::multiset<std::string> rose, read;
+  for (const EscErrorTruth& e : truth->esc_errors) {
+    rose.insert(fmt::format("{} {} {} {} {}", e.frame, e.station, e.port, e.counter, e.delta));
+  }
+  for (const EscErrorDelta& e : result.esc_errors) {
+    read.insert(fmt::format("{} {} {} {} {}", e.frame, e.slave.station.value_or(0), e.port,
+                            diag::escCounterName(e.counter), e.delta));
+  }
+  EXPECT_EQ(read, rose) << GetParam().name;
+  std::vector<std::string> links, named;
+  for (const LinkFaultTruth& l : truth->link_faults) {
+    links.push_back(fmt::format("{} {} {} {}", l.frame, l.station, l.port, l.errors));
+  }
+  for (const LinkFault& l : result.link_faults) {
+    named.push_back(fmt::format("{} {} {} {}", l.frame, l.reported.station.value_or(0),
+                                l.reported_port, l.errors));
+  }
+  EXPECT_EQ(named, links) << GetParam().name;
+  EXPECT_TRUE(result.mailbox_notes.empty()) << GetParam().name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Rows, DiagnosisRun, ::testing::ValuesIn(diagnosisRows()),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(ParseBadLink, Rows) {
+  struct Row {
+    const char* text;
+    std::optional<std::tuple<std::uint16_t, int, double, int>> parsed;  // none: an error
+  };
+  const Row rows[] = {
+      {"0x3EB:0@1.2", std::tuple{0x03EB, 0, 1.2, 2}},
+      {"1004:1@2x6", std::tuple{1004, 1, 2.0, 6}},
+      {"0x3EB:2@1", std::nullopt},
+      {"0x3EB@1", std::nullopt},
+      {"0x3EB:0", std::nullopt},
+      {"1004:0@1x0", std::nullopt},
+      {"70000:0@1", std::nullopt},
+      {"x:0@1", std::nullopt},
+  };
+  for (const Row& row : rows) {
+    const Result<BadLink> link = parseBadLink(row.text);
+    ASSERT_EQ(link.has_value(), row.parsed.has_value()) << row.text;
+    if (!link) {
+      EXPECT_NE(link.error().text().find(row.text), std::string::npos) << link.error().text();
+      continue;
+    }
+    const auto [station, port, at_s, frames] = *row.parsed;
+    EXPECT_EQ(link->station, station) << row.text;
+    EXPECT_EQ(link->port, port) << row.text;
+    EXPECT_DOUBLE_EQ(link->at_s, at_s) << row.text;
+    EXPECT_EQ(link->frames, frames) << row.text;
+  }
+}
+
+TEST(ResolveBadLink, RefusesWhatTheRingDoesNotHave) {
+  const std::pair<const char*, const char*> rows[] = {
+      {"0x3E8:0@1.2", "is not in the ring"},
+      {"0x3EC:1@1.2", "has no cable"},
+      {"0x3EA:0@0.1", "outside the quiet part"},
+  };
+  for (const auto& [text, error] : rows) {
+    SimOptions o = options(Scenario::Commissioning, 4, 3.0);
+    o.bad_links.push_back(*parseBadLink(text));
+    EXPECT_NE(test::statusText(resolveOptions(o)).find(error), std::string::npos) << text;
+  }
+  SimOptions fine = options(Scenario::Commissioning, 4, 3.0);
+  fine.bad_links.push_back(*parseBadLink("0x3EA:0@1.2"));
+  EXPECT_EQ(test::statusText(resolveOptions(fine)), "");
+  EXPECT_TRUE(fine.diagnosis) << "a bad link needs the counter polls";
 }
 
 // --- process-image styles (docs/protocol.md §9.4) ---

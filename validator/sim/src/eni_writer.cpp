@@ -45,6 +45,14 @@ std::string writeEni(const std::vector<EniSlave>& slaves,
     info.append_child("Name").text().set(s.name.c_str());
     info.append_child("PhysAddr").text().set(s.station);
     info.append_child("AutoIncAddr").text().set(static_cast<int>(-static_cast<int>(s.position)));
+    if (s.mailbox_bytes > 0) {
+      pugi::xml_node mailbox = slave.append_child("Mailbox");
+      for (const auto& [name, start] : {std::pair{"Send", s.mailbox_out}, {"Recv", s.mailbox_in}}) {
+        pugi::xml_node area = mailbox.append_child(name);
+        area.append_child("Start").text().set(start);
+        area.append_child("Length").text().set(s.mailbox_bytes);
+      }
+    }
     pugi::xml_node pd = slave.append_child("ProcessData");
     std::size_t which = 0;
     if (s.output_bytes > 0) {

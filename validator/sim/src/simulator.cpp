@@ -860,6 +860,11 @@ std::string Simulator::eni() const {
     e.output_bytes = static_cast<std::uint16_t>(esc.outputBytes());
     e.inputs = esc.inputs_logical;
     e.input_bytes = static_cast<std::uint16_t>(esc.inputBytes());
+    if (impl_->o.diagnosis && esc.servo()) {
+      e.mailbox_out = kMailboxOutPhys;
+      e.mailbox_in = kMailboxInPhys;
+      e.mailbox_bytes = kMailboxBytes;
+    }
     slaves.push_back(std::move(e));
   }
   std::vector<EniCyclicCommand> commands;

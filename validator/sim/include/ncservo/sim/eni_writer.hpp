@@ -19,6 +19,10 @@ struct EniSlave {
   std::uint16_t output_bytes = 0;
   std::uint32_t inputs = 0;
   std::uint16_t input_bytes = 0;
+  // Its mailbox (Mailbox/Send|Recv/Start: SM0 and SM1), when it has one; 0: none.
+  std::uint16_t mailbox_out = 0;
+  std::uint16_t mailbox_in = 0;
+  std::uint16_t mailbox_bytes = 0;
 };
 struct EniCyclicCommand {
   std::uint8_t command = 0;   // LRW, LWR or LRD
