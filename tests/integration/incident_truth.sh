@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # incident_truth.sh SRC BUILD
-# Incidents against their makers' truth, on three captures: the simulator's incidents scenario
-# (made here), the independent generator's incident chains (made here) and the bundled
+# Incidents against their makers' truth, on four captures: the simulator's incidents scenario
+# (made here, also with --diagnosis: the drives' mailboxes and the ESC counters, and its link-fault
+# incident), the independent generator's incident chains (made here) and the bundled
 # captures/sim-incidents-4axis.pcap. First the truth itself, against what the tools show without
 # the incident detector: each drive fault is a FAULT transition in tshark with the plugin, and
 # nothing else is; the chain of each cause is in validate's findings and decode's values. Then
@@ -15,6 +16,9 @@ CHECK_INCIDENTS="$SRC/tests/tools/check_incidents.py"
 "$NCSERVO" simulate --scenario incidents -o "$WORK/sim.pcap" \
   --incidents-truth "$WORK/sim.incidents.json" 2>"$WORK/sim.err" ||
   fail "simulate --scenario incidents exit $?: $(cat "$WORK/sim.err")"
+"$NCSERVO" simulate --scenario incidents --diagnosis --cycle-us 2000 --duration 8 -o "$WORK/simdiag.pcap" \
+  --incidents-truth "$WORK/simdiag.incidents.json" 2>"$WORK/sim.err" ||
+  fail "simulate --scenario incidents --diagnosis exit $?: $(cat "$WORK/sim.err")"
 python3 "$GEN" --axes 4 --cycles 4000 --seed 5 --incident communication-loss \
   --incident overtemperature --incident following-error-after-step --incident link-fault \
   --incident bus-outage \
@@ -25,28 +29,31 @@ cp "$bundled.incidents.json" "$WORK/bundled.incidents.json"
 
 # docs/simulate.md's table of the scenario is the scenario: its rows in order give the truth's
 # incidents (a bus outage row: the outage, then a drive fault on every axis).
-python3 - "$SRC/docs/simulate.md" "$WORK/sim.incidents.json" <<'PY' ||
+python3 - "$SRC/docs/simulate.md" "$WORK/sim.incidents.json" "$WORK/simdiag.incidents.json" <<'PY' ||
 import json, re, sys
 text = open(sys.argv[1], encoding="utf-8").read()
 section = text[text.index("## Incidents"):]
-rows = re.findall(r"^\| `([a-z-]+)` \| ([^|]+) \| ([^|]+) \|", section, re.M)
-want = []
-for cause, kind, axis in rows:
-    kind, axis = kind.strip(), axis.strip()
-    if kind.startswith("bus outage"):
-        want.append(("bus-outage", None, cause))
-        want += [("drive-fault", a, "communication-loss") for a in range(4)]
-    else:
-        want.append(({"drive fault": "drive-fault", "ESM fall": "esm"}[kind], int(axis), cause))
-truth = json.load(open(sys.argv[2]))["incidents"]
-got = [(i["kind"], i["axis"], i["cause"]) for i in truth]
-if got != want:
-    sys.exit(f"docs/simulate.md's incidents {want}\nthe scenario's {got}")
+rows = re.findall(r"^\| `([a-z-]+)` \| ([^|]+) \| ([^|]+) \| ([^|]+) \|", section, re.M)
+for path, diagnosis in ((sys.argv[2], False), (sys.argv[3], True)):
+    want = []
+    for cause, kind, axis, chain in rows:
+        kind, axis = kind.strip(), axis.strip()
+        if chain.strip().startswith("with `--diagnosis`") and not diagnosis:
+            continue
+        if kind.startswith("bus outage"):
+            want.append(("bus-outage", None, cause))
+            want += [("drive-fault", a, "communication-loss") for a in range(4)]
+        else:
+            want.append(({"drive fault": "drive-fault", "ESM fall": "esm"}[kind], int(axis), cause))
+    truth = json.load(open(path))["incidents"]
+    got = [(i["kind"], i["axis"], i["cause"]) for i in truth]
+    if got != want:
+        sys.exit(f"docs/simulate.md's incidents {want}\nthe scenario's {got} ({path})")
 PY
   fail "docs/simulate.md's table of the incidents scenario differs from the scenario"
 
 # --- the truth, against today's outputs ---
-for name in sim gen bundled; do
+for name in sim simdiag gen bundled; do
   capture="$WORK/$name.pcap" truth="$WORK/$name.incidents.json"
   "$NCSERVO" validate --format json --fail-on never "$capture" >"$WORK/$name.json" ||
     fail "$name: validate exit $?"
@@ -148,7 +155,7 @@ PY
 done
 
 # --- the incident detector against the truth ---
-for name in sim gen bundled; do
+for name in sim simdiag gen bundled; do
   python3 "$CHECK_INCIDENTS" "$WORK/$name.incidents.json" --report "$WORK/$name.json" ||
     fail "$name: validate's incidents differ from the truth (exit $?; 2: no incident detector)"
   "$TSHARK" "$PLUGIN" -2 -r "$WORK/$name.pcap" -Y ncservo.incident -T fields -E occurrence=a \
@@ -158,4 +165,4 @@ for name in sim gen bundled; do
   python3 "$CHECK_INCIDENTS" "$WORK/$name.incidents.json" --tshark "$WORK/$name.tshark" ||
     fail "$name: the plugin's ncservo.incident differs from the truth"
 done
-echo "incident_truth: the simulator's, the generator's and the bundled incidents, in validate and tshark"
+echo "incident_truth: the simulator's (with and without --diagnosis), the generator's and the bundled incidents, in validate and tshark"
