@@ -5,7 +5,8 @@
 # register, data), SDO answer and abort (index, subindex, value, abort code, request frame), ESC
 # counter rise (station, port, counter, rise) and link fault (its text), each in the ncservo layer
 # of its slave. Checked on the independent generator's captures with the §11 injections and the
-# link-fault incident (which must hold each kind), and on every real capture, where the plugin's
+# link-fault incident and on the simulator's with --diagnosis (which must hold each kind), and on
+# every real capture, where the plugin's
 # SDO index, subindex and expedited value must also be what stock tshark's ecat_mailbox.coe.*
 # fields show on the same frame.
 SRC=$1 BUILD=$2
@@ -157,6 +158,11 @@ compare "gen-link" "$WORK/gen-link.pcapng" "esc link abort"
 python3 "$gen" --axes 3 --cycles 3000 --seed 7 --inject MBX-002 --inject ERH-002 \
   --layout-config "$WORK/gen-drive.toml" -o "$WORK/gen-drive.pcap" >/dev/null || fail "gen_capture.py exited $?"
 compare "gen-drive" "$WORK/gen-drive.pcap" "emergency sdo"
+# The simulator's drives, which report each fault and answer the NC's reads of 1003h, an abort, a
+# bad cable and the counters that name it.
+"$NCSERVO" simulate --diagnosis --bad-link 0x3EB:0@1.2x3 --fault MBX-003@0.9:0 -o "$WORK/sim-said.pcap" \
+  2>"$WORK/err.txt" || fail "simulate exited $?: $(cat "$WORK/err.txt")"
+compare "sim-said" "$WORK/sim-said.pcap" "emergency sdo abort esc link"
 # Every field of what was said (`ncservo fields`) showed on one of the generated captures.
 "$NCSERVO" fields | awk -F'\t' '$3 !~ /^\(expert/ {print $1}' |
   grep -E '^ncservo\.(emcy|sdo|errhist|esc)\.|^ncservo\.link_fault$' | sort >"$WORK/wanted.txt"
