@@ -243,7 +243,7 @@ std::vector<SimRow> simRows() {
   {
     // Without a start-up no AL state is known, so the fast path runs throughout: every fault the
     // simulator can inject there, one after another.
-    SimRow r{"soak_no_startup_every_axis_fault", opts(Scenario::Soak, 8, 12), true};
+    SimRow r{"soak_no_startup_every_axis_fault", opts(Scenario::Soak, 8, 20), true};
     r.options.startup = false;
     r.options.faults = faultsOneAfterAnother(
         1.0, 0.5, [](const RuleDef& rule) { return rule.id != RuleId::Esm002; });

@@ -14,8 +14,8 @@ namespace ncservo::sim {
 namespace {
 
 constexpr std::size_t kSdoBody = ecat::kSdoDataAt + ecat::kSdoDataSize;  // command to data
-constexpr std::uint16_t kGeneralError = 0x1000;                         // ERH-002's wrong code
-constexpr std::uint16_t kFollowingError = 0x8611;                       // MBX-001's emergency
+constexpr std::uint16_t kGeneralError = 0x1000;                          // ERH-002's wrong code
+constexpr std::uint16_t kFollowingError = 0x8611;                        // MBX-001's emergency
 constexpr std::uint8_t kFollowingErrorNumber = 13;
 constexpr std::uint32_t kAbortNoObject = 0x06020000;
 constexpr std::uint8_t kSdoUploadRequest = ecat::kSdoInitiateUploadRequest << 5;
@@ -118,8 +118,8 @@ void DriveMailbox::quirk(MailboxQuirk quirk) {
   }
 }
 
-void DriveMailbox::send(Esc& esc, std::uint8_t service, const std::uint8_t* body,
-                        std::size_t size, DriveSaid said) {
+void DriveMailbox::send(Esc& esc, std::uint8_t service, const std::uint8_t* body, std::size_t size,
+                        DriveSaid said) {
   said.station = esc.station();
   esc.mailbox_answers.push_back({coeMessage(nextCounter(counter_), service, body, size), said});
 }
@@ -168,8 +168,8 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
   esc.mailbox_written.clear();
 }
 
-void DriveMailbox::upload(Esc& esc, std::uint16_t index, std::uint8_t subindex,
-                          std::uint32_t value, std::size_t size) {
+void DriveMailbox::upload(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t value,
+                          std::size_t size) {
   const auto body = sdoBody(expedited(kSdoUploadAnswer, size), index, subindex, value);
   DriveSaid said;
   said.kind = driveMessageKindName(DriveMessage::Kind::SdoUpload);
@@ -179,8 +179,7 @@ void DriveMailbox::upload(Esc& esc, std::uint16_t index, std::uint8_t subindex,
   send(esc, ecat::kCoeServiceSdoResponse, body.data(), body.size(), said);
 }
 
-void DriveMailbox::abort(Esc& esc, std::uint16_t index, std::uint8_t subindex,
-                         std::uint32_t code) {
+void DriveMailbox::abort(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t code) {
   // an abort, either side's, is an SDO request (ETG.1000.6)
   const auto body = sdoBody(kSdoAbortCommand, index, subindex, code);
   DriveSaid said;

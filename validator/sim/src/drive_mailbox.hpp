@@ -10,8 +10,8 @@
 #include <optional>
 #include <vector>
 
+#include "ncservo/sim/diagnosis_truth.hpp"
 #include "ncservo/sim/faults.hpp"
-#include "ncservo/sim/simulator.hpp"
 #include "segment.hpp"
 
 namespace ncservo::sim {

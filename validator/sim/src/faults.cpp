@@ -347,10 +347,8 @@ const std::vector<FaultRecipe>& faultRecipes() {
              f.diagnosis({.kind = Said::Mailbox,
                           .offset_ns = 150 * kMs,
                           .quirk = MailboxQuirk::LoseHistory});
-             f.diagnosis({.kind = Said::NcRead,
-                          .offset_ns = 200 * kMs,
-                          .index = 0x1003,
-                          .subindex = 0});
+             f.diagnosis(
+                 {.kind = Said::NcRead, .offset_ns = 200 * kMs, .index = 0x1003, .subindex = 0});
            },
        .diagnosis = true},
       {.rule = RuleId::Erh002,

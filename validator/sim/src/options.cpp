@@ -9,7 +9,6 @@
 #include <string>
 
 #include "incident_plan.hpp"
-#include "segment.hpp"
 #include "ncservo/base/number.hpp"
 #include "ncservo/sim/faults.hpp"
 
@@ -204,10 +203,9 @@ Result<BadLink> parseBadLink(std::string_view text) {
     frames = when.substr(x + 1);
     when = when.substr(0, x);
   }
-  const Result<std::uint64_t> number =
-      station.starts_with("0x") || station.starts_with("0X")
-          ? parseNumber<std::uint64_t>(station.substr(2), 16)
-          : parseNumber<std::uint64_t>(station);
+  const Result<std::uint64_t> number = station.starts_with("0x") || station.starts_with("0X")
+                                           ? parseNumber<std::uint64_t>(station.substr(2), 16)
+                                           : parseNumber<std::uint64_t>(station);
   const Result<int> port_number = parseNumber<int>(port);
   const Result<double> seconds = parseNumber<double>(when);
   if (!number || *number > 0xFFFF || !port_number || !seconds) return malformed();
@@ -215,9 +213,10 @@ Result<BadLink> parseBadLink(std::string_view text) {
   link.port = static_cast<std::uint8_t>(std::clamp(*port_number, 0, 255));
   link.at_s = *seconds;
   if (*port_number != 0 && *port_number != 1) {
-    return fail(fmt::format("--bad-link {}: port 0 (the cable from the slave before) or 1 (the "
-                            "cable to the slave after)",
-                            text));
+    return fail(
+        fmt::format("--bad-link {}: port 0 (the cable from the slave before) or 1 (the "
+                    "cable to the slave after)",
+                    text));
   }
   if (!frames.empty()) {
     const Result<int> count = parseNumber<int>(frames);
@@ -239,16 +238,16 @@ Status checkBadLinks(SimOptions& o) {
     const int position = link.station - kFirstStation;
     if (position < 0 || position >= slaves) {
       return fail(fmt::format("--bad-link {}: station {} is not in the ring (0x{:04X} to 0x{:04X})",
-                              link.text, link.station, kFirstStation,
-                              kFirstStation + slaves - 1));
+                              link.text, link.station, kFirstStation, kFirstStation + slaves - 1));
     }
     if (link.port == 1 && position == slaves - 1) {
       return fail(fmt::format("--bad-link {}: the last slave's port 1 has no cable", link.text));
     }
     if (link.at_s < earliest || link.at_s > *o.duration_s - 0.4) {
-      return fail(fmt::format("--bad-link {}: {} s is outside the quiet part of the run ({:g} s "
-                              "to {:g} s)",
-                              link.text, link.at_s, earliest, *o.duration_s - 0.4));
+      return fail(
+          fmt::format("--bad-link {}: {} s is outside the quiet part of the run ({:g} s "
+                      "to {:g} s)",
+                      link.text, link.at_s, earliest, *o.duration_s - 0.4));
     }
     if (o.mid_start != MidStart::None || o.scenario == Scenario::Incidents) {
       return fail(fmt::format(

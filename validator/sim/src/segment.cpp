@@ -364,8 +364,8 @@ std::optional<std::uint16_t> Esc::mailboxArea(std::size_t sm) const {
 bool Esc::mailboxAccess(RingDatagram& dg) {
   if (dg.ado < ecat::kProcessRam) return false;
   const bool write = dg.command == ecat::kFpwr || dg.command == ecat::kApwr;
-  const std::optional<std::uint16_t> area = mailboxArea(write ? ecat::kMailboxOutSm
-                                                              : ecat::kMailboxInSm);
+  const std::optional<std::uint16_t> area =
+      mailboxArea(write ? ecat::kMailboxOutSm : ecat::kMailboxInSm);
   if (!area || dg.ado != *area) return false;
   if (write) {
     mailbox_written.push_back(dg.data);
@@ -710,7 +710,8 @@ bool Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns,
     storeLe(&esc.mem[ecat::kRegDcSystemTime], static_cast<std::uint64_t>(system_time_ns), 8);
     if (corrupted_into && pos >= *corrupted_into) {
       // The frame's CRC fails: the slave at the bad link counts an invalid frame, every slave
-      // after it one that came marked, as forwarded (docs/drive-messages.md#the-esc-error-counters).
+      // after it one that came marked, as forwarded
+      // (docs/drive-messages.md#the-esc-error-counters).
       esc.countError(diag::EscCounter::Invalid, 0);
       if (pos != *corrupted_into) esc.countError(diag::EscCounter::Forwarded, 0);
       continue;

@@ -3,8 +3,8 @@
 // capture is consistent by construction; in ring order, with where their process data lies.
 #pragma once
 
-#include <cstddef>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -13,16 +13,15 @@
 
 #include "ncservo/config/config.hpp"
 #include "ncservo/model/al_tracker.hpp"
+#include "ncservo/sim/diagnosis_truth.hpp"
 #include "ncservo/sim/models.hpp"
 #include "ncservo/sim/options.hpp"
-#include "ncservo/sim/simulator.hpp"
 #include "ncservo/wire/diagnosis_texts.hpp"
 #include "ncservo/wire/ecat_wire.hpp"
 
 namespace ncservo::sim {
 
-inline constexpr std::size_t kEscMemory = 0x2000;  // registers and process RAM
-inline constexpr std::uint16_t kFirstStation = 0x03E9;
+inline constexpr std::size_t kEscMemory = 0x2000;                  // registers and process RAM
 inline constexpr std::int64_t kEpochNs = 1'767'225'600 * kSecond;  // 2026-01-01 00:00:00 UTC
 
 // What a slave's process data is, for what the master writes and the slave answers.

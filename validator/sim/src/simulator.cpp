@@ -64,43 +64,6 @@ std::string faultsJson(const std::vector<FaultTruth>& faults) {
   return nlohmann::ordered_json{{"expected", expected}, {"companions", companions}}.dump(1) + "\n";
 }
 
-std::string diagnosisJson(const DiagnosisTruth& truth) {
-  using Json = nlohmann::ordered_json;
-  auto optional = [](const auto& value) { return value ? Json(*value) : Json(); };
-  Json messages = Json::array();
-  for (const DriveSaid& m : truth.drive_messages) {
-    Json item = {{"frame", m.frame},
-                 {"request_frame", optional(m.request_frame)},
-                 {"station", m.station},
-                 {"kind", m.kind}};
-    if (std::string_view(m.kind) == "emergency") {
-      item["code"] = m.code;
-      item["register"] = m.error_register;
-    } else {
-      item["index"] = m.index;
-      item["subindex"] = m.subindex;
-      if (m.value) item["value"] = *m.value;
-      if (std::string_view(m.kind) == "sdo-abort") item["abort"] = m.abort_code;
-    }
-    messages.push_back(std::move(item));
-  }
-  Json errors = Json::array();
-  for (const EscErrorTruth& e : truth.esc_errors) {
-    errors.push_back({{"frame", e.frame},
-                      {"station", e.station},
-                      {"port", e.port},
-                      {"counter", e.counter},
-                      {"delta", e.delta}});
-  }
-  Json links = Json::array();
-  for (const LinkFaultTruth& l : truth.link_faults) {
-    links.push_back(
-        {{"frame", l.frame}, {"station", l.station}, {"port", l.port}, {"errors", l.errors}});
-  }
-  return Json{{"drive_messages", messages}, {"esc_errors", errors}, {"link_faults", links}}.dump(1) +
-         "\n";
-}
-
 std::string incidentsJson(const std::vector<IncidentTruth>& incidents) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
   for (const IncidentTruth& i : incidents) {
@@ -203,9 +166,10 @@ struct Simulator::Impl {
       requests.assign(static_cast<std::size_t>(o.axes), std::nullopt);
       counters_read.assign(segment.escs.size(), false);
       for (const BadLink& link : o.bad_links) {
-        bursts.push_back({at(link.at_s), static_cast<std::size_t>(link.station - kFirstStation) +
-                                             (link.port == 1 ? 1u : 0u),
-                          link.frames});
+        bursts.push_back(
+            {at(link.at_s),
+             static_cast<std::size_t>(link.station - kFirstStation) + (link.port == 1 ? 1u : 0u),
+             link.frames});
       }
     }
     planScenario();
@@ -292,7 +256,8 @@ struct Simulator::Impl {
       impl_.bursts.push_back({at_ns_ + offset_ns, into, frames});
       // the drives behind the link miss the frames too: each an incident of this cause
       for (int a = 0; a < impl_.o.axes; ++a) {
-        if (a != axis_ && static_cast<std::size_t>(impl_.segment.servo_slave[static_cast<std::size_t>(a)]) >= into) {
+        if (a != axis_ && static_cast<std::size_t>(
+                              impl_.segment.servo_slave[static_cast<std::size_t>(a)]) >= into) {
           impl_.planned.push_back({IncidentKind::DriveFault, a, "link-fault", at_ns_ + offset_ns});
         }
       }
@@ -420,6 +385,19 @@ struct Simulator::Impl {
       }
       d.done = true;
     }
+    for (LinkBurst& burst : bursts) {
+      if (burst.done || slot < burst.at_ns) continue;
+      master.corruptFrames(burst.into, burst.frames);
+      burst.done = true;
+    }
+  }
+
+  // After a cycle: the NC's reads of what faulted, and (in a cycle whose frames came back, in
+  // OP) the master's AL status check and its diagnosis polls. False if the sink stopped.
+  bool betweenCycles(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot, bool polls) {
+    if (o.diagnosis) watchFaultsForReads();
+    if (!polls || (o.scenario != Scenario::Incidents && !o.diagnosis)) return true;
+    return checkAlStatus(sink, cycle, slot) && (!o.diagnosis || diagnosisFrames(sink, cycle, slot));
   }
 
   // The cycles between two polls of `period`.
@@ -430,8 +408,8 @@ struct Simulator::Impl {
   // Register datagrams in as few frames as they fit in, one after the other from `t_ns`;
   // `returned(frame)` for each frame that came back.
   template <typename Returned>
-  bool sendAcyclic(const FrameSink& sink, std::vector<RingDatagram>& datagrams,
-                   std::int64_t& t_ns, Returned&& returned) {
+  bool sendAcyclic(const FrameSink& sink, std::vector<RingDatagram>& datagrams, std::int64_t& t_ns,
+                   Returned&& returned) {
     std::vector<RingDatagram> frame;
     std::size_t bytes = 0;
     auto flush = [&] {
@@ -462,8 +440,8 @@ struct Simulator::Impl {
       const std::uint16_t station = segment.servo(a).station();
       if (std::optional<std::vector<std::uint8_t>> request =
               nc_mailboxes[static_cast<std::size_t>(a)].takeRequest()) {
-        RingDatagram dg = master.registerDatagram(ecat::kFpwr, station, kMailboxOutPhys,
-                                                  kMailboxBytes);
+        RingDatagram dg =
+            master.registerDatagram(ecat::kFpwr, station, kMailboxOutPhys, kMailboxBytes);
         dg.data = std::move(*request);
         datagrams.push_back(std::move(dg));
       }
@@ -500,9 +478,8 @@ struct Simulator::Impl {
     for (std::size_t s = 0; s < segment.escs.size(); ++s) {
       Esc& esc = segment.escs[s];
       esc.setTimeDifference(timeDifference(s, cycle, slot));
-      datagrams.push_back(master.registerDatagram(ecat::kFprd, esc.station(),
-                                                  ecat::kRegErrorCounters,
-                                                  ecat::kErrorCountersSize));
+      datagrams.push_back(master.registerDatagram(
+          ecat::kFprd, esc.station(), ecat::kRegErrorCounters, ecat::kErrorCountersSize));
       datagrams.push_back(
           master.registerDatagram(ecat::kFprd, esc.station(), ecat::kRegDcSystemTimeDifference, 4));
     }
@@ -616,6 +593,23 @@ struct Simulator::Impl {
     }
   }
 
+  // Before a cycle's frames: the NCs' outputs from the inputs the last cycle returned, and the
+  // slaves' falls from OP now due.
+  void stepNcs(std::int64_t slot) {
+    for (int a = 0; a < o.axes; ++a) {
+      const auto& in = latest_inputs[static_cast<std::size_t>(a)];
+      outputs[static_cast<std::size_t>(a)] =
+          ncs[static_cast<std::size_t>(a)].step(in ? &*in : nullptr, slot);
+    }
+    for (Esc& esc : segment.escs) esc.outputs_taken = false;
+    std::fill(latest_inputs.begin(), latest_inputs.end(), std::nullopt);
+    for (Fall& f : falls) {
+      if (f.done || slot < f.at_ns) continue;
+      segment.servo(f.axis).fallFromOp(f.code);
+      f.done = true;
+    }
+  }
+
   // --start-in: the capture keeps nothing before the moment (half a cycle early, so that each
   // cycle keeps both its copies). Inside a fault (fault:RULE) the moment is the cycle after the
   // fault's first, whose returned copy shows the drive's answer to it.
@@ -692,25 +686,9 @@ struct Simulator::Impl {
         const std::int64_t from = firstSlotAt(d.at_s);
         return slot >= from && slot < from + d.amount * cycle_ns;
       });
-      for (int a = 0; a < o.axes; ++a) {
-        const auto& in = latest_inputs[static_cast<std::size_t>(a)];
-        outputs[static_cast<std::size_t>(a)] =
-            ncs[static_cast<std::size_t>(a)].step(in ? &*in : nullptr, slot);
-      }
-      for (Esc& esc : segment.escs) esc.outputs_taken = false;
-      std::fill(latest_inputs.begin(), latest_inputs.end(), std::nullopt);
-      for (Fall& f : falls) {
-        if (f.done || slot < f.at_ns) continue;
-        segment.servo(f.axis).fallFromOp(f.code);
-        f.done = true;
-      }
+      stepNcs(slot);
       bool failed = true;  // every axis: the cycle's frames lost or not sent
       if (o.diagnosis) applyDiagnosisFaults(slot);
-      for (LinkBurst& burst : bursts) {
-        if (burst.done || slot < burst.at_ns) continue;
-        master.corruptFrames(burst.into, burst.frames);
-        burst.done = true;
-      }
       if (!faults.takeSkippedCycle() && !lost) {
         const bool lost_before = faults.takeLossBeforeSlaves();
         const bool lost_after =
@@ -741,11 +719,7 @@ struct Simulator::Impl {
         failed_cycles = failed ? failed_cycles + 1 : 0;
         if (failed_cycles == kTelegramFailureLimit + 1) outage_due = true;
       }
-      if (o.diagnosis) watchFaultsForReads();
-      if ((o.scenario == Scenario::Incidents || o.diagnosis) && operational && !failed) {
-        if (!checkAlStatus(sink, cycle, slot)) return std::nullopt;
-        if (o.diagnosis && !diagnosisFrames(sink, cycle, slot)) return std::nullopt;
-      }
+      if (!betweenCycles(sink, cycle, slot, operational && !failed)) return std::nullopt;
       if (!operational) {
         if (!walk.active && cycle + 1 == safe_op_cycles) {
           walk.start(ecat::kAlOp, segment.escs.size(), true);

@@ -137,6 +137,9 @@ struct CycleDisturbance {
 };
 Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::string_view text);
 
+// The station address the master gives the first slave of the ring; the others count up.
+inline constexpr std::uint16_t kFirstStation = 0x03E9;
+
 // --bad-link STATION:PORT@SECONDS[xFRAMES]: from SECONDS on, the next FRAMES frames (default 2)
 // that cross the cable at the slave's port reach the slave behind it corrupted
 // (docs/simulate.md#diagnosis).
