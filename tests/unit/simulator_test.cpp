@@ -535,6 +535,12 @@ const std::vector<StreamRow>& streamRows() {
   said_32.diagnosis = true;
   said_32.io_slaves = 8;
   rows.push_back({"diagnosis_32_io_8", said_32});
+  // polls that do not fit between two cycles of 125 us go in the next ones, never late
+  SimOptions crowded = options(Scenario::Commissioning, 32, 1.0);
+  crowded.diagnosis = true;
+  crowded.io_slaves = 32;
+  crowded.cycle_us = 125;
+  rows.push_back({"diagnosis_125us_32_io_32", crowded});
   return rows;
 }
 class Stream : public ::testing::TestWithParam<std::size_t> {};

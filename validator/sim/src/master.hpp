@@ -33,6 +33,7 @@ class Master {
   explicit Master(Segment& segment);
   // The returned copy this long after its master copy, instead of the ring's own delay.
   void setReturnDelayNs(std::int64_t ns) { return_delay_ns_ = ns; }
+  std::int64_t returnDelayNs() const { return return_delay_ns_; }
   // The next cycle's last frame comes back this much later than the ring's delay (COM-007); its
   // returned copy is the cycle's last, so the capture stays in time order.
   void delayNextReturnNs(std::int64_t ns) { next_return_late_ns_ = ns; }

@@ -483,6 +483,13 @@ Status resolveOptions(SimOptions& o) {
   for (const FaultRequest& f : o.faults) {
     if (faultRecipe(f.rule)->diagnosis) o.diagnosis = true;
   }
+  // The polls go between the cycles: a returned copy must come back well inside one.
+  if (o.diagnosis && o.latency_us > o.cycle_us / 4 - 2) {
+    return fail(
+        fmt::format("--latency-us {}: at most a quarter cycle less 2 ({}) with --diagnosis, "
+                    "whose polls go between the cycles",
+                    o.latency_us, o.cycle_us / 4 - 2));
+  }
   return {};
 }
 

@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "capture_shaper.hpp"
-#include "drive_mailbox.hpp"
+#include "diagnosis_polls.hpp"
 #include "esl_probe.hpp"
 #include "fault_plan.hpp"
 #include "incident_plan.hpp"
@@ -28,13 +28,6 @@ namespace {
 constexpr std::int64_t kSoakPeriodNs = 10 * kSecond;
 // The incidents scenario's master reads every slave's AL status this often (docs/simulate.md).
 constexpr std::int64_t kStatusPollNs = 10 * kMs;
-// With --diagnosis the master reads the servos' mailboxes, and every slave's error counters and
-// system time difference, this often (docs/simulate.md#diagnosis).
-constexpr std::int64_t kMailboxPollNs = 2 * kMs;
-constexpr std::int64_t kCountersPollNs = 100 * kMs;
-// A frame of register datagrams holds at most this much (header and WKC included).
-constexpr std::size_t kAcyclicFrameBytes = 1400;
-constexpr std::size_t kDatagramOverhead = 12;
 // An incident the plan says must happen, matched with what the capture shows.
 struct PlannedIncident {
   IncidentKind kind;
@@ -119,21 +112,8 @@ struct Simulator::Impl {
   AlWalk status_check;
   int failed_cycles = 0;  // consecutive cycles every axis failed
   bool outage_due = false;
-  // --diagnosis (docs/simulate.md#diagnosis): each drive's mailbox and its NC's reads, the bad
-  // links still to come, and what was said, as the truth.
-  struct LinkBurst {
-    std::int64_t at_ns;
-    std::size_t into;  // the ring position whose port 0 receives the corrupted frames
-    int frames;
-    bool done = false;
-  };
-  std::vector<DriveMailbox> drive_mailboxes;
-  std::vector<NcMailbox> nc_mailboxes;
-  std::vector<bool> nc_saw_error;                      // per axis
-  std::vector<std::optional<std::uint64_t>> requests;  // per axis: the open request's frame
-  std::vector<bool> counters_read;                     // per slave: its baseline was read
-  std::vector<LinkBurst> bursts;
-  DiagnosisTruth said;
+  // --diagnosis (docs/simulate.md#diagnosis): the mailboxes, the polls, the bad links.
+  std::optional<DiagnosisPolls> polls;
 
   explicit Impl(const SimOptions& options)
       : o(options),
@@ -158,20 +138,7 @@ struct Simulator::Impl {
     }
     latest_inputs.assign(static_cast<std::size_t>(o.axes), std::nullopt);
     outputs.assign(static_cast<std::size_t>(o.axes), RxPdo{});
-    if (o.diagnosis) {
-      master.configureMailboxes();
-      drive_mailboxes.resize(static_cast<std::size_t>(o.axes));
-      nc_mailboxes.resize(static_cast<std::size_t>(o.axes));
-      nc_saw_error.assign(static_cast<std::size_t>(o.axes), false);
-      requests.assign(static_cast<std::size_t>(o.axes), std::nullopt);
-      counters_read.assign(segment.escs.size(), false);
-      for (const BadLink& link : o.bad_links) {
-        bursts.push_back(
-            {at(link.at_s),
-             static_cast<std::size_t>(link.station - kFirstStation) + (link.port == 1 ? 1u : 0u),
-             link.frames});
-      }
-    }
+    if (o.diagnosis) polls.emplace(o, segment, master, faults);
     planScenario();
     for (const FaultRequest& f : o.faults) {
       faults.inject(f.rule, f.at_s.value_or(-1), f.axis.value_or(-1));
@@ -253,7 +220,7 @@ struct Simulator::Impl {
     }
     void badLink(std::int64_t offset_ns, int frames) override {
       const auto into = static_cast<std::size_t>(impl_.segment.servo_slave[index()]);
-      impl_.bursts.push_back({at_ns_ + offset_ns, into, frames});
+      impl_.polls->corruptFrames(at_ns_ + offset_ns, into, frames);
       // the drives behind the link miss the frames too: each an incident of this cause
       for (int a = 0; a < impl_.o.axes; ++a) {
         if (a != axis_ && static_cast<std::size_t>(
@@ -323,8 +290,8 @@ struct Simulator::Impl {
   // The master reads every slave's AL status every kStatusPollNs (between two cycles, as its
   // start-up's walk does); a slave out of OP is acknowledged and walked back, and its axis's NC
   // sends neutral outputs until then.
-  bool checkAlStatus(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot) {
-    const std::int64_t at_ns = slot + cycle_ns / 2;
+  bool checkAlStatus(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot,
+                     std::int64_t at_ns) {
     if (status_check.active) {
       if (!master.alFrame(sink, status_check, at_ns)) return false;
       if (!status_check.active) {
@@ -348,199 +315,19 @@ struct Simulator::Impl {
     return true;
   }
 
-  // --- diagnosis (docs/simulate.md#diagnosis) ---
-
-  // The NC reads a drive's diagnosis objects after each fault its inputs show.
-  void watchFaultsForReads() {
-    for (std::size_t a = 0; a < latest_inputs.size(); ++a) {
-      if (!latest_inputs[a]) continue;
-      const bool error = (latest_inputs[a]->sew & bits::kServoErrors) != 0;
-      if (error && !nc_saw_error[a]) nc_mailboxes[a].faultSeen();
-      nc_saw_error[a] = error;
-    }
-  }
-
-  // The diagnosis faults due by this cycle (a time difference stands for its time).
-  void applyDiagnosisFaults(std::int64_t slot) {
-    for (FaultPlan::TimedDiagnosis& d : faults.diagnosisFaults()) {
-      if (d.done || slot < d.at_ns) continue;
-      const auto axis = static_cast<std::size_t>(d.axis);
-      const auto position = static_cast<std::size_t>(segment.servo_slave[axis]);
-      switch (d.fault.kind) {
-        case DiagnosisFault::Kind::Mailbox:
-          drive_mailboxes[axis].quirk(d.fault.quirk);
-          break;
-        case DiagnosisFault::Kind::NcRead:
-          nc_mailboxes[axis].upload(d.fault.index, d.fault.subindex);
-          break;
-        case DiagnosisFault::Kind::CorruptFrames:
-          bursts.push_back({slot, position, d.fault.amount});
-          break;
-        case DiagnosisFault::Kind::LinkDown:
-          segment.escs[position].countError(diag::EscCounter::LostLink, 0);
-          if (position > 0) segment.escs[position - 1].countError(diag::EscCounter::LostLink, 1);
-          break;
-        case DiagnosisFault::Kind::TimeDifference:
-          continue;  // read by timeDifference while it stands
-      }
-      d.done = true;
-    }
-    for (LinkBurst& burst : bursts) {
-      if (burst.done || slot < burst.at_ns) continue;
-      master.corruptFrames(burst.into, burst.frames);
-      burst.done = true;
-    }
-  }
+  // --- between two cycles ---
 
   // After a cycle: the NC's reads of what faulted, and (in a cycle whose frames came back, in
-  // OP) the master's AL status check and its diagnosis polls. False if the sink stopped.
-  bool betweenCycles(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot, bool polls) {
-    if (o.diagnosis) watchFaultsForReads();
-    if (!polls || (o.scenario != Scenario::Incidents && !o.diagnosis)) return true;
-    return checkAlStatus(sink, cycle, slot) && (!o.diagnosis || diagnosisFrames(sink, cycle, slot));
-  }
-
-  // The cycles between two polls of `period`.
-  std::uint64_t every(std::int64_t period_ns) const {
-    return static_cast<std::uint64_t>(std::max<std::int64_t>(1, period_ns / cycle_ns));
-  }
-
-  // Register datagrams in as few frames as they fit in, one after the other from `t_ns`;
-  // `returned(frame)` for each frame that came back.
-  template <typename Returned>
-  bool sendAcyclic(const FrameSink& sink, std::vector<RingDatagram>& datagrams, std::int64_t& t_ns,
-                   Returned&& returned) {
-    std::vector<RingDatagram> frame;
-    std::size_t bytes = 0;
-    auto flush = [&] {
-      if (frame.empty()) return true;
-      bool came_back = false;
-      if (!master.acyclic(sink, frame, t_ns, came_back)) return false;
-      t_ns = master.lastFrameNs() + kUs;
-      if (came_back) returned(frame);
-      frame.clear();
-      bytes = 0;
-      return true;
-    };
-    for (RingDatagram& dg : datagrams) {
-      if (bytes + dg.data.size() + kDatagramOverhead > kAcyclicFrameBytes && !flush()) {
-        return false;
-      }
-      bytes += dg.data.size() + kDatagramOverhead;
-      frame.push_back(std::move(dg));
-    }
-    return flush();
-  }
-
-  // The servos' mailboxes: the NC's requests written into SM0, every SM1 read; what came back
-  // is the truth of what the drives said.
-  bool mailboxFrames(const FrameSink& sink, std::int64_t& t_ns) {
-    std::vector<RingDatagram> datagrams;
-    for (int a = 0; a < o.axes; ++a) {
-      const std::uint16_t station = segment.servo(a).station();
-      if (std::optional<std::vector<std::uint8_t>> request =
-              nc_mailboxes[static_cast<std::size_t>(a)].takeRequest()) {
-        RingDatagram dg =
-            master.registerDatagram(ecat::kFpwr, station, kMailboxOutPhys, kMailboxBytes);
-        dg.data = std::move(*request);
-        datagrams.push_back(std::move(dg));
-      }
-      datagrams.push_back(
-          master.registerDatagram(ecat::kFprd, station, kMailboxInPhys, kMailboxBytes));
-    }
-    return sendAcyclic(sink, datagrams, t_ns, [&](const std::vector<RingDatagram>& frame) {
-      for (const RingDatagram& dg : frame) {
-        if (dg.command != ecat::kFpwr || dg.wkc == 0) continue;
-        // the request's frame is the master's copy, the one before the returned copy
-        const auto s = static_cast<std::size_t>(dg.adp - kFirstStation);
-        requests[static_cast<std::size_t>(segment.escs[s].axis)] = master.frames() - 1;
-      }
-      for (int a = 0; a < o.axes; ++a) {
-        Esc& esc = segment.servo(a);
-        for (Esc::MailboxAnswer& taken : esc.mailbox_taken) {
-          taken.said.frame = master.frames();
-          if (std::string_view(taken.said.kind) != "emergency") {
-            taken.said.request_frame = requests[static_cast<std::size_t>(a)];
-          }
-          nc_mailboxes[static_cast<std::size_t>(a)].answered(taken.bytes);
-          said.drive_messages.push_back(taken.said);
-        }
-        esc.mailbox_taken.clear();
-      }
-    });
-  }
-
-  // Every slave's error counters and system time difference; the rises each read shows since
-  // the slave's last read (its first is the baseline) and the links they name are the truth.
-  bool counterFrames(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot,
-                     std::int64_t& t_ns) {
-    std::vector<RingDatagram> datagrams;
-    for (std::size_t s = 0; s < segment.escs.size(); ++s) {
-      Esc& esc = segment.escs[s];
-      esc.setTimeDifference(timeDifference(s, cycle, slot));
-      datagrams.push_back(master.registerDatagram(
-          ecat::kFprd, esc.station(), ecat::kRegErrorCounters, ecat::kErrorCountersSize));
-      datagrams.push_back(
-          master.registerDatagram(ecat::kFprd, esc.station(), ecat::kRegDcSystemTimeDifference, 4));
-    }
-    return sendAcyclic(sink, datagrams, t_ns, [&](const std::vector<RingDatagram>& frame) {
-      for (const RingDatagram& dg : frame) {
-        if (dg.ado != ecat::kRegErrorCounters || dg.wkc == 0) continue;
-        const auto s = static_cast<std::size_t>(dg.adp - kFirstStation);
-        Esc& esc = segment.escs[s];
-        if (counters_read[s]) countersRead(esc, master.frames());
-        counters_read[s] = true;
-        esc.counted.fill(0);
-      }
-    });
-  }
-
-  // What the counters of one slave rose by since its last read (docs/protocol.md §11's offsets).
-  void countersRead(const Esc& esc, std::uint64_t frame) {
-    using diag::EscCounter;
-    auto rise = [&](std::size_t offset, EscCounter counter, std::uint8_t port) {
-      if (esc.counted[offset] == 0) return;
-      said.esc_errors.push_back(
-          {frame, esc.station(), port, diag::escCounterName(counter), esc.counted[offset]});
-    };
-    for (std::uint8_t port = 0; port < ecat::kEscPorts; ++port) {
-      const std::size_t invalid = ecat::kRegInvalidFrame0 + 2u * port - ecat::kRegErrorCounters;
-      const std::size_t rx = ecat::kRegRxError0 + 2u * port - ecat::kRegErrorCounters;
-      const std::size_t forwarded = ecat::kRegForwardedRxError0 + port - ecat::kRegErrorCounters;
-      rise(invalid, EscCounter::Invalid, port);
-      rise(rx, EscCounter::Rx, port);
-      rise(forwarded, EscCounter::Forwarded, port);
-      rise(ecat::kRegLostLink0 + port - ecat::kRegErrorCounters, EscCounter::LostLink, port);
-      const std::uint32_t received = esc.counted[invalid] + esc.counted[rx];
-      if (received > esc.counted[forwarded]) {
-        said.link_faults.push_back({frame, esc.station(), port, received - esc.counted[forwarded]});
-      }
-    }
-    rise(ecat::kRegProcessingUnitError - ecat::kRegErrorCounters, EscCounter::Processing, 0);
-    rise(ecat::kRegPdiError - ecat::kRegErrorCounters, EscCounter::Pdi, 0);
-  }
-
-  // A slave's system time difference at a read: within a few tens of ns of the reference, but
-  // where a fault (DC-001) puts it.
-  std::int32_t timeDifference(std::size_t slave, std::uint64_t cycle, std::int64_t slot) {
-    for (const FaultPlan::TimedDiagnosis& d : faults.diagnosisFaults()) {
-      if (d.fault.kind == DiagnosisFault::Kind::TimeDifference &&
-          static_cast<std::size_t>(segment.servo_slave[static_cast<std::size_t>(d.axis)]) ==
-              slave &&
-          slot >= d.at_ns && slot < d.at_ns + d.fault.for_ns) {
-        return d.fault.amount;
-      }
-    }
-    const std::uint64_t x = (cycle * 0x9E3779B97F4A7C15ULL) ^ (slave * 0xBF58476D1CE4E5B9ULL);
-    return static_cast<std::int32_t>((x >> 33) % 61) - 30;
-  }
-
-  // Between two cycles: the mailboxes every kMailboxPollNs, the counters every kCountersPollNs.
-  bool diagnosisFrames(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot) {
-    std::int64_t t_ns = std::max(slot + cycle_ns / 2, master.lastFrameNs() + kUs);
-    if (cycle % every(kMailboxPollNs) == 0 && !mailboxFrames(sink, t_ns)) return false;
-    const std::uint64_t counters = every(kCountersPollNs);
-    return cycle % counters != counters / 2 || counterFrames(sink, cycle, slot, t_ns);
+  // OP) the master's AL status check and its diagnosis polls, each frame only when its returned
+  // copy comes before the next cycle may be sent. False if the sink stopped.
+  bool betweenCycles(const FrameSink& sink, std::uint64_t cycle, std::int64_t slot, bool in_op) {
+    if (polls) polls->watchInputs(latest_inputs);
+    if (!in_op || (o.scenario != Scenario::Incidents && !polls)) return true;
+    const std::int64_t t_ns = std::max(slot + cycle_ns / 2, master.lastFrameNs() + kUs);
+    const std::int64_t deadline_ns = slot + cycle_ns - cycle_ns / 4;
+    if (t_ns + master.returnDelayNs() + kUs > deadline_ns) return true;
+    if (!checkAlStatus(sink, cycle, slot, t_ns)) return false;
+    return !polls || polls->between(sink, cycle, slot, master.lastFrameNs() + kUs, deadline_ns);
   }
 
   // Soak: a 10 s pattern repeated, planned a period ahead (constant memory).
@@ -586,7 +373,7 @@ struct Simulator::Impl {
         drive.step(nullptr, now_ns);
       }
       encodeTx(drive.inputs(), &esc.mem[esc.inputsPhysical()]);
-      if (o.diagnosis) drive_mailboxes[static_cast<std::size_t>(a)].step(drive.inputs().sew, esc);
+      if (polls) polls->stepDrive(a, drive.inputs().sew, esc);
     }
     for (Esc& esc : segment.escs) {
       if (!esc.servo()) esc.updateTerminalInputs(now_ns);
@@ -688,7 +475,7 @@ struct Simulator::Impl {
       });
       stepNcs(slot);
       bool failed = true;  // every axis: the cycle's frames lost or not sent
-      if (o.diagnosis) applyDiagnosisFaults(slot);
+      if (polls) polls->beforeCycle(slot);
       if (!faults.takeSkippedCycle() && !lost) {
         const bool lost_before = faults.takeLossBeforeSlaves();
         const bool lost_after =
@@ -783,7 +570,7 @@ Result<DiagnosisTruth> Simulator::diagnosis() const {
         "the capture's records are not the bus's frames (a capture shape, --start-in or "
         "--capture-loss): no diagnosis truth");
   }
-  return impl.said;
+  return impl.polls ? impl.polls->truth() : DiagnosisTruth{};
 }
 
 Result<std::vector<IncidentTruth>> Simulator::incidents() const {
