@@ -215,5 +215,42 @@ TEST(EscErrors, ProcessingAndPdiCounted) {
   EXPECT_TRUE(h.tracker.linkFaults().empty());
 }
 
+// 0x0442 (process data) and 0x0443 (PDI): how often the slave's watchdogs expired, rises between
+// reads as the error counters' (the first read the baseline), cleared by a write; a read that
+// also covers 0x0440 (the status) takes them from their place in it.
+TEST(EscErrors, WatchdogExpiriesCounted) {
+  struct Row {
+    const char* name;
+    std::uint16_t ado;     // where the read starts
+    std::size_t counters;  // where 0x0442 lies in its data
+  };
+  for (const Row& row : {Row{"0x0442", 0x0442, 0}, Row{"from 0x0440", 0x0440, 2}}) {
+    Harness h;
+    h.assign(1);
+    auto read = [&](std::uint8_t sm, std::uint8_t pdi) {
+      Bytes data(row.counters + 2, 0);
+      data[row.counters] = sm;
+      data[row.counters + 1] = pdi;
+      h.feed({Dg{ecat::kFprd, 0, physical(1001, row.ado), Bytes(data.size(), 0), 0}}, false);
+      h.feed({Dg{ecat::kFprd, 0, physical(1001, row.ado), data, 1}}, true);
+    };
+    read(4, 0);  // the baseline
+    EXPECT_TRUE(h.tracker.deltas().empty()) << row.name;
+    read(6, 1);
+    ASSERT_EQ(h.tracker.deltas().size(), 2u) << row.name;
+    EXPECT_EQ(h.tracker.deltas()[0].counter, diag::EscCounter::SmWatchdog) << row.name;
+    EXPECT_EQ(h.tracker.deltas()[0].delta, 2u) << row.name;
+    EXPECT_EQ(h.tracker.deltas()[1].counter, diag::EscCounter::PdiWatchdog) << row.name;
+    EXPECT_EQ(h.tracker.deltas()[1].delta, 1u) << row.name;
+    EXPECT_EQ(std::string(diag::escCounterName(diag::EscCounter::SmWatchdog)), "sm-watchdog");
+    // a write clears them: the next read's 1 is one expiry
+    h.feed({Dg{ecat::kFpwr, 0, physical(1001, 0x0442), Bytes(2, 0), 0}}, false);
+    read(1, 1);
+    ASSERT_EQ(h.tracker.deltas().size(), 4u) << row.name;
+    EXPECT_EQ(h.tracker.deltas()[2].delta, 1u) << row.name;
+    EXPECT_TRUE(h.tracker.linkFaults().empty()) << row.name;
+  }
+}
+
 }  // namespace
 }  // namespace ncservo

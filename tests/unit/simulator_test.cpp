@@ -529,7 +529,7 @@ const std::vector<StreamRow>& streamRows() {
   rows.push_back({"commissioning_32", options(Scenario::Commissioning, 32, 1.0)});
   SimOptions said = options(Scenario::Commissioning, 4, 3.0);
   said.diagnosis = true;
-  said.bad_links.push_back({.station = 0x03EB, .port = 0, .at_s = 1.2, .frames = 3});
+  said.bad_links.push_back({.station = 0x03EB, .port = 0, .at_s = 1.2, .frames = 3, .text = ""});
   rows.push_back({"diagnosis_bad_link", said});
   SimOptions said_32 = options(Scenario::Commissioning, 32, 1.0);
   said_32.diagnosis = true;
@@ -830,13 +830,15 @@ struct DiagnosisRow {
 std::vector<DiagnosisRow> diagnosisRows() {
   std::vector<DiagnosisRow> rows;
   SimOptions bad_link = options(Scenario::Commissioning, 4, 3.0);
-  bad_link.bad_links.push_back({.station = 0x03EB, .port = 0, .at_s = 1.2, .frames = 3});
+  bad_link.bad_links.push_back(
+      {.station = 0x03EB, .port = 0, .at_s = 1.2, .frames = 3, .text = ""});
   bad_link.faults.push_back({.rule = RuleId::Mbx003, .at_s = 0.9, .axis = 0, .text = "MBX-003"});
   bad_link.faults.push_back({.rule = RuleId::Dc001, .at_s = 1.0, .axis = 3, .text = "DC-001"});
   rows.push_back({"commissioning_bad_link", bad_link});
   SimOptions far_port = options(Scenario::Commissioning, 3, 3.0);
   far_port.image = ImageStyle::TwinCat;
-  far_port.bad_links.push_back({.station = 0x03EA, .port = 1, .at_s = 1.2, .frames = 6});
+  far_port.bad_links.push_back(
+      {.station = 0x03EA, .port = 1, .at_s = 1.2, .frames = 6, .text = ""});
   rows.push_back({"twincat_port_1_outage", far_port});
   SimOptions incidents = options(Scenario::Incidents, 4, 6.0);
   incidents.cycle_us = 5000;
@@ -850,6 +852,11 @@ std::vector<DiagnosisRow> diagnosisRows() {
   faults.cycle_us = 2000;
   faults.diagnosis = true;
   rows.push_back({"faults", faults});
+  // 150 ms without outputs: every slave's sync manager watchdog expires once (0x0442)
+  SimOptions silent = options(Scenario::Commissioning, 4, 3.0);
+  silent.diagnosis = true;
+  silent.lost_cycles.push_back({.at_s = 1.3, .amount = 150, .text = "1.3:150"});
+  rows.push_back({"watchdogs", silent});
   return rows;
 }
 class DiagnosisRun : public ::testing::TestWithParam<DiagnosisRow> {};
@@ -909,6 +916,14 @@ TEST_P(DiagnosisRun, TheValidatorDecodesWhatTheSimulatorSaid) {
                             diag::escCounterName(e.counter), e.delta));
   }
   EXPECT_EQ(read, rose) << GetParam().name;
+  if (!o.lost_cycles.empty()) {
+    EXPECT_EQ(std::count_if(truth->esc_errors.begin(), truth->esc_errors.end(),
+                            [](const EscErrorTruth& e) {
+                              return std::string_view(e.counter) == "sm-watchdog";
+                            }),
+              o.axes)
+        << "each servo's watchdog expired once";
+  }
   std::vector<std::string> links, named;
   for (const LinkFaultTruth& l : truth->link_faults) {
     links.push_back(fmt::format("{} {} {} {}", l.frame, l.station, l.port, l.errors));
@@ -922,7 +937,7 @@ TEST_P(DiagnosisRun, TheValidatorDecodesWhatTheSimulatorSaid) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Rows, DiagnosisRun, ::testing::ValuesIn(diagnosisRows()),
-                         [](const auto& info) { return std::string(info.param.name); });
+                         [](const auto& row) { return std::string(row.param.name); });
 
 TEST(ParseBadLink, Rows) {
   struct Row {

@@ -10,13 +10,27 @@ namespace {
 using diag::EscCounter;
 constexpr std::size_t kBlock = ecat::kRegErrorCounters;
 constexpr std::size_t kBlockEnd = kBlock + ecat::kErrorCountersSize;
+constexpr std::size_t kWatchdogs = ecat::kRegSmWatchdogCounter;
+constexpr std::size_t kWatchdogsEnd = kWatchdogs + ecat::kWatchdogCountersSize;
 
-// What the byte at `offset` of 0x0300-0x0313 counts, and at which port; none for a reserved byte.
+// The counter registers a tracker keeps, each block at its place in Counters::value.
+struct Block {
+  std::size_t from, to, at;
+};
+constexpr std::array<Block, 2> kBlocks{
+    {{kBlock, kBlockEnd, 0}, {kWatchdogs, kWatchdogsEnd, ecat::kErrorCountersSize}}};
+
+// What the counter at `offset` of Counters::value counts, and at which port; none for a reserved
+// byte of 0x0300-0x0313.
 struct CounterAt {
   EscCounter counter;
   std::uint8_t port;
 };
 std::optional<CounterAt> counterAt(std::size_t offset) {
+  if (offset >= ecat::kErrorCountersSize) {
+    return CounterAt{
+        offset == ecat::kErrorCountersSize ? EscCounter::SmWatchdog : EscCounter::PdiWatchdog, 0};
+  }
   const std::size_t reg = kBlock + offset;
   if (reg < ecat::kRegForwardedRxError0) {
     const auto port = static_cast<std::uint8_t>((reg - ecat::kRegInvalidFrame0) / 2);
@@ -39,8 +53,10 @@ constexpr std::size_t offsetOf(std::uint16_t reg) {
 }
 
 bool reachesCounters(const Datagram& dg) {
-  return !ecat::isLogical(dg.command) && dg.ado() < kBlockEnd &&
-         std::size_t{dg.ado()} + dg.data_captured > kBlock;
+  if (ecat::isLogical(dg.command)) return false;
+  return std::any_of(kBlocks.begin(), kBlocks.end(), [&](const Block& b) {
+    return dg.ado() < b.to && std::size_t{dg.ado()} + dg.data_captured > b.from;
+  });
 }
 
 std::string sideName(const SlaveRef& slave) {
@@ -77,37 +93,41 @@ SlaveRef EscErrorTracker::refOf(std::size_t slave) const {
 bool EscErrorTracker::take(Counters& counters, const Datagram& dg, const ByteReader& bytes,
                            Read& read) {
   const std::size_t ado = dg.ado();
-  const std::size_t from = std::max(ado, kBlock);
-  const std::size_t to = std::min(ado + dg.data_captured, kBlockEnd);
   bool any = false;
-  for (std::size_t reg = from; reg < to; ++reg) {
-    auto value = bytes.u8(dg.data_offset + (reg - ado));
-    if (!value) break;
-    const std::size_t i = reg - kBlock;
-    if (counters.known[i]) {
-      any = true;
-      // Saturating counters: lower than before means cleared since, and rose by the new value.
-      read.delta[i] = *value >= counters.value[i] ? *value - counters.value[i] : *value;
+  for (const Block& block : kBlocks) {
+    const std::size_t from = std::max(ado, block.from);
+    const std::size_t to = std::min(ado + dg.data_captured, block.to);
+    for (std::size_t reg = from; reg < to; ++reg) {
+      auto value = bytes.u8(dg.data_offset + (reg - ado));
+      if (!value) break;
+      const std::size_t i = block.at + (reg - block.from);
+      if (counters.known[i]) {
+        any = true;
+        // Saturating counters: lower than before means cleared since, and rose by the new value.
+        read.delta[i] = *value >= counters.value[i] ? *value - counters.value[i] : *value;
+      }
+      counters.value[i] = *value;
+      counters.known[i] = true;
     }
-    counters.value[i] = *value;
-    counters.known[i] = true;
   }
   return any;
 }
 
-// A write to 0x0300-0x030B clears those counters, one to 0x0310-0x0313 the lost-link counters.
+// A write to 0x0300-0x030B clears those counters, one to 0x0310-0x0313 the lost-link counters,
+// one to 0x0442-0x0443 the watchdog counters.
 void EscErrorTracker::clear(Counters& counters, const Datagram& dg) {
   const std::size_t ado = dg.ado();
   const std::size_t end = ado + dg.length;
-  auto span = [&](std::size_t from, std::size_t to) {
+  auto span = [&](std::size_t from, std::size_t to, std::size_t at) {
     if (ado >= to || end <= from) return;
     for (std::size_t reg = from; reg < to; ++reg) {
-      counters.value[reg - kBlock] = 0;
-      counters.known[reg - kBlock] = true;
+      counters.value[at + reg - from] = 0;
+      counters.known[at + reg - from] = true;
     }
   };
-  span(kBlock, ecat::kRegErrorCountersClearedEnd);
-  span(ecat::kRegLostLink0, kBlockEnd);
+  span(kBlock, ecat::kRegErrorCountersClearedEnd, 0);
+  span(ecat::kRegLostLink0, kBlockEnd, ecat::kRegLostLink0 - kBlock);
+  span(kWatchdogs, kWatchdogsEnd, ecat::kErrorCountersSize);
 }
 
 void EscErrorTracker::list(const EscErrorDelta& delta) {

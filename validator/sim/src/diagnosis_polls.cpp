@@ -18,10 +18,6 @@ constexpr std::int64_t kCountersPollNs = 100 * kMs;
 constexpr std::size_t kAcyclicFrameBytes = 1400;
 constexpr std::size_t kDatagramOverhead = 12;
 
-std::size_t offsetOf(std::uint16_t reg) {
-  return static_cast<std::size_t>(reg - ecat::kRegErrorCounters);
-}
-
 }  // namespace
 
 DiagnosisPolls::DiagnosisPolls(const SimOptions& options, Segment& segment, Master& master,
@@ -35,7 +31,7 @@ DiagnosisPolls::DiagnosisPolls(const SimOptions& options, Segment& segment, Mast
       nc_mailboxes_(static_cast<std::size_t>(options.axes)),
       nc_saw_error_(static_cast<std::size_t>(options.axes), false),
       request_frame_(static_cast<std::size_t>(options.axes)),
-      counters_read_(segment.escs.size(), false) {
+      baseline_(segment.escs.size(), {false, false}) {
   master.configureMailboxes();
   for (const BadLink& link : options.bad_links) {
     const auto position = static_cast<std::size_t>(link.station - kFirstStation);
@@ -180,6 +176,8 @@ void DiagnosisPolls::queueCounterPoll(std::uint64_t cycle, std::int64_t slot) {
     esc.setTimeDifference(timeDifference(s, cycle, slot));
     datagrams.push_back(master_.registerDatagram(
         ecat::kFprd, esc.station(), ecat::kRegErrorCounters, ecat::kErrorCountersSize));
+    datagrams.push_back(master_.registerDatagram(
+        ecat::kFprd, esc.station(), ecat::kRegSmWatchdogCounter, ecat::kWatchdogCountersSize));
     datagrams.push_back(
         master_.registerDatagram(ecat::kFprd, esc.station(), ecat::kRegDcSystemTimeDifference, 4));
   }
@@ -190,41 +188,44 @@ void DiagnosisPolls::queueCounterPoll(std::uint64_t cycle, std::int64_t slot) {
 // links they name, are the truth.
 void DiagnosisPolls::countersReturned(const std::vector<RingDatagram>& frame) {
   for (const RingDatagram& dg : frame) {
-    if (dg.ado != ecat::kRegErrorCounters || dg.wkc == 0) continue;
+    const bool watchdogs = dg.ado == ecat::kRegSmWatchdogCounter;
+    if ((dg.ado != ecat::kRegErrorCounters && !watchdogs) || dg.wkc == 0) continue;
     const auto s = static_cast<std::size_t>(dg.adp - kFirstStation);
-    Esc& esc = segment_.escs[s];
-    if (counters_read_[s]) countersRead(esc, master_.frames());
-    counters_read_[s] = true;
-    esc.counted.fill(0);
+    countersRead(segment_.escs[s], watchdogs, master_.frames());
   }
 }
 
-// What the counters of one slave rose by since its last read (docs/protocol.md §11's offsets).
-void DiagnosisPolls::countersRead(const Esc& esc, std::uint64_t frame) {
+void DiagnosisPolls::countersRead(Esc& esc, bool watchdogs, std::uint64_t frame) {
   using diag::EscCounter;
-  auto rise = [&](std::size_t offset, EscCounter counter, std::uint8_t port) {
-    if (esc.counted[offset] == 0) return;
-    said_.esc_errors.push_back(
-        {frame, esc.station(), port, diag::escCounterName(counter), esc.counted[offset]});
+  const auto s = static_cast<std::size_t>(esc.station() - kFirstStation);
+  const bool baseline = !baseline_[s][watchdogs ? 1 : 0];
+  baseline_[s][watchdogs ? 1 : 0] = true;
+  auto count = [&](EscCounter counter, std::uint8_t port) {
+    return esc.counted[static_cast<std::size_t>(counter)][port];
   };
-  for (std::uint8_t port = 0; port < ecat::kEscPorts; ++port) {
-    const std::size_t invalid =
-        offsetOf(static_cast<std::uint16_t>(ecat::kRegInvalidFrame0 + 2 * port));
-    const std::size_t rx = offsetOf(static_cast<std::uint16_t>(ecat::kRegRxError0 + 2 * port));
-    const std::size_t forwarded =
-        offsetOf(static_cast<std::uint16_t>(ecat::kRegForwardedRxError0 + port));
-    rise(invalid, EscCounter::Invalid, port);
-    rise(rx, EscCounter::Rx, port);
-    rise(forwarded, EscCounter::Forwarded, port);
-    rise(offsetOf(static_cast<std::uint16_t>(ecat::kRegLostLink0 + port)), EscCounter::LostLink,
-         port);
-    const std::uint32_t received = esc.counted[invalid] + esc.counted[rx];
-    if (received > esc.counted[forwarded]) {
-      said_.link_faults.push_back({frame, esc.station(), port, received - esc.counted[forwarded]});
+  for (std::size_t c = 0; c < esc.counted.size(); ++c) {
+    const auto counter = static_cast<EscCounter>(c);
+    const bool watchdog = counter == EscCounter::SmWatchdog || counter == EscCounter::PdiWatchdog;
+    if (watchdog != watchdogs) continue;
+    for (std::uint8_t port = 0; port < ecat::kEscPorts; ++port) {
+      if (!baseline && count(counter, port) > 0) {
+        said_.esc_errors.push_back(
+            {frame, esc.station(), port, diag::escCounterName(counter), count(counter, port)});
+      }
     }
   }
-  rise(offsetOf(ecat::kRegProcessingUnitError), EscCounter::Processing, 0);
-  rise(offsetOf(ecat::kRegPdiError), EscCounter::Pdi, 0);
+  for (std::uint8_t port = 0; port < ecat::kEscPorts && !watchdogs && !baseline; ++port) {
+    const std::uint32_t received = count(EscCounter::Invalid, port) + count(EscCounter::Rx, port);
+    if (received > count(EscCounter::Forwarded, port)) {
+      said_.link_faults.push_back(
+          {frame, esc.station(), port, received - count(EscCounter::Forwarded, port)});
+    }
+  }
+  for (std::size_t c = 0; c < esc.counted.size(); ++c) {
+    const auto counter = static_cast<EscCounter>(c);
+    const bool watchdog = counter == EscCounter::SmWatchdog || counter == EscCounter::PdiWatchdog;
+    if (watchdog == watchdogs) esc.counted[c].fill(0);
+  }
 }
 
 // A slave's system time difference at a read: within a few tens of ns of the reference, but

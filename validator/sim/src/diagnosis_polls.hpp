@@ -4,6 +4,7 @@
 // and the truth of everything said.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -60,7 +61,8 @@ class DiagnosisPolls {
   void queueCounterPoll(std::uint64_t cycle, std::int64_t slot);
   void mailboxReturned(const std::vector<RingDatagram>& frame);
   void countersReturned(const std::vector<RingDatagram>& frame);
-  void countersRead(const Esc& esc, std::uint64_t frame);
+  // What the counters a read covers rose by since the slave's last read of them.
+  void countersRead(Esc& esc, bool watchdogs, std::uint64_t frame);
   std::int32_t timeDifference(std::size_t slave, std::uint64_t cycle, std::int64_t slot) const;
 
   const SimOptions& o_;
@@ -72,7 +74,7 @@ class DiagnosisPolls {
   std::vector<NcMailbox> nc_mailboxes_;                      // per axis
   std::vector<bool> nc_saw_error_;                           // per axis
   std::vector<std::optional<std::uint64_t>> request_frame_;  // per axis: the open request's
-  std::vector<bool> counters_read_;                          // per slave: its baseline was read
+  std::vector<std::array<bool, 2>> baseline_;  // per slave: each block's first read was seen
   std::vector<LinkBurst> bursts_;
   std::deque<PendingFrame> pending_;  // at most one poll of each kind
   DiagnosisTruth said_;

@@ -340,9 +340,30 @@ void Esc::countError(diag::EscCounter counter, std::uint8_t port) {
     case diag::EscCounter::Pdi:
       reg = ecat::kRegPdiError;
       break;
+    case diag::EscCounter::SmWatchdog:
+      reg = ecat::kRegSmWatchdogCounter;
+      break;
+    case diag::EscCounter::PdiWatchdog:
+      reg = ecat::kRegPdiWatchdogCounter;
+      break;
   }
   if (mem[reg] < 0xFF) ++mem[reg];
-  ++counted[reg - ecat::kRegErrorCounters];
+  ++counted[static_cast<std::size_t>(counter)][port];
+}
+
+void Esc::watchOutputs(std::int64_t now_ns, bool processed) {
+  constexpr std::int64_t kSmWatchdogNs = 100 * kMs;
+  if (state != kOp || outputBytes() == 0) {
+    outputs_ns_ = -1;
+  } else if (processed) {  // the frame has passed: its outputs restart the watchdog
+    if (outputs_taken || outputs_ns_ < 0) {
+      outputs_ns_ = now_ns;
+      watchdog_expired_ = false;
+    }
+  } else if (outputs_ns_ >= 0 && !watchdog_expired_ && now_ns - outputs_ns_ > kSmWatchdogNs) {
+    countError(diag::EscCounter::SmWatchdog, 0);  // it expired before this frame came
+    watchdog_expired_ = true;
+  }
 }
 
 void Esc::setTimeDifference(std::int32_t ns) {
@@ -395,9 +416,14 @@ void Esc::writeRegisters(const RingDatagram& dg) {
         (reg >= ecat::kRegAlStatus && reg < ecat::kRegAlStatus + kAlStatusRegisters)) {
       continue;
     }
-    // a write to the first error counters clears them all (ESC datasheets)
+    // a write to the first error counters clears them all, one to a watchdog counter it
+    // (ESC datasheets)
     if (reg >= ecat::kRegErrorCounters && reg < ecat::kRegErrorCountersClearedEnd) {
       std::fill_n(&mem[ecat::kRegErrorCounters], ecat::kErrorCountersSize, 0);
+      continue;
+    }
+    if (reg == ecat::kRegSmWatchdogCounter || reg == ecat::kRegPdiWatchdogCounter) {
+      mem[reg] = 0;
       continue;
     }
     mem[reg] = dg.data[i];
@@ -716,7 +742,9 @@ bool Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns,
       if (pos != *corrupted_into) esc.countError(diag::EscCounter::Forwarded, 0);
       continue;
     }
+    esc.watchOutputs(since_epoch_ns, false);
     for (RingDatagram& dg : frame) esc.process(dg);
+    esc.watchOutputs(since_epoch_ns, true);
     esc.endOfFrame();
   }
   if (!corrupted_into) return true;

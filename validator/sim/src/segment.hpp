@@ -121,10 +121,14 @@ class Esc {
   std::vector<std::vector<std::uint8_t>> mailbox_written;
   std::deque<MailboxAnswer> mailbox_answers;
   std::vector<MailboxAnswer> mailbox_taken;  // read by the master in the last frames
-  // The error counters (0x0300-0x0313): each rises by one and stays at 0xFF. `counted` keeps
-  // what rose since the last read of them, the truth a read must show.
+  // The error counters (0x0300-0x0313) and watchdog counters (0x0442-0x0443): each rises by one
+  // and stays at 0xFF. `counted` keeps what rose since the last read of them, per counter and
+  // port, the truth a read must show.
   void countError(diag::EscCounter counter, std::uint8_t port);
-  std::array<std::uint32_t, ecat::kErrorCountersSize> counted{};
+  std::array<std::array<std::uint32_t, ecat::kEscPorts>, diag::kEscCounterNames.size()> counted{};
+  // The sync manager watchdog (0x0420, 100 ms): in OP, outputs not written for longer expire it
+  // once, until they come again. Before a frame passes (`processed` false) and after.
+  void watchOutputs(std::int64_t now_ns, bool processed);
   // The system time difference (0x092C) the slave's DC unit shows, in ns.
   void setTimeDifference(std::int32_t ns);
 
@@ -139,6 +143,8 @@ class Esc {
 
   bool error_ = false;
   std::uint16_t code_ = 0;
+  std::int64_t outputs_ns_ = -1;  // when outputs were last written
+  bool watchdog_expired_ = false;
   std::uint8_t pending_ = 0;  // a state change under way
   int pending_frames_ = 0;
 };

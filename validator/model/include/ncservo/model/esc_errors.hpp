@@ -1,10 +1,11 @@
 // The ESCs' own error counters as the master reads them (PROTOCOL.md §11, docs/drive-messages.md):
 // every read of 0x0300-0x0313 of one slave gives, per port, how much each counter rose since
 // its last read (invalid frames, RX errors, forwarded RX errors, lost links; processing-unit and
-// PDI errors per slave). The first read of a slave is its baseline (what it counted before the
-// capture has no time); a counter lower than before was cleared (a write, or the slave's reset)
-// and rose by its new value; a write to the registers clears them. A BRD gives the sum over every
-// slave and names none: its deltas are kept apart (`broadcast`).
+// PDI errors per slave), and a read of 0x0442-0x0443 how often its watchdogs expired. The first
+// read of a slave is its baseline (what it counted before the capture has no time); a counter lower
+// than before was cleared (a write, or the slave's reset) and rose by its new value; a write to the
+// registers clears them. A BRD gives the sum over every slave and names none: its deltas are kept
+// apart (`broadcast`).
 //
 // Localisation (Beckhoff's interpretation of the counters): an RX or invalid-frame error at a port
 // that no upstream slave forwarded (the forwarded counter did not rise as much) is a fault of the
@@ -74,16 +75,18 @@ class EscErrorTracker {
   std::uint64_t broadcastReads() const { return broadcast_reads_; }
 
  private:
+  // 0x0300-0x0313, then 0x0442-0x0443
+  static constexpr std::size_t kCounters = ecat::kErrorCountersSize + ecat::kWatchdogCountersSize;
   struct Counters {
-    std::array<std::uint8_t, ecat::kErrorCountersSize> value{};
-    std::bitset<ecat::kErrorCountersSize> known;
+    std::array<std::uint8_t, kCounters> value{};
+    std::bitset<kCounters> known;
     Stamp last_read;
     void absorb(const Counters& other);
   };
   struct Read {  // one slave's rises in this frame
     std::size_t slave = 0;
     std::uint32_t order = 0;  // processing order: ring position, else the order read
-    std::array<std::uint32_t, ecat::kErrorCountersSize> delta{};
+    std::array<std::uint32_t, kCounters> delta{};
     Stamp since;
   };
   // Rises of the counters the datagram read, into `read`; whether any was known before.

@@ -1065,7 +1065,8 @@ inline constexpr DerivedFieldDef kDerivedFields[] = {
     {.id = Derived::EscCounter,
      .label = "ESC counter",
      .filter = "ncservo.esc.counter",
-     .blurb = "Which counter rose: invalid, rx, forwarded, lost-link, processing, pdi"},
+     .blurb = "Which counter rose: invalid, rx, forwarded, lost-link, processing, pdi, "
+              "sm-watchdog, pdi-watchdog"},
     {.id = Derived::EscDelta,
      .label = "ESC counter rise",
      .filter = "ncservo.esc.delta",

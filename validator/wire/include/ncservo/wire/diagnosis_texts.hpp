@@ -241,9 +241,21 @@ const AlCodeDef* alStatusCode(std::uint16_t code);  // null for a code not in th
 const char* mailboxTypeName(std::uint8_t type);  // "CoE", "EoE", …, "other"
 
 // --- ESC error counters, by name (JSON `esc_errors` "counter") ---
-enum class EscCounter : std::uint8_t { Invalid, Rx, Forwarded, LostLink, Processing, Pdi };
-inline constexpr std::array<const char*, 6> kEscCounterNames{"invalid",   "rx",         "forwarded",
-                                                             "lost-link", "processing", "pdi"};
+// The watchdog counters (0x0442 process data, 0x0443 PDI) count expiries: a slave whose outputs
+// stopped coming for longer than its sync manager watchdog, or whose application stopped serving
+// its PDI.
+enum class EscCounter : std::uint8_t {
+  Invalid,
+  Rx,
+  Forwarded,
+  LostLink,
+  Processing,
+  Pdi,
+  SmWatchdog,
+  PdiWatchdog
+};
+inline constexpr std::array<const char*, 8> kEscCounterNames{
+    "invalid", "rx", "forwarded", "lost-link", "processing", "pdi", "sm-watchdog", "pdi-watchdog"};
 constexpr const char* escCounterName(EscCounter counter) {
   return kEscCounterNames[static_cast<std::size_t>(counter)];
 }

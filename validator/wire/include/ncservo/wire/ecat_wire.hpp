@@ -143,6 +143,7 @@ inline constexpr std::uint16_t kRegErrorCountersClearedEnd = 0x030C;  // writes 
 inline constexpr std::uint16_t kRegSmWatchdogStatus = 0x0440;
 inline constexpr std::uint16_t kRegSmWatchdogCounter = 0x0442;
 inline constexpr std::uint16_t kRegPdiWatchdogCounter = 0x0443;
+inline constexpr std::size_t kWatchdogCountersSize = 2;  // 0x0442-0x0443, cleared by a write
 // Process RAM starts here: FPRD/FPWR at or above it exchange process data, not registers.
 inline constexpr std::uint16_t kProcessRam = 0x1000;
 static_assert(kRegFmmu0 + kFmmuCount * kFmmuStride <= kRegSyncManager0);
