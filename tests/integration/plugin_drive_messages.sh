@@ -163,6 +163,11 @@ compare "gen-drive" "$WORK/gen-drive.pcap" "emergency sdo"
 "$NCSERVO" simulate --diagnosis --bad-link 0x3EB:0@1.2x3 --fault MBX-003@0.9:0 -o "$WORK/sim-said.pcap" \
   2>"$WORK/err.txt" || fail "simulate exited $?: $(cat "$WORK/err.txt")"
 compare "sim-said" "$WORK/sim-said.pcap" "emergency sdo abort esc link"
+# ... and its day at the machine in the TwinCAT style, a pcapng: the drives' words at each fault,
+# a bad cable, a sync error's AL status polls.
+"$NCSERVO" simulate --scenario incidents --diagnosis --image twincat --cycle-us 2000 --duration 8 \
+  --seed 11 -o "$WORK/sim-day.pcapng" 2>"$WORK/err.txt" || fail "simulate exited $?: $(cat "$WORK/err.txt")"
+compare "sim-day" "$WORK/sim-day.pcapng" "emergency sdo esc link"
 # Every field of what was said (`ncservo fields`) showed on one of the generated captures.
 "$NCSERVO" fields | awk -F'\t' '$3 !~ /^\(expert/ {print $1}' |
   grep -E '^ncservo\.(emcy|sdo|errhist|esc)\.|^ncservo\.link_fault$' | sort >"$WORK/wanted.txt"
