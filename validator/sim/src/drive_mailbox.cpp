@@ -168,26 +168,32 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
   esc.mailbox_written.clear();
 }
 
-void DriveMailbox::upload(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t value,
-                          std::size_t size) {
-  const auto body = sdoBody(expedited(kSdoUploadAnswer, size), index, subindex, value);
+void DriveMailbox::sdo(Esc& esc, std::uint8_t service, std::uint8_t command,
+                       DriveMessage::Kind kind, std::uint16_t index, std::uint8_t subindex,
+                       std::uint32_t data) {
+  const auto body = sdoBody(command, index, subindex, data);
   DriveSaid said;
-  said.kind = driveMessageKindName(DriveMessage::Kind::SdoUpload);
+  said.kind = driveMessageKindName(kind);
   said.index = index;
   said.subindex = subindex;
-  said.value = value;
-  send(esc, ecat::kCoeServiceSdoResponse, body.data(), body.size(), said);
+  if (kind == DriveMessage::Kind::SdoAbort) {
+    said.abort_code = data;
+  } else {
+    said.value = data;
+  }
+  send(esc, service, body.data(), body.size(), said);
+}
+
+void DriveMailbox::upload(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t value,
+                          std::size_t size) {
+  sdo(esc, ecat::kCoeServiceSdoResponse, expedited(kSdoUploadAnswer, size),
+      DriveMessage::Kind::SdoUpload, index, subindex, value);
 }
 
 void DriveMailbox::abort(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t code) {
   // an abort, either side's, is an SDO request (ETG.1000.6)
-  const auto body = sdoBody(kSdoAbortCommand, index, subindex, code);
-  DriveSaid said;
-  said.kind = driveMessageKindName(DriveMessage::Kind::SdoAbort);
-  said.index = index;
-  said.subindex = subindex;
-  said.abort_code = code;
-  send(esc, ecat::kCoeServiceSdoRequest, body.data(), body.size(), said);
+  sdo(esc, ecat::kCoeServiceSdoRequest, kSdoAbortCommand, DriveMessage::Kind::SdoAbort, index,
+      subindex, code);
 }
 
 void DriveMailbox::answer(Esc& esc, const std::vector<std::uint8_t>& request) {
@@ -200,13 +206,8 @@ void DriveMailbox::answer(Esc& esc, const std::vector<std::uint8_t>& request) {
     if (index == diag::kPredefinedErrorField && subindex == 0 &&
         loadLe(&request[at + ecat::kSdoDataAt], 1) == 0) {
       history_.clear();
-      const auto body = sdoBody(kSdoDownloadAnswer, index, subindex, 0);
-      DriveSaid said;
-      said.kind = driveMessageKindName(DriveMessage::Kind::SdoDownload);
-      said.index = index;
-      said.subindex = subindex;
-      said.value = 0;
-      send(esc, ecat::kCoeServiceSdoResponse, body.data(), body.size(), said);
+      sdo(esc, ecat::kCoeServiceSdoResponse, kSdoDownloadAnswer, DriveMessage::Kind::SdoDownload,
+          index, subindex, 0);
     } else {
       abort(esc, index, subindex, kAbortNoObject);
     }
@@ -232,10 +233,7 @@ void DriveMailbox::answer(Esc& esc, const std::vector<std::uint8_t>& request) {
 // --- the NC ---
 
 void NcMailbox::upload(std::uint16_t index, std::uint8_t subindex) {
-  queue_.push_back({false, index, subindex});
-}
-void NcMailbox::clearHistory() {
-  queue_.push_back({true, diag::kPredefinedErrorField, 0});
+  queue_.push_back({index, subindex});
 }
 void NcMailbox::faultSeen() {
   upload(diag::kErrorRegister, 0);
@@ -248,8 +246,7 @@ std::optional<std::vector<std::uint8_t>> NcMailbox::takeRequest() {
   const Request r = queue_.front();
   queue_.pop_front();
   open_ = true;
-  const auto body = r.download ? sdoBody(expedited(kSdoDownloadRequest, 1), r.index, r.subindex, 0)
-                               : sdoBody(kSdoUploadRequest, r.index, r.subindex, 0);
+  const auto body = sdoBody(kSdoUploadRequest, r.index, r.subindex, 0);
   return coeMessage(nextCounter(counter_), ecat::kCoeServiceSdoRequest, body.data(), body.size());
 }
 

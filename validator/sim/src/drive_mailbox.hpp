@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "ncservo/model/mailbox_tracker.hpp"
 #include "ncservo/sim/diagnosis_truth.hpp"
 #include "ncservo/sim/faults.hpp"
 #include "segment.hpp"
@@ -28,6 +29,9 @@ class DriveMailbox {
             DriveSaid said);
   void emergency(Esc& esc, std::uint16_t code, std::uint8_t error_register, std::uint8_t number);
   void answer(Esc& esc, const std::vector<std::uint8_t>& request);
+  // An SDO message of the drive's: an answer's value, or an abort's code, in `data`.
+  void sdo(Esc& esc, std::uint8_t service, std::uint8_t command, DriveMessage::Kind kind,
+           std::uint16_t index, std::uint8_t subindex, std::uint32_t data);
   void upload(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t value,
               std::size_t size);
   void abort(Esc& esc, std::uint16_t index, std::uint8_t subindex, std::uint32_t code);
@@ -46,17 +50,14 @@ class DriveMailbox {
 class NcMailbox {
  public:
   void upload(std::uint16_t index, std::uint8_t subindex);
-  void clearHistory();  // writes 0 to 1003h:00
-  void faultSeen();     // 1001h:00, 1003h:00, 1003h:01
+  void faultSeen();  // 1001h:00, 1003h:00, 1003h:01
   // The request to write into SM0 now: one waits and none is open.
   std::optional<std::vector<std::uint8_t>> takeRequest();
   // What the master read from SM1: an SDO answer or abort closes the open request.
   void answered(const std::vector<std::uint8_t>& message);
-  bool idle() const { return !open_ && queue_.empty(); }
 
  private:
   struct Request {
-    bool download;
     std::uint16_t index;
     std::uint8_t subindex;
   };
