@@ -16,13 +16,15 @@ namespace {
 constexpr std::size_t kSdoBody = ecat::kSdoDataAt + ecat::kSdoDataSize;  // command to data
 constexpr std::uint16_t kGeneralError = 0x1000;                          // ERH-002's wrong code
 constexpr std::uint16_t kFollowingError = 0x8611;                        // MBX-001's emergency
-constexpr std::uint8_t kFollowingErrorNumber = 13;
 constexpr std::uint32_t kAbortNoObject = 0x06020000;
-constexpr std::uint8_t kSdoUploadRequest = ecat::kSdoInitiateUploadRequest << 5;
-constexpr std::uint8_t kSdoUploadAnswer = ecat::kSdoInitiateUploadResponse << 5;
-constexpr std::uint8_t kSdoDownloadRequest = ecat::kSdoInitiateDownloadRequest << 5;
-constexpr std::uint8_t kSdoDownloadAnswer = ecat::kSdoInitiateDownloadResponse << 5;
-constexpr std::uint8_t kSdoAbortCommand = ecat::kSdoAbort << 5;
+// SDO command bytes: the command specifier in bits 7..5.
+constexpr std::uint8_t command(std::uint8_t specifier) {
+  return static_cast<std::uint8_t>(specifier << ecat::kSdoSpecifierShift);
+}
+constexpr std::uint8_t kSdoUploadRequest = command(ecat::kSdoInitiateUploadRequest);
+constexpr std::uint8_t kSdoUploadAnswer = command(ecat::kSdoInitiateUploadResponse);
+constexpr std::uint8_t kSdoDownloadAnswer = command(ecat::kSdoInitiateDownloadResponse);
+constexpr std::uint8_t kSdoAbortCommand = command(ecat::kSdoAbort);
 
 // The error number of the drive maker's table (diag::kErrorNumbers) that goes with each error
 // code the drive's cause bits carry (kSewCauses), in its emergencies and 1003h entries.
@@ -49,7 +51,7 @@ std::uint8_t numberOf(std::uint16_t code) {
   for (const CodeNumber& row : kCodeNumbers) {
     if (row.code == code) return row.number;
   }
-  return 25;
+  return 25;  // internal software error: a code the drive has no number for
 }
 // 1001h as CiA 301 sets it for an error code: generic, and the family's bit.
 std::uint8_t registerOf(std::uint16_t code) {
@@ -142,7 +144,7 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
     if (quirk == MailboxQuirk::ErrorResetNow) {
       emergency(esc, diag::kErrorReset, 0, 0);
     } else {
-      emergency(esc, kFollowingError, registerOf(kFollowingError), kFollowingErrorNumber);
+      emergency(esc, kFollowingError, registerOf(kFollowingError), numberOf(kFollowingError));
     }
   }
   pending_.clear();
@@ -199,10 +201,10 @@ void DriveMailbox::abort(Esc& esc, std::uint16_t index, std::uint8_t subindex, s
 void DriveMailbox::answer(Esc& esc, const std::vector<std::uint8_t>& request) {
   const std::size_t at = ecat::kMailboxHeaderSize + ecat::kCoeHeaderSize;
   if (request.size() < at + kSdoBody) return;
-  const std::uint8_t command = request[at + ecat::kSdoCommandAt];
+  const std::uint8_t specifier = request[at + ecat::kSdoCommandAt] >> ecat::kSdoSpecifierShift;
   const auto index = static_cast<std::uint16_t>(loadLe(&request[at + ecat::kSdoIndexAt], 2));
   const std::uint8_t subindex = request[at + ecat::kSdoSubindexAt];
-  if ((command & 0xE0) == kSdoDownloadRequest) {
+  if (specifier == ecat::kSdoInitiateDownloadRequest) {
     if (index == diag::kPredefinedErrorField && subindex == 0 &&
         loadLe(&request[at + ecat::kSdoDataAt], 1) == 0) {
       history_.clear();

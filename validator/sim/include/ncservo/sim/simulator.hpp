@@ -7,7 +7,9 @@
 // style (ImageStyle) with a DC FRMW to 0x0910. Each frame is captured twice: the master's copy and
 // the copy the ring returns. The slaves are small ESC models with register memory: FMMUs, sync
 // managers and AL control work from what the master wrote, so the capture is consistent by
-// construction. Each rule's fault is a row of faults.hpp.
+// construction. Each rule's fault is a row of faults.hpp. With --diagnosis the servos also have
+// mailboxes, the drives report their faults there, the NC reads their error history and the
+// master polls the ESCs' error counters between the cycles (docs/simulate.md#diagnosis).
 #pragma once
 
 #include <cstdint>
