@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # simulate_diagnosis.sh SRC BUILD
 # `ncservo simulate --diagnosis` (docs/simulate.md#diagnosis) against its own truth: on a capture
-# with drive faults, a bad cable, an SDO abort and a clock out of sync, and on the incidents
+# with drive faults, a bad cable, an SDO abort, a clock out of sync and a sync error, and on the incidents
 # scenario in the TwinCAT style as a pcapng, `validate`'s JSON lists every emergency, SDO answer
 # and abort, counter rise and link fault of --diagnosis-truth on its frame (and nothing else), and
 # every incident of --incidents-truth with its cause (link-fault and sync-error among them). The
@@ -64,6 +64,7 @@ PY
 }
 
 "$NCSERVO" simulate --diagnosis --bad-link 0x3EB:0@1.2x3 --fault MBX-003@0.9:0 --fault DC-001@1.0:3 \
+  --sync-error 0x3EA@1.6 \
   -o "$WORK/said.pcap" --diagnosis-truth "$WORK/said.truth.json" 2>"$WORK/err.txt" ||
   fail "simulate exited $?: $(cat "$WORK/err.txt")"
 compare said "$WORK/said.pcap" "$WORK/said.truth.json" "emergency sdo-upload sdo-abort esc link"
@@ -72,11 +73,14 @@ import json, sys
 capture = json.load(open(sys.argv[1]))["captures"][0]
 fired = {f["rule"] for f in capture["findings"]}
 # the bad link's 3 lost frames (COM-004; COM-003 on the axes before it, whose drives got them),
-# the link it names, the abort and the clock out of sync: nothing else
-assert fired == {"COM-003", "COM-004", "LNK-001", "MBX-003", "DC-001"}, sorted(fired)
+# the link it names, the abort, the clock out of sync and axis 1's slave leaving OP: nothing else
+assert fired == {"COM-003", "COM-004", "LNK-001", "MBX-003", "DC-001", "ESM-003"}, sorted(fired)
 assert all(m["axis"] is not None for m in capture["drive_messages"]), "a drive message without its axis"
-causes = {(i["axis"], i["cause"]["id"]) for i in capture["incidents"]}
-assert {(2, "link-fault"), (3, "link-fault")} <= causes, causes
+causes = {(i["kind"], i["axis"], i["cause"]["id"]) for i in capture["incidents"]}
+assert {("drive-fault", 2, "link-fault"), ("drive-fault", 3, "link-fault"),
+        ("esm", 1, "sync-error")} <= causes, causes
+sync = [f for f in capture["findings"] if f["rule"] == "ESM-003"]
+assert len(sync) == 1 and "0x001A" in sync[0]["message"] and sync[0]["axis"] == 1, sync
 PY
 
 "$NCSERVO" simulate --scenario incidents --diagnosis --image twincat --cycle-us 2000 --duration 8 \

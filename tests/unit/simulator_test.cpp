@@ -969,6 +969,34 @@ TEST(ParseBadLink, Rows) {
   }
 }
 
+TEST(ParseSyncError, Rows) {
+  const std::pair<const char*, std::optional<std::pair<std::uint16_t, double>>> rows[] = {
+      {"0x3EA@1.6", std::pair{0x03EA, 1.6}},
+      {"1001@2", std::pair{1001, 2.0}},
+      {"0x3EA", std::nullopt},
+      {"@1.6", std::nullopt},
+      {"0x3EA@soon", std::nullopt},
+      {"0x10000@1", std::nullopt},
+  };
+  for (const auto& [text, parsed] : rows) {
+    const Result<SlaveAt> sync = parseSyncError(text);
+    ASSERT_EQ(sync.has_value(), parsed.has_value()) << text;
+    if (!sync) {
+      EXPECT_NE(sync.error().text().find(text), std::string::npos) << sync.error().text();
+      continue;
+    }
+    EXPECT_EQ(sync->station, parsed->first) << text;
+    EXPECT_DOUBLE_EQ(sync->at_s, parsed->second) << text;
+  }
+  SimOptions o = options(Scenario::Commissioning, 4, 3.0);
+  o.sync_errors.push_back(*parseSyncError("0x3F0@1.6"));
+  EXPECT_NE(test::statusText(resolveOptions(o)).find("is not in the ring"), std::string::npos);
+  SimOptions fine = options(Scenario::Commissioning, 4, 3.0);
+  fine.sync_errors.push_back(*parseSyncError("0x3EA@1.6"));
+  EXPECT_EQ(test::statusText(resolveOptions(fine)), "");
+  EXPECT_TRUE(fine.diagnosis) << "the AL status polls see it";
+}
+
 TEST(ResolveBadLink, RefusesWhatTheRingDoesNotHave) {
   const std::pair<const char*, const char*> rows[] = {
       {"0x3E8:0@1.2", "is not in the ring"},

@@ -87,6 +87,7 @@ struct SimulateArgs {
   std::string faults_truth;
   std::string diagnosis_truth;
   std::vector<std::string> bad_links;
+  std::vector<std::string> sync_errors;
   std::string io_inputs = "slow";
   std::string idle;            // SECONDS or all; empty: none
   std::string start_in;        // empty: the capture starts with the session
@@ -187,6 +188,14 @@ bool simulationOptions(SimulateArgs& args) {
       return false;
     }
     o.bad_links.push_back(std::move(*link));
+  }
+  for (const std::string& text : args.sync_errors) {
+    Result<sim::SlaveAt> sync = sim::parseSyncError(text);
+    if (!sync) {
+      fmt::print(stderr, "ncservo simulate: {}\n", sync.error().text());
+      return false;
+    }
+    o.sync_errors.push_back(std::move(*sync));
   }
   if (!args.incidents_truth.empty() && o.scenario != sim::Scenario::Incidents) {
     fmt::print(stderr, "ncservo simulate: --incidents-truth needs --scenario incidents\n");
@@ -385,6 +394,9 @@ Handler simulateCommand(CLI::App& command) {
   command.add_option("--bad-link", sa.bad_links,
                      "STATION:PORT@SECONDS[xFRAMES]: FRAMES frames (default 2) cross the cable "
                      "at that port corrupted from SECONDS on (repeatable; implies --diagnosis)");
+  command.add_option("--sync-error", sa.sync_errors,
+                     "STATION@SECONDS: the slave falls from OP to SAFE-OP with AL status code "
+                     "0x001A (synchronization error) (repeatable; implies --diagnosis)");
   addBusTimingOptions(command, sa);
   command
       .add_option(

@@ -1,5 +1,7 @@
 #include "incident_plan.hpp"
 
+#include "ncservo/wire/ecat_wire.hpp"
+
 namespace ncservo::sim {
 
 namespace {
@@ -9,8 +11,6 @@ using Quantity = Drift::Quantity;
 // enough for its recovery to be captured.
 constexpr double kFirstIncidentS = 0.8;
 constexpr double kAfterLastIncidentS = 0.6;
-// AL status code 0x001A: synchronization error (ETG.1000.6).
-constexpr std::uint16_t kAlCodeSyncError = 0x001A;
 }  // namespace
 
 // Each chain stays clear of the other rows' evidence: no set-point step, NC violation, lost
@@ -110,7 +110,7 @@ const std::vector<IncidentRow>& incidentRows(bool diagnosis) {
        .description = "the axis's slave falls from OP to SAFE-OP with AL status code 0x001A; the "
                       "master's AL status poll (every 10 ms) sees it, acknowledges it and "
                       "requests OP; the NC enables the axis again",
-       .apply = [](IncidentActions& a) { a.fallFromOp(0, kAlCodeSyncError); }},
+       .apply = [](IncidentActions& a) { a.fallFromOp(0, ecat::kAlCodeSyncError); }},
       {.cause = "link-fault",
        .kind = IncidentKind::DriveFault,
        .axis = 3,

@@ -182,6 +182,29 @@ Result<CycleDisturbance> parseCycleDisturbance(std::string_view option, std::str
   return d;
 }
 
+namespace {
+// A station address as the user writes it: decimal, or hexadecimal after 0x.
+std::optional<std::uint16_t> stationNumber(std::string_view text) {
+  const Result<std::uint64_t> number = text.starts_with("0x") || text.starts_with("0X")
+                                           ? parseNumber<std::uint64_t>(text.substr(2), 16)
+                                           : parseNumber<std::uint64_t>(text);
+  if (!number || *number > 0xFFFF) return std::nullopt;
+  return static_cast<std::uint16_t>(*number);
+}
+}  // namespace
+
+Result<SlaveAt> parseSyncError(std::string_view text) {
+  const std::size_t at = text.find('@');
+  const std::optional<std::uint16_t> station =
+      at == std::string_view::npos ? std::nullopt : stationNumber(text.substr(0, at));
+  const Result<double> seconds =
+      at == std::string_view::npos ? fail("no @") : parseNumber<double>(text.substr(at + 1));
+  if (!station || !seconds) {
+    return fail(fmt::format("--sync-error {}: expected STATION@SECONDS (e.g. 0x3EA@1.6)", text));
+  }
+  return SlaveAt{*station, *seconds, std::string(text)};
+}
+
 Result<BadLink> parseBadLink(std::string_view text) {
   BadLink link;
   link.text = std::string(text);
@@ -203,13 +226,11 @@ Result<BadLink> parseBadLink(std::string_view text) {
     frames = when.substr(x + 1);
     when = when.substr(0, x);
   }
-  const Result<std::uint64_t> number = station.starts_with("0x") || station.starts_with("0X")
-                                           ? parseNumber<std::uint64_t>(station.substr(2), 16)
-                                           : parseNumber<std::uint64_t>(station);
+  const std::optional<std::uint16_t> number = stationNumber(station);
   const Result<int> port_number = parseNumber<int>(port);
   const Result<double> seconds = parseNumber<double>(when);
-  if (!number || *number > 0xFFFF || !port_number || !seconds) return malformed();
-  link.station = static_cast<std::uint16_t>(*number);
+  if (!number || !port_number || !seconds) return malformed();
+  link.station = *number;
   link.port = static_cast<std::uint8_t>(std::clamp(*port_number, 0, 255));
   link.at_s = *seconds;
   if (*port_number != 0 && *port_number != 1) {
@@ -230,32 +251,42 @@ Result<BadLink> parseBadLink(std::string_view text) {
 
 namespace {
 
-// The bad links' slaves and times (docs/simulate.md#diagnosis); each turns --diagnosis on.
-Status checkBadLinks(SimOptions& o) {
+// The bad links' and sync errors' slaves and times (docs/simulate.md#diagnosis); each turns
+// --diagnosis on, whose polls read what they do.
+Status checkSlaveFaults(SimOptions& o) {
   const int slaves = o.axes + *o.io_slaves + o.cia402_drives;
   const double earliest = (o.startup ? kStartupSeconds : 0.0) + 0.45;
-  for (const BadLink& link : o.bad_links) {
-    const int position = link.station - kFirstStation;
+  auto check = [&](const char* option, const std::string& text, std::uint16_t station,
+                   double at_s) -> Status {
+    const int position = station - kFirstStation;
     if (position < 0 || position >= slaves) {
-      return fail(fmt::format("--bad-link {}: station {} is not in the ring (0x{:04X} to 0x{:04X})",
-                              link.text, link.station, kFirstStation, kFirstStation + slaves - 1));
+      return fail(fmt::format("{} {}: station {} is not in the ring (0x{:04X} to 0x{:04X})", option,
+                              text, station, kFirstStation, kFirstStation + slaves - 1));
     }
-    if (link.port == 1 && position == slaves - 1) {
-      return fail(fmt::format("--bad-link {}: the last slave's port 1 has no cable", link.text));
-    }
-    if (link.at_s < earliest || link.at_s > *o.duration_s - 0.4) {
-      return fail(
-          fmt::format("--bad-link {}: {} s is outside the quiet part of the run ({:g} s "
-                      "to {:g} s)",
-                      link.text, link.at_s, earliest, *o.duration_s - 0.4));
+    if (at_s < earliest || at_s > *o.duration_s - 0.4) {
+      return fail(fmt::format("{} {}: {} s is outside the quiet part of the run ({:g} s to {:g} s)",
+                              option, text, at_s, earliest, *o.duration_s - 0.4));
     }
     if (o.mid_start != MidStart::None || o.scenario == Scenario::Incidents) {
       return fail(fmt::format(
-          "--bad-link {}: not with --start-in or --scenario incidents (which has one with "
-          "--diagnosis)",
-          link.text));
+          "{} {}: not with --start-in or --scenario incidents (which has its own with --diagnosis)",
+          option, text));
     }
     o.diagnosis = true;
+    return {};
+  };
+  for (const BadLink& link : o.bad_links) {
+    if (Status placed = check("--bad-link", link.text, link.station, link.at_s); !placed) {
+      return placed;
+    }
+    if (link.port == 1 && link.station - kFirstStation == slaves - 1) {
+      return fail(fmt::format("--bad-link {}: the last slave's port 1 has no cable", link.text));
+    }
+  }
+  for (const SlaveAt& sync : o.sync_errors) {
+    if (Status placed = check("--sync-error", sync.text, sync.station, sync.at_s); !placed) {
+      return placed;
+    }
   }
   return {};
 }
@@ -475,7 +506,7 @@ Status resolveOptions(SimOptions& o) {
   if (Status duration = checkDuration(o); !duration) return duration;
   const Result<std::optional<double>> begins_s = placeStartFault(o);
   if (!begins_s) return fail(begins_s.error());
-  if (Status links = checkBadLinks(o); !links) return links;
+  if (Status slaves = checkSlaveFaults(o); !slaves) return slaves;
   const std::size_t placed_already = o.mid_start == MidStart::InFault ? 1 : 0;
   for (std::size_t i = placed_already; i < o.faults.size(); ++i) {
     if (Status placed = placeFault(o.faults[i], o, *begins_s); !placed) return placed;

@@ -90,9 +90,9 @@ struct Simulator::Impl {
   CaptureShaper shaper{o};       // what the capturing PC does to the recording
   // The incidents scenario: its plan, what the capture shows of it, the slaves' falls from OP
   // and the master's AL status checks.
-  struct Fall {
+  struct Fall {  // a slave's, by ring position
     std::int64_t at_ns;
-    int axis;
+    int slave;
     std::uint16_t code;
     bool done = false;
   };
@@ -139,6 +139,9 @@ struct Simulator::Impl {
     latest_inputs.assign(static_cast<std::size_t>(o.axes), std::nullopt);
     outputs.assign(static_cast<std::size_t>(o.axes), RxPdo{});
     if (o.diagnosis) polls.emplace(o, segment, master, faults);
+    for (const SlaveAt& sync : o.sync_errors) {
+      falls.push_back({at(sync.at_s), sync.station - kFirstStation, ecat::kAlCodeSyncError});
+    }
     planScenario();
     for (const FaultRequest& f : o.faults) {
       faults.inject(f.rule, f.at_s.value_or(-1), f.axis.value_or(-1));
@@ -216,7 +219,7 @@ struct Simulator::Impl {
       impl_.faults.scheduleBusFault(at_ns_ + offset_ns, axis_, fault);
     }
     void fallFromOp(std::int64_t offset_ns, std::uint16_t code) override {
-      impl_.falls.push_back({at_ns_ + offset_ns, axis_, code});
+      impl_.falls.push_back({at_ns_ + offset_ns, impl_.segment.servo_slave[index()], code});
     }
     void badLink(std::int64_t offset_ns, int frames) override {
       const auto into = static_cast<std::size_t>(impl_.segment.servo_slave[index()]);
@@ -392,7 +395,7 @@ struct Simulator::Impl {
     std::fill(latest_inputs.begin(), latest_inputs.end(), std::nullopt);
     for (Fall& f : falls) {
       if (f.done || slot < f.at_ns) continue;
-      segment.servo(f.axis).fallFromOp(f.code);
+      segment.escs[static_cast<std::size_t>(f.slave)].fallFromOp(f.code);
       f.done = true;
     }
   }

@@ -151,6 +151,15 @@ struct BadLink {
   std::string text;  // as given, for messages
 };
 Result<BadLink> parseBadLink(std::string_view text);
+// --sync-error STATION@SECONDS: the slave falls from OP to SAFE-OP with AL status code 0x001A
+// (synchronization error) at SECONDS; the master's AL status poll sees it, acknowledges it and
+// walks the slave back to OP (docs/simulate.md#diagnosis).
+struct SlaveAt {
+  std::uint16_t station = 0;
+  double at_s = 0;
+  std::string text;  // as given, for messages
+};
+Result<SlaveAt> parseSyncError(std::string_view text);
 
 struct SimOptions {
   Scenario scenario = Scenario::Commissioning;
@@ -176,6 +185,7 @@ struct SimOptions {
   // fault, the master's polls of the error counters, AL status and system time differences.
   bool diagnosis = false;
   std::vector<BadLink> bad_links;
+  std::vector<SlaveAt> sync_errors;
   // Shapes of a machine's bus (docs/simulate.md#shapes); the defaults add none.
   TerminalInputs terminal_inputs = TerminalInputs::Slow;
   int cia402_drives = 0;  // neighbours of another protocol with 10/40-byte PDOs, 0..32

@@ -197,6 +197,7 @@ inline constexpr bool exchangesInputs(std::uint8_t al_state) {
 inline constexpr std::uint8_t kAlErrorBit = 0x10;
 // AL status codes (ETG.1000.6).
 inline constexpr std::uint16_t kAlCodeInvalidTransition = 0x0011;
+inline constexpr std::uint16_t kAlCodeSyncError = 0x001A;
 inline constexpr std::uint16_t kAlCodeInvalidOutputs = 0x001D;
 inline constexpr std::uint16_t kAlCodeEepromNoAccess = 0x0050;
 
