@@ -132,6 +132,21 @@ void printFaults() {
   }
 }
 
+// Each text of a repeatable option parsed into `into`; false (with the message printed) at the
+// first malformed one.
+template <typename T, typename Parse>
+bool parseEach(const std::vector<std::string>& texts, Parse parse, std::vector<T>& into) {
+  for (const std::string& text : texts) {
+    Result<T> item = parse(text);
+    if (!item) {
+      fmt::print(stderr, "ncservo simulate: {}\n", item.error().text());
+      return false;
+    }
+    into.push_back(std::move(*item));
+  }
+  return true;
+}
+
 // The options of the command line into the simulator's; false (with the message printed) when
 // one is malformed or they do not go together.
 bool simulationOptions(SimulateArgs& args) {
@@ -161,42 +176,19 @@ bool simulationOptions(SimulateArgs& args) {
   }
   o.writes_pcapng = captureFormatFor(args.format, args.output) == CaptureFormat::Pcapng;
   if (!parseIdle(args.idle, o)) return false;
-  for (const std::string& text : args.faults) {
-    Result<sim::FaultRequest> fault = sim::parseFault(text);
-    if (!fault) {
-      fmt::print(stderr, "ncservo simulate: {}\n", fault.error().text());
-      return false;
-    }
-    o.faults.push_back(std::move(*fault));
-  }
-  for (auto [option, texts, into] :
-       {std::tuple{"--late-cycle", &args.late_cycles, &o.late_cycles},
-        std::tuple{"--lost-cycles", &args.lost_cycles, &o.lost_cycles}}) {
-    for (const std::string& text : *texts) {
-      Result<sim::CycleDisturbance> parsed = sim::parseCycleDisturbance(option, text);
-      if (!parsed) {
-        fmt::print(stderr, "ncservo simulate: {}\n", parsed.error().text());
-        return false;
-      }
-      into->push_back(std::move(*parsed));
-    }
-  }
-  for (const std::string& text : args.bad_links) {
-    Result<sim::BadLink> link = sim::parseBadLink(text);
-    if (!link) {
-      fmt::print(stderr, "ncservo simulate: {}\n", link.error().text());
-      return false;
-    }
-    o.bad_links.push_back(std::move(*link));
-  }
-  for (const std::string& text : args.sync_errors) {
-    Result<sim::SlaveAt> sync = sim::parseSyncError(text);
-    if (!sync) {
-      fmt::print(stderr, "ncservo simulate: {}\n", sync.error().text());
-      return false;
-    }
-    o.sync_errors.push_back(std::move(*sync));
-  }
+  const bool parsed =
+      parseEach(args.faults, sim::parseFault, o.faults) &&
+      parseEach(
+          args.late_cycles,
+          [](std::string_view text) { return sim::parseCycleDisturbance("--late-cycle", text); },
+          o.late_cycles) &&
+      parseEach(
+          args.lost_cycles,
+          [](std::string_view text) { return sim::parseCycleDisturbance("--lost-cycles", text); },
+          o.lost_cycles) &&
+      parseEach(args.bad_links, sim::parseBadLink, o.bad_links) &&
+      parseEach(args.sync_errors, sim::parseSyncError, o.sync_errors);
+  if (!parsed) return false;
   if (!args.incidents_truth.empty() && o.scenario != sim::Scenario::Incidents) {
     fmt::print(stderr, "ncservo simulate: --incidents-truth needs --scenario incidents\n");
     return false;
