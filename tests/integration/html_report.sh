@@ -60,6 +60,15 @@ python3 -c 'import json, sys; c = json.load(open(sys.argv[1]))["captures"][0]; s
 "$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/mailbox.html" "$WORK/mailbox.json" "$WORK/reads.json" "$marker" ||
   fail "the HTML report of drive messages and a link fault in Chromium"
 
+# ... and the simulator's (--diagnosis): drives that report each fault, the NC's reads of 1003h,
+# an abort and a bad cable.
+"$NCSERVO" simulate --bad-link 0x3EB:0@1.2x3 --fault MBX-003@0.9:0 -o "$WORK/said.pcap" 2>/dev/null ||
+  fail "simulate exited $?"
+"$NCSERVO" validate --format html -o "$WORK/said.html" --report json:"$WORK/said.json" \
+  "$WORK/said.pcap" >/dev/null 2>&1 || [ $? = 1 ] || fail "validate exited $?"
+"$debian_python" "$SRC/tests/tools/check_html_report.py" "$WORK/said.html" "$WORK/said.json" "$WORK/reads.json" "$marker" ||
+  fail "the HTML report of the simulated drives' messages and bad cable in Chromium"
+
 # A report of several captures, one of them unreadable, also loads without a console error.
 printf 'not a capture\n' >"$WORK/text.pcap"
 "$NCSERVO" validate --format html -o "$WORK/two.html" --report json:"$WORK/two.json" \
