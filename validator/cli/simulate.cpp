@@ -198,7 +198,9 @@ bool simulationOptions(SimulateArgs& args) {
     return false;
   }
   if (!args.diagnosis_truth.empty() && !o.diagnosis) {
-    fmt::print(stderr, "ncservo simulate: --diagnosis-truth needs --diagnosis (or --bad-link)\n");
+    fmt::print(stderr,
+               "ncservo simulate: --diagnosis-truth needs --diagnosis (or --bad-link, "
+               "--sync-error or a --fault of what the drives and ESCs say)\n");
     return false;
   }
   return true;

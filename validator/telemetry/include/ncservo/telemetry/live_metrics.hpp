@@ -51,7 +51,7 @@ struct DcDifference {
   std::uint16_t station = 0;
   double seconds = 0;
 };
-// An ESC error counter of one port of a slave (issue 37 feeds these; none until then).
+// The rises of one ESC error counter of one port of a slave (docs/drive-messages.md).
 struct EscErrorCount {
   std::uint16_t station = 0;
   std::uint8_t port = 0;
@@ -103,7 +103,6 @@ class LiveMetrics {
   void refresh(const CapturePipeline& pipeline, std::uint64_t frames,
                std::uint64_t capture_dropped);
   void setMqttDropped(std::uint64_t dropped) { snapshot_.mqtt_dropped = dropped; }
-  // The ESC error counters as last read (issue 37 feeds them).
   const MetricsSnapshot& snapshot() const { return snapshot_; }
 
  private:
