@@ -47,6 +47,12 @@ void FaultPlan::bus(BusFault fault) {
 }
 void FaultPlan::diagnosis(const DiagnosisFault& fault) {
   diagnosis_faults_.push_back({fault, axis_, at_ns_ + fault.offset_ns});
+  // A link down is counted at port 1 of the slave before too, when there is one.
+  const auto position = static_cast<std::size_t>(segment_.servo_slave[axisIndex()]);
+  if (fault.kind == DiagnosisFault::Kind::LinkDown && position > 0) {
+    const int before = segment_.escs[position - 1].axis;
+    placed_.back().also.push_back(before < 0 ? std::nullopt : std::optional<int>(before));
+  }
 }
 void FaultPlan::startup(StartupFault fault) {
   const auto slave = static_cast<std::size_t>(segment_.servo_slave[axisIndex()]);

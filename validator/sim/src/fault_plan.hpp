@@ -57,6 +57,9 @@ class FaultPlan final : public FaultActions {
     int axis;
     std::int64_t at_ns;
     bool startup;
+    // The other axes its findings name (none: a slave no axis names): a link down is counted at
+    // both its ends.
+    std::vector<std::optional<int>> also = {};
   };
   const std::vector<Placed>& placed() const { return placed_; }
 

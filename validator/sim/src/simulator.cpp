@@ -150,6 +150,8 @@ struct Simulator::Impl {
     for (const FaultPlan::Placed& fault : faults.placed()) fault_windows.push_back({fault});
   }
 
+  Status recordsAreBusFrames(const char* truth) const;
+
   // The capture ends: the windows still open end with it.
   void closeFaultWindows() {
     for (FaultWindow& w : fault_windows) {
@@ -535,13 +537,20 @@ std::uint64_t Simulator::masterCopiesDropped() const {
   return impl_->master_copies_dropped;
 }
 
+// A truth counted in the bus's frames holds only where the capture's records are those frames.
+Status Simulator::Impl::recordsAreBusFrames(const char* truth) const {
+  if (shaper.active() || o.mid_start != MidStart::None || o.capture_loss > 0) {
+    return fail(fmt::format(
+        "the capture's records are not the bus's frames (a capture shape, --start-in or "
+        "--capture-loss): no {}",
+        truth));
+  }
+  return {};
+}
+
 Result<std::vector<FaultTruth>> Simulator::faults() const {
   const Impl& impl = *impl_;
-  if (impl.shaper.active() || impl.o.mid_start != MidStart::None || impl.o.capture_loss > 0) {
-    return fail(
-        "the capture's records are not the bus's frames (a capture shape, --start-in or "
-        "--capture-loss): no fault truth");
-  }
+  if (Status frames = impl.recordsAreBusFrames("fault truth"); !frames) return fail(frames.error());
   std::vector<FaultTruth> out;
   for (const Impl::FaultWindow& w : impl.fault_windows) {
     const RuleDef& rule = ruleDef(w.fault.rule);
@@ -552,12 +561,7 @@ Result<std::vector<FaultTruth>> Simulator::faults() const {
       for (int a = 0; a < impl.o.axes; ++a) axes.push_back(a);
     } else {
       axes.push_back(w.fault.axis);
-      // a link down is counted at both ends: port 1 of the slave before too, when there is one
-      const int position = impl.segment.servo_slave[static_cast<std::size_t>(w.fault.axis)];
-      if (w.fault.rule == RuleId::Lnk002 && position > 0) {
-        const int before = impl.segment.escs[static_cast<std::size_t>(position - 1)].axis;
-        axes.push_back(before < 0 ? std::nullopt : std::optional<int>(before));
-      }
+      axes.insert(axes.end(), w.fault.also.begin(), w.fault.also.end());
     }
     for (const std::optional<int>& axis : axes) {
       out.push_back({rule.code, axis, w.first, w.last});
@@ -568,10 +572,8 @@ Result<std::vector<FaultTruth>> Simulator::faults() const {
 
 Result<DiagnosisTruth> Simulator::diagnosis() const {
   const Impl& impl = *impl_;
-  if (impl.shaper.active() || impl.o.mid_start != MidStart::None || impl.o.capture_loss > 0) {
-    return fail(
-        "the capture's records are not the bus's frames (a capture shape, --start-in or "
-        "--capture-loss): no diagnosis truth");
+  if (Status frames = impl.recordsAreBusFrames("diagnosis truth"); !frames) {
+    return fail(frames.error());
   }
   return impl.polls ? impl.polls->truth() : DiagnosisTruth{};
 }
