@@ -18,17 +18,6 @@ constexpr std::int64_t kCountersPollNs = 100 * kMs;
 constexpr std::size_t kAcyclicFrameBytes = 1400;
 constexpr std::size_t kDatagramOverhead = 12;
 
-// A register datagram of a poll; numbered when its frame is sent (Master::acyclic).
-RingDatagram registerRead(std::uint8_t command, std::uint16_t station, std::uint16_t ado,
-                          std::size_t length) {
-  RingDatagram dg;
-  dg.command = command;
-  dg.adp = station;
-  dg.ado = ado;
-  dg.data.assign(length, 0);
-  return dg;
-}
-
 }  // namespace
 
 DiagnosisPolls::DiagnosisPolls(const SimOptions& options, Segment& segment, Master& master,
@@ -145,11 +134,11 @@ void DiagnosisPolls::queueMailboxPoll() {
     const std::uint16_t station = segment_.servo(a).station();
     if (std::optional<std::vector<std::uint8_t>> request =
             nc_mailboxes_[static_cast<std::size_t>(a)].takeRequest()) {
-      RingDatagram dg = registerRead(ecat::kFpwr, station, kMailboxOutPhys, kMailboxBytes);
+      RingDatagram dg = registerDatagram(ecat::kFpwr, station, kMailboxOutPhys, kMailboxBytes);
       dg.data = std::move(*request);
       datagrams.push_back(std::move(dg));
     }
-    datagrams.push_back(registerRead(ecat::kFprd, station, kMailboxInPhys, kMailboxBytes));
+    datagrams.push_back(registerDatagram(ecat::kFprd, station, kMailboxInPhys, kMailboxBytes));
   }
   queue(Poll::Mailbox, datagrams);
 }
@@ -183,12 +172,12 @@ void DiagnosisPolls::queueCounterPoll(std::uint64_t cycle, std::int64_t slot) {
   for (std::size_t s = 0; s < segment_.escs.size(); ++s) {
     Esc& esc = segment_.escs[s];
     esc.setTimeDifference(timeDifference(s, cycle, slot));
-    datagrams.push_back(registerRead(ecat::kFprd, esc.station(), ecat::kRegErrorCounters,
-                                     ecat::kErrorCountersSize));
-    datagrams.push_back(registerRead(ecat::kFprd, esc.station(), ecat::kRegSmWatchdogCounter,
-                                     ecat::kWatchdogCountersSize));
+    datagrams.push_back(registerDatagram(ecat::kFprd, esc.station(), ecat::kRegErrorCounters,
+                                         ecat::kErrorCountersSize));
+    datagrams.push_back(registerDatagram(ecat::kFprd, esc.station(), ecat::kRegSmWatchdogCounter,
+                                         ecat::kWatchdogCountersSize));
     datagrams.push_back(
-        registerRead(ecat::kFprd, esc.station(), ecat::kRegDcSystemTimeDifference, 4));
+        registerDatagram(ecat::kFprd, esc.station(), ecat::kRegDcSystemTimeDifference, 4));
   }
   queue(Poll::Counters, datagrams);
 }

@@ -61,11 +61,10 @@ Master::Master(Segment& segment)
 
 // --- frames on the wire ---
 
-RingDatagram Master::registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
-                                      std::size_t length) {
+RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
+                              std::size_t length) {
   RingDatagram dg;
   dg.command = command;
-  dg.index = datagram_index_++;
   dg.adp = adp;
   dg.ado = ado;
   dg.data.assign(length, 0);
@@ -92,6 +91,7 @@ bool Master::emit(const FrameSink& sink, const std::vector<RingDatagram>& frame,
 bool Master::exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
                       bool lost_before, bool lost_after, bool* came_back) {
   if (came_back != nullptr) *came_back = false;
+  for (RingDatagram& dg : frame) dg.index = datagram_index_++;  // in the order sent
   if (!emit(sink, frame, false, t_ns)) return false;
   if (lost_before) return true;
   std::optional<std::size_t> corrupted;
@@ -316,7 +316,6 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
     for (std::size_t d = 0; d < fg.datagrams.size(); ++d) {
       RingDatagram& dg = frame[d];
       dg.command = fg.datagrams[d].command;
-      dg.index = datagram_index_++;
       dg.adp = static_cast<std::uint16_t>(fg.datagrams[d].logical & 0xFFFF);
       dg.ado = static_cast<std::uint16_t>(fg.datagrams[d].logical >> 16);
       dg.data.assign(images[d].begin(), images[d].end());
@@ -325,7 +324,6 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
     if (g == 0) {
       RingDatagram& dc = frame[fg.datagrams.size()];
       dc.command = ecat::kFrmw;
-      dc.index = datagram_index_++;
       dc.adp = kFirstStation;
       dc.ado = ecat::kRegDcSystemTime;
       dc.data.assign(kDcTimeSize, 0);
@@ -333,7 +331,6 @@ bool Master::cycle(const FrameSink& sink, std::int64_t t_ns, std::uint64_t cycle
       if (segment_.status_poll) {
         RingDatagram& status = frame[fg.datagrams.size() + 1];
         status.command = ecat::kBrd;
-        status.index = datagram_index_++;
         status.adp = 0;
         status.ado = ecat::kRegAlStatus;
         status.data.assign(2, 0);

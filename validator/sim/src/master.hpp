@@ -28,6 +28,10 @@ struct AlWalk {
   bool finished() const;
 };
 
+// A datagram of the master's register access, its data zeroed; numbered when its frame is sent.
+RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
+                              std::size_t length);
+
 class Master {
  public:
   explicit Master(Segment& segment);
@@ -60,12 +64,10 @@ class Master {
   }
   // Whether every frame of the last cycle came back.
   bool lastCycleReturned() const { return last_cycle_returned_; }
-  // A frame of register datagrams between the cycles (the mailbox, the diagnosis polls), each
-  // numbered as it is sent; its datagrams then hold what the slaves answered, when `came_back`.
-  // False if the sink stopped.
+  // A frame of register datagrams between the cycles (the mailbox, the diagnosis polls); its
+  // datagrams then hold what the slaves answered, when `came_back`. False if the sink stopped.
   bool acyclic(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
                bool& came_back) {
-    for (RingDatagram& dg : frame) dg.index = datagram_index_++;
     return exchange(sink, frame, t_ns, false, false, &came_back);
   }
 
@@ -76,13 +78,10 @@ class Master {
   std::uint64_t inputFrame(int axis) const { return input_frames_[static_cast<std::size_t>(axis)]; }
 
  private:
-  // A datagram of the master's register access, numbered in turn.
-  RingDatagram registerDatagram(std::uint8_t command, std::uint16_t adp, std::uint16_t ado,
-                                std::size_t length);
   bool mailboxFrame(const FrameSink& sink, std::int64_t t_ns);
   bool configFrame(const FrameSink& sink, bool sync_managers, std::int64_t t_ns);
-  // Sends a frame round the ring and captures both copies. `came_back` (when given) says
-  // whether the returned copy reached the master.
+  // Sends a frame round the ring, its datagrams numbered in turn, and captures both copies.
+  // `came_back` (when given) says whether the returned copy reached the master.
   bool exchange(const FrameSink& sink, std::vector<RingDatagram>& frame, std::int64_t t_ns,
                 bool lost_before = false, bool lost_after = false, bool* came_back = nullptr);
   bool emit(const FrameSink& sink, const std::vector<RingDatagram>& frame, bool returned,
