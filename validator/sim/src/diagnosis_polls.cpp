@@ -198,32 +198,24 @@ void DiagnosisPolls::countersRead(Esc& esc, bool watchdogs, std::uint64_t frame)
   const auto s = static_cast<std::size_t>(esc.station() - kFirstStation);
   const bool baseline = !baseline_[s][watchdogs ? 1 : 0];
   baseline_[s][watchdogs ? 1 : 0] = true;
-  auto count = [&](EscCounter counter, std::uint8_t port) {
-    return esc.counted[static_cast<std::size_t>(counter)][port];
-  };
   for (std::size_t c = 0; c < esc.counted.size(); ++c) {
     const auto counter = static_cast<EscCounter>(c);
     const bool watchdog = counter == EscCounter::SmWatchdog || counter == EscCounter::PdiWatchdog;
     if (watchdog != watchdogs) continue;
     for (std::uint8_t port = 0; port < ecat::kEscPorts; ++port) {
-      if (!baseline && count(counter, port) > 0) {
+      if (!baseline && esc.counted[c][port] > 0) {
         said_.esc_errors.push_back(
-            {frame, esc.station(), port, diag::escCounterName(counter), count(counter, port)});
+            {frame, esc.station(), port, diag::escCounterName(counter), esc.counted[c][port]});
       }
     }
+    esc.counted[c].fill(0);
   }
-  for (std::uint8_t port = 0; port < ecat::kEscPorts && !watchdogs && !baseline; ++port) {
-    const std::uint32_t received = count(EscCounter::Invalid, port) + count(EscCounter::Rx, port);
-    if (received > count(EscCounter::Forwarded, port)) {
-      said_.link_faults.push_back(
-          {frame, esc.station(), port, received - count(EscCounter::Forwarded, port)});
-    }
+  if (watchdogs) return;
+  // The link is the cable the simulator corrupted the frames on, into this slave's port 0.
+  if (!baseline && esc.corrupted_frames > 0) {
+    said_.link_faults.push_back({frame, esc.station(), 0, esc.corrupted_frames});
   }
-  for (std::size_t c = 0; c < esc.counted.size(); ++c) {
-    const auto counter = static_cast<EscCounter>(c);
-    const bool watchdog = counter == EscCounter::SmWatchdog || counter == EscCounter::PdiWatchdog;
-    if (watchdog == watchdogs) esc.counted[c].fill(0);
-  }
+  esc.corrupted_frames = 0;
 }
 
 // A slave's system time difference at a read: within a few tens of ns of the reference, but

@@ -739,7 +739,11 @@ bool Segment::pass(std::vector<RingDatagram>& frame, std::int64_t now_ns,
       // after it one that came marked, as forwarded
       // (docs/drive-messages.md#the-esc-error-counters).
       esc.countError(diag::EscCounter::Invalid, 0);
-      if (pos != *corrupted_into) esc.countError(diag::EscCounter::Forwarded, 0);
+      if (pos == *corrupted_into) {
+        ++esc.corrupted_frames;
+      } else {
+        esc.countError(diag::EscCounter::Forwarded, 0);
+      }
       continue;
     }
     esc.watchOutputs(since_epoch_ns, false);

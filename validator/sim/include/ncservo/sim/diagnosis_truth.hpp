@@ -31,7 +31,7 @@ struct EscErrorTruth {  // a counter's rise since the slave's last read (the fir
   const char* counter = "";  // diag::escCounterName
   std::uint32_t delta = 0;
 };
-struct LinkFaultTruth {  // the link into a port whose invalid frames no upstream slave forwarded
+struct LinkFaultTruth {  // the bad link into a slave's port, and the frames it corrupted
   std::uint64_t frame = 0;
   std::uint16_t station = 0;
   std::uint8_t port = 0;
