@@ -20,36 +20,37 @@ struct Block {
 constexpr std::array<Block, 2> kBlocks{
     {{kBlock, kBlockEnd, 0}, {kWatchdogs, kWatchdogsEnd, ecat::kErrorCountersSize}}};
 
-// What the counter at `offset` of Counters::value counts, and at which port; none for a reserved
-// byte of 0x0300-0x0313.
+// Where a register lies in Counters::value; none outside the blocks.
+constexpr std::optional<std::size_t> slotOf(std::size_t reg) {
+  for (const Block& block : kBlocks) {
+    if (reg >= block.from && reg < block.to) return block.at + (reg - block.from);
+  }
+  return std::nullopt;
+}
+constexpr std::size_t slotOf(EscCounter counter, std::uint8_t port) {
+  return *slotOf(diag::escCounterRegister(counter, port));
+}
+
+// What each place of Counters::value counts, and at which port, from the counter table; none
+// for a reserved byte of 0x0300-0x0313.
 struct CounterAt {
   EscCounter counter;
   std::uint8_t port;
 };
+constexpr auto kCounterAt = [] {
+  std::array<std::optional<CounterAt>, ecat::kErrorCountersSize + ecat::kWatchdogCountersSize> at{};
+  for (std::size_t c = 0; c < diag::kEscCounters.size(); ++c) {
+    const auto counter = static_cast<EscCounter>(c);
+    const std::size_t ports = diag::kEscCounters[c].port_stride == 0 ? 1 : ecat::kEscPorts;
+    for (std::size_t port = 0; port < ports; ++port) {
+      at[slotOf(counter, static_cast<std::uint8_t>(port))] =
+          CounterAt{counter, static_cast<std::uint8_t>(port)};
+    }
+  }
+  return at;
+}();
 std::optional<CounterAt> counterAt(std::size_t offset) {
-  if (offset >= ecat::kErrorCountersSize) {
-    return CounterAt{
-        offset == ecat::kErrorCountersSize ? EscCounter::SmWatchdog : EscCounter::PdiWatchdog, 0};
-  }
-  const std::size_t reg = kBlock + offset;
-  if (reg < ecat::kRegForwardedRxError0) {
-    const auto port = static_cast<std::uint8_t>((reg - ecat::kRegInvalidFrame0) / 2);
-    return CounterAt{
-        (reg - ecat::kRegInvalidFrame0) % 2 == 0 ? EscCounter::Invalid : EscCounter::Rx, port};
-  }
-  if (reg < ecat::kRegProcessingUnitError) {
-    return CounterAt{EscCounter::Forwarded,
-                     static_cast<std::uint8_t>(reg - ecat::kRegForwardedRxError0)};
-  }
-  if (reg == ecat::kRegProcessingUnitError) return CounterAt{EscCounter::Processing, 0};
-  if (reg == ecat::kRegPdiError) return CounterAt{EscCounter::Pdi, 0};
-  if (reg >= ecat::kRegLostLink0) {
-    return CounterAt{EscCounter::LostLink, static_cast<std::uint8_t>(reg - ecat::kRegLostLink0)};
-  }
-  return std::nullopt;
-}
-constexpr std::size_t offsetOf(std::uint16_t reg) {
-  return reg - kBlock;
+  return kCounterAt[offset];
 }
 
 bool reachesCounters(const Datagram& dg) {
@@ -255,10 +256,8 @@ void EscErrorTracker::localise(const Stamp& now, std::vector<BusEvent>& out) {
   for (const Read& read : reads_this_frame_) {
     for (std::uint8_t port = 0; port < ecat::kEscPorts; ++port) {
       const std::uint32_t received =
-          read.delta[offsetOf(static_cast<std::uint16_t>(ecat::kRegInvalidFrame0 + 2 * port))] +
-          read.delta[offsetOf(static_cast<std::uint16_t>(ecat::kRegRxError0 + 2 * port))];
-      const std::uint32_t forwarded =
-          read.delta[offsetOf(static_cast<std::uint16_t>(ecat::kRegForwardedRxError0 + port))];
+          read.delta[slotOf(EscCounter::Invalid, port)] + read.delta[slotOf(EscCounter::Rx, port)];
+      const std::uint32_t forwarded = read.delta[slotOf(EscCounter::Forwarded, port)];
       if (received <= forwarded) continue;
       LinkFault fault = linkAt(read.slave, port);
       fault.errors = received - forwarded;

@@ -320,33 +320,7 @@ void writeMailboxSyncManagers(std::uint8_t* registers) {
 }
 
 void Esc::countError(diag::EscCounter counter, std::uint8_t port) {
-  std::size_t reg = 0;
-  switch (counter) {
-    case diag::EscCounter::Invalid:
-      reg = ecat::kRegInvalidFrame0 + 2u * port;
-      break;
-    case diag::EscCounter::Rx:
-      reg = ecat::kRegRxError0 + 2u * port;
-      break;
-    case diag::EscCounter::Forwarded:
-      reg = ecat::kRegForwardedRxError0 + port;
-      break;
-    case diag::EscCounter::LostLink:
-      reg = ecat::kRegLostLink0 + port;
-      break;
-    case diag::EscCounter::Processing:
-      reg = ecat::kRegProcessingUnitError;
-      break;
-    case diag::EscCounter::Pdi:
-      reg = ecat::kRegPdiError;
-      break;
-    case diag::EscCounter::SmWatchdog:
-      reg = ecat::kRegSmWatchdogCounter;
-      break;
-    case diag::EscCounter::PdiWatchdog:
-      reg = ecat::kRegPdiWatchdogCounter;
-      break;
-  }
+  const std::uint16_t reg = diag::escCounterRegister(counter, port);
   if (mem[reg] < 0xFF) ++mem[reg];
   ++counted[static_cast<std::size_t>(counter)][port];
 }

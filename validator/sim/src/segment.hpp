@@ -125,7 +125,7 @@ class Esc {
   // and stays at 0xFF. `counted` keeps what rose since the last read of them, per counter and
   // port, the truth a read must show.
   void countError(diag::EscCounter counter, std::uint8_t port);
-  std::array<std::array<std::uint32_t, ecat::kEscPorts>, diag::kEscCounterNames.size()> counted{};
+  std::array<std::array<std::uint32_t, ecat::kEscPorts>, diag::kEscCounters.size()> counted{};
   // Frames that came corrupted over the cable into port 0 since that read (a bad link's truth).
   std::uint32_t corrupted_frames = 0;
   // The sync manager watchdog (0x0420, 100 ms): in OP, outputs not written for longer expire it

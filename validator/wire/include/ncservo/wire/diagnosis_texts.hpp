@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "ncservo/wire/ecat_wire.hpp"
+
 namespace ncservo::diag {
 
 // --- Objects (CiA 301, CiA 402, ETG.1020; seed 002 for 1003h) ---
@@ -254,10 +256,33 @@ enum class EscCounter : std::uint8_t {
   SmWatchdog,
   PdiWatchdog
 };
-inline constexpr std::array<const char*, 8> kEscCounterNames{
-    "invalid", "rx", "forwarded", "lost-link", "processing", "pdi", "sm-watchdog", "pdi-watchdog"};
+// Each counter's name and where it lies (ESC datasheets, PROTOCOL.md §11): its register at port
+// 0 and the stride to the next port's; a stride of 0 is the slave's own counter (port 0 only).
+struct EscCounterDef {
+  const char* name;
+  std::uint16_t at_port0;
+  std::uint8_t port_stride;
+};
+inline constexpr std::array<EscCounterDef, 8> kEscCounters{{
+    {"invalid", ecat::kRegInvalidFrame0, 2},
+    {"rx", ecat::kRegRxError0, 2},
+    {"forwarded", ecat::kRegForwardedRxError0, 1},
+    {"lost-link", ecat::kRegLostLink0, 1},
+    {"processing", ecat::kRegProcessingUnitError, 0},
+    {"pdi", ecat::kRegPdiError, 0},
+    {"sm-watchdog", ecat::kRegSmWatchdogCounter, 0},
+    {"pdi-watchdog", ecat::kRegPdiWatchdogCounter, 0},
+}};
+constexpr const EscCounterDef& escCounterDef(EscCounter counter) {
+  return kEscCounters[static_cast<std::size_t>(counter)];
+}
 constexpr const char* escCounterName(EscCounter counter) {
-  return kEscCounterNames[static_cast<std::size_t>(counter)];
+  return escCounterDef(counter).name;
+}
+// The register of a counter of a port (the slave's own counters: port 0).
+constexpr std::uint16_t escCounterRegister(EscCounter counter, std::uint8_t port) {
+  const EscCounterDef& def = escCounterDef(counter);
+  return static_cast<std::uint16_t>(def.at_port0 + def.port_stride * port);
 }
 
 template <std::size_t N>
