@@ -158,6 +158,19 @@ TEST(DiagnosisTexts, FromTheirTables) {
   EXPECT_EQ(e.code, 34321);
 }
 
+// The error register (1001h) a code sets: generic, and its CiA 301 family's bit (INTERFACES.md's
+// example: 0x8611 with class 0x21).
+TEST(DiagnosisTexts, ErrorRegisterOfACode) {
+  const std::pair<std::uint16_t, std::uint8_t> rows[] = {
+      {0x0000, 0x00}, {0x1000, 0x01}, {0x2300, 0x03}, {0x3100, 0x05}, {0x4200, 0x09},
+      {0x6010, 0x01}, {0x7305, 0x01}, {0x8100, 0x11}, {0x8130, 0x11}, {0x8210, 0x11},
+      {0x8400, 0x21}, {0x8611, 0x21}, {0xFF00, 0x81},
+  };
+  for (const auto& [code, error_register] : rows) {
+    EXPECT_EQ(diag::errorRegisterFor(code), error_register) << std::hex << code;
+  }
+}
+
 // --- The tracker ---
 
 // Feeds master copies and returned copies to one tracker; frames numbered from 1.

@@ -53,22 +53,6 @@ std::uint8_t numberOf(std::uint16_t code) {
   }
   return 25;  // internal software error: a code the drive has no number for
 }
-// 1001h as CiA 301 sets it for an error code: generic, and the family's bit.
-std::uint8_t registerOf(std::uint16_t code) {
-  switch (code >> 12) {
-    case 0x2:
-      return 0x03;  // current
-    case 0x3:
-      return 0x05;  // voltage
-    case 0x4:
-      return 0x09;  // temperature
-    case 0x8:
-      return (code >> 8) == 0x81 ? 0x11 : 0x21;  // communication; else device profile
-    default:
-      return 0x01;
-  }
-}
-
 std::vector<std::uint8_t> coeMessage(std::uint8_t counter, std::uint8_t service,
                                      const std::uint8_t* body, std::size_t size) {
   std::vector<std::uint8_t> message(kMailboxBytes, 0);
@@ -144,7 +128,8 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
     if (quirk == MailboxQuirk::ErrorResetNow) {
       emergency(esc, diag::kErrorReset, 0, 0);
     } else {
-      emergency(esc, kFollowingError, registerOf(kFollowingError), numberOf(kFollowingError));
+      emergency(esc, kFollowingError, diag::errorRegisterFor(kFollowingError),
+                numberOf(kFollowingError));
     }
   }
   pending_.clear();
@@ -152,7 +137,7 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
     if ((sew & cause.mask) == 0 || (sew_ & cause.mask) != 0) continue;
     const std::uint16_t code = wrong_code_next_ ? kGeneralError : cause.canopen;
     wrong_code_next_ = false;
-    error_register_ = registerOf(cause.canopen);
+    error_register_ = diag::errorRegisterFor(cause.canopen);
     last_code_ = cause.canopen;
     history_.push_front(std::uint32_t{numberOf(cause.canopen)} << 24 |
                         std::uint32_t{error_register_} << 16 | code);

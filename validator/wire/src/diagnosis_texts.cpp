@@ -14,27 +14,35 @@ const char* lookup(const std::array<CodeText, N>& table, std::uint32_t code) {
   return it != table.end() && it->code == code ? it->text : nullptr;
 }
 
-// CiA 301's error code families, by the code's high byte (then its high nibble).
+// CiA 301's error code families, by the code's high byte (then its high nibble), and the bit of
+// the error register (1001h) an error of the family sets beside the generic bit.
 struct Family {
   std::uint16_t mask;
   std::uint16_t value;
   const char* text;
+  std::uint8_t register_bit;
 };
 constexpr std::array<Family, 13> kFamilies{{
-    {0xFF00, 0x1000, "generic error"},
-    {0xF000, 0x2000, "current"},
-    {0xF000, 0x3000, "voltage"},
-    {0xF000, 0x4000, "temperature"},
-    {0xFF00, 0x5000, "device hardware"},
-    {0xF000, 0x6000, "device software"},
-    {0xF000, 0x7000, "additional modules"},
-    {0xFF00, 0x8100, "communication"},
-    {0xFF00, 0x8200, "protocol error"},
-    {0xFF00, 0x8600, "position control"},
-    {0xF000, 0x8000, "monitoring"},
-    {0xFF00, 0x9000, "external error"},
-    {0xFF00, 0xFF00, "device specific"},
+    {0xFF00, 0x1000, "generic error", 0},
+    {0xF000, 0x2000, "current", 0x02},
+    {0xF000, 0x3000, "voltage", 0x04},
+    {0xF000, 0x4000, "temperature", 0x08},
+    {0xFF00, 0x5000, "device hardware", 0},
+    {0xF000, 0x6000, "device software", 0},
+    {0xF000, 0x7000, "additional modules", 0},
+    {0xFF00, 0x8100, "communication", 0x10},
+    {0xFF00, 0x8200, "protocol error", 0x10},
+    {0xFF00, 0x8600, "position control", 0x20},
+    {0xF000, 0x8000, "monitoring", 0x20},
+    {0xFF00, 0x9000, "external error", 0},
+    {0xFF00, 0xFF00, "device specific", 0x80},
 }};
+const Family* familyOf(std::uint16_t code) {
+  for (const Family& f : kFamilies) {
+    if ((code & f.mask) == f.value) return &f;
+  }
+  return nullptr;
+}
 
 }  // namespace
 
@@ -47,10 +55,14 @@ const char* objectName(std::uint16_t index) {
 
 const char* errorCodeText(std::uint16_t code) {
   if (const char* text = lookup(kErrorCodes, code)) return text;
-  for (const Family& f : kFamilies) {
-    if ((code & f.mask) == f.value) return f.text;
-  }
-  return nullptr;
+  const Family* family = familyOf(code);
+  return family != nullptr ? family->text : nullptr;
+}
+
+std::uint8_t errorRegisterFor(std::uint16_t code) {
+  if (code == kErrorReset) return 0;
+  const Family* family = familyOf(code);
+  return static_cast<std::uint8_t>(0x01 | (family != nullptr ? family->register_bit : 0));
 }
 
 const char* errorNumberText(std::uint8_t number) {

@@ -136,6 +136,9 @@ inline constexpr std::array<CodeText, 37> kErrorNumbers{{
 // Seed 002's text for an error code; for a code not in it, its CiA 301 family ("current",
 // "voltage", …); null for neither.
 const char* errorCodeText(std::uint16_t code);
+// The error register (1001h) an error of this code sets: the generic bit and its family's (0 for
+// an error reset).
+std::uint8_t errorRegisterFor(std::uint16_t code);
 const char* errorNumberText(std::uint8_t number);
 
 // --- SDO abort codes (CiA 301, ETG.1000.6) ---
