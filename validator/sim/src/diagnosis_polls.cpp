@@ -33,6 +33,7 @@ DiagnosisPolls::DiagnosisPolls(const SimOptions& options, Segment& segment, Mast
       request_frame_(static_cast<std::size_t>(options.axes)),
       baseline_(segment.escs.size(), {false, false}) {
   master.configureMailboxes();
+  segment.watchdogs = true;
   for (const BadLink& link : options.bad_links) {
     const auto position = static_cast<std::size_t>(link.station - kFirstStation);
     corruptFrames(static_cast<std::int64_t>(std::llround(link.at_s * 1e9)),

@@ -133,8 +133,10 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
     }
   }
   pending_.clear();
+  const std::uint32_t rose = sew & ~sew_ & kSewCauseMask;
   for (const SewCause& cause : kSewCauses) {
-    if ((sew & cause.mask) == 0 || (sew_ & cause.mask) != 0) continue;
+    if (rose == 0) break;  // most cycles: nothing rose
+    if ((rose & cause.mask) == 0) continue;
     const std::uint16_t code = wrong_code_next_ ? kGeneralError : cause.canopen;
     wrong_code_next_ = false;
     error_register_ = diag::errorRegisterFor(cause.canopen);
@@ -145,7 +147,7 @@ void DriveMailbox::step(std::uint32_t sew, Esc& esc) {
     if (silent_next_) continue;
     emergency(esc, cause.canopen, error_register_, numberOf(cause.canopen));
   }
-  silent_next_ = silent_next_ && (sew & ~sew_ & kSewCauseMask) == 0;
+  silent_next_ = silent_next_ && rose == 0;
   if ((sew_ & bits::kServoErrors) != 0 && (sew & bits::kServoErrors) == 0) {
     error_register_ = 0;
     emergency(esc, diag::kErrorReset, 0, 0);

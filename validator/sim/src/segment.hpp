@@ -186,6 +186,7 @@ struct Segment {
   bool outputs_first = true;  // all outputs, then all inputs (else per slave)
   bool status_poll = false;   // the cycle's first frame also reads the AL status (BRD 0x0130)
   double dc_drift_ppm = 0;    // the reference clock's rate against the master's clock
+  bool watchdogs = false;  // the ESCs count their SM watchdogs' expiries (--diagnosis reads them)
 
   Segment(const SimOptions& options, Rng& rng);
   // docs/protocol.md §8: what the slaves' FMMUs add to the WKC of a logical datagram.
